@@ -1,0 +1,41 @@
+// Triangle meshes: positions in LPS millimetres, optional per-vertex normals
+// and colours, indexed triangles.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include <glm/vec3.hpp>
+#include <glm/vec4.hpp>
+
+namespace iso {
+
+struct Mesh {
+    std::vector<glm::vec3> positions;            // LPS mm
+    std::vector<glm::vec3> normals;              // empty or one per position, unit length
+    std::vector<glm::u8vec4> colors;             // empty or one per position, RGBA8
+    std::vector<std::array<std::uint32_t, 3>> triangles;
+    std::vector<std::string> warnings;           // non-fatal findings while reading
+
+    bool empty() const { return triangles.empty(); }
+};
+
+struct MeshStats {
+    std::size_t vertices = 0, triangles = 0;
+    glm::dvec3 bounds_min{0.0}, bounds_max{0.0};
+    double area = 0;   // mm^2
+    double volume = 0; // signed enclosed volume, mm^3 (positive when outward-facing)
+};
+MeshStats mesh_stats(const Mesh& m);
+
+// Formats by extension: .stl (binary; ASCII read too), .ply, .obj, .vtp.
+// Readers convert to LPS when the file says it is in RAS (Slicer's
+// "SPACE=RAS" comment); files that say nothing are taken as LPS.
+Mesh load_mesh(const std::string& path);
+// Writers tag the file as LPS where the format has a header or comment.
+// Writes to a temporary file and renames it into place.
+void save_mesh(const Mesh& m, const std::string& path);
+
+} // namespace iso
