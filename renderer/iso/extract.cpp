@@ -1,0 +1,634 @@
+#include "renderer/iso/extract.hpp"
+
+#include <algorithm>
+#include <atomic>
+#include <cmath>
+#include <cstring>
+#include <limits>
+#include <mutex>
+
+#include <glm/glm.hpp>
+#include <tbb/enumerable_thread_specific.h>
+#include <tbb/parallel_for.h>
+#include <tbb/parallel_sort.h>
+#include <tbb/task_arena.h>
+
+#include "io/sparse.hpp"
+#include "renderer/iso/mc_tables.hpp"
+
+namespace iso {
+
+namespace {
+
+constexpr std::uint32_t kNone = 0xFFFFFFFFu;
+
+int effective_threads(int requested) {
+    const int hw = tbb::this_task_arena::max_concurrency();
+    return requested > 0 ? std::min(requested, hw) : hw;
+}
+
+// Runs f inside an arena of `threads` threads.
+template <class F> void in_arena(int threads, F&& f) {
+    tbb::task_arena arena(effective_threads(threads));
+    arena.execute(std::forward<F>(f));
+}
+
+struct ChunkGeom {
+    std::array<std::int64_t, 3> p0, p1; // first and last sample (inclusive) of the chunk
+};
+
+ChunkGeom chunk_geom(const std::array<std::int64_t, 3>& dims, int C, const std::array<int, 3>& c) {
+    ChunkGeom g;
+    for (int a = 0; a < 3; ++a) {
+        g.p0[a] = std::int64_t(c[a]) * C;
+        g.p1[a] = std::min<std::int64_t>(g.p0[a] + C, dims[a] - 1);
+    }
+    return g;
+}
+
+// Case index from the "column" codes of two neighbouring x positions. A
+// column code packs the inside bits of (y,z), (y+1,z), (y,z+1), (y+1,z+1).
+struct CaseFromColumns {
+    std::array<std::array<std::uint8_t, 16>, 16> t{};
+    CaseFromColumns() {
+        for (int a = 0; a < 16; ++a)
+            for (int b = 0; b < 16; ++b) {
+                // corners: 0 (0,0,0) a0; 1 (1,0,0) b0; 2 (1,1,0) b1; 3 (0,1,0) a1;
+                //          4 (0,0,1) a2; 5 (1,0,1) b2; 6 (1,1,1) b3; 7 (0,1,1) a3
+                int c = ((a >> 0) & 1) | (((b >> 0) & 1) << 1) | (((b >> 1) & 1) << 2) | (((a >> 1) & 1) << 3) |
+                        (((a >> 2) & 1) << 4) | (((b >> 2) & 1) << 5) | (((b >> 3) & 1) << 6) | (((a >> 3) & 1) << 7);
+                t[a][b] = std::uint8_t(c);
+            }
+    }
+};
+const CaseFromColumns kCases;
+
+// Per-thread scratch.
+struct Scratch {
+    std::vector<std::byte> block;     // samples of the chunk plus a one-sample halo
+    std::vector<std::uint8_t> inside; // per chunk sample
+    std::vector<std::uint8_t> cols;   // column codes of one cell row
+    std::vector<std::uint32_t> slots; // per chunk sample x 4: vertex on the +x/+y/+z edge, or at the sample
+    std::size_t bytes() const {
+        return block.capacity() + inside.capacity() + cols.capacity() + slots.capacity() * sizeof(std::uint32_t);
+    }
+};
+
+// The geometry every kernel needs.
+struct Frame {
+    std::array<std::int64_t, 3> dims;
+    int C;
+    glm::dmat4 m;         // index -> LPS
+    glm::dmat3 normal_m;  // inverse transpose of the linear part
+    bool flip;            // affine mirrors space: reverse the winding
+    bool normals;
+};
+
+// A block of samples: the chunk's samples plus a halo, with substitutions for
+// NaN and Inf already made.
+template <class T> struct Block {
+    const T* data;
+    std::array<std::int64_t, 3> lo, n; // first sample and extent of the block
+    T at(std::int64_t x, std::int64_t y, std::int64_t z) const {
+        return data[(x - lo[0]) + n[0] * ((y - lo[1]) + n[1] * (z - lo[2]))];
+    }
+};
+
+template <class T> T substitute(T v, const ChunkIndex& idx) {
+    if constexpr (std::is_floating_point_v<T>) {
+        if (std::isnan(v)) return T(idx.nan_value());
+        if (std::isinf(v)) return v > 0 ? T(idx.highest()) : T(idx.lowest());
+    }
+    return v;
+}
+
+// Copies the samples of [lo, lo+n) into scratch (dense or sparse source).
+template <class T>
+Block<T> load_block(const Volume& v, const ChunkIndex& idx, const std::array<std::int64_t, 3>& lo,
+                    const std::array<std::int64_t, 3>& n, Scratch& s) {
+    const std::size_t count = std::size_t(n[0] * n[1] * n[2]);
+    s.block.resize(count * sizeof(T));
+    T* out = reinterpret_cast<T*>(s.block.data());
+    if (v.is_sparse()) {
+        const auto& g = *v.sparse_grid();
+        auto acc = g.grid->getConstAccessor();
+        std::size_t o = 0;
+        for (std::int64_t z = 0; z < n[2]; ++z)
+            for (std::int64_t y = 0; y < n[1]; ++y)
+                for (std::int64_t x = 0; x < n[0]; ++x) {
+                    openvdb::Coord c(int(lo[0] + x) + g.offset.x(), int(lo[1] + y) + g.offset.y(),
+                                     int(lo[2] + z) + g.offset.z());
+                    out[o++] = substitute(T(acc.getValue(c)), idx);
+                }
+    } else {
+        const T* src = v.as<T>().data();
+        std::size_t o = 0;
+        for (std::int64_t z = 0; z < n[2]; ++z)
+            for (std::int64_t y = 0; y < n[1]; ++y) {
+                const T* row = src + v.linear_index(lo[0], lo[1] + y, lo[2] + z);
+                if constexpr (std::is_floating_point_v<T>) {
+                    for (std::int64_t x = 0; x < n[0]; ++x) out[o++] = substitute(row[x], idx);
+                } else {
+                    std::memcpy(out + o, row, std::size_t(n[0]) * sizeof(T));
+                    o += std::size_t(n[0]);
+                }
+            }
+    }
+    return Block<T>{out, lo, n};
+}
+
+// Gradient in index space at sample (x,y,z): central differences inside the
+// volume, one-sided at its border (as vtkFlyingEdges3D).
+template <class T> glm::dvec3 gradient(const Block<T>& b, const Frame& f, std::int64_t x, std::int64_t y, std::int64_t z) {
+    glm::dvec3 g;
+    const std::int64_t p[3] = {x, y, z};
+    for (int a = 0; a < 3; ++a) {
+        std::int64_t lo[3] = {x, y, z}, hi[3] = {x, y, z};
+        double scale = 0.5;
+        if (p[a] == 0) {
+            hi[a] += 1;
+            scale = 1.0;
+        } else if (p[a] >= f.dims[a] - 1) {
+            lo[a] -= 1;
+            scale = 1.0;
+        } else {
+            lo[a] -= 1;
+            hi[a] += 1;
+        }
+        if (f.dims[a] < 2) { g[a] = 0; continue; }
+        g[a] = scale * (double(b.at(hi[0], hi[1], hi[2])) - double(b.at(lo[0], lo[1], lo[2])));
+    }
+    return g;
+}
+
+bool on_border(const Frame& f, std::int64_t p, int a) { return p % f.C == 0 && p > 0 && p < f.dims[a] - 1; }
+
+// Marching cubes over one chunk for one iso value.
+template <class T>
+void run_chunk(const Block<T>& b, const ChunkGeom& g, const Frame& f, double iso, Scratch& s, ChunkMesh& out) {
+    const auto& tab = mc::tables();
+    const std::int64_t nx = g.p1[0] - g.p0[0] + 1, ny = g.p1[1] - g.p0[1] + 1, nz = g.p1[2] - g.p0[2] + 1;
+    const std::size_t npts = std::size_t(nx * ny * nz);
+    out = ChunkMesh{};
+
+    s.inside.resize(npts);
+    for (std::int64_t z = 0; z < nz; ++z)
+        for (std::int64_t y = 0; y < ny; ++y) {
+            std::uint8_t* in = s.inside.data() + nx * (y + ny * z);
+            for (std::int64_t x = 0; x < nx; ++x)
+                in[x] = double(b.at(g.p0[0] + x, g.p0[1] + y, g.p0[2] + z)) >= iso ? 1 : 0;
+        }
+    s.slots.assign(npts * 4, kNone);
+    s.cols.resize(std::size_t(nx));
+
+    auto lin = [&](std::int64_t x, std::int64_t y, std::int64_t z) { return std::size_t(x + nx * (y + ny * z)); };
+
+    auto make_vertex = [&](std::int64_t lx, std::int64_t ly, std::int64_t lz, int axis) -> std::uint32_t {
+        const std::size_t sp = lin(lx, ly, lz);
+        std::uint32_t& slot = s.slots[sp * 4 + axis];
+        if (slot != kNone) return slot;
+        std::int64_t ex = lx + (axis == 0), ey = ly + (axis == 1), ez = lz + (axis == 2);
+        const std::int64_t gx = g.p0[0] + lx, gy = g.p0[1] + ly, gz = g.p0[2] + lz;
+        const double s0 = double(b.at(gx, gy, gz));
+        const double s1 = double(b.at(gx + (axis == 0), gy + (axis == 1), gz + (axis == 2)));
+        const double t = (iso - s0) / (s1 - s0);
+        // A tie puts the vertex on a sample: one vertex per sample, shared by every cut edge ending there.
+        int point_axis = -1;
+        std::size_t point_lin = 0;
+        std::int64_t px = gx, py = gy, pz = gz;
+        if (t <= 0.0) {
+            point_axis = 3;
+            point_lin = sp;
+        } else if (t >= 1.0) {
+            point_axis = 3;
+            point_lin = lin(ex, ey, ez);
+            px = gx + (axis == 0);
+            py = gy + (axis == 1);
+            pz = gz + (axis == 2);
+        }
+        if (point_axis == 3) {
+            std::uint32_t& pslot = s.slots[point_lin * 4 + 3];
+            if (pslot != kNone) return slot = pslot;
+        }
+        const std::uint32_t id = std::uint32_t(out.positions.size());
+        glm::dvec3 ip, n(0.0);
+        std::uint64_t key;
+        bool border;
+        if (point_axis == 3) {
+            ip = glm::dvec3(px, py, pz);
+            key = 4 * std::uint64_t(px + f.dims[0] * (py + f.dims[1] * pz)) + 3;
+            border = on_border(f, px, 0) || on_border(f, py, 1) || on_border(f, pz, 2);
+            if (f.normals) n = gradient(b, f, px, py, pz);
+            s.slots[point_lin * 4 + 3] = id;
+        } else {
+            ip = glm::dvec3(gx, gy, gz);
+            ip[axis] += t;
+            key = 4 * std::uint64_t(gx + f.dims[0] * (gy + f.dims[1] * gz)) + std::uint64_t(axis);
+            const std::int64_t gp[3] = {gx, gy, gz};
+            border = false;
+            for (int a = 0; a < 3; ++a)
+                if (a != axis && on_border(f, gp[a], a)) border = true;
+            if (f.normals) {
+                const glm::dvec3 g0 = gradient(b, f, gx, gy, gz);
+                const glm::dvec3 g1 = gradient(b, f, gx + (axis == 0), gy + (axis == 1), gz + (axis == 2));
+                n = g0 + t * (g1 - g0);
+            }
+        }
+        const glm::dvec3 w = glm::dvec3(f.m * glm::dvec4(ip, 1.0));
+        out.positions.emplace_back(w);
+        if (f.normals) {
+            glm::dvec3 wn = -(f.normal_m * n);
+            const double len = glm::length(wn);
+            out.normals.emplace_back(len > 0.0 ? glm::vec3(wn / len) : glm::vec3(0.0f));
+        }
+        if (border) out.border.emplace_back(key, id);
+        return slot = id;
+    };
+
+    for (std::int64_t z = 0; z + 1 < nz; ++z)
+        for (std::int64_t y = 0; y + 1 < ny; ++y) {
+            const std::uint8_t* r00 = s.inside.data() + lin(0, y, z);
+            const std::uint8_t* r10 = s.inside.data() + lin(0, y + 1, z);
+            const std::uint8_t* r01 = s.inside.data() + lin(0, y, z + 1);
+            const std::uint8_t* r11 = s.inside.data() + lin(0, y + 1, z + 1);
+            std::uint8_t any = 0, all = 15;
+            for (std::int64_t x = 0; x < nx; ++x) {
+                const std::uint8_t c = std::uint8_t(r00[x] | (r10[x] << 1) | (r01[x] << 2) | (r11[x] << 3));
+                s.cols[std::size_t(x)] = c;
+                any |= c;
+                all &= c;
+            }
+            if (any == 0 || all == 15) continue; // the whole cell row is outside, or inside
+            for (std::int64_t x = 0; x + 1 < nx; ++x) {
+                const std::uint8_t cs = kCases.t[s.cols[std::size_t(x)]][s.cols[std::size_t(x + 1)]];
+                const int ntri = tab.tri_count[cs];
+                if (ntri == 0) continue;
+                const auto& te = tab.tri_edges[cs];
+                for (int t = 0; t < ntri; ++t) {
+                    std::uint32_t v[3];
+                    for (int k = 0; k < 3; ++k) {
+                        const auto& e = tab.edges[std::size_t(te[std::size_t(3 * t + k)])];
+                        v[k] = make_vertex(x + e.dx, y + e.dy, z + e.dz, e.axis);
+                    }
+                    if (v[0] == v[1] || v[1] == v[2] || v[0] == v[2]) continue; // collapsed by a tie
+                    if (f.flip) std::swap(v[1], v[2]);
+                    out.triangles.push_back({v[0], v[1], v[2]});
+                }
+            }
+        }
+}
+
+Frame make_frame(const Volume& v, int C, bool normals) {
+    Frame f;
+    f.dims = v.dims;
+    f.C = C;
+    f.m = v.index_to_lps;
+    const glm::dmat3 lin(v.index_to_lps);
+    f.normal_m = glm::transpose(glm::inverse(lin));
+    f.flip = glm::determinant(lin) < 0.0;
+    f.normals = normals;
+    return f;
+}
+
+} // namespace
+
+// ---- ChunkIndex ------------------------------------------------------------
+
+ChunkIndex::ChunkIndex(const Volume& v, int chunk_size, int threads) : chunk_size_(chunk_size), dims_(v.dims) {
+    if (chunk_size < 1) throw Error("ChunkIndex", "chunk size must be at least 1");
+    for (int a = 0; a < 3; ++a) {
+        const std::int64_t cells = std::max<std::int64_t>(v.dims[a] - 1, 0);
+        counts_[a] = int((cells + chunk_size - 1) / chunk_size);
+    }
+    const std::size_t n = std::size_t(counts_[0]) * counts_[1] * counts_[2];
+    min_.assign(n, 0.0);
+    max_.assign(n, 0.0);
+    // Only floating-point samples can be NaN or Inf; skip the scan otherwise.
+    const bool floating = v.is_sparse() || v.type == VoxelType::F32 || v.type == VoxelType::F64;
+    const auto r = floating ? v.value_range() : ValueRange{};
+    const bool any_finite = r.min <= r.max && (r.nan_count + r.inf_count) < std::size_t(std::max<std::int64_t>(v.voxel_count(), 1));
+    lowest_ = any_finite ? r.min : 0.0;
+    highest_ = any_finite ? r.max : 0.0;
+    nan_value_ = lowest_ - std::max(1.0, std::abs(lowest_) * 1e-3);
+    if (n == 0) return;
+    in_arena(threads, [&] {
+        tbb::parallel_for(std::size_t(0), n, [&](std::size_t id) { summarize(v, id); });
+    });
+}
+
+void ChunkIndex::summarize(const Volume& v, std::size_t id) {
+    const auto g = chunk_geom(dims_, chunk_size_, coords(id));
+    double lo = std::numeric_limits<double>::max(), hi = std::numeric_limits<double>::lowest();
+    if (v.is_sparse()) {
+        const auto& sg = *v.sparse_grid();
+        auto acc = sg.grid->getConstAccessor();
+        for (std::int64_t z = g.p0[2]; z <= g.p1[2]; ++z)
+            for (std::int64_t y = g.p0[1]; y <= g.p1[1]; ++y)
+                for (std::int64_t x = g.p0[0]; x <= g.p1[0]; ++x) {
+                    const double s = substitute(double(acc.getValue(openvdb::Coord(
+                                                    int(x) + sg.offset.x(), int(y) + sg.offset.y(), int(z) + sg.offset.z()))),
+                                                *this);
+                    lo = std::min(lo, s);
+                    hi = std::max(hi, s);
+                }
+    } else {
+        dispatch_voxel_type(v.type, [&](auto tag) {
+            using T = decltype(tag);
+            const T* src = v.as<T>().data();
+            T tlo = std::numeric_limits<T>::max(), thi = std::numeric_limits<T>::lowest();
+            for (std::int64_t z = g.p0[2]; z <= g.p1[2]; ++z)
+                for (std::int64_t y = g.p0[1]; y <= g.p1[1]; ++y) {
+                    const T* row = src + v.linear_index(g.p0[0], y, z);
+                    const std::int64_t n = g.p1[0] - g.p0[0] + 1;
+                    if constexpr (std::is_floating_point_v<T>) {
+                        for (std::int64_t x = 0; x < n; ++x) {
+                            const T s = substitute(row[x], *this);
+                            tlo = std::min(tlo, s);
+                            thi = std::max(thi, s);
+                        }
+                    } else {
+                        for (std::int64_t x = 0; x < n; ++x) {
+                            tlo = std::min(tlo, row[x]);
+                            thi = std::max(thi, row[x]);
+                        }
+                    }
+                }
+            lo = double(tlo);
+            hi = double(thi);
+            return 0;
+        });
+    }
+    min_[id] = lo;
+    max_[id] = hi;
+}
+
+std::vector<std::size_t> ChunkIndex::chunks_touching(const IndexBox& box) const {
+    std::vector<std::size_t> ids;
+    if (box.empty() || min_.empty()) return ids;
+    // A changed sample alters the samples of the chunks holding it and, through
+    // the gradient stencil, vertices on edges that end one sample away.
+    std::array<int, 3> c0, c1;
+    for (int a = 0; a < 3; ++a) {
+        const std::int64_t lo = std::max<std::int64_t>(box.lo[a] - 1, 0);
+        const std::int64_t hi = std::min<std::int64_t>(box.hi[a] + 1, dims_[a] - 1);
+        if (hi < lo) return ids;
+        // Chunk c holds samples [c*C, c*C + C]: sample p is in chunks (p-1)/C .. p/C.
+        c0[a] = int(std::max<std::int64_t>(lo - 1, 0) / chunk_size_);
+        c1[a] = int(std::min<std::int64_t>(hi / chunk_size_, counts_[a] - 1));
+    }
+    for (int z = c0[2]; z <= c1[2]; ++z)
+        for (int y = c0[1]; y <= c1[1]; ++y)
+            for (int x = c0[0]; x <= c1[0]; ++x)
+                ids.push_back(std::size_t(x) + std::size_t(counts_[0]) * (std::size_t(y) + std::size_t(counts_[1]) * z));
+    return ids;
+}
+
+void ChunkIndex::refresh(const Volume& v, std::span<const std::size_t> ids) {
+    // The value range may have grown; NaN substitution keeps the old bounds,
+    // which is enough for classification (only "below every iso" matters).
+    for (auto id : ids) summarize(v, id);
+}
+
+// ---- ChunkedSurface -----------------------------------------------------------
+
+std::size_t ChunkedSurface::triangle_count() const {
+    std::size_t n = 0;
+    for (const auto& c : chunks) n += c.triangles.size();
+    return n;
+}
+
+std::size_t ChunkedSurface::memory_bytes() const {
+    std::size_t n = chunks.capacity() * sizeof(ChunkMesh);
+    for (const auto& c : chunks)
+        n += c.positions.capacity() * sizeof(glm::vec3) + c.normals.capacity() * sizeof(glm::vec3) +
+             c.triangles.capacity() * sizeof(c.triangles[0]) + c.border.capacity() * sizeof(c.border[0]);
+    return n;
+}
+
+// ---- Extractor -----------------------------------------------------------------
+
+namespace {
+std::size_t scratch_estimate(int C, std::size_t sample_bytes) {
+    const std::size_t n = std::size_t(C + 1), h = std::size_t(C + 3);
+    return h * h * h * sample_bytes + n * n * n * (1 + 4 * sizeof(std::uint32_t)) + n;
+}
+} // namespace
+
+Extractor::Extractor(const Volume& volume, ExtractOptions opt) : volume_(&volume), opt_(std::move(opt)) {
+    if (opt_.chunk_size < 2) throw Error("extract", "chunk size must be at least 2 cells");
+    const std::size_t sample = volume.is_sparse() ? sizeof(float) : voxel_size(volume.type);
+    // Fit the per-thread scratch into the budget: fewer threads first, then smaller chunks.
+    int threads = effective_threads(opt_.threads);
+    while (threads > 1 && std::size_t(threads) * scratch_estimate(opt_.chunk_size, sample) > opt_.memory_budget) --threads;
+    while (opt_.chunk_size > 4 && scratch_estimate(opt_.chunk_size, sample) > opt_.memory_budget) opt_.chunk_size /= 2;
+    opt_.threads = threads;
+    index_ = ChunkIndex(volume, opt_.chunk_size, opt_.threads);
+}
+
+namespace {
+
+// Extracts `ids` for every surface in `out` (one per iso).
+void run_chunks(const Volume& v, const ChunkIndex& idx, const ExtractOptions& opt, std::span<const std::size_t> ids,
+                std::span<ChunkedSurface> out, ExtractStats* stats) {
+    const Frame f = make_frame(v, idx.chunk_size(), opt.normals);
+    tbb::enumerable_thread_specific<Scratch> scratch;
+    std::atomic<std::size_t> done{0};
+    std::atomic<bool> cancelled{false};
+    std::mutex progress_mutex;
+    const VoxelType type = v.is_sparse() ? VoxelType::F32 : v.type;
+
+    in_arena(opt.threads, [&] {
+        tbb::parallel_for(std::size_t(0), ids.size(), [&](std::size_t n) {
+            if (cancelled.load(std::memory_order_relaxed)) return;
+            const std::size_t id = ids[n];
+            bool any = false;
+            for (auto& s : out) any |= idx.active(id, s.iso);
+            if (any) {
+                auto& sc = scratch.local();
+                const auto g = chunk_geom(v.dims, idx.chunk_size(), idx.coords(id));
+                std::array<std::int64_t, 3> lo, cnt;
+                for (int a = 0; a < 3; ++a) {
+                    lo[a] = std::max<std::int64_t>(g.p0[a] - 1, 0);
+                    cnt[a] = std::min<std::int64_t>(g.p1[a] + 1, v.dims[a] - 1) - lo[a] + 1;
+                }
+                dispatch_voxel_type(type, [&](auto tag) {
+                    using T = decltype(tag);
+                    const Block<T> b = load_block<T>(v, idx, lo, cnt, sc);
+                    for (auto& s : out) {
+                        if (idx.active(id, s.iso))
+                            run_chunk(b, g, f, s.iso, sc, s.chunks[id]);
+                        else
+                            s.chunks[id] = ChunkMesh{};
+                    }
+                    return 0;
+                });
+            } else {
+                for (auto& s : out) s.chunks[id] = ChunkMesh{};
+            }
+            const std::size_t d = ++done;
+            if (opt.progress && (d % 64 == 0 || d == ids.size())) {
+                std::lock_guard lock(progress_mutex);
+                if (!opt.progress(double(d) / double(ids.size()), "extracting isosurface")) cancelled = true;
+            }
+        });
+    });
+    if (cancelled) throw Cancelled("extract");
+    if (stats) {
+        std::size_t bytes = 0;
+        for (const auto& s : scratch) bytes += s.bytes();
+        stats->peak_scratch_bytes = std::max(stats->peak_scratch_bytes, bytes);
+        stats->threads = effective_threads(opt.threads);
+        stats->chunk_size = idx.chunk_size();
+        stats->chunks_total = idx.chunk_count();
+        for (auto id : ids)
+            for (auto& s : out)
+                if (idx.active(id, s.iso)) { ++stats->chunks_visited; break; }
+    }
+}
+
+} // namespace
+
+std::vector<ChunkedSurface> Extractor::extract(std::span<const double> isos, ExtractStats* stats) const {
+    std::vector<ChunkedSurface> out(isos.size());
+    for (std::size_t i = 0; i < isos.size(); ++i) {
+        if (!std::isfinite(isos[i])) throw Error("extract", "iso value is not a finite number");
+        out[i].iso = isos[i];
+        out[i].chunks.resize(index_.chunk_count());
+    }
+    std::vector<std::size_t> ids;
+    ids.reserve(index_.chunk_count());
+    for (std::size_t id = 0; id < index_.chunk_count(); ++id)
+        for (double iso : isos)
+            if (index_.active(id, iso)) { ids.push_back(id); break; }
+    run_chunks(*volume_, index_, opt_, ids, out, stats);
+    if (stats) stats->chunks_total = index_.chunk_count();
+    return out;
+}
+
+ChunkedSurface Extractor::extract(double iso, ExtractStats* stats) const {
+    const double isos[1] = {iso};
+    return std::move(extract(std::span<const double>(isos, 1), stats)[0]);
+}
+
+std::vector<std::size_t> Extractor::update(const IndexBox& box, std::span<ChunkedSurface> surfaces, ExtractStats* stats) {
+    auto ids = index_.chunks_touching(box);
+    index_.refresh(*volume_, ids);
+    for (auto& s : surfaces)
+        if (s.chunks.size() != index_.chunk_count()) throw Error("extract", "surface does not belong to this extractor");
+    run_chunks(*volume_, index_, opt_, ids, surfaces, stats);
+    return ids;
+}
+
+// ---- weld ------------------------------------------------------------------------
+
+Mesh weld(const ChunkedSurface& s, int threads) {
+    Mesh m;
+    const std::size_t n = s.chunks.size();
+    // 1. Border vertices, sorted by key: the first of each run is kept.
+    struct Entry {
+        std::uint64_t key;
+        std::uint32_t chunk, local;
+        bool operator<(const Entry& o) const { return key != o.key ? key < o.key : chunk < o.chunk; }
+    };
+    std::vector<Entry> border;
+    {
+        std::size_t total = 0;
+        for (const auto& c : s.chunks) total += c.border.size();
+        border.reserve(total);
+        for (std::size_t id = 0; id < n; ++id)
+            for (const auto& [key, local] : s.chunks[id].border) border.push_back({key, std::uint32_t(id), local});
+    }
+    in_arena(threads, [&] { tbb::parallel_sort(border.begin(), border.end()); });
+
+    // 2. Global numbering: every vertex but the border duplicates.
+    constexpr std::uint32_t kAlias = 0xFFFFFFFEu;
+    std::vector<std::vector<std::uint32_t>> remap(n);
+    for (std::size_t id = 0; id < n; ++id) remap[id].assign(s.chunks[id].positions.size(), kNone);
+    for (std::size_t i = 1; i < border.size(); ++i)
+        if (border[i].key == border[i - 1].key) remap[border[i].chunk][border[i].local] = kAlias;
+    std::vector<std::size_t> vbase(n + 1, 0), tbase(n + 1, 0);
+    for (std::size_t id = 0; id < n; ++id) {
+        std::size_t kept = 0;
+        for (auto r : remap[id]) kept += (r != kAlias);
+        vbase[id + 1] = vbase[id] + kept;
+        tbase[id + 1] = tbase[id] + s.chunks[id].triangles.size();
+    }
+    if (vbase[n] >= kNone) throw Error("weld", "the surface has more than 4 billion vertices");
+    const bool normals = [&] {
+        for (const auto& c : s.chunks)
+            if (!c.positions.empty()) return !c.normals.empty();
+        return false;
+    }();
+    m.positions.resize(vbase[n]);
+    if (normals) m.normals.resize(vbase[n]);
+    m.triangles.resize(tbase[n]);
+
+    in_arena(threads, [&] {
+        tbb::parallel_for(std::size_t(0), n, [&](std::size_t id) {
+            const auto& c = s.chunks[id];
+            std::uint32_t next = std::uint32_t(vbase[id]);
+            for (std::size_t v = 0; v < c.positions.size(); ++v) {
+                if (remap[id][v] == kAlias) continue;
+                remap[id][v] = next;
+                m.positions[next] = c.positions[v];
+                if (normals) m.normals[next] = c.normals[v];
+                ++next;
+            }
+        });
+    });
+    // 3. Duplicates take the index of the first of their run.
+    for (std::size_t i = 1, first = 0; i < border.size(); ++i) {
+        if (border[i].key != border[first].key) { first = i; continue; }
+        remap[border[i].chunk][border[i].local] = remap[border[first].chunk][border[first].local];
+    }
+    in_arena(threads, [&] {
+        tbb::parallel_for(std::size_t(0), n, [&](std::size_t id) {
+            const auto& c = s.chunks[id];
+            auto* out = m.triangles.data() + tbase[id];
+            for (const auto& t : c.triangles) *out++ = {remap[id][t[0]], remap[id][t[1]], remap[id][t[2]]};
+        });
+    });
+
+    // 4. Vertices where the gradient vanished take the area-weighted normal of their triangles.
+    if (normals) {
+        std::vector<std::uint32_t> flat;
+        for (std::size_t v = 0; v < m.normals.size(); ++v)
+            if (m.normals[v] == glm::vec3(0.0f)) flat.push_back(std::uint32_t(v));
+        if (!flat.empty()) {
+            std::vector<glm::dvec3> acc(m.positions.size(), glm::dvec3(0.0));
+            std::vector<std::uint8_t> want(m.positions.size(), 0);
+            for (auto v : flat) want[v] = 1;
+            for (const auto& t : m.triangles) {
+                if (!(want[t[0]] | want[t[1]] | want[t[2]])) continue;
+                const glm::dvec3 a(m.positions[t[0]]), b(m.positions[t[1]]), c(m.positions[t[2]]);
+                const glm::dvec3 fn = glm::cross(b - a, c - a);
+                for (auto v : t)
+                    if (want[v]) acc[v] += fn;
+            }
+            for (auto v : flat) {
+                const double len = glm::length(acc[v]);
+                if (len > 0.0) m.normals[v] = glm::vec3(acc[v] / len);
+            }
+        }
+    }
+    return m;
+}
+
+Mesh extract_isosurface(const Volume& v, double iso, const ExtractOptions& opt) {
+    Extractor x(v, opt);
+    return weld(x.extract(iso), x.options().threads);
+}
+
+std::vector<Mesh> extract_isosurfaces(const Volume& v, std::span<const double> isos, const ExtractOptions& opt) {
+    Extractor x(v, opt);
+    auto surfaces = x.extract(isos);
+    std::vector<Mesh> out;
+    out.reserve(surfaces.size());
+    for (auto& s : surfaces) {
+        out.push_back(weld(s, x.options().threads));
+        s = ChunkedSurface{}; // free the chunks as soon as they are welded
+    }
+    return out;
+}
+
+} // namespace iso
