@@ -8,6 +8,7 @@
 #include <mutex>
 
 #include <glm/glm.hpp>
+#include <sys/mman.h>
 #include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_sort.h>
@@ -21,6 +22,18 @@ namespace iso {
 namespace {
 
 constexpr std::uint32_t kNone = 0xFFFFFFFFu;
+
+// Large output arrays are backed by transparent huge pages where the kernel
+// offers them on request ("madvise" mode): one fault per 2 MiB instead of one
+// per 4 KiB, which on virtual machines is most of the cost of filling fresh
+// memory. Call after reserve() and before the memory is first written.
+template <class V> void advise_huge_pages(V& v) {
+    constexpr std::uintptr_t huge = std::uintptr_t(2) << 20;
+    const auto begin = reinterpret_cast<std::uintptr_t>(v.data());
+    const auto end = begin + v.capacity() * sizeof(typename V::value_type);
+    const std::uintptr_t lo = (begin + huge - 1) & ~(huge - 1), hi = end & ~(huge - 1);
+    if (hi > lo) ::madvise(reinterpret_cast<void*>(lo), hi - lo, MADV_HUGEPAGE);
+}
 
 int effective_threads(int requested) {
     const int hw = tbb::this_task_arena::max_concurrency();
@@ -69,8 +82,14 @@ struct Scratch {
     std::vector<std::uint8_t> inside; // per chunk sample
     std::vector<std::uint8_t> cols;   // column codes of one cell row
     std::vector<std::uint32_t> slots; // per chunk sample x 4: vertex on the +x/+y/+z edge, or at the sample
+    std::vector<std::uint32_t> touched; // slots written for the current chunk (reset afterwards)
+    ChunkMesh staging;                  // grows once per thread; chunks get exact-size copies
     std::size_t bytes() const {
-        return block.capacity() + inside.capacity() + cols.capacity() + slots.capacity() * sizeof(std::uint32_t);
+        return block.capacity() + inside.capacity() + cols.capacity() +
+               (slots.capacity() + touched.capacity()) * sizeof(std::uint32_t) +
+               staging.positions.capacity() * 2 * sizeof(glm::vec3) +
+               staging.triangles.capacity() * sizeof(staging.triangles[0]) +
+               staging.border.capacity() * sizeof(staging.border[0]);
     }
 };
 
@@ -165,20 +184,26 @@ bool on_border(const Frame& f, std::int64_t p, int a) { return p % f.C == 0 && p
 
 // Marching cubes over one chunk for one iso value.
 template <class T>
-void run_chunk(const Block<T>& b, const ChunkGeom& g, const Frame& f, double iso, Scratch& s, ChunkMesh& out) {
+void run_chunk(const Block<T>& b, const ChunkGeom& g, const Frame& f, double iso, Scratch& s, ChunkMesh& result) {
     const auto& tab = mc::tables();
     const std::int64_t nx = g.p1[0] - g.p0[0] + 1, ny = g.p1[1] - g.p0[1] + 1, nz = g.p1[2] - g.p0[2] + 1;
     const std::size_t npts = std::size_t(nx * ny * nz);
-    out = ChunkMesh{};
+    ChunkMesh& out = s.staging;
+    out.positions.clear();
+    out.normals.clear();
+    out.triangles.clear();
+    out.border.clear();
 
     s.inside.resize(npts);
     for (std::int64_t z = 0; z < nz; ++z)
         for (std::int64_t y = 0; y < ny; ++y) {
             std::uint8_t* in = s.inside.data() + nx * (y + ny * z);
-            for (std::int64_t x = 0; x < nx; ++x)
-                in[x] = double(b.at(g.p0[0] + x, g.p0[1] + y, g.p0[2] + z)) >= iso ? 1 : 0;
+            const T* row = b.data + (g.p0[0] - b.lo[0]) + b.n[0] * ((g.p0[1] + y - b.lo[1]) + b.n[1] * (g.p0[2] + z - b.lo[2]));
+            for (std::int64_t x = 0; x < nx; ++x) in[x] = double(row[x]) >= iso ? 1 : 0;
         }
-    s.slots.assign(npts * 4, kNone);
+    // Slots stay kNone between chunks: only the ones written are reset.
+    if (s.slots.size() < npts * 4) s.slots.assign(npts * 4, kNone);
+    s.touched.clear();
     s.cols.resize(std::size_t(nx));
 
     auto lin = [&](std::int64_t x, std::int64_t y, std::int64_t z) { return std::size_t(x + nx * (y + ny * z)); };
@@ -187,6 +212,7 @@ void run_chunk(const Block<T>& b, const ChunkGeom& g, const Frame& f, double iso
         const std::size_t sp = lin(lx, ly, lz);
         std::uint32_t& slot = s.slots[sp * 4 + axis];
         if (slot != kNone) return slot;
+        s.touched.push_back(std::uint32_t(sp * 4 + axis));
         std::int64_t ex = lx + (axis == 0), ey = ly + (axis == 1), ez = lz + (axis == 2);
         const std::int64_t gx = g.p0[0] + lx, gy = g.p0[1] + ly, gz = g.p0[2] + lz;
         const double s0 = double(b.at(gx, gy, gz));
@@ -220,6 +246,7 @@ void run_chunk(const Block<T>& b, const ChunkGeom& g, const Frame& f, double iso
             border = on_border(f, px, 0) || on_border(f, py, 1) || on_border(f, pz, 2);
             if (f.normals) n = gradient(b, f, px, py, pz);
             s.slots[point_lin * 4 + 3] = id;
+            s.touched.push_back(std::uint32_t(point_lin * 4 + 3));
         } else {
             ip = glm::dvec3(gx, gy, gz);
             ip[axis] += t;
@@ -276,6 +303,11 @@ void run_chunk(const Block<T>& b, const ChunkGeom& g, const Frame& f, double iso
                 }
             }
         }
+    for (auto t : s.touched) s.slots[t] = kNone;
+    result.positions.assign(out.positions.begin(), out.positions.end());
+    result.normals.assign(out.normals.begin(), out.normals.end());
+    result.triangles.assign(out.triangles.begin(), out.triangles.end());
+    result.border.assign(out.border.begin(), out.border.end());
 }
 
 Frame make_frame(const Volume& v, int C, bool normals) {
@@ -559,8 +591,16 @@ Mesh weld(const ChunkedSurface& s, int threads) {
             if (!c.positions.empty()) return !c.normals.empty();
         return false;
     }();
+    m.positions.reserve(vbase[n]);
+    advise_huge_pages(m.positions);
     m.positions.resize(vbase[n]);
-    if (normals) m.normals.resize(vbase[n]);
+    if (normals) {
+        m.normals.reserve(vbase[n]);
+        advise_huge_pages(m.normals);
+        m.normals.resize(vbase[n]);
+    }
+    m.triangles.reserve(tbase[n]);
+    advise_huge_pages(m.triangles);
     m.triangles.resize(tbase[n]);
 
     in_arena(threads, [&] {
