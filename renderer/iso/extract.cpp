@@ -6,6 +6,7 @@
 #include <cstring>
 #include <limits>
 #include <mutex>
+#include <set>
 
 #include <glm/glm.hpp>
 #include <sys/mman.h>
@@ -158,7 +159,8 @@ Block<T> load_block(const Volume& v, const ChunkIndex& idx, const std::array<std
 
 // Gradient in index space at sample (x,y,z): central differences inside the
 // volume, one-sided at its border (as vtkFlyingEdges3D).
-template <class T> glm::dvec3 gradient(const Block<T>& b, const Frame& f, std::int64_t x, std::int64_t y, std::int64_t z) {
+template <class T, class Cls>
+glm::dvec3 gradient(const Block<T>& b, const Frame& f, const Cls& cls, std::int64_t x, std::int64_t y, std::int64_t z) {
     glm::dvec3 g;
     const std::int64_t p[3] = {x, y, z};
     for (int a = 0; a < 3; ++a) {
@@ -175,16 +177,34 @@ template <class T> glm::dvec3 gradient(const Block<T>& b, const Frame& f, std::i
             hi[a] += 1;
         }
         if (f.dims[a] < 2) { g[a] = 0; continue; }
-        g[a] = scale * (double(b.at(hi[0], hi[1], hi[2])) - double(b.at(lo[0], lo[1], lo[2])));
+        g[a] = scale * (cls.value(double(b.at(hi[0], hi[1], hi[2]))) - cls.value(double(b.at(lo[0], lo[1], lo[2]))));
     }
     return g;
 }
 
 bool on_border(const Frame& f, std::int64_t p, int a) { return p % f.C == 0 && p > 0 && p < f.dims[a] - 1; }
 
-// Marching cubes over one chunk for one iso value.
-template <class T>
-void run_chunk(const Block<T>& b, const ChunkGeom& g, const Frame& f, double iso, Scratch& s, ChunkMesh& result) {
+// What makes a sample inside, where a cut edge's vertex goes, and the field
+// whose gradient gives the normals.
+struct IsoClassifier {
+    double iso;
+    bool inside(double s) const { return s >= iso; }
+    double t(double s0, double s1) const { return (iso - s0) / (s1 - s0); }
+    double value(double s) const { return s; }
+};
+// Discrete (label map) surfaces: the boundary of {sample == label}, vertices
+// at edge midpoints as vtkDiscreteFlyingEdges3D places them, normals from the
+// gradient of the label's indicator function.
+struct LabelClassifier {
+    double label;
+    bool inside(double s) const { return s == label; }
+    double t(double, double) const { return 0.5; }
+    double value(double s) const { return s == label ? 1.0 : 0.0; }
+};
+
+// Marching cubes over one chunk for one surface.
+template <class T, class Cls>
+void run_chunk(const Block<T>& b, const ChunkGeom& g, const Frame& f, const Cls& cls, Scratch& s, ChunkMesh& result) {
     const auto& tab = mc::tables();
     const std::int64_t nx = g.p1[0] - g.p0[0] + 1, ny = g.p1[1] - g.p0[1] + 1, nz = g.p1[2] - g.p0[2] + 1;
     const std::size_t npts = std::size_t(nx * ny * nz);
@@ -199,7 +219,7 @@ void run_chunk(const Block<T>& b, const ChunkGeom& g, const Frame& f, double iso
         for (std::int64_t y = 0; y < ny; ++y) {
             std::uint8_t* in = s.inside.data() + nx * (y + ny * z);
             const T* row = b.data + (g.p0[0] - b.lo[0]) + b.n[0] * ((g.p0[1] + y - b.lo[1]) + b.n[1] * (g.p0[2] + z - b.lo[2]));
-            for (std::int64_t x = 0; x < nx; ++x) in[x] = double(row[x]) >= iso ? 1 : 0;
+            for (std::int64_t x = 0; x < nx; ++x) in[x] = cls.inside(double(row[x])) ? 1 : 0;
         }
     // Slots stay kNone between chunks: only the ones written are reset.
     if (s.slots.size() < npts * 4) s.slots.assign(npts * 4, kNone);
@@ -217,7 +237,7 @@ void run_chunk(const Block<T>& b, const ChunkGeom& g, const Frame& f, double iso
         const std::int64_t gx = g.p0[0] + lx, gy = g.p0[1] + ly, gz = g.p0[2] + lz;
         const double s0 = double(b.at(gx, gy, gz));
         const double s1 = double(b.at(gx + (axis == 0), gy + (axis == 1), gz + (axis == 2)));
-        const double t = (iso - s0) / (s1 - s0);
+        const double t = cls.t(s0, s1);
         // A tie puts the vertex on a sample: one vertex per sample, shared by every cut edge ending there.
         int point_axis = -1;
         std::size_t point_lin = 0;
@@ -244,7 +264,7 @@ void run_chunk(const Block<T>& b, const ChunkGeom& g, const Frame& f, double iso
             ip = glm::dvec3(px, py, pz);
             key = 4 * std::uint64_t(px + f.dims[0] * (py + f.dims[1] * pz)) + 3;
             border = on_border(f, px, 0) || on_border(f, py, 1) || on_border(f, pz, 2);
-            if (f.normals) n = gradient(b, f, px, py, pz);
+            if (f.normals) n = gradient(b, f, cls, px, py, pz);
             s.slots[point_lin * 4 + 3] = id;
             s.touched.push_back(std::uint32_t(point_lin * 4 + 3));
         } else {
@@ -256,8 +276,8 @@ void run_chunk(const Block<T>& b, const ChunkGeom& g, const Frame& f, double iso
             for (int a = 0; a < 3; ++a)
                 if (a != axis && on_border(f, gp[a], a)) border = true;
             if (f.normals) {
-                const glm::dvec3 g0 = gradient(b, f, gx, gy, gz);
-                const glm::dvec3 g1 = gradient(b, f, gx + (axis == 0), gy + (axis == 1), gz + (axis == 2));
+                const glm::dvec3 g0 = gradient(b, f, cls, gx, gy, gz);
+                const glm::dvec3 g1 = gradient(b, f, cls, gx + (axis == 0), gy + (axis == 1), gz + (axis == 2));
                 n = g0 + t * (g1 - g0);
             }
         }
@@ -488,7 +508,7 @@ void run_chunks(const Volume& v, const ChunkIndex& idx, const ExtractOptions& op
                     const Block<T> b = load_block<T>(v, idx, lo, cnt, sc);
                     for (auto& s : out) {
                         if (idx.active(id, s.iso))
-                            run_chunk(b, g, f, s.iso, sc, s.chunks[id]);
+                            run_chunk(b, g, f, IsoClassifier{s.iso}, sc, s.chunks[id]);
                         else
                             s.chunks[id] = ChunkMesh{};
                     }
@@ -652,6 +672,108 @@ Mesh weld(const ChunkedSurface& s, int threads) {
         }
     }
     return m;
+}
+
+std::vector<double> distinct_labels(const Volume& v, std::size_t limit) {
+    if (v.is_sparse()) throw Error(v.meta.source, "label maps must be dense volumes");
+    std::vector<double> out;
+    dispatch_voxel_type(v.type, [&](auto tag) {
+        using T = decltype(tag);
+        if constexpr (std::is_integral_v<T> && sizeof(T) <= 2) {
+            // Small integer types: a histogram.
+            std::vector<std::uint8_t> seen(std::size_t(1) << (8 * sizeof(T)), 0);
+            using U = std::make_unsigned_t<T>;
+            for (T x : v.as<T>()) seen[U(x)] = 1;
+            for (std::size_t u = 0; u < seen.size(); ++u)
+                if (seen[u]) {
+                    const double value = double(T(U(u)));
+                    if (value != 0.0) out.push_back(value);
+                }
+        } else {
+            std::set<T> seen;
+            for (T x : v.as<T>()) {
+                if constexpr (std::is_floating_point_v<T>)
+                    if (std::isnan(x)) continue;
+                if (x != T(0) && seen.insert(x).second && seen.size() > limit) break;
+            }
+            for (T x : seen) out.push_back(double(x));
+        }
+        return 0;
+    });
+    std::sort(out.begin(), out.end());
+    if (out.size() > limit)
+        throw Error(v.meta.source, "has more than " + std::to_string(limit) +
+                                       " distinct values: it does not look like a label map");
+    return out;
+}
+
+std::vector<LabelSurface> extract_labels(const Volume& v, std::span<const double> wanted, const ExtractOptions& opt_in) {
+    std::vector<double> labels(wanted.begin(), wanted.end());
+    if (labels.empty()) labels = distinct_labels(v);
+    std::sort(labels.begin(), labels.end());
+    labels.erase(std::unique(labels.begin(), labels.end()), labels.end());
+    Extractor x(v, opt_in);
+    const auto& idx = x.index();
+    const auto& opt = x.options();
+    const Frame f = make_frame(v, idx.chunk_size(), opt.normals);
+    std::vector<ChunkedSurface> surfaces(labels.size());
+    for (std::size_t l = 0; l < labels.size(); ++l) {
+        surfaces[l].iso = labels[l];
+        surfaces[l].chunks.resize(idx.chunk_count());
+    }
+    // A label's surface can only cross a chunk holding values on both sides of
+    // it... or equal to it: the chunk's range must include the label and not
+    // be that label alone.
+    std::vector<std::size_t> ids;
+    for (std::size_t id = 0; id < idx.chunk_count(); ++id) ids.push_back(id);
+    tbb::enumerable_thread_specific<Scratch> scratch;
+    std::atomic<std::size_t> done{0};
+    std::atomic<bool> cancelled{false};
+    std::mutex progress_mutex;
+    in_arena(opt.threads, [&] {
+        tbb::parallel_for(std::size_t(0), ids.size(), [&](std::size_t n) {
+            if (cancelled.load(std::memory_order_relaxed)) return;
+            const std::size_t id = ids[n];
+            const auto g = chunk_geom(v.dims, idx.chunk_size(), idx.coords(id));
+            // Labels whose range test passes (cheap), then the exact set present.
+            std::vector<std::size_t> candidates;
+            for (std::size_t l = 0; l < labels.size(); ++l)
+                if (idx.active(id, labels[l]) || idx.active(id, std::nextafter(labels[l], HUGE_VAL)))
+                    candidates.push_back(l);
+            if (!candidates.empty()) {
+                auto& sc = scratch.local();
+                std::array<std::int64_t, 3> lo, cnt;
+                for (int a = 0; a < 3; ++a) {
+                    lo[a] = std::max<std::int64_t>(g.p0[a] - 1, 0);
+                    cnt[a] = std::min<std::int64_t>(g.p1[a] + 1, v.dims[a] - 1) - lo[a] + 1;
+                }
+                dispatch_voxel_type(v.type, [&](auto tag) {
+                    using T = decltype(tag);
+                    const Block<T> b = load_block<T>(v, idx, lo, cnt, sc);
+                    std::set<double> present;
+                    for (std::int64_t z = g.p0[2]; z <= g.p1[2]; ++z)
+                        for (std::int64_t y = g.p0[1]; y <= g.p1[1]; ++y)
+                            for (std::int64_t xx = g.p0[0]; xx <= g.p1[0]; ++xx) present.insert(double(b.at(xx, y, z)));
+                    if (present.size() < 2) return 0; // uniform chunk: no boundary inside it
+                    for (auto l : candidates)
+                        if (present.count(labels[l])) run_chunk(b, g, f, LabelClassifier{labels[l]}, sc, surfaces[l].chunks[id]);
+                    return 0;
+                });
+            }
+            const std::size_t d = ++done;
+            if (opt.progress && (d % 64 == 0 || d == ids.size())) {
+                std::lock_guard lock(progress_mutex);
+                if (!opt.progress(double(d) / double(ids.size()), "extracting label surfaces")) cancelled = true;
+            }
+        });
+    });
+    if (cancelled) throw Cancelled("extract_labels");
+    std::vector<LabelSurface> out;
+    for (std::size_t l = 0; l < labels.size(); ++l) {
+        out.push_back({labels[l], weld(surfaces[l], opt.threads)});
+        surfaces[l] = ChunkedSurface{};
+    }
+    return out;
 }
 
 Mesh extract_isosurface(const Volume& v, double iso, const ExtractOptions& opt) {

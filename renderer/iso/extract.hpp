@@ -139,6 +139,20 @@ private:
 // area-weighted face normal.
 Mesh weld(const ChunkedSurface& s, int threads = 0);
 
+// Label maps: one surface per label, all in one pass over the chunks. Each
+// surface bounds the samples equal to its label (vertices at edge midpoints,
+// as vtkDiscreteFlyingEdges3D). `labels` empty: every non-zero value of the
+// volume (at most 4096 distinct values, else iso::Error: not a label map).
+struct LabelSurface {
+    double label = 0;
+    Mesh mesh;
+};
+std::vector<LabelSurface> extract_labels(const Volume& v, std::span<const double> labels = {},
+                                         const ExtractOptions& opt = {});
+// The distinct non-zero values of a volume, sorted; throws when there are
+// more than `limit` (the volume is then not a label map).
+std::vector<double> distinct_labels(const Volume& v, std::size_t limit = 4096);
+
 // One-call forms.
 Mesh extract_isosurface(const Volume& v, double iso, const ExtractOptions& opt = {});
 std::vector<Mesh> extract_isosurfaces(const Volume& v, std::span<const double> isos, const ExtractOptions& opt = {});
