@@ -373,3 +373,34 @@ TEST(Isosurface, LabelMapOneSurfacePerLabelInOnePass) {
     // V = 5*14*12 - (4*(5+14+12))/8 + 8/12.
     EXPECT_NEAR(stats(surfaces[1].mesh).volume, 5.0 * 14.0 * 12.0 - 4.0 * (5 + 14 + 12) / 8.0 + 8.0 / 12.0, 1e-9);
 }
+
+#include "renderer/iso/postprocess.hpp"
+
+TEST(Postprocess, SmoothDecimateKeepLargest) {
+    // Two spheres of different sizes.
+    auto v = field({48, 32, 32}, glm::dmat4(1.0), [](glm::dvec3 p) {
+        return std::max(10.0 - glm::length(p - glm::dvec3(15, 15.5, 15.5)), 5.0 - glm::length(p - glm::dvec3(38, 15.5, 15.5)));
+    });
+    const Mesh m = extract_isosurface(v, 0.0, {});
+    const auto base = stats(m);
+
+    const Mesh largest = postprocess(m, {.keep_largest = true});
+    EXPECT_LT(largest.triangles.size(), m.triangles.size());
+    EXPECT_NEAR(stats(largest).volume, 4.0 / 3.0 * M_PI * 1000.0, 0.02 * 4.0 / 3.0 * M_PI * 1000.0);
+    EXPECT_EQ(bad_edges(largest), 0u);
+
+    const Mesh dec = postprocess(m, {.decimate = 0.75});
+    EXPECT_LT(dec.triangles.size(), m.triangles.size() * 0.3);
+    EXPECT_NEAR(stats(dec).volume, base.volume, 0.03 * base.volume);
+    EXPECT_GT(stats(dec).volume, 0.0) << "orientation kept";
+
+    const Mesh smooth = postprocess(m, {.smooth = 0.5});
+    EXPECT_EQ(smooth.triangles.size(), m.triangles.size());
+    EXPECT_EQ(smooth.normals.size(), smooth.positions.size());
+    EXPECT_NEAR(stats(smooth).volume, base.volume, 0.03 * base.volume);
+    EXPECT_LT(stats(smooth).area, base.area) << "smoothing removes the staircase";
+
+    EXPECT_THROW(postprocess(m, {.smooth = 2.0}), Error);
+    EXPECT_THROW(postprocess(m, {.decimate = 1.0}), Error);
+    EXPECT_TRUE(postprocess(Mesh{}, {.smooth = 0.5}).empty());
+}

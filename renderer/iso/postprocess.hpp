@@ -1,0 +1,28 @@
+// Mesh post-processing through VTK, with the settings users know from 3D
+// Slicer: windowed-sinc smoothing, quadric decimation, keep the largest
+// connected component. Positions stay in LPS mm; normals are recomputed.
+#pragma once
+
+#include "io/mesh.hpp"
+#include "io/progress.hpp"
+
+namespace iso {
+
+struct PostProcessOptions {
+    // 0 (off) .. 1 (strong). Maps to vtkWindowedSincPolyDataFilter with
+    // pass band 10^(-4 * smooth) and 20 iterations, as Slicer's "smoothing
+    // factor" does; boundary and feature edges are left free, normalization on.
+    double smooth = 0.0;
+    // Fraction of triangles to remove, 0 (off) .. <1 (vtkQuadricDecimation,
+    // volume preservation on).
+    double decimate = 0.0;
+    // Keep only the largest connected component (by triangle count).
+    bool keep_largest = false;
+};
+
+bool needs_postprocess(const PostProcessOptions& o);
+
+// Throws iso::Error for options out of range. An empty mesh stays empty.
+Mesh postprocess(const Mesh& m, const PostProcessOptions& o, const ProgressFn& progress = {});
+
+} // namespace iso
