@@ -10,6 +10,9 @@
 
 #include <CLI/CLI.hpp>
 
+#include <filesystem>
+
+#include "io/atomic_file.hpp"
 #include "renderer/core/api.hpp"
 
 namespace {
@@ -87,6 +90,26 @@ int main(int argc, char** argv) {
     info->add_option("--series", info_series, "DICOM series to load: index in the listing or SeriesInstanceUID");
     info->add_flag("--json", info_json, "Print one JSON object");
 
+    std::string mesh_in, mesh_out, mesh_series;
+    std::vector<double> mesh_isos, mesh_label_values;
+    bool mesh_labels = false;
+    iso::PostProcessOptions post;
+    int mesh_threads = 0, mesh_chunk = 32;
+    auto* mesh = app.add_subcommand("mesh", "Extract isosurfaces (or label surfaces) and write them in LPS mm");
+    mesh->add_option("input", mesh_in, "Volume file or DICOM folder")->required();
+    mesh->add_option("--iso", mesh_isos, "Iso value (repeat for several surfaces, e.g. --iso -500 --iso 300)")
+        ->allow_extra_args(false);
+    mesh->add_flag("--labels", mesh_labels, "Label map: one surface per label");
+    mesh->add_option("--label", mesh_label_values, "With --labels: only these labels (repeatable)")
+        ->allow_extra_args(false);
+    mesh->add_option("--smooth", post.smooth, "Windowed-sinc smoothing factor, 0..1 (Slicer's scale)")->check(CLI::Range(0.0, 1.0));
+    mesh->add_option("--decimate", post.decimate, "Fraction of triangles to remove, 0..<1")->check(CLI::Range(0.0, 0.999));
+    mesh->add_flag("--largest", post.keep_largest, "Keep only the largest connected component");
+    mesh->add_option("--series", mesh_series, "DICOM series to load: index or SeriesInstanceUID");
+    mesh->add_option("--threads", mesh_threads, "Threads (default: all cores)")->check(CLI::NonNegativeNumber);
+    mesh->add_option("--chunk", mesh_chunk, "Chunk size in cells per side")->check(CLI::Range(2, 1024));
+    mesh->add_option("-o,--output", mesh_out, "Output .stl, .ply, .obj or .vtp (several surfaces: NAME-iso<V>.ext)")->required();
+
     CLI11_PARSE(app, argc, argv);
 
     try {
@@ -100,6 +123,44 @@ int main(int argc, char** argv) {
                 std::cout << j.dump(2) << "\n";
             else
                 print_info(j, std::cout);
+        }
+        if (*mesh) {
+            if (mesh_isos.empty() && !mesh_labels) throw iso::Error("isoscope mesh", "give --iso V (repeatable) or --labels");
+            if (!mesh_isos.empty() && mesh_labels) throw iso::Error("isoscope mesh", "--iso and --labels exclude each other");
+            namespace fs = std::filesystem;
+            const fs::path out(mesh_out);
+            std::string ext = out.extension().string();
+            for (auto& c : ext) c = char(std::tolower(static_cast<unsigned char>(c)));
+            if (ext != ".stl" && ext != ".ply" && ext != ".obj" && ext != ".vtp")
+                throw iso::Error(mesh_out, "unsupported mesh format (write .stl, .ply, .obj or .vtp)");
+            iso::check_writable_destination(mesh_out); // fail before the long part
+            iso::LoadOptions lo;
+            lo.series = mesh_series;
+            lo.progress = progress_bar();
+            const auto v = iso::core::open_volume(mesh_in, lo);
+            for (const auto& w : v.meta.warnings) std::cerr << "warning: " << w << "\n";
+            iso::core::SurfaceRequest req;
+            req.isos = mesh_isos;
+            req.labels = mesh_labels;
+            req.label_values = mesh_label_values;
+            req.extract.threads = mesh_threads;
+            req.extract.chunk_size = mesh_chunk;
+            req.post = post;
+            req.progress = progress_bar();
+            const auto surfaces = iso::core::extract_surfaces(v, req);
+            for (const auto& s : surfaces) {
+                std::string path = mesh_out;
+                if (surfaces.size() > 1) {
+                    char suffix[64];
+                    std::snprintf(suffix, sizeof suffix, mesh_labels ? "-label%g" : "-iso%g", s.value);
+                    path = (out.parent_path() / (out.stem().string() + suffix + ext)).string();
+                }
+                for (const auto& w : s.mesh.warnings) std::cerr << "warning: " << s.name << ": " << w << "\n";
+                iso::save_mesh(s.mesh, path);
+                const auto st = iso::mesh_stats(s.mesh);
+                std::cout << s.name << ": " << st.triangles << " triangles, " << st.vertices << " vertices, area "
+                          << st.area << " mm^2, volume " << st.volume << " mm^3 -> " << path << "\n";
+            }
         }
     } catch (const iso::Error& e) {
         std::cerr << "isoscope: error: " << e.what() << "\n";

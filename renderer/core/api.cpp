@@ -51,4 +51,54 @@ nlohmann::json describe(const Volume& v) {
     return j;
 }
 
+std::vector<Surface> extract_surfaces(const Volume& v, const SurfaceRequest& req) {
+    std::vector<Surface> out;
+    // Extraction is most of the work; post-processing shares the rest of the bar.
+    const bool post = needs_postprocess(req.post);
+    const double share = post ? 0.6 : 1.0;
+    ExtractOptions eo = req.extract;
+    if (req.progress)
+        eo.progress = [&](double f, std::string_view stage) { return req.progress(f * share, stage); };
+    if (req.labels) {
+        for (auto& ls : extract_labels(v, req.label_values, eo)) {
+            char name[64];
+            std::snprintf(name, sizeof name, "label %g", ls.label);
+            out.push_back({name, ls.label, std::move(ls.mesh)});
+        }
+    } else {
+        if (req.isos.empty()) throw Error("extract_surfaces", "no iso value given");
+        const auto range = v.value_range();
+        for (std::size_t i = 0; i < req.isos.size(); ++i) {
+            char name[64];
+            std::snprintf(name, sizeof name, "iso %g", req.isos[i]);
+            out.push_back({name, req.isos[i], {}});
+        }
+        auto meshes = extract_isosurfaces(v, req.isos, eo);
+        for (std::size_t i = 0; i < meshes.size(); ++i) {
+            out[i].mesh = std::move(meshes[i]);
+            if (req.isos[i] > range.max || req.isos[i] <= range.min) {
+                char w[160];
+                std::snprintf(w, sizeof w, "iso value %g is outside the volume's value range [%g, %g]: the surface is empty",
+                              req.isos[i], range.min, range.max);
+                out[i].mesh.warnings.push_back(w);
+            }
+        }
+    }
+    if (post) {
+        for (std::size_t i = 0; i < out.size(); ++i) {
+            const double base = share + (1.0 - share) * double(i) / double(out.size());
+            ProgressFn pp;
+            if (req.progress)
+                pp = [&](double f, std::string_view stage) {
+                    return req.progress(base + f * (1.0 - share) / double(out.size()), stage);
+                };
+            auto warnings = out[i].mesh.warnings;
+            out[i].mesh = postprocess(out[i].mesh, req.post, pp);
+            out[i].mesh.warnings = std::move(warnings);
+        }
+    }
+    report(req.progress, 1.0, "done", "extract_surfaces");
+    return out;
+}
+
 } // namespace iso::core

@@ -7,6 +7,8 @@
 #include <nlohmann/json.hpp>
 
 #include "io/mesh.hpp"
+#include "renderer/iso/extract.hpp"
+#include "renderer/iso/postprocess.hpp"
 #include "io/volume.hpp"
 #include "io/volume_io.hpp"
 
@@ -25,5 +27,26 @@ std::vector<SeriesInfo> list_series(const std::string& path);
 // index_to_lps (row-major 4x4), range, type, memory_bytes, format, source,
 // storage (dense/sparse), metadata, warnings and, for DICOM, the series list.
 nlohmann::json describe(const Volume& v);
+
+// ---- surfaces -------------------------------------------------------------
+
+struct SurfaceRequest {
+    std::vector<double> isos;   // iso values (ignored with `labels`)
+    bool labels = false;        // one surface per label of a label map
+    std::vector<double> label_values; // with `labels`: which ones (empty: all non-zero)
+    ExtractOptions extract;
+    PostProcessOptions post;
+    ProgressFn progress;
+};
+
+struct Surface {
+    std::string name;   // "iso 500", "label 3"
+    double value = 0;   // iso value or label
+    Mesh mesh;          // LPS mm
+};
+
+// Extracts (and post-processes) the requested surfaces. An iso value outside
+// the volume's range gives an empty mesh with a warning in the mesh.
+std::vector<Surface> extract_surfaces(const Volume& v, const SurfaceRequest& req);
 
 } // namespace iso::core
