@@ -102,6 +102,7 @@ struct Frame {
     glm::dmat3 normal_m;  // inverse transpose of the linear part
     bool flip;            // affine mirrors space: reverse the winding
     bool normals;
+    bool keep_keys;
 };
 
 // A block of samples: the chunk's samples plus a halo, with substitutions for
@@ -213,6 +214,7 @@ void run_chunk(const Block<T>& b, const ChunkGeom& g, const Frame& f, const Cls&
     out.normals.clear();
     out.triangles.clear();
     out.border.clear();
+    out.keys.clear();
 
     s.inside.resize(npts);
     for (std::int64_t z = 0; z < nz; ++z)
@@ -289,6 +291,7 @@ void run_chunk(const Block<T>& b, const ChunkGeom& g, const Frame& f, const Cls&
             out.normals.emplace_back(len > 0.0 ? glm::vec3(wn / len) : glm::vec3(0.0f));
         }
         if (border) out.border.emplace_back(key, id);
+        if (f.keep_keys) out.keys.push_back(key);
         return slot = id;
     };
 
@@ -328,9 +331,10 @@ void run_chunk(const Block<T>& b, const ChunkGeom& g, const Frame& f, const Cls&
     result.normals.assign(out.normals.begin(), out.normals.end());
     result.triangles.assign(out.triangles.begin(), out.triangles.end());
     result.border.assign(out.border.begin(), out.border.end());
+    result.keys.assign(out.keys.begin(), out.keys.end());
 }
 
-Frame make_frame(const Volume& v, int C, bool normals) {
+Frame make_frame(const Volume& v, int C, bool normals, bool keep_keys = false) {
     Frame f;
     f.dims = v.dims;
     f.C = C;
@@ -339,6 +343,7 @@ Frame make_frame(const Volume& v, int C, bool normals) {
     f.normal_m = glm::transpose(glm::inverse(lin));
     f.flip = glm::determinant(lin) < 0.0;
     f.normals = normals;
+    f.keep_keys = keep_keys;
     return f;
 }
 
@@ -482,7 +487,7 @@ namespace {
 // Extracts `ids` for every surface in `out` (one per iso).
 void run_chunks(const Volume& v, const ChunkIndex& idx, const ExtractOptions& opt, std::span<const std::size_t> ids,
                 std::span<ChunkedSurface> out, ExtractStats* stats) {
-    const Frame f = make_frame(v, idx.chunk_size(), opt.normals);
+    const Frame f = make_frame(v, idx.chunk_size(), opt.normals, opt.keep_keys);
     tbb::enumerable_thread_specific<Scratch> scratch;
     std::atomic<std::size_t> done{0};
     std::atomic<bool> cancelled{false};

@@ -46,6 +46,8 @@ struct ExtractOptions {
     // thread count (and, if needed, the chunk size) to stay under it.
     std::size_t memory_budget = std::size_t(256) << 20;
     ProgressFn progress;
+    // Keep every vertex's key in ChunkMesh::keys (tests compare CPU and GPU by key).
+    bool keep_keys = false;
 };
 
 // An index box of samples, inclusive: [lo, hi].
@@ -95,12 +97,16 @@ struct ChunkMesh {
     std::vector<std::array<std::uint32_t, 3>> triangles;
     // Vertices that lie on a face shared with another chunk: (global key, local index).
     std::vector<std::pair<std::uint64_t, std::uint32_t>> border;
+    // With ExtractOptions::keep_keys: every vertex's key, 4 * (linear index of
+    // its edge's first sample) + axis (0..2), or + 3 for a vertex on a sample.
+    std::vector<std::uint64_t> keys;
 };
 
 // The chunked result of one iso value: chunks[id] is empty where no surface is.
 struct ChunkedSurface {
     double iso = 0;
     std::vector<ChunkMesh> chunks;
+    std::vector<std::string> warnings;
     std::size_t triangle_count() const;
     std::size_t memory_bytes() const;
 };

@@ -1,0 +1,157 @@
+#include "renderer/gl/context.hpp"
+
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <vector>
+
+#include <epoxy/egl.h>
+#include <epoxy/gl.h>
+
+#include "io/error.hpp"
+
+namespace iso::gl {
+
+struct HeadlessContext::Impl {
+    EGLDisplay display = EGL_NO_DISPLAY;
+    EGLContext context = EGL_NO_CONTEXT;
+};
+
+bool HeadlessContext::default_debug() {
+#ifdef NDEBUG
+    return std::getenv("ISOSCOPE_GL_DEBUG") != nullptr;
+#else
+    return true;
+#endif
+}
+
+namespace {
+
+const char* egl_error_name(EGLint e) {
+    switch (e) {
+    case EGL_SUCCESS: return "EGL_SUCCESS";
+    case EGL_NOT_INITIALIZED: return "EGL_NOT_INITIALIZED";
+    case EGL_BAD_ACCESS: return "EGL_BAD_ACCESS";
+    case EGL_BAD_ALLOC: return "EGL_BAD_ALLOC";
+    case EGL_BAD_ATTRIBUTE: return "EGL_BAD_ATTRIBUTE";
+    case EGL_BAD_CONFIG: return "EGL_BAD_CONFIG";
+    case EGL_BAD_CONTEXT: return "EGL_BAD_CONTEXT";
+    case EGL_BAD_DISPLAY: return "EGL_BAD_DISPLAY";
+    case EGL_BAD_MATCH: return "EGL_BAD_MATCH";
+    case EGL_BAD_PARAMETER: return "EGL_BAD_PARAMETER";
+    default: return "EGL error";
+    }
+}
+
+bool has_extension(const char* list, const char* name) {
+    if (!list) return false;
+    const std::size_t n = std::strlen(name);
+    for (const char* p = list; (p = std::strstr(p, name)); p += n)
+        if ((p == list || p[-1] == ' ') && (p[n] == ' ' || p[n] == '\0')) return true;
+    return false;
+}
+
+// Displays to try, best first: each GPU the device platform lists (skipping
+// Mesa's software device, which surfaceless gives us anyway), then surfaceless.
+std::vector<std::pair<EGLDisplay, const char*>> candidate_displays() {
+    std::vector<std::pair<EGLDisplay, const char*>> out;
+    const char* client = eglQueryString(EGL_NO_DISPLAY, EGL_EXTENSIONS);
+    if (has_extension(client, "EGL_EXT_platform_device") && has_extension(client, "EGL_EXT_device_enumeration")) {
+        EGLDeviceEXT devices[16];
+        EGLint n = 0;
+        if (eglQueryDevicesEXT(16, devices, &n)) {
+            for (EGLint i = 0; i < n; ++i) {
+                const char* ext = eglQueryDeviceStringEXT(devices[i], EGL_EXTENSIONS);
+                if (has_extension(ext, "EGL_MESA_device_software")) continue;
+                EGLDisplay d = eglGetPlatformDisplayEXT(EGL_PLATFORM_DEVICE_EXT, devices[i], nullptr);
+                if (d != EGL_NO_DISPLAY) out.emplace_back(d, "device");
+            }
+        }
+    }
+    if (has_extension(client, "EGL_MESA_platform_surfaceless")) {
+        EGLDisplay d = eglGetPlatformDisplayEXT(EGL_PLATFORM_SURFACELESS_MESA, EGL_DEFAULT_DISPLAY, nullptr);
+        if (d != EGL_NO_DISPLAY) out.emplace_back(d, "surfaceless");
+    }
+    return out;
+}
+
+} // namespace
+
+HeadlessContext::HeadlessContext(bool debug) : impl_(std::make_unique<Impl>()) {
+    std::string tried;
+    for (auto [display, platform] : candidate_displays()) {
+        EGLint major = 0, minor = 0;
+        if (!eglInitialize(display, &major, &minor)) {
+            tried += std::string(platform) + ": eglInitialize failed (" + egl_error_name(eglGetError()) + "); ";
+            continue;
+        }
+        if (!eglBindAPI(EGL_OPENGL_API)) {
+            tried += std::string(platform) + ": no desktop OpenGL; ";
+            eglTerminate(display);
+            continue;
+        }
+        const EGLint attribs[] = {EGL_CONTEXT_MAJOR_VERSION, 4, EGL_CONTEXT_MINOR_VERSION, 5,
+                                  EGL_CONTEXT_OPENGL_PROFILE_MASK, EGL_CONTEXT_OPENGL_CORE_PROFILE_BIT,
+                                  EGL_CONTEXT_OPENGL_DEBUG, debug ? EGL_TRUE : EGL_FALSE, EGL_NONE};
+        EGLContext ctx = eglCreateContext(display, EGL_NO_CONFIG_KHR, EGL_NO_CONTEXT, attribs);
+        if (ctx == EGL_NO_CONTEXT) {
+            tried += std::string(platform) + ": no GL 4.5 core context (" + egl_error_name(eglGetError()) + "); ";
+            eglTerminate(display);
+            continue;
+        }
+        if (!eglMakeCurrent(display, EGL_NO_SURFACE, EGL_NO_SURFACE, ctx)) {
+            tried += std::string(platform) + ": eglMakeCurrent failed; ";
+            eglDestroyContext(display, ctx);
+            eglTerminate(display);
+            continue;
+        }
+        impl_->display = display;
+        impl_->context = ctx;
+        info_.platform = platform;
+        info_.vendor = reinterpret_cast<const char*>(glGetString(GL_VENDOR));
+        info_.renderer = reinterpret_cast<const char*>(glGetString(GL_RENDERER));
+        info_.version = reinterpret_cast<const char*>(glGetString(GL_VERSION));
+        info_.glsl = reinterpret_cast<const char*>(glGetString(GL_SHADING_LANGUAGE_VERSION));
+        info_.debug = debug;
+        if (debug) install_debug_output();
+        return;
+    }
+    throw Error("OpenGL", "cannot create a headless OpenGL 4.5 core context through EGL (" +
+                              (tried.empty() ? std::string("no EGL platform found") : tried) +
+                              "). Install libegl-mesa0 and libgl1-mesa-dri (./setup.sh).");
+}
+
+HeadlessContext::~HeadlessContext() {
+    if (impl_ && impl_->display != EGL_NO_DISPLAY) {
+        eglMakeCurrent(impl_->display, EGL_NO_SURFACE, EGL_NO_SURFACE, EGL_NO_CONTEXT);
+        if (impl_->context != EGL_NO_CONTEXT) eglDestroyContext(impl_->display, impl_->context);
+        eglTerminate(impl_->display);
+    }
+}
+
+void HeadlessContext::make_current() {
+    if (!eglMakeCurrent(impl_->display, EGL_NO_SURFACE, EGL_NO_SURFACE, impl_->context))
+        throw Error("OpenGL", std::string("eglMakeCurrent failed: ") + egl_error_name(eglGetError()));
+}
+
+namespace {
+void GLAPIENTRY on_debug_message(GLenum source, GLenum type, GLuint id, GLenum severity, GLsizei, const GLchar* message,
+                                 const void*) {
+    if (severity == GL_DEBUG_SEVERITY_NOTIFICATION) return;
+    if (type != GL_DEBUG_TYPE_ERROR && type != GL_DEBUG_TYPE_UNDEFINED_BEHAVIOR &&
+        type != GL_DEBUG_TYPE_DEPRECATED_BEHAVIOR && type != GL_DEBUG_TYPE_PORTABILITY)
+        return;
+    std::fprintf(stderr, "GL %s (id %u): %s\n", type == GL_DEBUG_TYPE_ERROR ? "error" : "warning", id, message);
+}
+} // namespace
+
+void install_debug_output() {
+    GLint flags = 0;
+    glGetIntegerv(GL_CONTEXT_FLAGS, &flags);
+    if (!(flags & GL_CONTEXT_FLAG_DEBUG_BIT)) return;
+    glEnable(GL_DEBUG_OUTPUT);
+    glEnable(GL_DEBUG_OUTPUT_SYNCHRONOUS);
+    glDebugMessageCallback(on_debug_message, nullptr);
+}
+
+} // namespace iso::gl
