@@ -135,7 +135,7 @@ Volume read_metaimage(const std::string& path) {
     }
     for (int a = 0; a < 3; ++a)
         if (!(spacing[a] > 0.0) || !std::isfinite(spacing[a]))
-            throw Error(path, std::string("ElementSpacing along ") + "ijk"[a] + " is zero, negative or not a number");
+            throw Error(path, std::string("spacing along ") + "ijk"[a] + " (ElementSpacing) is zero, negative or not a number");
     if (ndims == 2) dir[2] = glm::cross(dir[0], dir[1]);
     const glm::dmat4 affine = make_affine(spacing, origin, dir);
     check_affine(path, affine);
@@ -160,9 +160,9 @@ Volume read_metaimage(const std::string& path) {
         if (const auto* hs = get({"HeaderSize"})) skip = std::max<std::intmax_t>(0, std::atoll(hs->c_str()));
         const auto dsize = fs::file_size(data, ec);
         if (!compressed && dsize < std::uintmax_t(skip) + bytes)
-            throw Error(data.string(), "truncated: " + std::to_string(bytes) + " bytes of data expected, the file has " +
-                                           std::to_string(dsize));
-        if (compressed && dsize == 0) throw Error(data.string(), "compressed data file is empty");
+            throw Error(path, "data file '" + data.string() + "' is truncated: " + std::to_string(bytes) +
+                                  " bytes expected, it has " + std::to_string(dsize));
+        if (compressed && dsize == 0) throw Error(path, "compressed data file '" + data.string() + "' is empty");
     } else {
         throw Error(path, "ElementDataFile = " + *data_file + ": file lists and patterns are not supported");
     }

@@ -10,6 +10,7 @@
 #include <memory>
 
 #include <nifti1_io.h>
+#include <zlib.h>
 
 #include "io/volume_io.hpp"
 
@@ -121,6 +122,24 @@ Volume read_nifti(const std::string& path) {
         if (isize < std::uintmax_t(nim->iname_offset) + bytes)
             throw Error(path, "truncated: the header announces " + std::to_string(bytes) + " bytes of data after offset " +
                                   std::to_string(nim->iname_offset) + ", the file has " + std::to_string(isize) + " bytes");
+    }
+    if (nim->iname && ends_with(nim->iname, ".gz")) {
+        // nifti_clib does not notice a gzip stream that ends early: decompress
+        // once through zlib, which checks the length and CRC at the end.
+        gzFile gz = gzopen(nim->iname, "rb");
+        if (!gz) throw Error(path, "cannot open the compressed data");
+        std::vector<char> buf(1 << 16);
+        std::uintmax_t total = 0;
+        int n;
+        while ((n = gzread(gz, buf.data(), unsigned(buf.size()))) > 0) total += std::uintmax_t(n);
+        int err = 0;
+        const char* msg = gzerror(gz, &err);
+        const bool bad = n < 0 || (err != Z_OK && err != Z_BUF_ERROR);
+        const std::string why = msg ? msg : "";
+        if (gzclose_r(gz) != Z_OK || bad) throw Error(path, "corrupt or truncated gzip data" + (why.empty() ? "" : " (" + why + ")"));
+        if (total < std::uintmax_t(nim->iname_offset) + bytes)
+            throw Error(path, "truncated: " + std::to_string(bytes) + " bytes of data expected after offset " +
+                                  std::to_string(nim->iname_offset) + ", the decompressed file has " + std::to_string(total));
     }
     if (nifti_image_load(nim.get()) != 0 || !nim->data)
         throw Error(path, "cannot read the data (truncated or corrupt file)");
