@@ -17,6 +17,7 @@
 #include <cmath>
 #include <cstring>
 #include <filesystem>
+#include <fstream>
 #include <map>
 #include <set>
 #include <sstream>
@@ -47,6 +48,7 @@ struct Slice {
     bool has_ipp = false, has_iop = false, has_spacing = false;
     glm::dvec3 ipp{0.0}, row{1, 0, 0}, col{0, 1, 0};
     double row_spacing = 1, col_spacing = 1; // PixelSpacing[0] (between rows), [1] (between columns)
+    std::string problem; // why this file cannot be loaded (reported if its series is chosen)
 };
 
 struct Group {
@@ -62,6 +64,15 @@ std::string str(vtkDICOMMetaData* m, vtkDICOMTag t) {
     return s;
 }
 
+// Part 10 files carry "DICM" after a 128-byte preamble.
+bool looks_like_dicom(const std::string& file) {
+    std::ifstream f(file, std::ios::binary);
+    char magic[4] = {};
+    f.seekg(128);
+    f.read(magic, 4);
+    return f && std::memcmp(magic, "DICM", 4) == 0;
+}
+
 // Reads one file's header; false when it is not DICOM.
 bool parse(const std::string& file, Slice& s) {
     vtkNew<vtkDICOMMetaData> meta;
@@ -71,9 +82,22 @@ bool parse(const std::string& file, Slice& s) {
     parser->SetMetaData(meta);
     parser->SetFileName(file.c_str());
     parser->Update();
-    if (parser->GetErrorCode() || msgs->has_error()) return false;
+    if (parser->GetErrorCode() || msgs->has_error()) {
+        // A file with the DICOM magic that does not parse is damaged, not foreign.
+        if (looks_like_dicom(file)) throw Error(file, "truncated or corrupt DICOM file: " + msgs->first_error());
+        return false;
+    }
     if (!meta->Has(DC::Rows) || !meta->Has(DC::Columns)) return false; // not an image (DICOMDIR, report, ...)
     s.file = file;
+    // vtkDICOMReader reads a short file without complaint: check the length
+    // of uncompressed pixel data against the file here.
+    if (!parser->GetPixelDataFound()) {
+        s.problem = "has no pixel data (truncated?)";
+    } else if (parser->GetPixelDataVL() != 0xFFFFFFFFu &&
+               parser->GetFileOffset() + vtkTypeInt64(parser->GetPixelDataVL()) > parser->GetFileSize()) {
+        s.problem = "truncated: its pixel data needs " + std::to_string(parser->GetPixelDataVL()) + " bytes, " +
+                    std::to_string(parser->GetFileSize() - parser->GetFileOffset()) + " are left in the file";
+    }
     s.series_uid = str(meta, DC::SeriesInstanceUID);
     s.study_uid = str(meta, DC::StudyInstanceUID);
     s.description = str(meta, DC::SeriesDescription);
@@ -253,6 +277,8 @@ Volume read_dicom(const std::vector<std::string>& paths, const LoadOptions& opt)
     const std::size_t chosen = select(groups, opt.series, where);
     Group& g = groups[chosen];
     auto& slices = g.slices;
+    for (const auto& s : slices)
+        if (!s.problem.empty()) throw Error(s.file, s.problem);
     const Slice& first = slices[0];
     std::vector<std::string> warnings;
     if (dropped) warnings.push_back(std::to_string(dropped) + " localizer image(s) ignored");

@@ -2,6 +2,7 @@
 
 #include <mutex>
 
+#include <vtkLogger.h>
 #include <vtkOutputWindow.h>
 
 namespace iso {
@@ -21,6 +22,8 @@ void quiet_vtk() {
         auto* w = SilentOutputWindow::New();
         vtkOutputWindow::SetInstance(w);
         w->Delete();
+        // Some classes (vtk-dicom's among them) also log through vtkLogger.
+        vtkLogger::SetStderrVerbosity(vtkLogger::VERBOSITY_OFF);
     });
 }
 
