@@ -167,6 +167,31 @@ std::string check_ply(const std::string& path, std::uintmax_t size) {
     return comments;
 }
 
+// OBJ vertex lines must hold finite numbers: vtkOBJReader reads "nan" and
+// other unparsable coordinates as 0 without a word.
+void check_obj(const std::string& path) {
+    std::ifstream f(path, std::ios::binary);
+    std::string line;
+    std::size_t lineno = 0, bad = 0, first_bad = 0;
+    while (std::getline(f, line)) {
+        ++lineno;
+        if (line.size() < 2 || line[0] != 'v' || (line[1] != ' ' && line[1] != '\t')) continue;
+        const char* p = line.c_str() + 2;
+        for (int k = 0; k < 3; ++k) {
+            char* end = nullptr;
+            const double x = std::strtod(p, &end);
+            if (end == p || !std::isfinite(x)) {
+                if (!bad++) first_bad = lineno;
+                break;
+            }
+            p = end;
+        }
+    }
+    if (bad)
+        throw Error(path, std::to_string(bad) + " vertex line(s) with NaN, infinite or unreadable coordinates (first at line " +
+                              std::to_string(first_bad) + ")");
+}
+
 vtkSmartPointer<vtkPolyData> run_reader(vtkAlgorithm* reader, const std::string& path) {
     vtkNew<VtkMessages> msgs;
     msgs->watch(reader);
@@ -328,6 +353,7 @@ Mesh load_mesh(const std::string& path) {
     }
     case Fmt::Obj: {
         space = space_tag(read_prefix(path, 4096));
+        check_obj(path);
         vtkNew<vtkOBJReader> r;
         r->SetFileName(path.c_str());
         pd = run_reader(r, path);
