@@ -1,449 +1,793 @@
-// DICOM series through vtk-dicom (vtkDICOMParser for headers, vtkDICOMReader
-// for pixels; GDCM decodes compressed transfer syntaxes). The series logic is
-// ours, because no installed library does all of it the way clinical tools
-// expect (see docs/clinical.md):
-//  - group by SeriesInstanceUID, then split by orientation, size and pixel
-//    spacing; drop localizers; list several series, never merge them;
-//  - sort along the normal of ImageOrientationPatient by ImagePositionPatient;
-//    spacing from positions, not SliceThickness;
-//  - missing slices (a step that is a whole multiple of the usual one) are
-//    reported and filled by linear interpolation so the geometry stays right;
-//    other non-uniform spacing is reported;
-//  - gantry tilt (steps not along the normal) is reported and kept as a
-//    sheared index->LPS affine, which places every voxel where it was
-//    acquired (resampling to an orthogonal grid comes later);
-//  - RescaleSlope/Intercept applied (vtkDICOMReader's AutoRescale, per slice).
+// DICOM series reader: scan, group, split, sort, check geometry, read pixels.
+//
+// Headers are parsed with vtkDICOMParser (one file at a time, errors caught),
+// grouping/sorting/geometry are done here, and pixels are decoded by
+// vtkDICOMReader (GDCM behind it for compressed transfer syntaxes) given the
+// files in our order, with its own sorting, row flipping and rescaling off.
+//
+// Behaviours chosen (see also the comments at each place):
+//  - Series are grouped by SeriesInstanceUID and split by orientation
+//    (ImageOrientationPatient within 1e-4), Rows/Columns and PixelSpacing.
+//    A split series is listed as "<uid>.1", "<uid>.2", ...
+//  - Localizers are dropped: ImageType containing LOCALIZER (unless the folder
+//    holds nothing else), and, inside one SeriesInstanceUID, small groups (<= 3
+//    images) whose orientation differs from the main group's.
+//  - Missing slices (a gap close to an integer multiple >= 2 of the typical
+//    step) are filled by linear interpolation of the neighbouring slices, with
+//    a warning naming where; other non-uniform spacing gives a warning and the
+//    mean step.
+//  - Duplicate positions: copies of the same instance (same SOPInstanceUID) are
+//    read once, with a warning; different instances at one position (several
+//    phases/echoes in one series) are an error, since any choice would be a
+//    guess.
+//  - Gantry tilt: a warning with the angle; the affine is sheared so every
+//    voxel stays where the scanner put it (no resampling).
+//  - Colour (RGB, YBR, PALETTE) images are refused with an error; multi-frame
+//    (enhanced) files are listed but refused with an error when loaded.
+#include "io/volume_io.hpp"
+
 #include <algorithm>
+#include <cctype>
 #include <cmath>
+#include <cstdlib>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
-#include <map>
-#include <set>
+#include <limits>
+#include <optional>
 #include <sstream>
 
+#include <glm/geometric.hpp>
+#include <glm/mat4x4.hpp>
+
+#include <vtkCallbackCommand.h>
+#include <vtkCommand.h>
 #include <vtkDICOMMetaData.h>
 #include <vtkDICOMParser.h>
 #include <vtkDICOMReader.h>
 #include <vtkDICOMValue.h>
 #include <vtkDataArray.h>
 #include <vtkImageData.h>
+#include <vtkIntArray.h>
 #include <vtkNew.h>
 #include <vtkPointData.h>
 #include <vtkStringArray.h>
-
-#include "io/vtk_util.hpp"
-#include "io/volume_io.hpp"
+#include <vtkType.h>
 
 namespace iso {
 namespace fs = std::filesystem;
 
 namespace {
 
+constexpr const char* kWhere = "read_dicom";
+constexpr const char* kStage = "reading DICOM";
+
+// Collects VTK error (and warning) messages of the objects it watches instead
+// of letting VTK print them; messages are stripped of VTK's file/line prefix.
+class VtkMessages {
+public:
+    VtkMessages() {
+        cmd_->SetCallback(&VtkMessages::callback);
+        cmd_->SetClientData(this);
+    }
+    void watch(vtkObject* o) {
+        o->AddObserver(vtkCommand::ErrorEvent, cmd_);
+        o->AddObserver(vtkCommand::WarningEvent, cmd_);
+    }
+    const std::string& errors() const { return errors_; }
+
+private:
+    static void callback(vtkObject*, unsigned long event, void* client, void* call) {
+        auto* self = static_cast<VtkMessages*>(client);
+        if (event != vtkCommand::ErrorEvent || !call) return;
+        std::string m = static_cast<const char*>(call);
+        if (auto p = m.rfind("): "); p != std::string::npos) m = m.substr(p + 3);
+        while (!m.empty() && std::isspace(static_cast<unsigned char>(m.back()))) m.pop_back();
+        if (!self->errors_.empty()) self->errors_ += "; ";
+        self->errors_ += m;
+    }
+    vtkNew<vtkCallbackCommand> cmd_;
+    std::string errors_;
+};
+
+// Everything we need from one file's header.
 struct Slice {
     std::string file;
-    std::string series_uid, study_uid, description, modality, patient_name, patient_id, image_type;
+    std::string sop_uid, series_uid, study_uid, description, modality, patient_name, patient_id;
+    std::string image_type, photometric, transfer_syntax;
     int series_number = 0, instance_number = 0;
-    int rows = 0, cols = 0, frames = 1, samples = 1;
-    bool has_ipp = false, has_iop = false, has_spacing = false;
+    int rows = 0, cols = 0, frames = 1, samples = 1, bits_allocated = 0, pixel_rep = 0;
+    bool has_ipp = false, has_iop = false, has_spacing = false, imager_spacing = false;
     glm::dvec3 ipp{0.0}, row{1, 0, 0}, col{0, 1, 0};
-    double row_spacing = 1, col_spacing = 1; // PixelSpacing[0] (between rows), [1] (between columns)
-    std::string problem; // why this file cannot be loaded (reported if its series is chosen)
+    double spacing_between_rows = 1, spacing_between_cols = 1; // PixelSpacing[0], [1]
+    double slope = 1, intercept = 0;
+    bool has_rescale = false;
+    bool localizer = false;
+    double thickness = 0;
 };
 
-struct Group {
-    std::vector<Slice> slices;
-    SeriesInfo info;
-};
-
-std::string str(vtkDICOMMetaData* m, vtkDICOMTag t) {
-    const vtkDICOMValue& v = m->Get(t);
-    if (!v.IsValid()) return "";
-    std::string s = v.AsString();
-    while (!s.empty() && (s.back() == ' ' || s.back() == '\0')) s.pop_back();
+std::string upper(std::string s) {
+    for (auto& c : s) c = char(std::toupper(static_cast<unsigned char>(c)));
     return s;
 }
 
-// Part 10 files carry "DICM" after a 128-byte preamble.
-bool looks_like_dicom(const std::string& file) {
-    std::ifstream f(file, std::ios::binary);
-    char magic[4] = {};
-    f.seekg(128);
-    f.read(magic, 4);
-    return f && std::memcmp(magic, "DICM", 4) == 0;
+std::string trim(std::string s) {
+    while (!s.empty() && (std::isspace(static_cast<unsigned char>(s.back())) || s.back() == '\0')) s.pop_back();
+    size_t b = 0;
+    while (b < s.size() && std::isspace(static_cast<unsigned char>(s[b]))) ++b;
+    return s.substr(b);
 }
 
-// Reads one file's header; false when it is not DICOM.
-bool parse(const std::string& file, Slice& s) {
-    vtkNew<vtkDICOMMetaData> meta;
-    vtkNew<vtkDICOMParser> parser;
-    vtkNew<VtkMessages> msgs;
-    msgs->watch(parser);
-    parser->SetMetaData(meta);
-    parser->SetFileName(file.c_str());
-    parser->Update();
-    if (parser->GetErrorCode() || msgs->has_error()) {
-        // A file with the DICOM magic that does not parse is damaged, not foreign.
-        if (looks_like_dicom(file)) throw Error(file, "truncated or corrupt DICOM file: " + msgs->first_error());
-        return false;
+std::string fmt(double v, int prec = 4) {
+    std::ostringstream os;
+    os.precision(prec);
+    os << std::fixed << v;
+    std::string s = os.str();
+    if (s.find('.') != std::string::npos) {
+        while (!s.empty() && s.back() == '0') s.pop_back();
+        if (!s.empty() && s.back() == '.') s.pop_back();
     }
-    if (!meta->Has(DC::Rows) || !meta->Has(DC::Columns)) return false; // not an image (DICOMDIR, report, ...)
-    s.file = file;
-    // vtkDICOMReader reads a short file without complaint: check the length
-    // of uncompressed pixel data against the file here.
-    if (!parser->GetPixelDataFound()) {
-        s.problem = "has no pixel data (truncated?)";
-    } else if (parser->GetPixelDataVL() != 0xFFFFFFFFu &&
-               parser->GetFileOffset() + vtkTypeInt64(parser->GetPixelDataVL()) > parser->GetFileSize()) {
-        s.problem = "truncated: its pixel data needs " + std::to_string(parser->GetPixelDataVL()) + " bytes, " +
-                    std::to_string(parser->GetFileSize() - parser->GetFileOffset()) + " are left in the file";
+    return s == "-0" ? "0" : s;
+}
+
+std::string fmt_vec(const glm::dvec3& v) { return "(" + fmt(v.x, 3) + ", " + fmt(v.y, 3) + ", " + fmt(v.z, 3) + ")"; }
+
+// A DICOM file has "DICM" after a 128-byte preamble; old ACR-NEMA style files
+// without preamble start with a group 0x0008 (or 0x0002) element.
+bool looks_like_dicom(const std::string& path) {
+    std::ifstream in(path, std::ios::binary);
+    if (!in) return false;
+    unsigned char b[132] = {};
+    in.read(reinterpret_cast<char*>(b), sizeof b);
+    const auto n = in.gcount();
+    if (n >= 132 && std::memcmp(b + 128, "DICM", 4) == 0) return true;
+    if (n >= 8) {
+        const unsigned group = b[0] | (b[1] << 8);
+        const unsigned elem = b[2] | (b[3] << 8);
+        return (group == 0x0008 || group == 0x0002) && elem < 0x0100;
     }
-    s.series_uid = str(meta, DC::SeriesInstanceUID);
-    s.study_uid = str(meta, DC::StudyInstanceUID);
-    s.description = str(meta, DC::SeriesDescription);
-    s.modality = str(meta, DC::Modality);
-    s.patient_name = str(meta, DC::PatientName);
-    s.patient_id = str(meta, DC::PatientID);
-    s.image_type = str(meta, DC::ImageType);
-    s.series_number = meta->Get(DC::SeriesNumber).AsInt();
-    s.instance_number = meta->Get(DC::InstanceNumber).AsInt();
-    s.rows = meta->Get(DC::Rows).AsInt();
-    s.cols = meta->Get(DC::Columns).AsInt();
-    if (meta->Has(DC::NumberOfFrames)) s.frames = std::max(1, meta->Get(DC::NumberOfFrames).AsInt());
-    if (meta->Has(DC::SamplesPerPixel)) s.samples = meta->Get(DC::SamplesPerPixel).AsInt();
-    const vtkDICOMValue& ipp = meta->Get(DC::ImagePositionPatient);
-    if (ipp.IsValid() && ipp.GetNumberOfValues() == 3) {
-        double v[3];
-        ipp.GetValues(v, 3);
-        s.ipp = {v[0], v[1], v[2]};
-        s.has_ipp = true;
+    return false;
+}
+
+// Decimal strings are parsed here rather than by vtk-dicom, which reads text
+// such as "nan" as 0: a value that is not a number becomes NaN and is refused
+// by the geometry checks.
+bool get_doubles(const vtkDICOMValue& v, double* out, size_t n) {
+    if (!v.IsValid() || v.GetNumberOfValues() < n) return false;
+    if (v.GetVR() != vtkDICOMVR::DS) {
+        v.GetValues(out, n);
+        return true;
     }
-    const vtkDICOMValue& iop = meta->Get(DC::ImageOrientationPatient);
-    if (iop.IsValid() && iop.GetNumberOfValues() == 6) {
-        double v[6];
-        iop.GetValues(v, 6);
-        s.row = {v[0], v[1], v[2]};
-        s.col = {v[3], v[4], v[5]};
-        s.has_iop = true;
-    }
-    const vtkDICOMValue& ps = meta->Get(DC::PixelSpacing);
-    if (ps.IsValid() && ps.GetNumberOfValues() == 2) {
-        double v[2];
-        ps.GetValues(v, 2);
-        s.row_spacing = v[0];
-        s.col_spacing = v[1];
-        s.has_spacing = true;
+    const std::string text = v.AsString();
+    size_t start = 0;
+    for (size_t i = 0; i < n; ++i) {
+        size_t end = text.find('\\', start);
+        std::string item = trim(text.substr(start, end == std::string::npos ? std::string::npos : end - start));
+        char* stop = nullptr;
+        out[i] = std::strtod(item.c_str(), &stop);
+        if (item.empty() || stop != item.c_str() + item.size()) out[i] = std::numeric_limits<double>::quiet_NaN();
+        if (end == std::string::npos && i + 1 < n) return false;
+        start = end + 1;
     }
     return true;
 }
 
-std::vector<std::string> expand(const std::vector<std::string>& paths, std::string& where) {
-    std::vector<std::string> files;
-    for (const auto& p : paths) {
-        std::error_code ec;
-        if (fs::is_directory(p, ec)) {
-            if (where.empty()) where = p;
-            for (auto it = fs::recursive_directory_iterator(p, fs::directory_options::skip_permission_denied, ec);
-                 it != fs::recursive_directory_iterator(); it.increment(ec)) {
-                if (ec) break;
-                if (it->is_regular_file(ec)) files.push_back(it->path().string());
-            }
-        } else if (fs::is_regular_file(p, ec)) {
-            if (where.empty()) where = p;
-            files.push_back(p);
-        } else {
-            throw Error(p, "no such file or folder");
-        }
-    }
-    std::sort(files.begin(), files.end());
-    return files;
+std::string get_string(vtkDICOMMetaData* md, vtkDICOMTag tag, bool utf8 = false) {
+    const auto& v = md->Get(tag);
+    if (!v.IsValid()) return {};
+    return trim(utf8 ? v.AsUTF8String() : v.AsString());
 }
 
-std::string round_key(double x, double step) {
-    std::ostringstream os;
-    os << std::llround(x / step);
-    return os.str();
+bool is_uncompressed(const std::string& ts) {
+    return ts.empty() || ts == "1.2.840.10008.1.2" || ts == "1.2.840.10008.1.2.1" || ts == "1.2.840.10008.1.2.2";
 }
 
-// Scans, parses, groups. Localizers are dropped (counted in `dropped`).
-std::vector<Group> scan(const std::vector<std::string>& paths, std::string& where, std::size_t& dropped,
-                        const ProgressFn& progress) {
-    const auto files = expand(paths, where);
-    if (files.empty()) throw Error(where.empty() ? "DICOM" : where, "folder is empty");
-    std::map<std::string, Group> groups;
-    std::size_t dicom = 0;
-    for (std::size_t i = 0; i < files.size(); ++i) {
-        Slice s;
-        if (parse(files[i], s)) {
-            ++dicom;
-            if (s.image_type.find("LOCALIZER") != std::string::npos) {
-                ++dropped;
-            } else {
-                std::string key = s.series_uid + "|" + std::to_string(s.rows) + "x" + std::to_string(s.cols);
-                if (s.has_iop)
-                    for (int k = 0; k < 3; ++k) key += "|" + round_key(s.row[k], 1e-4) + "," + round_key(s.col[k], 1e-4);
-                if (s.has_spacing) key += "|" + round_key(s.row_spacing, 1e-4) + "," + round_key(s.col_spacing, 1e-4);
-                groups[key].slices.push_back(std::move(s));
-            }
-        }
-        if (i % 16 == 0) report(progress, 0.5 * double(i) / double(files.size()), "scanning DICOM files", "read_dicom");
+// Parses one file's header. Returns nullopt for DICOM files without pixel data
+// (DICOMDIR, reports, ...). Throws iso::Error for a DICOM file that is broken.
+std::optional<Slice> parse_header(const std::string& path) {
+    vtkNew<vtkDICOMParser> parser;
+    vtkNew<vtkDICOMMetaData> md;
+    VtkMessages msgs;
+    msgs.watch(parser);
+    parser->SetMetaData(md);
+    parser->SetFileName(path.c_str());
+    parser->Update();
+    if (parser->GetErrorCode() != 0 || !msgs.errors().empty()) {
+        const std::string& m = msgs.errors();
+        const bool short_file = m.find("end of file") != std::string::npos || m.find("remaining") != std::string::npos;
+        throw Error(path, std::string(short_file ? "file is truncated or corrupt" : "cannot read the DICOM header") +
+                              (m.empty() ? "" : " (" + m + ")"));
     }
-    if (dicom == 0)
-        throw Error(where, "no DICOM files found (" + std::to_string(files.size()) + " file" + (files.size() == 1 ? "" : "s") +
-                               " looked at)");
-    if (groups.empty()) throw Error(where, "only localizer images found (" + std::to_string(dropped) + ")");
-    std::vector<Group> out;
-    for (auto& [key, g] : groups) out.push_back(std::move(g));
-    std::sort(out.begin(), out.end(), [](const Group& a, const Group& b) {
-        const Slice &x = a.slices[0], &y = b.slices[0];
-        if (x.series_number != y.series_number) return x.series_number < y.series_number;
-        if (x.series_uid != y.series_uid) return x.series_uid < y.series_uid;
-        return a.slices.size() > b.slices.size();
-    });
-    // Series split by orientation or size get a "#k" suffix on their UID.
-    std::map<std::string, int> seen;
-    for (auto& g : out) {
-        const Slice& s = g.slices[0];
-        const int k = ++seen[s.series_uid];
-        g.info.uid = s.series_uid;
-        if (k > 1) g.info.uid += "#" + std::to_string(k);
-        g.info.description = s.description;
-        g.info.modality = s.modality;
-        g.info.number = s.series_number;
-        g.info.dims = {s.cols, s.rows, int(g.slices.size()) * s.frames};
-        g.info.files = g.slices.size();
-    }
-    return out;
-}
+    if (!parser->GetPixelDataFound()) return std::nullopt;
 
-std::string listing(const std::vector<Group>& groups) {
-    std::string s;
-    for (std::size_t i = 0; i < groups.size(); ++i) {
-        const auto& g = groups[i].info;
-        s += "\n  [" + std::to_string(i) + "] " + g.modality + " #" + std::to_string(g.number) + " " + std::to_string(g.dims[0]) + "x" +
-             std::to_string(g.dims[1]) + "x" + std::to_string(g.dims[2]) + " '" + g.description + "' " + g.uid;
+    Slice s;
+    s.file = path;
+    s.sop_uid = get_string(md, DC::SOPInstanceUID);
+    s.series_uid = get_string(md, DC::SeriesInstanceUID);
+    s.study_uid = get_string(md, DC::StudyInstanceUID);
+    s.description = get_string(md, DC::SeriesDescription, true);
+    s.modality = get_string(md, DC::Modality);
+    s.patient_name = get_string(md, DC::PatientName, true);
+    s.patient_id = get_string(md, DC::PatientID, true);
+    s.image_type = upper(get_string(md, DC::ImageType));
+    s.photometric = upper(get_string(md, DC::PhotometricInterpretation));
+    s.transfer_syntax = get_string(md, DC::TransferSyntaxUID);
+    s.series_number = md->Get(DC::SeriesNumber).AsInt();
+    s.instance_number = md->Get(DC::InstanceNumber).AsInt();
+    s.rows = md->Get(DC::Rows).AsInt();
+    s.cols = md->Get(DC::Columns).AsInt();
+    s.frames = std::max(1, md->Get(DC::NumberOfFrames).AsInt());
+    s.samples = md->Has(DC::SamplesPerPixel) ? md->Get(DC::SamplesPerPixel).AsInt() : 1;
+    s.bits_allocated = md->Get(DC::BitsAllocated).AsInt();
+    s.pixel_rep = md->Get(DC::PixelRepresentation).AsInt();
+    s.thickness = md->Get(DC::SliceThickness).AsDouble();
+    s.localizer = s.image_type.find("LOCALIZER") != std::string::npos;
+
+    double v[6];
+    if (get_doubles(md->Get(DC::ImagePositionPatient), v, 3)) {
+        s.has_ipp = true;
+        s.ipp = {v[0], v[1], v[2]};
+    }
+    if (get_doubles(md->Get(DC::ImageOrientationPatient), v, 6)) {
+        s.has_iop = true;
+        s.row = {v[0], v[1], v[2]};
+        s.col = {v[3], v[4], v[5]};
+    }
+    if (get_doubles(md->Get(DC::PixelSpacing), v, 2)) {
+        s.has_spacing = true;
+    } else if (get_doubles(md->Get(DC::ImagerPixelSpacing), v, 2)) {
+        s.has_spacing = true;
+        s.imager_spacing = true;
+    }
+    if (s.has_spacing) {
+        s.spacing_between_rows = v[0];
+        s.spacing_between_cols = v[1];
+    }
+    const auto& vs = md->Get(DC::RescaleSlope);
+    const auto& vi = md->Get(DC::RescaleIntercept);
+    if (vs.IsValid() || vi.IsValid()) {
+        s.has_rescale = true;
+        if (vs.IsValid()) s.slope = vs.AsDouble();
+        if (vi.IsValid()) s.intercept = vi.AsDouble();
+    }
+
+    if (s.rows <= 0 || s.cols <= 0) throw Error(path, "image has no Rows/Columns");
+    // Truncated pixel data, for the transfer syntaxes where the size is known.
+    if (is_uncompressed(s.transfer_syntax) && s.bits_allocated > 0) {
+        const long long expected =
+            (static_cast<long long>(s.rows) * s.cols * s.frames * s.samples * s.bits_allocated + 7) / 8;
+        const long long available = parser->GetFileSize() - parser->GetFileOffset();
+        const unsigned vl = parser->GetPixelDataVL();
+        if (available < expected || (vl != 0xffffffffu && vl < expected))
+            throw Error(path, "pixel data is truncated (" + std::to_string(std::max<long long>(0, available)) +
+                                  " bytes present, " + std::to_string(expected) + " expected)");
     }
     return s;
 }
 
-std::size_t select(const std::vector<Group>& groups, const std::string& want, const std::string& where) {
-    if (want.empty()) {
-        if (groups.size() == 1) return 0;
-        throw Error(where, "holds " + std::to_string(groups.size()) +
-                               " series; choose one with --series N (index) or --series UID:" + listing(groups));
-    }
-    if (std::all_of(want.begin(), want.end(), [](char c) { return std::isdigit(static_cast<unsigned char>(c)); })) {
-        const auto i = std::stoull(want);
-        if (i < groups.size()) return std::size_t(i);
-        throw Error(where, "series index " + want + " is out of range (" + std::to_string(groups.size()) + " series):" + listing(groups));
-    }
-    for (std::size_t i = 0; i < groups.size(); ++i)
-        if (groups[i].info.uid == want) return i;
-    throw Error(where, "no series with UID " + want + ":" + listing(groups));
+bool valid_orientation(const Slice& s) {
+    return s.has_iop && std::isfinite(glm::dot(s.row, s.col)) && std::abs(glm::length(s.row) - 1) <= 1e-3 &&
+           std::abs(glm::length(s.col) - 1) <= 1e-3 && std::abs(glm::dot(s.row, s.col)) <= 1e-3;
 }
 
-VoxelType type_of(vtkDataArray* a, const std::string& where) {
-    switch (a->GetDataType()) {
+// A group of slices that can form one volume.
+struct Group {
+    std::vector<Slice> slices;
+    std::string uid; // listing uid (with ".n" when split)
+};
+
+bool same_geometry_class(const Slice& a, const Slice& b) {
+    if (a.series_uid != b.series_uid || a.rows != b.rows || a.cols != b.cols) return false;
+    if (a.frames > 1 || b.frames > 1) return a.file == b.file; // a multi-frame file is its own volume
+    if (a.localizer != b.localizer) return false;
+    if (a.has_iop != b.has_iop) return false;
+    if (glm::length(a.row - b.row) > 1e-4 || glm::length(a.col - b.col) > 1e-4) return false;
+    if (std::abs(a.spacing_between_rows - b.spacing_between_rows) > 1e-4 ||
+        std::abs(a.spacing_between_cols - b.spacing_between_cols) > 1e-4)
+        return false;
+    return true;
+}
+
+struct Scan {
+    std::vector<Group> groups;     // listed series, in listing order
+    std::vector<std::string> notes; // dropped localizers, skipped files
+    std::string where;              // folder or file to name in messages
+};
+
+void collect_files(const std::vector<std::string>& inputs, std::vector<std::string>& files, std::string& where) {
+    if (inputs.empty()) throw Error(kWhere, "no files or folder given");
+    where = inputs.size() == 1 ? inputs[0] : fs::path(inputs[0]).parent_path().string();
+    if (where.empty()) where = inputs[0];
+    for (const auto& in : inputs) {
+        std::error_code ec;
+        if (!fs::exists(in, ec)) throw Error(in, "no such file or folder");
+        if (fs::is_directory(in, ec)) {
+            std::vector<std::string> found;
+            for (auto it = fs::recursive_directory_iterator(in, fs::directory_options::skip_permission_denied, ec);
+                 !ec && it != fs::recursive_directory_iterator(); it.increment(ec)) {
+                std::error_code ec2;
+                if (it->is_regular_file(ec2)) found.push_back(it->path().string());
+            }
+            if (ec) throw Error(in, "cannot list the folder: " + ec.message());
+            if (found.empty()) throw Error(in, "folder is empty (no files found)");
+            std::sort(found.begin(), found.end());
+            files.insert(files.end(), found.begin(), found.end());
+        } else {
+            files.push_back(in);
+        }
+    }
+}
+
+Scan scan(const std::vector<std::string>& inputs, const ProgressFn& progress) {
+    Scan sc;
+    std::vector<std::string> files;
+    collect_files(inputs, files, sc.where);
+
+    std::vector<Slice> slices;
+    size_t non_dicom = 0, non_image = 0;
+    for (size_t i = 0; i < files.size(); ++i) {
+        report(progress, 0.4 * double(i) / double(files.size()), kStage, kWhere);
+        if (!looks_like_dicom(files[i])) {
+            ++non_dicom;
+            continue;
+        }
+        auto s = parse_header(files[i]);
+        if (!s) {
+            ++non_image;
+            continue;
+        }
+        slices.push_back(std::move(*s));
+    }
+    if (slices.empty()) {
+        std::string why = "no DICOM images found (" + std::to_string(files.size()) + " file(s) looked at, " +
+                          std::to_string(non_dicom) + " not DICOM";
+        if (non_image) why += ", " + std::to_string(non_image) + " DICOM file(s) without pixel data";
+        throw Error(sc.where, why + ")");
+    }
+
+    // Group by SeriesInstanceUID, split by orientation / size / spacing.
+    std::vector<Group> groups;
+    for (auto& s : slices) {
+        auto it = std::find_if(groups.begin(), groups.end(),
+                               [&](const Group& g) { return same_geometry_class(g.slices.front(), s); });
+        if (it == groups.end()) {
+            groups.push_back({});
+            it = groups.end() - 1;
+        }
+        it->slices.push_back(std::move(s));
+    }
+
+    // Drop localizers.
+    const bool any_regular = std::any_of(groups.begin(), groups.end(), [](const Group& g) {
+        return !g.slices.front().localizer;
+    });
+    size_t dropped = 0;
+    std::vector<bool> drop(groups.size(), false);
+    for (size_t g = 0; g < groups.size(); ++g) {
+        const Slice& a = groups[g].slices.front();
+        if (a.localizer && any_regular) drop[g] = true;
+        // Small groups of another (valid) orientation inside one series are
+        // scouts. Broken orientations stay listed so that loading them says why.
+        if (a.frames == 1 && groups[g].slices.size() <= 3 && valid_orientation(a)) {
+            for (size_t h = 0; h < groups.size(); ++h) {
+                const Slice& b = groups[h].slices.front();
+                if (h != g && b.series_uid == a.series_uid && !b.localizer && b.frames == 1 &&
+                    groups[h].slices.size() >= 2 * groups[g].slices.size() && groups[h].slices.size() > 3 &&
+                    (glm::length(a.row - b.row) > 1e-4 || glm::length(a.col - b.col) > 1e-4))
+                    drop[g] = true;
+            }
+        }
+        if (drop[g]) dropped += groups[g].slices.size();
+    }
+    for (size_t g = 0; g < groups.size(); ++g)
+        if (!drop[g]) sc.groups.push_back(std::move(groups[g]));
+    if (dropped) sc.notes.push_back("ignored " + std::to_string(dropped) + " localizer/scout image(s)");
+
+    // Listing order: series number, UID, then bigger groups first.
+    std::stable_sort(sc.groups.begin(), sc.groups.end(), [](const Group& x, const Group& y) {
+        const Slice &a = x.slices.front(), &b = y.slices.front();
+        if (a.series_number != b.series_number) return a.series_number < b.series_number;
+        if (a.series_uid != b.series_uid) return a.series_uid < b.series_uid;
+        return x.slices.size() > y.slices.size();
+    });
+    for (size_t g = 0; g < sc.groups.size(); ++g) {
+        const auto& uid = sc.groups[g].slices.front().series_uid;
+        size_t count = 0, rank = 0;
+        for (size_t h = 0; h < sc.groups.size(); ++h)
+            if (sc.groups[h].slices.front().series_uid == uid) {
+                if (h < g) ++rank;
+                ++count;
+            }
+        sc.groups[g].uid = count > 1 ? uid + "." + std::to_string(rank + 1) : uid;
+    }
+    return sc;
+}
+
+SeriesInfo info_of(const Group& g) {
+    const Slice& s = g.slices.front();
+    SeriesInfo si;
+    si.uid = g.uid;
+    si.description = s.description;
+    si.modality = s.modality;
+    si.number = s.series_number;
+    int depth = 0;
+    for (const auto& x : g.slices) depth += x.frames;
+    si.dims = {s.cols, s.rows, depth};
+    si.files = g.slices.size();
+    return si;
+}
+
+std::string listing_text(const std::vector<SeriesInfo>& list) {
+    std::string out;
+    for (size_t i = 0; i < list.size(); ++i) {
+        const auto& s = list[i];
+        out += "\n  [" + std::to_string(i) + "] " + (s.modality.empty() ? "?" : s.modality) + " #" +
+               std::to_string(s.number) + " " + std::to_string(s.dims[0]) + "x" + std::to_string(s.dims[1]) + "x" +
+               std::to_string(s.dims[2]) + " \"" + s.description + "\" " + s.uid;
+    }
+    return out;
+}
+
+int select_series(const Scan& sc, const std::vector<SeriesInfo>& list, const std::string& want) {
+    if (want.empty()) {
+        if (list.size() == 1) return 0;
+        throw Error(sc.where, "holds " + std::to_string(list.size()) +
+                                  " series; choose one with --series N|UID:" + listing_text(list));
+    }
+    if (std::all_of(want.begin(), want.end(), [](unsigned char c) { return std::isdigit(c); }) &&
+        want.size() < 9) {
+        const int idx = std::stoi(want);
+        if (idx < 0 || size_t(idx) >= list.size())
+            throw Error(sc.where, "no series " + want + " (there are " + std::to_string(list.size()) +
+                                      "):" + listing_text(list));
+        // A purely numeric UID is not a valid DICOM UID, so an index is meant.
+        return idx;
+    }
+    for (size_t i = 0; i < list.size(); ++i)
+        if (list[i].uid == want) return int(i);
+    std::vector<int> by_base;
+    for (size_t i = 0; i < sc.groups.size(); ++i)
+        if (sc.groups[i].slices.front().series_uid == want) by_base.push_back(int(i));
+    if (by_base.size() == 1) return by_base[0];
+    if (by_base.size() > 1)
+        throw Error(sc.where, "series " + want + " was split into " + std::to_string(by_base.size()) +
+                                  " parts (different orientation, size or spacing); choose one:" +
+                                  listing_text(list));
+    throw Error(sc.where, "no series with UID " + want + "; available:" + listing_text(list));
+}
+
+VoxelType voxel_type_of_vtk(int t, const std::string& where) {
+    switch (t) {
+    case VTK_UNSIGNED_CHAR: return VoxelType::U8;
     case VTK_SIGNED_CHAR:
     case VTK_CHAR: return VoxelType::I8;
-    case VTK_UNSIGNED_CHAR: return VoxelType::U8;
-    case VTK_SHORT: return VoxelType::I16;
     case VTK_UNSIGNED_SHORT: return VoxelType::U16;
-    case VTK_INT: return VoxelType::I32;
+    case VTK_SHORT: return VoxelType::I16;
     case VTK_UNSIGNED_INT: return VoxelType::U32;
+    case VTK_INT: return VoxelType::I32;
     case VTK_FLOAT: return VoxelType::F32;
     case VTK_DOUBLE: return VoxelType::F64;
     default: break;
     }
-    throw Error(where, std::string("unsupported pixel data type ") + a->GetDataTypeAsString());
+    throw Error(where, std::string("unsupported pixel type ") + vtkImageScalarTypeNameMacro(t));
+}
+
+bool integral(double v) { return std::isfinite(v) && v == std::round(v); }
+
+// Checks orientation, position and spacing of every slice in a group.
+void check_geometry(const Group& g, bool need_position) {
+    for (const auto& s : g.slices) {
+        if (need_position && !s.has_ipp) throw Error(s.file, "ImagePositionPatient is missing");
+        if (need_position && !s.has_iop) throw Error(s.file, "ImageOrientationPatient is missing");
+        for (int a = 0; a < 3; ++a)
+            if (!std::isfinite(s.ipp[a])) throw Error(s.file, "ImagePositionPatient is not finite");
+        for (int a = 0; a < 3; ++a)
+            if (!std::isfinite(s.row[a]) || !std::isfinite(s.col[a]))
+                throw Error(s.file, "ImageOrientationPatient is not finite");
+        const double lr = glm::length(s.row), lc = glm::length(s.col), d = glm::dot(s.row, s.col);
+        if (std::abs(lr - 1) > 1e-3 || std::abs(lc - 1) > 1e-3 || std::abs(d) > 1e-3)
+            throw Error(s.file, "ImageOrientationPatient is not orthonormal (|row| = " + fmt(lr, 5) +
+                                    ", |column| = " + fmt(lc, 5) + ", row.column = " + fmt(d, 5) + ")");
+        if (!std::isfinite(s.spacing_between_rows) || !std::isfinite(s.spacing_between_cols) ||
+            !(s.spacing_between_rows > 0) || !(s.spacing_between_cols > 0))
+            throw Error(s.file, "PixelSpacing is zero, negative or not finite (" + fmt(s.spacing_between_rows) +
+                                    "\\" + fmt(s.spacing_between_cols) + ")");
+        if (s.has_rescale && (!std::isfinite(s.slope) || !std::isfinite(s.intercept) || s.slope == 0))
+            throw Error(s.file, "RescaleSlope/RescaleIntercept are invalid");
+    }
+}
+
+double median(std::vector<double> v) {
+    std::sort(v.begin(), v.end());
+    const size_t n = v.size();
+    return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
+}
+
+Volume load_group(Group& g, const Scan& sc, const ProgressFn& progress) {
+    const Slice first = g.slices.front(); // a copy: g.slices is rebuilt below
+    const std::string where = sc.where;
+    if (first.frames > 1)
+        throw Error(first.file, "multi-frame (enhanced) DICOM files are not supported yet (" +
+                                    std::to_string(first.frames) + " frames in one file)");
+    for (const auto& s : g.slices) {
+        if (s.samples != 1 || (s.photometric != "MONOCHROME1" && s.photometric != "MONOCHROME2" &&
+                               !s.photometric.empty()))
+            throw Error(s.file, "colour images (" + s.photometric + ", " + std::to_string(s.samples) +
+                                    " samples per pixel) are not supported: isoscope reads greyscale CT/MR");
+        if (s.bits_allocated != first.bits_allocated || s.pixel_rep != first.pixel_rep)
+            throw Error(s.file, "pixel format (BitsAllocated/PixelRepresentation) differs from " + first.file);
+        if (s.rows != first.rows || s.cols != first.cols)
+            throw Error(s.file, "image size differs from " + first.file);
+    }
+    std::vector<std::string> warnings;
+    const bool multi = g.slices.size() > 1;
+    check_geometry(g, multi);
+    if (!first.has_spacing) warnings.push_back("PixelSpacing is missing; 1 mm assumed");
+    else if (first.imager_spacing)
+        warnings.push_back("PixelSpacing is missing; ImagerPixelSpacing (at the detector) used instead, "
+                           "measurements may be off by the magnification factor");
+
+    const glm::dvec3 row = glm::normalize(first.row), col = glm::normalize(first.col);
+    const glm::dvec3 normal = glm::normalize(glm::cross(row, col));
+
+    // Sort along the normal; equal positions by InstanceNumber.
+    auto pos = [&](const Slice& s) { return glm::dot(s.ipp, normal); };
+    std::stable_sort(g.slices.begin(), g.slices.end(), [&](const Slice& a, const Slice& b) {
+        const double pa = pos(a), pb = pos(b);
+        if (pa != pb) return pa < pb;
+        return a.instance_number < b.instance_number;
+    });
+
+    // Duplicate positions: a copy of the same instance is read once; two
+    // different instances at one position mean the series holds several
+    // volumes (phases, echoes), which we refuse rather than guess.
+    {
+        std::vector<Slice> kept;
+        size_t copies = 0;
+        for (auto& s : g.slices) {
+            if (!kept.empty() && std::abs(pos(s) - pos(kept.back())) < 1e-3) {
+                if (!s.sop_uid.empty() && s.sop_uid == kept.back().sop_uid) {
+                    ++copies;
+                    continue;
+                }
+                throw Error(where, "two different images at the same position " + fmt_vec(s.ipp) + ": " +
+                                       kept.back().file + " and " + s.file +
+                                       " (several volumes, e.g. phases or echoes, in one series are not supported)");
+            }
+            kept.push_back(std::move(s));
+        }
+        g.slices = std::move(kept);
+        if (copies) warnings.push_back("ignored " + std::to_string(copies) + " duplicate file(s) of the same image");
+    }
+
+    const size_t n = g.slices.size();
+    std::vector<int> grid(n, 0); // slice index on the regular grid
+    glm::dvec3 step_vec = normal * (first.thickness > 0 ? first.thickness : 1.0);
+    if (n == 1 && first.thickness <= 0) warnings.push_back("single slice without SliceThickness: 1 mm assumed");
+    if (n == 1 && (!first.has_ipp || !first.has_iop))
+        warnings.push_back("ImagePositionPatient/ImageOrientationPatient missing: placed at the origin, axis-aligned");
+    if (n > 1) {
+        std::vector<double> p(n), d(n - 1);
+        for (size_t k = 0; k < n; ++k) p[k] = pos(g.slices[k]);
+        for (size_t k = 0; k + 1 < n; ++k) d[k] = p[k + 1] - p[k];
+        const double m = median(d);
+        const double tol = 0.01; // mm, uniform spacing
+        bool irregular = false;
+        std::vector<std::string> gaps;
+        for (size_t k = 0; k + 1 < n; ++k) {
+            int r = 1;
+            if (std::abs(d[k] - m) > tol) {
+                const double q = d[k] / m;
+                r = int(std::lround(q));
+                if (r < 2 || std::abs(d[k] - r * m) > std::max(tol, 0.1 * m)) {
+                    irregular = true;
+                    r = 1;
+                } else {
+                    gaps.push_back(std::to_string(r - 1) + " slice(s) missing between slice " + std::to_string(k) +
+                                   " at " + fmt(p[k], 3) + " mm and slice " + std::to_string(k + 1) + " at " +
+                                   fmt(p[k + 1], 3) + " mm (files " + fs::path(g.slices[k].file).filename().string() +
+                                   ", " + fs::path(g.slices[k + 1].file).filename().string() + ")");
+                }
+            }
+            grid[k + 1] = grid[k] + r;
+        }
+        if (irregular) {
+            for (size_t k = 0; k < n; ++k) grid[k] = int(k);
+            const auto [mn, mx] = std::minmax_element(d.begin(), d.end());
+            warnings.push_back("slice spacing is not uniform (steps from " + fmt(*mn) + " to " + fmt(*mx) +
+                               " mm along the normal); the mean step " + fmt((p[n - 1] - p[0]) / double(n - 1)) +
+                               " mm is used, so positions are approximate");
+        } else {
+            for (const auto& gtxt : gaps)
+                warnings.push_back("missing slice: " + gtxt + "; filled by linear interpolation of the neighbours");
+        }
+        const glm::dvec3 total = g.slices[n - 1].ipp - g.slices[0].ipp;
+        const double along = glm::dot(total, normal);
+        const glm::dvec3 inplane = total - along * normal;
+        const double steps = double(grid[n - 1]);
+        const double angle = std::atan2(glm::length(inplane), along) * 180.0 / M_PI;
+        if (glm::length(inplane) > 0.01 && angle > 0.01) {
+            step_vec = total / steps;
+            warnings.push_back("gantry tilt of " + fmt(angle, 2) +
+                               " degrees: slices are sheared along the scanner axis; the index->LPS affine is "
+                               "sheared to keep voxels at their true positions (not resampled)");
+        } else {
+            step_vec = normal * (along / steps);
+        }
+        // Each slice should sit on the (possibly sheared) line.
+        double worst = 0;
+        for (size_t k = 0; k < n; ++k)
+            worst = std::max(worst, glm::length(g.slices[0].ipp + double(grid[k]) * step_vec - g.slices[k].ipp));
+        if (!irregular && worst > 0.05)
+            warnings.push_back("slice positions deviate up to " + fmt(worst) + " mm from a straight line");
+    }
+
+    glm::dmat4 affine(1.0);
+    affine[0] = glm::dvec4(row * first.spacing_between_cols, 0.0);
+    affine[1] = glm::dvec4(col * first.spacing_between_rows, 0.0);
+    affine[2] = glm::dvec4(step_vec, 0.0);
+    affine[3] = glm::dvec4(g.slices[0].ipp, 1.0);
+    check_affine(where, affine, /*allow_shear=*/true);
+
+    const std::int64_t nx = first.cols, ny = first.rows, nz = std::int64_t(grid[n - 1]) + 1;
+    // Fail early on a size that cannot be allocated (float32 is the largest output type we pick
+    // unless the files hold 32/64-bit data).
+    checked_byte_size(where, {nx, ny, nz}, first.bits_allocated > 16 ? VoxelType::F64 : VoxelType::F32);
+
+    // ---- pixels -----------------------------------------------------------
+    vtkNew<vtkStringArray> names;
+    for (const auto& s : g.slices) names->InsertNextValue(s.file);
+    vtkNew<vtkDICOMReader> reader;
+    VtkMessages msgs;
+    msgs.watch(reader);
+    reader->SetFileNames(names);
+    reader->SortingOff();
+    reader->SetMemoryRowOrderToFileNative();
+    reader->AutoRescaleOff();
+    bool cancelled = false;
+    vtkNew<vtkCallbackCommand> on_progress;
+    struct ProgressCtx {
+        const ProgressFn* fn;
+        bool* cancelled;
+        vtkDICOMReader* reader;
+    } ctx{&progress, &cancelled, reader};
+    if (progress) {
+        on_progress->SetClientData(&ctx);
+        on_progress->SetCallback([](vtkObject*, unsigned long, void* client, void* call) {
+            auto* c = static_cast<ProgressCtx*>(client);
+            const double f = call ? *static_cast<double*>(call) : 0.0;
+            if (!(*c->fn)(0.4 + 0.5 * f, kStage)) {
+                *c->cancelled = true;
+                c->reader->AbortExecuteOn();
+            }
+        });
+        reader->AddObserver(vtkCommand::ProgressEvent, on_progress);
+    }
+    reader->Update();
+    if (cancelled) throw Cancelled(kWhere);
+    if (reader->GetErrorCode() != 0 || !msgs.errors().empty())
+        throw Error(where, "cannot read the pixel data" + (msgs.errors().empty() ? "" : ": " + msgs.errors()));
+    vtkImageData* img = reader->GetOutput();
+    int dim[3];
+    img->GetDimensions(dim);
+    vtkDataArray* arr = img->GetPointData() ? img->GetPointData()->GetScalars() : nullptr;
+    if (!arr || dim[0] != nx || dim[1] != ny || dim[2] != int(n) || arr->GetNumberOfComponents() != 1)
+        throw Error(where, "pixel data does not have the size given by the headers (" + std::to_string(dim[0]) +
+                               "x" + std::to_string(dim[1]) + "x" + std::to_string(dim[2]) + ")");
+    // Map output slices to our files (the reader was told not to sort, but check).
+    std::vector<int> file_of_slice(n);
+    vtkIntArray* fidx = reader->GetFileIndexArray();
+    for (size_t k = 0; k < n; ++k) {
+        const int f = fidx && fidx->GetNumberOfTuples() == vtkIdType(n) ? int(fidx->GetComponent(vtkIdType(k), 0))
+                                                                           : int(k);
+        if (f < 0 || size_t(f) >= n) throw Error(where, "reader returned an unexpected slice order");
+        file_of_slice[k] = f;
+    }
+    const VoxelType stored = voxel_type_of_vtk(arr->GetDataType(), where);
+
+    // Output type.
+    bool any_rescale = false, all_integral = true;
+    for (const auto& s : g.slices) {
+        if (s.has_rescale && (s.slope != 1.0 || s.intercept != 0.0)) any_rescale = true;
+        all_integral = all_integral && integral(s.slope) && integral(s.intercept);
+    }
+    const std::size_t plane = std::size_t(nx) * std::size_t(ny);
+    const std::byte* raw = static_cast<const std::byte*>(arr->GetVoidPointer(0));
+    const std::size_t ssize = voxel_size(stored);
+    VoxelType out_type = stored;
+    if (any_rescale) {
+        double lo = std::numeric_limits<double>::infinity(), hi = -lo;
+        dispatch_voxel_type(stored, [&](auto t) {
+            using S = decltype(t);
+            for (size_t k = 0; k < n; ++k) {
+                const Slice& s = g.slices[file_of_slice[k]];
+                const S* src = reinterpret_cast<const S*>(raw + k * plane * ssize);
+                for (size_t i = 0; i < plane; ++i) {
+                    const double v = double(src[i]) * s.slope + s.intercept;
+                    lo = std::min(lo, v);
+                    hi = std::max(hi, v);
+                }
+            }
+        });
+        out_type = (all_integral && lo >= -32768.0 && hi <= 32767.0) ? VoxelType::I16 : VoxelType::F32;
+        if (stored == VoxelType::F64 || stored == VoxelType::I32 || stored == VoxelType::U32)
+            out_type = all_integral && lo >= -32768.0 && hi <= 32767.0 ? VoxelType::I16 : VoxelType::F64;
+    }
+    report(progress, 0.92, kStage, kWhere);
+
+    Volume vol = Volume::dense({nx, ny, nz}, out_type, affine);
+    dispatch_voxel_type(stored, [&](auto st) {
+        using S = decltype(st);
+        dispatch_voxel_type(out_type, [&](auto ot) {
+            using O = decltype(ot);
+            auto dst = vol.as<O>();
+            auto put = [&](std::size_t idx, double v) {
+                if constexpr (std::is_integral_v<O>) dst[idx] = static_cast<O>(std::llround(v));
+                else dst[idx] = static_cast<O>(v);
+            };
+            for (size_t k = 0; k < n; ++k) {
+                const size_t fi = file_of_slice[k];
+                const Slice& s = g.slices[fi];
+                const S* src = reinterpret_cast<const S*>(raw + k * plane * ssize);
+                O* out = dst.data() + std::size_t(grid[fi]) * plane;
+                if (any_rescale) {
+                    for (size_t i = 0; i < plane; ++i) put(&out[i] - dst.data(), double(src[i]) * s.slope + s.intercept);
+                } else {
+                    for (size_t i = 0; i < plane; ++i) out[i] = static_cast<O>(src[i]);
+                }
+            }
+            // Fill missing slices linearly between their neighbours on the grid.
+            for (size_t k = 0; k + 1 < n; ++k) {
+                const int a = grid[k], b = grid[k + 1];
+                for (int z = a + 1; z < b; ++z) {
+                    const double t = double(z - a) / double(b - a);
+                    const O* pa = dst.data() + std::size_t(a) * plane;
+                    const O* pb = dst.data() + std::size_t(b) * plane;
+                    for (size_t i = 0; i < plane; ++i)
+                        put(std::size_t(z) * plane + i, (1 - t) * double(pa[i]) + t * double(pb[i]));
+                }
+            }
+        });
+    });
+
+    vol.meta.format = "DICOM";
+    vol.meta.modality = first.modality;
+    vol.meta.patient_name = first.patient_name;
+    vol.meta.patient_id = first.patient_id;
+    vol.meta.study_uid = first.study_uid;
+    vol.meta.series_uid = first.series_uid;
+    vol.meta.series_description = first.description;
+    const std::string desc = upper(first.description);
+    if (desc.find("SCOUT") != std::string::npos || desc.find("LOCALI") != std::string::npos ||
+        first.localizer)
+        warnings.push_back("series \"" + first.description + "\" looks like a scout/localizer (" +
+                           std::to_string(n) + " slice(s), " + fmt(glm::length(step_vec)) +
+                           " mm apart): not meant for 3D reconstruction");
+    vol.meta.warnings = std::move(warnings);
+    return vol;
 }
 
 } // namespace
 
-std::vector<SeriesInfo> list_dicom_series(const std::vector<std::string>& paths) {
-    quiet_vtk();
-    std::string where;
-    std::size_t dropped = 0;
+std::vector<SeriesInfo> list_dicom_series(const std::vector<std::string>& files_or_folder) {
+    const Scan sc = scan(files_or_folder, {});
     std::vector<SeriesInfo> out;
-    for (auto& g : scan(paths, where, dropped, {})) out.push_back(g.info);
+    for (const auto& g : sc.groups) out.push_back(info_of(g));
     return out;
 }
 
-Volume read_dicom(const std::vector<std::string>& paths, const LoadOptions& opt) {
-    quiet_vtk();
-    std::string where;
-    std::size_t dropped = 0;
-    auto groups = scan(paths, where, dropped, opt.progress);
-    const std::size_t chosen = select(groups, opt.series, where);
-    Group& g = groups[chosen];
-    auto& slices = g.slices;
-    for (const auto& s : slices)
-        if (!s.problem.empty()) throw Error(s.file, s.problem);
-    const Slice& first = slices[0];
-    std::vector<std::string> warnings;
-    if (dropped) warnings.push_back(std::to_string(dropped) + " localizer image(s) ignored");
-    if (first.frames > 1)
-        throw Error(first.file, "multi-frame (enhanced) DICOM with " + std::to_string(first.frames) +
-                                    " frames is not supported yet");
-    if (first.samples != 1)
-        throw Error(first.file, "colour images (" + std::to_string(first.samples) + " samples per pixel) are not supported");
-    if (first.rows <= 0 || first.cols <= 0) throw Error(first.file, "image has no rows or columns");
-
-    // Geometry.
-    for (const auto& s : slices) {
-        if (!s.has_ipp || !s.has_iop) {
-            if (slices.size() == 1) break;
-            throw Error(s.file, "has no ImagePositionPatient/ImageOrientationPatient: the slices cannot be placed");
-        }
-        if (!std::isfinite(s.ipp.x + s.ipp.y + s.ipp.z + s.row.x + s.row.y + s.row.z + s.col.x + s.col.y + s.col.z))
-            throw Error(s.file, "ImagePositionPatient or ImageOrientationPatient is not a number");
-    }
-    if (!(first.row_spacing > 0 && first.col_spacing > 0) || !std::isfinite(first.row_spacing + first.col_spacing))
-        throw Error(first.file, "PixelSpacing is zero, negative or not a number");
-    if (!first.has_spacing) warnings.push_back("no PixelSpacing: 1 mm assumed");
-    glm::dvec3 row = first.row, col = first.col;
-    if (first.has_iop) {
-        if (std::abs(glm::length(row) - 1) > 1e-3 || std::abs(glm::length(col) - 1) > 1e-3 || std::abs(glm::dot(row, col)) > 1e-3)
-            throw Error(first.file, "ImageOrientationPatient is not two orthogonal unit vectors");
-        row = glm::normalize(row);
-        col = glm::normalize(col - glm::dot(col, row) * row);
-    } else {
-        warnings.push_back("no ImagePositionPatient/ImageOrientationPatient: placed at the origin, axes along L and P");
-    }
-    const glm::dvec3 normal = glm::cross(row, col);
-    std::stable_sort(slices.begin(), slices.end(),
-                     [&](const Slice& a, const Slice& b) { return glm::dot(a.ipp, normal) < glm::dot(b.ipp, normal); });
-    const std::size_t n = slices.size();
-    std::vector<double> steps;
-    for (std::size_t i = 1; i < n; ++i) {
-        const double d = glm::dot(slices[i].ipp - slices[i - 1].ipp, normal);
-        if (std::abs(d) < 1e-3) {
-            std::size_t same = 0;
-            for (std::size_t k = 1; k < n; ++k)
-                if (std::abs(glm::dot(slices[k].ipp - slices[k - 1].ipp, normal)) < 1e-3) ++same;
-            throw Error(where, std::to_string(same + 1) + " or more slices share a position (e.g. " + slices[i - 1].file + " and " +
-                                   slices[i].file + "): several acquisitions, echoes or phases in one series are not supported");
-        }
-        steps.push_back(d);
-    }
-    // Grid: slice k of the volume is at first + k * step along the normal.
-    std::vector<int> grid_index(n, 0);
-    double step = 1.0;
-    glm::dvec3 step_vec = normal;
-    std::size_t nz = n;
-    if (n > 1) {
-        std::vector<double> sorted = steps;
-        std::sort(sorted.begin(), sorted.end());
-        step = sorted.front(); // the smallest step: gaps are multiples of it
-        const double tol = std::max(0.01, 1e-3 * step);
-        bool uniform = true, gaps = false;
-        std::string gap_text;
-        int k = 0;
-        for (std::size_t i = 0; i < steps.size(); ++i) {
-            const double m = std::round(steps[i] / step);
-            if (std::abs(steps[i] - step) <= tol) {
-                ++k;
-            } else if (m >= 2 && std::abs(steps[i] - m * step) <= tol * m) {
-                gaps = true;
-                gap_text += (gap_text.empty() ? "" : "; ") + std::to_string(int(m) - 1) + " between " + fs::path(slices[i].file).filename().string() +
-                            " and " + fs::path(slices[i + 1].file).filename().string();
-                k += int(m);
-            } else {
-                uniform = false;
-                k += std::max(1, int(m));
-            }
-            grid_index[i + 1] = k;
-        }
-        nz = std::size_t(grid_index[n - 1]) + 1;
-        if (!uniform) {
-            warnings.push_back("non-uniform slice spacing (steps from " + std::to_string(sorted.front()) + " to " +
-                               std::to_string(sorted.back()) + " mm): slices are placed on a regular grid of " +
-                               std::to_string(step) + " mm and may be off by up to " +
-                               std::to_string(sorted.back() - step) + " mm");
-        }
-        if (gaps)
-            warnings.push_back("missing slices (" + gap_text + "): " + std::to_string(nz - n) +
-                               " slice(s) filled by linear interpolation of their neighbours");
-        // The mean step vector: along the normal unless the gantry was tilted.
-        step_vec = (slices[n - 1].ipp - slices[0].ipp) / double(nz - 1);
-        const glm::dvec3 inplane = step_vec - glm::dot(step_vec, normal) * normal;
-        if (glm::length(inplane) > 1e-3 * std::max(1.0, glm::dot(step_vec, normal)) + 1e-4) {
-            const double tilt = std::atan2(glm::length(inplane), glm::dot(step_vec, normal)) * 180.0 / M_PI;
-            std::ostringstream os;
-            os.precision(3);
-            os << "gantry tilt of " << tilt << " degrees (slice positions are sheared): kept as a sheared index-to-LPS "
-               << "matrix, which places every voxel where it was acquired";
-            warnings.push_back(os.str());
-        }
-    }
-
-    // Pixels, in our slice order.
-    vtkNew<vtkStringArray> names;
-    for (const auto& s : slices) names->InsertNextValue(s.file);
-    vtkNew<vtkDICOMReader> reader;
-    vtkNew<VtkMessages> msgs;
-    msgs->watch(reader);
-    reader->SetFileNames(names);
-    reader->SortingOff();                     // keep our order
-    reader->SetMemoryRowOrderToFileNative();  // voxel (i, j) = column i of row j, as DICOM stores it
-    reader->AutoRescaleOn();                  // RescaleSlope/Intercept per slice
-    reader->Update();
-    if (reader->GetErrorCode() || msgs->has_error())
-        throw Error(where, "cannot read the pixel data: " + msgs->first_error());
-    vtkImageData* img = reader->GetOutput();
-    vtkDataArray* arr = img ? img->GetPointData()->GetScalars() : nullptr;
-    if (!arr || arr->GetNumberOfComponents() != 1) throw Error(where, "pixel data could not be read as one scalar per voxel");
-    int d[3];
-    img->GetDimensions(d);
-    if (d[0] != first.cols || d[1] != first.rows || std::size_t(d[2]) != n)
-        throw Error(where, "pixel data does not match the headers (truncated or corrupt files?)");
-    const VoxelType type = type_of(arr, where);
-    const std::array<std::int64_t, 3> dims{first.cols, first.rows, std::int64_t(nz)};
-    checked_byte_size(where, dims, type);
-
-    glm::dmat4 affine(1.0);
-    affine[0] = glm::dvec4(row * first.col_spacing, 0.0);
-    affine[1] = glm::dvec4(col * first.row_spacing, 0.0);
-    affine[2] = glm::dvec4(n > 1 ? step_vec : normal * 1.0, 0.0);
-    affine[3] = glm::dvec4(first.ipp, 1.0);
-    check_affine(where, affine, /*allow_shear=*/true);
-
-    Volume v = Volume::dense(dims, type, affine);
-    const std::size_t slice_bytes = std::size_t(dims[0] * dims[1]) * voxel_size(type);
-    const auto* src = static_cast<const std::byte*>(arr->GetVoidPointer(0));
-    for (std::size_t i = 0; i < n; ++i)
-        std::memcpy(v.bytes().data() + std::size_t(grid_index[i]) * slice_bytes, src + i * slice_bytes, slice_bytes);
-    // Fill gaps by linear interpolation between the real neighbours.
-    for (std::size_t i = 0; i + 1 < n; ++i) {
-        const int a = grid_index[i], b = grid_index[i + 1];
-        for (int k = a + 1; k < b; ++k) {
-            const double w = double(k - a) / double(b - a);
-            dispatch_voxel_type(type, [&](auto tag) {
-                using T = decltype(tag);
-                auto s = v.as<T>();
-                const std::size_t plane = std::size_t(dims[0] * dims[1]);
-                for (std::size_t p = 0; p < plane; ++p) {
-                    const double x = (1 - w) * double(s[std::size_t(a) * plane + p]) + w * double(s[std::size_t(b) * plane + p]);
-                    s[std::size_t(k) * plane + p] = std::is_integral_v<T> ? T(std::lround(x)) : T(x);
-                }
-                return 0;
-            });
-        }
-    }
-    report(opt.progress, 1.0, "reading DICOM", "read_dicom");
-
-    v.meta.source = where;
-    v.meta.format = "DICOM";
-    v.meta.modality = first.modality;
-    v.meta.patient_name = first.patient_name;
-    v.meta.patient_id = first.patient_id;
-    v.meta.study_uid = first.study_uid;
-    v.meta.series_uid = g.info.uid;
-    v.meta.series_description = first.description;
-    for (const auto& gr : groups) v.meta.series.push_back(gr.info);
-    v.meta.selected_series = int(chosen);
-    v.meta.warnings = std::move(warnings);
-    warn_non_finite(v);
+Volume read_dicom(const std::vector<std::string>& files_or_folder, const LoadOptions& opt) {
+    report(opt.progress, 0.0, kStage, kWhere);
+    Scan sc = scan(files_or_folder, opt.progress);
+    std::vector<SeriesInfo> list;
+    for (const auto& g : sc.groups) list.push_back(info_of(g));
+    const int idx = select_series(sc, list, opt.series);
+    Volume v = load_group(sc.groups[size_t(idx)], sc, opt.progress);
+    v.meta.source = sc.where;
+    v.meta.series = std::move(list);
+    v.meta.selected_series = idx;
+    v.meta.warnings.insert(v.meta.warnings.begin(), sc.notes.begin(), sc.notes.end());
+    report(opt.progress, 1.0, kStage, kWhere);
     return v;
 }
 

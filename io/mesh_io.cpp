@@ -1,8 +1,7 @@
-// Mesh readers and writers through VTK (STL, PLY, OBJ, VTP), in LPS mm.
+// Mesh readers and writers (STL, PLY, OBJ, VTP), in LPS mm.
 //
-// Files are checked before VTK sees them (existence, size, STL and PLY
-// headers against the file size), because VTK's readers report malformed
-// input through its output window, and some crash on it. The coordinate
+// STL, PLY and OBJ are parsed by io/mesh_parsers.cpp (VTK's readers for them
+// crash on malformed input); VTP goes through VTK's XML reader. The coordinate
 // system is read from Slicer's "SPACE=RAS|LPS" tag where the format has a
 // header or comment, and written as SPACE=LPS. OBJ is written here because
 // VTK 9.1's vtkOBJWriter cannot add a comment line.
@@ -22,13 +21,10 @@
 #include <vtkFieldData.h>
 #include <vtkFloatArray.h>
 #include <vtkNew.h>
-#include <vtkOBJReader.h>
-#include <vtkPLYReader.h>
 #include <vtkPLYWriter.h>
 #include <vtkPointData.h>
 #include <vtkPoints.h>
 #include <vtkPolyData.h>
-#include <vtkSTLReader.h>
 #include <vtkSTLWriter.h>
 #include <vtkSmartPointer.h>
 #include <vtkStringArray.h>
@@ -39,6 +35,7 @@
 
 #include "io/atomic_file.hpp"
 #include "io/error.hpp"
+#include "io/mesh_parsers.hpp"
 #include "io/vtk_util.hpp"
 
 namespace iso {
@@ -81,116 +78,10 @@ Fmt format_of(const std::string& path) {
     throw Error(path, "unsupported mesh format '" + ext + "' (expected .stl, .ply, .obj or .vtp)");
 }
 
-// "RAS", "LPS" or "" from text holding Slicer's "SPACE=..." tag.
-std::string space_tag(const std::string& text) {
-    const auto p = text.find("SPACE=");
-    if (p == std::string::npos) return "";
-    return text.substr(p + 6, 3);
-}
 
-std::string read_prefix(const std::string& path, std::size_t n) {
-    std::ifstream f(path, std::ios::binary);
-    std::string s(n, '\0');
-    f.read(s.data(), std::streamsize(n));
-    s.resize(std::size_t(f.gcount()));
-    return s;
-}
 
-// Binary STL: 80-byte header, triangle count, 50 bytes per triangle. Checks
-// the count against the size before VTK allocates for it.
-std::string check_stl(const std::string& path, std::uintmax_t size) {
-    const std::string head = read_prefix(path, 84);
-    if (size >= 84) {
-        std::uint32_t n = 0;
-        std::memcpy(&n, head.data() + 80, 4);
-        if (84 + 50 * std::uintmax_t(n) == size) return head.substr(0, 80); // binary
-    }
-    std::string start = head.substr(0, std::min<std::size_t>(head.size(), 80));
-    const auto nonspace = start.find_first_not_of(" \t\r\n");
-    if (nonspace != std::string::npos && start.compare(nonspace, 5, "solid") == 0) {
-        // ASCII, or a binary file whose header starts with "solid" and whose
-        // size is wrong: tell them apart by the text.
-        const std::string more = read_prefix(path, 4096);
-        if (more.find("facet") != std::string::npos || more.find("endsolid") != std::string::npos)
-            return start.substr(0, start.find('\n'));
-    }
-    if (size < 84) throw Error(path, "truncated STL file (" + std::to_string(size) + " bytes)");
-    std::uint32_t n = 0;
-    std::memcpy(&n, head.data() + 80, 4);
-    throw Error(path, "truncated or malformed binary STL: the header announces " + std::to_string(n) +
-                          " triangles (" + std::to_string(84 + 50 * std::uintmax_t(n)) + " bytes), the file has " +
-                          std::to_string(size) + " bytes");
-}
 
-// PLY: the header must be complete and its element counts plausible for the
-// file size (VTK's reader trusts them).
-std::string check_ply(const std::string& path, std::uintmax_t size) {
-    const std::string head = read_prefix(path, 1 << 16);
-    if (head.compare(0, 3, "ply") != 0) throw Error(path, "not a PLY file (no 'ply' magic)");
-    const auto end = head.find("end_header");
-    if (end == std::string::npos) throw Error(path, "PLY header is incomplete (no end_header)");
-    std::istringstream in(head.substr(0, end));
-    std::string line, comments, format;
-    std::uintmax_t elements = 0;
-    bool has_vertex = false, has_face = false;
-    while (std::getline(in, line)) {
-        std::istringstream ls(line);
-        std::string word;
-        ls >> word;
-        if (word == "comment" || word == "obj_info") comments += line + "\n";
-        else if (word == "format") ls >> format;
-        else if (word == "element") {
-            std::string name;
-            std::uintmax_t count = 0;
-            if (!(ls >> name >> count)) throw Error(path, "malformed PLY element line: " + line);
-            elements += count;
-            has_vertex |= name == "vertex";
-            has_face |= name == "face";
-        } else if (word == "property") {
-            std::string type;
-            ls >> type;
-            if (type == "list") {
-                std::string ct, it;
-                ls >> ct >> it;
-                static const char* ok[] = {"char", "uchar", "short", "ushort", "int", "uint", "float", "double",
-                                           "int8", "uint8", "int16", "uint16", "int32", "uint32", "float32", "float64"};
-                auto valid = [&](const std::string& t) { return std::find(std::begin(ok), std::end(ok), t) != std::end(ok); };
-                if (!valid(ct) || !valid(it)) throw Error(path, "malformed PLY list property: " + line);
-            }
-        }
-    }
-    if (format != "ascii" && format != "binary_little_endian" && format != "binary_big_endian")
-        throw Error(path, "unknown PLY format '" + format + "'");
-    if (!has_vertex || !has_face) throw Error(path, "PLY file has no vertex or no face element");
-    // Every element takes at least one byte (binary) or two characters (ASCII).
-    if (elements > size) throw Error(path, "PLY header announces more elements than the file can hold (truncated?)");
-    return comments;
-}
 
-// OBJ vertex lines must hold finite numbers: vtkOBJReader reads "nan" and
-// other unparsable coordinates as 0 without a word.
-void check_obj(const std::string& path) {
-    std::ifstream f(path, std::ios::binary);
-    std::string line;
-    std::size_t lineno = 0, bad = 0, first_bad = 0;
-    while (std::getline(f, line)) {
-        ++lineno;
-        if (line.size() < 2 || line[0] != 'v' || (line[1] != ' ' && line[1] != '\t')) continue;
-        const char* p = line.c_str() + 2;
-        for (int k = 0; k < 3; ++k) {
-            char* end = nullptr;
-            const double x = std::strtod(p, &end);
-            if (end == p || !std::isfinite(x)) {
-                if (!bad++) first_bad = lineno;
-                break;
-            }
-            p = end;
-        }
-    }
-    if (bad)
-        throw Error(path, std::to_string(bad) + " vertex line(s) with NaN, infinite or unreadable coordinates (first at line " +
-                              std::to_string(first_bad) + ")");
-}
 
 vtkSmartPointer<vtkPolyData> run_reader(vtkAlgorithm* reader, const std::string& path) {
     vtkNew<VtkMessages> msgs;
@@ -334,48 +225,41 @@ Mesh load_mesh(const std::string& path) {
     const auto size = fs::file_size(path, ec);
     if (size == 0) throw Error(path, "file is empty");
     std::string space;
-    vtkSmartPointer<vtkPolyData> pd;
-    switch (fmt) {
-    case Fmt::Stl: {
-        space = space_tag(check_stl(path, size));
-        vtkNew<vtkSTLReader> r;
-        r->SetFileName(path.c_str());
-        r->MergingOn(); // weld identical positions: STL stores each triangle's corners
-        pd = run_reader(r, path);
-        break;
+    Mesh m;
+    try {
+        switch (fmt) {
+        case Fmt::Stl: m = detail::parse_stl(path, space); break;
+        case Fmt::Ply: m = detail::parse_ply(path, space); break;
+        case Fmt::Obj: m = detail::parse_obj(path, space); break;
+        case Fmt::Vtp: {
+            vtkNew<vtkXMLPolyDataReader> r;
+            r->SetFileName(path.c_str());
+            if (!r->CanReadFile(path.c_str())) throw Error(path, "not a VTK XML PolyData file");
+            auto pd = run_reader(r, path);
+            if (auto* s = vtkStringArray::SafeDownCast(pd->GetFieldData()->GetAbstractArray("SPACE")); s && s->GetNumberOfValues() > 0)
+                space = s->GetValue(0);
+            m = to_mesh(pd, path);
+            break;
+        }
+        }
+    } catch (const std::bad_alloc&) {
+        throw Error(path, "not enough memory to read this file (a corrupt header announcing a huge size?)");
     }
-    case Fmt::Ply: {
-        space = space_tag(check_ply(path, size));
-        vtkNew<vtkPLYReader> r;
-        r->SetFileName(path.c_str());
-        pd = run_reader(r, path);
-        break;
-    }
-    case Fmt::Obj: {
-        space = space_tag(read_prefix(path, 4096));
-        check_obj(path);
-        vtkNew<vtkOBJReader> r;
-        r->SetFileName(path.c_str());
-        pd = run_reader(r, path);
-        break;
-    }
-    case Fmt::Vtp: {
-        vtkNew<vtkXMLPolyDataReader> r;
-        r->SetFileName(path.c_str());
-        if (!r->CanReadFile(path.c_str())) throw Error(path, "not a VTK XML PolyData file");
-        pd = run_reader(r, path);
-        if (auto* s = vtkStringArray::SafeDownCast(pd->GetFieldData()->GetAbstractArray("SPACE")); s && s->GetNumberOfValues() > 0)
-            space = s->GetValue(0);
-        break;
-    }
-    }
-    if (pd->GetNumberOfPoints() == 0 && size > 0 && fmt != Fmt::Vtp)
-        throw Error(path, "no vertices could be read (malformed or truncated file)");
-    Mesh m = to_mesh(pd, path);
+    const std::uint32_t n = std::uint32_t(m.positions.size());
+    for (const auto& t : m.triangles)
+        if (t[0] >= n || t[1] >= n || t[2] >= n)
+            throw Error(path, "a triangle refers to a vertex that does not exist (" + std::to_string(std::max({t[0], t[1], t[2]})) + " of " +
+                                  std::to_string(n) + ")");
+    if (!m.normals.empty() && m.normals.size() != m.positions.size()) m.normals.clear();
+    if (!m.colors.empty() && m.colors.size() != m.positions.size()) m.colors.clear();
+    std::size_t degenerate = 0;
+    for (const auto& t : m.triangles)
+        if (t[0] == t[1] || t[1] == t[2] || t[0] == t[2]) ++degenerate;
+    if (degenerate && fmt != Fmt::Vtp) m.warnings.push_back(std::to_string(degenerate) + " degenerate triangles (repeated vertices) kept as read");
     if (space == "RAS") {
         // A 180-degree turn about z: determinant +1, so winding and outward normals stay.
         for (auto& p : m.positions) p = glm::vec3(-p.x, -p.y, p.z);
-        for (auto& n : m.normals) n = glm::vec3(-n.x, -n.y, n.z);
+        for (auto& nn : m.normals) nn = glm::vec3(-nn.x, -nn.y, nn.z);
         m.warnings.push_back("coordinates converted from RAS (SPACE=RAS in the file) to LPS");
     } else if (!space.empty() && space != "LPS") {
         m.warnings.push_back("unknown SPACE=" + space + " tag; coordinates taken as LPS");

@@ -49,6 +49,7 @@ Volume load_volume(const std::string& path, const LoadOptions& opt) {
     if (!fs::exists(path, ec)) throw Error(path, "no such file or folder");
     VolumeFormat f = volume_format_of(path);
     Volume v;
+    try {
     switch (f) {
     case VolumeFormat::Dicom: v = read_dicom({path}, opt); break;
     case VolumeFormat::Nifti: v = read_nifti(path); break;
@@ -64,6 +65,10 @@ Volume load_volume(const std::string& path, const LoadOptions& opt) {
         }
         throw Error(path, "unsupported volume format (expected .nii, .nii.gz, .nrrd, .nhdr, .mha, .mhd, "
                           ".vti, .vdb, or a DICOM file or folder)");
+    }
+    } catch (const std::bad_alloc&) {
+        // Libraries (VTK's XML reader, OpenVDB) allocate what a header claims.
+        throw Error(path, "not enough memory to read this file (a corrupt header announcing a huge size?)");
     }
     if (v.meta.source.empty()) v.meta.source = path;
     if (v.meta.format.empty()) v.meta.format = volume_format_name(f);
