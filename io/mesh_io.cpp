@@ -36,6 +36,7 @@
 #include "io/atomic_file.hpp"
 #include "io/error.hpp"
 #include "io/mesh_parsers.hpp"
+#include "io/vtp_check.hpp"
 #include "io/vtk_util.hpp"
 
 namespace iso {
@@ -235,6 +236,7 @@ Mesh load_mesh(const std::string& path) {
             vtkNew<vtkXMLPolyDataReader> r;
             r->SetFileName(path.c_str());
             if (!r->CanReadFile(path.c_str())) throw Error(path, "not a VTK XML PolyData file");
+            detail::check_vtk_xml_headers(path);
             auto pd = run_reader(r, path);
             if (auto* s = vtkStringArray::SafeDownCast(pd->GetFieldData()->GetAbstractArray("SPACE")); s && s->GetNumberOfValues() > 0)
                 space = s->GetValue(0);

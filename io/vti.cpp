@@ -12,6 +12,7 @@
 #include <vtkXMLImageDataReader.h>
 
 #include "io/vtk_util.hpp"
+#include "io/vtp_check.hpp"
 #include "io/volume_io.hpp"
 
 namespace iso {
@@ -23,6 +24,7 @@ Volume read_vti(const std::string& path) {
     if (std::filesystem::file_size(path, ec) == 0) throw Error(path, "file is empty");
     vtkNew<vtkXMLImageDataReader> r;
     if (!r->CanReadFile(path.c_str())) throw Error(path, "not a VTK XML image data file");
+    detail::check_vtk_xml_headers(path);
     vtkNew<VtkMessages> msgs;
     msgs->watch(r);
     r->SetFileName(path.c_str());
