@@ -1,12 +1,22 @@
 // OpenVDB (.vdb): the first float grid, kept sparse. VDB has no patient
 // convention: its world space is taken as LPS millimetres (what we write).
 // Our index (0,0,0) is the corner of the grid's active bounding box.
+#include <cerrno>
 #include <cmath>
+#include <cstdio>
+#include <cstdlib>
 #include <filesystem>
+#include <fstream>
 #include <mutex>
 
 #include <openvdb/openvdb.h>
 #include <openvdb/io/File.h>
+
+#include <csignal>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include "io/atomic_file.hpp"
 
 #include "io/sparse.hpp"
 #include "io/volume_io.hpp"
@@ -18,6 +28,66 @@ void init_openvdb() {
     static std::once_flag once;
     std::call_once(once, [] { openvdb::initialize(); });
 }
+// OpenVDB's reader is not hardened against malformed files (the fuzzer
+// found heap overflows inside it), and no other library reads VDB. So an
+// untrusted file is first read in a child process, which writes the grids
+// back out through OpenVDB's writer; the parent then reads that copy. A
+// crash or a hang in the child becomes an error instead of taking the
+// program down. Returns the path of the copy (the caller removes it).
+std::string sanitized_copy(const std::string& path) {
+    namespace fs = std::filesystem;
+    const std::string copy = (fs::temp_directory_path() / ("isoscope-vdb-" + std::to_string(::getpid()) + "-" +
+                                                           fs::path(temp_path_for(path)).filename().string()))
+                                 .string();
+    std::fflush(nullptr);
+    const pid_t pid = ::fork();
+    if (pid < 0) throw Error(path, "cannot start the VDB reader process");
+    if (pid == 0) {
+        // Default dispositions: a handler inherited from the host program
+        // (a crash reporter, a fuzzer's timer) must not keep the child alive.
+        for (int sig : {SIGALRM, SIGSEGV, SIGBUS, SIGABRT, SIGFPE, SIGILL}) std::signal(sig, SIG_DFL);
+        // A malformed file must not hang the reader forever.
+        unsigned limit = 120;
+        if (const char* e = std::getenv("ISOSCOPE_VDB_READ_TIMEOUT")) limit = unsigned(std::max(1, std::atoi(e)));
+        ::alarm(limit);
+        int rc = 1;
+        try {
+            openvdb::io::File in(path);
+            in.open(false);
+            openvdb::GridPtrVec grids;
+            for (auto it = in.beginName(); it != in.endName(); ++it) grids.push_back(in.readGrid(it.gridName()));
+            in.close();
+            openvdb::io::File out(copy);
+            out.write(grids);
+            out.close();
+            rc = 0;
+        } catch (const std::exception& e) {
+            std::FILE* f = std::fopen((copy + ".error").c_str(), "w");
+            if (f) {
+                std::fputs(e.what(), f);
+                std::fclose(f);
+            }
+            rc = 2;
+        }
+        ::_exit(rc);
+    }
+    int status = 0;
+    while (::waitpid(pid, &status, 0) < 0 && errno == EINTR) {
+    }
+    std::error_code ec;
+    if (WIFEXITED(status) && WEXITSTATUS(status) == 0) return copy;
+    fs::remove(copy, ec);
+    std::string why;
+    if (WIFEXITED(status) && WEXITSTATUS(status) == 2) {
+        std::ifstream f(copy + ".error");
+        std::getline(f, why);
+        fs::remove(copy + ".error", ec);
+        throw Error(path, "not a readable OpenVDB file: " + why);
+    }
+    if (WIFSIGNALED(status) && WTERMSIG(status) == SIGALRM) throw Error(path, "OpenVDB did not finish reading the file in time (corrupt?)");
+    throw Error(path, "OpenVDB's reader failed on this file (corrupt or truncated?)");
+}
+
 } // namespace
 
 Volume read_vdb(const std::string& path) {
@@ -27,8 +97,13 @@ Volume read_vdb(const std::string& path) {
     if (std::filesystem::file_size(path, ec) == 0) throw Error(path, "file is empty");
     openvdb::FloatGrid::Ptr grid;
     std::string others;
+    const std::string copy = sanitized_copy(path);
+    struct Remove {
+        std::string p;
+        ~Remove() { std::error_code e; std::filesystem::remove(p, e); }
+    } remove_copy{copy};
     try {
-        openvdb::io::File file(path);
+        openvdb::io::File file(copy);
         file.open(/*delayLoad=*/false);
         for (auto it = file.beginName(); it != file.endName(); ++it) {
             auto meta = file.readGridMetadata(it.gridName());
