@@ -49,7 +49,7 @@ extern "C" int LLVMFuzzerInitialize(int*, char***) {
     // allocations well under its RSS limit (the check itself is what we test).
     ::setenv("ISOSCOPE_MAX_VOLUME_BYTES", "268435456", 0);
     // The VDB reader's child process must give up well inside -timeout.
-    ::setenv("ISOSCOPE_VDB_READ_TIMEOUT", "5", 0);
+    ::setenv("ISOSCOPE_VDB_READ_TIMEOUT", "2", 0);
     return 0;
 }
 
