@@ -20,6 +20,8 @@ PACKAGES=(
   libgtest-dev libgmock-dev libbenchmark-dev
   clang libclang-rt-14-dev
   xvfb xauth glslang-tools
+  # benchmark plots
+  gnuplot-nox
   # NIfTI reference library, CLI parsing, JSON output, zlib
   libnifti2-dev libcli11-dev nlohmann-json3-dev zlib1g-dev
 )

@@ -404,3 +404,19 @@ TEST(Postprocess, SmoothDecimateKeepLargest) {
     EXPECT_THROW(postprocess(m, {.decimate = 1.0}), Error);
     EXPECT_TRUE(postprocess(Mesh{}, {.smooth = 0.5}).empty());
 }
+
+TEST(Isosurface, TinyMemoryBudgetStillExtractsTheSameMesh) {
+    const auto v = sphere({40, 40, 40}, glm::dmat4(1.0), {19.5, 19.5, 19.5}, 15.0);
+    const auto ref = canonical(extract_isosurface(v, 0.0, {.chunk_size = 32}));
+    ExtractOptions opt;
+    opt.chunk_size = 32;
+    opt.threads = 2;
+    opt.memory_budget = 100 << 10; // far below two threads' scratch at 32^3
+    Extractor x(v, opt);
+    EXPECT_LT(x.options().chunk_size, 32);
+    EXPECT_EQ(x.options().threads, 1);
+    ExtractStats st;
+    const Mesh m = weld(x.extract(0.0, &st));
+    EXPECT_LE(st.peak_scratch_bytes, opt.memory_budget);
+    EXPECT_EQ(canonical(m), ref);
+}
