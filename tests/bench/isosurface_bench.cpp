@@ -278,6 +278,8 @@ int main(int argc, char** argv) {
         return parse(capture(cmd.str()));
     };
     std::ofstream csv(a.out + "/isosurface.csv");
+    std::ofstream dat(a.out + "/isosurface_methods.dat"); // for the clustered bar plot
+    dat << "case ours FlyingEdges OpenVDB\n";
     csv << "table,data,iso,method,threads,chunk,ms,tris,extra_mb\n";
 
     const std::string bundled = std::string(ISOSCOPE_DATA_DIR) + "/headsq.nhdr";
@@ -304,6 +306,8 @@ int main(int argc, char** argv) {
                       << " | " << (d.count("tris") ? d.at("tris") : 0.0) << " | " << std::setprecision(1)
                       << o.at("extra_mb") << " | " << f.at("extra_mb") << " | "
                       << (d.count("extra_mb") ? d.at("extra_mb") : 0.0) << " |\n";
+            const std::string label = c.name.substr(0, c.name.find(' ', c.name.find(' ') + 1)) + ", " + std::to_string(t) + " thr";
+            dat << '"' << label << "\" " << o.at("ms") << ' ' << f.at("ms") << ' ' << (d.count("ms") ? d.at("ms") : 0.0) << "\n";
             for (auto& [m, r] : std::vector<std::pair<std::string, std::map<std::string, double>>>{{"ours", o}, {"fe", f}, {"vdb", d}})
                 if (r.count("ms"))
                     csv << "methods," << c.name << "," << c.iso << "," << m << "," << t << ",32," << r.at("ms") << ","
@@ -351,14 +355,20 @@ int main(int argc, char** argv) {
         csv << "incremental,phantom,-500,ours," << t << ",32," << r.at("inc_ms") << ",0,0\n";
     }
     csv.close();
+    dat.close();
 
     // Plots through gnuplot when it is installed.
     if (std::system("command -v gnuplot >/dev/null 2>&1") == 0) {
         std::ofstream gp(a.out + "/isosurface.gp");
-        gp << "set datafile separator ','\nset terminal pngcairo size 900,500\nset key left top\n"
+        gp << "set datafile separator ','\nset terminal pngcairo size 900,500 noenhanced\nset key left top\n"
            << "set output '" << a.out << "/isosurface_chunks.png'\nset title 'Chunk size sweep (phantom skin, 2 threads)'\n"
            << "set xlabel 'chunk size (cells per side)'\nset ylabel 'ms'\nset logscale x 2\n"
            << "plot '< grep ^chunks " << a.out << "/isosurface.csv' using 6:7 with linespoints title 'ours'\n";
+        gp << "set output '" << a.out << "/isosurface_methods.png'\nunset logscale x\nset title 'Isosurface extraction time, normals on (lower is better)'\n"
+           << "set style data histograms\nset style histogram clustered gap 1\nset style fill solid 0.8 border -1\n"
+           << "set xtics rotate by -25 font ',9'\nset xlabel ''\nset ylabel 'ms'\nset datafile separator whitespace\nset key left top\n"
+           << "plot '" << a.out << "/isosurface_methods.dat' using 2:xtic(1) title 'ours (chunked MC)', '' using 3 title 'vtkFlyingEdges3D', "
+           << "'' using 4 title 'OpenVDB volumeToMesh'\n";
         gp.close();
         if (std::system(("gnuplot " + a.out + "/isosurface.gp").c_str()) != 0) std::cerr << "gnuplot failed\n";
     }
