@@ -36,6 +36,7 @@
 #include "io/atomic_file.hpp"
 #include "io/error.hpp"
 #include "io/mesh_parsers.hpp"
+#include "io/vtk_mesh.hpp"
 #include "io/vtp_check.hpp"
 #include "io/vtk_util.hpp"
 
@@ -94,7 +95,9 @@ vtkSmartPointer<vtkPolyData> run_reader(vtkAlgorithm* reader, const std::string&
     return pd;
 }
 
-Mesh to_mesh(vtkPolyData* in, const std::string& path) {
+} // namespace
+
+Mesh from_polydata(vtkPolyData* in, const std::string& path) {
     vtkSmartPointer<vtkPolyData> pd = in;
     // Polygons and strips become triangles; lines and vertices are dropped.
     bool all_triangles = pd->GetNumberOfStrips() == 0;
@@ -164,7 +167,7 @@ Mesh to_mesh(vtkPolyData* in, const std::string& path) {
     return m;
 }
 
-vtkSmartPointer<vtkPolyData> to_polydata(const Mesh& m, bool with_colors = true) {
+vtkSmartPointer<vtkPolyData> to_polydata(const Mesh& m, bool with_colors) {
     auto pd = vtkSmartPointer<vtkPolyData>::New();
     vtkNew<vtkPoints> pts;
     pts->SetDataTypeToFloat();
@@ -196,6 +199,8 @@ vtkSmartPointer<vtkPolyData> to_polydata(const Mesh& m, bool with_colors = true)
     }
     return pd;
 }
+
+namespace {
 
 void write_obj(const Mesh& m, const std::string& path) {
     std::ofstream f(path, std::ios::binary);
@@ -240,7 +245,7 @@ Mesh load_mesh(const std::string& path) {
             auto pd = run_reader(r, path);
             if (auto* s = vtkStringArray::SafeDownCast(pd->GetFieldData()->GetAbstractArray("SPACE")); s && s->GetNumberOfValues() > 0)
                 space = s->GetValue(0);
-            m = to_mesh(pd, path);
+            m = from_polydata(pd, path);
             break;
         }
         }
