@@ -1,0 +1,244 @@
+#include "renderer/graph/frame_graph.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <map>
+
+#include "io/error.hpp"
+
+namespace iso::graph {
+
+std::size_t bytes_per_pixel(Format f) {
+    switch (f) {
+    case Format::RGBA8:
+    case Format::R32F:
+    case Format::R32UI:
+    case Format::Depth32F:
+    case Format::RG16F: return 4;
+    case Format::RGBA16F: return 8;
+    case Format::RGBA32F:
+    case Format::RGBA32UI: return 16;
+    }
+    return 4;
+}
+
+namespace {
+std::size_t bytes_of(const TextureDesc& d) {
+    return std::size_t(d.width) * std::size_t(d.height) * std::size_t(d.layers) * bytes_per_pixel(d.format);
+}
+} // namespace
+
+// ---- Builder -------------------------------------------------------------------
+
+TextureHandle FrameGraph::Builder::create(const std::string& name, const TextureDesc& d) {
+    Resource r;
+    r.name = name;
+    r.texture = true;
+    r.tdesc = d;
+    const auto i = g_.add_resource(std::move(r));
+    g_.passes_[pass_].creates.push_back(i);
+    return {i, 0};
+}
+
+BufferHandle FrameGraph::Builder::create(const std::string& name, const BufferDesc& d) {
+    Resource r;
+    r.name = name;
+    r.texture = false;
+    r.bdesc = d;
+    const auto i = g_.add_resource(std::move(r));
+    g_.passes_[pass_].creates.push_back(i);
+    return {i, 0};
+}
+
+TextureHandle FrameGraph::Builder::read(TextureHandle h) {
+    g_.check(h.index, h.version, true, "read");
+    const auto& r = g_.resources_[h.index];
+    if (h.version == 0 && !r.imported)
+        throw Error("pass '" + g_.passes_[pass_].name + "'", "reads '" + r.name + "' before any pass wrote it");
+    g_.passes_[pass_].reads.push_back({h.index, h.version});
+    return h;
+}
+
+BufferHandle FrameGraph::Builder::read(BufferHandle h) {
+    g_.check(h.index, h.version, false, "read");
+    const auto& r = g_.resources_[h.index];
+    if (h.version == 0 && !r.imported)
+        throw Error("pass '" + g_.passes_[pass_].name + "'", "reads '" + r.name + "' before any pass wrote it");
+    g_.passes_[pass_].reads.push_back({h.index, h.version});
+    return h;
+}
+
+TextureHandle FrameGraph::Builder::write(TextureHandle h) {
+    g_.check(h.index, h.version, true, "write");
+    auto& r = g_.resources_[h.index];
+    if (h.version != r.version)
+        throw Error("pass '" + g_.passes_[pass_].name + "'", "writes an old version of '" + r.name + "'");
+    ++r.version;
+    g_.passes_[pass_].writes.push_back({h.index, r.version});
+    return {h.index, r.version};
+}
+
+BufferHandle FrameGraph::Builder::write(BufferHandle h) {
+    g_.check(h.index, h.version, false, "write");
+    auto& r = g_.resources_[h.index];
+    if (h.version != r.version)
+        throw Error("pass '" + g_.passes_[pass_].name + "'", "writes an old version of '" + r.name + "'");
+    ++r.version;
+    g_.passes_[pass_].writes.push_back({h.index, r.version});
+    return {h.index, r.version};
+}
+
+void FrameGraph::Builder::side_effect() { g_.passes_[pass_].side_effect = true; }
+
+// ---- Resources -------------------------------------------------------------------
+
+std::uint64_t Resources::get(TextureHandle h) const { return g_.resources_.at(h.index).physical; }
+std::uint64_t Resources::get(BufferHandle h) const { return g_.resources_.at(h.index).physical; }
+const TextureDesc& Resources::desc(TextureHandle h) const { return g_.resources_.at(h.index).tdesc; }
+const BufferDesc& Resources::desc(BufferHandle h) const { return g_.resources_.at(h.index).bdesc; }
+
+// ---- FrameGraph ----------------------------------------------------------------------
+
+std::uint32_t FrameGraph::add_resource(Resource r) {
+    resources_.push_back(std::move(r));
+    return std::uint32_t(resources_.size() - 1);
+}
+
+void FrameGraph::check(std::uint32_t index, std::uint32_t version, bool texture, const char* what) const {
+    if (index >= resources_.size()) throw Error("frame graph", std::string("cannot ") + what + " an invalid handle");
+    const auto& r = resources_[index];
+    if (r.texture != texture) throw Error("frame graph", std::string("handle kind mismatch for '") + r.name + "'");
+    if (version > r.version) throw Error("frame graph", "handle of '" + r.name + "' has a version that does not exist");
+}
+
+TextureHandle FrameGraph::import(const std::string& name, const TextureDesc& d, std::uint64_t physical) {
+    Resource r;
+    r.name = name;
+    r.tdesc = d;
+    r.imported = true;
+    r.physical = physical;
+    return {add_resource(std::move(r)), 0};
+}
+
+BufferHandle FrameGraph::import(const std::string& name, const BufferDesc& d, std::uint64_t physical) {
+    Resource r;
+    r.name = name;
+    r.texture = false;
+    r.bdesc = d;
+    r.imported = true;
+    r.physical = physical;
+    return {add_resource(std::move(r)), 0};
+}
+
+void FrameGraph::request(TextureHandle h) {
+    check(h.index, h.version, true, "request");
+    requested_.push_back({h.index, h.version});
+}
+
+void FrameGraph::request(BufferHandle h) {
+    check(h.index, h.version, false, "request");
+    requested_.push_back({h.index, h.version});
+}
+
+void FrameGraph::cull() {
+    // Who produced each (resource, version)?
+    std::map<std::pair<std::uint32_t, std::uint32_t>, std::uint32_t> producer;
+    for (std::uint32_t p = 0; p < passes_.size(); ++p)
+        for (const auto& w : passes_[p].writes) producer[{w.resource, w.version}] = p;
+    std::vector<std::uint32_t> work;
+    auto need_version = [&](const Access& a) {
+        auto it = producer.find({a.resource, a.version});
+        if (it != producer.end() && !passes_[it->second].needed) {
+            passes_[it->second].needed = true;
+            work.push_back(it->second);
+        }
+    };
+    for (const auto& a : requested_) need_version(a);
+    for (std::uint32_t p = 0; p < passes_.size(); ++p)
+        if (passes_[p].side_effect && !passes_[p].needed) {
+            passes_[p].needed = true;
+            work.push_back(p);
+        }
+    while (!work.empty()) {
+        const auto p = work.back();
+        work.pop_back();
+        for (const auto& r : passes_[p].reads) need_version(r);
+        // A pass that writes version v > 1 builds on version v - 1 only if it
+        // read it; writes alone do not pull earlier writers in.
+    }
+}
+
+FrameStats FrameGraph::execute(Backend& backend) {
+    cull();
+    FrameStats stats;
+    // Lifetimes over the needed passes only.
+    for (auto& r : resources_) r.first_use = r.last_use = -1;
+    for (std::uint32_t p = 0; p < passes_.size(); ++p) {
+        if (!passes_[p].needed) continue;
+        auto touch = [&](std::uint32_t i) {
+            auto& r = resources_[i];
+            if (r.first_use < 0) r.first_use = p;
+            r.last_use = p;
+        };
+        for (auto i : passes_[p].creates) touch(i);
+        for (const auto& a : passes_[p].reads) touch(a.resource);
+        for (const auto& a : passes_[p].writes) touch(a.resource);
+    }
+    // Requested resources stay alive to the end (the caller reads them).
+    const std::int64_t end = std::int64_t(passes_.size());
+    for (const auto& a : requested_)
+        if (resources_[a.resource].first_use >= 0) resources_[a.resource].last_use = end;
+    for (const auto& r : resources_) stats.virtual_resources += r.imported ? 0 : 1;
+
+    struct Free {
+        bool texture;
+        TextureDesc t;
+        BufferDesc b;
+        std::uint64_t id;
+    };
+    std::vector<Free> pool;
+    std::vector<std::uint64_t> owned;
+    std::size_t live_bytes = 0;
+    auto acquire = [&](Resource& r, PassStats& ps) {
+        for (auto it = pool.begin(); it != pool.end(); ++it)
+            if (it->texture == r.texture && (r.texture ? it->t == r.tdesc : it->b == r.bdesc)) {
+                r.physical = it->id;
+                pool.erase(it);
+                return;
+            }
+        r.physical = r.texture ? backend.create_texture(r.tdesc, r.name) : backend.create_buffer(r.bdesc, r.name);
+        owned.push_back(r.physical);
+        const std::size_t bytes = r.texture ? bytes_of(r.tdesc) : r.bdesc.bytes;
+        ps.bytes_created += bytes;
+        live_bytes += bytes;
+        stats.peak_bytes = std::max(stats.peak_bytes, live_bytes);
+        ++stats.physical_resources;
+    };
+
+    Resources res(*this);
+    for (std::uint32_t p = 0; p < passes_.size(); ++p) {
+        PassStats ps;
+        ps.name = passes_[p].name;
+        if (passes_[p].needed) {
+            for (auto& r : resources_)
+                if (!r.imported && r.first_use == p) acquire(r, ps);
+            const auto t0 = std::chrono::steady_clock::now();
+            passes_[p].run(res);
+            ps.ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+            ps.ran = true;
+            for (auto& r : resources_)
+                if (!r.imported && r.last_use == p) pool.push_back({r.texture, r.tdesc, r.bdesc, r.physical});
+        }
+        stats.passes.push_back(ps);
+    }
+    for (auto id : owned) backend.destroy(id);
+    return stats;
+}
+
+bool FrameGraph::ran(const std::string& pass) const {
+    for (const auto& p : passes_)
+        if (p.name == pass) return p.needed;
+    return false;
+}
+
+} // namespace iso::graph
