@@ -1,0 +1,73 @@
+// Renders a scene of meshes headlessly (or into the GUI's context) through
+// the pass graph: G-buffer -> deferred lighting -> read-back, with AOVs
+// (depth, normal, id) as extra requested outputs. Needs a current GL 4.5
+// context.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <glm/vec3.hpp>
+#include <glm/vec4.hpp>
+
+#include "io/mesh.hpp"
+#include "renderer/graph/frame_graph.hpp"
+#include "renderer/scene/camera.hpp"
+
+namespace iso {
+
+struct SceneObject {
+    std::string name;
+    glm::vec3 color{0.9f, 0.85f, 0.8f}; // linear RGB albedo
+    float opacity = 1.0f;
+    bool visible = true, pickable = true;
+};
+
+// A CPU image: `channels` floats or bytes per pixel, rows top to bottom.
+struct Image {
+    int width = 0, height = 0, channels = 4;
+    bool is_float = false;
+    std::vector<std::uint8_t> bytes;   // !is_float
+    std::vector<float> floats;         // is_float
+};
+
+enum class Aov { None, Depth, Normal, Id };
+Aov aov_from_name(const std::string& name); // "depth", "normal", "id"; throws iso::Error
+
+struct RenderOptions {
+    int width = 512, height = 512;
+    glm::vec4 background{0.08f, 0.09f, 0.11f, 1.0f}; // linear; alpha 0 for a transparent background
+    Aov aov = Aov::None;
+};
+
+struct RenderResult {
+    Image image;                 // RGBA8 sRGB colour, or the AOV as floats
+    graph::FrameStats stats;
+    std::string gl_renderer;
+};
+
+class Renderer {
+public:
+    Renderer();
+    ~Renderer();
+    Renderer(const Renderer&) = delete;
+    Renderer& operator=(const Renderer&) = delete;
+
+    // Uploads a mesh (positions LPS mm, normals optional: computed if absent).
+    // Returns the object's id (1-based; 0 is the background in the id AOV).
+    std::uint32_t add(const Mesh& m, const SceneObject& o);
+    std::size_t object_count() const;
+    Bounds bounds() const;
+    SceneObject& object(std::uint32_t id);
+
+    RenderResult render(const Camera& camera, const RenderOptions& opt);
+
+private:
+    struct Impl;
+    std::unique_ptr<Impl> impl_;
+};
+
+} // namespace iso
