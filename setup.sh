@@ -20,10 +20,10 @@ PACKAGES=(
   libgtest-dev libgmock-dev libbenchmark-dev
   clang libclang-rt-14-dev
   xvfb xauth glslang-tools
-  # benchmark plots
-  gnuplot-nox
+  # benchmark plots; stb_easy_font for overlay text
+  gnuplot-nox libstb-dev
   # NIfTI reference library, CLI parsing, JSON output, zlib
-  libnifti2-dev libcli11-dev nlohmann-json3-dev zlib1g-dev
+  libnifti2-dev libcli11-dev nlohmann-json3-dev zlib1g-dev libssl-dev
 )
 
 missing=()

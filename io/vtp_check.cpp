@@ -113,9 +113,10 @@ void check_vtk_xml_headers(const std::string& path) {
         }
         const std::uint64_t blocks = get_int(head, 0, hs, big), block = get_int(head, 1, hs, big), last = get_int(head, 2, hs, big);
         if (blocks > file_size) throw Error(path, "an array's compression header claims " + std::to_string(blocks) + " blocks");
-        if (blocks == 0) continue;
+        // VTK divides by the block size even for an empty array.
         if (block == 0 || block > (std::uint64_t(1) << 30) || last > block)
             throw Error(path, "an array's compression header has an invalid block size");
+        if (blocks == 0) continue;
         const std::string sizes = format == "appended" && !appended_b64 ? s.substr(data_start + want, std::size_t(blocks) * hs)
                                                                          : base64(s, data_start, want + std::size_t(blocks) * hs).substr(want);
         if (sizes.size() < blocks * hs) throw Error(path, "an array's compression header is truncated");

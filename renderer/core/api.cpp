@@ -1,6 +1,10 @@
 #include "renderer/core/api.hpp"
 
+#include <algorithm>
 #include <filesystem>
+#include <sstream>
+
+#include "renderer/gl/context.hpp"
 
 namespace iso::core {
 
@@ -98,6 +102,92 @@ std::vector<Surface> extract_surfaces(const Volume& v, const SurfaceRequest& req
         }
     }
     report(req.progress, 1.0, "done", "extract_surfaces");
+    return out;
+}
+
+glm::vec3 surface_color(std::size_t index, std::size_t count) {
+    // Outer surfaces (lower CT values) skin-toned, inner ones bone white; more get distinct hues.
+    static const glm::vec3 palette[] = {{0.93f, 0.72f, 0.60f}, {0.95f, 0.92f, 0.84f}, {0.85f, 0.25f, 0.22f},
+                                        {0.35f, 0.55f, 0.85f}, {0.45f, 0.75f, 0.40f}, {0.80f, 0.65f, 0.30f}};
+    if (count == 1) return palette[1];
+    return palette[index % 6];
+}
+
+namespace {
+bool is_mesh_path(const std::string& p) {
+    std::string e = std::filesystem::path(p).extension().string();
+    std::transform(e.begin(), e.end(), e.begin(), [](unsigned char c) { return char(std::tolower(c)); });
+    return e == ".stl" || e == ".ply" || e == ".obj" || e == ".vtp";
+}
+std::vector<float> flat(const glm::dmat4& m) {
+    std::vector<float> v;
+    for (int c = 0; c < 4; ++c)
+        for (int r = 0; r < 4; ++r) v.push_back(float(m[c][r]));
+    return v;
+}
+} // namespace
+
+RenderOutput render_input(const std::string& input, const RenderRequest& req) {
+    static gl::HeadlessContext ctx; // one per process, made on first use
+    ctx.make_current();
+    RenderOutput out;
+    Renderer ren;
+    std::string isos_text;
+    if (is_mesh_path(input)) {
+        const Mesh m = load_mesh(input);
+        ren.add(m, {std::filesystem::path(input).filename().string(), surface_color(0, 1)});
+    } else {
+        LoadOptions lo;
+        lo.series = req.series;
+        lo.progress = req.progress;
+        const Volume v = load_volume(input, lo);
+        if (req.isos.empty()) throw Error("render", "give at least one --iso value for a volume");
+        std::vector<double> isos = req.isos;
+        std::sort(isos.begin(), isos.end());
+        SurfaceRequest sr;
+        sr.isos = isos;
+        sr.progress = req.progress;
+        const auto surfaces = extract_surfaces(v, sr);
+        for (std::size_t i = 0; i < surfaces.size(); ++i) {
+            ren.add(surfaces[i].mesh, {surfaces[i].name, surface_color(i, surfaces.size())});
+            char b[32];
+            std::snprintf(b, sizeof b, "%s%g", i ? "," : "", isos[i]);
+            isos_text += b;
+        }
+    }
+    Camera cam;
+    cam.set_view(patient_view_from_name(req.view), ren.bounds());
+    cam.fit(ren.bounds(), double(req.width) / double(req.height));
+    Annotations ann;
+    RenderOptions ro;
+    ro.width = req.width;
+    ro.height = req.height;
+    ro.aov = req.aov;
+    ro.scale = req.scale;
+    if (req.transparent) ro.background.a = 0.0f;
+    if (req.annotations && req.aov == Aov::None) ro.annotations = &ann;
+    auto r = ren.render(cam, ro);
+    out.image = std::move(r.image);
+    out.stats = std::move(r.stats);
+    out.gl_renderer = r.gl_renderer;
+    out.camera = cam;
+    auto& t = out.meta.text;
+    t["isoscope:version"] = version();
+    t["isoscope:input"] = std::filesystem::absolute(input).string();
+    t["isoscope:input_sha256"] = sha256_of_path(input);
+    if (!isos_text.empty()) t["isoscope:iso"] = isos_text;
+    t["isoscope:view_name"] = req.view;
+    std::ostringstream cs;
+    cs.precision(9);
+    cs << "eye " << cam.eye.x << ' ' << cam.eye.y << ' ' << cam.eye.z << "; target " << cam.target.x << ' ' << cam.target.y << ' '
+       << cam.target.z << "; up " << cam.up.x << ' ' << cam.up.y << ' ' << cam.up.z << "; fov_y_degrees " << cam.fov_y_degrees
+       << "; near " << cam.near_plane << "; far " << cam.far_plane << "; depth reversed-Z [0,1]";
+    t["isoscope:camera"] = cs.str();
+    t["isoscope:world"] = "LPS millimetres";
+    t["isoscope:renderer"] = out.gl_renderer;
+    if (req.aov != Aov::None) t["isoscope:aov"] = req.aov == Aov::Depth ? "depth (mm along the view axis)" : req.aov == Aov::Normal ? "normal (LPS)" : "id";
+    out.meta.float_arrays["isoscope:view"] = flat(cam.view());
+    out.meta.float_arrays["isoscope:projection"] = flat(cam.projection(double(req.width) / double(req.height)));
     return out;
 }
 

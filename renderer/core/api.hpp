@@ -9,6 +9,8 @@
 #include "io/mesh.hpp"
 #include "renderer/iso/extract.hpp"
 #include "renderer/iso/postprocess.hpp"
+#include "renderer/render/overlay.hpp"
+#include "renderer/render/renderer.hpp"
 #include "io/volume.hpp"
 #include "io/volume_io.hpp"
 
@@ -48,5 +50,34 @@ struct Surface {
 // Extracts (and post-processes) the requested surfaces. An iso value outside
 // the volume's range gives an empty mesh with a warning in the mesh.
 std::vector<Surface> extract_surfaces(const Volume& v, const SurfaceRequest& req);
+
+// ---- rendering ------------------------------------------------------------
+
+struct RenderRequest {
+    std::vector<double> isos;        // for volume inputs (meshes are drawn as they are)
+    std::string series;              // DICOM series choice
+    std::string view = "anterior";   // patient view
+    int width = 1024, height = 1024;
+    float scale = 1.0f;              // annotation scale (text, lines, glyphs)
+    Aov aov = Aov::None;
+    bool annotations = true;
+    bool transparent = false;        // transparent background (colour images)
+    ProgressFn progress;
+};
+
+struct RenderOutput {
+    Image image;
+    ImageMetadata meta;              // embedded in the exported file
+    graph::FrameStats stats;
+    std::string gl_renderer;
+    Camera camera;
+};
+
+// Loads `input` (a volume, extracting the iso surfaces, or a mesh file) and
+// renders it headlessly. Throws iso::Error.
+RenderOutput render_input(const std::string& input, const RenderRequest& req);
+
+// Surface colours for iso values in increasing order (skin, bone, ...).
+glm::vec3 surface_color(std::size_t index, std::size_t count);
 
 } // namespace iso::core

@@ -10,6 +10,7 @@
 
 #include "io/error.hpp"
 #include "renderer/gl/objects.hpp"
+#include "renderer/render/overlay.hpp"
 
 namespace iso {
 
@@ -93,6 +94,7 @@ struct Renderer::Impl {
     std::vector<GpuMesh> meshes;
     gl::Program gbuffer = gl::Program::from_files({"render/gbuffer.vert", "render/gbuffer.frag"});
     gl::Program lighting = gl::Program::from_files({"render/fullscreen.vert", "render/lighting.frag"});
+    gl::Program overlay = gl::Program::from_files({"render/overlay.vert", "render/overlay.frag"});
     gl::VertexArray empty_vao = gl::VertexArray::create();
     GlBackend backend;
 };
@@ -233,6 +235,46 @@ RenderResult Renderer::render(const Camera& camera, const RenderOptions& opt) {
             glBindFramebuffer(GL_FRAMEBUFFER, 0);
         });
 
+    // Annotations over the lit image: reads it and writes its next version.
+    graph::TextureHandle final_color = lit.color;
+    if (opt.annotations) {
+        struct Ov {
+            graph::TextureHandle color;
+        };
+        const auto verts = build_overlay(*opt.annotations, camera, W, H, opt.scale);
+        const auto& ov = fg.add_pass<Ov>(
+            "overlay",
+            [&](graph::FrameGraph::Builder& b, Ov& d) { d.color = b.write(b.read(lit.color)); },
+            [&, verts](const Ov& d, const graph::Resources& r) {
+                if (verts.empty()) return;
+                auto fb = gl::Framebuffer::create();
+                glNamedFramebufferTexture(fb.id(), GL_COLOR_ATTACHMENT0, im.backend.texture(r.get(d.color)), 0);
+                fb.check();
+                glBindFramebuffer(GL_FRAMEBUFFER, fb.id());
+                glViewport(0, 0, W, H);
+                gl::Buffer vb(verts.size() * sizeof(OverlayVertex), verts.data(), 0);
+                auto vao = gl::VertexArray::create();
+                glVertexArrayVertexBuffer(vao.id(), 0, vb.id(), 0, sizeof(OverlayVertex));
+                glEnableVertexArrayAttrib(vao.id(), 0);
+                glVertexArrayAttribFormat(vao.id(), 0, 2, GL_FLOAT, GL_FALSE, 0);
+                glVertexArrayAttribBinding(vao.id(), 0, 0);
+                glEnableVertexArrayAttrib(vao.id(), 1);
+                glVertexArrayAttribFormat(vao.id(), 1, 4, GL_FLOAT, GL_FALSE, sizeof(glm::vec2));
+                glVertexArrayAttribBinding(vao.id(), 1, 0);
+                im.overlay.use();
+                glUniform2f(im.overlay.uniform("viewport"), float(W), float(H));
+                glEnable(GL_BLEND);
+                // Colour blends; alpha accumulates so a transparent background keeps annotations opaque.
+                glBlendFuncSeparate(GL_SRC_ALPHA, GL_ONE_MINUS_SRC_ALPHA, GL_ONE, GL_ONE_MINUS_SRC_ALPHA);
+                glBindVertexArray(vao.id());
+                glDrawArrays(GL_TRIANGLES, 0, GLsizei(verts.size()));
+                glBindVertexArray(0);
+                glDisable(GL_BLEND);
+                glBindFramebuffer(GL_FRAMEBUFFER, 0);
+            });
+        final_color = ov.color;
+    }
+
     // Read-back of what was asked for: the colour image or one AOV. The
     // passes that only the other outputs need are culled by the graph.
     struct Readback {
@@ -242,7 +284,7 @@ RenderResult Renderer::render(const Camera& camera, const RenderOptions& opt) {
         "readback",
         [&](graph::FrameGraph::Builder& b, Readback& d) {
             switch (opt.aov) {
-            case Aov::None: d.source = b.read(lit.color); break;
+            case Aov::None: d.source = b.read(final_color); break;
             case Aov::Depth: d.source = b.read(gb.depth); break;
             case Aov::Normal: d.source = b.read(gb.normal); break;
             case Aov::Id: d.source = b.read(gb.id); break;

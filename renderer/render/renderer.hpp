@@ -13,6 +13,7 @@
 #include <glm/vec3.hpp>
 #include <glm/vec4.hpp>
 
+#include "io/image.hpp"
 #include "io/mesh.hpp"
 #include "renderer/graph/frame_graph.hpp"
 #include "renderer/scene/camera.hpp"
@@ -26,13 +27,6 @@ struct SceneObject {
     bool visible = true, pickable = true;
 };
 
-// A CPU image: `channels` floats or bytes per pixel, rows top to bottom.
-struct Image {
-    int width = 0, height = 0, channels = 4;
-    bool is_float = false;
-    std::vector<std::uint8_t> bytes;   // !is_float
-    std::vector<float> floats;         // is_float
-};
 
 enum class Aov { None, Depth, Normal, Id };
 Aov aov_from_name(const std::string& name); // "depth", "normal", "id"; throws iso::Error
@@ -41,6 +35,9 @@ struct RenderOptions {
     int width = 512, height = 512;
     glm::vec4 background{0.08f, 0.09f, 0.11f, 1.0f}; // linear; alpha 0 for a transparent background
     Aov aov = Aov::None;
+    // Annotations drawn over the colour image (not over AOVs); null: none.
+    const struct Annotations* annotations = nullptr;
+    float scale = 1.0f; // text, line widths and glyphs scale with it
 };
 
 struct RenderResult {

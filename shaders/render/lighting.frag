@@ -32,11 +32,11 @@ void main() {
     vec3 albedo = texture(albedo_tex, uv).rgb;
     vec3 key = normalize(vec3(-0.45, 0.6, 0.65));
     vec3 head = v;
-    float ambient = 0.18 * (0.6 + 0.4 * n.y);     // brighter from above
+    float ambient = 0.12 * (0.6 + 0.4 * n.y);     // brighter from above
     vec3 color = albedo * ambient;
     for (int i = 0; i < 2; ++i) {
         vec3 l = i == 0 ? key : head;
-        float intensity = i == 0 ? 1.1 : 0.55;
+        float intensity = i == 0 ? 0.75 : 0.35;
         float ndl = max(dot(n, l), 0.0);
         vec3 h = normalize(l + v);
         float spec = ndl > 0.0 ? pow(max(dot(n, h), 0.0), 48.0) * (48.0 + 8.0) / (8.0 * 3.14159265) : 0.0;
