@@ -1,0 +1,146 @@
+// isoscope render as a real process: PNG with embedded metadata, AOVs as EXR,
+// transparent background, annotation scale, and a golden image.
+#include <cmath>
+#include <cstdlib>
+#include <filesystem>
+#include <sstream>
+
+#include "io/image.hpp"
+#include "test_util.hpp"
+
+using namespace iso;
+using iso::test::TempDir;
+namespace fs = std::filesystem;
+
+namespace {
+
+std::vector<double> numbers(const std::string& s) {
+    std::istringstream in(s);
+    std::vector<double> v;
+    double x;
+    while (in >> x) v.push_back(x);
+    return v;
+}
+
+std::string render(const std::string& args) {
+    const auto r = test::run_command(test::cli() + " render " + args, true);
+    EXPECT_EQ(r.exit_code, 0) << r.out;
+    return r.out;
+}
+
+} // namespace
+
+TEST(RenderCli, PngWithMetadataAndAnnotations) {
+    TempDir dir;
+    const std::string out = render(test::data("headsq.nhdr") + " --iso 500 --iso 1150 --size 200x150 --stats -o " + (dir / "a.png"));
+    EXPECT_NE(out.find("gbuffer"), std::string::npos) << out;
+    EXPECT_NE(out.find("overlay"), std::string::npos) << out;
+    ImageMetadata meta;
+    const Image img = load_image(dir / "a.png", &meta);
+    EXPECT_EQ(img.width, 200);
+    EXPECT_EQ(img.height, 150);
+    auto& t = meta.text;
+    EXPECT_EQ(t["isoscope:iso"], "500,1150");
+    EXPECT_NE(t["isoscope:input"].find("headsq.nhdr"), std::string::npos);
+    EXPECT_EQ(t["isoscope:input_sha256"].size(), 64u);
+    EXPECT_NE(t["isoscope:camera"].find("eye"), std::string::npos);
+    const auto view = numbers(t["isoscope:view"]), proj = numbers(t["isoscope:projection"]);
+    ASSERT_EQ(view.size(), 16u);
+    ASSERT_EQ(proj.size(), 16u);
+    // Anterior view: the view matrix's third row is the camera's back direction, +y... i.e. the
+    // camera looks along +y (towards posterior), so the eye-space z axis is -y in LPS.
+    EXPECT_NEAR(view[1 + 4 * 0], 0.0, 1e-6); // column-major: element (row 1, col 0)
+    EXPECT_NEAR(view[2 + 4 * 1], -1.0, 1e-6); // row 2 (eye z) of column 1 (world y)
+    EXPECT_LT(proj[11], 0.0);                 // perspective: clip.w = -z_eye
+}
+
+TEST(RenderCli, AovsAreFloatExrWithMetadata) {
+    TempDir dir;
+    render(test::data("headsq.nhdr") + " --iso 500 --size 96x96 --aov depth -o " + (dir / "d.exr"));
+    ImageMetadata meta;
+    const Image d = load_image(dir / "d.exr", &meta);
+    ASSERT_TRUE(d.is_float);
+    EXPECT_EQ(d.channels, 1);
+    EXPECT_NE(meta.text["isoscope:aov"].find("depth"), std::string::npos);
+    EXPECT_FALSE(meta.text["isoscope:view"].empty());
+    const float centre = d.floats[48 * 96 + 48], corner = d.floats[0];
+    EXPECT_TRUE(std::isfinite(centre) && centre > 0) << centre;
+    EXPECT_TRUE(std::isinf(corner));
+    render(test::data("headsq.nhdr") + " --iso 500 --size 96x96 --aov normal -o " + (dir / "n.exr"));
+    const Image n = load_image(dir / "n.exr");
+    EXPECT_EQ(n.channels, 3);
+    const float* c = &n.floats[(48 * 96 + 48) * 3];
+    EXPECT_NEAR(std::sqrt(c[0] * c[0] + c[1] * c[1] + c[2] * c[2]), 1.0, 1e-3);
+    render(test::data("headsq.nhdr") + " --iso 500 --size 96x96 --aov id -o " + (dir / "i.exr"));
+    EXPECT_EQ(load_image(dir / "i.exr").floats[48 * 96 + 48], 1.0f);
+    // A float AOV cannot go to PNG; the error names the file.
+    const auto bad = test::run_command(test::cli() + " render " + test::data("headsq.nhdr") + " --iso 500 --aov depth -o " + (dir / "d.png"), true);
+    EXPECT_EQ(bad.exit_code, 1);
+    EXPECT_NE(bad.out.find("d.png"), std::string::npos) << bad.out;
+}
+
+TEST(RenderCli, TransparentBackgroundAndScaledAnnotations) {
+    TempDir dir;
+    render(test::data("headsq.nhdr") + " --iso 500 --size 120x90 --transparent --no-annotations -o " + (dir / "t.png"));
+    const Image t = load_image(dir / "t.png");
+    ASSERT_EQ(t.channels, 4);
+    EXPECT_EQ(t.bytes[3], 0) << "corner is transparent";
+    EXPECT_EQ(t.bytes[(45 * 120 + 60) * 4 + 3], 255) << "the head is opaque";
+    // The same view at 2x with --scale 2: annotations cover about 4x the pixels.
+    auto annotated = [&](int w, int h, float s) {
+        const std::string p = dir / ("s" + std::to_string(w) + ".png");
+        render(test::data("headsq.nhdr") + " --iso 500 --size " + std::to_string(w) + "x" + std::to_string(h) + " --scale " +
+               std::to_string(s) + " -o " + p);
+        const Image a = load_image(p);
+        std::size_t bright = 0; // the annotation colour (near white-yellow) on the background
+        for (int y = 0; y < a.height; ++y)
+            for (int x = 0; x < a.width / 3; ++x) { // left third: orientation letter and scale bar, no head
+                const auto* px = &a.bytes[(std::size_t(y) * a.width + x) * 4];
+                if (px[0] > 200 && px[1] > 200 && px[2] > 170) ++bright;
+            }
+        return double(bright);
+    };
+    const double one = annotated(160, 120, 1.0), two = annotated(320, 240, 2.0);
+    ASSERT_GT(one, 20.0);
+    EXPECT_NEAR(two / one, 4.0, 1.0);
+}
+
+TEST(RenderCli, GoldenImage) {
+    // Tolerance: llvmpipe is deterministic, but GPUs rasterize and round
+    // differently; allow 1 % of pixels to differ by more than 24/255 in any
+    // channel (silhouette edges) and a mean absolute difference of 2/255.
+    TempDir dir;
+    const std::string golden = std::string(ISOSCOPE_SOURCE_DIR) + "/tests/golden/headsq_skin_anterior_160x120.png";
+    render(test::data("headsq.nhdr") + " --iso 500 --size 160x120 -o " + (dir / "actual.png"));
+    const Image a = load_image(dir / "actual.png");
+    if (std::getenv("ISOSCOPE_UPDATE_GOLDEN")) {
+        fs::copy_file(dir / "actual.png", golden, fs::copy_options::overwrite_existing);
+        GTEST_SKIP() << "golden image written: " << golden;
+    }
+    ASSERT_TRUE(fs::exists(golden)) << golden << " is missing (ISOSCOPE_UPDATE_GOLDEN=1 writes it)";
+    const Image g = load_image(golden);
+    ASSERT_EQ(a.width, g.width);
+    ASSERT_EQ(a.height, g.height);
+    ASSERT_EQ(a.bytes.size(), g.bytes.size());
+    Image diff = a;
+    std::size_t off = 0;
+    double sum = 0;
+    for (std::size_t p = 0; p < a.bytes.size() / 4; ++p) {
+        int worst = 0;
+        for (int c = 0; c < 4; ++c) {
+            const int d = std::abs(int(a.bytes[p * 4 + c]) - int(g.bytes[p * 4 + c]));
+            worst = std::max(worst, d);
+            sum += d;
+            diff.bytes[p * 4 + c] = c == 3 ? 255 : std::uint8_t(std::min(255, d * 8));
+        }
+        if (worst > 24) ++off;
+    }
+    const double mean = sum / double(a.bytes.size()), frac = double(off) / double(a.bytes.size() / 4);
+    if (mean > 2.0 || frac > 0.01) {
+        const std::string keep = std::string(ISOSCOPE_BINARY_DIR) + "/golden-failures";
+        fs::create_directories(keep);
+        fs::copy_file(dir / "actual.png", keep + "/headsq_skin_anterior_actual.png", fs::copy_options::overwrite_existing);
+        save_image(diff, keep + "/headsq_skin_anterior_diff.png");
+        ADD_FAILURE() << "golden image differs: mean |diff| " << mean << ", " << 100 * frac << " % of pixels off; actual and diff in " << keep;
+    }
+}
