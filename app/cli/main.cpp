@@ -1,5 +1,7 @@
 // isoscope command-line interface. Parses arguments, calls the core API,
 // prints. No algorithms live here.
+#include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <iomanip>
 #include <iostream>
@@ -13,6 +15,12 @@
 #include <filesystem>
 
 #include "io/atomic_file.hpp"
+#include <QApplication>
+#include <QImage>
+#include <QSurfaceFormat>
+#include <QTimer>
+
+#include "app/gui/viewer.hpp"
 #include "renderer/core/api.hpp"
 
 namespace {
@@ -127,6 +135,15 @@ int main(int argc, char** argv) {
     render->add_option("--series", r_series, "DICOM series to load: index or SeriesInstanceUID");
     render->add_option("-o,--output", r_out, "Output .png, .tif or .exr")->required();
 
+    std::string v_in, v_view = "anterior", v_shot, v_series;
+    std::vector<double> v_isos;
+    auto* view = app.add_subcommand("view", "Open a window showing the surfaces (mouse: orbit, pan, zoom; keys a p l r s i: views)");
+    view->add_option("input", v_in, "Volume file, DICOM folder, or mesh")->required();
+    view->add_option("--iso", v_isos, "Iso value (repeatable) for volume inputs")->allow_extra_args(false);
+    view->add_option("--view", v_view, "Initial view: anterior, posterior, left, right, superior or inferior");
+    view->add_option("--series", v_series, "DICOM series to load: index or SeriesInstanceUID");
+    view->add_option("--screenshot", v_shot, "Save the first frame to this PNG and quit (tests)");
+
     CLI11_PARSE(app, argc, argv);
 
     try {
@@ -178,6 +195,59 @@ int main(int argc, char** argv) {
                 std::cout << s.name << ": " << st.triangles << " triangles, " << st.vertices << " vertices, area "
                           << st.area << " mm^2, volume " << st.volume << " mm^3 -> " << path << "\n";
             }
+        }
+        if (*view) {
+            const auto initial = iso::patient_view_from_name(v_view);
+            std::vector<iso::gui::ViewerMesh> meshes;
+            const std::string ext = std::filesystem::path(v_in).extension().string();
+            if (ext == ".stl" || ext == ".ply" || ext == ".obj" || ext == ".vtp") {
+                const auto c = iso::core::surface_color(0, 1);
+                meshes.push_back({iso::core::open_mesh(v_in), v_in, c.r, c.g, c.b});
+            } else {
+                iso::LoadOptions lo;
+                lo.series = v_series;
+                lo.progress = progress_bar();
+                const auto vol = iso::core::open_volume(v_in, lo);
+                if (v_isos.empty()) throw iso::Error("isoscope view", "give --iso V for a volume");
+                std::sort(v_isos.begin(), v_isos.end());
+                iso::core::SurfaceRequest req;
+                req.isos = v_isos;
+                req.progress = progress_bar();
+                auto surfaces = iso::core::extract_surfaces(vol, req);
+                for (std::size_t i = 0; i < surfaces.size(); ++i) {
+                    const auto c = iso::core::surface_color(i, surfaces.size());
+                    meshes.push_back({std::move(surfaces[i].mesh), surfaces[i].name, c.r, c.g, c.b});
+                }
+            }
+            QSurfaceFormat fmt;
+            fmt.setVersion(4, 5);
+            fmt.setProfile(QSurfaceFormat::CoreProfile);
+            fmt.setDepthBufferSize(24);
+            QSurfaceFormat::setDefaultFormat(fmt);
+            int qargc = 1;
+            char* qargv[] = {argv[0], nullptr};
+            QApplication qapp(qargc, qargv);
+            iso::gui::Viewer w(std::move(meshes), initial);
+            w.setWindowTitle(QString::fromStdString("isoscope - " + v_in));
+            w.resize(800, 600);
+            w.show();
+            if (!v_shot.empty()) {
+                // Grab once the first frame is drawn, then quit.
+                QTimer poll;
+                QObject::connect(&poll, &QTimer::timeout, [&] {
+                    if (w.frames() < 1) return;
+                    poll.stop();
+                    if (!w.grabFramebuffer().save(QString::fromStdString(v_shot))) {
+                        std::cerr << "isoscope: error: " << v_shot << ": cannot save the screenshot\n";
+                        qapp.exit(1);
+                        return;
+                    }
+                    qapp.exit(0);
+                });
+                poll.start(50);
+                return qapp.exec();
+            }
+            return qapp.exec();
         }
         if (*render) {
             iso::core::RenderRequest req;

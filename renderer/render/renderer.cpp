@@ -275,6 +275,27 @@ RenderResult Renderer::render(const Camera& camera, const RenderOptions& opt) {
         final_color = ov.color;
     }
 
+    if (opt.present) {
+        // Copy the final image into the caller's framebuffer (a widget's).
+        struct Present {
+            graph::TextureHandle source;
+        };
+        fg.add_pass<Present>(
+            "present",
+            [&](graph::FrameGraph::Builder& b, Present& d) {
+                d.source = b.read(final_color);
+                b.side_effect();
+            },
+            [&](const Present& d, const graph::Resources& r) {
+                auto fb = gl::Framebuffer::create();
+                glNamedFramebufferTexture(fb.id(), GL_COLOR_ATTACHMENT0, im.backend.texture(r.get(d.source)), 0);
+                glNamedFramebufferReadBuffer(fb.id(), GL_COLOR_ATTACHMENT0);
+                glBlitNamedFramebuffer(fb.id(), opt.target_framebuffer, 0, 0, W, H, 0, 0, W, H, GL_COLOR_BUFFER_BIT, GL_NEAREST);
+            });
+        result.stats = fg.execute(im.backend);
+        return result;
+    }
+
     // Read-back of what was asked for: the colour image or one AOV. The
     // passes that only the other outputs need are culled by the graph.
     struct Readback {

@@ -38,6 +38,10 @@ struct RenderOptions {
     // Annotations drawn over the colour image (not over AOVs); null: none.
     const struct Annotations* annotations = nullptr;
     float scale = 1.0f; // text, line widths and glyphs scale with it
+    // Draw into this GL framebuffer (e.g. a Qt widget's) instead of reading
+    // the image back; 0 means read back into RenderResult::image.
+    unsigned target_framebuffer = 0;
+    bool present = false;
 };
 
 struct RenderResult {

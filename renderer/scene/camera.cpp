@@ -63,6 +63,14 @@ void Camera::fit(const Bounds& b, double aspect) {
     far_plane = dist + 2.0 * r;
 }
 
+void Camera::fit_planes(const Bounds& b) {
+    if (b.empty()) return;
+    const double r = std::max(b.radius(), 1e-6);
+    const double d = glm::dot(b.center() - eye, forward()); // depth of the centre
+    far_plane = std::max(d + 2.0 * r, 1e-3);
+    near_plane = std::max(d - 2.0 * r, far_plane * 1e-5);
+}
+
 void Camera::orbit(double yaw, double pitch) {
     glm::dvec3 offset = eye - target;
     const glm::dmat4 ry = glm::rotate(glm::dmat4(1.0), glm::radians(yaw), up);

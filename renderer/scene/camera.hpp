@@ -38,6 +38,8 @@ public:
     // Keeps the direction, moves so that `b` fills the view, and sets near/far
     // planes around it.
     void fit(const Bounds& b, double aspect);
+    // Keeps position and direction; sets near/far planes around `b`.
+    void fit_planes(const Bounds& b);
     void orbit(double yaw_degrees, double pitch_degrees); // about `target`
     void pan(double dx, double dy);                        // in units of the view height at the target
     void zoom(double factor);                              // > 1 moves closer
