@@ -39,7 +39,14 @@ void save_image(const Image& img, const std::string& path, const ImageMetadata& 
             if (img.channels == 3) spec.channelnames = {"X", "Y", "Z"};
         }
         spec.attribute("Software", "isoscope");
-        for (const auto& [k, v] : meta.text) spec.attribute(k, v);
+        // TIFF has no free-form tags: everything goes into ImageDescription,
+        // one "key: value" line each (load_image splits it again).
+        const bool tiff = ext == ".tif" || ext == ".tiff";
+        std::string description;
+        for (const auto& [k, v] : meta.text) {
+            if (tiff) description += k + ": " + v + "\n";
+            else spec.attribute(k, v);
+        }
         for (const auto& [k, v] : meta.float_arrays) {
             if (ext == ".exr") {
                 spec.attribute(k, OIIO::TypeDesc(OIIO::TypeDesc::FLOAT, int(v.size())), v.data());
@@ -48,9 +55,11 @@ void save_image(const Image& img, const std::string& path, const ImageMetadata& 
                 std::ostringstream os;
                 os.precision(9);
                 for (std::size_t i = 0; i < v.size(); ++i) os << (i ? " " : "") << v[i];
-                spec.attribute(k, os.str());
+                if (tiff) description += k + ": " + os.str() + "\n";
+                else spec.attribute(k, os.str());
             }
         }
+        if (tiff && !description.empty()) spec.attribute("ImageDescription", description);
         if (!out->open(tmp, spec)) throw Error(path, "cannot open for writing: " + out->geterror());
         const bool ok = img.is_float ? out->write_image(OIIO::TypeDesc::FLOAT, img.floats.data())
                                      : out->write_image(OIIO::TypeDesc::UINT8, img.bytes.data());
@@ -76,8 +85,15 @@ Image load_image(const std::string& path, ImageMetadata* meta) {
         ok = in->read_image(0, 0, 0, img.channels, OIIO::TypeDesc::UINT8, img.bytes.data());
     }
     if (!ok) throw Error(path, "cannot read pixels: " + in->geterror());
-    if (meta)
+    if (meta) {
         for (const auto& p : spec.extra_attribs) meta->text[p.name().string()] = p.get_string(1 << 20);
+        // Our TIFF metadata: "key: value" lines in ImageDescription.
+        std::istringstream lines(spec.get_string_attribute("ImageDescription"));
+        std::string line;
+        while (std::getline(lines, line))
+            if (const auto c = line.find(": "); line.rfind("isoscope:", 0) == 0 && c != std::string::npos)
+                meta->text[line.substr(0, c)] = line.substr(c + 2);
+    }
     in->close();
     return img;
 }

@@ -144,3 +144,13 @@ TEST(RenderCli, GoldenImage) {
         ADD_FAILURE() << "golden image differs: mean |diff| " << mean << ", " << 100 * frac << " % of pixels off; actual and diff in " << keep;
     }
 }
+
+TEST(RenderCli, MeshFilesRenderToo) {
+    TempDir dir;
+    render(test::data("bunny.vtp") + " --size 96x96 --view anterior -o " + (dir / "bunny.tif"));
+    ImageMetadata meta;
+    const Image img = load_image(dir / "bunny.tif", &meta);
+    EXPECT_EQ(img.width, 96);
+    EXPECT_NE(meta.text["isoscope:input"].find("bunny.vtp"), std::string::npos);
+    EXPECT_TRUE(meta.text["isoscope:iso"].empty());
+}
