@@ -260,6 +260,7 @@ int main(int argc, char** argv) {
             req.aov = iso::aov_from_name(r_aov);
             req.annotations = !r_no_annotations;
             req.transparent = r_transparent;
+            req.time_passes = r_stats;
             req.progress = progress_bar();
             iso::check_writable_destination(r_out);
             const auto out = iso::core::render_input(r_in, req);

@@ -165,6 +165,7 @@ RenderOutput render_input(const std::string& input, const RenderRequest& req) {
     ro.aov = req.aov;
     ro.scale = req.scale;
     if (req.transparent) ro.background.a = 0.0f;
+    ro.time_passes = req.time_passes;
     if (req.annotations && req.aov == Aov::None) ro.annotations = &ann;
     auto r = ren.render(cam, ro);
     out.image = std::move(r.image);

@@ -62,6 +62,7 @@ struct RenderRequest {
     Aov aov = Aov::None;
     bool annotations = true;
     bool transparent = false;        // transparent background (colour images)
+    bool time_passes = false;        // real per-pass GPU times (glFinish after each pass)
     ProgressFn progress;
 };
 

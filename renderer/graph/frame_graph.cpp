@@ -224,6 +224,7 @@ FrameStats FrameGraph::execute(Backend& backend) {
                 if (!r.imported && r.first_use == p) acquire(r, ps);
             const auto t0 = std::chrono::steady_clock::now();
             passes_[p].run(res);
+            if (epilogue_) epilogue_();
             ps.ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
             ps.ran = true;
             for (auto& r : resources_)

@@ -137,6 +137,11 @@ public:
     // backend at the end (the caller keeps a Backend that may pool them).
     FrameStats execute(Backend& backend);
 
+    // Runs at the end of every executed pass, inside its timed region (the GL
+    // renderer passes glFinish here when per-pass times are asked for: GL
+    // calls return before the GPU is done).
+    void set_pass_epilogue(std::function<void()> f) { epilogue_ = std::move(f); }
+
     // After execute(): was the named pass run?
     bool ran(const std::string& pass) const;
 
@@ -173,6 +178,7 @@ private:
     std::vector<Resource> resources_;
     std::vector<Pass> passes_;
     std::vector<Access> requested_;
+    std::function<void()> epilogue_;
 };
 
 } // namespace iso::graph

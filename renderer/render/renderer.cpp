@@ -157,6 +157,7 @@ RenderResult Renderer::render(const Camera& camera, const RenderOptions& opt) {
     Impl& im = *impl_;
 
     graph::FrameGraph fg;
+    if (opt.time_passes) fg.set_pass_epilogue([] { glFinish(); });
     struct GBuffer {
         graph::TextureHandle depth, normal, id, albedo;
     };

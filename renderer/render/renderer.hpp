@@ -42,6 +42,9 @@ struct RenderOptions {
     // the image back; 0 means read back into RenderResult::image.
     unsigned target_framebuffer = 0;
     bool present = false;
+    // Finish the GPU's work at the end of each pass so that per-pass times
+    // are real (costs some throughput; for --stats and benchmarks).
+    bool time_passes = false;
 };
 
 struct RenderResult {
