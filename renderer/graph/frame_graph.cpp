@@ -30,14 +30,34 @@ std::size_t bytes_of(const TextureDesc& d) {
 
 // ---- Builder -------------------------------------------------------------------
 
+std::uint32_t FrameGraph::Builder::create_resource(Resource r) {
+    const auto i = g_.add_resource(std::move(r));
+    g_.passes_[pass_].creates.push_back(i);
+    return i;
+}
+
+void FrameGraph::Builder::read_resource(std::uint32_t index, std::uint32_t version, bool texture) {
+    g_.check(index, version, texture, "read");
+    const auto& r = g_.resources_[index];
+    if (version == 0 && !r.imported)
+        throw Error("pass '" + g_.passes_[pass_].name + "'", "reads '" + r.name + "' before any pass wrote it");
+    g_.passes_[pass_].reads.push_back({index, version});
+}
+
+std::uint32_t FrameGraph::Builder::write_resource(std::uint32_t index, std::uint32_t version, bool texture) {
+    g_.check(index, version, texture, "write");
+    auto& r = g_.resources_[index];
+    if (version != r.version) throw Error("pass '" + g_.passes_[pass_].name + "'", "writes an old version of '" + r.name + "'");
+    ++r.version;
+    g_.passes_[pass_].writes.push_back({index, r.version});
+    return r.version;
+}
+
 TextureHandle FrameGraph::Builder::create(const std::string& name, const TextureDesc& d) {
     Resource r;
     r.name = name;
-    r.texture = true;
     r.tdesc = d;
-    const auto i = g_.add_resource(std::move(r));
-    g_.passes_[pass_].creates.push_back(i);
-    return {i, 0};
+    return {create_resource(std::move(r)), 0};
 }
 
 BufferHandle FrameGraph::Builder::create(const std::string& name, const BufferDesc& d) {
@@ -45,48 +65,22 @@ BufferHandle FrameGraph::Builder::create(const std::string& name, const BufferDe
     r.name = name;
     r.texture = false;
     r.bdesc = d;
-    const auto i = g_.add_resource(std::move(r));
-    g_.passes_[pass_].creates.push_back(i);
-    return {i, 0};
+    return {create_resource(std::move(r)), 0};
 }
 
 TextureHandle FrameGraph::Builder::read(TextureHandle h) {
-    g_.check(h.index, h.version, true, "read");
-    const auto& r = g_.resources_[h.index];
-    if (h.version == 0 && !r.imported)
-        throw Error("pass '" + g_.passes_[pass_].name + "'", "reads '" + r.name + "' before any pass wrote it");
-    g_.passes_[pass_].reads.push_back({h.index, h.version});
+    read_resource(h.index, h.version, true);
     return h;
 }
 
 BufferHandle FrameGraph::Builder::read(BufferHandle h) {
-    g_.check(h.index, h.version, false, "read");
-    const auto& r = g_.resources_[h.index];
-    if (h.version == 0 && !r.imported)
-        throw Error("pass '" + g_.passes_[pass_].name + "'", "reads '" + r.name + "' before any pass wrote it");
-    g_.passes_[pass_].reads.push_back({h.index, h.version});
+    read_resource(h.index, h.version, false);
     return h;
 }
 
-TextureHandle FrameGraph::Builder::write(TextureHandle h) {
-    g_.check(h.index, h.version, true, "write");
-    auto& r = g_.resources_[h.index];
-    if (h.version != r.version)
-        throw Error("pass '" + g_.passes_[pass_].name + "'", "writes an old version of '" + r.name + "'");
-    ++r.version;
-    g_.passes_[pass_].writes.push_back({h.index, r.version});
-    return {h.index, r.version};
-}
+TextureHandle FrameGraph::Builder::write(TextureHandle h) { return {h.index, write_resource(h.index, h.version, true)}; }
 
-BufferHandle FrameGraph::Builder::write(BufferHandle h) {
-    g_.check(h.index, h.version, false, "write");
-    auto& r = g_.resources_[h.index];
-    if (h.version != r.version)
-        throw Error("pass '" + g_.passes_[pass_].name + "'", "writes an old version of '" + r.name + "'");
-    ++r.version;
-    g_.passes_[pass_].writes.push_back({h.index, r.version});
-    return {h.index, r.version};
-}
+BufferHandle FrameGraph::Builder::write(BufferHandle h) { return {h.index, write_resource(h.index, h.version, false)}; }
 
 void FrameGraph::Builder::side_effect() { g_.passes_[pass_].side_effect = true; }
 

@@ -86,6 +86,8 @@ private:
 };
 
 class FrameGraph {
+    struct Resource; // below
+
 public:
     class Builder {
     public:
@@ -102,6 +104,9 @@ public:
     private:
         friend class FrameGraph;
         Builder(FrameGraph& g, std::uint32_t pass) : g_(g), pass_(pass) {}
+        std::uint32_t create_resource(Resource r);
+        void read_resource(std::uint32_t index, std::uint32_t version, bool texture);
+        std::uint32_t write_resource(std::uint32_t index, std::uint32_t version, bool texture);
         FrameGraph& g_;
         std::uint32_t pass_;
     };
