@@ -128,7 +128,13 @@ int main(int argc, char** argv) {
     render->add_option("--view", r_view, "anterior, posterior, left, right, superior or inferior");
     render->add_option("--size", r_size, "Image size WxH (default 1024x1024)");
     render->add_option("--scale", r_scale, "Scale of text, lines and glyphs (e.g. 2 for a 2x export)")->check(CLI::Range(0.1, 20.0));
-    render->add_option("--aov", r_aov, "Write a buffer instead of the colour image: depth, normal or id (EXR)");
+    render->add_option("--aov", r_aov, "Write a buffer instead of the colour image: depth, normal, id or ao (EXR)");
+    std::string r_ao = "off";
+    double r_ao_radius = 10.0;
+    int r_ao_rays = 1024;
+    render->add_option("--ao", r_ao, "Ambient occlusion: off, or reference (Embree ray tracing; with --aov ao)");
+    render->add_option("--ao-radius", r_ao_radius, "AO radius R_max in mm")->check(CLI::PositiveNumber);
+    render->add_option("--ao-rays", r_ao_rays, "Rays per pixel for --ao reference")->check(CLI::Range(1, 1 << 20));
     render->add_flag("--no-annotations", r_no_annotations, "No scale bar, orientation letters or labels");
     render->add_flag("--transparent", r_transparent, "Transparent background");
     render->add_flag("--stats", r_stats, "Print per-pass statistics");
@@ -257,7 +263,12 @@ int main(int argc, char** argv) {
             if (std::sscanf(r_size.c_str(), "%dx%d", &req.width, &req.height) != 2 || req.width < 1 || req.height < 1)
                 throw iso::Error("--size", "expected WxH, e.g. 1920x1080, got '" + r_size + "'");
             req.scale = r_scale;
-            req.aov = iso::aov_from_name(r_aov);
+            req.aov_ao = r_aov == "ao";
+            req.aov = req.aov_ao ? iso::Aov::None : iso::aov_from_name(r_aov);
+            req.ao = r_ao;
+            req.ao_radius_mm = r_ao_radius;
+            req.ao_rays = r_ao_rays;
+            if (r_ao != "off" && r_ao != "reference") throw iso::Error("--ao", "expected off or reference, got '" + r_ao + "'");
             req.annotations = !r_no_annotations;
             req.transparent = r_transparent;
             req.time_passes = r_stats;

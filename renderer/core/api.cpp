@@ -4,6 +4,7 @@
 #include <filesystem>
 #include <sstream>
 
+#include "renderer/ao/reference.hpp"
 #include "renderer/gl/context.hpp"
 
 namespace iso::core {
@@ -133,9 +134,11 @@ RenderOutput render_input(const std::string& input, const RenderRequest& req) {
     RenderOutput out;
     Renderer ren;
     std::string isos_text;
+    std::vector<Mesh> meshes_for_ao; // kept only when the AO reference needs them
     if (is_mesh_path(input)) {
-        const Mesh m = load_mesh(input);
+        Mesh m = load_mesh(input);
         ren.add(m, {std::filesystem::path(input).filename().string(), surface_color(0, 1)});
+        if (req.aov_ao) meshes_for_ao.push_back(std::move(m));
     } else {
         LoadOptions lo;
         lo.series = req.series;
@@ -150,6 +153,7 @@ RenderOutput render_input(const std::string& input, const RenderRequest& req) {
         const auto surfaces = extract_surfaces(v, sr);
         for (std::size_t i = 0; i < surfaces.size(); ++i) {
             ren.add(surfaces[i].mesh, {surfaces[i].name, surface_color(i, surfaces.size())});
+            if (req.aov_ao) meshes_for_ao.push_back(surfaces[i].mesh);
             char b[32];
             std::snprintf(b, sizeof b, "%s%g", i ? "," : "", isos[i]);
             isos_text += b;
@@ -187,6 +191,30 @@ RenderOutput render_input(const std::string& input, const RenderRequest& req) {
     t["isoscope:world"] = "LPS millimetres";
     t["isoscope:renderer"] = out.gl_renderer;
     if (req.aov != Aov::None) t["isoscope:aov"] = req.aov == Aov::Depth ? "depth (mm along the view axis)" : req.aov == Aov::Normal ? "normal (LPS)" : "id";
+    if (req.aov_ao) {
+        if (req.ao != "reference") throw Error("--aov ao", "needs --ao reference (cone-traced AO is not implemented yet)");
+        // The visible points come from the depth and normal AOVs, the
+        // occlusion from Embree rays against the same meshes.
+        RenderOptions d = ro;
+        d.annotations = nullptr;
+        d.aov = Aov::Depth;
+        const Image depth = ren.render(cam, d).image;
+        d.aov = Aov::Normal;
+        const Image normal = ren.render(cam, d).image;
+        std::vector<const Mesh*> ptrs;
+        for (const auto& m : meshes_for_ao) ptrs.push_back(&m);
+        AoReference reference(ptrs);
+        AoReferenceOptions ao;
+        ao.radius_mm = req.ao_radius_mm;
+        ao.rays = req.ao_rays;
+        out.image = reference.image(cam, depth, normal, ao);
+        t["isoscope:aov"] = "ao (1 = unoccluded; cosine-weighted visibility within the radius; NaN = background)";
+        t["isoscope:ao"] = "reference (Embree ray tracing)";
+        char b[96];
+        std::snprintf(b, sizeof b, "%g", req.ao_radius_mm);
+        t["isoscope:ao_radius_mm"] = b;
+        t["isoscope:ao_rays"] = std::to_string(req.ao_rays);
+    }
     out.meta.float_arrays["isoscope:view"] = flat(cam.view());
     out.meta.float_arrays["isoscope:projection"] = flat(cam.projection(double(req.width) / double(req.height)));
     return out;

@@ -63,6 +63,12 @@ struct RenderRequest {
     bool annotations = true;
     bool transparent = false;        // transparent background (colour images)
     bool time_passes = false;        // real per-pass GPU times (glFinish after each pass)
+    // --aov ao: the raw AO term (1 = unoccluded). Only the ray-traced
+    // reference exists so far ("reference"); cone tracing comes next.
+    bool aov_ao = false;
+    std::string ao = "off";
+    double ao_radius_mm = 10.0;
+    int ao_rays = 1024;
     ProgressFn progress;
 };
 

@@ -154,3 +154,24 @@ TEST(RenderCli, MeshFilesRenderToo) {
     EXPECT_NE(meta.text["isoscope:input"].find("bunny.vtp"), std::string::npos);
     EXPECT_TRUE(meta.text["isoscope:iso"].empty());
 }
+
+TEST(RenderCli, ReferenceAoOfTheBundledCt) {
+    TempDir dir;
+    render(test::data("headsq.nhdr") + " --iso 500 --size 64x48 --view left --aov ao --ao reference --ao-radius 10 --ao-rays 256 -o " +
+           (dir / "ao.exr"));
+    ImageMetadata meta;
+    const Image ao = load_image(dir / "ao.exr", &meta);
+    ASSERT_TRUE(ao.is_float);
+    EXPECT_EQ(meta.text["isoscope:ao_radius_mm"], "10");
+    std::size_t fg = 0, occluded = 0;
+    for (float v : ao.floats) {
+        if (std::isnan(v)) continue; // background
+        ++fg;
+        EXPECT_GE(v, 0.0f);
+        EXPECT_LE(v, 1.0f);
+        if (v < 0.9f) ++occluded;
+    }
+    EXPECT_GT(fg, 300u);
+    EXPECT_GT(occluded, 10u) << "the ear and the face have folds";
+    EXPECT_TRUE(std::isnan(ao.floats[0]));
+}

@@ -1,0 +1,151 @@
+#include "renderer/ao/reference.hpp"
+
+#include <cmath>
+#include <cstring>
+#include <limits>
+
+#include <embree3/rtcore.h>
+#include <glm/glm.hpp>
+#include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
+
+#include "io/error.hpp"
+
+namespace iso {
+
+struct AoReference::Impl {
+    RTCDevice device = nullptr;
+    RTCScene scene = nullptr;
+    double epsilon = 1e-4; // ray origin offset, mm
+    ~Impl() {
+        if (scene) rtcReleaseScene(scene);
+        if (device) rtcReleaseDevice(device);
+    }
+};
+
+AoReference::AoReference(const std::vector<const Mesh*>& meshes) : impl_(std::make_unique<Impl>()) {
+    impl_->device = rtcNewDevice(nullptr);
+    if (!impl_->device) throw Error("Embree", "cannot create a device (error " + std::to_string(rtcGetDeviceError(nullptr)) + ")");
+    impl_->scene = rtcNewScene(impl_->device);
+    rtcSetSceneBuildQuality(impl_->scene, RTC_BUILD_QUALITY_HIGH);
+    Bounds b;
+    for (const Mesh* m : meshes) {
+        if (!m || m->triangles.empty()) continue;
+        RTCGeometry g = rtcNewGeometry(impl_->device, RTC_GEOMETRY_TYPE_TRIANGLE);
+        auto* v = static_cast<float*>(rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 3 * sizeof(float),
+                                                              m->positions.size()));
+        for (std::size_t i = 0; i < m->positions.size(); ++i) {
+            v[3 * i] = m->positions[i].x;
+            v[3 * i + 1] = m->positions[i].y;
+            v[3 * i + 2] = m->positions[i].z;
+            b.add(glm::dvec3(m->positions[i]));
+        }
+        auto* idx = static_cast<unsigned*>(rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, 3 * sizeof(unsigned),
+                                                                   m->triangles.size()));
+        std::memcpy(idx, m->triangles.data(), m->triangles.size() * 3 * sizeof(unsigned));
+        rtcCommitGeometry(g);
+        rtcAttachGeometry(impl_->scene, g);
+        rtcReleaseGeometry(g);
+    }
+    rtcCommitScene(impl_->scene);
+    if (const auto e = rtcGetDeviceError(impl_->device); e != RTC_ERROR_NONE)
+        throw Error("Embree", "building the scene failed (error " + std::to_string(int(e)) + ")");
+    scene_size_ = b.empty() ? 1.0 : std::max(2.0 * b.radius(), 1e-9);
+    // Far enough above the surface to leave its own triangle behind in float
+    // precision, small against any occluder distance that matters.
+    impl_->epsilon = 2e-5 * scene_size_;
+}
+
+AoReference::~AoReference() = default;
+
+namespace {
+// Radical inverse base 2 (Hammersley points), with a per-point rotation
+// (Cranley-Patterson) so neighbouring pixels do not share the same directions.
+double radical_inverse(unsigned i) {
+    i = (i << 16u) | (i >> 16u);
+    i = ((i & 0x55555555u) << 1u) | ((i & 0xAAAAAAAAu) >> 1u);
+    i = ((i & 0x33333333u) << 2u) | ((i & 0xCCCCCCCCu) >> 2u);
+    i = ((i & 0x0F0F0F0Fu) << 4u) | ((i & 0xF0F0F0F0u) >> 4u);
+    i = ((i & 0x00FF00FFu) << 8u) | ((i & 0xFF00FF00u) >> 8u);
+    return double(i) * 2.3283064365386963e-10;
+}
+double hash01(unsigned x) {
+    x ^= x >> 16;
+    x *= 0x7feb352du;
+    x ^= x >> 15;
+    x *= 0x846ca68bu;
+    x ^= x >> 16;
+    return double(x) * 2.3283064365386963e-10;
+}
+} // namespace
+
+double AoReference::at(const glm::dvec3& p, const glm::dvec3& n_in, const AoReferenceOptions& opt, unsigned pixel_seed) const {
+    const glm::dvec3 n = glm::normalize(n_in);
+    // An orthonormal frame around n.
+    const glm::dvec3 t = glm::normalize(std::abs(n.x) > 0.9 ? glm::cross(n, glm::dvec3(0, 1, 0)) : glm::cross(n, glm::dvec3(1, 0, 0)));
+    const glm::dvec3 bt = glm::cross(n, t);
+    const glm::dvec3 origin = p + n * impl_->epsilon;
+    const double u0 = hash01(opt.seed * 0x9E3779B9u + pixel_seed * 2u), v0 = hash01(opt.seed * 0x85EBCA6Bu + pixel_seed * 2u + 1u);
+    int unoccluded = 0;
+    for (int i = 0; i < opt.rays; ++i) {
+        double u = (i + 0.5) / opt.rays + u0, v = radical_inverse(unsigned(i)) + v0;
+        u -= std::floor(u);
+        v -= std::floor(v);
+        // Malley: a uniform point of the unit disk, lifted to the hemisphere.
+        const double r = std::sqrt(u), phi = 2.0 * M_PI * v;
+        const double x = r * std::cos(phi), y = r * std::sin(phi), z = std::sqrt(std::max(0.0, 1.0 - u));
+        const glm::dvec3 d = x * t + y * bt + z * n;
+        RTCRay ray;
+        ray.org_x = float(origin.x);
+        ray.org_y = float(origin.y);
+        ray.org_z = float(origin.z);
+        ray.dir_x = float(d.x);
+        ray.dir_y = float(d.y);
+        ray.dir_z = float(d.z);
+        ray.tnear = 0.0f;
+        ray.tfar = float(opt.radius_mm);
+        ray.time = 0.0f;
+        ray.mask = 0xFFFFFFFFu;
+        ray.id = 0;
+        ray.flags = 0;
+        RTCIntersectContext ctx;
+        rtcInitIntersectContext(&ctx);
+        rtcOccluded1(impl_->scene, &ctx, &ray);
+        if (ray.tfar >= 0.0f) ++unoccluded; // Embree sets tfar to -inf on a hit
+    }
+    return double(unoccluded) / double(opt.rays);
+}
+
+Image AoReference::image(const Camera& cam, const Image& depth, const Image& normal, const AoReferenceOptions& opt) const {
+    if (depth.width != normal.width || depth.height != normal.height || depth.channels != 1 || normal.channels != 3)
+        throw Error("ao reference", "depth (1 channel) and normal (3 channels) images of the same size are needed");
+    if (!(opt.radius_mm > 0) || opt.rays < 1) throw Error("ao reference", "radius and ray count must be positive");
+    const int W = depth.width, H = depth.height;
+    Image out;
+    out.width = W;
+    out.height = H;
+    out.channels = 1;
+    out.is_float = true;
+    out.floats.assign(std::size_t(W) * H, std::numeric_limits<float>::quiet_NaN());
+    const glm::dvec3 f = cam.forward(), right = glm::normalize(glm::cross(f, cam.up)), up = glm::cross(right, f);
+    const double th = std::tan(glm::radians(cam.fov_y_degrees) * 0.5), aspect = double(W) / double(H);
+    tbb::task_arena arena(opt.threads > 0 ? opt.threads : tbb::this_task_arena::max_concurrency());
+    arena.execute([&] {
+        tbb::parallel_for(0, H, [&](int y) {
+            for (int x = 0; x < W; ++x) {
+                const std::size_t i = std::size_t(y) * W + x;
+                const float D = depth.floats[i];
+                if (!std::isfinite(D)) continue;
+                const double ndc_x = (x + 0.5) / W * 2.0 - 1.0, ndc_y = 1.0 - (y + 0.5) / H * 2.0;
+                const glm::dvec3 dir = f + right * (ndc_x * th * aspect) + up * (ndc_y * th); // dot(dir, f) = 1
+                const glm::dvec3 p = cam.eye + dir * double(D);
+                const glm::dvec3 n(normal.floats[3 * i], normal.floats[3 * i + 1], normal.floats[3 * i + 2]);
+                if (!(glm::length(n) > 0.5)) continue;
+                out.floats[i] = float(at(p, n, opt, unsigned(i)));
+            }
+        });
+    });
+    return out;
+}
+
+} // namespace iso

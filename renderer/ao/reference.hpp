@@ -1,0 +1,55 @@
+// Ground truth for ambient occlusion (issue 5), by ray tracing with Embree:
+// the cosine-weighted visibility of the hemisphere around the normal,
+// limited to distance R (a ray that hits nothing within R counts as
+// unoccluded), 1 = unoccluded. This is the one AO definition every method is
+// measured against (../shared/docs/measuring.md).
+//
+// Directions are cosine-distributed (Malley: uniform points of the unit disk
+// lifted to the hemisphere), so the estimate is the plain fraction of
+// unoccluded rays; its standard error is at most 0.5 / sqrt(N).
+#pragma once
+
+#include <memory>
+#include <vector>
+
+#include <glm/vec3.hpp>
+
+#include "io/image.hpp"
+#include "io/mesh.hpp"
+#include "renderer/scene/camera.hpp"
+
+namespace iso {
+
+struct AoReferenceOptions {
+    double radius_mm = 10.0;  // R
+    int rays = 1024;          // N per point
+    unsigned seed = 1;
+    int threads = 0;          // 0: all
+};
+
+class AoReference {
+public:
+    // Builds the ray-tracing scene (Embree BVH) over the meshes, in LPS mm.
+    explicit AoReference(const std::vector<const Mesh*>& meshes);
+    ~AoReference();
+    AoReference(const AoReference&) = delete;
+    AoReference& operator=(const AoReference&) = delete;
+
+    // AO at one point with unit normal `n` (rays leave from slightly above it).
+    double at(const glm::dvec3& p, const glm::dvec3& n, const AoReferenceOptions& opt, unsigned pixel_seed = 0) const;
+
+    // AO for every pixel of a view, from the renderer's depth AOV (mm along the
+    // view axis, +inf for background) and normal AOV (LPS). Background pixels
+    // are NaN. One float channel.
+    Image image(const Camera& cam, const Image& depth, const Image& normal, const AoReferenceOptions& opt) const;
+
+    // Scale of the scene (bounding-box diagonal), for ray offsets.
+    double scene_size() const { return scene_size_; }
+
+private:
+    struct Impl;
+    std::unique_ptr<Impl> impl_;
+    double scene_size_ = 1.0;
+};
+
+} // namespace iso
