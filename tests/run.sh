@@ -34,6 +34,6 @@ ASAN_OPTIONS=detect_leaks=0:abort_on_error=1 UBSAN_OPTIONS=print_stacktrace=1:ha
 if [[ -f tests/fuzz/smoke.sh ]]; then
   echo "== fuzz smoke"
   CC=clang CXX=clang++ cmake -S . -B build-fuzz -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DISOSCOPE_FUZZ=ON >/dev/null
-  cmake --build build-fuzz -j "$jobs"
+  cmake --build build-fuzz -j "$jobs" --target fuzzers
   tests/fuzz/smoke.sh build-fuzz ${ISOSCOPE_FUZZ_SECONDS:-}
 fi
