@@ -96,6 +96,16 @@ std::string expand(const std::string& name, int depth) {
     return out.str();
 }
 
+// The info log of a shader or program (glGetShaderiv/glGetShaderInfoLog or
+// glGetProgramiv/glGetProgramInfoLog).
+template <class GetIv, class GetLog> std::string info_log(GLuint id, GetIv get_iv, GetLog get_log) {
+    GLint len = 0;
+    get_iv(id, GL_INFO_LOG_LENGTH, &len);
+    std::string log(std::size_t(std::max(len, 1)), '\0');
+    get_log(id, len, nullptr, log.data());
+    return log;
+}
+
 GLenum stage_of(const std::string& name) {
     auto ends = [&](const char* s) { return name.size() > std::strlen(s) && name.compare(name.size() - std::strlen(s), std::string::npos, s) == 0; };
     if (ends(".comp")) return GL_COMPUTE_SHADER;
@@ -130,10 +140,7 @@ Program Program::from_files(std::initializer_list<std::string> files, const std:
         GLint ok = 0;
         glGetShaderiv(sh, GL_COMPILE_STATUS, &ok);
         if (!ok) {
-            GLint len = 0;
-            glGetShaderiv(sh, GL_INFO_LOG_LENGTH, &len);
-            std::string log(std::size_t(std::max(len, 1)), '\0');
-            glGetShaderInfoLog(sh, len, nullptr, log.data());
+            const std::string log = info_log(sh, glGetShaderiv, glGetShaderInfoLog);
             glDeleteShader(sh);
             for (auto s : shaders) glDeleteShader(s);
             throw Error(f, "shader does not compile:\n" + log);
@@ -149,10 +156,7 @@ Program Program::from_files(std::initializer_list<std::string> files, const std:
     GLint ok = 0;
     glGetProgramiv(prog, GL_LINK_STATUS, &ok);
     if (!ok) {
-        GLint len = 0;
-        glGetProgramiv(prog, GL_INFO_LOG_LENGTH, &len);
-        std::string log(std::size_t(std::max(len, 1)), '\0');
-        glGetProgramInfoLog(prog, len, nullptr, log.data());
+        const std::string log = info_log(prog, glGetProgramiv, glGetProgramInfoLog);
         std::string names;
         for (const auto& f : files) names += (names.empty() ? "" : ", ") + f;
         throw Error(names, "program does not link:\n" + log);

@@ -16,6 +16,7 @@
 #include <vtkPointData.h>
 #include <vtkPoints.h>
 #include <vtkPolyData.h>
+#include <vtkPolyDataAlgorithm.h>
 #include <vtkCellArray.h>
 #include <vtkFloatArray.h>
 #include <vtkShortArray.h>
@@ -57,22 +58,16 @@ Volume sphere(std::array<std::int64_t, 3> dims, const glm::dmat4& affine, glm::d
 
 // Runs vtkFlyingEdges3D in index space (origin 0, spacing 1) and maps its
 // points through the affine ourselves, so any affine can be compared.
-Mesh flying_edges(const Volume& v, double iso) {
+// Runs a configured VTK contour filter over `v` in index space (origin 0,
+// spacing 1) and maps its points through the affine ourselves, so any affine
+// can be compared; mirrored affines reverse the winding as ours do.
+Mesh run_in_index_space(vtkPolyDataAlgorithm& filter, vtkDataArray* scalars, const Volume& v) {
     vtkNew<vtkImageData> img;
     img->SetDimensions(int(v.dims[0]), int(v.dims[1]), int(v.dims[2]));
-    vtkNew<vtkFloatArray> arr;
-    arr->SetNumberOfTuples(v.voxel_count());
-    for (std::int64_t n = 0; n < v.voxel_count(); ++n)
-        arr->SetValue(n, float(v.value(n % v.dims[0], (n / v.dims[0]) % v.dims[1], n / (v.dims[0] * v.dims[1]))));
-    img->GetPointData()->SetScalars(arr);
-    vtkNew<vtkFlyingEdges3D> fe;
-    fe->SetInputData(img);
-    fe->SetValue(0, iso);
-    fe->ComputeNormalsOff();
-    fe->ComputeGradientsOff();
-    fe->ComputeScalarsOff();
-    fe->Update();
-    vtkPolyData* pd = fe->GetOutput();
+    img->GetPointData()->SetScalars(scalars);
+    filter.SetInputData(img);
+    filter.Update();
+    vtkPolyData* pd = filter.GetOutput();
     Mesh m;
     for (vtkIdType i = 0; i < pd->GetNumberOfPoints(); ++i) {
         double p[3];
@@ -90,6 +85,19 @@ Mesh flying_edges(const Volume& v, double iso) {
         m.triangles.push_back(t);
     }
     return m;
+}
+
+Mesh flying_edges(const Volume& v, double iso) {
+    vtkNew<vtkFloatArray> arr;
+    arr->SetNumberOfTuples(v.voxel_count());
+    for (std::int64_t n = 0; n < v.voxel_count(); ++n)
+        arr->SetValue(n, float(v.value(n % v.dims[0], (n / v.dims[0]) % v.dims[1], n / (v.dims[0] * v.dims[1]))));
+    vtkNew<vtkFlyingEdges3D> fe;
+    fe->SetValue(0, iso);
+    fe->ComputeNormalsOff();
+    fe->ComputeGradientsOff();
+    fe->ComputeScalarsOff();
+    return run_in_index_space(*fe, arr, v);
 }
 
 // Triangles as position triples, rotated to start at the smallest vertex
@@ -321,32 +329,15 @@ Mesh discrete_flying_edges(const Volume& v, double label);
 
 namespace {
 Mesh discrete_flying_edges(const Volume& v, double label) {
-    vtkNew<vtkImageData> img;
-    img->SetDimensions(int(v.dims[0]), int(v.dims[1]), int(v.dims[2]));
     vtkNew<vtkShortArray> arr;
     arr->SetNumberOfTuples(v.voxel_count());
     for (std::int64_t n = 0; n < v.voxel_count(); ++n) arr->SetValue(n, v.as<std::int16_t>()[std::size_t(n)]);
-    img->GetPointData()->SetScalars(arr);
     vtkNew<vtkDiscreteFlyingEdges3D> fe;
-    fe->SetInputData(img);
     fe->SetValue(0, label);
     fe->ComputeNormalsOff();
     fe->ComputeGradientsOff();
     fe->ComputeScalarsOff();
-    fe->Update();
-    vtkPolyData* pd = fe->GetOutput();
-    Mesh m;
-    for (vtkIdType i = 0; i < pd->GetNumberOfPoints(); ++i) {
-        double p[3];
-        pd->GetPoint(i, p);
-        m.positions.emplace_back(glm::dvec3(v.index_to_lps * glm::dvec4(p[0], p[1], p[2], 1.0)));
-    }
-    auto polys = pd->GetPolys();
-    polys->InitTraversal();
-    vtkIdType npts;
-    const vtkIdType* ids;
-    while (polys->GetNextCell(npts, ids)) m.triangles.push_back({std::uint32_t(ids[0]), std::uint32_t(ids[1]), std::uint32_t(ids[2])});
-    return m;
+    return run_in_index_space(*fe, arr, v);
 }
 } // namespace
 
