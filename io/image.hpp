@@ -33,5 +33,7 @@ Image load_image(const std::string& path, ImageMetadata* meta = nullptr);
 
 // SHA-256 of a file or of every file under a folder (sorted by path), hex.
 std::string sha256_of_path(const std::string& path);
+// Hex SHA-256 of a byte string (cache keys).
+std::string sha256_of_string(const std::string& bytes);
 
 } // namespace iso

@@ -98,6 +98,29 @@ Image load_image(const std::string& path, ImageMetadata* meta) {
     return img;
 }
 
+namespace {
+std::string hex_digest(EVP_MD_CTX* ctx) {
+    unsigned char md[EVP_MAX_MD_SIZE];
+    unsigned int n = 0;
+    EVP_DigestFinal_ex(ctx, md, &n);
+    EVP_MD_CTX_free(ctx);
+    static const char* hex = "0123456789abcdef";
+    std::string s;
+    for (unsigned i = 0; i < n; ++i) {
+        s += hex[md[i] >> 4];
+        s += hex[md[i] & 15];
+    }
+    return s;
+}
+} // namespace
+
+std::string sha256_of_string(const std::string& bytes) {
+    EVP_MD_CTX* ctx = EVP_MD_CTX_new();
+    EVP_DigestInit_ex(ctx, EVP_sha256(), nullptr);
+    EVP_DigestUpdate(ctx, bytes.data(), bytes.size());
+    return hex_digest(ctx);
+}
+
 std::string sha256_of_path(const std::string& path) {
     std::vector<std::string> files;
     std::error_code ec;
@@ -120,17 +143,7 @@ std::string sha256_of_path(const std::string& path) {
         while (in.read(buf.data(), std::streamsize(buf.size())) || in.gcount() > 0)
             EVP_DigestUpdate(ctx, buf.data(), std::size_t(in.gcount()));
     }
-    unsigned char md[EVP_MAX_MD_SIZE];
-    unsigned int n = 0;
-    EVP_DigestFinal_ex(ctx, md, &n);
-    EVP_MD_CTX_free(ctx);
-    static const char* hex = "0123456789abcdef";
-    std::string s;
-    for (unsigned i = 0; i < n; ++i) {
-        s += hex[md[i] >> 4];
-        s += hex[md[i] & 15];
-    }
-    return s;
+    return hex_digest(ctx);
 }
 
 } // namespace iso

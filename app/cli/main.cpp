@@ -132,9 +132,25 @@ int main(int argc, char** argv) {
     std::string r_ao = "off";
     double r_ao_radius = 10.0;
     int r_ao_rays = 1024;
-    render->add_option("--ao", r_ao, "Ambient occlusion: off, or reference (Embree ray tracing; with --aov ao)");
+    iso::ConeAoSettings r_cone;
+    int r_ao_frames = 1;
+    std::string r_cache;
+    render->add_option("--ao", r_ao, "Ambient occlusion: off, cone (cone tracing), or reference (Embree ray tracing; with --aov ao)");
     render->add_option("--ao-radius", r_ao_radius, "AO radius R_max in mm")->check(CLI::PositiveNumber);
     render->add_option("--ao-rays", r_ao_rays, "Rays per pixel for --ao reference")->check(CLI::Range(1, 1 << 20));
+    render->add_option("--ao-cones", r_cone.cones, "Cones over the hemisphere (cone AO)")->check(CLI::Range(1, 64));
+    render->add_option("--ao-spheres", r_cone.spheres, "Spheres per cone (cone AO)")->check(CLI::Range(1, 32));
+    render->add_option("--ao-samples", r_cone.samples, "Poisson-disk columns per sphere (cone AO)")->check(CLI::Range(1, 64));
+    render->add_option("--ao-strength", r_cone.strength, "AO = 1 - strength * occlusion (cone AO)")->check(CLI::Range(0.0, 4.0));
+    render->add_option("--ao-layers", r_cone.layers, "Slicemap depth: 128 z-voxels per layer, 1..8 (cone AO)")->check(CLI::Range(1, 8));
+    render->add_option("--ao-grid", r_cone.grid_scale, "Slicemap texels per image pixel, 0.125..2 (cone AO)")->check(CLI::Range(0.125, 2.0));
+    render->add_option("--ao-jitter", r_cone.jitter_sets, "Jitter distributions chosen per pixel by a screen hash (cone AO)")
+        ->check(CLI::Range(1, 64));
+    render->add_option("--ao-persistence", r_cone.persistence,
+                       "Sphere combination along a cone: 0 independent absorbers, 1 one solid (cone AO)")
+        ->check(CLI::Range(0.0, 1.0));
+    render->add_option("--ao-frames", r_ao_frames, "Still frames accumulated with new jitter sets (cone AO)")->check(CLI::Range(1, 4096));
+    render->add_option("--ao-cache", r_cache, "Folder caching AO references ('-': none; default ~/.cache/isoscope)");
     render->add_flag("--no-annotations", r_no_annotations, "No scale bar, orientation letters or labels");
     render->add_flag("--transparent", r_transparent, "Transparent background");
     render->add_flag("--stats", r_stats, "Print per-pass statistics");
@@ -268,7 +284,9 @@ int main(int argc, char** argv) {
             req.ao = r_ao;
             req.ao_radius_mm = r_ao_radius;
             req.ao_rays = r_ao_rays;
-            if (r_ao != "off" && r_ao != "reference") throw iso::Error("--ao", "expected off or reference, got '" + r_ao + "'");
+            req.cone = r_cone;
+            req.ao_frames = r_ao_frames;
+            req.cache_dir = r_cache;
             req.annotations = !r_no_annotations;
             req.transparent = r_transparent;
             req.time_passes = r_stats;

@@ -77,16 +77,15 @@ double hash01(unsigned x) {
     x ^= x >> 16;
     return double(x) * 2.3283064365386963e-10;
 }
-} // namespace
 
-double AoReference::at(const glm::dvec3& p, const glm::dvec3& n_in, const AoReferenceOptions& opt, unsigned pixel_seed) const {
-    const glm::dvec3 n = glm::normalize(n_in);
+// Calls f(direction) for `opt.rays` cosine-distributed directions around n
+// (Malley's method over rotated Hammersley points); stops early when f
+// returns false.
+template <class F> void for_each_direction(const glm::dvec3& n, const AoReferenceOptions& opt, unsigned pixel_seed, F&& f) {
     // An orthonormal frame around n.
     const glm::dvec3 t = glm::normalize(std::abs(n.x) > 0.9 ? glm::cross(n, glm::dvec3(0, 1, 0)) : glm::cross(n, glm::dvec3(1, 0, 0)));
     const glm::dvec3 bt = glm::cross(n, t);
-    const glm::dvec3 origin = p + n * impl_->epsilon;
     const double u0 = hash01(opt.seed * 0x9E3779B9u + pixel_seed * 2u), v0 = hash01(opt.seed * 0x85EBCA6Bu + pixel_seed * 2u + 1u);
-    int unoccluded = 0;
     for (int i = 0; i < opt.rays; ++i) {
         double u = (i + 0.5) / opt.rays + u0, v = radical_inverse(unsigned(i)) + v0;
         u -= std::floor(u);
@@ -94,7 +93,53 @@ double AoReference::at(const glm::dvec3& p, const glm::dvec3& n_in, const AoRefe
         // Malley: a uniform point of the unit disk, lifted to the hemisphere.
         const double r = std::sqrt(u), phi = 2.0 * M_PI * v;
         const double x = r * std::cos(phi), y = r * std::sin(phi), z = std::sqrt(std::max(0.0, 1.0 - u));
-        const glm::dvec3 d = x * t + y * bt + z * n;
+        f(x * t + y * bt + z * n);
+    }
+}
+
+// Runs f(p, n, i) in parallel for every `stride`-th visible pixel of the
+// depth/normal AOVs (p: the point in LPS mm, n: unit normal, i: pixel index)
+// and returns the image of its results (NaN elsewhere).
+template <class F>
+Image per_visible_pixel(const Camera& cam, const Image& depth, const Image& normal, const AoReferenceOptions& opt, int stride, F&& f) {
+    if (depth.width != normal.width || depth.height != normal.height || depth.channels != 1 || normal.channels != 3)
+        throw Error("ao reference", "depth (1 channel) and normal (3 channels) images of the same size are needed");
+    if (!(opt.radius_mm > 0) || opt.rays < 1) throw Error("ao reference", "radius and ray count must be positive");
+    const int W = depth.width, H = depth.height;
+    Image out;
+    out.width = W;
+    out.height = H;
+    out.channels = 1;
+    out.is_float = true;
+    out.floats.assign(std::size_t(W) * H, std::numeric_limits<float>::quiet_NaN());
+    const glm::dvec3 fw = cam.forward(), right = glm::normalize(glm::cross(fw, cam.up)), up = glm::cross(right, fw);
+    const double th = std::tan(glm::radians(cam.fov_y_degrees) * 0.5), aspect = double(W) / double(H);
+    tbb::task_arena arena(opt.threads > 0 ? opt.threads : tbb::this_task_arena::max_concurrency());
+    arena.execute([&] {
+        tbb::parallel_for(0, (H + stride - 1) / stride, [&](int yi) {
+            const int y = yi * stride;
+            for (int x = 0; x < W; x += stride) {
+                const std::size_t i = std::size_t(y) * W + x;
+                const float D = depth.floats[i];
+                if (!std::isfinite(D)) continue;
+                const double ndc_x = (x + 0.5) / W * 2.0 - 1.0, ndc_y = 1.0 - (y + 0.5) / H * 2.0;
+                const glm::dvec3 dir = fw + right * (ndc_x * th * aspect) + up * (ndc_y * th); // dot(dir, fw) = 1
+                const glm::dvec3 p = cam.eye + dir * double(D);
+                const glm::dvec3 n(normal.floats[3 * i], normal.floats[3 * i + 1], normal.floats[3 * i + 2]);
+                if (!(glm::length(n) > 0.5)) continue;
+                out.floats[i] = float(f(p, glm::normalize(n), i));
+            }
+        });
+    });
+    return out;
+}
+} // namespace
+
+double AoReference::at(const glm::dvec3& p, const glm::dvec3& n_in, const AoReferenceOptions& opt, unsigned pixel_seed) const {
+    const glm::dvec3 n = glm::normalize(n_in);
+    const glm::dvec3 origin = p + n * impl_->epsilon;
+    int unoccluded = 0;
+    for_each_direction(n, opt, pixel_seed, [&](const glm::dvec3& d) {
         RTCRay ray;
         ray.org_x = float(origin.x);
         ray.org_y = float(origin.y);
@@ -112,40 +157,48 @@ double AoReference::at(const glm::dvec3& p, const glm::dvec3& n_in, const AoRefe
         rtcInitIntersectContext(&ctx);
         rtcOccluded1(impl_->scene, &ctx, &ray);
         if (ray.tfar >= 0.0f) ++unoccluded; // Embree sets tfar to -inf on a hit
-    }
+    });
     return double(unoccluded) / double(opt.rays);
 }
 
 Image AoReference::image(const Camera& cam, const Image& depth, const Image& normal, const AoReferenceOptions& opt) const {
-    if (depth.width != normal.width || depth.height != normal.height || depth.channels != 1 || normal.channels != 3)
-        throw Error("ao reference", "depth (1 channel) and normal (3 channels) images of the same size are needed");
-    if (!(opt.radius_mm > 0) || opt.rays < 1) throw Error("ao reference", "radius and ray count must be positive");
-    const int W = depth.width, H = depth.height;
-    Image out;
-    out.width = W;
-    out.height = H;
-    out.channels = 1;
-    out.is_float = true;
-    out.floats.assign(std::size_t(W) * H, std::numeric_limits<float>::quiet_NaN());
-    const glm::dvec3 f = cam.forward(), right = glm::normalize(glm::cross(f, cam.up)), up = glm::cross(right, f);
-    const double th = std::tan(glm::radians(cam.fov_y_degrees) * 0.5), aspect = double(W) / double(H);
-    tbb::task_arena arena(opt.threads > 0 ? opt.threads : tbb::this_task_arena::max_concurrency());
-    arena.execute([&] {
-        tbb::parallel_for(0, H, [&](int y) {
-            for (int x = 0; x < W; ++x) {
-                const std::size_t i = std::size_t(y) * W + x;
-                const float D = depth.floats[i];
-                if (!std::isfinite(D)) continue;
-                const double ndc_x = (x + 0.5) / W * 2.0 - 1.0, ndc_y = 1.0 - (y + 0.5) / H * 2.0;
-                const glm::dvec3 dir = f + right * (ndc_x * th * aspect) + up * (ndc_y * th); // dot(dir, f) = 1
-                const glm::dvec3 p = cam.eye + dir * double(D);
-                const glm::dvec3 n(normal.floats[3 * i], normal.floats[3 * i + 1], normal.floats[3 * i + 2]);
-                if (!(glm::length(n) > 0.5)) continue;
-                out.floats[i] = float(at(p, n, opt, unsigned(i)));
+    return per_visible_pixel(cam, depth, normal, opt, 1,
+                             [&](const glm::dvec3& p, const glm::dvec3& n, std::size_t i) { return at(p, n, opt, unsigned(i)); });
+}
+
+Image voxel_ao_image(const SliceMap& sm, const Camera& cam, const Image& depth, const Image& normal, const AoReferenceOptions& opt,
+                     double bias, int stride) {
+    if (sm.empty()) throw Error("voxel ao reference", "no slicemap (render with read_slicemap)");
+    if (stride < 1) throw Error("voxel ao reference", "stride must be >= 1");
+    const double dz = sm.voxel_length();
+    const double p00 = sm.projection[0][0], p11 = sm.projection[1][1];
+    const glm::dmat3 rot(sm.view);
+    return per_visible_pixel(cam, depth, normal, opt, stride, [&](const glm::dvec3& pw, const glm::dvec3& nw, std::size_t i) {
+        // Eye space, as the cone-tracing shader works (camera looks down -z).
+        const glm::dvec3 p = glm::dvec3(sm.view * glm::dvec4(pw, 1.0));
+        const glm::dvec3 n = glm::normalize(rot * nw);
+        const double D = -p.z;
+        const double texel_w = 2.0 * D / (p11 * sm.height);
+        // The same raised tangent plane as the shader: the surface's own voxels do not occlude.
+        const double beta = bias * (std::abs(n.z) * dz + 0.5 * (std::abs(n.x) + std::abs(n.y)) * texel_w);
+        const double step = 0.5 * std::min(dz, texel_w);
+        int unoccluded = 0;
+        for_each_direction(n, opt, unsigned(i), [&](const glm::dvec3& d) {
+            for (double t = step; t <= opt.radius_mm; t += step) {
+                const glm::dvec3 q = p + t * d;
+                if (glm::dot(n, q - p) <= beta) continue;
+                const double Dq = -q.z;
+                if (Dq <= 0) return;
+                const int x = int(std::floor((p00 * q.x / Dq * 0.5 + 0.5) * sm.width));
+                const int y = int(std::floor((p11 * q.y / Dq * 0.5 + 0.5) * sm.height));
+                const int b = int(std::floor((Dq - sm.z_near) / dz));
+                if (x < 0 || y < 0 || x >= sm.width || y >= sm.height || b < 0 || b >= sm.bits()) continue;
+                if (sm.bit(x, y, b)) return; // blocked
             }
+            ++unoccluded;
         });
+        return double(unoccluded) / double(opt.rays);
     });
-    return out;
 }
 
 } // namespace iso

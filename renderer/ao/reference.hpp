@@ -16,6 +16,7 @@
 
 #include "io/image.hpp"
 #include "io/mesh.hpp"
+#include "renderer/render/cone_ao.hpp"
 #include "renderer/scene/camera.hpp"
 
 namespace iso {
@@ -51,5 +52,13 @@ private:
     std::unique_ptr<Impl> impl_;
     double scene_size_ = 1.0;
 };
+
+// The second reference: the same AO traced through the slicemap itself
+// (voxel by voxel along each ray, above the same raised tangent plane as the
+// cone tracer with bias factor `bias`), so that the cone tracer's error
+// splits into voxelization error (this vs AoReference) and cone error (cone
+// vs this). Every `stride`-th pixel in x and y; NaN elsewhere.
+Image voxel_ao_image(const SliceMap& sm, const Camera& cam, const Image& depth, const Image& normal, const AoReferenceOptions& opt,
+                     double bias = 1.0, int stride = 1);
 
 } // namespace iso

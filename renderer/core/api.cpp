@@ -1,6 +1,8 @@
 #include "renderer/core/api.hpp"
 
 #include <algorithm>
+#include <cstdlib>
+#include <map>
 #include <filesystem>
 #include <sstream>
 
@@ -126,6 +128,68 @@ std::vector<float> flat(const glm::dmat4& m) {
         for (int r = 0; r < 4; ++r) v.push_back(float(m[c][r]));
     return v;
 }
+
+// The cache folder for AO references (see RenderRequest::cache_dir); empty: none.
+std::filesystem::path cache_folder(const std::string& requested) {
+    if (requested == "-") return {};
+    if (!requested.empty()) return requested;
+    if (const char* e = std::getenv("ISOSCOPE_CACHE_DIR"); e && *e) return std::string(e) == "-" ? std::filesystem::path() : e;
+    if (const char* e = std::getenv("XDG_CACHE_HOME"); e && *e) return std::filesystem::path(e) / "isoscope";
+    if (const char* e = std::getenv("HOME"); e && *e) return std::filesystem::path(e) / ".cache" / "isoscope";
+    return {};
+}
+
+// The Embree reference for this view, from the cache when the same input,
+// surfaces, camera, size, radius and ray count were traced before.
+Image ao_reference_cached(Renderer& ren, const Camera& cam, const RenderOptions& ro, const std::vector<Mesh>& meshes,
+                          const std::map<std::string, std::string>& t, const RenderRequest& req, bool& hit) {
+    std::ostringstream key;
+    key.precision(17);
+    key << "ao-reference v1 (Embree, Malley, rotated Hammersley, seed 1)\n"
+        << t.at("isoscope:input_sha256") << "\n" << (t.count("isoscope:iso") ? t.at("isoscope:iso") : "") << "\n"
+        << t.at("isoscope:camera") << "\n" << ro.width << "x" << ro.height << "\n" << req.ao_radius_mm << "\n" << req.ao_rays;
+    const auto dir = cache_folder(req.cache_dir);
+    const auto file = dir.empty() ? std::filesystem::path() : dir / "ao" / (sha256_of_string(key.str()) + ".exr");
+    std::error_code ec;
+    if (!file.empty() && std::filesystem::exists(file, ec)) {
+        try {
+            Image img = load_image(file.string());
+            if (img.is_float && img.channels == 1 && img.width == ro.width && img.height == ro.height) {
+                hit = true;
+                return img;
+            }
+        } catch (const Error&) {
+            // A damaged cache entry is recomputed and replaced below.
+        }
+    }
+    // The visible points come from the depth and normal AOVs, the occlusion
+    // from Embree rays against the same meshes.
+    RenderOptions d = ro;
+    d.annotations = nullptr;
+    d.ao = false;
+    d.aov = Aov::Depth;
+    const Image depth = ren.render(cam, d).image;
+    d.aov = Aov::Normal;
+    const Image normal = ren.render(cam, d).image;
+    std::vector<const Mesh*> ptrs;
+    for (const auto& m : meshes) ptrs.push_back(&m);
+    AoReference reference(ptrs);
+    AoReferenceOptions ao;
+    ao.radius_mm = req.ao_radius_mm;
+    ao.rays = req.ao_rays;
+    Image img = reference.image(cam, depth, normal, ao);
+    if (!file.empty()) {
+        std::filesystem::create_directories(file.parent_path(), ec);
+        try {
+            ImageMetadata m;
+            m.text["isoscope:cache_key"] = key.str();
+            save_image(img, file.string(), m);
+        } catch (const Error&) {
+            // An unwritable cache only costs time.
+        }
+    }
+    return img;
+}
 } // namespace
 
 RenderOutput render_input(const std::string& input, const RenderRequest& req) {
@@ -138,7 +202,7 @@ RenderOutput render_input(const std::string& input, const RenderRequest& req) {
     if (is_mesh_path(input)) {
         Mesh m = load_mesh(input);
         ren.add(m, {std::filesystem::path(input).filename().string(), surface_color(0, 1)});
-        if (req.aov_ao) meshes_for_ao.push_back(std::move(m));
+        if (req.aov_ao && req.ao == "reference") meshes_for_ao.push_back(std::move(m));
     } else {
         LoadOptions lo;
         lo.series = req.series;
@@ -153,7 +217,7 @@ RenderOutput render_input(const std::string& input, const RenderRequest& req) {
         const auto surfaces = extract_surfaces(v, sr);
         for (std::size_t i = 0; i < surfaces.size(); ++i) {
             ren.add(surfaces[i].mesh, {surfaces[i].name, surface_color(i, surfaces.size())});
-            if (req.aov_ao) meshes_for_ao.push_back(surfaces[i].mesh);
+            if (req.aov_ao && req.ao == "reference") meshes_for_ao.push_back(surfaces[i].mesh);
             char b[32];
             std::snprintf(b, sizeof b, "%s%g", i ? "," : "", isos[i]);
             isos_text += b;
@@ -171,6 +235,22 @@ RenderOutput render_input(const std::string& input, const RenderRequest& req) {
     if (req.transparent) ro.background.a = 0.0f;
     ro.time_passes = req.time_passes;
     if (req.annotations && req.aov == Aov::None) ro.annotations = &ann;
+    if (req.ao != "off" && req.ao != "cone" && req.ao != "reference")
+        throw Error("--ao", "expected off, cone or reference, got '" + req.ao + "'");
+    if (req.ao == "reference" && !req.aov_ao)
+        throw Error("--ao reference", "the ray-traced reference is written only as the raw term: add --aov ao");
+    if (req.aov_ao && req.ao == "off") throw Error("--aov ao", "needs --ao cone or --ao reference");
+    if (req.ao_frames < 1 || req.ao_frames > 4096) throw Error("--ao-frames", "expected 1..4096, got " + std::to_string(req.ao_frames));
+    const bool cone = req.ao == "cone";
+    if (cone) {
+        ro.ao = !req.aov_ao;
+        ro.ao_settings = req.cone;
+        ro.ao_settings.radius_mm = req.ao_radius_mm;
+        validate(ro.ao_settings);
+        if (req.aov_ao) ro.aov = Aov::Ao;
+    }
+    // Still frames: each adds new jitter sets to the running mean of the AO.
+    for (int f = 1; cone && f < req.ao_frames; ++f) ren.render(cam, ro);
     auto r = ren.render(cam, ro);
     out.image = std::move(r.image);
     out.stats = std::move(r.stats);
@@ -190,30 +270,31 @@ RenderOutput render_input(const std::string& input, const RenderRequest& req) {
     t["isoscope:camera"] = cs.str();
     t["isoscope:world"] = "LPS millimetres";
     t["isoscope:renderer"] = out.gl_renderer;
-    if (req.aov != Aov::None) t["isoscope:aov"] = req.aov == Aov::Depth ? "depth (mm along the view axis)" : req.aov == Aov::Normal ? "normal (LPS)" : "id";
+    if (req.aov != Aov::None && !req.aov_ao)
+        t["isoscope:aov"] = req.aov == Aov::Depth ? "depth (mm along the view axis)" : req.aov == Aov::Normal ? "normal (LPS)" : "id";
+    auto num = [](double v) {
+        char b[64];
+        std::snprintf(b, sizeof b, "%.9g", v);
+        return std::string(b);
+    };
+    if (req.ao != "off") t["isoscope:ao_radius_mm"] = num(req.ao_radius_mm);
+    if (cone) {
+        const auto& c = ro.ao_settings;
+        t["isoscope:ao"] = "cone (cone tracing in a solid slicemap voxelization)";
+        t["isoscope:ao_parameters"] = "cones " + std::to_string(c.cones) + "; spheres " + std::to_string(c.spheres) + "; samples " +
+                                      std::to_string(c.samples) + "; strength " + num(c.strength) + "; layers " +
+                                      std::to_string(c.layers) + " (" + std::to_string(128 * c.layers) + " z-voxels); grid " +
+                                      num(c.grid_scale) + "; jitter_sets " + std::to_string(c.jitter_sets) + "; persistence " +
+                                      num(c.persistence) + "; attenuation " + num(c.attenuation) + "; bias " + num(c.bias) +
+                                      "; frames " + std::to_string(req.ao_frames);
+    }
     if (req.aov_ao) {
-        if (req.ao != "reference") throw Error("--aov ao", "needs --ao reference (cone-traced AO is not implemented yet)");
-        // The visible points come from the depth and normal AOVs, the
-        // occlusion from Embree rays against the same meshes.
-        RenderOptions d = ro;
-        d.annotations = nullptr;
-        d.aov = Aov::Depth;
-        const Image depth = ren.render(cam, d).image;
-        d.aov = Aov::Normal;
-        const Image normal = ren.render(cam, d).image;
-        std::vector<const Mesh*> ptrs;
-        for (const auto& m : meshes_for_ao) ptrs.push_back(&m);
-        AoReference reference(ptrs);
-        AoReferenceOptions ao;
-        ao.radius_mm = req.ao_radius_mm;
-        ao.rays = req.ao_rays;
-        out.image = reference.image(cam, depth, normal, ao);
         t["isoscope:aov"] = "ao (1 = unoccluded; cosine-weighted visibility within the radius; NaN = background)";
-        t["isoscope:ao"] = "reference (Embree ray tracing)";
-        char b[96];
-        std::snprintf(b, sizeof b, "%g", req.ao_radius_mm);
-        t["isoscope:ao_radius_mm"] = b;
-        t["isoscope:ao_rays"] = std::to_string(req.ao_rays);
+        if (req.ao == "reference") {
+            t["isoscope:ao"] = "reference (Embree ray tracing)";
+            t["isoscope:ao_rays"] = std::to_string(req.ao_rays);
+            out.image = ao_reference_cached(ren, cam, ro, meshes_for_ao, t, req, out.ao_cache_hit);
+        }
     }
     out.meta.float_arrays["isoscope:view"] = flat(cam.view());
     out.meta.float_arrays["isoscope:projection"] = flat(cam.projection(double(req.width) / double(req.height)));

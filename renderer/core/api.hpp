@@ -63,12 +63,20 @@ struct RenderRequest {
     bool annotations = true;
     bool transparent = false;        // transparent background (colour images)
     bool time_passes = false;        // real per-pass GPU times (glFinish after each pass)
-    // --aov ao: the raw AO term (1 = unoccluded). Only the ray-traced
-    // reference exists so far ("reference"); cone tracing comes next.
+    // Ambient occlusion: "off", "cone" (cone tracing in the slicemap; in the
+    // colour image it darkens the ambient light) or "reference" (Embree ray
+    // tracing; only as --aov ao). --aov ao writes the raw term (1 = unoccluded).
     bool aov_ao = false;
     std::string ao = "off";
-    double ao_radius_mm = 10.0;
-    int ao_rays = 1024;
+    double ao_radius_mm = 10.0;      // R_max, for both methods
+    ConeAoSettings cone;             // tunables of "cone" (its radius_mm is set from ao_radius_mm)
+    int ao_frames = 1;               // still frames accumulated (new jitter sets each) for "cone"
+    int ao_rays = 1024;              // rays per pixel for "reference"
+    // Reference results are cached by a hash of everything they depend on
+    // (input file contents, iso values, camera, size, radius, rays) under
+    // this folder; empty: $ISOSCOPE_CACHE_DIR, else $XDG_CACHE_HOME/isoscope,
+    // else ~/.cache/isoscope. "-": no cache.
+    std::string cache_dir;
     ProgressFn progress;
 };
 
@@ -78,6 +86,7 @@ struct RenderOutput {
     graph::FrameStats stats;
     std::string gl_renderer;
     Camera camera;
+    bool ao_cache_hit = false;       // the AO reference came from the cache
 };
 
 // Loads `input` (a volume, extracting the iso surfaces, or a mesh file) and

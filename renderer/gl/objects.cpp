@@ -44,6 +44,22 @@ Texture Texture::create_2d(GLenum internal_format, int width, int height) {
     return t;
 }
 
+Texture Texture::create_2d_array(GLenum internal_format, int width, int height, int layers) {
+    GLuint id = 0;
+    glCreateTextures(GL_TEXTURE_2D_ARRAY, 1, &id);
+    Texture t;
+    static_cast<Object<TextureTraits>&>(t) = Object<TextureTraits>(id);
+    glTextureStorage3D(id, 1, internal_format, width, height, layers);
+    glTextureParameteri(id, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
+    glTextureParameteri(id, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
+    glTextureParameteri(id, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
+    glTextureParameteri(id, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
+    t.w_ = width;
+    t.h_ = height;
+    t.format_ = internal_format;
+    return t;
+}
+
 Framebuffer Framebuffer::create() {
     GLuint id = 0;
     glCreateFramebuffers(1, &id);

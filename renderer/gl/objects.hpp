@@ -78,6 +78,8 @@ public:
     Texture() = default;
     // 2D texture with one level of `internal_format` (e.g. GL_RGBA8, GL_DEPTH_COMPONENT32F).
     static Texture create_2d(GLenum internal_format, int width, int height);
+    // 2D array texture (layers >= 1), one level, nearest filtering.
+    static Texture create_2d_array(GLenum internal_format, int width, int height, int layers);
     int width() const { return w_; }
     int height() const { return h_; }
     GLenum format() const { return format_; }

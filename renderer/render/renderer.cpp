@@ -18,8 +18,9 @@ Aov aov_from_name(const std::string& n) {
     if (n == "depth") return Aov::Depth;
     if (n == "normal") return Aov::Normal;
     if (n == "id") return Aov::Id;
+    if (n == "ao") return Aov::Ao;
     if (n.empty() || n == "none") return Aov::None;
-    throw Error("--aov", "unknown AOV '" + n + "' (depth, normal, id)");
+    throw Error("--aov", "unknown AOV '" + n + "' (depth, normal, id, ao)");
 }
 
 namespace {
@@ -60,6 +61,18 @@ public:
         buffers_.erase(id);
     }
     GLuint texture(std::uint64_t id) const { return textures_.at(id).id(); }
+    GLuint buffer(std::uint64_t id) const { return buffers_.at(id).id(); }
+    // Persistent resources (kept across frames, imported into each frame's graph).
+    std::uint64_t adopt(gl::Texture t) {
+        const auto id = next_++;
+        textures_.emplace(id, std::move(t));
+        return id;
+    }
+    std::uint64_t adopt(gl::Buffer b) {
+        const auto id = next_++;
+        buffers_.emplace(id, std::move(b));
+        return id;
+    }
 
 private:
     std::uint64_t next_ = 1;
@@ -95,8 +108,37 @@ struct Renderer::Impl {
     gl::Program gbuffer = gl::Program::from_files({"render/gbuffer.vert", "render/gbuffer.frag"});
     gl::Program lighting = gl::Program::from_files({"render/fullscreen.vert", "render/lighting.frag"});
     gl::Program overlay = gl::Program::from_files({"render/overlay.vert", "render/overlay.frag"});
+    gl::Program zrange = gl::Program::from_files({"ao/zrange.comp"});
     gl::VertexArray empty_vao = gl::VertexArray::create();
     GlBackend backend;
+    std::uint64_t geometry_version = 0;
+
+    // Programs whose source depends on the slicemap's layer count.
+    std::map<int, gl::Program> slicemap_programs, cone_programs;
+    gl::Program& slicemap_program(int layers) {
+        auto it = slicemap_programs.find(layers);
+        if (it == slicemap_programs.end())
+            it = slicemap_programs.emplace(layers, gl::Program::from_files({"ao/slicemap.vert", "ao/slicemap.frag"},
+                                                                           "#define LAYERS " + std::to_string(layers) + "\n")).first;
+        return it->second;
+    }
+    gl::Program& cone_program(int layers) {
+        auto it = cone_programs.find(layers);
+        if (it == cone_programs.end())
+            it = cone_programs.emplace(layers, gl::Program::from_files({"ao/cone.comp"}, "#define LAYERS " + std::to_string(layers) + "\n")).first;
+        return it->second;
+    }
+
+    // AO state kept across frames: the slicemap is rebuilt only when the
+    // geometry, the camera or the grid changed; the AO image accumulates new
+    // jitter sets while nothing changed at all.
+    struct AoState {
+        std::uint64_t slicemap = 0, zrange = 0, ao_image = 0, pattern = 0; // backend ids (0: none yet)
+        int grid_w = 0, grid_h = 0, layers = 0, width = 0, height = 0, samples_len = 0;
+        std::vector<double> view_key;   // what the slicemap depends on
+        ConeAoSettings settings;        // what the accumulated AO depends on too
+        int frames = 0;
+    } ao;
 };
 
 Renderer::Renderer() : impl_(std::make_unique<Impl>()) {}
@@ -127,6 +169,7 @@ std::uint32_t Renderer::add(const Mesh& m, const SceneObject& o) {
         glVertexArrayAttribBinding(vao, a, 0);
     }
     impl_->meshes.push_back(std::move(g));
+    ++impl_->geometry_version;
     return std::uint32_t(impl_->meshes.size());
 }
 
@@ -207,6 +250,232 @@ RenderResult Renderer::render(const Camera& camera, const RenderOptions& opt) {
             glBindFramebuffer(GL_FRAMEBUFFER, 0);
         });
 
+    // ---- ambient occlusion: z range -> slicemap -> cone tracing ----------
+    // Declared whenever AO is on; the graph culls them when nothing reads the
+    // AO image (a depth AOV, for instance).
+    const bool ao_on = opt.ao || opt.aov == Aov::Ao;
+    graph::TextureHandle ao_image;
+    bool voxelize_now = false;
+    if (ao_on) {
+        const ConeAoSettings st = opt.ao_settings;
+        validate(st);
+        auto& S = im.ao;
+        const int gw = std::max(1, int(std::lround(W * st.grid_scale)));
+        const int gh = std::max(1, int(std::lround(H * st.grid_scale)));
+        // Persistent resources, (re)made when their size changes.
+        if (S.grid_w != gw || S.grid_h != gh || S.layers != st.layers) {
+            if (S.slicemap) im.backend.destroy(S.slicemap);
+            S.slicemap = im.backend.adopt(gl::Texture::create_2d_array(GL_RGBA32UI, gw, gh, st.layers));
+            S.grid_w = gw;
+            S.grid_h = gh;
+            S.layers = st.layers;
+            S.view_key.clear();
+        }
+        if (S.width != W || S.height != H) {
+            if (S.ao_image) im.backend.destroy(S.ao_image);
+            S.ao_image = im.backend.adopt(gl::Texture::create_2d(GL_R32F, W, H));
+            S.width = W;
+            S.height = H;
+            S.view_key.clear();
+        }
+        if (!S.zrange) S.zrange = im.backend.adopt(gl::Buffer(8, nullptr, GL_DYNAMIC_STORAGE_BIT));
+        // What the slicemap depends on: camera, viewport, grid, radius (its z
+        // range), the geometry and which objects are visible.
+        std::vector<double> key;
+        for (int c = 0; c < 4; ++c)
+            for (int r = 0; r < 4; ++r) key.push_back(double(view_projection[c][r]));
+        key.insert(key.end(), {double(W), double(H), double(gw), double(gh), double(st.layers), st.radius_mm,
+                               double(im.geometry_version)});
+        for (const auto& m : im.meshes) key.push_back(m.object.visible ? 1.0 : 0.0);
+        voxelize_now = key != S.view_key || opt.ao_force_voxelize;
+        if (voxelize_now || !(st == S.settings) || !st.temporal) S.frames = 0;
+        S.view_key = key;
+        S.settings = st;
+        const std::uint32_t frame = std::uint32_t(S.frames);
+        const float history_weight = float(frame) / float(frame + 1);
+        ++S.frames;
+        result.ao_frames = S.frames;
+        result.voxelized = voxelize_now;
+        // This frame's cones and jitter sets (new sets for each still frame).
+        const auto pattern = cone_pattern(st, frame);
+        if (S.pattern) im.backend.destroy(S.pattern);
+        S.pattern = im.backend.adopt(gl::Buffer(pattern.size() * sizeof(glm::vec4), pattern.data(), 0));
+
+        // The scene's far bound along the view axis (the slicemap's range).
+        double scene_far = 0;
+        const Bounds sb = bounds();
+        if (!sb.empty())
+            for (int c = 0; c < 8; ++c) {
+                const glm::dvec3 corner((c & 1) ? sb.max.x : sb.min.x, (c & 2) ? sb.max.y : sb.min.y, (c & 4) ? sb.max.z : sb.min.z);
+                scene_far = std::max(scene_far, -(camera.view() * glm::dvec4(corner, 1.0)).z);
+            }
+        const float scene_far_f = float(scene_far), radius_f = float(st.radius_mm);
+        const float near_f = float(camera.near_plane), far_f = float(camera.far_plane);
+        const glm::dmat4 proj = camera.projection(aspect);
+        const glm::vec2 proj_scale{float(proj[0][0]), float(proj[1][1])};
+        const glm::mat4 view_f = glm::mat4(camera.view());
+
+        graph::BufferHandle zrange_h = fg.import("zrange", graph::BufferDesc{8}, S.zrange);
+        graph::TextureHandle slicemap_h =
+            fg.import("slicemap", graph::TextureDesc{gw, gh, graph::Format::RGBA32UI, st.layers}, S.slicemap);
+        const graph::TextureHandle ao_h = fg.import("ao", graph::TextureDesc{W, H, graph::Format::R32F}, S.ao_image);
+        if (voxelize_now) {
+            struct ZR {
+                graph::BufferHandle range;
+            };
+            const auto& zr = fg.add_pass<ZR>(
+                "zrange",
+                [&](graph::FrameGraph::Builder& b, ZR& d) {
+                    b.read(gb.depth);
+                    d.range = b.write(zrange_h);
+                },
+                [&](const ZR& d, const graph::Resources& r) {
+                    const GLuint buf = im.backend.buffer(r.get(d.range));
+                    const GLuint init[2] = {0x7F800000u, 0u}; // +inf, 0
+                    glNamedBufferSubData(buf, 0, 8, init);
+                    im.zrange.use();
+                    glBindTextureUnit(0, im.backend.texture(r.get(gb.depth)));
+                    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, buf);
+                    glUniform2i(im.zrange.uniform("size"), W, H);
+                    glUniform1f(im.zrange.uniform("near_plane"), near_f);
+                    glUniform1f(im.zrange.uniform("far_plane"), far_f);
+                    glDispatchCompute(GLuint((W + 15) / 16), GLuint((H + 15) / 16), 1);
+                    glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
+                });
+            zrange_h = zr.range;
+            struct Vox {
+                graph::TextureHandle slicemap;
+            };
+            const auto& vox = fg.add_pass<Vox>(
+                "voxelize",
+                [&](graph::FrameGraph::Builder& b, Vox& d) {
+                    b.read(zrange_h);
+                    d.slicemap = b.write(slicemap_h);
+                },
+                [&, gw, gh, layers = st.layers, scene_far_f, radius_f, view_f](const Vox& d, const graph::Resources& r) {
+                    const GLuint tex = im.backend.texture(r.get(d.slicemap));
+                    auto fb = gl::Framebuffer::create();
+                    std::vector<GLenum> bufs;
+                    for (int l = 0; l < layers; ++l) {
+                        glNamedFramebufferTextureLayer(fb.id(), GLenum(GL_COLOR_ATTACHMENT0 + l), tex, 0, l);
+                        bufs.push_back(GLenum(GL_COLOR_ATTACHMENT0 + l));
+                    }
+                    glNamedFramebufferDrawBuffers(fb.id(), GLsizei(bufs.size()), bufs.data());
+                    fb.check();
+                    const GLuint zero[4] = {0, 0, 0, 0};
+                    for (int l = 0; l < layers; ++l) glClearNamedFramebufferuiv(fb.id(), GL_COLOR, l, zero);
+                    glBindFramebuffer(GL_FRAMEBUFFER, fb.id());
+                    glViewport(0, 0, gw, gh);
+                    glDisable(GL_DEPTH_TEST);
+                    glDisable(GL_CULL_FACE);
+                    glEnable(GL_DEPTH_CLAMP);
+                    glEnable(GL_COLOR_LOGIC_OP);
+                    glLogicOp(GL_XOR);
+                    glClipControl(GL_LOWER_LEFT, GL_ZERO_TO_ONE);
+                    auto& prog = im.slicemap_program(layers);
+                    prog.use();
+                    glUniformMatrix4fv(prog.uniform("view_projection"), 1, GL_FALSE, &view_projection[0][0]);
+                    glUniformMatrix4fv(prog.uniform("view"), 1, GL_FALSE, &view_f[0][0]);
+                    glUniform1f(prog.uniform("scene_far"), scene_far_f);
+                    glUniform1f(prog.uniform("radius"), radius_f);
+                    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, im.backend.buffer(r.get(zrange_h)));
+                    for (const auto& m : im.meshes) {
+                        if (!m.object.visible || m.count == 0) continue;
+                        glBindVertexArray(m.vao.id());
+                        glDrawElements(GL_TRIANGLES, m.count, GL_UNSIGNED_INT, nullptr);
+                    }
+                    glBindVertexArray(0);
+                    glClipControl(GL_LOWER_LEFT, GL_NEGATIVE_ONE_TO_ONE);
+                    glDisable(GL_COLOR_LOGIC_OP);
+                    glDisable(GL_DEPTH_CLAMP);
+                    glBindFramebuffer(GL_FRAMEBUFFER, 0);
+                    glMemoryBarrier(GL_TEXTURE_FETCH_BARRIER_BIT);
+                });
+            slicemap_h = vox.slicemap;
+        }
+        struct Cone {
+            graph::TextureHandle ao;
+        };
+        const auto& cone = fg.add_pass<Cone>(
+            "cone_ao",
+            [&](graph::FrameGraph::Builder& b, Cone& d) {
+                b.read(gb.depth);
+                b.read(gb.normal);
+                b.read(slicemap_h);
+                b.read(zrange_h);
+                d.ao = b.write(ao_h);
+            },
+            [&, st, gw, gh, scene_far_f, near_f, far_f, proj_scale, history_weight, slicemap_h, zrange_h,
+             pattern_id = S.pattern](const Cone& d, const graph::Resources& r) {
+                auto& prog = im.cone_program(st.layers);
+                prog.use();
+                glBindTextureUnit(0, im.backend.texture(r.get(gb.depth)));
+                glBindTextureUnit(1, im.backend.texture(r.get(gb.normal)));
+                glBindTextureUnit(2, im.backend.texture(r.get(slicemap_h)));
+                glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, im.backend.buffer(r.get(zrange_h)));
+                glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 1, im.backend.buffer(pattern_id));
+                glBindImageTexture(0, im.backend.texture(r.get(d.ao)), 0, GL_FALSE, 0, GL_READ_WRITE, GL_R32F);
+                glUniformMatrix3fv(prog.uniform("world_to_view"), 1, GL_FALSE, &world_to_view[0][0]);
+                glUniform2f(prog.uniform("proj_scale"), proj_scale.x, proj_scale.y);
+                glUniform1f(prog.uniform("near_plane"), near_f);
+                glUniform1f(prog.uniform("far_plane"), far_f);
+                glUniform1f(prog.uniform("scene_far"), scene_far_f);
+                glUniform2i(prog.uniform("size"), W, H);
+                glUniform2i(prog.uniform("grid"), gw, gh);
+                glUniform1f(prog.uniform("radius"), float(st.radius_mm));
+                glUniform1f(prog.uniform("strength"), float(st.strength));
+                glUniform1f(prog.uniform("persistence"), float(st.persistence));
+                glUniform1f(prog.uniform("attenuation"), float(st.attenuation));
+                glUniform1f(prog.uniform("bias"), float(st.bias));
+                glUniform1i(prog.uniform("cones"), st.cones);
+                glUniform1i(prog.uniform("spheres"), st.spheres);
+                glUniform1i(prog.uniform("samples"), st.samples);
+                glUniform1i(prog.uniform("sets"), st.jitter_sets);
+                glUniform1f(prog.uniform("history_weight"), history_weight);
+                glDispatchCompute(GLuint((W + 7) / 8), GLuint((H + 7) / 8), 1);
+                glMemoryBarrier(GL_TEXTURE_FETCH_BARRIER_BIT | GL_SHADER_IMAGE_ACCESS_BARRIER_BIT | GL_TEXTURE_UPDATE_BARRIER_BIT);
+            });
+        ao_image = cone.ao;
+        if (opt.read_slicemap) {
+            struct ReadSm {
+                graph::TextureHandle s;
+            };
+            fg.add_pass<ReadSm>(
+                "read_slicemap",
+                [&](graph::FrameGraph::Builder& b, ReadSm& d) {
+                    d.s = b.read(slicemap_h);
+                    b.read(zrange_h);
+                    b.side_effect();
+                },
+                [&, gw, gh, layers = st.layers, scene_far_f, radius_f, zrange_h, proj](const ReadSm& d, const graph::Resources& r) {
+                    SliceMap& sm = result.slicemap;
+                    sm.width = gw;
+                    sm.height = gh;
+                    sm.layers = layers;
+                    sm.view = camera.view();
+                    sm.projection = proj;
+                    const std::size_t texels = std::size_t(gw) * std::size_t(gh);
+                    std::vector<std::uint32_t> raw(texels * std::size_t(layers) * 4);
+                    glGetTextureImage(im.backend.texture(r.get(d.s)), 0, GL_RGBA_INTEGER, GL_UNSIGNED_INT,
+                                      GLsizei(raw.size() * 4), raw.data());
+                    // GL returns layer after layer; SliceMap keeps a texel's layers together.
+                    sm.words.resize(raw.size());
+                    for (int l = 0; l < layers; ++l)
+                        for (std::size_t t = 0; t < texels; ++t)
+                            for (int c = 0; c < 4; ++c)
+                                sm.words[(t * std::size_t(layers) + std::size_t(l)) * 4 + std::size_t(c)] =
+                                    raw[(std::size_t(l) * texels + t) * 4 + std::size_t(c)];
+                    GLuint bits[2];
+                    glGetNamedBufferSubData(im.backend.buffer(r.get(zrange_h)), 0, 8, bits);
+                    float zn, zx;
+                    std::memcpy(&zn, &bits[0], 4);
+                    std::memcpy(&zx, &bits[1], 4);
+                    sm.z_near = zn;
+                    sm.z_far = std::max(double(std::min(scene_far_f, zx + radius_f)), double(zn) + 1e-3);
+                });
+        }
+    }
+
     struct Lit {
         graph::TextureHandle color;
     };
@@ -215,6 +484,7 @@ RenderResult Renderer::render(const Camera& camera, const RenderOptions& opt) {
         [&](graph::FrameGraph::Builder& b, Lit& d) {
             b.read(gb.normal);
             b.read(gb.albedo);
+            if (opt.ao) b.read(ao_image);
             d.color = b.write(b.create("lit", {W, H, graph::Format::RGBA8}));
         },
         [&](const Lit& d, const graph::Resources& r) {
@@ -228,6 +498,11 @@ RenderResult Renderer::render(const Camera& camera, const RenderOptions& opt) {
             glBindTextureUnit(1, im.backend.texture(r.get(gb.albedo)));
             glUniform1i(im.lighting.uniform("normal_tex"), 0);
             glUniform1i(im.lighting.uniform("albedo_tex"), 1);
+            glUniform1i(im.lighting.uniform("use_ao"), opt.ao ? 1 : 0);
+            if (opt.ao) {
+                glBindTextureUnit(2, im.backend.texture(r.get(ao_image)));
+                glUniform1i(im.lighting.uniform("ao_tex"), 2);
+            }
             glUniformMatrix3fv(im.lighting.uniform("world_to_view"), 1, GL_FALSE, &world_to_view[0][0]);
             glUniform4fv(im.lighting.uniform("background"), 1, &opt.background.x);
             glBindVertexArray(im.empty_vao.id());
@@ -310,6 +585,7 @@ RenderResult Renderer::render(const Camera& camera, const RenderOptions& opt) {
             case Aov::Depth: d.source = b.read(gb.depth); break;
             case Aov::Normal: d.source = b.read(gb.normal); break;
             case Aov::Id: d.source = b.read(gb.id); break;
+            case Aov::Ao: d.source = b.read(ao_image); break;
             }
             b.side_effect();
         },
@@ -352,6 +628,14 @@ RenderResult Renderer::render(const Camera& camera, const RenderOptions& opt) {
                 for (std::size_t i = 0; i < n; ++i)
                     for (int c = 0; c < 3; ++c) img.floats[i * 3 + std::size_t(c)] = rgba[i * 4 + std::size_t(c)];
                 flip_rows(img.floats, 3);
+                break;
+            }
+            case Aov::Ao: {
+                img.channels = 1;
+                img.is_float = true;
+                img.floats.resize(n);
+                glGetTextureImage(tex, 0, GL_RED, GL_FLOAT, GLsizei(n * 4), img.floats.data());
+                flip_rows(img.floats, 1); // NaN marks the background
                 break;
             }
             case Aov::Id: {

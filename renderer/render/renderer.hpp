@@ -16,6 +16,7 @@
 #include "io/image.hpp"
 #include "io/mesh.hpp"
 #include "renderer/graph/frame_graph.hpp"
+#include "renderer/render/cone_ao.hpp"
 #include "renderer/scene/camera.hpp"
 
 namespace iso {
@@ -28,8 +29,8 @@ struct SceneObject {
 };
 
 
-enum class Aov { None, Depth, Normal, Id };
-Aov aov_from_name(const std::string& name); // "depth", "normal", "id"; throws iso::Error
+enum class Aov { None, Depth, Normal, Id, Ao };
+Aov aov_from_name(const std::string& name); // "depth", "normal", "id", "ao"; throws iso::Error
 
 struct RenderOptions {
     int width = 512, height = 512;
@@ -45,12 +46,24 @@ struct RenderOptions {
     // Finish the GPU's work at the end of each pass so that per-pass times
     // are real (costs some throughput; for --stats and benchmarks).
     bool time_passes = false;
+    // Cone-traced ambient occlusion (modulates the ambient term; Aov::Ao
+    // reads it raw). Off: its passes are culled.
+    bool ao = false;
+    ConeAoSettings ao_settings;
+    // Also read the slicemap back into RenderResult::slicemap (tests, the
+    // voxel-grid reference).
+    bool read_slicemap = false;
+    // Rebuild the slicemap even if nothing changed (benchmarks time a new view).
+    bool ao_force_voxelize = false;
 };
 
 struct RenderResult {
     Image image;                 // RGBA8 sRGB colour, or the AOV as floats
     graph::FrameStats stats;
     std::string gl_renderer;
+    SliceMap slicemap;           // with RenderOptions::read_slicemap
+    bool voxelized = false;      // the slicemap was rebuilt this frame (else reused)
+    int ao_frames = 0;           // still frames accumulated into the AO so far
 };
 
 class Renderer {

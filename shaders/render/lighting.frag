@@ -1,14 +1,18 @@
 #version 450
 // Deferred lighting: a key light from the upper left of the viewer and a
 // headlight, Lambert diffuse plus a normalized Blinn-Phong highlight, a
-// hemispherical ambient term (AO will modulate it), ACES-fitted tone mapping
-// and sRGB encoding.
+// hemispherical ambient term that ambient occlusion modulates, ACES-fitted
+// tone mapping and sRGB encoding. With AO the ambient (sky) light is
+// stronger and the headlight weaker, so folds and cavities read darker while
+// the overall brightness stays about the same.
 in vec2 uv;
 
 uniform sampler2D normal_tex;
 uniform sampler2D albedo_tex;
 uniform mat3 world_to_view;   // rotation part of the view matrix
 uniform vec4 background;      // linear RGB, alpha
+uniform bool use_ao;
+uniform sampler2D ao_tex;     // R32F, 1 = unoccluded
 
 layout(location = 0) out vec4 out_color;
 
@@ -32,11 +36,12 @@ void main() {
     vec3 albedo = texture(albedo_tex, uv).rgb;
     vec3 key = normalize(vec3(-0.45, 0.6, 0.65));
     vec3 head = v;
-    float ambient = 0.12 * (0.6 + 0.4 * n.y);     // brighter from above
+    float ao = use_ao ? texelFetch(ao_tex, ivec2(gl_FragCoord.xy), 0).r : 1.0;
+    float ambient = (use_ao ? 0.42 : 0.12) * (0.6 + 0.4 * n.y) * ao;   // brighter from above
     vec3 color = albedo * ambient;
     for (int i = 0; i < 2; ++i) {
         vec3 l = i == 0 ? key : head;
-        float intensity = i == 0 ? 0.75 : 0.35;
+        float intensity = i == 0 ? 0.75 : (use_ao ? 0.12 : 0.35);
         float ndl = max(dot(n, l), 0.0);
         vec3 h = normalize(l + v);
         float spec = ndl > 0.0 ? pow(max(dot(n, h), 0.0), 48.0) * (48.0 + 8.0) / (8.0 * 3.14159265) : 0.0;

@@ -157,8 +157,8 @@ TEST(RenderCli, MeshFilesRenderToo) {
 
 TEST(RenderCli, ReferenceAoOfTheBundledCt) {
     TempDir dir;
-    render(test::data("headsq.nhdr") + " --iso 500 --size 64x48 --view left --aov ao --ao reference --ao-radius 10 --ao-rays 256 -o " +
-           (dir / "ao.exr"));
+    render(test::data("headsq.nhdr") + " --iso 500 --size 64x48 --view left --aov ao --ao reference --ao-radius 10 --ao-rays 256 --ao-cache " +
+           (dir / "cache") + " -o " + (dir / "ao.exr"));
     ImageMetadata meta;
     const Image ao = load_image(dir / "ao.exr", &meta);
     ASSERT_TRUE(ao.is_float);
@@ -174,4 +174,66 @@ TEST(RenderCli, ReferenceAoOfTheBundledCt) {
     EXPECT_GT(fg, 300u);
     EXPECT_GT(occluded, 10u) << "the ear and the face have folds";
     EXPECT_TRUE(std::isnan(ao.floats[0]));
+}
+
+TEST(RenderCli, ReferenceAoIsCachedByItsInputs) {
+    TempDir dir;
+    const std::string args = test::data("headsq.nhdr") + " --iso 500 --size 48x40 --view left --aov ao --ao reference --ao-rays 64 --ao-cache " +
+                             (dir / "cache");
+    render(args + " -o " + (dir / "a.exr"));
+    std::size_t entries = 0;
+    for (const auto& e : std::filesystem::recursive_directory_iterator(dir / "cache")) entries += e.is_regular_file();
+    EXPECT_EQ(entries, 1u);
+    render(args + " -o " + (dir / "b.exr"));
+    EXPECT_EQ(load_image(dir / "a.exr").floats.size(), load_image(dir / "b.exr").floats.size());
+    const auto a = load_image(dir / "a.exr"), b = load_image(dir / "b.exr");
+    for (std::size_t i = 0; i < a.floats.size(); ++i)
+        if (!std::isnan(a.floats[i])) ASSERT_EQ(a.floats[i], b.floats[i]);
+    entries = 0;
+    for (const auto& e : std::filesystem::recursive_directory_iterator(dir / "cache")) entries += e.is_regular_file();
+    EXPECT_EQ(entries, 1u) << "the second run hit the cache";
+    // Another radius is another entry.
+    render(args + " --ao-radius 5 -o " + (dir / "c.exr"));
+    entries = 0;
+    for (const auto& e : std::filesystem::recursive_directory_iterator(dir / "cache")) entries += e.is_regular_file();
+    EXPECT_EQ(entries, 2u);
+}
+
+TEST(RenderCli, ConeAoAsAnAovAndInTheColourImage) {
+    TempDir dir;
+    render(test::data("headsq.nhdr") + " --iso 500 --size 96x80 --view left --aov ao --ao cone --ao-radius 8 --ao-cones 6 --ao-frames 3 -o " +
+           (dir / "ao.exr"));
+    ImageMetadata meta;
+    const Image ao = load_image(dir / "ao.exr", &meta);
+    ASSERT_TRUE(ao.is_float);
+    ASSERT_EQ(ao.channels, 1);
+    EXPECT_EQ(meta.text["isoscope:ao_radius_mm"], "8");
+    EXPECT_NE(meta.text["isoscope:ao"].find("cone"), std::string::npos);
+    EXPECT_NE(meta.text["isoscope:ao_parameters"].find("cones 6"), std::string::npos);
+    EXPECT_NE(meta.text["isoscope:ao_parameters"].find("frames 3"), std::string::npos);
+    std::size_t fg = 0, occluded = 0;
+    for (float v : ao.floats) {
+        if (std::isnan(v)) continue;
+        ++fg;
+        ASSERT_GE(v, 0.0f);
+        ASSERT_LE(v, 1.0f);
+        occluded += v < 0.9f;
+    }
+    EXPECT_GT(fg, 500u);
+    EXPECT_GT(occluded, 10u);
+    // In the colour image AO darkens: the mean brightness of the surface drops.
+    render(test::data("headsq.nhdr") + " --iso 500 --size 96x80 --view left --no-annotations --ao cone -o " + (dir / "on.png"));
+    render(test::data("headsq.nhdr") + " --iso 500 --size 96x80 --view left --no-annotations -o " + (dir / "off.png"));
+    const Image on = load_image(dir / "on.png"), off = load_image(dir / "off.png");
+    ASSERT_EQ(on.bytes.size(), off.bytes.size());
+    EXPECT_NE(on.bytes, off.bytes);
+    // Bad values are refused with the option's name.
+    for (const std::string bad : {" --ao cones", " --ao reference", " --aov ao", " --ao cone --ao-cones 0", " --ao cone --ao-layers 9"}) {
+        const auto r = test::run_command(test::cli() + " render " + test::data("headsq.nhdr") + " --iso 500 --size 32x32" + bad + " -o " +
+                                             (dir / "x.exr"),
+                                         true);
+        EXPECT_NE(r.exit_code, 0) << bad;
+        EXPECT_NE(r.out.find("--ao"), std::string::npos) << bad << ": " << r.out;
+        EXPECT_FALSE(std::filesystem::exists(dir / "x.exr")) << bad;
+    }
 }

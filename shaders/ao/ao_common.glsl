@@ -1,0 +1,27 @@
+// Shared by the slicemap voxelization and the cone-tracing pass.
+#ifndef LAYERS
+#define LAYERS 2          // 128 z-voxels per RGBA32UI layer
+#endif
+#define BITS (128 * LAYERS)
+
+// Bits k and above of a 32-bit word (k <= 0: all, k >= 32: none). Bit
+// arithmetic instead of the thesis's 128-entry LUT: the same masks, no fetch.
+uint mask_from(int k) {
+    return k <= 0 ? 0xFFFFFFFFu : (k >= 32 ? 0u : (0xFFFFFFFFu << uint(k)));
+}
+
+// The slicemap's z range (linear depth in mm): from the nearest visible depth
+// (the G-buffer's, reduced by zrange.comp; nothing nearer can be on screen)
+// to the nearer of the scene's far bound and the farthest visible depth + R
+// (nothing farther can occlude a visible point).
+vec2 slicemap_range(uint zmin_bits, uint zmax_bits, float scene_far, float radius) {
+    float zn = uintBitsToFloat(zmin_bits);
+    float zf = min(scene_far, uintBitsToFloat(zmax_bits) + radius);
+    return vec2(zn, max(zf, zn + 1e-3));
+}
+
+// Index of the first voxel whose centre lies at or beyond linear depth z.
+int voxel_at(float z, vec2 range) {
+    float t = (z - range.x) / (range.y - range.x) * float(BITS);
+    return int(clamp(ceil(t - 0.5), 0.0, float(BITS)));
+}

@@ -1,0 +1,447 @@
+// Ambient occlusion: run time against error (issue 5; docs/ao.md).
+//
+// For each scene (the bundled CT's skin and bone surfaces, the Stanford
+// bunny) and image size, against the Embree ray-traced reference (cached by
+// input hash, see core::RenderRequest::cache_dir):
+//   - cone-traced AO over a sweep of its tunables (AO passes timed with
+//     glFinish after each pass, slicemap rebuilt every frame);
+//   - the same AO traced through the slicemap (the voxel-grid reference), to
+//     split voxelization error from cone error;
+//   - VTK 9.1 vtkSSAOPass (ssao_peer under xvfb-run) over a kernel sweep,
+//     same meshes, camera and size, in the same run;
+//   - no AO at all (AO = 1).
+// Prints markdown tables with Pareto flags, writes OUT/ao.csv and, with
+// gnuplot, OUT/ao_time_rmse.png.
+//
+//   ao_bench [--quick] [--out DIR] [--sizes 512,1024] [--scenes ct-skin,ct-bone,bunny]
+//            [--rays 1024] [--reps 5] [--ssao PATH|none]
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <iomanip>
+#include <iostream>
+#include <map>
+#include <sstream>
+
+#include <nlohmann/json.hpp>
+
+#include "ao_metrics.hpp"
+#include "bench_util.hpp"
+#include "io/image.hpp"
+#include "io/mesh.hpp"
+#include "renderer/ao/reference.hpp"
+#include "renderer/core/api.hpp"
+#include "renderer/gl/context.hpp"
+
+namespace fs = std::filesystem;
+using namespace iso;
+
+namespace {
+
+struct Args {
+    std::string out = "bench-out/ao";
+    std::vector<int> sizes{512, 1024};
+    std::vector<std::string> scenes{"ct-skin", "ct-bone", "bunny"};
+    int rays = 1024;
+    int reps = 5;
+    bool quick = false;
+    std::string ssao = ISOSCOPE_SSAO_PEER;
+    std::string data = ISOSCOPE_DATA_DIR;
+    std::vector<std::string> configs; // replace the sweep (exploration)
+    bool extras = true;               // still frames, voxel reference
+};
+
+struct Scene {
+    std::string name, input, view;
+    std::vector<double> isos;
+    double radius = 10;
+    std::vector<Mesh> meshes;
+    double size = 1; // bounding-box diagonal
+};
+
+struct Row {
+    std::string scene, method, params;
+    int size = 0;
+    double ao_ms = 0, frame_ms = 0;
+    AoError err;
+    bool pareto = false;
+};
+
+std::vector<std::string> split(const std::string& s) {
+    std::vector<std::string> v;
+    std::stringstream ss(s);
+    for (std::string t; std::getline(ss, t, ',');) v.push_back(t);
+    return v;
+}
+
+Scene make_scene(const std::string& name, const Args& a) {
+    Scene s;
+    s.name = name;
+    if (name == "ct-skin" || name == "ct-bone") {
+        s.input = a.data + "/headsq.nhdr";
+        s.isos = {name == "ct-skin" ? 500.0 : 1150.0};
+        s.view = name == "ct-skin" ? "left" : "anterior";
+        const Volume v = core::open_volume(s.input);
+        core::SurfaceRequest sr;
+        sr.isos = s.isos;
+        for (auto& surf : core::extract_surfaces(v, sr)) s.meshes.push_back(std::move(surf.mesh));
+    } else if (name == "bunny") {
+        s.input = a.data + "/bunny.vtp";
+        s.view = "anterior";
+        s.meshes.push_back(core::open_mesh(s.input));
+    } else {
+        throw Error("ao_bench", "unknown scene '" + name + "' (ct-skin, ct-bone, bunny)");
+    }
+    Bounds b;
+    for (const auto& m : s.meshes)
+        for (const auto& p : m.positions) b.add(glm::dvec3(p));
+    s.size = 2.0 * b.radius();
+    // CT: the radius of the issue's targets; the bunny (units of ~metres/10): a tenth of its size.
+    s.radius = name == "bunny" ? 0.1 * s.size : 10.0;
+    return s;
+}
+
+void mark_pareto(std::vector<Row>& rows) {
+    for (auto& r : rows) {
+        r.pareto = true;
+        for (const auto& o : rows)
+            if (&o != &r && o.ao_ms <= r.ao_ms && o.err.rmse <= r.err.rmse && (o.ao_ms < r.ao_ms || o.err.rmse < r.err.rmse)) {
+                r.pareto = false;
+                break;
+            }
+    }
+}
+
+std::string no_commas(std::string s) {
+    std::replace(s.begin(), s.end(), ',', ';');
+    return s;
+}
+
+// An AO image as an 8-bit grey PNG (background dark blue-grey), or the
+// signed difference of two as a diverging map (red: too dark, blue: too bright).
+void save_grey(const Image& ao, const std::string& path) {
+    Image o;
+    o.width = ao.width;
+    o.height = ao.height;
+    o.channels = 3;
+    o.bytes.resize(std::size_t(o.width) * o.height * 3);
+    for (std::size_t i = 0; i < ao.floats.size(); ++i) {
+        const float v = ao.floats[i];
+        const bool bg = !std::isfinite(v);
+        const auto g = std::uint8_t(std::clamp(v, 0.0f, 1.0f) * 255.0f + 0.5f);
+        o.bytes[3 * i] = bg ? 40 : g;
+        o.bytes[3 * i + 1] = bg ? 44 : g;
+        o.bytes[3 * i + 2] = bg ? 60 : g;
+    }
+    save_image(o, path);
+}
+void save_diff(const Image& ao, const Image& ref, const std::string& path, float full_scale = 0.25f) {
+    Image o;
+    o.width = ao.width;
+    o.height = ao.height;
+    o.channels = 3;
+    o.bytes.assign(std::size_t(o.width) * o.height * 3, 40);
+    for (std::size_t i = 0; i < ao.floats.size(); ++i) {
+        const float a = ao.floats[i], r = ref.floats[i];
+        if (!std::isfinite(a) || !std::isfinite(r)) continue;
+        const float d = std::clamp((a - r) / full_scale, -1.0f, 1.0f);
+        o.bytes[3 * i] = std::uint8_t(255.0f * (d < 0 ? 1.0f : 1.0f - d));
+        o.bytes[3 * i + 1] = std::uint8_t(255.0f * (1.0f - std::abs(d)));
+        o.bytes[3 * i + 2] = std::uint8_t(255.0f * (d > 0 ? 1.0f : 1.0f + d));
+    }
+    save_image(o, path);
+}
+
+std::string fmt(double v, int prec = 3) {
+    std::ostringstream s;
+    s << std::fixed << std::setprecision(prec) << v;
+    return s.str();
+}
+
+struct ConeConfig {
+    int cones, spheres, samples;
+    double grid;
+    int layers;
+    double persistence;
+};
+
+std::string describe(const ConeConfig& c) {
+    std::ostringstream s;
+    s << c.cones << "c " << c.spheres << "s " << c.samples << "p grid " << c.grid << " L" << c.layers << " pers " << c.persistence;
+    return s.str();
+}
+
+} // namespace
+
+int main(int argc, char** argv) {
+    Args a;
+    for (int i = 1; i < argc; ++i) {
+        std::string s = argv[i];
+        auto next = [&]() -> std::string { return i + 1 < argc ? argv[++i] : ""; };
+        if (s == "--out") a.out = next();
+        else if (s == "--quick") a.quick = true;
+        else if (s == "--sizes") {
+            a.sizes.clear();
+            for (auto& t : split(next())) a.sizes.push_back(std::stoi(t));
+        } else if (s == "--scenes") a.scenes = split(next());
+        else if (s == "--rays") a.rays = std::stoi(next());
+        else if (s == "--reps") a.reps = std::stoi(next());
+        else if (s == "--ssao") a.ssao = next();
+        else if (s == "--data") a.data = next();
+        else if (s == "--config") a.configs.push_back(next()); // cones,spheres,samples,grid,layers,persistence
+        else {
+            std::cerr << "usage: ao_bench [--quick] [--out DIR] [--sizes 512,1024] [--scenes ct-skin,ct-bone,bunny] [--rays N] "
+                         "[--reps N] [--ssao PATH|none]\n";
+            return 2;
+        }
+    }
+    if (a.quick) {
+        a.sizes = {256};
+        a.rays = 256;
+        a.reps = 2;
+    }
+    try {
+        fs::create_directories(a.out);
+        gl::HeadlessContext ctx;
+        ctx.make_current();
+        std::vector<ConeConfig> configs = {
+            {3, 2, 3, 0.5, 1, 0.75},  {4, 3, 4, 0.5, 1, 0.75},  {4, 3, 4, 1.0, 2, 0.75},  {6, 4, 6, 1.0, 2, 0.75},
+            {8, 5, 8, 1.0, 2, 0.75},  {12, 6, 12, 1.0, 2, 0.75}, {16, 8, 16, 1.0, 4, 0.75},
+            {8, 5, 8, 1.0, 2, 0.0},   {8, 5, 8, 1.0, 2, 0.5},   {8, 5, 8, 1.0, 2, 1.0},
+        };
+        std::vector<int> kernels = {8, 16, 32, 64, 128};
+        if (a.quick) {
+            configs = {{4, 3, 4, 0.5, 1, 0.75}, {8, 5, 8, 1.0, 2, 0.75}};
+            kernels = {16, 64};
+        }
+        if (!a.configs.empty()) {
+            configs.clear();
+            for (const auto& c : a.configs) {
+                ConeConfig k{};
+                if (std::sscanf(c.c_str(), "%d,%d,%d,%lf,%d,%lf", &k.cones, &k.spheres, &k.samples, &k.grid, &k.layers, &k.persistence) != 6)
+                    throw Error("--config", "expected cones,spheres,samples,grid,layers,persistence, got '" + c + "'");
+                configs.push_back(k);
+            }
+        }
+        std::vector<Row> all;
+        std::string renderer_name;
+        for (const auto& scene_name : a.scenes) {
+            Scene sc = make_scene(scene_name, a);
+            for (int S : a.sizes) {
+                std::cerr << "[ao_bench] " << sc.name << " " << S << "x" << S << ": reference (" << a.rays << " rays)\n";
+                // The reference through the core API: same camera as the CLI, cached.
+                core::RenderRequest rq;
+                rq.isos = sc.isos;
+                rq.view = sc.view;
+                rq.width = rq.height = S;
+                rq.aov_ao = true;
+                rq.ao = "reference";
+                rq.ao_radius_mm = sc.radius;
+                rq.ao_rays = a.rays;
+                const auto ref = core::render_input(sc.input, rq);
+                const Camera cam = ref.camera;
+                renderer_name = ref.gl_renderer;
+
+                Renderer ren;
+                for (const auto& m : sc.meshes) ren.add(m, {});
+                std::vector<Row> rows;
+                auto add_row = [&](const std::string& method, const std::string& params, double ao_ms, double frame_ms, const Image& img) {
+                    Row r{sc.name, method, params, S, ao_ms, frame_ms, ao_error(img, ref.image, a.rays)};
+                    rows.push_back(r);
+                };
+                {
+                    Image ones = ref.image;
+                    for (auto& v : ones.floats)
+                        if (std::isfinite(v)) v = 1.0f;
+                    add_row("none", "AO = 1", 0, 0, ones);
+                }
+                // Cone AO sweep.
+                for (const auto& c : configs) {
+                    RenderOptions ro;
+                    ro.width = ro.height = S;
+                    ro.aov = Aov::Ao;
+                    ro.ao_settings.radius_mm = sc.radius;
+                    ro.ao_settings.cones = c.cones;
+                    ro.ao_settings.spheres = c.spheres;
+                    ro.ao_settings.samples = c.samples;
+                    ro.ao_settings.grid_scale = c.grid;
+                    ro.ao_settings.layers = c.layers;
+                    ro.ao_settings.persistence = c.persistence;
+                    ro.ao_settings.temporal = false;
+                    ro.ao_force_voxelize = true;
+                    ro.time_passes = true;
+                    Image img;
+                    std::vector<double> ao_ms, frame_ms;
+                    for (int rep = 0; rep < a.reps + 1; ++rep) {
+                        auto r = ren.render(cam, ro);
+                        double ao = 0, total = 0;
+                        for (const auto& p : r.stats.passes) {
+                            if (!p.ran) continue;
+                            total += p.ms;
+                            if (p.name == "zrange" || p.name == "voxelize" || p.name == "cone_ao") ao += p.ms;
+                        }
+                        if (rep > 0) { // the first frame compiles shaders
+                            ao_ms.push_back(ao);
+                            frame_ms.push_back(total);
+                        }
+                        img = std::move(r.image);
+                    }
+                    add_row("cone", describe(c), bench::median(ao_ms), bench::median(frame_ms), img);
+                }
+                // Default settings, still camera, temporal accumulation of 8 frames.
+                if (a.configs.empty()) {
+                    RenderOptions ro;
+                    ro.width = ro.height = S;
+                    ro.aov = Aov::Ao;
+                    ro.ao_settings.radius_mm = sc.radius;
+                    ro.time_passes = true;
+                    Image img;
+                    double ao_sum = 0;
+                    const int frames = 8;
+                    ren.render(cam, ro); // warm-up; then a new view starts the accumulation
+                    ro.ao_force_voxelize = true;
+                    for (int f = 0; f < frames; ++f) {
+                        auto r = ren.render(cam, ro);
+                        ro.ao_force_voxelize = false;
+                        for (const auto& p : r.stats.passes)
+                            if (p.ran && (p.name == "zrange" || p.name == "voxelize" || p.name == "cone_ao")) ao_sum += p.ms;
+                        img = std::move(r.image);
+                    }
+                    add_row("cone-still", "default; 8 still frames accumulated (time: all 8)", ao_sum, 0, img);
+                    const std::string stem = a.out + "/" + sc.name + "_" + std::to_string(S);
+                    save_grey(ref.image, stem + "_reference.png");
+                    save_grey(img, stem + "_cone.png");
+                    save_diff(img, ref.image, stem + "_cone_minus_reference.png");
+                }
+                // The voxel-grid reference (default grid), on every 4th pixel.
+                if (a.configs.empty()) {
+                    RenderOptions ro;
+                    ro.width = ro.height = S;
+                    ro.aov = Aov::Ao;
+                    ro.ao_settings.radius_mm = sc.radius;
+                    ro.read_slicemap = true;
+                    auto r = ren.render(cam, ro);
+                    RenderOptions d;
+                    d.width = d.height = S;
+                    d.aov = Aov::Depth;
+                    const Image depth = ren.render(cam, d).image;
+                    d.aov = Aov::Normal;
+                    const Image normal = ren.render(cam, d).image;
+                    AoReferenceOptions vo;
+                    vo.radius_mm = sc.radius;
+                    vo.rays = std::min(a.rays, 256);
+                    const double t0 = bench::now_s();
+                    const Image vox = voxel_ao_image(r.slicemap, cam, depth, normal, vo, 1.0, a.quick ? 2 : 4);
+                    const double t1 = bench::now_s();
+                    add_row("voxel-ref", "rays through the default slicemap (every 4th px, CPU)", 0, (t1 - t0) * 1e3, vox);
+                    // Cone error alone: cone (default) against the voxel reference.
+                    Row cr{sc.name, "cone-vs-voxel", "default cone AO against the voxel reference", S, 0, 0, ao_error(r.image, vox, vo.rays)};
+                    rows.push_back(cr);
+                }
+                // VTK's SSAO, same meshes and camera, under Xvfb.
+                if (a.ssao != "none" && fs::exists(a.ssao)) {
+                    std::vector<std::string> files;
+                    for (std::size_t m = 0; m < sc.meshes.size(); ++m) {
+                        files.push_back(a.out + "/" + sc.name + "_" + std::to_string(m) + ".ply");
+                        if (!fs::exists(files.back())) save_mesh(sc.meshes[m], files.back());
+                    }
+                    auto v3 = [](const glm::dvec3& v) {
+                        std::ostringstream s;
+                        s.precision(17);
+                        s << v.x << "," << v.y << "," << v.z;
+                        return s.str();
+                    };
+                    struct SsaoRun {
+                        double radius, bias;
+                        int kernel;
+                        std::string label;
+                    };
+                    std::vector<SsaoRun> runs;
+                    for (int k : kernels) runs.push_back({sc.radius, 0.001 * sc.size, k, "radius R"});
+                    runs.push_back({0.1 * sc.size, 0.001 * sc.size, 32, "radius 0.1 x scene (Kitware's advice)"});
+                    for (const auto& run : runs) {
+                        std::ostringstream cmd;
+                        cmd.precision(17);
+                        const std::string out_exr = a.out + "/ssao_" + sc.name + ".exr";
+                        cmd << "xvfb-run -a -s '-screen 0 " << std::max(S + 64, 1280) << "x" << std::max(S + 64, 1024) << "x24' " << a.ssao;
+                        for (const auto& f : files) cmd << " --mesh " << f;
+                        cmd << " --eye " << v3(cam.eye) << " --target " << v3(cam.target) << " --up " << v3(cam.up) << " --fov "
+                            << cam.fov_y_degrees << " --near " << cam.near_plane << " --far " << cam.far_plane << " --size " << S << "x" << S
+                            << " --radius " << run.radius << " --bias " << run.bias << " --kernel " << run.kernel << " --frames "
+                            << std::max(5, a.reps * 2) << " --out " << out_exr << " 2>/dev/null";
+                        const std::string line = bench::capture(cmd.str());
+                        try {
+                            const auto j = nlohmann::json::parse(line.substr(line.find('{')));
+                            const Image img = load_image(out_exr);
+                            if (run.kernel == 32 && run.label == "radius R") {
+                                const std::string stem = a.out + "/" + sc.name + "_" + std::to_string(S);
+                                save_grey(img, stem + "_ssao.png");
+                                save_diff(img, ref.image, stem + "_ssao_minus_reference.png");
+                            }
+                            const double ms = j.at("ms_median").get<double>(), plain = j.at("ms_plain_median").get<double>();
+                            add_row("vtkSSAOPass", "kernel " + std::to_string(run.kernel) + ", " + run.label + " " + fmt(run.radius, 4) +
+                                                       ", bias " + fmt(run.bias, 5),
+                                    std::max(0.0, ms - plain), ms, img);
+                        } catch (const std::exception& e) {
+                            std::cerr << "[ao_bench] ssao_peer failed (" << e.what() << "): " << line << "\n";
+                        }
+                    }
+                } else if (a.ssao != "none") {
+                    std::cerr << "[ao_bench] no ssao_peer at " << a.ssao << ": VTK's SSAO not measured\n";
+                }
+                // Pareto over the methods that give a per-frame AO (not the references, not the CPU voxel tracer).
+                std::vector<Row> contenders;
+                for (const auto& r : rows)
+                    if (r.method == "cone" || r.method == "vtkSSAOPass" || r.method == "none") contenders.push_back(r);
+                mark_pareto(contenders);
+                for (auto& r : rows)
+                    for (const auto& c : contenders)
+                        if (c.method == r.method && c.params == r.params) r.pareto = c.pareto;
+                std::cout << "\n### " << sc.name << ", " << S << "x" << S << ", R = " << fmt(sc.radius, 4) << " (reference: " << a.rays
+                          << " rays/px, own noise RMS " << fmt(rows[0].err.reference_noise_rms, 4) << "; " << rows[0].err.pixels
+                          << " foreground px)\n\n";
+                std::cout << "| method | parameters | AO ms | frame ms | bias | MAE | RMSE | p95 | p99 | Pareto |\n"
+                          << "|---|---|---:|---:|---:|---:|---:|---:|---:|:-:|\n";
+                for (const auto& r : rows)
+                    std::cout << "| " << r.method << " | " << r.params << " | " << fmt(r.ao_ms, 1) << " | " << fmt(r.frame_ms, 1) << " | "
+                              << fmt(r.err.bias) << " | " << fmt(r.err.mae) << " | " << fmt(r.err.rmse) << " | " << fmt(r.err.p95) << " | "
+                              << fmt(r.err.p99) << " | " << (r.pareto ? "*" : "") << " |\n";
+                std::cout.flush();
+                all.insert(all.end(), rows.begin(), rows.end());
+            }
+        }
+        std::cout << "\nrenderer: " << renderer_name << "; AO ms: zrange + voxelize + cone_ao passes (cone), frame with SSAO minus "
+                     "frame without (vtkSSAOPass); glFinish after each pass; median of "
+                  << a.reps << " frames\n";
+        std::ofstream csv(a.out + "/ao.csv");
+        csv << "scene,size,method,params,ao_ms,frame_ms,bias,mae,rmse,p95,p99,pareto\n";
+        for (const auto& r : all)
+            csv << r.scene << "," << r.size << "," << r.method << "," << no_commas(r.params) << "," << r.ao_ms << "," << r.frame_ms << ","
+                << r.err.bias << "," << r.err.mae << "," << r.err.rmse << "," << r.err.p95 << "," << r.err.p99 << "," << r.pareto << "\n";
+        if (std::system("command -v gnuplot >/dev/null 2>&1") == 0) {
+            std::ofstream gp(a.out + "/ao.gp");
+            gp << "set terminal pngcairo size 1200,800\nset output '" << a.out << "/ao_time_rmse.png'\n"
+               << "set datafile separator ','\nset logscale x\nset xlabel 'AO time per frame, ms (" << renderer_name
+               << ")'\nset ylabel 'RMSE against the Embree reference'\nset key outside right\nset grid\n"
+               << "set title 'Ambient occlusion: run time against error'\nplot ";
+            bool first = true;
+            for (const auto& sn : a.scenes)
+                for (int S : a.sizes)
+                    for (const char* m : {"cone", "vtkSSAOPass"}) {
+                        gp << (first ? "" : ", ") << "'< grep \"^" << sn << "," << S << "," << m << ",\" " << a.out
+                           << "/ao.csv' using 5:9 with points pt " << (std::string(m) == "cone" ? 7 : 5) << " title '" << m << " " << sn << " "
+                           << S << "'";
+                        first = false;
+                    }
+            gp << "\n";
+            gp.close();
+            if (std::system(("gnuplot " + a.out + "/ao.gp").c_str()) != 0) std::cerr << "gnuplot failed\n";
+        }
+    } catch (const std::exception& e) {
+        std::cerr << "ao_bench: " << e.what() << "\n";
+        return 1;
+    }
+    return 0;
+}
