@@ -297,7 +297,9 @@ TEST(ConeAo, PassesAreCulledWhenOffAndTheSlicemapIsReusedWhenStill) {
     o.aov = Aov::Depth;
     auto c = ren.render(cam, o);
     for (const auto& p : c.stats.passes)
-        if (p.name == "cone_ao" || p.name == "voxelize") EXPECT_FALSE(p.ran) << p.name;
+        if (p.name == "cone_ao" || p.name == "voxelize") {
+            EXPECT_FALSE(p.ran) << p.name;
+        }
     o.aov = Aov::None;
     Camera moved = cam;
     moved.orbit(5, 0);
@@ -338,7 +340,9 @@ TEST(ConeAo, StillFramesConvergeInsteadOfFlickering) {
     const auto x = ren.render(cam, o).image, y = ren.render(cam, o).image;
     EXPECT_EQ(x.floats.size(), y.floats.size());
     for (std::size_t i = 0; i < x.floats.size(); ++i)
-        if (std::isfinite(x.floats[i])) ASSERT_EQ(x.floats[i], y.floats[i]) << "temporal off: the same jitter every frame";
+        if (std::isfinite(x.floats[i])) {
+            ASSERT_EQ(x.floats[i], y.floats[i]) << "temporal off: the same jitter every frame";
+        }
 }
 
 // ---- stress cases -------------------------------------------------------

@@ -45,7 +45,9 @@ TEST(ConePattern, PoissonDiskPointsAreInsideAndApart) {
             for (int j = 0; j < i; ++j) min_d = std::min(min_d, double(glm::length(p[i] - p[j])));
         }
         // The densest packing is ~2/sqrt(n) apart; dart throwing (and the concentric map) keep a third of it.
-        if (n > 1) EXPECT_GT(min_d, 0.66 / std::sqrt(double(n))) << n;
+        if (n > 1) {
+            EXPECT_GT(min_d, 0.66 / std::sqrt(double(n))) << n;
+        }
         EXPECT_EQ(poisson_disk(n, 7), p) << "deterministic in the seed";
     }
 }
