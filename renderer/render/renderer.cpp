@@ -329,7 +329,7 @@ RenderResult Renderer::render(const Camera& camera, const RenderOptions& opt) {
                     b.read(gb.depth);
                     d.range = b.write(zrange_h);
                 },
-                [&](const ZR& d, const graph::Resources& r) {
+                [&, near_f, far_f](const ZR& d, const graph::Resources& r) {
                     const GLuint buf = im.backend.buffer(r.get(d.range));
                     const GLuint init[2] = {0x7F800000u, 0u}; // +inf, 0
                     glNamedBufferSubData(buf, 0, 8, init);
@@ -352,7 +352,7 @@ RenderResult Renderer::render(const Camera& camera, const RenderOptions& opt) {
                     b.read(zrange_h);
                     d.slicemap = b.write(slicemap_h);
                 },
-                [&, gw, gh, layers = st.layers, scene_far_f, radius_f, view_f](const Vox& d, const graph::Resources& r) {
+                [&, gw, gh, layers = st.layers, scene_far_f, radius_f, view_f, zrange_h](const Vox& d, const graph::Resources& r) {
                     const GLuint tex = im.backend.texture(r.get(d.slicemap));
                     auto fb = gl::Framebuffer::create();
                     std::vector<GLenum> bufs;
