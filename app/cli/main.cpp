@@ -149,6 +149,9 @@ int main(int argc, char** argv) {
     render->add_option("--ao-persistence", r_cone.persistence,
                        "Sphere combination along a cone: 0 independent absorbers, 1 one solid (cone AO)")
         ->check(CLI::Range(0.0, 1.0));
+    render->add_option("--ao-resolution", r_cone.resolution,
+                       "Cone-pass pixels per image pixel, 0.25..1; below 1 a bilateral upsampling follows (cone AO)")
+        ->check(CLI::Range(0.25, 1.0));
     render->add_option("--ao-frames", r_ao_frames, "Still frames accumulated with new jitter sets (cone AO)")->check(CLI::Range(1, 4096));
     render->add_option("--ao-cache", r_cache, "Folder caching AO references ('-': none; default ~/.cache/isoscope)");
     render->add_flag("--no-annotations", r_no_annotations, "No scale bar, orientation letters or labels");

@@ -1,5 +1,6 @@
 #include "renderer/render/cone_ao.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <random>
 
@@ -31,6 +32,7 @@ void validate(const ConeAoSettings& s) {
     check_range("persistence", s.persistence, 0, 1);
     check_range("attenuation", s.attenuation, 0, 100);
     check_range("bias", s.bias, 0, 16);
+    check_range("resolution", s.resolution, 0.25, 1);
 }
 
 std::vector<glm::vec4> cone_directions(int n) {
@@ -105,11 +107,19 @@ std::vector<glm::vec4> cone_pattern(const ConeAoSettings& s, std::uint32_t frame
     std::uniform_real_distribution<double> u(0.0, 1.0);
     const int J = s.jitter_sets;
     // Rotations about the normal stratified over the sets (a fresh offset each frame).
+    // Sphere offsets along the cone stratified too, in shuffled order: with
+    // independent offsets, one frame's few sets could all place their spheres
+    // near (or far), and that frame's whole image would be darker (or
+    // lighter) than the mean the still frames converge to.
     const double base = u(rng);
+    std::vector<int> strata(std::size_t(J), 0);
+    for (int j = 0; j < J; ++j) strata[std::size_t(j)] = j;
+    std::shuffle(strata.begin(), strata.end(), rng);
     std::vector<glm::vec4> sets, samples;
     for (int j = 0; j < J; ++j) {
         const double a = 2.0 * kPi * (j + base) / J;
-        sets.emplace_back(float(std::cos(a)), float(std::sin(a)), float(u(rng) - 0.5), 0.0f);
+        const double offset = (strata[std::size_t(j)] + u(rng)) / J - 0.5;
+        sets.emplace_back(float(std::cos(a)), float(std::sin(a)), float(offset), 0.0f);
         const auto disk = poisson_disk(s.samples, std::uint32_t(frame * 7919u + std::uint32_t(j) * 104729u + 1u));
         const double b = 2.0 * kPi * u(rng); // the disk pattern also turns
         for (const auto& p : disk)

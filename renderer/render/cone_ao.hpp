@@ -31,6 +31,10 @@ struct ConeAoSettings {
     double persistence = 0.5;
     double attenuation = 0.0;  // o_i /= 1 + attenuation * (t_i / R)^2
     double bias = 1.0;         // tangent-plane offset, in voxel/texel footprints
+    // Cone-pass pixels per frame pixel along each axis (0.25..1). Below 1 the
+    // cones are traced on a coarser image and brought back to full size by a
+    // joint bilateral (depth-plane and normal aware) upsampling pass.
+    double resolution = 0.5;
     bool temporal = true;      // accumulate new jitter sets while camera and scene are still
     bool operator==(const ConeAoSettings&) const = default;
 };

@@ -109,6 +109,7 @@ struct Renderer::Impl {
     gl::Program lighting = gl::Program::from_files({"render/fullscreen.vert", "render/lighting.frag"});
     gl::Program overlay = gl::Program::from_files({"render/overlay.vert", "render/overlay.frag"});
     gl::Program zrange = gl::Program::from_files({"ao/zrange.comp"});
+    gl::Program ao_upsample = gl::Program::from_files({"ao/ao_upsample.comp"});
     gl::VertexArray empty_vao = gl::VertexArray::create();
     GlBackend backend;
     std::uint64_t geometry_version = 0;
@@ -133,8 +134,8 @@ struct Renderer::Impl {
     // geometry, the camera or the grid changed; the AO image accumulates new
     // jitter sets while nothing changed at all.
     struct AoState {
-        std::uint64_t slicemap = 0, zrange = 0, ao_image = 0, pattern = 0; // backend ids (0: none yet)
-        int grid_w = 0, grid_h = 0, layers = 0, width = 0, height = 0, samples_len = 0;
+        std::uint64_t slicemap = 0, zrange = 0, ao_image = 0, ao_low = 0, pattern = 0; // backend ids (0: none yet)
+        int grid_w = 0, grid_h = 0, layers = 0, width = 0, height = 0, low_w = 0, low_h = 0, samples_len = 0;
         std::vector<double> view_key;   // what the slicemap depends on
         ConeAoSettings settings;        // what the accumulated AO depends on too
         int frames = 0;
@@ -278,6 +279,18 @@ RenderResult Renderer::render(const Camera& camera, const RenderOptions& opt) {
             S.height = H;
             S.view_key.clear();
         }
+        // The cone pass's own image when it runs coarser than the frame
+        // (--ao-resolution < 1); it keeps the still-frame history too.
+        const int aw = std::max(1, int(std::lround(W * st.resolution)));
+        const int ah = std::max(1, int(std::lround(H * st.resolution)));
+        const bool coarse = aw != W || ah != H;
+        if (coarse && (S.low_w != aw || S.low_h != ah)) {
+            if (S.ao_low) im.backend.destroy(S.ao_low);
+            S.ao_low = im.backend.adopt(gl::Texture::create_2d(GL_R32F, aw, ah));
+            S.low_w = aw;
+            S.low_h = ah;
+            S.view_key.clear();
+        }
         if (!S.zrange) S.zrange = im.backend.adopt(gl::Buffer(8, nullptr, GL_DYNAMIC_STORAGE_BIT));
         // What the slicemap depends on: camera, viewport, grid, radius (its z
         // range), the geometry and which objects are visible.
@@ -319,6 +332,8 @@ RenderResult Renderer::render(const Camera& camera, const RenderOptions& opt) {
         graph::TextureHandle slicemap_h =
             fg.import("slicemap", graph::TextureDesc{gw, gh, graph::Format::RGBA32UI, st.layers}, S.slicemap);
         const graph::TextureHandle ao_h = fg.import("ao", graph::TextureDesc{W, H, graph::Format::R32F}, S.ao_image);
+        const graph::TextureHandle cone_h =
+            coarse ? fg.import("ao_coarse", graph::TextureDesc{aw, ah, graph::Format::R32F}, S.ao_low) : ao_h;
         if (voxelize_now) {
             struct ZR {
                 graph::BufferHandle range;
@@ -403,10 +418,10 @@ RenderResult Renderer::render(const Camera& camera, const RenderOptions& opt) {
                 b.read(gb.normal);
                 b.read(slicemap_h);
                 b.read(zrange_h);
-                d.ao = b.write(ao_h);
+                d.ao = b.write(cone_h);
             },
             [&, st, gw, gh, scene_far_f, near_f, far_f, proj_scale, history_weight, slicemap_h, zrange_h,
-             pattern_id = S.pattern](const Cone& d, const graph::Resources& r) {
+             aw, ah, pattern_id = S.pattern](const Cone& d, const graph::Resources& r) {
                 auto& prog = im.cone_program(st.layers);
                 prog.use();
                 glBindTextureUnit(0, im.backend.texture(r.get(gb.depth)));
@@ -421,6 +436,7 @@ RenderResult Renderer::render(const Camera& camera, const RenderOptions& opt) {
                 glUniform1f(prog.uniform("far_plane"), far_f);
                 glUniform1f(prog.uniform("scene_far"), scene_far_f);
                 glUniform2i(prog.uniform("size"), W, H);
+                glUniform2i(prog.uniform("ao_size"), aw, ah);
                 glUniform2i(prog.uniform("grid"), gw, gh);
                 glUniform1f(prog.uniform("radius"), float(st.radius_mm));
                 glUniform1f(prog.uniform("strength"), float(st.strength));
@@ -432,10 +448,41 @@ RenderResult Renderer::render(const Camera& camera, const RenderOptions& opt) {
                 glUniform1i(prog.uniform("samples"), st.samples);
                 glUniform1i(prog.uniform("sets"), st.jitter_sets);
                 glUniform1f(prog.uniform("history_weight"), history_weight);
-                glDispatchCompute(GLuint((W + 7) / 8), GLuint((H + 7) / 8), 1);
+                glDispatchCompute(GLuint((aw + 7) / 8), GLuint((ah + 7) / 8), 1);
                 glMemoryBarrier(GL_TEXTURE_FETCH_BARRIER_BIT | GL_SHADER_IMAGE_ACCESS_BARRIER_BIT | GL_TEXTURE_UPDATE_BARRIER_BIT);
             });
         ao_image = cone.ao;
+        if (coarse) {
+            struct Up {
+                graph::TextureHandle ao;
+            };
+            const graph::TextureHandle coarse_h = cone.ao;
+            const auto& up = fg.add_pass<Up>(
+                "ao_upsample",
+                [&](graph::FrameGraph::Builder& b, Up& d) {
+                    b.read(gb.depth);
+                    b.read(gb.normal);
+                    b.read(coarse_h);
+                    d.ao = b.write(ao_h);
+                },
+                [&, aw, ah, near_f, far_f, proj_scale, coarse_h](const Up& d, const graph::Resources& r) {
+                    auto& prog = im.ao_upsample;
+                    prog.use();
+                    glBindTextureUnit(0, im.backend.texture(r.get(gb.depth)));
+                    glBindTextureUnit(1, im.backend.texture(r.get(gb.normal)));
+                    glBindTextureUnit(2, im.backend.texture(r.get(coarse_h)));
+                    glBindImageTexture(0, im.backend.texture(r.get(d.ao)), 0, GL_FALSE, 0, GL_WRITE_ONLY, GL_R32F);
+                    glUniformMatrix3fv(prog.uniform("world_to_view"), 1, GL_FALSE, &world_to_view[0][0]);
+                    glUniform2f(prog.uniform("proj_scale"), proj_scale.x, proj_scale.y);
+                    glUniform1f(prog.uniform("near_plane"), near_f);
+                    glUniform1f(prog.uniform("far_plane"), far_f);
+                    glUniform2i(prog.uniform("size"), W, H);
+                    glUniform2i(prog.uniform("ao_size"), aw, ah);
+                    glDispatchCompute(GLuint((W + 7) / 8), GLuint((H + 7) / 8), 1);
+                    glMemoryBarrier(GL_TEXTURE_FETCH_BARRIER_BIT | GL_SHADER_IMAGE_ACCESS_BARRIER_BIT);
+                });
+            ao_image = up.ao;
+        }
         if (opt.read_slicemap) {
             struct ReadSm {
                 graph::TextureHandle s;

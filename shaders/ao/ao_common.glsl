@@ -25,3 +25,11 @@ int voxel_at(float z, vec2 range) {
     float t = (z - range.x) / (range.y - range.x) * float(BITS);
     return int(clamp(ceil(t - 0.5), 0.0, float(BITS)));
 }
+
+// The frame pixel an AO-image pixel traces from when the AO image is
+// coarser than the frame: the one at the centre of its block (the identity
+// when both have the same size).
+ivec2 ao_source_pixel(ivec2 q, ivec2 ao_size, ivec2 size) {
+    ivec2 p = ivec2(floor((vec2(q) + 0.5) * vec2(size) / vec2(ao_size)));
+    return clamp(p, ivec2(0), size - 1);
+}

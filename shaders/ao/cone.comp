@@ -23,6 +23,7 @@ uniform mat3 world_to_view;
 uniform vec2 proj_scale;          // projection[0][0], projection[1][1]
 uniform float near_plane, far_plane, scene_far;
 uniform ivec2 size, grid;
+uniform ivec2 ao_size;            // the AO image's size (= size at resolution 1)
 uniform float radius, strength, persistence, attenuation, bias;
 uniform int cones, spheres, samples, sets;
 uniform float history_weight;     // 0: overwrite; k/(k+1) for the (k+1)-th still frame
@@ -54,11 +55,15 @@ int count_bits(ivec2 texel, int b0, int b1) {
 }
 
 void main() {
-    ivec2 pix = ivec2(gl_GlobalInvocationID.xy);
-    if (any(greaterThanEqual(pix, size))) return;
+    // The AO image may be coarser than the frame (resolution < 1): each of
+    // its pixels traces from the frame pixel at the centre of its block, and
+    // ao_upsample.comp brings it back to full size.
+    ivec2 q = ivec2(gl_GlobalInvocationID.xy);
+    if (any(greaterThanEqual(q, ao_size))) return;
+    ivec2 pix = ao_source_pixel(q, ao_size, size);
     float d = texelFetch(depth_tex, pix, 0).r;
     if (d <= 0.0) {
-        imageStore(ao_image, pix, vec4(uintBitsToFloat(0x7FC00000u)));
+        imageStore(ao_image, q, vec4(uintBitsToFloat(0x7FC00000u)));
         return;
     }
     // Eye-space point (camera looks down -z) and normal.
@@ -124,6 +129,6 @@ void main() {
         blocked_sum += blocked;
     }
     float ao = clamp(1.0 - strength * blocked_sum / float(cones), 0.0, 1.0);
-    if (history_weight > 0.0) ao = mix(ao, imageLoad(ao_image, pix).r, history_weight);
-    imageStore(ao_image, pix, vec4(ao));
+    if (history_weight > 0.0) ao = mix(ao, imageLoad(ao_image, q).r, history_weight);
+    imageStore(ao_image, q, vec4(ao));
 }

@@ -51,6 +51,7 @@ struct Args {
     std::string data = ISOSCOPE_DATA_DIR;
     std::vector<std::string> configs; // replace the sweep (exploration)
     bool extras = true;               // still frames, voxel reference
+    bool voxel_ref_each = false;      // --voxel-ref: voxel-grid reference for every --config
 };
 
 struct Scene {
@@ -165,11 +166,17 @@ struct ConeConfig {
     double grid;
     int layers;
     double persistence;
+    double bias = 1.0;
+    int frames = 1;          // still frames accumulated (temporal jitter)
+    double resolution = 1.0; // cone pass pixels per image pixel
 };
 
 std::string describe(const ConeConfig& c) {
     std::ostringstream s;
     s << c.cones << "c " << c.spheres << "s " << c.samples << "p grid " << c.grid << " L" << c.layers << " pers " << c.persistence;
+    if (c.bias != 1.0) s << " bias " << c.bias;
+    if (c.resolution != 1.0) s << " res " << c.resolution;
+    if (c.frames != 1) s << " x" << c.frames << " frames";
     return s.str();
 }
 
@@ -190,7 +197,8 @@ int main(int argc, char** argv) {
         else if (s == "--reps") a.reps = std::stoi(next());
         else if (s == "--ssao") a.ssao = next();
         else if (s == "--data") a.data = next();
-        else if (s == "--config") a.configs.push_back(next()); // cones,spheres,samples,grid,layers,persistence
+        else if (s == "--voxel-ref") a.voxel_ref_each = true;
+        else if (s == "--config") a.configs.push_back(next()); // cones,spheres,samples,grid,layers,persistence[,bias[,frames[,resolution]]]
         else {
             std::cerr << "usage: ao_bench [--quick] [--out DIR] [--sizes 512,1024] [--scenes ct-skin,ct-bone,bunny] [--rays N] "
                          "[--reps N] [--ssao PATH|none]\n";
@@ -206,22 +214,31 @@ int main(int argc, char** argv) {
         fs::create_directories(a.out);
         gl::HeadlessContext ctx;
         ctx.make_current();
+        // cones, spheres, samples, grid, layers, persistence, bias, frames, resolution
         std::vector<ConeConfig> configs = {
-            {3, 2, 3, 0.5, 1, 0.75},  {4, 3, 4, 0.5, 1, 0.75},  {4, 3, 4, 1.0, 2, 0.75},  {6, 4, 6, 1.0, 2, 0.75},
-            {8, 5, 8, 1.0, 2, 0.75},  {12, 6, 12, 1.0, 2, 0.75}, {16, 8, 16, 1.0, 4, 0.75},
-            {8, 5, 8, 1.0, 2, 0.0},   {8, 5, 8, 1.0, 2, 0.5},   {8, 5, 8, 1.0, 2, 1.0},
+            {4, 2, 4, 0.25, 1, 0.75, 1, 1, 0.25}, {3, 1, 4, 0.25, 1, 0.75, 1, 1, 0.5}, {4, 3, 4, 0.5, 1, 0.75, 1, 1, 0.5},
+            {6, 4, 6, 1.0, 2, 0.75, 1, 1, 0.5},   {8, 5, 8, 1.0, 2, 0.5, 1, 1, 0.5},   {16, 8, 16, 1.0, 4, 0.75, 1, 1, 0.5},
+            {3, 2, 3, 0.5, 1, 0.75, 1, 1, 1},     {4, 3, 4, 0.5, 1, 0.75, 1, 1, 1},    {6, 4, 6, 1.0, 2, 0.75, 1, 1, 1},
+            {8, 5, 8, 1.0, 2, 0.5, 1, 1, 1},      {12, 6, 12, 1.0, 2, 0.75, 1, 1, 1},  {16, 8, 16, 1.0, 4, 0.75, 1, 1, 1},
+            {8, 5, 8, 1.0, 2, 0.0, 1, 1, 0.5},    {8, 5, 8, 1.0, 2, 1.0, 1, 1, 0.5},
         };
         std::vector<int> kernels = {8, 16, 32, 64, 128};
         if (a.quick) {
-            configs = {{4, 3, 4, 0.5, 1, 0.75}, {8, 5, 8, 1.0, 2, 0.75}};
+            configs = {{4, 3, 4, 0.5, 1, 0.75, 1, 1, 0.5}, {8, 5, 8, 1.0, 2, 0.5, 1, 1, 0.5}};
             kernels = {16, 64};
         }
         if (!a.configs.empty()) {
             configs.clear();
             for (const auto& c : a.configs) {
                 ConeConfig k{};
-                if (std::sscanf(c.c_str(), "%d,%d,%d,%lf,%d,%lf", &k.cones, &k.spheres, &k.samples, &k.grid, &k.layers, &k.persistence) != 6)
-                    throw Error("--config", "expected cones,spheres,samples,grid,layers,persistence, got '" + c + "'");
+                k.bias = 1.0;
+                k.frames = 1;
+                k.resolution = 1.0;
+                const int got = std::sscanf(c.c_str(), "%d,%d,%d,%lf,%d,%lf,%lf,%d,%lf", &k.cones, &k.spheres, &k.samples, &k.grid,
+                                            &k.layers, &k.persistence, &k.bias, &k.frames, &k.resolution);
+                if (got < 6 || k.frames < 1)
+                    throw Error("--config",
+                                "expected cones,spheres,samples,grid,layers,persistence[,bias[,frames[,resolution]]], got '" + c + "'");
                 configs.push_back(k);
             }
         }
@@ -269,18 +286,28 @@ int main(int argc, char** argv) {
                     ro.ao_settings.grid_scale = c.grid;
                     ro.ao_settings.layers = c.layers;
                     ro.ao_settings.persistence = c.persistence;
-                    ro.ao_settings.temporal = false;
-                    ro.ao_force_voxelize = true;
+                    ro.ao_settings.bias = c.bias;
+                    ro.ao_settings.resolution = c.resolution;
+                    ro.ao_settings.temporal = c.frames > 1;
                     ro.time_passes = true;
                     Image img;
                     std::vector<double> ao_ms, frame_ms;
+                    std::map<std::string, std::vector<double>> pass_ms;
                     for (int rep = 0; rep < a.reps + 1; ++rep) {
+                        ro.ao_force_voxelize = true;
+                        for (int f = 1; f < c.frames; ++f) { // earlier still frames (not timed)
+                            ren.render(cam, ro);
+                            ro.ao_force_voxelize = false;
+                        }
                         auto r = ren.render(cam, ro);
                         double ao = 0, total = 0;
                         for (const auto& p : r.stats.passes) {
                             if (!p.ran) continue;
                             total += p.ms;
-                            if (p.name == "zrange" || p.name == "voxelize" || p.name == "cone_ao") ao += p.ms;
+                            if (p.name == "zrange" || p.name == "voxelize" || p.name == "cone_ao" || p.name == "ao_upsample") {
+                                ao += p.ms;
+                                if (rep > 0) pass_ms[p.name].push_back(p.ms);
+                            }
                         }
                         if (rep > 0) { // the first frame compiles shaders
                             ao_ms.push_back(ao);
@@ -288,6 +315,9 @@ int main(int argc, char** argv) {
                         }
                         img = std::move(r.image);
                     }
+                    std::cerr << "[ao_bench]   " << describe(c) << ":";
+                    for (auto& [name, v] : pass_ms) std::cerr << " " << name << " " << fmt(bench::median(v), 1) << " ms";
+                    std::cerr << "\n";
                     add_row("cone", describe(c), bench::median(ao_ms), bench::median(frame_ms), img);
                 }
                 // Default settings, still camera, temporal accumulation of 8 frames.
@@ -315,30 +345,47 @@ int main(int argc, char** argv) {
                     save_grey(img, stem + "_cone.png");
                     save_diff(img, ref.image, stem + "_cone_minus_reference.png");
                 }
-                // The voxel-grid reference (default grid), on every 4th pixel.
-                if (a.configs.empty()) {
-                    RenderOptions ro;
-                    ro.width = ro.height = S;
-                    ro.aov = Aov::Ao;
-                    ro.ao_settings.radius_mm = sc.radius;
-                    ro.read_slicemap = true;
-                    auto r = ren.render(cam, ro);
-                    RenderOptions d;
-                    d.width = d.height = S;
-                    d.aov = Aov::Depth;
-                    const Image depth = ren.render(cam, d).image;
-                    d.aov = Aov::Normal;
-                    const Image normal = ren.render(cam, d).image;
-                    AoReferenceOptions vo;
-                    vo.radius_mm = sc.radius;
-                    vo.rays = std::min(a.rays, 256);
-                    const double t0 = bench::now_s();
-                    const Image vox = voxel_ao_image(r.slicemap, cam, depth, normal, vo, 1.0, a.quick ? 2 : 4);
-                    const double t1 = bench::now_s();
-                    add_row("voxel-ref", "rays through the default slicemap (every 4th px, CPU)", 0, (t1 - t0) * 1e3, vox);
-                    // Cone error alone: cone (default) against the voxel reference.
-                    Row cr{sc.name, "cone-vs-voxel", "default cone AO against the voxel reference", S, 0, 0, ao_error(r.image, vox, vo.rays)};
-                    rows.push_back(cr);
+                // The voxel-grid reference (default grid, or each --config's
+                // grid, layers and bias with --voxel-ref), on every 4th pixel.
+                {
+                    std::vector<ConeConfig> vcs;
+                    if (a.configs.empty()) vcs.push_back(ConeConfig{8, 5, 8, 1.0, 2, 0.5, 1, 1, 0.5});
+                    else if (a.voxel_ref_each) vcs = configs;
+                    for (const auto& vc : vcs) {
+                        RenderOptions ro;
+                        ro.width = ro.height = S;
+                        ro.aov = Aov::Ao;
+                        ro.ao_settings.radius_mm = sc.radius;
+                        ro.ao_settings.grid_scale = vc.grid;
+                        ro.ao_settings.layers = vc.layers;
+                        ro.ao_settings.bias = vc.bias;
+                        ro.ao_force_voxelize = true;
+                        ro.read_slicemap = true;
+                        auto r = ren.render(cam, ro);
+                        RenderOptions d;
+                        d.width = d.height = S;
+                        d.aov = Aov::Depth;
+                        const Image depth = ren.render(cam, d).image;
+                        d.aov = Aov::Normal;
+                        const Image normal = ren.render(cam, d).image;
+                        AoReferenceOptions vo;
+                        vo.radius_mm = sc.radius;
+                        vo.rays = std::min(a.rays, 256);
+                        const double t0 = bench::now_s();
+                        const Image vox = voxel_ao_image(r.slicemap, cam, depth, normal, vo, vc.bias, a.quick ? 2 : 4);
+                        const double t1 = bench::now_s();
+                        if (a.configs.empty()) {
+                            add_row("voxel-ref", "rays through the default slicemap (every 4th px, CPU)", 0, (t1 - t0) * 1e3, vox);
+                            // Cone error alone: cone (default) against the voxel reference.
+                            Row cr{sc.name, "cone-vs-voxel", "default cone AO against the voxel reference", S, 0, 0,
+                                   ao_error(r.image, vox, vo.rays)};
+                            rows.push_back(cr);
+                        } else {
+                            std::ostringstream pr;
+                            pr << "grid " << vc.grid << " L" << vc.layers << " bias " << vc.bias << " (every 4th px, CPU)";
+                            add_row("voxel-ref", pr.str(), 0, (t1 - t0) * 1e3, vox);
+                        }
+                    }
                 }
                 // VTK's SSAO, same meshes and camera, under Xvfb.
                 if (a.ssao != "none" && fs::exists(a.ssao)) {

@@ -228,7 +228,8 @@ TEST(RenderCli, ConeAoAsAnAovAndInTheColourImage) {
     ASSERT_EQ(on.bytes.size(), off.bytes.size());
     EXPECT_NE(on.bytes, off.bytes);
     // Bad values are refused with the option's name.
-    for (const std::string bad : {" --ao cones", " --ao reference", " --aov ao", " --ao cone --ao-cones 0", " --ao cone --ao-layers 9"}) {
+    for (const std::string bad : {" --ao cones", " --ao reference", " --aov ao", " --ao cone --ao-cones 0", " --ao cone --ao-layers 9",
+                                  " --ao cone --ao-resolution 0.1", " --ao cone --ao-resolution 2"}) {
         const auto r = test::run_command(test::cli() + " render " + test::data("headsq.nhdr") + " --iso 500 --size 32x32" + bad + " -o " +
                                              (dir / "x.exr"),
                                          true);
