@@ -118,6 +118,27 @@ int main(int argc, char** argv) {
     mesh->add_option("--chunk", mesh_chunk, "Chunk size in cells per side")->check(CLI::Range(2, 1024));
     mesh->add_option("-o,--output", mesh_out, "Output .stl, .ply, .obj or .vtp (several surfaces: NAME-iso<V>.ext)")->required();
 
+    // Cone-AO tunables, shared by `render` and `view`.
+    auto add_cone_options = [](CLI::App* cmd, iso::ConeAoSettings& c) {
+        cmd->add_option("--ao-cones", c.cones, "Cones over the hemisphere (cone AO)")->check(CLI::Range(1, 64));
+        cmd->add_option("--ao-spheres", c.spheres, "Spheres per cone (cone AO)")->check(CLI::Range(1, 32));
+        cmd->add_option("--ao-samples", c.samples, "Poisson-disk columns per sphere (cone AO)")->check(CLI::Range(1, 64));
+        cmd->add_option("--ao-strength", c.strength, "AO = 1 - strength * occlusion (cone AO)")->check(CLI::Range(0.0, 4.0));
+        cmd->add_option("--ao-layers", c.layers, "Slicemap depth: 128 z-voxels per layer, 1..8 (cone AO)")->check(CLI::Range(1, 8));
+        cmd->add_option("--ao-grid", c.grid_scale, "Slicemap texels per image pixel, 0.125..2 (cone AO)")->check(CLI::Range(0.125, 2.0));
+        cmd->add_option("--ao-jitter", c.jitter_sets, "Jitter distributions chosen per pixel by a screen hash (cone AO)")
+            ->check(CLI::Range(1, 64));
+        cmd->add_option("--ao-persistence", c.persistence,
+                        "Sphere combination along a cone: 0 independent absorbers, 1 one solid (cone AO)")
+            ->check(CLI::Range(0.0, 1.0));
+        cmd->add_option("--ao-resolution", c.resolution,
+                        "Cone-pass pixels per image pixel, 0.25..1; below 1 a bilateral upsampling follows (cone AO)")
+            ->check(CLI::Range(0.25, 1.0));
+        cmd->add_option("--ao-guard", c.guard,
+                        "Largest guard band around the view, fraction of the viewport per side, for occluders just off screen; 0 none (cone AO)")
+            ->check(CLI::Range(0.0, 0.5));
+    };
+
     std::string r_in, r_out, r_view = "anterior", r_size = "1024x1024", r_aov, r_series;
     std::vector<double> r_isos;
     float r_scale = 1.0f;
@@ -138,20 +159,7 @@ int main(int argc, char** argv) {
     render->add_option("--ao", r_ao, "Ambient occlusion: off, cone (cone tracing), or reference (Embree ray tracing; with --aov ao)");
     render->add_option("--ao-radius", r_ao_radius, "AO radius R_max in mm")->check(CLI::PositiveNumber);
     render->add_option("--ao-rays", r_ao_rays, "Rays per pixel for --ao reference")->check(CLI::Range(1, 1 << 20));
-    render->add_option("--ao-cones", r_cone.cones, "Cones over the hemisphere (cone AO)")->check(CLI::Range(1, 64));
-    render->add_option("--ao-spheres", r_cone.spheres, "Spheres per cone (cone AO)")->check(CLI::Range(1, 32));
-    render->add_option("--ao-samples", r_cone.samples, "Poisson-disk columns per sphere (cone AO)")->check(CLI::Range(1, 64));
-    render->add_option("--ao-strength", r_cone.strength, "AO = 1 - strength * occlusion (cone AO)")->check(CLI::Range(0.0, 4.0));
-    render->add_option("--ao-layers", r_cone.layers, "Slicemap depth: 128 z-voxels per layer, 1..8 (cone AO)")->check(CLI::Range(1, 8));
-    render->add_option("--ao-grid", r_cone.grid_scale, "Slicemap texels per image pixel, 0.125..2 (cone AO)")->check(CLI::Range(0.125, 2.0));
-    render->add_option("--ao-jitter", r_cone.jitter_sets, "Jitter distributions chosen per pixel by a screen hash (cone AO)")
-        ->check(CLI::Range(1, 64));
-    render->add_option("--ao-persistence", r_cone.persistence,
-                       "Sphere combination along a cone: 0 independent absorbers, 1 one solid (cone AO)")
-        ->check(CLI::Range(0.0, 1.0));
-    render->add_option("--ao-resolution", r_cone.resolution,
-                       "Cone-pass pixels per image pixel, 0.25..1; below 1 a bilateral upsampling follows (cone AO)")
-        ->check(CLI::Range(0.25, 1.0));
+    add_cone_options(render, r_cone);
     render->add_option("--ao-frames", r_ao_frames, "Still frames accumulated with new jitter sets (cone AO)")->check(CLI::Range(1, 4096));
     render->add_option("--ao-cache", r_cache, "Folder caching AO references ('-': none; default ~/.cache/isoscope)");
     render->add_flag("--no-annotations", r_no_annotations, "No scale bar, orientation letters or labels");
@@ -167,7 +175,14 @@ int main(int argc, char** argv) {
     view->add_option("--iso", v_isos, "Iso value (repeatable) for volume inputs")->allow_extra_args(false);
     view->add_option("--view", v_view, "Initial view: anterior, posterior, left, right, superior or inferior");
     view->add_option("--series", v_series, "DICOM series to load: index or SeriesInstanceUID");
-    view->add_option("--screenshot", v_shot, "Save the first frame to this PNG and quit (tests)");
+    view->add_option("--screenshot", v_shot, "Save the first converged frame to this PNG and quit (tests)");
+    std::string v_ao = "cone";
+    iso::gui::ViewerOptions v_opt;
+    view->add_option("--ao", v_ao, "Ambient occlusion: cone (default) or off; key O toggles it")->check(CLI::IsMember({"cone", "off"}));
+    view->add_option("--ao-radius", v_opt.cone.radius_mm, "AO radius R_max in mm")->check(CLI::PositiveNumber);
+    add_cone_options(view, v_opt.cone);
+    view->add_option("--ao-frames", v_opt.still_frames, "Still frames accumulated with new jitter sets while nothing moves")
+        ->check(CLI::Range(1, 4096));
 
     CLI11_PARSE(app, argc, argv);
 
@@ -252,15 +267,18 @@ int main(int argc, char** argv) {
             int qargc = 1;
             char* qargv[] = {argv[0], nullptr};
             QApplication qapp(qargc, qargv);
-            iso::gui::Viewer w(std::move(meshes), initial);
+            v_opt.ao = v_ao == "cone";
+            iso::validate(v_opt.cone);
+            iso::gui::Viewer w(std::move(meshes), initial, v_opt);
             w.setWindowTitle(QString::fromStdString("isoscope - " + v_in));
             w.resize(800, 600);
             w.show();
             if (!v_shot.empty()) {
-                // Grab once the first frame is drawn, then quit.
+                // Grab once the picture has converged (the first frame without
+                // AO; all still frames with it), then quit.
                 QTimer poll;
                 QObject::connect(&poll, &QTimer::timeout, [&] {
-                    if (w.frames() < 1) return;
+                    if (!w.converged()) return;
                     poll.stop();
                     if (!w.grabFramebuffer().save(QString::fromStdString(v_shot))) {
                         std::cerr << "isoscope: error: " << v_shot << ": cannot save the screenshot\n";

@@ -2,6 +2,7 @@
 
 #include <QKeyEvent>
 #include <QMouseEvent>
+#include <QTimer>
 #include <QWheelEvent>
 
 #include "renderer/render/overlay.hpp"
@@ -9,8 +10,9 @@
 
 namespace iso::gui {
 
-Viewer::Viewer(std::vector<ViewerMesh> meshes, PatientView view, QWidget* parent)
-    : QOpenGLWidget(parent), meshes_(std::move(meshes)), initial_view_(view), annotations_(std::make_unique<Annotations>()) {
+Viewer::Viewer(std::vector<ViewerMesh> meshes, PatientView view, ViewerOptions options, QWidget* parent)
+    : QOpenGLWidget(parent), meshes_(std::move(meshes)), initial_view_(view), options_(options),
+      annotations_(std::make_unique<Annotations>()) {
     setFocusPolicy(Qt::StrongFocus);
     setMinimumSize(320, 240);
 }
@@ -44,8 +46,15 @@ void Viewer::paintGL() {
     opt.annotations = annotations_.get();
     opt.present = true;
     opt.target_framebuffer = defaultFramebufferObject();
-    renderer_->render(camera_, opt);
+    opt.ao = options_.ao;
+    opt.ao_settings = options_.cone;
+    const auto r = renderer_->render(camera_, opt);
     ++frames_;
+    ao_frames_ = options_.ao ? r.ao_frames : 0;
+    // Progressive AO: while the camera and the scene stay still, keep
+    // drawing so new jitter sets accumulate and the noise averages out; any
+    // interaction restarts the accumulation (the renderer sees the change).
+    if (options_.ao && ao_frames_ < options_.still_frames) QTimer::singleShot(0, this, [this] { update(); });
 }
 
 void Viewer::mousePressEvent(QMouseEvent* e) { last_ = e->pos(); }
@@ -69,6 +78,11 @@ void Viewer::keyPressEvent(QKeyEvent* e) {
     static const std::pair<int, PatientView> keys[] = {{Qt::Key_A, PatientView::Anterior}, {Qt::Key_P, PatientView::Posterior},
                                                        {Qt::Key_L, PatientView::Left},     {Qt::Key_R, PatientView::Right},
                                                        {Qt::Key_S, PatientView::Superior}, {Qt::Key_I, PatientView::Inferior}};
+    if (e->key() == Qt::Key_O) { // ambient occlusion on / off
+        options_.ao = !options_.ao;
+        update();
+        return;
+    }
     for (auto [k, v] : keys)
         if (e->key() == k) {
             camera_.set_view(v, renderer_->bounds());

@@ -9,6 +9,7 @@
 #include <QOpenGLWidget>
 
 #include "io/mesh.hpp"
+#include "renderer/render/cone_ao.hpp"
 #include "renderer/scene/camera.hpp"
 
 namespace iso {
@@ -24,11 +25,21 @@ struct ViewerMesh {
     float r, g, b;
 };
 
+struct ViewerOptions {
+    bool ao = true;          // cone-traced AO (key O toggles it)
+    ConeAoSettings cone;     // its settings
+    int still_frames = 16;   // while nothing moves, this many frames accumulate new jitter sets
+};
+
 class Viewer : public QOpenGLWidget {
 public:
-    explicit Viewer(std::vector<ViewerMesh> meshes, PatientView view, QWidget* parent = nullptr);
+    explicit Viewer(std::vector<ViewerMesh> meshes, PatientView view, ViewerOptions options = {}, QWidget* parent = nullptr);
     ~Viewer() override;
     int frames() const { return frames_; }
+    // True once the picture stopped changing: AO off, or its still frames
+    // all accumulated.
+    bool converged() const { return frames_ > 0 && (!options_.ao || ao_frames_ >= options_.still_frames); }
+    int ao_frames() const { return ao_frames_; }
 
 protected:
     void initializeGL() override;
@@ -41,11 +52,13 @@ protected:
 private:
     std::vector<ViewerMesh> meshes_;
     PatientView initial_view_;
+    ViewerOptions options_;
     std::unique_ptr<Renderer> renderer_;
     std::unique_ptr<Annotations> annotations_;
     Camera camera_;
     QPoint last_;
     int frames_ = 0;
+    int ao_frames_ = 0;
 };
 
 } // namespace iso::gui

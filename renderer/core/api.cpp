@@ -286,7 +286,7 @@ RenderOutput render_input(const std::string& input, const RenderRequest& req) {
                                       std::to_string(c.layers) + " (" + std::to_string(128 * c.layers) + " z-voxels); grid " +
                                       num(c.grid_scale) + "; jitter_sets " + std::to_string(c.jitter_sets) + "; persistence " +
                                       num(c.persistence) + "; attenuation " + num(c.attenuation) + "; bias " + num(c.bias) +
-                                      "; resolution " + num(c.resolution) + "; frames " + std::to_string(req.ao_frames);
+                                      "; resolution " + num(c.resolution) + "; guard " + num(c.guard) + "; frames " + std::to_string(req.ao_frames);
     }
     if (req.aov_ao) {
         t["isoscope:aov"] = "ao (1 = unoccluded; cosine-weighted visibility within the radius; NaN = background)";

@@ -33,6 +33,7 @@ void validate(const ConeAoSettings& s) {
     check_range("attenuation", s.attenuation, 0, 100);
     check_range("bias", s.bias, 0, 16);
     check_range("resolution", s.resolution, 0.25, 1);
+    check_range("guard", s.guard, 0, 0.5);
 }
 
 std::vector<glm::vec4> cone_directions(int n) {

@@ -35,6 +35,11 @@ struct ConeAoSettings {
     // cones are traced on a coarser image and brought back to full size by a
     // joint bilateral (depth-plane and normal aware) upsampling pass.
     double resolution = 0.5;
+    // Guard band: when the scene reaches beyond the viewport, the slicemap
+    // covers up to this fraction of the viewport more on each side (as much
+    // as R needs at the scene's nearest depth), so occluders just off screen
+    // still count. 0: none.
+    double guard = 0.15;
     bool temporal = true;      // accumulate new jitter sets while camera and scene are still
     bool operator==(const ConeAoSettings&) const = default;
 };

@@ -7,6 +7,7 @@
 #include <map>
 
 #include <glm/glm.hpp>
+#include <glm/gtc/matrix_transform.hpp>
 
 #include "io/error.hpp"
 #include "renderer/gl/objects.hpp"
@@ -123,10 +124,14 @@ struct Renderer::Impl {
                                                                            "#define LAYERS " + std::to_string(layers) + "\n")).first;
         return it->second;
     }
-    gl::Program& cone_program(int layers) {
-        auto it = cone_programs.find(layers);
+    gl::Program& cone_program(int layers, bool coarse) {
+        const int key = layers * 2 + (coarse ? 1 : 0);
+        auto it = cone_programs.find(key);
         if (it == cone_programs.end())
-            it = cone_programs.emplace(layers, gl::Program::from_files({"ao/cone.comp"}, "#define LAYERS " + std::to_string(layers) + "\n")).first;
+            it = cone_programs
+                     .emplace(key, gl::Program::from_files({"ao/cone.comp"}, "#define LAYERS " + std::to_string(layers) + "\n" +
+                                                                                 (coarse ? "#define COARSE 1\n" : "")))
+                     .first;
         return it->second;
     }
 
@@ -261,8 +266,39 @@ RenderResult Renderer::render(const Camera& camera, const RenderOptions& opt) {
         const ConeAoSettings st = opt.ao_settings;
         validate(st);
         auto& S = im.ao;
-        const int gw = std::max(1, int(std::lround(W * st.grid_scale)));
-        const int gh = std::max(1, int(std::lround(H * st.grid_scale)));
+        // Guard band: occluders just outside the view still darken visible
+        // points within R of them, so when the scene reaches beyond the
+        // viewport the slicemap covers a margin around it (same texel
+        // density), wide enough for R at the scene's nearest depth, at most
+        // `guard` of the viewport per side. A scene wholly in view needs none.
+        double guard = 0;
+        {
+            const Bounds sb = bounds();
+            const glm::dmat4 vp = camera.projection(aspect) * camera.view();
+            const glm::dmat4 v = camera.view();
+            bool outside = false;
+            double nearest = std::numeric_limits<double>::infinity();
+            for (int c = 0; !sb.empty() && c < 8; ++c) {
+                const glm::dvec4 w((c & 1) ? sb.max.x : sb.min.x, (c & 2) ? sb.max.y : sb.min.y, (c & 4) ? sb.max.z : sb.min.z, 1.0);
+                const glm::dvec4 clip = vp * w;
+                outside |= clip.w <= 0 || std::abs(clip.x) > clip.w || std::abs(clip.y) > clip.w;
+                nearest = std::min(nearest, -(v * w).z);
+            }
+            if (outside && st.guard > 0) {
+                const glm::dmat4 pr = camera.projection(aspect);
+                const double d = std::max(nearest, camera.near_plane);
+                guard = std::min(st.guard, 0.5 * st.radius_mm * std::max(pr[0][0], pr[1][1]) / d);
+            }
+        }
+        // Whole texels of margin, so the texels stay aligned with those of
+        // the viewport's own grid (a fractional shift would move every edge
+        // by up to half a texel).
+        const int gw0 = std::max(1, int(std::lround(W * st.grid_scale)));
+        const int gh0 = std::max(1, int(std::lround(H * st.grid_scale)));
+        const int gw = gw0 + 2 * int(std::ceil(guard * gw0));
+        const int gh = gh0 + 2 * int(std::ceil(guard * gh0));
+        const glm::vec2 sm_scale{float(gw0) / float(gw), float(gh0) / float(gh)}; // slicemap NDC per frame NDC
+        result.ao_guard = guard;
         // Persistent resources, (re)made when their size changes.
         if (S.grid_w != gw || S.grid_h != gh || S.layers != st.layers) {
             if (S.slicemap) im.backend.destroy(S.slicemap);
@@ -286,7 +322,7 @@ RenderResult Renderer::render(const Camera& camera, const RenderOptions& opt) {
         const bool coarse = aw != W || ah != H;
         if (coarse && (S.low_w != aw || S.low_h != ah)) {
             if (S.ao_low) im.backend.destroy(S.ao_low);
-            S.ao_low = im.backend.adopt(gl::Texture::create_2d(GL_R32F, aw, ah));
+            S.ao_low = im.backend.adopt(gl::Texture::create_2d(GL_RGBA32F, aw, ah));
             S.low_w = aw;
             S.low_h = ah;
             S.view_key.clear();
@@ -297,7 +333,7 @@ RenderResult Renderer::render(const Camera& camera, const RenderOptions& opt) {
         std::vector<double> key;
         for (int c = 0; c < 4; ++c)
             for (int r = 0; r < 4; ++r) key.push_back(double(view_projection[c][r]));
-        key.insert(key.end(), {double(W), double(H), double(gw), double(gh), double(st.layers), st.radius_mm,
+        key.insert(key.end(), {double(W), double(H), double(gw), double(gh), guard, double(st.layers), st.radius_mm,
                                double(im.geometry_version)});
         for (const auto& m : im.meshes) key.push_back(m.object.visible ? 1.0 : 0.0);
         voxelize_now = key != S.view_key || opt.ao_force_voxelize;
@@ -323,9 +359,13 @@ RenderResult Renderer::render(const Camera& camera, const RenderOptions& opt) {
                 scene_far = std::max(scene_far, -(camera.view() * glm::dvec4(corner, 1.0)).z);
             }
         const float scene_far_f = float(scene_far), radius_f = float(st.radius_mm);
+        const float near_margin = guard > 0 ? radius_f : 0.0f;
         const float near_f = float(camera.near_plane), far_f = float(camera.far_plane);
         const glm::dmat4 proj = camera.projection(aspect);
         const glm::vec2 proj_scale{float(proj[0][0]), float(proj[1][1])};
+        // The slicemap's projection: the frame's, its x and y shrunk by the guard band.
+        const glm::dmat4 sm_proj = glm::scale(glm::dmat4(1.0), glm::dvec3(sm_scale.x, sm_scale.y, 1.0)) * proj;
+        const glm::mat4 sm_view_projection = glm::mat4(sm_proj * camera.view());
         const glm::mat4 view_f = glm::mat4(camera.view());
 
         graph::BufferHandle zrange_h = fg.import("zrange", graph::BufferDesc{8}, S.zrange);
@@ -333,7 +373,7 @@ RenderResult Renderer::render(const Camera& camera, const RenderOptions& opt) {
             fg.import("slicemap", graph::TextureDesc{gw, gh, graph::Format::RGBA32UI, st.layers}, S.slicemap);
         const graph::TextureHandle ao_h = fg.import("ao", graph::TextureDesc{W, H, graph::Format::R32F}, S.ao_image);
         const graph::TextureHandle cone_h =
-            coarse ? fg.import("ao_coarse", graph::TextureDesc{aw, ah, graph::Format::R32F}, S.ao_low) : ao_h;
+            coarse ? fg.import("ao_coarse", graph::TextureDesc{aw, ah, graph::Format::RGBA32F}, S.ao_low) : ao_h;
         if (voxelize_now) {
             struct ZR {
                 graph::BufferHandle range;
@@ -367,7 +407,8 @@ RenderResult Renderer::render(const Camera& camera, const RenderOptions& opt) {
                     b.read(zrange_h);
                     d.slicemap = b.write(slicemap_h);
                 },
-                [&, gw, gh, layers = st.layers, scene_far_f, radius_f, view_f, zrange_h](const Vox& d, const graph::Resources& r) {
+                [&, gw, gh, layers = st.layers, scene_far_f, radius_f, view_f, zrange_h, sm_view_projection, near_margin](const Vox& d,
+                                                                                                           const graph::Resources& r) {
                     const GLuint tex = im.backend.texture(r.get(d.slicemap));
                     auto fb = gl::Framebuffer::create();
                     std::vector<GLenum> bufs;
@@ -389,9 +430,10 @@ RenderResult Renderer::render(const Camera& camera, const RenderOptions& opt) {
                     glClipControl(GL_LOWER_LEFT, GL_ZERO_TO_ONE);
                     auto& prog = im.slicemap_program(layers);
                     prog.use();
-                    glUniformMatrix4fv(prog.uniform("view_projection"), 1, GL_FALSE, &view_projection[0][0]);
+                    glUniformMatrix4fv(prog.uniform("view_projection"), 1, GL_FALSE, &sm_view_projection[0][0]);
                     glUniformMatrix4fv(prog.uniform("view"), 1, GL_FALSE, &view_f[0][0]);
                     glUniform1f(prog.uniform("scene_far"), scene_far_f);
+                    glUniform1f(prog.uniform("near_margin"), near_margin);
                     glUniform1f(prog.uniform("radius"), radius_f);
                     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, im.backend.buffer(r.get(zrange_h)));
                     for (const auto& m : im.meshes) {
@@ -420,21 +462,23 @@ RenderResult Renderer::render(const Camera& camera, const RenderOptions& opt) {
                 b.read(zrange_h);
                 d.ao = b.write(cone_h);
             },
-            [&, st, gw, gh, scene_far_f, near_f, far_f, proj_scale, history_weight, slicemap_h, zrange_h,
-             aw, ah, pattern_id = S.pattern](const Cone& d, const graph::Resources& r) {
-                auto& prog = im.cone_program(st.layers);
+            [&, st, gw, gh, scene_far_f, near_margin, near_f, far_f, proj_scale, history_weight, slicemap_h, zrange_h,
+             aw, ah, coarse, sm_scale, pattern_id = S.pattern](const Cone& d, const graph::Resources& r) {
+                auto& prog = im.cone_program(st.layers, coarse);
                 prog.use();
                 glBindTextureUnit(0, im.backend.texture(r.get(gb.depth)));
                 glBindTextureUnit(1, im.backend.texture(r.get(gb.normal)));
                 glBindTextureUnit(2, im.backend.texture(r.get(slicemap_h)));
                 glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, im.backend.buffer(r.get(zrange_h)));
                 glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 1, im.backend.buffer(pattern_id));
-                glBindImageTexture(0, im.backend.texture(r.get(d.ao)), 0, GL_FALSE, 0, GL_READ_WRITE, GL_R32F);
+                glBindImageTexture(0, im.backend.texture(r.get(d.ao)), 0, GL_FALSE, 0, GL_READ_WRITE, coarse ? GL_RGBA32F : GL_R32F);
                 glUniformMatrix3fv(prog.uniform("world_to_view"), 1, GL_FALSE, &world_to_view[0][0]);
                 glUniform2f(prog.uniform("proj_scale"), proj_scale.x, proj_scale.y);
+                glUniform2f(prog.uniform("sm_proj_scale"), sm_scale.x * proj_scale.x, sm_scale.y * proj_scale.y);
                 glUniform1f(prog.uniform("near_plane"), near_f);
                 glUniform1f(prog.uniform("far_plane"), far_f);
                 glUniform1f(prog.uniform("scene_far"), scene_far_f);
+                glUniform1f(prog.uniform("near_margin"), near_margin);
                 glUniform2i(prog.uniform("size"), W, H);
                 glUniform2i(prog.uniform("ao_size"), aw, ah);
                 glUniform2i(prog.uniform("grid"), gw, gh);
@@ -494,13 +538,13 @@ RenderResult Renderer::render(const Camera& camera, const RenderOptions& opt) {
                     b.read(zrange_h);
                     b.side_effect();
                 },
-                [&, gw, gh, layers = st.layers, scene_far_f, radius_f, zrange_h, proj](const ReadSm& d, const graph::Resources& r) {
+                [&, gw, gh, layers = st.layers, scene_far_f, radius_f, zrange_h, sm_proj, near_margin](const ReadSm& d, const graph::Resources& r) {
                     SliceMap& sm = result.slicemap;
                     sm.width = gw;
                     sm.height = gh;
                     sm.layers = layers;
                     sm.view = camera.view();
-                    sm.projection = proj;
+                    sm.projection = sm_proj;
                     const std::size_t texels = std::size_t(gw) * std::size_t(gh);
                     std::vector<std::uint32_t> raw(texels * std::size_t(layers) * 4);
                     glGetTextureImage(im.backend.texture(r.get(d.s)), 0, GL_RGBA_INTEGER, GL_UNSIGNED_INT,
@@ -517,8 +561,8 @@ RenderResult Renderer::render(const Camera& camera, const RenderOptions& opt) {
                     float zn, zx;
                     std::memcpy(&zn, &bits[0], 4);
                     std::memcpy(&zx, &bits[1], 4);
-                    sm.z_near = zn;
-                    sm.z_far = std::max(double(std::min(scene_far_f, zx + radius_f)), double(zn) + 1e-3);
+                    sm.z_near = std::max(double(zn) - double(near_margin), 0.0);
+                    sm.z_far = std::max(double(std::min(scene_far_f, zx + radius_f)), sm.z_near + 1e-3);
                 });
         }
     }

@@ -64,6 +64,7 @@ struct RenderResult {
     SliceMap slicemap;           // with RenderOptions::read_slicemap
     bool voxelized = false;      // the slicemap was rebuilt this frame (else reused)
     int ao_frames = 0;           // still frames accumulated into the AO so far
+    double ao_guard = 0;         // guard band used by the slicemap, fraction of the viewport per side
 };
 
 class Renderer {

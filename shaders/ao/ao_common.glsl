@@ -13,9 +13,11 @@ uint mask_from(int k) {
 // The slicemap's z range (linear depth in mm): from the nearest visible depth
 // (the G-buffer's, reduced by zrange.comp; nothing nearer can be on screen)
 // to the nearer of the scene's far bound and the farthest visible depth + R
-// (nothing farther can occlude a visible point).
-vec2 slicemap_range(uint zmin_bits, uint zmax_bits, float scene_far, float radius) {
-    float zn = uintBitsToFloat(zmin_bits);
+// (nothing farther can occlude a visible point). With a guard band, geometry
+// off screen may be nearer than anything visible: the range then starts R
+// nearer (near_margin = R; else 0).
+vec2 slicemap_range(uint zmin_bits, uint zmax_bits, float scene_far, float radius, float near_margin) {
+    float zn = max(uintBitsToFloat(zmin_bits) - near_margin, 0.0);
     float zf = min(scene_far, uintBitsToFloat(zmax_bits) + radius);
     return vec2(zn, max(zf, zn + 1e-3));
 }
@@ -32,4 +34,17 @@ int voxel_at(float z, vec2 range) {
 ivec2 ao_source_pixel(ivec2 q, ivec2 ao_size, ivec2 size) {
     ivec2 p = ivec2(floor((vec2(q) + 0.5) * vec2(size) / vec2(ao_size)));
     return clamp(p, ivec2(0), size - 1);
+}
+
+// Octahedral encoding of a unit vector in two floats (Meyer et al. 2010).
+vec2 oct_encode(vec3 n) {
+    n /= abs(n.x) + abs(n.y) + abs(n.z);
+    vec2 e = n.xy;
+    if (n.z < 0.0) e = (1.0 - abs(n.yx)) * vec2(e.x >= 0.0 ? 1.0 : -1.0, e.y >= 0.0 ? 1.0 : -1.0);
+    return e;
+}
+vec3 oct_decode(vec2 e) {
+    vec3 n = vec3(e, 1.0 - abs(e.x) - abs(e.y));
+    if (n.z < 0.0) n.xy = (1.0 - abs(n.yx)) * vec2(n.x >= 0.0 ? 1.0 : -1.0, n.y >= 0.0 ? 1.0 : -1.0);
+    return normalize(n);
 }

@@ -13,7 +13,7 @@ layout(local_size_x = 8, local_size_y = 8) in;
 
 layout(binding = 0) uniform sampler2D depth_tex;   // reversed-Z
 layout(binding = 1) uniform sampler2D normal_tex;  // world normal
-layout(binding = 2) uniform sampler2D ao_low;      // coarse AO (R32F)
+layout(binding = 2) uniform sampler2D ao_low;      // coarse: AO, linear depth, octahedral view normal
 layout(binding = 0, r32f) writeonly uniform image2D ao_image;
 
 uniform ivec2 size, ao_size;
@@ -21,10 +21,12 @@ uniform mat3 world_to_view;
 uniform vec2 proj_scale;
 uniform float near_plane, far_plane;
 
-vec3 eye_point(ivec2 pix, float d) {
-    float D = near_plane * far_plane / (d * (far_plane - near_plane) + near_plane);
+vec3 eye_point_at(ivec2 pix, float D) {
     vec2 ndc = (vec2(pix) + 0.5) / vec2(size) * 2.0 - 1.0;
     return vec3(ndc * D / proj_scale, -D);
+}
+vec3 eye_point(ivec2 pix, float d) { // d: reversed-Z depth
+    return eye_point_at(pix, near_plane * far_plane / (d * (far_plane - near_plane) + near_plane));
 }
 
 void main() {
@@ -51,14 +53,13 @@ void main() {
     for (int k = 0; k < 4; ++k) {
         ivec2 o = ivec2(k & 1, k >> 1);
         ivec2 q = clamp(c + o, ivec2(0), ao_size - 1);
-        float v = texelFetch(ao_low, q, 0).r;
+        vec4 c4 = texelFetch(ao_low, q, 0);
+        float v = c4.x;
         if (isnan(v)) continue;
-        ivec2 s = ao_source_pixel(q, ao_size, size);
-        float ds = texelFetch(depth_tex, s, 0).r;
-        vec3 ns = normalize(world_to_view * texelFetch(normal_tex, s, 0).xyz);
+        vec3 ns = oct_decode(c4.zw);
         float dn = max(dot(n, ns), 0.0);
         dn *= dn;
-        float h = dot(n, eye_point(s, ds) - p) / sigma; // off this pixel's tangent plane, in coarse texels
+        float h = dot(n, eye_point_at(ao_source_pixel(q, ao_size, size), c4.y) - p) / sigma; // off this pixel's tangent plane, in coarse texels
         h *= h;
         float wg = dn * dn / (1.0 + h * h);              // 1 / (1 + h^4): flat near the plane, steep beyond a texel
         vec2 b = mix(1.0 - f, f, vec2(o));

@@ -17,11 +17,19 @@ layout(binding = 2) uniform usampler2DArray slicemap;
 layout(std430, binding = 0) readonly buffer ZRange { uint zmin_bits; uint zmax_bits; };
 // [cones: axis xyz, sin(half-angle)] [sets: cos a, sin a, sphere offset] [sets x samples: disk xy]
 layout(std430, binding = 1) readonly buffer Pattern { vec4 pattern[]; };
+#ifdef COARSE
+// Coarse AO for ao_upsample.comp: (AO, linear depth of the source pixel,
+// its view-space normal octahedron-encoded), so the upsampling reads one
+// texel per neighbour.
+layout(binding = 0, rgba32f) uniform image2D ao_image;
+#else
 layout(binding = 0, r32f) uniform image2D ao_image;   // running mean over still frames
+#endif
 
 uniform mat3 world_to_view;
 uniform vec2 proj_scale;          // projection[0][0], projection[1][1]
-uniform float near_plane, far_plane, scene_far;
+uniform vec2 sm_proj_scale;       // the slicemap's: smaller by its guard band
+uniform float near_plane, far_plane, scene_far, near_margin;
 uniform ivec2 size, grid;
 uniform ivec2 ao_size;            // the AO image's size (= size at resolution 1)
 uniform float radius, strength, persistence, attenuation, bias;
@@ -72,9 +80,9 @@ void main() {
     vec3 p = vec3(ndc * D / proj_scale, -D);
     vec3 n = normalize(world_to_view * texelFetch(normal_tex, pix, 0).xyz);
 
-    vec2 range = slicemap_range(zmin_bits, zmax_bits, scene_far, radius);
+    vec2 range = slicemap_range(zmin_bits, zmax_bits, scene_far, radius, near_margin);
     float dz = (range.y - range.x) / float(BITS);
-    float texel_w = 2.0 * D / (proj_scale.y * float(grid.y)); // grid texel footprint at this depth
+    float texel_w = 2.0 * D / (sm_proj_scale.y * float(grid.y)); // grid texel footprint at this depth
     // The surface's own voxels are not occluders: count only above the
     // tangent plane raised by the voxel's z extent and the texel's footprint
     // on a slope.
@@ -117,7 +125,7 @@ void main() {
                 else if (a <= 0.0) continue;
                 if (D1 <= D0) continue;
                 tot_len += D1 - D0;
-                vec2 g = (proj_scale * xy / max(Dc, 1e-6)) * 0.5 + 0.5;
+                vec2 g = (sm_proj_scale * xy / max(Dc, 1e-6)) * 0.5 + 0.5;
                 ivec2 texel = ivec2(floor(g * vec2(grid)));
                 occ_len += float(count_bits(texel, voxel_at(D0, range), voxel_at(D1, range))) * dz;
             }
@@ -130,5 +138,9 @@ void main() {
     }
     float ao = clamp(1.0 - strength * blocked_sum / float(cones), 0.0, 1.0);
     if (history_weight > 0.0) ao = mix(ao, imageLoad(ao_image, q).r, history_weight);
+#ifdef COARSE
+    imageStore(ao_image, q, vec4(ao, D, oct_encode(n)));
+#else
     imageStore(ao_image, q, vec4(ao));
+#endif
 }

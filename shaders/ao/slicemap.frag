@@ -8,13 +8,13 @@
 in float view_depth;
 
 layout(std430, binding = 0) readonly buffer ZRange { uint zmin_bits; uint zmax_bits; };
-uniform float scene_far;
+uniform float scene_far, near_margin;
 uniform float radius;
 
 layout(location = 0) out uvec4 out_mask[LAYERS];
 
 void main() {
-    vec2 range = slicemap_range(zmin_bits, zmax_bits, scene_far, radius);
+    vec2 range = slicemap_range(zmin_bits, zmax_bits, scene_far, radius, near_margin);
     int k = voxel_at(view_depth, range);
     for (int l = 0; l < LAYERS; ++l) {
         int b = k - 128 * l;

@@ -169,6 +169,7 @@ struct ConeConfig {
     double bias = 1.0;
     int frames = 1;          // still frames accumulated (temporal jitter)
     double resolution = 1.0; // cone pass pixels per image pixel
+    double strength = 1.0;
 };
 
 std::string describe(const ConeConfig& c) {
@@ -176,6 +177,7 @@ std::string describe(const ConeConfig& c) {
     s << c.cones << "c " << c.spheres << "s " << c.samples << "p grid " << c.grid << " L" << c.layers << " pers " << c.persistence;
     if (c.bias != 1.0) s << " bias " << c.bias;
     if (c.resolution != 1.0) s << " res " << c.resolution;
+    if (c.strength != 1.0) s << " strength " << c.strength;
     if (c.frames != 1) s << " x" << c.frames << " frames";
     return s.str();
 }
@@ -198,7 +200,7 @@ int main(int argc, char** argv) {
         else if (s == "--ssao") a.ssao = next();
         else if (s == "--data") a.data = next();
         else if (s == "--voxel-ref") a.voxel_ref_each = true;
-        else if (s == "--config") a.configs.push_back(next()); // cones,spheres,samples,grid,layers,persistence[,bias[,frames[,resolution]]]
+        else if (s == "--config") a.configs.push_back(next()); // cones,spheres,samples,grid,layers,persistence[,bias[,frames[,resolution[,strength]]]]
         else {
             std::cerr << "usage: ao_bench [--quick] [--out DIR] [--sizes 512,1024] [--scenes ct-skin,ct-bone,bunny] [--rays N] "
                          "[--reps N] [--ssao PATH|none]\n";
@@ -234,11 +236,12 @@ int main(int argc, char** argv) {
                 k.bias = 1.0;
                 k.frames = 1;
                 k.resolution = 1.0;
-                const int got = std::sscanf(c.c_str(), "%d,%d,%d,%lf,%d,%lf,%lf,%d,%lf", &k.cones, &k.spheres, &k.samples, &k.grid,
-                                            &k.layers, &k.persistence, &k.bias, &k.frames, &k.resolution);
+                k.strength = 1.0;
+                const int got = std::sscanf(c.c_str(), "%d,%d,%d,%lf,%d,%lf,%lf,%d,%lf,%lf", &k.cones, &k.spheres, &k.samples, &k.grid,
+                                            &k.layers, &k.persistence, &k.bias, &k.frames, &k.resolution, &k.strength);
                 if (got < 6 || k.frames < 1)
                     throw Error("--config",
-                                "expected cones,spheres,samples,grid,layers,persistence[,bias[,frames[,resolution]]], got '" + c + "'");
+                                "expected cones,spheres,samples,grid,layers,persistence[,bias[,frames[,resolution[,strength]]]], got '" + c + "'");
                 configs.push_back(k);
             }
         }
@@ -288,6 +291,7 @@ int main(int argc, char** argv) {
                     ro.ao_settings.persistence = c.persistence;
                     ro.ao_settings.bias = c.bias;
                     ro.ao_settings.resolution = c.resolution;
+                    ro.ao_settings.strength = c.strength;
                     ro.ao_settings.temporal = c.frames > 1;
                     ro.time_passes = true;
                     Image img;
@@ -336,7 +340,8 @@ int main(int argc, char** argv) {
                         auto r = ren.render(cam, ro);
                         ro.ao_force_voxelize = false;
                         for (const auto& p : r.stats.passes)
-                            if (p.ran && (p.name == "zrange" || p.name == "voxelize" || p.name == "cone_ao")) ao_sum += p.ms;
+                            if (p.ran && (p.name == "zrange" || p.name == "voxelize" || p.name == "cone_ao" || p.name == "ao_upsample"))
+                                ao_sum += p.ms;
                         img = std::move(r.image);
                     }
                     add_row("cone-still", "default; 8 still frames accumulated (time: all 8)", ao_sum, 0, img);
@@ -459,7 +464,7 @@ int main(int argc, char** argv) {
                 all.insert(all.end(), rows.begin(), rows.end());
             }
         }
-        std::cout << "\nrenderer: " << renderer_name << "; AO ms: zrange + voxelize + cone_ao passes (cone), frame with SSAO minus "
+        std::cout << "\nrenderer: " << renderer_name << "; AO ms: zrange + voxelize + cone_ao (+ ao_upsample) passes (cone), frame with SSAO minus "
                      "frame without (vtkSSAOPass); glFinish after each pass; median of "
                   << a.reps << " frames\n";
         std::ofstream csv(a.out + "/ao.csv");

@@ -350,6 +350,76 @@ TEST(ConeAo, CoarseConePassIsUpsampledAlongSurfacesNotAcrossEdges) {
     }
 }
 
+TEST(ConeAo, GuardBandKeepsOccludersJustOffScreen) {
+    context();
+    // A floor seen from above, zoomed in; a wall starts 3 mm beyond the
+    // view's right edge and rises 40 mm. Floor points at the edge are within
+    // R of it: the Embree reference (whole meshes) sees it, a slicemap cut at
+    // the viewport would not. The same floor strip seen with the wall in view
+    // gives the cone tracer's own error there, which the guard band must reach.
+    const double R = 10;
+    const int S = 128;
+    const Camera cam = looking({0, 0, 200}, {0, 0, 0}, {0, 1, 0});
+    const double x_edge = 200.0 / (cam.projection(1.0))[0][0]; // floor x at NDC x = 1 (the floor's depth is 200)
+    std::vector<Mesh> meshes{box({-400, -400, -10}, {400, 400, 0}),
+                             box({float(x_edge + 3), -400, 0}, {float(x_edge + 40), 400, 40})};
+    Renderer ren;
+    for (const auto& m : meshes) ren.add(m, {});
+    AoReference reference({&meshes[0], &meshes[1]});
+    const double pixel = 2 * x_edge / S;
+    // Mean (cone - reference) over floor pixels within 4 pixels of x_edge.
+    auto strip_error = [&](const Camera& c, double guard, double* used) {
+        RenderOptions d;
+        d.width = d.height = S;
+        d.aov = Aov::Depth;
+        const Image depth = ren.render(c, d).image;
+        d.aov = Aov::Normal;
+        const Image normal = ren.render(c, d).image;
+        AoReferenceOptions ro;
+        ro.radius_mm = R;
+        ro.rays = 256;
+        const Image ref = reference.image(c, depth, normal, ro);
+        RenderOptions o = ao_options(S, R);
+        o.ao_settings.guard = guard;
+        o.ao_settings.temporal = false;
+        const auto r = ren.render(c, o);
+        *used = r.ao_guard;
+        double e = 0, ref_mean = 0;
+        int n = 0;
+        for (int y = 0; y < S; ++y)
+            for (int x = 0; x < S; ++x) {
+                const std::size_t i = std::size_t(y) * S + std::size_t(x);
+                const double wx = c.target.x + ((x + 0.5) / S * 2 - 1) * x_edge;
+                if (wx < x_edge - 4 * pixel || wx > x_edge || std::abs(depth.floats[i] - 200.0f) > 0.01f) continue;
+                e += r.image.floats[i] - ref.floats[i];
+                ref_mean += ref.floats[i];
+                ++n;
+            }
+        EXPECT_GT(n, 400);
+        EXPECT_LT(ref_mean / n, 0.85) << "the wall occludes the strip";
+        return e / n;
+    };
+    double used = 0;
+    const double without = strip_error(cam, 0.0, &used);
+    EXPECT_EQ(used, 0.0);
+    const double with = strip_error(cam, 0.15, &used);
+    const double guard_used = used;
+    EXPECT_GT(guard_used, 0.02);
+    EXPECT_LE(guard_used, 0.15);
+    Camera shifted = cam;
+    shifted.eye.x += 30;
+    shifted.target.x += 30;
+    const double in_view = strip_error(shifted, 0.0, &used);
+    std::cout << "strip error (cone - reference): no guard " << without << ", guard " << guard_used << ": " << with << ", wall in view " << in_view
+              << "\n";
+    EXPECT_GT(without, in_view + 0.1) << "no guard band: the off-screen wall is missed";
+    EXPECT_NEAR(with, in_view, 0.03) << "guard band " << guard_used << ": the strip as if the wall were in view";
+    // A scene wholly in view needs no guard band.
+    Renderer small;
+    small.add(box({-20, -20, -20}, {20, 20, 20}), {});
+    EXPECT_EQ(small.render(looking({0, -300, 0}, {0, 0, 0}, {0, 0, 1}), ao_options(64, R)).ao_guard, 0.0);
+}
+
 TEST(ConeAo, PassesAreCulledWhenOffAndTheSlicemapIsReusedWhenStill) {
     context();
     Renderer ren;
