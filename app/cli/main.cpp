@@ -131,6 +131,9 @@ int main(int argc, char** argv) {
         cmd->add_option("--ao-persistence", c.persistence,
                         "Sphere combination along a cone: 0 independent absorbers, 1 one solid (cone AO)")
             ->check(CLI::Range(0.0, 1.0));
+        cmd->add_option("--ao-ray-weight", c.ray_weight,
+                        "Sphere occlusion: 0 occupied volume fraction, 1 blocked-ray fraction of a cutting plane (cone AO)")
+            ->check(CLI::Range(0.0, 1.0));
         cmd->add_option("--ao-resolution", c.resolution,
                         "Cone-pass pixels per image pixel, 0.25..1; below 1 a bilateral upsampling follows (cone AO)")
             ->check(CLI::Range(0.25, 1.0));

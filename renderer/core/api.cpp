@@ -284,7 +284,7 @@ RenderOutput render_input(const std::string& input, const RenderRequest& req) {
         t["isoscope:ao_parameters"] = "cones " + std::to_string(c.cones) + "; spheres " + std::to_string(c.spheres) + "; samples " +
                                       std::to_string(c.samples) + "; strength " + num(c.strength) + "; layers " +
                                       std::to_string(c.layers) + " (" + std::to_string(128 * c.layers) + " z-voxels); grid " +
-                                      num(c.grid_scale) + "; jitter_sets " + std::to_string(c.jitter_sets) + "; persistence " +
+                                      num(c.grid_scale) + "; jitter_sets " + std::to_string(c.jitter_sets) + "; ray_weight " + num(c.ray_weight) + "; persistence " +
                                       num(c.persistence) + "; attenuation " + num(c.attenuation) + "; bias " + num(c.bias) +
                                       "; resolution " + num(c.resolution) + "; guard " + num(c.guard) + "; frames " + std::to_string(req.ao_frames);
     }

@@ -487,6 +487,7 @@ RenderResult Renderer::render(const Camera& camera, const RenderOptions& opt) {
                 glUniform1f(prog.uniform("persistence"), float(st.persistence));
                 glUniform1f(prog.uniform("attenuation"), float(st.attenuation));
                 glUniform1f(prog.uniform("bias"), float(st.bias));
+                glUniform1f(prog.uniform("ray_weight"), float(st.ray_weight));
                 glUniform1i(prog.uniform("cones"), st.cones);
                 glUniform1i(prog.uniform("spheres"), st.spheres);
                 glUniform1i(prog.uniform("samples"), st.samples);

@@ -32,7 +32,7 @@ uniform vec2 sm_proj_scale;       // the slicemap's: smaller by its guard band
 uniform float near_plane, far_plane, scene_far, near_margin;
 uniform ivec2 size, grid;
 uniform ivec2 ao_size;            // the AO image's size (= size at resolution 1)
-uniform float radius, strength, persistence, attenuation, bias;
+uniform float radius, strength, persistence, attenuation, bias, ray_weight;
 uniform int cones, spheres, samples, sets;
 uniform float history_weight;     // 0: overwrite; k/(k+1) for the (k+1)-th still frame
 
@@ -130,6 +130,12 @@ void main() {
                 occ_len += float(count_bits(texel, voxel_at(D0, range), voxel_at(D1, range))) * dz;
             }
             float o = tot_len > 0.0 ? clamp(occ_len / tot_len, 0.0, 1.0) : 0.0;
+            // From occupied volume to blocked rays: a plane cutting a cap of
+            // volume fraction o off the sphere blocks, on average over its
+            // orientation, a fraction sqrt(o) (1.15 - 0.15 o) of the rays
+            // crossing the sphere (docs/ao.md); a thin cap blocks far more
+            // rays than its volume says.
+            o = mix(o, sqrt(o) * (1.15 - 0.15 * o), ray_weight);
             float x = ti / radius;
             o /= 1.0 + attenuation * x * x;
             blocked = mix(1.0 - (1.0 - blocked) * (1.0 - o), max(blocked, o), persistence);

@@ -170,6 +170,7 @@ struct ConeConfig {
     int frames = 1;          // still frames accumulated (temporal jitter)
     double resolution = 1.0; // cone pass pixels per image pixel
     double strength = 1.0;
+    double ray_weight = 0.5;
 };
 
 std::string describe(const ConeConfig& c) {
@@ -178,6 +179,7 @@ std::string describe(const ConeConfig& c) {
     if (c.bias != 1.0) s << " bias " << c.bias;
     if (c.resolution != 1.0) s << " res " << c.resolution;
     if (c.strength != 1.0) s << " strength " << c.strength;
+    s << " rw " << c.ray_weight;
     if (c.frames != 1) s << " x" << c.frames << " frames";
     return s.str();
 }
@@ -200,7 +202,7 @@ int main(int argc, char** argv) {
         else if (s == "--ssao") a.ssao = next();
         else if (s == "--data") a.data = next();
         else if (s == "--voxel-ref") a.voxel_ref_each = true;
-        else if (s == "--config") a.configs.push_back(next()); // cones,spheres,samples,grid,layers,persistence[,bias[,frames[,resolution[,strength]]]]
+        else if (s == "--config") a.configs.push_back(next()); // cones,spheres,samples,grid,layers,persistence[,bias[,frames[,resolution[,strength[,ray_weight]]]]]
         else {
             std::cerr << "usage: ao_bench [--quick] [--out DIR] [--sizes 512,1024] [--scenes ct-skin,ct-bone,bunny] [--rays N] "
                          "[--reps N] [--ssao PATH|none]\n";
@@ -216,17 +218,29 @@ int main(int argc, char** argv) {
         fs::create_directories(a.out);
         gl::HeadlessContext ctx;
         ctx.make_current();
-        // cones, spheres, samples, grid, layers, persistence, bias, frames, resolution
+        // cones, spheres, samples, grid, layers, persistence, bias, frames, resolution, strength, ray weight
         std::vector<ConeConfig> configs = {
-            {4, 2, 4, 0.25, 1, 0.75, 1, 1, 0.25}, {3, 1, 4, 0.25, 1, 0.75, 1, 1, 0.5}, {4, 3, 4, 0.5, 1, 0.75, 1, 1, 0.5},
-            {6, 4, 6, 1.0, 2, 0.75, 1, 1, 0.5},   {8, 5, 8, 1.0, 2, 0.5, 1, 1, 0.5},   {16, 8, 16, 1.0, 4, 0.75, 1, 1, 0.5},
-            {3, 2, 3, 0.5, 1, 0.75, 1, 1, 1},     {4, 3, 4, 0.5, 1, 0.75, 1, 1, 1},    {6, 4, 6, 1.0, 2, 0.75, 1, 1, 1},
-            {8, 5, 8, 1.0, 2, 0.5, 1, 1, 1},      {12, 6, 12, 1.0, 2, 0.75, 1, 1, 1},  {16, 8, 16, 1.0, 4, 0.75, 1, 1, 1},
-            {8, 5, 8, 1.0, 2, 0.0, 1, 1, 0.5},    {8, 5, 8, 1.0, 2, 1.0, 1, 1, 0.5},
+            // the defaults' estimator (ray weight 0.5, persistence 1), coarse cone pass
+            {4, 2, 4, 0.25, 1, 1.0, 1, 1, 0.25, 1, 0.5},
+            {3, 1, 4, 0.25, 1, 1.0, 1, 1, 0.5, 1, 0.5},
+            {4, 3, 4, 0.5, 1, 1.0, 1, 1, 0.5, 1, 0.5},
+            {6, 4, 6, 1.0, 2, 1.0, 1, 1, 0.5, 1, 0.5},
+            {8, 5, 8, 1.0, 2, 1.0, 1, 1, 0.5, 1, 0.5}, // the defaults
+            {16, 8, 16, 1.0, 4, 1.0, 1, 1, 0.5, 1, 0.5},
+            // every pixel traced
+            {3, 2, 3, 0.5, 1, 1.0, 1, 1, 1, 1, 0.5},
+            {8, 5, 8, 1.0, 2, 1.0, 1, 1, 1, 1, 0.5},
+            {16, 8, 16, 1.0, 4, 1.0, 1, 1, 1, 1, 0.5},
+            // the thesis's volume fraction, and other combinations
+            {8, 5, 8, 1.0, 2, 0.5, 1, 1, 1, 1, 0.0},
+            {8, 5, 8, 1.0, 2, 0.5, 1, 1, 0.5, 1, 0.0},
+            {8, 5, 8, 1.0, 2, 0.5, 1, 1, 0.5, 1, 0.5},
+            {8, 5, 8, 1.0, 2, 1.0, 1, 1, 0.5, 1, 1.0},
+            {8, 5, 8, 1.0, 2, 0.0, 1, 1, 0.5, 1, 0.5},
         };
         std::vector<int> kernels = {8, 16, 32, 64, 128};
         if (a.quick) {
-            configs = {{4, 3, 4, 0.5, 1, 0.75, 1, 1, 0.5}, {8, 5, 8, 1.0, 2, 0.5, 1, 1, 0.5}};
+            configs = {{4, 3, 4, 0.5, 1, 1.0, 1, 1, 0.5, 1, 0.5}, {8, 5, 8, 1.0, 2, 1.0, 1, 1, 0.5, 1, 0.5}};
             kernels = {16, 64};
         }
         if (!a.configs.empty()) {
@@ -237,11 +251,12 @@ int main(int argc, char** argv) {
                 k.frames = 1;
                 k.resolution = 1.0;
                 k.strength = 1.0;
-                const int got = std::sscanf(c.c_str(), "%d,%d,%d,%lf,%d,%lf,%lf,%d,%lf,%lf", &k.cones, &k.spheres, &k.samples, &k.grid,
-                                            &k.layers, &k.persistence, &k.bias, &k.frames, &k.resolution, &k.strength);
+                k.ray_weight = 0.5;
+                const int got = std::sscanf(c.c_str(), "%d,%d,%d,%lf,%d,%lf,%lf,%d,%lf,%lf,%lf", &k.cones, &k.spheres, &k.samples, &k.grid,
+                                            &k.layers, &k.persistence, &k.bias, &k.frames, &k.resolution, &k.strength, &k.ray_weight);
                 if (got < 6 || k.frames < 1)
                     throw Error("--config",
-                                "expected cones,spheres,samples,grid,layers,persistence[,bias[,frames[,resolution[,strength]]]], got '" + c + "'");
+                                "expected cones,spheres,samples,grid,layers,persistence[,bias[,frames[,resolution[,strength[,ray_weight]]]]], got '" + c + "'");
                 configs.push_back(k);
             }
         }
@@ -292,6 +307,7 @@ int main(int argc, char** argv) {
                     ro.ao_settings.bias = c.bias;
                     ro.ao_settings.resolution = c.resolution;
                     ro.ao_settings.strength = c.strength;
+                    ro.ao_settings.ray_weight = c.ray_weight;
                     ro.ao_settings.temporal = c.frames > 1;
                     ro.time_passes = true;
                     Image img;
@@ -354,7 +370,7 @@ int main(int argc, char** argv) {
                 // grid, layers and bias with --voxel-ref), on every 4th pixel.
                 {
                     std::vector<ConeConfig> vcs;
-                    if (a.configs.empty()) vcs.push_back(ConeConfig{8, 5, 8, 1.0, 2, 0.5, 1, 1, 0.5});
+                    if (a.configs.empty()) vcs.push_back(ConeConfig{8, 5, 8, 1.0, 2, 1.0, 1, 1, 0.5, 1, 0.5});
                     else if (a.voxel_ref_each) vcs = configs;
                     for (const auto& vc : vcs) {
                         RenderOptions ro;
