@@ -186,7 +186,6 @@ std::string describe(const ConeConfig& c) {
     return s.str();
 }
 
-
 // Time-vs-RMSE plot of an ao.csv: one panel per scene; filled marks for the
 // first image size, open marks for the others; each method's frontier (the
 // rows no faster row of that method beats) as a line; "no AO" as a dashed
@@ -209,9 +208,7 @@ void write_plot(const std::string& csv_path, const std::string& png_path) {
     std::string renderer_name; // the optional 13th column
     for (int ln = 2; std::getline(in, line); ++ln) {
         if (line.empty()) continue;
-        std::vector<std::string> f;
-        std::stringstream ss(line);
-        for (std::string t; std::getline(ss, t, ',');) f.push_back(t);
+        const std::vector<std::string> f = split(line);
         if (f.size() < 12) throw Error(csv_path, "line " + std::to_string(ln) + ": expected 12 fields, got " + std::to_string(f.size()));
         P q{f[0], f[2], std::stoi(f[1]), std::stod(f[4]), std::stod(f[8])};
         if (!std::isfinite(q.ms) || !std::isfinite(q.rmse)) throw Error(csv_path, "line " + std::to_string(ln) + ": non-finite time or RMSE");
