@@ -20,7 +20,11 @@ TEST(Cli, InfoJsonHasTheDocumentedKeys) {
     EXPECT_NEAR(j["spacing"][0].get<double>(), 3.2, 1e-12);
     EXPECT_NEAR(j["spacing"][2].get<double>(), 1.5, 1e-12);
     ASSERT_EQ(j["index_to_lps"].size(), 4u);
-    EXPECT_EQ(j["index_to_lps"][3], nlohmann::json({0.0, 0.0, 0.0, 1.0}));
+    // Row-major; the bundled CT's i runs towards the patient's right and k
+    // towards inferior (datasets/README.md).
+    const double expected[4][4] = {{-3.2, 0, 0, 0}, {0, 3.2, 0, 0}, {0, 0, -1.5, 0}, {0, 0, 0, 1}};
+    for (int r = 0; r < 4; ++r)
+        for (int c = 0; c < 4; ++c) EXPECT_NEAR(j["index_to_lps"][r][c].get<double>(), expected[r][c], 1e-12) << r << "," << c;
     EXPECT_EQ(j["range"].size(), 2u);
     EXPECT_GT(j["memory_bytes"].get<double>(), 0);
 }
@@ -52,9 +56,17 @@ TEST(Cli, MeshWritesSkinAndBoneInLps) {
     EXPECT_GT(s.triangles, 10000u);
     EXPECT_GT(b.triangles, 10000u);
     EXPECT_GT(s.volume, b.volume) << "the skin encloses more than the bone";
-    // Inside the volume's extent: 0 .. 63*3.2, 0 .. 63*3.2, 0 .. 92*1.5 mm.
-    EXPECT_GE(s.bounds_min.x, -1e-3);
-    EXPECT_LE(s.bounds_max.z, 92 * 1.5 + 1e-3);
+    EXPECT_GT(b.volume, 0.0) << "outward-facing triangles (the affine is a rotation, no winding flip)";
+    // Inside the volume's extent in LPS: i runs to the right (-x), j to
+    // posterior (+y), k to inferior (-z) from the origin at voxel 0.
+    for (const auto& m : {s, b}) {
+        EXPECT_GE(m.bounds_min.x, -63 * 3.2 - 1e-3);
+        EXPECT_LE(m.bounds_max.x, 1e-3);
+        EXPECT_GE(m.bounds_min.y, -1e-3);
+        EXPECT_LE(m.bounds_max.y, 63 * 3.2 + 1e-3);
+        EXPECT_GE(m.bounds_min.z, -92 * 1.5 - 1e-3);
+        EXPECT_LE(m.bounds_max.z, 1e-3);
+    }
     // Post-processing options reach the mesh.
     const auto d = test::run_command(test::cli() + " mesh " + test::data("headsq.nhdr") + " --iso 500 --decimate 0.5 --smooth 0.3 --largest -o " +
                                      (dir / "dec.ply"));

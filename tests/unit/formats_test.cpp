@@ -84,9 +84,12 @@ TEST(Formats, BundledHeadCtAsNrrdAndMetaImageAgree) {
     EXPECT_EQ(a.dims, (std::array<std::int64_t, 3>{64, 64, 93}));
     EXPECT_EQ(a.type, VoxelType::I16);
     expect_same_samples(a, b);
-    // Both headers describe LPS axes with 3.2 x 3.2 x 1.5 mm steps and origin 0
-    // (headsq.mhd's "RAI" is ITK's name for axes towards L, P, S).
-    const glm::dmat4 expected = make_affine({3.2, 3.2, 1.5}, {0, 0, 0});
+    // Both headers describe 3.2 x 3.2 x 1.5 mm steps from origin 0 along
+    // i -> right (-x), j -> posterior (+y), k -> inferior (-z): the voxels are
+    // stored that way (datasets/README.md; tests/unit/orientation_test.cpp
+    // checks the anatomy). headsq.mhd's "LAS" is ITK's name for those axes
+    // (where each axis comes from), informational next to TransformMatrix.
+    const glm::dmat4 expected = make_affine({3.2, 3.2, 1.5}, {0, 0, 0}, glm::dmat3(-1, 0, 0, 0, 1, 0, 0, 0, -1));
     expect_affine_near(a.index_to_lps, expected, 1e-12);
     expect_affine_near(b.index_to_lps, expected, 1e-12);
     // Samples equal the raw bytes.
