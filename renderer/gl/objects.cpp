@@ -28,36 +28,36 @@ void Buffer::read(std::size_t offset, std::size_t bytes, void* out) const {
     glGetNamedBufferSubData(id(), GLintptr(offset), GLsizeiptr(bytes), out);
 }
 
-Texture Texture::create_2d(GLenum internal_format, int width, int height) {
+// One level, nearest filtering, clamped: what the passes sample.
+Texture Texture::create(GLenum target, GLenum internal_format, int width, int height, int depth) {
     GLuint id = 0;
-    glCreateTextures(GL_TEXTURE_2D, 1, &id);
+    glCreateTextures(target, 1, &id);
     Texture t;
     static_cast<Object<TextureTraits>&>(t) = Object<TextureTraits>(id);
-    glTextureStorage2D(id, 1, internal_format, width, height);
+    if (target == GL_TEXTURE_2D)
+        glTextureStorage2D(id, 1, internal_format, width, height);
+    else
+        glTextureStorage3D(id, 1, internal_format, width, height, depth);
     glTextureParameteri(id, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
     glTextureParameteri(id, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
     glTextureParameteri(id, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
     glTextureParameteri(id, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
+    glTextureParameteri(id, GL_TEXTURE_WRAP_R, GL_CLAMP_TO_EDGE);
     t.w_ = width;
     t.h_ = height;
+    t.d_ = depth;
     t.format_ = internal_format;
     return t;
 }
 
+Texture Texture::create_2d(GLenum internal_format, int width, int height) { return create(GL_TEXTURE_2D, internal_format, width, height, 1); }
+
 Texture Texture::create_2d_array(GLenum internal_format, int width, int height, int layers) {
-    GLuint id = 0;
-    glCreateTextures(GL_TEXTURE_2D_ARRAY, 1, &id);
-    Texture t;
-    static_cast<Object<TextureTraits>&>(t) = Object<TextureTraits>(id);
-    glTextureStorage3D(id, 1, internal_format, width, height, layers);
-    glTextureParameteri(id, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
-    glTextureParameteri(id, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
-    glTextureParameteri(id, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
-    glTextureParameteri(id, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
-    t.w_ = width;
-    t.h_ = height;
-    t.format_ = internal_format;
-    return t;
+    return create(GL_TEXTURE_2D_ARRAY, internal_format, width, height, layers);
+}
+
+Texture Texture::create_3d(GLenum internal_format, int width, int height, int depth) {
+    return create(GL_TEXTURE_3D, internal_format, width, height, depth);
 }
 
 Framebuffer Framebuffer::create() {

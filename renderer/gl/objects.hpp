@@ -80,12 +80,16 @@ public:
     static Texture create_2d(GLenum internal_format, int width, int height);
     // 2D array texture (layers >= 1), one level, nearest filtering.
     static Texture create_2d_array(GLenum internal_format, int width, int height, int layers);
+    // 3D texture, one level, nearest filtering.
+    static Texture create_3d(GLenum internal_format, int width, int height, int depth);
     int width() const { return w_; }
     int height() const { return h_; }
+    int depth() const { return d_; } // layers of an array texture, slices of a 3D one, else 1
     GLenum format() const { return format_; }
 
 private:
-    int w_ = 0, h_ = 0;
+    static Texture create(GLenum target, GLenum internal_format, int width, int height, int depth);
+    int w_ = 0, h_ = 0, d_ = 1;
     GLenum format_ = 0;
 };
 

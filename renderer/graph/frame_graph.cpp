@@ -5,6 +5,7 @@
 #include <map>
 
 #include "io/error.hpp"
+#include "renderer/graph/resource_pool.hpp"
 
 namespace iso::graph {
 
@@ -22,11 +23,9 @@ std::size_t bytes_per_pixel(Format f) {
     return 4;
 }
 
-namespace {
 std::size_t bytes_of(const TextureDesc& d) {
-    return std::size_t(d.width) * std::size_t(d.height) * std::size_t(d.layers) * bytes_per_pixel(d.format);
+    return std::size_t(d.width) * std::size_t(d.height) * std::size_t(d.layers) * std::size_t(d.depth) * bytes_per_pixel(d.format);
 }
-} // namespace
 
 // ---- Builder -------------------------------------------------------------------
 
@@ -37,15 +36,15 @@ std::uint32_t FrameGraph::Builder::create_resource(Resource r) {
 }
 
 void FrameGraph::Builder::read_resource(std::uint32_t index, std::uint32_t version, bool texture) {
-    g_.check(index, version, texture, "read");
+    g_.check(index, version, texture, "FrameGraph::Builder::read");
     const auto& r = g_.resources_[index];
-    if (version == 0 && !r.imported)
+    if (version == 0 && !r.imported && !r.history)
         throw Error("pass '" + g_.passes_[pass_].name + "'", "reads '" + r.name + "' before any pass wrote it");
     g_.passes_[pass_].reads.push_back({index, version});
 }
 
 std::uint32_t FrameGraph::Builder::write_resource(std::uint32_t index, std::uint32_t version, bool texture) {
-    g_.check(index, version, texture, "write");
+    g_.check(index, version, texture, "FrameGraph::Builder::write");
     auto& r = g_.resources_[index];
     if (version != r.version) throw Error("pass '" + g_.passes_[pass_].name + "'", "writes an old version of '" + r.name + "'");
     ++r.version;
@@ -90,6 +89,8 @@ std::uint64_t Resources::get(TextureHandle h) const { return g_.resources_.at(h.
 std::uint64_t Resources::get(BufferHandle h) const { return g_.resources_.at(h.index).physical; }
 const TextureDesc& Resources::desc(TextureHandle h) const { return g_.resources_.at(h.index).tdesc; }
 const BufferDesc& Resources::desc(BufferHandle h) const { return g_.resources_.at(h.index).bdesc; }
+bool Resources::fresh(TextureHandle h) const { return g_.resources_.at(h.index).fresh; }
+bool Resources::fresh(BufferHandle h) const { return g_.resources_.at(h.index).fresh; }
 
 // ---- FrameGraph ----------------------------------------------------------------------
 
@@ -99,10 +100,11 @@ std::uint32_t FrameGraph::add_resource(Resource r) {
 }
 
 void FrameGraph::check(std::uint32_t index, std::uint32_t version, bool texture, const char* what) const {
-    if (index >= resources_.size()) throw Error("frame graph", std::string("cannot ") + what + " an invalid handle");
+    // `what` names the function that was called with the bad handle.
+    if (index >= resources_.size()) throw Error(what, "invalid handle (index " + std::to_string(index) + ")");
     const auto& r = resources_[index];
-    if (r.texture != texture) throw Error("frame graph", std::string("handle kind mismatch for '") + r.name + "'");
-    if (version > r.version) throw Error("frame graph", "handle of '" + r.name + "' has a version that does not exist");
+    if (r.texture != texture) throw Error(what, "handle kind mismatch for '" + r.name + "'");
+    if (version > r.version) throw Error(what, "handle of '" + r.name + "' has a version that does not exist");
 }
 
 TextureHandle FrameGraph::import(const std::string& name, const TextureDesc& d, std::uint64_t physical) {
@@ -124,13 +126,30 @@ BufferHandle FrameGraph::import(const std::string& name, const BufferDesc& d, st
     return {add_resource(std::move(r)), 0};
 }
 
+TextureHandle FrameGraph::history(const std::string& name, const TextureDesc& d) {
+    Resource r;
+    r.name = name;
+    r.tdesc = d;
+    r.history = true;
+    return {add_resource(std::move(r)), 0};
+}
+
+BufferHandle FrameGraph::history(const std::string& name, const BufferDesc& d) {
+    Resource r;
+    r.name = name;
+    r.texture = false;
+    r.bdesc = d;
+    r.history = true;
+    return {add_resource(std::move(r)), 0};
+}
+
 void FrameGraph::request(TextureHandle h) {
-    check(h.index, h.version, true, "request");
+    check(h.index, h.version, true, "FrameGraph::request");
     requested_.push_back({h.index, h.version});
 }
 
 void FrameGraph::request(BufferHandle h) {
-    check(h.index, h.version, false, "request");
+    check(h.index, h.version, false, "FrameGraph::request");
     requested_.push_back({h.index, h.version});
 }
 
@@ -162,9 +181,9 @@ void FrameGraph::cull() {
     }
 }
 
-FrameStats FrameGraph::execute(Backend& backend) {
+void FrameGraph::compile() {
+    if (compiled_) return;
     cull();
-    FrameStats stats;
     // Lifetimes over the needed passes only.
     for (auto& r : resources_) r.first_use = r.last_use = -1;
     for (std::uint32_t p = 0; p < passes_.size(); ++p) {
@@ -182,31 +201,47 @@ FrameStats FrameGraph::execute(Backend& backend) {
     const std::int64_t end = std::int64_t(passes_.size());
     for (const auto& a : requested_)
         if (resources_[a.resource].first_use >= 0) resources_[a.resource].last_use = end;
-    for (const auto& r : resources_) stats.virtual_resources += r.imported ? 0 : 1;
+    compiled_ = true;
+}
 
-    struct Free {
-        bool texture;
-        TextureDesc t;
-        BufferDesc b;
-        std::uint64_t id;
-    };
-    std::vector<Free> pool;
-    std::vector<std::uint64_t> owned;
+bool FrameGraph::will_run(const std::string& pass) const {
+    if (!compiled_) throw Error("FrameGraph::will_run", "called before compile()");
+    for (const auto& p : passes_)
+        if (p.name == pass) return p.needed;
+    return false;
+}
+
+std::vector<std::string> FrameGraph::running_passes() const {
+    if (!compiled_) throw Error("FrameGraph::running_passes", "called before compile()");
+    std::vector<std::string> names;
+    for (const auto& p : passes_)
+        if (p.needed) names.push_back(p.name);
+    return names;
+}
+
+FrameStats FrameGraph::execute(ResourcePool& pool) {
+    if (executed_) throw Error("FrameGraph::execute", "a frame graph runs once; declare a new one for the next frame");
+    executed_ = true;
+    compile();
+    FrameStats stats;
+    for (const auto& r : resources_) stats.virtual_resources += r.imported || r.history ? 0 : 1;
     std::size_t live_bytes = 0;
     auto acquire = [&](Resource& r, PassStats& ps) {
-        for (auto it = pool.begin(); it != pool.end(); ++it)
-            if (it->texture == r.texture && (r.texture ? it->t == r.tdesc : it->b == r.bdesc)) {
-                r.physical = it->id;
-                pool.erase(it);
-                return;
-            }
-        r.physical = r.texture ? backend.create_texture(r.tdesc, r.name) : backend.create_buffer(r.bdesc, r.name);
-        owned.push_back(r.physical);
-        const std::size_t bytes = r.texture ? bytes_of(r.tdesc) : r.bdesc.bytes;
-        ps.bytes_created += bytes;
-        live_bytes += bytes;
-        stats.peak_bytes = std::max(stats.peak_bytes, live_bytes);
-        ++stats.physical_resources;
+        bool created = false;
+        if (r.history) {
+            r.physical = r.texture ? pool.history(r.name, r.tdesc, &created) : pool.history(r.name, r.bdesc, &created);
+            r.fresh = created;
+        } else {
+            r.physical = r.texture ? pool.acquire(r.tdesc, r.name, &created) : pool.acquire(r.bdesc, r.name, &created);
+            live_bytes += r.texture ? bytes_of(r.tdesc) : r.bdesc.bytes;
+            stats.peak_bytes = std::max(stats.peak_bytes, live_bytes);
+        }
+        if (created) {
+            ps.bytes_created += r.texture ? bytes_of(r.tdesc) : r.bdesc.bytes;
+            ++stats.physical_resources;
+        } else {
+            ++stats.reused_resources;
+        }
     };
 
     Resources res(*this);
@@ -222,11 +257,18 @@ FrameStats FrameGraph::execute(Backend& backend) {
             ps.ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
             ps.ran = true;
             for (auto& r : resources_)
-                if (!r.imported && r.last_use == p) pool.push_back({r.texture, r.tdesc, r.bdesc, r.physical});
+                if (!r.imported && !r.history && r.last_use == p) {
+                    pool.release(r.physical);
+                    live_bytes -= r.texture ? bytes_of(r.tdesc) : r.bdesc.bytes;
+                }
         }
         stats.passes.push_back(ps);
     }
-    for (auto id : owned) backend.destroy(id);
+    // Requested resources (last use past the final pass) go back now: the
+    // caller has read them inside a side-effect pass or does not need them.
+    for (auto& r : resources_)
+        if (!r.imported && !r.history && r.last_use == std::int64_t(passes_.size())) pool.release(r.physical);
+    pool.end_frame();
     return stats;
 }
 

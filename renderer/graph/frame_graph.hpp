@@ -1,14 +1,19 @@
 // The pass graph (docs/pass_graph.md). Each frame, passes are declared with
-// the resources they create, read and write; the graph then
-//  - culls every pass whose outputs nobody needs (a pass is needed when it
-//    writes a resource that is requested for this frame, that a needed pass
-//    reads, or when it has a side effect such as a read-back to the CPU),
-//  - allocates transient resources for the needed passes only, reusing one
-//    backing object for resources whose lifetimes do not overlap,
-//  - runs the needed passes in declaration order and records per-pass
-//    statistics (ran or culled, wall time, bytes of resources created).
-// Resources and passes talk to the GPU only through a Backend, so the graph
-// itself is tested without one (tests/unit/frame_graph_test.cpp).
+// the resources they create, read and write; then
+//  - compile() culls every pass whose outputs nobody needs (a pass is needed
+//    when it writes a resource that is requested for this frame, that a
+//    needed pass reads, or when it has a side effect such as a read-back to
+//    the CPU) and works out each resource's lifetime, touching no GPU, so the
+//    renderer's real frame is tested without one;
+//  - execute() takes transient resources for the needed passes from a
+//    ResourcePool (resource_pool.hpp: kept across frames, keyed by
+//    descriptor; resources whose lifetimes do not overlap share one object),
+//    runs the needed passes in declaration order, gives the resources back
+//    and records per-pass statistics (ran or culled, wall time, bytes of
+//    resources created).
+// History resources persist across frames under a name (the AO slicemap and
+// accumulation); a pass learns from Resources::fresh() that one was just
+// (re)made and holds nothing yet.
 // Modelled on Filament's FrameGraph: typed handles, descriptor structs,
 // [[nodiscard]] writes that return the new version of a resource.
 #pragma once
@@ -24,12 +29,15 @@ namespace iso::graph {
 enum class Format : std::uint8_t { RGBA8, RGBA16F, RGBA32F, R32F, RG16F, R32UI, RGBA32UI, Depth32F };
 std::size_t bytes_per_pixel(Format f);
 
+// depth > 1: a 3D texture; layers > 1: a 2D array texture (not both).
 struct TextureDesc {
     int width = 1, height = 1;
     Format format = Format::RGBA8;
     int layers = 1;
+    int depth = 1;
     bool operator==(const TextureDesc&) const = default;
 };
+std::size_t bytes_of(const TextureDesc& d);
 struct BufferDesc {
     std::size_t bytes = 0;
     bool operator==(const BufferDesc&) const = default;
@@ -64,12 +72,14 @@ struct PassStats {
 
 struct FrameStats {
     std::vector<PassStats> passes;
-    std::size_t physical_resources = 0; // created this frame
+    std::size_t physical_resources = 0; // created this frame (not taken from the pool)
+    std::size_t reused_resources = 0;   // taken from the pool (kept from earlier frames or passes)
     std::size_t virtual_resources = 0;  // declared this frame (non-imported)
-    std::size_t peak_bytes = 0;         // all physical transient resources this frame
+    std::size_t peak_bytes = 0;         // physical transient resources in use at once this frame
 };
 
 class FrameGraph;
+class ResourcePool;
 
 // Handed to a pass's execute step: physical ids of its resources.
 class Resources {
@@ -78,6 +88,9 @@ public:
     std::uint64_t get(BufferHandle h) const;
     const TextureDesc& desc(TextureHandle h) const;
     const BufferDesc& desc(BufferHandle h) const;
+    // A history resource that was (re)made this frame: its contents are undefined.
+    bool fresh(TextureHandle h) const;
+    bool fresh(BufferHandle h) const;
 
 private:
     friend class FrameGraph;
@@ -133,14 +146,28 @@ public:
     // a mesh's vertex buffer): never allocated or freed by the graph.
     TextureHandle import(const std::string& name, const TextureDesc& d, std::uint64_t physical);
     BufferHandle import(const std::string& name, const BufferDesc& d, std::uint64_t physical);
+    // A resource that persists across frames in the pool under `name`; made
+    // when first needed or when its descriptor changes, and only if a needed
+    // pass uses it. Passes read what earlier frames wrote to it.
+    TextureHandle history(const std::string& name, const TextureDesc& d);
+    BufferHandle history(const std::string& name, const BufferDesc& d);
 
     // This frame's requested outputs: what must be computed.
     void request(TextureHandle h);
     void request(BufferHandle h);
 
-    // Culls, allocates, runs. Transient resources are released to the
-    // backend at the end (the caller keeps a Backend that may pool them).
-    FrameStats execute(Backend& backend);
+    // Culls and computes lifetimes; no GPU work. Graph misuse (reading what
+    // nothing wrote, writing an old version) throws iso::Error naming the
+    // pass when it is declared.
+    void compile();
+    // After compile(): will the named pass run? (false for unknown names)
+    bool will_run(const std::string& pass) const;
+    // After compile(): names of the passes that will run, in order.
+    std::vector<std::string> running_passes() const;
+
+    // compile() if not yet, then takes resources from the pool, runs the
+    // needed passes and gives transient resources back. Once per graph.
+    FrameStats execute(ResourcePool& pool);
 
     // Runs at the end of every executed pass, inside its timed region (the GL
     // renderer passes glFinish here when per-pass times are asked for: GL
@@ -158,6 +185,8 @@ private:
         TextureDesc tdesc;
         BufferDesc bdesc;
         bool imported = false;
+        bool history = false;
+        bool fresh = false;
         std::uint64_t physical = 0;
         std::uint32_t version = 0;
         std::int64_t producer_of_version = -1; // pass that wrote the latest version (bookkeeping)
@@ -179,6 +208,7 @@ private:
     std::uint32_t add_resource(Resource r);
     void check(std::uint32_t index, std::uint32_t version, bool texture, const char* what) const;
     void cull();
+    bool compiled_ = false, executed_ = false;
 
     std::vector<Resource> resources_;
     std::vector<Pass> passes_;

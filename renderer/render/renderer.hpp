@@ -16,6 +16,7 @@
 #include "io/image.hpp"
 #include "io/mesh.hpp"
 #include "renderer/graph/frame_graph.hpp"
+#include "renderer/graph/resource_pool.hpp"
 #include "renderer/render/cone_ao.hpp"
 #include "renderer/scene/camera.hpp"
 
@@ -82,6 +83,11 @@ public:
     SceneObject& object(std::uint32_t id);
 
     RenderResult render(const Camera& camera, const RenderOptions& opt);
+
+    // GPU resources kept across frames (renderer/graph/resource_pool.hpp),
+    // and all GL objects made so far: in a steady view neither grows.
+    const graph::ResourcePool& pool() const;
+    std::size_t gl_objects_created() const;
 
 private:
     struct Impl;

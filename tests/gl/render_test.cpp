@@ -8,6 +8,8 @@
 #include <glm/glm.hpp>
 
 #include "renderer/gl/context.hpp"
+#include "renderer/gl/objects.hpp"
+#include "renderer/render/overlay.hpp"
 #include "renderer/iso/extract.hpp"
 #include "test_util.hpp"
 
@@ -151,4 +153,50 @@ TEST(Render, DegenerateAndEmptyScenes) {
     const auto d = degenerate.render(cam, {.width = 32, .height = 32, .aov = Aov::Normal}).image;
     for (float x : d.floats) EXPECT_TRUE(std::isfinite(x));
     EXPECT_THROW(degenerate.render(cam, {.width = 0, .height = 10}), Error);
+}
+
+TEST(Render, SteadyFramesMakeNoNewGlObjects) {
+    // The viewer's case: the same view redrawn (still frames accumulating AO,
+    // annotations on, presented into a window's framebuffer, then read back).
+    // After the first frame of each kind, nothing is created: the pool's and
+    // the GL objects' counts stay put.
+    context();
+    Renderer ren;
+    ren.add(sphere_mesh({0, 0, 0}, 20, 2.0), {});
+    Bounds b = ren.bounds();
+    Camera cam;
+    cam.set_view(PatientView::Left, b);
+    cam.fit(b, 1.0);
+    Annotations ann;
+    ann.labels.push_back({{0, 0, 20}, "top"});
+    auto window = gl::Texture::create_2d(GL_RGBA8, 96, 96);
+    auto window_fb = gl::Framebuffer::create();
+    window_fb.attach(GL_COLOR_ATTACHMENT0, window);
+    RenderOptions o;
+    o.width = o.height = 96;
+    o.ao = true;
+    o.annotations = &ann;
+    o.present = true;
+    o.target_framebuffer = window_fb.id();
+    for (const bool present : {true, false}) {
+        o.present = present;
+        ren.render(cam, o);
+        const auto created = ren.pool().stats().created;
+        const auto objects = ren.gl_objects_created();
+        for (int f = 0; f < 4; ++f) {
+            const auto r = ren.render(cam, o);
+            EXPECT_EQ(r.stats.physical_resources, 0u) << "frame " << f;
+            EXPECT_GT(r.stats.reused_resources, 0u);
+        }
+        EXPECT_EQ(ren.pool().stats().created, created) << (present ? "presented" : "read back");
+        EXPECT_EQ(ren.gl_objects_created(), objects) << (present ? "presented" : "read back");
+        EXPECT_EQ(glGetError(), GLenum(GL_NO_ERROR));
+    }
+    // A new size makes new resources once; the old ones are evicted by age.
+    o.width = 64;
+    ren.render(cam, o);
+    const auto created = ren.pool().stats().created;
+    for (int f = 0; f < 5; ++f) ren.render(cam, o);
+    EXPECT_EQ(ren.pool().stats().created, created);
+    EXPECT_GT(ren.pool().stats().destroyed, 0u) << "the 96x96 textures were evicted";
 }

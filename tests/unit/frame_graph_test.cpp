@@ -1,8 +1,11 @@
-// The pass graph without a GPU: a recording backend stands in for GL. Checks
-// that passes whose outputs nobody needs never execute, that side effects
-// keep passes alive, that transient resources are reused when lifetimes do
-// not overlap, and that misuse is reported.
+// The pass graph and its resource pool without a GPU: a recording backend
+// stands in for GL. Checks that transient resources are reused when
+// lifetimes do not overlap and across frames, that waiting resources are
+// evicted by age, that history resources persist (and say when they are
+// fresh), and that misuse is reported with the function's name. The
+// renderer's real frame is compiled in frame_test.cpp.
 #include "renderer/graph/frame_graph.hpp"
+#include "renderer/graph/resource_pool.hpp"
 
 #include <map>
 
@@ -36,112 +39,7 @@ struct RecordingBackend : Backend {
 const TextureDesc kColor{64, 32, Format::RGBA16F};
 const TextureDesc kDepth{64, 32, Format::Depth32F};
 
-// The renderer's shape: gbuffer -> (voxelize -> ao) -> lighting -> overlay -> readback.
-struct Frame {
-    std::vector<std::string> executed;
-    TextureHandle depth, normal, ao, lit;
-};
-
-void build(FrameGraph& g, Frame& f, bool ao_on, bool readback) {
-    struct GB { TextureHandle depth, normal; };
-    const auto& gb = g.add_pass<GB>("gbuffer",
-        [&](FrameGraph::Builder& b, GB& d) {
-            d.depth = b.write(b.create("depth", kDepth));
-            d.normal = b.write(b.create("normal", kColor));
-        },
-        [&](const GB&, const Resources&) { f.executed.push_back("gbuffer"); });
-    f.depth = gb.depth;
-    f.normal = gb.normal;
-    struct Vox { TextureHandle voxels; };
-    const auto& vox = g.add_pass<Vox>("voxelize",
-        [&](FrameGraph::Builder& b, Vox& d) {
-            b.read(gb.depth);
-            d.voxels = b.write(b.create("voxels", TextureDesc{64, 32, Format::RGBA32UI, 2}));
-        },
-        [&](const Vox&, const Resources&) { f.executed.push_back("voxelize"); });
-    struct Ao { TextureHandle ao; };
-    const auto& ao = g.add_pass<Ao>("cone ao",
-        [&](FrameGraph::Builder& b, Ao& d) {
-            b.read(vox.voxels);
-            b.read(gb.normal);
-            d.ao = b.write(b.create("ao", TextureDesc{64, 32, Format::R32F}));
-        },
-        [&](const Ao&, const Resources&) { f.executed.push_back("cone ao"); });
-    f.ao = ao.ao;
-    struct Lit { TextureHandle lit; };
-    const auto& lit = g.add_pass<Lit>("lighting",
-        [&](FrameGraph::Builder& b, Lit& d) {
-            b.read(gb.depth);
-            b.read(gb.normal);
-            if (ao_on) b.read(ao.ao);
-            d.lit = b.write(b.create("lit", kColor));
-        },
-        [&](const Lit&, const Resources&) { f.executed.push_back("lighting"); });
-    struct Ov { TextureHandle out; };
-    const auto& ov = g.add_pass<Ov>("overlay",
-        [&](FrameGraph::Builder& b, Ov& d) {
-            b.read(lit.lit);
-            d.out = b.write(lit.lit);
-        },
-        [&](const Ov&, const Resources&) { f.executed.push_back("overlay"); });
-    f.lit = ov.out;
-    if (readback) {
-        struct Rb {};
-        g.add_pass<Rb>("readback",
-            [&](FrameGraph::Builder& b, Rb&) {
-                b.read(ov.out);
-                b.side_effect();
-            },
-            [&](const Rb&, const Resources&) { f.executed.push_back("readback"); });
-    }
-}
-
 } // namespace
-
-TEST(FrameGraph, AoOffCullsVoxelizationAndConeTracing) {
-    FrameGraph g;
-    Frame f;
-    build(g, f, /*ao_on=*/false, /*readback=*/true);
-    RecordingBackend be;
-    const auto stats = g.execute(be);
-    EXPECT_EQ(f.executed, (std::vector<std::string>{"gbuffer", "lighting", "overlay", "readback"}));
-    EXPECT_FALSE(g.ran("voxelize"));
-    EXPECT_FALSE(g.ran("cone ao"));
-    ASSERT_EQ(stats.passes.size(), 6u);
-    EXPECT_FALSE(stats.passes[1].ran);
-    EXPECT_EQ(stats.passes[1].bytes_created, 0u);
-    EXPECT_EQ(be.live.size(), 0u) << "transient resources are released";
-}
-
-TEST(FrameGraph, AoOnRunsEverythingInOrder) {
-    FrameGraph g;
-    Frame f;
-    build(g, f, true, true);
-    RecordingBackend be;
-    g.execute(be);
-    EXPECT_EQ(f.executed, (std::vector<std::string>{"gbuffer", "voxelize", "cone ao", "lighting", "overlay", "readback"}));
-}
-
-TEST(FrameGraph, NothingRequestedNothingRuns) {
-    FrameGraph g;
-    Frame f;
-    build(g, f, true, /*readback=*/false);
-    RecordingBackend be;
-    const auto stats = g.execute(be);
-    EXPECT_TRUE(f.executed.empty());
-    EXPECT_EQ(be.created, 0u);
-    EXPECT_EQ(stats.physical_resources, 0u);
-}
-
-TEST(FrameGraph, RequestingAnAovRunsOnlyItsProducers) {
-    FrameGraph g;
-    Frame f;
-    build(g, f, true, false);
-    g.request(f.depth); // --aov depth: only the G-buffer is needed
-    RecordingBackend be;
-    g.execute(be);
-    EXPECT_EQ(f.executed, (std::vector<std::string>{"gbuffer"}));
-}
 
 TEST(FrameGraph, TransientResourcesAreReusedWhenLifetimesDoNotOverlap) {
     // Three passes in a chain, each making a same-sized texture read only by the next:
@@ -171,14 +69,16 @@ TEST(FrameGraph, TransientResourcesAreReusedWhenLifetimesDoNotOverlap) {
         },
         [](const E&, const Resources&) {});
     RecordingBackend be;
-    const auto stats = g.execute(be);
+    ResourcePool pool(be);
+    const auto stats = g.execute(pool);
     ASSERT_EQ(ids.size(), 3u);
     // t1 is free once b has run, so c's t3 reuses it: two physical textures for three.
     EXPECT_EQ(stats.physical_resources, 2u);
     EXPECT_EQ(ids[2], ids[0]);
     EXPECT_NE(ids[1], ids[0]);
     EXPECT_EQ(stats.peak_bytes, 2 * 64 * 32 * 8u);
-    EXPECT_EQ(be.created, be.destroyed);
+    EXPECT_EQ(be.created, 2u);
+    EXPECT_EQ(pool.stats().waiting, 2u) << "given back to the pool, kept for the next frame";
 }
 
 TEST(FrameGraph, ImportedResourcesAreNeverCreatedOrDestroyed) {
@@ -190,7 +90,8 @@ TEST(FrameGraph, ImportedResourcesAreNeverCreatedOrDestroyed) {
                                   [&](const W& d, const Resources& r) { seen = r.get(d.out); });
     g.request(w.out);
     RecordingBackend be;
-    g.execute(be);
+    ResourcePool pool(be);
+    g.execute(pool);
     EXPECT_EQ(seen, 777u);
     EXPECT_EQ(be.created, 0u);
     EXPECT_EQ(be.destroyed, 0u);
@@ -216,5 +117,111 @@ TEST(FrameGraph, MisuseIsReported) {
     EXPECT_THROW(g2.add_pass<T>("c", [&](FrameGraph::Builder& b, T& d) { d.t = b.write(first); },
                                 [](const T&, const Resources&) {}),
                  iso::Error);
-    EXPECT_THROW(g2.request(TextureHandle{}), iso::Error);
+    try {
+        g2.request(TextureHandle{});
+        ADD_FAILURE() << "an invalid handle was accepted";
+    } catch (const iso::Error& e) {
+        EXPECT_NE(std::string(e.what()).find("FrameGraph::request"), std::string::npos) << e.what();
+    }
+    // Asking before compiling, executing twice.
+    EXPECT_THROW(g2.will_run("a"), iso::Error);
+    RecordingBackend be;
+    ResourcePool pool(be);
+    g2.execute(pool);
+    EXPECT_THROW(g2.execute(pool), iso::Error);
+    EXPECT_THROW(pool.release(12345), iso::Error);
+}
+
+namespace {
+
+// One frame: "make" creates a texture of `desc` that "use" reads (a side effect).
+FrameStats one_frame(ResourcePool& pool, const TextureDesc& desc, std::uint64_t* seen = nullptr) {
+    FrameGraph g;
+    struct T { TextureHandle t; };
+    const auto& a = g.add_pass<T>("make", [&](FrameGraph::Builder& b, T& d) { d.t = b.write(b.create("t", desc)); },
+                                  [&](const T& d, const Resources& r) { if (seen) *seen = r.get(d.t); });
+    g.add_pass<T>("use", [&](FrameGraph::Builder& b, T& d) { d.t = b.read(a.t); b.side_effect(); }, [](const T&, const Resources&) {});
+    return g.execute(pool);
+}
+
+} // namespace
+
+TEST(ResourcePool, SteadyFramesCreateNothingAfterTheFirst) {
+    RecordingBackend be;
+    ResourcePool pool(be);
+    std::uint64_t first = 0, later = 0;
+    EXPECT_EQ(one_frame(pool, kColor, &first).physical_resources, 1u);
+    for (int f = 0; f < 10; ++f) {
+        const auto s = one_frame(pool, kColor, &later);
+        EXPECT_EQ(s.physical_resources, 0u);
+        EXPECT_EQ(s.reused_resources, 1u);
+        EXPECT_EQ(later, first);
+    }
+    EXPECT_EQ(be.created, 1u);
+    EXPECT_EQ(pool.stats().reused, 10u);
+    EXPECT_EQ(pool.stats().frames, 11u);
+}
+
+TEST(ResourcePool, WaitingResourcesAreEvictedByAge) {
+    RecordingBackend be;
+    ResourcePool pool(be, /*max_age=*/3);
+    one_frame(pool, kColor);
+    const TextureDesc other{128, 64, Format::RGBA8};
+    // A resize: the old texture waits, unused, and goes after 3 frames.
+    one_frame(pool, other);
+    EXPECT_EQ(be.live.size(), 2u);
+    one_frame(pool, other);
+    one_frame(pool, other);
+    EXPECT_EQ(be.live.size(), 1u) << "the old size was evicted";
+    EXPECT_EQ(pool.stats().destroyed, 1u);
+    EXPECT_EQ(pool.stats().live_bytes, 128u * 64u * 4u);
+}
+
+TEST(ResourcePool, HistoryPersistsAndSaysWhenItIsFresh) {
+    RecordingBackend be;
+    ResourcePool pool(be);
+    const TextureDesc arr{16, 8, Format::RGBA32UI, 4};
+    auto frame = [&](const TextureDesc& d, bool* fresh, std::uint64_t* id) {
+        FrameGraph g;
+        const auto h = g.history("accum", d);
+        struct T { TextureHandle t; };
+        g.add_pass<T>("accumulate", [&](FrameGraph::Builder& b, T& t) { t.t = b.write(b.read(h)); b.side_effect(); },
+                      [&](const T& t, const Resources& r) { *fresh = r.fresh(t.t); *id = r.get(t.t); });
+        g.execute(pool);
+    };
+    bool fresh = false;
+    std::uint64_t a = 0, b = 0;
+    frame(arr, &fresh, &a);
+    EXPECT_TRUE(fresh);
+    frame(arr, &fresh, &b);
+    EXPECT_FALSE(fresh);
+    EXPECT_EQ(a, b);
+    EXPECT_TRUE(pool.has_history("accum", arr));
+    EXPECT_EQ(pool.stats().live_bytes, 16u * 8u * 4u * 16u) << "layers count";
+    // A new descriptor replaces it.
+    frame(TextureDesc{16, 8, Format::RGBA32UI, 2}, &fresh, &b);
+    EXPECT_TRUE(fresh);
+    EXPECT_EQ(be.live.size(), 1u);
+    // Unused history is evicted after max_history_age frames.
+    ResourcePool short_lived(be, 3, 2);
+    FrameGraph g;
+    g.history("unused", arr); // declared, never needed: never made
+    g.execute(short_lived);
+    EXPECT_EQ(short_lived.stats().history, 0u);
+}
+
+TEST(FrameGraph, CompileCullsWithoutRunningAnything) {
+    FrameGraph g;
+    struct T { TextureHandle t; };
+    int runs = 0;
+    const auto& a = g.add_pass<T>("a", [&](FrameGraph::Builder& b, T& d) { d.t = b.write(b.create("x", kColor)); },
+                                  [&](const T&, const Resources&) { ++runs; });
+    g.add_pass<T>("orphan", [&](FrameGraph::Builder& b, T& d) { d.t = b.write(b.create("y", kColor)); },
+                  [&](const T&, const Resources&) { ++runs; });
+    g.add_pass<T>("sink", [&](FrameGraph::Builder& b, T& d) { d.t = b.read(a.t); b.side_effect(); },
+                  [&](const T&, const Resources&) { ++runs; });
+    g.compile();
+    EXPECT_EQ(g.running_passes(), (std::vector<std::string>{"a", "sink"}));
+    EXPECT_FALSE(g.will_run("orphan"));
+    EXPECT_EQ(runs, 0);
 }

@@ -1,0 +1,29 @@
+// The cone-AO chain (docs/ao.md): zrange -> voxelize (when the slicemap is
+// stale) -> cone_ao -> ao_upsample (when traced coarser than the frame), with
+// the slicemap, its z range and the accumulated AO as history resources.
+// Declared whenever a frame is built; the graph culls the chain when nothing
+// reads the AO image.
+#include <memory>
+
+#include "renderer/passes/frame.hpp"
+
+namespace iso::passes {
+
+graph::TextureHandle ambient_occlusion(graph::FrameGraph& fg, const FrameContext& ctx, const GBuffer& gb) {
+    const auto plan = std::make_shared<const AoPlan>(plan_ao(ctx));
+    const ConeAoSettings& st = plan->settings;
+    AoResources res;
+    res.zrange = fg.history("zrange", graph::BufferDesc{8});
+    res.slicemap = fg.history("slicemap", graph::TextureDesc{plan->grid_w, plan->grid_h, graph::Format::RGBA32UI, st.layers});
+    if (plan->voxelize) {
+        res.zrange = zrange(fg, ctx, gb, res.zrange);
+        res.slicemap = voxelize(fg, ctx, plan, res.zrange, res.slicemap);
+    }
+    const auto history = fg.history(plan->coarse ? "ao_coarse" : "ao_accum",
+                                    graph::TextureDesc{plan->ao_w, plan->ao_h, plan->coarse ? graph::Format::RGBA32F : graph::Format::R32F});
+    const auto traced = cone_ao(fg, ctx, plan, gb, res, history);
+    if (ctx.opt.read_slicemap) read_slicemap(fg, ctx, plan, res);
+    return plan->coarse ? ao_upsample(fg, ctx, plan, gb, traced) : traced;
+}
+
+} // namespace iso::passes

@@ -1,0 +1,113 @@
+// One frame of the renderer as pass-graph passes, one function per pass in
+// its own file (docs/pass_graph.md, "How to add a pass"). A pass function
+// takes the graph, the frame's context and its input handles, declares what
+// it creates, reads and writes, and returns its output handles; its GL work
+// runs later, in FrameGraph::execute, and only if something needed reads
+// what it writes. build_frame() assembles the whole frame; with a null
+// FrameContext::gl it only declares, so the real frame's culling is tested
+// without a GPU (tests/unit/frame_test.cpp).
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <vector>
+
+#include <glm/mat3x3.hpp>
+#include <glm/mat4x4.hpp>
+
+#include "renderer/graph/frame_graph.hpp"
+#include "renderer/graph/resource_pool.hpp"
+#include "renderer/render/overlay.hpp"
+#include "renderer/render/renderer.hpp"
+
+namespace iso::passes {
+
+class GlResources;
+
+// A visible, non-empty mesh as the passes draw it.
+struct DrawItem {
+    std::uint32_t vao = 0;   // GL vertex array (positions at 0, normals at 1)
+    std::int32_t count = 0;  // indices
+    std::uint32_t id = 0;    // object id (1-based) written to the id AOV
+    glm::vec3 color{1.0f};   // linear albedo
+};
+
+// What the AO passes keep between frames besides their history resources.
+struct AoHistory {
+    std::vector<double> view_key;   // what the slicemap was built for
+    ConeAoSettings settings;        // what the accumulated AO was traced with
+    int frames = 0;                 // still frames accumulated so far
+};
+
+struct FrameContext {
+    GlResources* gl = nullptr;          // null: declare only (compile without a GPU)
+    graph::ResourcePool* pool = nullptr;
+    Camera camera;
+    RenderOptions opt;
+    int width = 1, height = 1;
+    glm::mat4 view_projection{1.0f};
+    glm::mat3 world_to_view{1.0f};
+    std::vector<DrawItem> draws;
+    Bounds bounds;                      // of the visible meshes
+    std::uint64_t geometry_version = 0; // changes when meshes are added
+    std::vector<OverlayVertex> overlay; // annotation triangles (empty: none)
+    AoHistory* ao = nullptr;            // required when the AO passes run
+    RenderResult* result = nullptr;     // what passes report back (image, AO state, slicemap)
+};
+
+// Builds the context of a frame: matrices, bounds and the AO/overlay inputs.
+FrameContext make_context(const Camera& camera, const RenderOptions& opt, std::vector<DrawItem> draws, const Bounds& bounds);
+
+// ---- passes (one file each) ----------------------------------------------
+
+struct GBuffer {
+    graph::TextureHandle depth, normal, id, albedo;
+};
+GBuffer gbuffer(graph::FrameGraph& fg, const FrameContext& ctx);
+
+// The cone-AO passes' shared plan for this frame (ao_plan.cpp): grid sizes,
+// guard band, z range bounds, whether the slicemap must be rebuilt.
+struct AoPlan {
+    ConeAoSettings settings;
+    double guard = 0;
+    int grid_w = 1, grid_h = 1, ao_w = 1, ao_h = 1;
+    bool coarse = false, voxelize = false;
+    glm::vec2 sm_scale{1.0f}, proj_scale{1.0f};
+    float scene_far = 0, radius = 0, near_margin = 0, near_plane = 0, far_plane = 0;
+    glm::dmat4 sm_projection{1.0};
+    glm::mat4 sm_view_projection{1.0f}, view{1.0f};
+    std::vector<double> key;
+    std::size_t pattern_bytes = 0;
+};
+AoPlan plan_ao(const FrameContext& ctx);
+// Passes keep the plan until they execute.
+using AoPlanRef = std::shared_ptr<const AoPlan>;
+
+struct AoResources {
+    graph::BufferHandle zrange;       // history: the slicemap's linear z range
+    graph::TextureHandle slicemap;    // history: the solid voxelization
+};
+graph::BufferHandle zrange(graph::FrameGraph& fg, const FrameContext& ctx, const GBuffer& gb, graph::BufferHandle range);
+graph::TextureHandle voxelize(graph::FrameGraph& fg, const FrameContext& ctx, const AoPlanRef& plan, graph::BufferHandle range,
+                              graph::TextureHandle slicemap);
+// Traces the cones into `target` (history: accumulates over still frames).
+graph::TextureHandle cone_ao(graph::FrameGraph& fg, const FrameContext& ctx, const AoPlanRef& plan, const GBuffer& gb,
+                             const AoResources& in, graph::TextureHandle target);
+graph::TextureHandle ao_upsample(graph::FrameGraph& fg, const FrameContext& ctx, const AoPlanRef& plan, const GBuffer& gb,
+                                 graph::TextureHandle coarse);
+void read_slicemap(graph::FrameGraph& fg, const FrameContext& ctx, const AoPlanRef& plan, const AoResources& in);
+// Declares the AO chain (zrange, voxelize when stale, cone_ao, ao_upsample
+// when coarser): returns the full-resolution AO image (1 = unoccluded).
+graph::TextureHandle ambient_occlusion(graph::FrameGraph& fg, const FrameContext& ctx, const GBuffer& gb);
+
+// Deferred lighting; `ao` invalid: no AO.
+graph::TextureHandle lighting(graph::FrameGraph& fg, const FrameContext& ctx, const GBuffer& gb, graph::TextureHandle ao);
+graph::TextureHandle overlay(graph::FrameGraph& fg, const FrameContext& ctx, graph::TextureHandle color);
+void present(graph::FrameGraph& fg, const FrameContext& ctx, graph::TextureHandle color);
+void readback(graph::FrameGraph& fg, const FrameContext& ctx, graph::TextureHandle source);
+
+// The whole frame: gbuffer -> [AO] -> lighting -> [overlay] -> present or
+// readback of the colour image or the requested AOV.
+void build_frame(graph::FrameGraph& fg, const FrameContext& ctx);
+
+} // namespace iso::passes

@@ -1,0 +1,61 @@
+// Voxelize: the screen-aligned solid slicemap (XOR logic op over 128-bit
+// columns per layer, local z range), rebuilt only when stale (ao_plan.cpp).
+#include "renderer/passes/frame.hpp"
+#include "renderer/passes/gl_resources.hpp"
+
+namespace iso::passes {
+
+graph::TextureHandle voxelize(graph::FrameGraph& fg, const FrameContext& ctx, const AoPlanRef& plan, graph::BufferHandle range,
+                              graph::TextureHandle slicemap) {
+    struct Data {
+        graph::BufferHandle range;
+        graph::TextureHandle slicemap;
+    };
+    return fg.add_pass<Data>(
+                 "voxelize",
+                 [&](graph::FrameGraph::Builder& b, Data& d) {
+                     d.range = b.read(range);
+                     d.slicemap = b.write(slicemap);
+                 },
+                 [&ctx, plan](const Data& d, const graph::Resources& r) {
+                     GlResources& gl = *ctx.gl;
+                     const GLuint tex = gl.texture(r, d.slicemap);
+                     const int layers = plan->settings.layers;
+                     std::vector<GlResources::Attachment> at;
+                     for (int l = 0; l < layers; ++l) at.push_back({tex, l});
+                     const GLuint fb = gl.framebuffer(at);
+                     const GLuint zero[4] = {0, 0, 0, 0};
+                     for (int l = 0; l < layers; ++l) glClearNamedFramebufferuiv(fb, GL_COLOR, l, zero);
+                     glBindFramebuffer(GL_FRAMEBUFFER, fb);
+                     glViewport(0, 0, plan->grid_w, plan->grid_h);
+                     glDisable(GL_DEPTH_TEST);
+                     glDisable(GL_CULL_FACE);
+                     glEnable(GL_DEPTH_CLAMP);
+                     glEnable(GL_COLOR_LOGIC_OP);
+                     glLogicOp(GL_XOR);
+                     glClipControl(GL_LOWER_LEFT, GL_ZERO_TO_ONE);
+                     auto& prog = gl.program({"ao/slicemap.vert", "ao/slicemap.frag"}, "#define LAYERS " + std::to_string(layers) + "\n");
+                     prog.use();
+                     glUniformMatrix4fv(prog.uniform("view_projection"), 1, GL_FALSE, &plan->sm_view_projection[0][0]);
+                     glUniformMatrix4fv(prog.uniform("view"), 1, GL_FALSE, &plan->view[0][0]);
+                     glUniform1f(prog.uniform("scene_far"), plan->scene_far);
+                     glUniform1f(prog.uniform("near_margin"), plan->near_margin);
+                     glUniform1f(prog.uniform("radius"), plan->radius);
+                     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, gl.buffer(r, d.range));
+                     for (const auto& m : ctx.draws) {
+                         glBindVertexArray(m.vao);
+                         glDrawElements(GL_TRIANGLES, m.count, GL_UNSIGNED_INT, nullptr);
+                     }
+                     glBindVertexArray(0);
+                     glClipControl(GL_LOWER_LEFT, GL_NEGATIVE_ONE_TO_ONE);
+                     glDisable(GL_COLOR_LOGIC_OP);
+                     glDisable(GL_DEPTH_CLAMP);
+                     glBindFramebuffer(GL_FRAMEBUFFER, 0);
+                     glMemoryBarrier(GL_TEXTURE_FETCH_BARRIER_BIT);
+                     ctx.ao->view_key = plan->key;
+                     ctx.result->voxelized = true;
+                 })
+        .slicemap;
+}
+
+} // namespace iso::passes

@@ -1,0 +1,107 @@
+// The renderer's real frame (renderer/passes/build_frame), compiled without a
+// GPU for each configuration: which passes run is decided by the graph's
+// culling from what the frame reads, never by the caller. No GL context: the
+// passes' GL work would only run in execute().
+#include "renderer/passes/frame.hpp"
+
+#include "io/error.hpp"
+#include "test_util.hpp"
+
+using namespace iso;
+using Passes = std::vector<std::string>;
+
+namespace {
+
+struct NullBackend : graph::Backend {
+    std::uint64_t next = 1;
+    std::uint64_t create_texture(const graph::TextureDesc&, const std::string&) override { return next++; }
+    std::uint64_t create_buffer(const graph::BufferDesc&, const std::string&) override { return next++; }
+    void destroy(std::uint64_t) override {}
+};
+
+struct Compiled {
+    Passes running;
+};
+
+Compiled compile(const RenderOptions& opt) {
+    NullBackend be;
+    graph::ResourcePool pool(be);
+    passes::AoHistory history;
+    RenderResult result;
+    Bounds b;
+    b.add({-50, -50, -50});
+    b.add({50, 50, 50});
+    Camera cam;
+    cam.set_view(PatientView::Anterior, b);
+    cam.fit(b, double(opt.width) / opt.height);
+    passes::FrameContext ctx = passes::make_context(cam, opt, {{0, 36, 1, glm::vec3(1)}, {0, 36, 2, glm::vec3(1)}}, b);
+    ctx.pool = &pool;
+    ctx.ao = &history;
+    ctx.result = &result;
+    graph::FrameGraph fg;
+    passes::build_frame(fg, ctx);
+    fg.compile();
+    Compiled c;
+    c.running = fg.running_passes();
+    return c;
+}
+
+RenderOptions options() {
+    RenderOptions o;
+    o.width = 64;
+    o.height = 48;
+    return o;
+}
+
+} // namespace
+
+TEST(Frame, OpaqueColourWithoutAoRunsGbufferLightingReadback) {
+    EXPECT_EQ(compile(options()).running, (Passes{"gbuffer", "lighting", "readback"}));
+}
+
+TEST(Frame, AoOnRunsTheConeChainBeforeLighting) {
+    RenderOptions o = options();
+    o.ao = true;
+    EXPECT_EQ(compile(o).running, (Passes{"gbuffer", "zrange", "voxelize", "cone_ao", "ao_upsample", "lighting", "readback"}));
+    o.ao_settings.resolution = 1.0; // traced at full size: no upsampling
+    EXPECT_EQ(compile(o).running, (Passes{"gbuffer", "zrange", "voxelize", "cone_ao", "lighting", "readback"}));
+    o.read_slicemap = true;
+    EXPECT_EQ(compile(o).running, (Passes{"gbuffer", "zrange", "voxelize", "cone_ao", "read_slicemap", "lighting", "readback"}));
+}
+
+TEST(Frame, AnAovRunsOnlyItsProducers) {
+    RenderOptions o = options();
+    o.ao = true; // on, but a depth AOV does not read it
+    for (const Aov aov : {Aov::Depth, Aov::Normal, Aov::Id}) {
+        o.aov = aov;
+        EXPECT_EQ(compile(o).running, (Passes{"gbuffer", "readback"})) << int(aov);
+    }
+    o.ao = false;
+    o.aov = Aov::Ao; // the raw AO term without lighting
+    EXPECT_EQ(compile(o).running, (Passes{"gbuffer", "zrange", "voxelize", "cone_ao", "ao_upsample", "readback"}));
+}
+
+TEST(Frame, AnnotationsAddTheOverlayAndPresentReplacesTheReadback) {
+    RenderOptions o = options();
+    Annotations ann;
+    o.annotations = &ann;
+    EXPECT_EQ(compile(o).running, (Passes{"gbuffer", "lighting", "overlay", "readback"}));
+    o.aov = Aov::Depth; // annotations go on the colour image only
+    EXPECT_EQ(compile(o).running, (Passes{"gbuffer", "readback"}));
+    o.aov = Aov::None;
+    o.present = true;
+    EXPECT_EQ(compile(o).running, (Passes{"gbuffer", "lighting", "overlay", "present"}));
+}
+
+TEST(Frame, BadAoSettingsAreRefusedOnlyWhenAoIsAskedFor) {
+    RenderOptions o = options();
+    o.ao_settings.cones = 0;
+    EXPECT_EQ(compile(o).running, (Passes{"gbuffer", "lighting", "readback"}));
+    o.ao = true;
+    try {
+        compile(o);
+        ADD_FAILURE() << "cones = 0 was accepted";
+    } catch (const Error& e) {
+        EXPECT_NE(std::string(e.what()).find("cones"), std::string::npos) << e.what();
+    }
+}
