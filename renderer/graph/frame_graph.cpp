@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <chrono>
 #include <map>
+#include <type_traits>
 
 #include "io/error.hpp"
 #include "renderer/graph/resource_pool.hpp"
@@ -107,41 +108,32 @@ void FrameGraph::check(std::uint32_t index, std::uint32_t version, bool texture,
     if (version > r.version) throw Error(what, "handle of '" + r.name + "' has a version that does not exist");
 }
 
-TextureHandle FrameGraph::import(const std::string& name, const TextureDesc& d, std::uint64_t physical) {
+namespace {
+template <class Desc> void set_desc(auto& r, const Desc& d) {
+    if constexpr (std::is_same_v<Desc, TextureDesc>) {
+        r.tdesc = d;
+    } else {
+        r.texture = false;
+        r.bdesc = d;
+    }
+}
+} // namespace
+
+// Imported (physical given) or history (physical from the pool's named store).
+template <class Desc> Handle<Desc> FrameGraph::declare(const std::string& name, const Desc& d, bool history, std::uint64_t physical) {
     Resource r;
     r.name = name;
-    r.tdesc = d;
-    r.imported = true;
+    set_desc(r, d);
+    r.imported = !history;
+    r.history = history;
     r.physical = physical;
     return {add_resource(std::move(r)), 0};
 }
 
-BufferHandle FrameGraph::import(const std::string& name, const BufferDesc& d, std::uint64_t physical) {
-    Resource r;
-    r.name = name;
-    r.texture = false;
-    r.bdesc = d;
-    r.imported = true;
-    r.physical = physical;
-    return {add_resource(std::move(r)), 0};
-}
-
-TextureHandle FrameGraph::history(const std::string& name, const TextureDesc& d) {
-    Resource r;
-    r.name = name;
-    r.tdesc = d;
-    r.history = true;
-    return {add_resource(std::move(r)), 0};
-}
-
-BufferHandle FrameGraph::history(const std::string& name, const BufferDesc& d) {
-    Resource r;
-    r.name = name;
-    r.texture = false;
-    r.bdesc = d;
-    r.history = true;
-    return {add_resource(std::move(r)), 0};
-}
+TextureHandle FrameGraph::import(const std::string& name, const TextureDesc& d, std::uint64_t physical) { return declare(name, d, false, physical); }
+BufferHandle FrameGraph::import(const std::string& name, const BufferDesc& d, std::uint64_t physical) { return declare(name, d, false, physical); }
+TextureHandle FrameGraph::history(const std::string& name, const TextureDesc& d) { return declare(name, d, true, 0); }
+BufferHandle FrameGraph::history(const std::string& name, const BufferDesc& d) { return declare(name, d, true, 0); }
 
 void FrameGraph::request(TextureHandle h) {
     check(h.index, h.version, true, "FrameGraph::request");

@@ -206,6 +206,7 @@ private:
         std::shared_ptr<void> keep_alive;
     };
     std::uint32_t add_resource(Resource r);
+    template <class Desc> Handle<Desc> declare(const std::string& name, const Desc& d, bool history, std::uint64_t physical);
     void check(std::uint32_t index, std::uint32_t version, bool texture, const char* what) const;
     void cull();
     bool compiled_ = false, executed_ = false;
