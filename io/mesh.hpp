@@ -30,7 +30,16 @@ struct MeshStats {
 };
 MeshStats mesh_stats(const Mesh& m);
 
-// Formats by extension: .stl (binary; ASCII read too), .ply, .obj, .vtp.
+// The mesh file extensions isoscope reads and writes, lower case with the
+// dot: .stl (binary; ASCII read too), .ply, .obj, .vtp. The one list: the
+// readers, the writers and the front ends all ask it.
+const std::vector<std::string>& mesh_extensions();
+// Does the path's extension (any case: .STL too) name a mesh format?
+bool is_mesh_path(const std::string& path);
+// "'.stl', '.ply', '.obj' or '.vtp'", for messages.
+std::string mesh_extensions_text();
+
+// Formats by extension (mesh_extensions()).
 // Readers convert to LPS when the file says it is in RAS (Slicer's
 // "SPACE=RAS" comment); files that say nothing are taken as LPS.
 Mesh load_mesh(const std::string& path);

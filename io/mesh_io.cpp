@@ -68,16 +68,21 @@ MeshStats mesh_stats(const Mesh& m) {
 
 namespace {
 
+// In the order of mesh_extensions().
 enum class Fmt { Stl, Ply, Obj, Vtp };
 
-Fmt format_of(const std::string& path) {
+std::string lower_extension(const std::string& path) {
     std::string ext = fs::path(path).extension().string();
     std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return char(std::tolower(c)); });
-    if (ext == ".stl") return Fmt::Stl;
-    if (ext == ".ply") return Fmt::Ply;
-    if (ext == ".obj") return Fmt::Obj;
-    if (ext == ".vtp") return Fmt::Vtp;
-    throw Error(path, "unsupported mesh format '" + ext + "' (expected .stl, .ply, .obj or .vtp)");
+    return ext;
+}
+
+Fmt format_of(const std::string& path) {
+    const std::string ext = lower_extension(path);
+    const auto& all = mesh_extensions();
+    for (std::size_t i = 0; i < all.size(); ++i)
+        if (ext == all[i]) return Fmt(i);
+    throw Error(path, "unsupported mesh format '" + ext + "' (expected " + mesh_extensions_text() + ")");
 }
 
 
@@ -222,6 +227,24 @@ void write_obj(const Mesh& m, const std::string& path) {
 }
 
 } // namespace
+
+const std::vector<std::string>& mesh_extensions() {
+    static const std::vector<std::string> all = {".stl", ".ply", ".obj", ".vtp"};
+    return all;
+}
+
+bool is_mesh_path(const std::string& path) {
+    const std::string ext = lower_extension(path);
+    const auto& all = mesh_extensions();
+    return std::find(all.begin(), all.end(), ext) != all.end();
+}
+
+std::string mesh_extensions_text() {
+    std::string s;
+    const auto& all = mesh_extensions();
+    for (std::size_t i = 0; i < all.size(); ++i) s += (i == 0 ? "" : i + 1 == all.size() ? " or " : ", ") + all[i];
+    return s;
+}
 
 Mesh load_mesh(const std::string& path) {
     quiet_vtk();

@@ -84,6 +84,42 @@ iso::ProgressFn progress_bar() {
     };
 }
 
+// The core names operations and settings in its errors; on the command line
+// they are flags.
+std::string cli_message(const iso::Error& e) {
+    static const std::pair<std::string, std::string> flags[] = {
+        {"patient view", "--view"},
+        {"AOV", "--aov"},
+        {"ao AOV", "--aov ao"},
+        {"ambient occlusion", "--ao"},
+        {"ambient occlusion reference", "--ao reference"},
+        {"ambient occlusion frames", "--ao-frames"},
+        {"smoothing factor", "--smooth"},
+        {"decimation fraction", "--decimate"},
+    };
+    std::string where = e.where();
+    const std::string cone = "cone AO setting ";
+    if (where.rfind(cone, 0) == 0) where = "--ao-" + where.substr(cone.size());
+    for (const auto& [core, flag] : flags)
+        if (where == core) where = flag;
+    return where.empty() ? e.reason() : where + ": " + e.reason();
+}
+
+// Opens the input of `render` and `view`: a mesh, or a volume and its
+// isosurfaces (--iso required).
+void open_input(iso::core::Scene& scene, const std::string& input, const std::string& series, const std::vector<double>& isos,
+                const std::string& command) {
+    iso::LoadOptions lo;
+    lo.series = series;
+    lo.progress = progress_bar();
+    scene.open(input, lo);
+    if (!scene.has_volume()) return;
+    for (const auto& w : scene.volume().meta.warnings) std::cerr << "warning: " << w << "\n";
+    if (isos.empty()) throw iso::Error("isoscope " + command, input + " is a volume: give --iso V (repeatable)");
+    for (const auto id : scene.add_isosurfaces(isos, {}, {}, progress_bar()))
+        for (const auto& w : scene.mesh(id).warnings) std::cerr << "warning: " << scene.info(id).name << ": " << w << "\n";
+}
+
 } // namespace
 
 int main(int argc, char** argv) {
@@ -206,62 +242,42 @@ int main(int argc, char** argv) {
             if (!mesh_isos.empty() && mesh_labels) throw iso::Error("isoscope mesh", "--iso and --labels exclude each other");
             namespace fs = std::filesystem;
             const fs::path out(mesh_out);
-            std::string ext = out.extension().string();
-            for (auto& c : ext) c = char(std::tolower(static_cast<unsigned char>(c)));
-            if (ext != ".stl" && ext != ".ply" && ext != ".obj" && ext != ".vtp")
-                throw iso::Error(mesh_out, "unsupported mesh format (write .stl, .ply, .obj or .vtp)");
+            if (!iso::is_mesh_path(mesh_out))
+                throw iso::Error(mesh_out, "unsupported mesh format (write " + iso::mesh_extensions_text() + ")");
             iso::check_writable_destination(mesh_out); // fail before the long part
             iso::LoadOptions lo;
             lo.series = mesh_series;
             lo.progress = progress_bar();
-            const auto v = iso::core::open_volume(mesh_in, lo);
-            for (const auto& w : v.meta.warnings) std::cerr << "warning: " << w << "\n";
-            iso::core::SurfaceRequest req;
-            req.isos = mesh_isos;
-            req.labels = mesh_labels;
-            req.label_values = mesh_label_values;
-            req.extract.threads = mesh_threads;
-            req.extract.chunk_size = mesh_chunk;
-            req.post = post;
-            req.progress = progress_bar();
-            const auto surfaces = iso::core::extract_surfaces(v, req);
-            for (const auto& s : surfaces) {
+            iso::core::Scene scene;
+            if (scene.open(mesh_in, lo) != 0) throw iso::Error(mesh_in, "is a mesh; isoscope mesh extracts surfaces from volumes");
+            for (const auto& w : scene.volume().meta.warnings) std::cerr << "warning: " << w << "\n";
+            iso::ExtractOptions eo;
+            eo.threads = mesh_threads;
+            eo.chunk_size = mesh_chunk;
+            const auto ids = mesh_labels ? scene.add_label_surfaces(mesh_label_values, eo, post, progress_bar())
+                                         : scene.add_isosurfaces(mesh_isos, eo, post, progress_bar());
+            const std::string ext = out.extension().string();
+            for (const auto id : ids) {
+                const auto& s = scene.info(id);
                 std::string path = mesh_out;
-                if (surfaces.size() > 1) {
+                if (ids.size() > 1) {
                     char suffix[64];
                     std::snprintf(suffix, sizeof suffix, mesh_labels ? "-label%g" : "-iso%g", s.value);
                     path = (out.parent_path() / (out.stem().string() + suffix + ext)).string();
                 }
-                for (const auto& w : s.mesh.warnings) std::cerr << "warning: " << s.name << ": " << w << "\n";
-                iso::save_mesh(s.mesh, path);
-                const auto st = iso::mesh_stats(s.mesh);
+                const auto& m = scene.mesh(id);
+                for (const auto& w : m.warnings) std::cerr << "warning: " << s.name << ": " << w << "\n";
+                scene.export_mesh(id, path);
+                const auto st = iso::mesh_stats(m);
                 std::cout << s.name << ": " << st.triangles << " triangles, " << st.vertices << " vertices, area "
                           << st.area << " mm^2, volume " << st.volume << " mm^3 -> " << path << "\n";
             }
         }
         if (*view) {
             const auto initial = iso::patient_view_from_name(v_view);
-            std::vector<iso::gui::ViewerMesh> meshes;
-            const std::string ext = std::filesystem::path(v_in).extension().string();
-            if (ext == ".stl" || ext == ".ply" || ext == ".obj" || ext == ".vtp") {
-                const auto c = iso::core::surface_color(0, 1);
-                meshes.push_back({iso::core::open_mesh(v_in), v_in, c.r, c.g, c.b});
-            } else {
-                iso::LoadOptions lo;
-                lo.series = v_series;
-                lo.progress = progress_bar();
-                const auto vol = iso::core::open_volume(v_in, lo);
-                if (v_isos.empty()) throw iso::Error("isoscope view", "give --iso V for a volume");
-                std::sort(v_isos.begin(), v_isos.end());
-                iso::core::SurfaceRequest req;
-                req.isos = v_isos;
-                req.progress = progress_bar();
-                auto surfaces = iso::core::extract_surfaces(vol, req);
-                for (std::size_t i = 0; i < surfaces.size(); ++i) {
-                    const auto c = iso::core::surface_color(i, surfaces.size());
-                    meshes.push_back({std::move(surfaces[i].mesh), surfaces[i].name, c.r, c.g, c.b});
-                }
-            }
+            iso::validate(v_opt.cone); // before the long part
+            iso::core::Scene scene;
+            open_input(scene, v_in, v_series, v_isos, "view");
             QSurfaceFormat fmt;
             fmt.setVersion(4, 5);
             fmt.setProfile(QSurfaceFormat::CoreProfile);
@@ -271,8 +287,7 @@ int main(int argc, char** argv) {
             char* qargv[] = {argv[0], nullptr};
             QApplication qapp(qargc, qargv);
             v_opt.ao = v_ao == "cone";
-            iso::validate(v_opt.cone);
-            iso::gui::Viewer w(std::move(meshes), initial, v_opt);
+            iso::gui::Viewer w(scene, initial, v_opt);
             w.setWindowTitle(QString::fromStdString("isoscope - " + v_in));
             w.resize(800, 600);
             w.show();
@@ -316,8 +331,10 @@ int main(int argc, char** argv) {
             req.time_passes = r_stats;
             req.progress = progress_bar();
             iso::check_writable_destination(r_out);
-            const auto out = iso::core::render_input(r_in, req);
-            iso::save_image(out.image, r_out, out.meta);
+            iso::core::Scene scene;
+            open_input(scene, r_in, r_series, r_isos, "render");
+            const auto out = iso::core::render_image(scene, req);
+            iso::core::export_image(out.image, out.meta, r_out);
             std::cout << "rendered " << out.image.width << "x" << out.image.height << " (" << out.gl_renderer << ") -> " << r_out << "\n";
             if (r_stats) {
                 std::cout << std::left << std::setw(12) << "pass" << std::setw(8) << "ran" << std::setw(12) << "ms" << "created\n";
@@ -332,7 +349,7 @@ int main(int argc, char** argv) {
             }
         }
     } catch (const iso::Error& e) {
-        std::cerr << "isoscope: error: " << e.what() << "\n";
+        std::cerr << "isoscope: error: " << cli_message(e) << "\n";
         return 1;
     } catch (const std::exception& e) {
         std::cerr << "isoscope: error: " << e.what() << "\n";

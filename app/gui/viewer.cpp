@@ -1,17 +1,22 @@
 #include "app/gui/viewer.hpp"
 
 #include <QKeyEvent>
+#include <QOpenGLContext>
+#include <QOpenGLFunctions>
 #include <QMouseEvent>
 #include <QTimer>
 #include <QWheelEvent>
 
+#include <iostream>
+
+#include "io/error.hpp"
+#include "renderer/core/scene.hpp"
 #include "renderer/render/overlay.hpp"
-#include "renderer/render/renderer.hpp"
 
 namespace iso::gui {
 
-Viewer::Viewer(std::vector<ViewerMesh> meshes, PatientView view, ViewerOptions options, QWidget* parent)
-    : QOpenGLWidget(parent), meshes_(std::move(meshes)), initial_view_(view), options_(options),
+Viewer::Viewer(core::Scene& scene, PatientView view, ViewerOptions options, QWidget* parent)
+    : QOpenGLWidget(parent), scene_(scene), initial_view_(view), options_(options),
       annotations_(std::make_unique<Annotations>()) {
     setFocusPolicy(Qt::StrongFocus);
     setMinimumSize(320, 240);
@@ -19,26 +24,40 @@ Viewer::Viewer(std::vector<ViewerMesh> meshes, PatientView view, ViewerOptions o
 
 Viewer::~Viewer() {
     makeCurrent(); // GL objects are released with the widget's context current
-    renderer_.reset();
+    scene_.release_gpu();
     doneCurrent();
 }
 
-void Viewer::initializeGL() {
-    renderer_ = std::make_unique<Renderer>();
-    for (const auto& m : meshes_) {
-        SceneObject o;
-        o.name = m.name;
-        o.color = {m.r, m.g, m.b};
-        renderer_->add(m.mesh, o);
-    }
-    meshes_.clear(); // on the GPU now
-    camera_.set_view(initial_view_, renderer_->bounds());
+namespace {
+void clear_to_background() {
+    auto* f = QOpenGLContext::currentContext()->functions();
+    f->glClearColor(0.08f, 0.09f, 0.11f, 1.0f);
+    f->glClear(GL_COLOR_BUFFER_BIT);
 }
+} // namespace
+
+void Viewer::initializeGL() { camera_.set_view(initial_view_, scene_.bounds()); }
 
 void Viewer::paintGL() {
+    if (!error_.empty()) {
+        clear_to_background();
+        return;
+    }
+    try {
+        draw();
+    } catch (const std::exception& e) {
+        // Nothing escapes into Qt's event loop: report, show the background, stop drawing.
+        error_ = e.what();
+        std::cerr << "isoscope view: error: " << error_ << "\n";
+        clear_to_background();
+        setToolTip(QString::fromStdString(error_));
+    }
+}
+
+void Viewer::draw() {
     const qreal dpr = devicePixelRatioF();
     const int w = std::max(1, int(width() * dpr)), h = std::max(1, int(height() * dpr));
-    camera_.fit_planes(renderer_->bounds());
+    camera_.fit_planes(scene_.bounds());
     RenderOptions opt;
     opt.width = w;
     opt.height = h;
@@ -48,7 +67,7 @@ void Viewer::paintGL() {
     opt.target_framebuffer = defaultFramebufferObject();
     opt.ao = options_.ao;
     opt.ao_settings = options_.cone;
-    const auto r = renderer_->render(camera_, opt);
+    const auto r = scene_.render(camera_, opt);
     ++frames_;
     ao_frames_ = options_.ao ? r.ao_frames : 0;
     // Progressive AO: while the camera and the scene stay still, keep
@@ -85,7 +104,7 @@ void Viewer::keyPressEvent(QKeyEvent* e) {
     }
     for (auto [k, v] : keys)
         if (e->key() == k) {
-            camera_.set_view(v, renderer_->bounds());
+            camera_.set_view(v, scene_.bounds());
             update();
             return;
         }

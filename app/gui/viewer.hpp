@@ -1,5 +1,7 @@
-// The 3D view of `isoscope view`: our renderer inside a QOpenGLWidget.
-// Presentation only: the scene comes from the core API.
+// The 3D view of `isoscope view`: a core::Scene drawn inside a
+// QOpenGLWidget. Presentation only: the scene, its surfaces and the renderer
+// are the core's (renderer/core/scene.hpp); the widget owns the camera and
+// the interaction.
 #pragma once
 
 #include <memory>
@@ -8,22 +10,17 @@
 
 #include <QOpenGLWidget>
 
-#include "io/mesh.hpp"
 #include "renderer/render/cone_ao.hpp"
 #include "renderer/scene/camera.hpp"
 
 namespace iso {
-class Renderer;
 struct Annotations;
+namespace core {
+class Scene;
 }
+} // namespace iso
 
 namespace iso::gui {
-
-struct ViewerMesh {
-    Mesh mesh;
-    std::string name;
-    float r, g, b;
-};
 
 struct ViewerOptions {
     bool ao = true;          // cone-traced AO (key O toggles it)
@@ -33,27 +30,32 @@ struct ViewerOptions {
 
 class Viewer : public QOpenGLWidget {
 public:
-    explicit Viewer(std::vector<ViewerMesh> meshes, PatientView view, ViewerOptions options = {}, QWidget* parent = nullptr);
+    // The scene must outlive the widget.
+    explicit Viewer(core::Scene& scene, PatientView view, ViewerOptions options = {}, QWidget* parent = nullptr);
     ~Viewer() override;
     int frames() const { return frames_; }
     // True once the picture stopped changing: AO off, or its still frames
     // all accumulated.
     bool converged() const { return frames_ > 0 && (!options_.ao || ao_frames_ >= options_.still_frames); }
     int ao_frames() const { return ao_frames_; }
+    // The last rendering error (empty: none). paintGL never lets one escape:
+    // it clears to the background, reports it here and on stderr, and stops.
+    const std::string& error() const { return error_; }
 
 protected:
     void initializeGL() override;
     void paintGL() override;
+    void draw();
     void mousePressEvent(QMouseEvent* e) override;
     void mouseMoveEvent(QMouseEvent* e) override;
     void wheelEvent(QWheelEvent* e) override;
     void keyPressEvent(QKeyEvent* e) override;
 
 private:
-    std::vector<ViewerMesh> meshes_;
+    core::Scene& scene_;
     PatientView initial_view_;
     ViewerOptions options_;
-    std::unique_ptr<Renderer> renderer_;
+    std::string error_;
     std::unique_ptr<Annotations> annotations_;
     Camera camera_;
     QPoint last_;

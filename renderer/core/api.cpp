@@ -58,70 +58,7 @@ nlohmann::json describe(const Volume& v) {
     return j;
 }
 
-std::vector<Surface> extract_surfaces(const Volume& v, const SurfaceRequest& req) {
-    std::vector<Surface> out;
-    // Extraction is most of the work; post-processing shares the rest of the bar.
-    const bool post = needs_postprocess(req.post);
-    const double share = post ? 0.6 : 1.0;
-    ExtractOptions eo = req.extract;
-    if (req.progress)
-        eo.progress = [&](double f, std::string_view stage) { return req.progress(f * share, stage); };
-    if (req.labels) {
-        for (auto& ls : extract_labels(v, req.label_values, eo)) {
-            char name[64];
-            std::snprintf(name, sizeof name, "label %g", ls.label);
-            out.push_back({name, ls.label, std::move(ls.mesh)});
-        }
-    } else {
-        if (req.isos.empty()) throw Error("extract_surfaces", "no iso value given");
-        const auto range = v.value_range();
-        for (std::size_t i = 0; i < req.isos.size(); ++i) {
-            char name[64];
-            std::snprintf(name, sizeof name, "iso %g", req.isos[i]);
-            out.push_back({name, req.isos[i], {}});
-        }
-        auto meshes = extract_isosurfaces(v, req.isos, eo);
-        for (std::size_t i = 0; i < meshes.size(); ++i) {
-            out[i].mesh = std::move(meshes[i]);
-            if (req.isos[i] > range.max || req.isos[i] <= range.min) {
-                char w[160];
-                std::snprintf(w, sizeof w, "iso value %g is outside the volume's value range [%g, %g]: the surface is empty",
-                              req.isos[i], range.min, range.max);
-                out[i].mesh.warnings.push_back(w);
-            }
-        }
-    }
-    if (post) {
-        for (std::size_t i = 0; i < out.size(); ++i) {
-            const double base = share + (1.0 - share) * double(i) / double(out.size());
-            ProgressFn pp;
-            if (req.progress)
-                pp = [&](double f, std::string_view stage) {
-                    return req.progress(base + f * (1.0 - share) / double(out.size()), stage);
-                };
-            auto warnings = out[i].mesh.warnings;
-            out[i].mesh = postprocess(out[i].mesh, req.post, pp);
-            out[i].mesh.warnings = std::move(warnings);
-        }
-    }
-    report(req.progress, 1.0, "done", "extract_surfaces");
-    return out;
-}
-
-glm::vec3 surface_color(std::size_t index, std::size_t count) {
-    // Outer surfaces (lower CT values) skin-toned, inner ones bone white; more get distinct hues.
-    static const glm::vec3 palette[] = {{0.93f, 0.72f, 0.60f}, {0.95f, 0.92f, 0.84f}, {0.85f, 0.25f, 0.22f},
-                                        {0.35f, 0.55f, 0.85f}, {0.45f, 0.75f, 0.40f}, {0.80f, 0.65f, 0.30f}};
-    if (count == 1) return palette[1];
-    return palette[index % 6];
-}
-
 namespace {
-bool is_mesh_path(const std::string& p) {
-    std::string e = std::filesystem::path(p).extension().string();
-    std::transform(e.begin(), e.end(), e.begin(), [](unsigned char c) { return char(std::tolower(c)); });
-    return e == ".stl" || e == ".ply" || e == ".obj" || e == ".vtp";
-}
 std::vector<float> flat(const glm::dmat4& m) {
     std::vector<float> v;
     for (int c = 0; c < 4; ++c)
@@ -141,8 +78,8 @@ std::filesystem::path cache_folder(const std::string& requested) {
 
 // The Embree reference for this view, from the cache when the same input,
 // surfaces, camera, size, radius and ray count were traced before.
-Image ao_reference_cached(Renderer& ren, const Camera& cam, const RenderOptions& ro, const std::vector<Mesh>& meshes,
-                          const std::map<std::string, std::string>& t, const RenderRequest& req, bool& hit) {
+Image ao_reference_cached(Scene& scene, const Camera& cam, const RenderOptions& ro, const std::map<std::string, std::string>& t,
+                          const RenderRequest& req, bool& hit) {
     std::ostringstream key;
     key.precision(17);
     key << "ao-reference v1 (Embree, Malley, rotated Hammersley, seed 1)\n"
@@ -168,11 +105,12 @@ Image ao_reference_cached(Renderer& ren, const Camera& cam, const RenderOptions&
     d.annotations = nullptr;
     d.ao = false;
     d.aov = Aov::Depth;
-    const Image depth = ren.render(cam, d).image;
+    const Image depth = scene.render(cam, d).image;
     d.aov = Aov::Normal;
-    const Image normal = ren.render(cam, d).image;
+    const Image normal = scene.render(cam, d).image;
     std::vector<const Mesh*> ptrs;
-    for (const auto& m : meshes) ptrs.push_back(&m);
+    for (const SurfaceId id : scene.surfaces())
+        if (scene.info(id).visible) ptrs.push_back(&scene.mesh(id));
     AoReference reference(ptrs);
     AoReferenceOptions ao;
     ao.radius_mm = req.ao_radius_mm;
@@ -190,43 +128,9 @@ Image ao_reference_cached(Renderer& ren, const Camera& cam, const RenderOptions&
     }
     return img;
 }
-} // namespace
 
-RenderOutput render_input(const std::string& input, const RenderRequest& req) {
-    static gl::HeadlessContext ctx; // one per process, made on first use
-    ctx.make_current();
-    RenderOutput out;
-    Renderer ren;
-    std::string isos_text;
-    std::vector<Mesh> meshes_for_ao; // kept only when the AO reference needs them
-    if (is_mesh_path(input)) {
-        Mesh m = load_mesh(input);
-        ren.add(m, {std::filesystem::path(input).filename().string(), surface_color(0, 1)});
-        if (req.aov_ao && req.ao == "reference") meshes_for_ao.push_back(std::move(m));
-    } else {
-        LoadOptions lo;
-        lo.series = req.series;
-        lo.progress = req.progress;
-        const Volume v = load_volume(input, lo);
-        if (req.isos.empty()) throw Error("render", "give at least one --iso value for a volume");
-        std::vector<double> isos = req.isos;
-        std::sort(isos.begin(), isos.end());
-        SurfaceRequest sr;
-        sr.isos = isos;
-        sr.progress = req.progress;
-        const auto surfaces = extract_surfaces(v, sr);
-        for (std::size_t i = 0; i < surfaces.size(); ++i) {
-            ren.add(surfaces[i].mesh, {surfaces[i].name, surface_color(i, surfaces.size())});
-            if (req.aov_ao && req.ao == "reference") meshes_for_ao.push_back(surfaces[i].mesh);
-            char b[32];
-            std::snprintf(b, sizeof b, "%s%g", i ? "," : "", isos[i]);
-            isos_text += b;
-        }
-    }
-    Camera cam;
-    cam.set_view(patient_view_from_name(req.view), ren.bounds());
-    cam.fit(ren.bounds(), double(req.width) / double(req.height));
-    Annotations ann;
+// The render request's settings, checked; errors name the setting, not a flag.
+RenderOptions render_options(const RenderRequest& req) {
     RenderOptions ro;
     ro.width = req.width;
     ro.height = req.height;
@@ -234,32 +138,76 @@ RenderOutput render_input(const std::string& input, const RenderRequest& req) {
     ro.scale = req.scale;
     if (req.transparent) ro.background.a = 0.0f;
     ro.time_passes = req.time_passes;
-    if (req.annotations && req.aov == Aov::None) ro.annotations = &ann;
     if (req.ao != "off" && req.ao != "cone" && req.ao != "reference")
-        throw Error("--ao", "expected off, cone or reference, got '" + req.ao + "'");
+        throw Error("ambient occlusion", "method must be off, cone or reference, got '" + req.ao + "'");
     if (req.ao == "reference" && !req.aov_ao)
-        throw Error("--ao reference", "the ray-traced reference is written only as the raw term: add --aov ao");
-    if (req.aov_ao && req.ao == "off") throw Error("--aov ao", "needs --ao cone or --ao reference");
-    if (req.ao_frames < 1 || req.ao_frames > 4096) throw Error("--ao-frames", "expected 1..4096, got " + std::to_string(req.ao_frames));
-    const bool cone = req.ao == "cone";
-    if (cone) {
+        throw Error("ambient occlusion reference", "the ray-traced reference is written only as the raw AO term (the ao AOV)");
+    if (req.aov_ao && req.ao == "off") throw Error("ao AOV", "needs cone or reference ambient occlusion");
+    if (req.ao_frames < 1 || req.ao_frames > 4096)
+        throw Error("ambient occlusion frames", "expected 1..4096, got " + std::to_string(req.ao_frames));
+    if (req.ao == "cone") {
         ro.ao = !req.aov_ao;
         ro.ao_settings = req.cone;
         ro.ao_settings.radius_mm = req.ao_radius_mm;
         validate(ro.ao_settings);
         if (req.aov_ao) ro.aov = Aov::Ao;
     }
+    return ro;
+}
+} // namespace
+
+RenderOutput render_input(const std::string& input, const RenderRequest& req) {
+    Scene scene;
+    LoadOptions lo;
+    lo.series = req.series;
+    lo.progress = req.progress;
+    scene.open(input, lo);
+    if (scene.has_volume()) {
+        if (req.isos.empty()) throw Error("render " + input, "a volume needs at least one iso value");
+        scene.add_isosurfaces(req.isos, {}, {}, req.progress);
+    }
+    return render_image(scene, req);
+}
+
+RenderOutput render_image(Scene& scene, const RenderRequest& req) {
+    static gl::HeadlessContext ctx; // one per process, made on first use
+    ctx.make_current();
+    RenderOutput out;
+    std::string isos_text;
+    for (const SurfaceId id : scene.surfaces())
+        if (scene.info(id).kind == SurfaceInfo::Kind::Iso) {
+            char b[32];
+            std::snprintf(b, sizeof b, "%s%g", isos_text.empty() ? "" : ",", scene.info(id).value);
+            isos_text += b;
+        }
+    RenderOptions ro = render_options(req);
+    Annotations ann;
+    if (req.annotations && req.aov == Aov::None) ro.annotations = &ann;
+    const Camera cam = scene.camera(patient_view_from_name(req.view), double(req.width) / double(req.height));
+    const bool cone = req.ao == "cone";
     // Still frames: each adds new jitter sets to the running mean of the AO.
-    for (int f = 1; cone && f < req.ao_frames; ++f) ren.render(cam, ro);
-    auto r = ren.render(cam, ro);
+    for (int f = 1; cone && f < req.ao_frames; ++f) scene.render(cam, ro);
+    auto r = scene.render(cam, ro);
+    // One GL context serves every scene of the process: free this one's GPU
+    // resources while it is current.
+    struct Release {
+        Scene& s;
+        ~Release() { s.release_gpu(); }
+    } release{scene};
     out.image = std::move(r.image);
     out.stats = std::move(r.stats);
     out.gl_renderer = r.gl_renderer;
     out.camera = cam;
     auto& t = out.meta.text;
     t["isoscope:version"] = version();
-    t["isoscope:input"] = std::filesystem::absolute(input).string();
-    t["isoscope:input_sha256"] = sha256_of_path(input);
+    // The inputs: one path (and its SHA-256) each, joined by newlines.
+    std::string inputs, hashes;
+    for (const auto& src : scene.sources()) {
+        inputs += (inputs.empty() ? "" : "\n") + std::filesystem::absolute(src).string();
+        hashes += (hashes.empty() ? "" : "\n") + sha256_of_path(src);
+    }
+    t["isoscope:input"] = inputs;
+    t["isoscope:input_sha256"] = hashes;
     if (!isos_text.empty()) t["isoscope:iso"] = isos_text;
     t["isoscope:view_name"] = req.view;
     std::ostringstream cs;
@@ -293,7 +241,7 @@ RenderOutput render_input(const std::string& input, const RenderRequest& req) {
         if (req.ao == "reference") {
             t["isoscope:ao"] = "reference (Embree ray tracing)";
             t["isoscope:ao_rays"] = std::to_string(req.ao_rays);
-            out.image = ao_reference_cached(ren, cam, ro, meshes_for_ao, t, req, out.ao_cache_hit);
+            out.image = ao_reference_cached(scene, cam, ro, t, req, out.ao_cache_hit);
         }
     }
     out.meta.float_arrays["isoscope:view"] = flat(cam.view());

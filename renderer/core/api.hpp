@@ -7,8 +7,7 @@
 #include <nlohmann/json.hpp>
 
 #include "io/mesh.hpp"
-#include "renderer/iso/extract.hpp"
-#include "renderer/iso/postprocess.hpp"
+#include "renderer/core/scene.hpp"
 #include "renderer/render/overlay.hpp"
 #include "renderer/render/renderer.hpp"
 #include "io/volume.hpp"
@@ -30,32 +29,11 @@ std::vector<SeriesInfo> list_series(const std::string& path);
 // storage (dense/sparse), metadata, warnings and, for DICOM, the series list.
 nlohmann::json describe(const Volume& v);
 
-// ---- surfaces -------------------------------------------------------------
-
-struct SurfaceRequest {
-    std::vector<double> isos;   // iso values (ignored with `labels`)
-    bool labels = false;        // one surface per label of a label map
-    std::vector<double> label_values; // with `labels`: which ones (empty: all non-zero)
-    ExtractOptions extract;
-    PostProcessOptions post;
-    ProgressFn progress;
-};
-
-struct Surface {
-    std::string name;   // "iso 500", "label 3"
-    double value = 0;   // iso value or label
-    Mesh mesh;          // LPS mm
-};
-
-// Extracts (and post-processes) the requested surfaces. An iso value outside
-// the volume's range gives an empty mesh with a warning in the mesh.
-std::vector<Surface> extract_surfaces(const Volume& v, const SurfaceRequest& req);
-
 // ---- rendering ------------------------------------------------------------
 
 struct RenderRequest {
-    std::vector<double> isos;        // for volume inputs (meshes are drawn as they are)
-    std::string series;              // DICOM series choice
+    std::vector<double> isos;        // render_input: for volume inputs (meshes are drawn as they are)
+    std::string series;              // render_input: DICOM series choice
     std::string view = "anterior";   // patient view
     int width = 1024, height = 1024;
     float scale = 1.0f;              // annotation scale (text, lines, glyphs)
@@ -89,11 +67,15 @@ struct RenderOutput {
     bool ao_cache_hit = false;       // the AO reference came from the cache
 };
 
-// Loads `input` (a volume, extracting the iso surfaces, or a mesh file) and
-// renders it headlessly. Throws iso::Error.
-RenderOutput render_input(const std::string& input, const RenderRequest& req);
+// Renders the scene headlessly (its own EGL context, made on first use) as
+// asked: camera from the patient view, annotations, AO (cone or the Embree
+// reference), AOVs; the output carries the metadata to embed (sources and
+// their SHA-256, iso values, camera, matrices). `isos` and `series` of the
+// request are not used here. Throws iso::Error.
+RenderOutput render_image(Scene& scene, const RenderRequest& req);
 
-// Surface colours for iso values in increasing order (skin, bone, ...).
-glm::vec3 surface_color(std::size_t index, std::size_t count);
+// Opens `input` into a new scene (a mesh file, or a volume whose `req.isos`
+// surfaces are extracted) and render_image()s it: `isoscope render`.
+RenderOutput render_input(const std::string& input, const RenderRequest& req);
 
 } // namespace iso::core

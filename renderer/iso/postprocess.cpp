@@ -23,8 +23,8 @@ namespace iso {
 bool needs_postprocess(const PostProcessOptions& o) { return o.smooth > 0.0 || o.decimate > 0.0 || o.keep_largest; }
 
 Mesh postprocess(const Mesh& in, const PostProcessOptions& o, const ProgressFn& progress) {
-    if (!(o.smooth >= 0.0 && o.smooth <= 1.0)) throw Error("--smooth", "must be between 0 and 1");
-    if (!(o.decimate >= 0.0 && o.decimate < 1.0)) throw Error("--decimate", "must be at least 0 and below 1");
+    if (!(o.smooth >= 0.0 && o.smooth <= 1.0)) throw Error("smoothing factor", "must be between 0 and 1");
+    if (!(o.decimate >= 0.0 && o.decimate < 1.0)) throw Error("decimation fraction", "must be at least 0 and below 1");
     if (!needs_postprocess(o) || in.empty()) return in;
     vtkSmartPointer<vtkPolyData> pd = to_polydata(in, false);
     int step = 0;

@@ -15,7 +15,7 @@ constexpr double kPi = 3.14159265358979323846;
 
 void check_range(const std::string& name, double v, double lo, double hi) {
     if (!(v >= lo && v <= hi)) // also rejects NaN
-        throw Error("--ao-" + name, "value " + std::to_string(v) + " is out of range [" + std::to_string(lo) + ", " +
+        throw Error("cone AO setting " + name, "value " + std::to_string(v) + " is out of range [" + std::to_string(lo) + ", " +
                                         std::to_string(hi) + "]");
 }
 } // namespace

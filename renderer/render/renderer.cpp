@@ -22,7 +22,7 @@ Aov aov_from_name(const std::string& n) {
     if (n == "id") return Aov::Id;
     if (n == "ao") return Aov::Ao;
     if (n.empty() || n == "none") return Aov::None;
-    throw Error("--aov", "unknown AOV '" + n + "' (depth, normal, id, ao)");
+    throw Error("AOV", "unknown AOV '" + n + "' (depth, normal, id, ao)");
 }
 
 namespace {

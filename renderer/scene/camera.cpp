@@ -18,7 +18,7 @@ PatientView patient_view_from_name(const std::string& n) {
     if (n == "right") return PatientView::Right;
     if (n == "superior") return PatientView::Superior;
     if (n == "inferior") return PatientView::Inferior;
-    throw Error("--view", "unknown view '" + n + "' (anterior, posterior, left, right, superior, inferior)");
+    throw Error("patient view", "unknown view '" + n + "' (anterior, posterior, left, right, superior, inferior)");
 }
 
 const char* patient_view_name(PatientView v) {

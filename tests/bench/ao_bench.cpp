@@ -86,10 +86,9 @@ Scene make_scene(const std::string& name, const Args& a) {
         s.input = a.data + "/headsq.nhdr";
         s.isos = {name == "ct-skin" ? 500.0 : 1150.0};
         s.view = name == "ct-skin" ? "left" : "anterior";
-        const Volume v = core::open_volume(s.input);
-        core::SurfaceRequest sr;
-        sr.isos = s.isos;
-        for (auto& surf : core::extract_surfaces(v, sr)) s.meshes.push_back(std::move(surf.mesh));
+        core::Scene scene;
+        scene.open(s.input);
+        for (const auto id : scene.add_isosurfaces(s.isos)) s.meshes.push_back(scene.mesh(id));
     } else if (name == "bunny") {
         s.input = a.data + "/bunny.vtp";
         s.view = "anterior";

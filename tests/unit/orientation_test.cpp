@@ -20,7 +20,7 @@ using namespace iso;
 namespace {
 
 struct Head {
-    Volume volume;
+    glm::dmat4 index_to_lps{1.0};
     Mesh skin;
     glm::dvec3 nose{0.0};
 };
@@ -30,11 +30,10 @@ const Head& head(const std::string& file) {
     auto it = cache.find(file);
     if (it != cache.end()) return it->second;
     Head h;
-    h.volume = core::open_volume(test::data(file));
-    core::SurfaceRequest req;
-    req.isos = {500.0};
-    auto s = core::extract_surfaces(h.volume, req);
-    h.skin = std::move(s.at(0).mesh);
+    core::Scene scene;
+    scene.open(test::data(file));
+    h.skin = scene.mesh(scene.add_isosurfaces({500.0}).at(0));
+    h.index_to_lps = scene.volume().index_to_lps;
     // The anterior-most skin point: smallest y in LPS (+y is posterior).
     const auto nose = std::min_element(h.skin.positions.begin(), h.skin.positions.end(),
                                        [](const glm::vec3& a, const glm::vec3& b) { return a.y < b.y; });
@@ -49,7 +48,7 @@ class BundledHeadOrientation : public ::testing::TestWithParam<const char*> {};
 TEST_P(BundledHeadOrientation, NoseIsAnteriorBelowTheEyesAndAboveTheChin) {
     const Head& h = head(GetParam());
     ASSERT_FALSE(h.skin.empty());
-    const test::HeadLandmarks lm = test::head_landmarks(h.volume.index_to_lps);
+    const test::HeadLandmarks lm = test::head_landmarks(h.index_to_lps);
     const glm::dvec3 nose = h.nose;
     const double eye_level = 0.5 * (lm.right_eye.z + lm.left_eye.z);
     SCOPED_TRACE("nose at LPS (" + std::to_string(nose.x) + ", " + std::to_string(nose.y) + ", " + std::to_string(nose.z) + ")");
@@ -78,11 +77,11 @@ TEST_P(BundledHeadOrientation, AffineIsTheRotationTheHeaderStates) {
     // i runs towards the patient's right, j towards posterior, k towards
     // inferior: a 180 degree rotation about the anterior-posterior axis of the
     // scaled identity (determinant positive, not a mirror).
-    const Volume& v = head(GetParam()).volume;
+    const glm::dmat4& a = head(GetParam()).index_to_lps;
     const glm::dmat4 expected = make_affine({3.2, 3.2, 1.5}, {0, 0, 0}, glm::dmat3(-1, 0, 0, 0, 1, 0, 0, 0, -1));
     for (int c = 0; c < 4; ++c)
-        for (int r = 0; r < 4; ++r) EXPECT_NEAR(v.index_to_lps[c][r], expected[c][r], 1e-12) << "column " << c << " row " << r;
-    EXPECT_GT(glm::determinant(glm::dmat3(v.index_to_lps)), 0.0);
+        for (int r = 0; r < 4; ++r) EXPECT_NEAR(a[c][r], expected[c][r], 1e-12) << "column " << c << " row " << r;
+    EXPECT_GT(glm::determinant(glm::dmat3(a)), 0.0);
 }
 
 INSTANTIATE_TEST_SUITE_P(BothHeaders, BundledHeadOrientation, ::testing::Values("headsq.nhdr", "headsq.mhd"),

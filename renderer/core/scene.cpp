@@ -1,0 +1,218 @@
+#include "renderer/core/scene.hpp"
+
+#include <algorithm>
+#include <cstdio>
+#include <filesystem>
+#include <optional>
+
+#include "io/error.hpp"
+
+namespace iso::core {
+
+struct Scene::Impl {
+    struct Entry {
+        SurfaceInfo info;
+        Mesh mesh;
+        Bounds bounds;
+        std::uint32_t gpu_id = 0; // the renderer's object id once uploaded (0: not yet)
+    };
+    std::vector<Entry> surfaces;
+    std::optional<Volume> volume;
+    std::string volume_source;
+    std::vector<std::string> sources;
+    std::unique_ptr<Renderer> renderer;
+
+    Entry& at(SurfaceId id, const char* op) {
+        if (id == 0 || id > surfaces.size()) throw Error(op, "no surface with id " + std::to_string(id));
+        return surfaces[id - 1];
+    }
+};
+
+Scene::Scene() : impl_(std::make_unique<Impl>()) {}
+Scene::~Scene() = default;
+
+SurfaceId Scene::open(const std::string& path, const LoadOptions& opt) {
+    if (is_mesh_path(path)) {
+        SurfaceInfo info;
+        info.name = std::filesystem::path(path).filename().string();
+        info.source = path;
+        info.color = surface_color(0, 1);
+        const SurfaceId id = add_mesh(load_mesh(path), info);
+        impl_->sources.push_back(path);
+        return id;
+    }
+    impl_->volume = load_volume(path, opt);
+    impl_->volume_source = path;
+    impl_->sources.push_back(path);
+    return 0;
+}
+
+bool Scene::has_volume() const { return impl_->volume.has_value(); }
+
+const Volume& Scene::volume() const {
+    if (!impl_->volume) throw Error("Scene::volume", "no volume is open");
+    return *impl_->volume;
+}
+
+const std::string& Scene::volume_source() const { return impl_->volume_source; }
+
+namespace {
+
+// Extraction is most of the work; post-processing shares the rest of the bar.
+void postprocess_all(std::vector<Mesh>& meshes, const PostProcessOptions& post, const ProgressFn& progress, double share) {
+    for (std::size_t i = 0; i < meshes.size(); ++i) {
+        const double base = share + (1.0 - share) * double(i) / double(meshes.size());
+        ProgressFn pp;
+        if (progress)
+            pp = [&](double f, std::string_view stage) { return progress(base + f * (1.0 - share) / double(meshes.size()), stage); };
+        auto warnings = meshes[i].warnings;
+        meshes[i] = postprocess(meshes[i], post, pp);
+        meshes[i].warnings = std::move(warnings);
+    }
+}
+
+ExtractOptions with_share(ExtractOptions eo, const ProgressFn& progress, double share) {
+    if (progress) eo.progress = [progress, share](double f, std::string_view stage) { return progress(f * share, stage); };
+    return eo;
+}
+
+} // namespace
+
+std::vector<SurfaceId> Scene::add_isosurfaces(std::vector<double> isos, const ExtractOptions& extract, const PostProcessOptions& post,
+                                              ProgressFn progress) {
+    const Volume& v = volume();
+    if (isos.empty()) throw Error("isosurface extraction of " + impl_->volume_source, "no iso value given");
+    std::sort(isos.begin(), isos.end());
+    const bool pp = needs_postprocess(post);
+    const double share = pp ? 0.6 : 1.0;
+    auto meshes = extract_isosurfaces(v, isos, with_share(extract, progress, share));
+    const auto range = v.value_range();
+    for (std::size_t i = 0; i < meshes.size(); ++i)
+        if (isos[i] > range.max || isos[i] <= range.min) {
+            char w[160];
+            std::snprintf(w, sizeof w, "iso value %g is outside the volume's value range [%g, %g]: the surface is empty", isos[i],
+                          range.min, range.max);
+            meshes[i].warnings.push_back(w);
+        }
+    if (pp) postprocess_all(meshes, post, progress, share);
+    report(progress, 1.0, "done", "isosurface extraction");
+    std::vector<SurfaceId> ids;
+    for (std::size_t i = 0; i < meshes.size(); ++i) {
+        SurfaceInfo info;
+        char name[64];
+        std::snprintf(name, sizeof name, "iso %g", isos[i]);
+        info.name = name;
+        info.kind = SurfaceInfo::Kind::Iso;
+        info.value = isos[i];
+        info.source = impl_->volume_source;
+        info.color = surface_color(i, meshes.size());
+        ids.push_back(add_mesh(std::move(meshes[i]), info));
+    }
+    return ids;
+}
+
+std::vector<SurfaceId> Scene::add_label_surfaces(const std::vector<double>& labels, const ExtractOptions& extract,
+                                                 const PostProcessOptions& post, ProgressFn progress) {
+    const Volume& v = volume();
+    const bool pp = needs_postprocess(post);
+    const double share = pp ? 0.6 : 1.0;
+    auto found = extract_labels(v, labels, with_share(extract, progress, share));
+    std::vector<Mesh> meshes;
+    for (auto& ls : found) meshes.push_back(std::move(ls.mesh));
+    if (pp) postprocess_all(meshes, post, progress, share);
+    report(progress, 1.0, "done", "label surface extraction");
+    std::vector<SurfaceId> ids;
+    for (std::size_t i = 0; i < meshes.size(); ++i) {
+        SurfaceInfo info;
+        char name[64];
+        std::snprintf(name, sizeof name, "label %g", found[i].label);
+        info.name = name;
+        info.kind = SurfaceInfo::Kind::Label;
+        info.value = found[i].label;
+        info.source = impl_->volume_source;
+        info.color = surface_color(i + 2, meshes.size() + 2);
+        ids.push_back(add_mesh(std::move(meshes[i]), info));
+    }
+    return ids;
+}
+
+SurfaceId Scene::add_mesh(Mesh m, SurfaceInfo info) {
+    if (!(info.opacity >= 0.0f && info.opacity <= 1.0f))
+        throw Error("Scene::add_mesh", "opacity of '" + info.name + "' must be between 0 and 1");
+    Bounds b;
+    for (const auto& p : m.positions) b.add(glm::dvec3(p));
+    impl_->surfaces.push_back({std::move(info), std::move(m), b, 0});
+    return SurfaceId(impl_->surfaces.size());
+}
+
+std::vector<SurfaceId> Scene::surfaces() const {
+    std::vector<SurfaceId> ids(impl_->surfaces.size());
+    for (std::size_t i = 0; i < ids.size(); ++i) ids[i] = SurfaceId(i + 1);
+    return ids;
+}
+
+SurfaceInfo& Scene::info(SurfaceId id) { return impl_->at(id, "Scene::info").info; }
+const SurfaceInfo& Scene::info(SurfaceId id) const { return impl_->at(id, "Scene::info").info; }
+const Mesh& Scene::mesh(SurfaceId id) const { return impl_->at(id, "Scene::mesh").mesh; }
+
+Bounds Scene::bounds() const {
+    Bounds b;
+    for (const auto& e : impl_->surfaces)
+        if (e.info.visible && !e.bounds.empty()) {
+            b.add(e.bounds.min);
+            b.add(e.bounds.max);
+        }
+    return b;
+}
+
+std::vector<std::string> Scene::sources() const { return impl_->sources; }
+
+Camera Scene::camera(PatientView view, double aspect) const {
+    const Bounds b = bounds();
+    Camera c;
+    c.set_view(view, b);
+    c.fit(b, aspect);
+    return c;
+}
+
+Renderer& Scene::renderer() {
+    if (!impl_->renderer) impl_->renderer = std::make_unique<Renderer>();
+    return *impl_->renderer;
+}
+
+RenderResult Scene::render(const Camera& camera, const RenderOptions& opt) {
+    Renderer& ren = renderer();
+    // Upload what is new; carry the properties a front end may have edited.
+    for (auto& e : impl_->surfaces) {
+        SceneObject o;
+        o.name = e.info.name;
+        o.color = e.info.color;
+        o.opacity = e.info.opacity;
+        o.visible = e.info.visible;
+        o.pickable = e.info.pickable;
+        if (e.gpu_id == 0)
+            e.gpu_id = ren.add(e.mesh, o);
+        else
+            ren.object(e.gpu_id) = o;
+    }
+    return ren.render(camera, opt);
+}
+
+void Scene::release_gpu() {
+    impl_->renderer.reset();
+    for (auto& e : impl_->surfaces) e.gpu_id = 0;
+}
+
+void Scene::export_mesh(SurfaceId id, const std::string& path) const { save_mesh(mesh(id), path); }
+
+void export_image(const Image& image, const ImageMetadata& meta, const std::string& path) { save_image(image, path, meta); }
+
+glm::vec3 surface_color(std::size_t index, std::size_t count) {
+    // Outer surfaces (lower CT values) skin-toned, inner ones bone white; more get distinct hues.
+    static const glm::vec3 palette[] = {{0.93f, 0.72f, 0.60f}, {0.95f, 0.92f, 0.84f}, {0.85f, 0.25f, 0.22f},
+                                        {0.35f, 0.55f, 0.85f}, {0.45f, 0.75f, 0.40f}, {0.80f, 0.65f, 0.30f}};
+    if (count == 1) return palette[1];
+    return palette[index % 6];
+}
+
+} // namespace iso::core

@@ -1,0 +1,101 @@
+// The core Scene that both front ends use: `isoscope render` and
+// `isoscope view` build one, the Qt widget draws it. It holds what was
+// opened (a volume, mesh files), the surfaces made from them as handles with
+// the properties a user edits (colour, opacity, visibility, pickable), and
+// the verbs: render, export mesh, export image (pick and measure join with
+// issue 13). Modelled on Polyscope's structures (include/polyscope/structure.h).
+// Errors name the operation and the file, never a command-line flag: the
+// CLI maps them (app/cli/main.cpp).
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <glm/vec3.hpp>
+
+#include "io/image.hpp"
+#include "io/mesh.hpp"
+#include "io/progress.hpp"
+#include "io/volume.hpp"
+#include "io/volume_io.hpp"
+#include "renderer/iso/extract.hpp"
+#include "renderer/iso/postprocess.hpp"
+#include "renderer/render/renderer.hpp"
+#include "renderer/scene/camera.hpp"
+
+namespace iso::core {
+
+// A surface of the scene: 1-based, the value the id AOV and picking report.
+using SurfaceId = std::uint32_t;
+
+struct SurfaceInfo {
+    enum class Kind { Iso, Label, Mesh };
+    std::string name;      // "iso 500", "label 3", the mesh file's name
+    Kind kind = Kind::Mesh;
+    double value = 0;      // iso value or label
+    std::string source;    // the file or folder it came from
+    glm::vec3 color{0.9f}; // linear RGB albedo
+    float opacity = 1.0f;  // 0..1
+    bool visible = true, pickable = true;
+};
+
+class Scene {
+public:
+    Scene();
+    ~Scene();
+    Scene(const Scene&) = delete;
+    Scene& operator=(const Scene&) = delete;
+
+    // ---- content ----------------------------------------------------------
+    // Opens a file or DICOM folder: a mesh file (is_mesh_path) becomes a
+    // surface and its id is returned; anything else is loaded as the scene's
+    // volume (replacing an earlier one) and 0 is returned. Throws iso::Error.
+    SurfaceId open(const std::string& path, const LoadOptions& opt = {});
+    bool has_volume() const;
+    const Volume& volume() const;           // throws without one
+    const std::string& volume_source() const;
+    // Isosurfaces of the volume, in increasing iso order, coloured skin to
+    // bone; each gets an empty-surface warning when outside the value range.
+    std::vector<SurfaceId> add_isosurfaces(std::vector<double> isos, const ExtractOptions& extract = {},
+                                           const PostProcessOptions& post = {}, ProgressFn progress = {});
+    // One surface per label (empty: every non-zero label) of a label map.
+    std::vector<SurfaceId> add_label_surfaces(const std::vector<double>& labels, const ExtractOptions& extract = {},
+                                              const PostProcessOptions& post = {}, ProgressFn progress = {});
+    SurfaceId add_mesh(Mesh m, SurfaceInfo info);
+
+    std::vector<SurfaceId> surfaces() const; // in the order added
+    SurfaceInfo& info(SurfaceId id);         // edit freely; the next render shows it
+    const SurfaceInfo& info(SurfaceId id) const;
+    const Mesh& mesh(SurfaceId id) const;
+    Bounds bounds() const;                   // of the visible surfaces
+    // Every file or folder opened, in order (image metadata, cache keys).
+    std::vector<std::string> sources() const;
+
+    // ---- verbs ------------------------------------------------------------
+    // A camera looking from `view` at the visible surfaces, fitted to them.
+    Camera camera(PatientView view, double aspect) const;
+    // Renders with the caller's GL 4.5 context current. GPU resources live in
+    // that context across calls (first call: the meshes are uploaded); call
+    // release_gpu() with it current before the context goes.
+    RenderResult render(const Camera& camera, const RenderOptions& opt);
+    void release_gpu();
+    // The GPU renderer (tests, benchmarks); made on first use in the current context.
+    Renderer& renderer();
+    // Writes a surface in LPS mm (.stl, .ply, .obj, .vtp; tagged LPS).
+    void export_mesh(SurfaceId id, const std::string& path) const;
+
+private:
+    struct Impl;
+    std::unique_ptr<Impl> impl_;
+};
+
+// Writes an image (.png, .tif, .exr) with its metadata; never leaves a
+// half-written file.
+void export_image(const Image& image, const ImageMetadata& meta, const std::string& path);
+
+// Surface colours for iso values in increasing order (skin, bone, ...).
+glm::vec3 surface_color(std::size_t index, std::size_t count);
+
+} // namespace iso::core
