@@ -96,19 +96,7 @@ std::vector<SurfaceId> Scene::add_isosurfaces(std::vector<double> isos, const Ex
         }
     if (pp) postprocess_all(meshes, post, progress, share);
     report(progress, 1.0, "done", "isosurface extraction");
-    std::vector<SurfaceId> ids;
-    for (std::size_t i = 0; i < meshes.size(); ++i) {
-        SurfaceInfo info;
-        char name[64];
-        std::snprintf(name, sizeof name, "iso %g", isos[i]);
-        info.name = name;
-        info.kind = SurfaceInfo::Kind::Iso;
-        info.value = isos[i];
-        info.source = impl_->volume_source;
-        info.color = surface_color(i, meshes.size());
-        ids.push_back(add_mesh(std::move(meshes[i]), info));
-    }
-    return ids;
+    return add_extracted(std::move(meshes), SurfaceInfo::Kind::Iso, isos);
 }
 
 std::vector<SurfaceId> Scene::add_label_surfaces(const std::vector<double>& labels, const ExtractOptions& extract,
@@ -121,16 +109,24 @@ std::vector<SurfaceId> Scene::add_label_surfaces(const std::vector<double>& labe
     for (auto& ls : found) meshes.push_back(std::move(ls.mesh));
     if (pp) postprocess_all(meshes, post, progress, share);
     report(progress, 1.0, "done", "label surface extraction");
+    std::vector<double> values;
+    for (const auto& ls : found) values.push_back(ls.label);
+    return add_extracted(std::move(meshes), SurfaceInfo::Kind::Label, values);
+}
+
+std::vector<SurfaceId> Scene::add_extracted(std::vector<Mesh> meshes, SurfaceInfo::Kind kind, const std::vector<double>& values) {
     std::vector<SurfaceId> ids;
+    const bool iso = kind == SurfaceInfo::Kind::Iso;
     for (std::size_t i = 0; i < meshes.size(); ++i) {
         SurfaceInfo info;
         char name[64];
-        std::snprintf(name, sizeof name, "label %g", found[i].label);
+        std::snprintf(name, sizeof name, iso ? "iso %g" : "label %g", values[i]);
         info.name = name;
-        info.kind = SurfaceInfo::Kind::Label;
-        info.value = found[i].label;
+        info.kind = kind;
+        info.value = values[i];
         info.source = impl_->volume_source;
-        info.color = surface_color(i + 2, meshes.size() + 2);
+        // Isosurfaces skin to bone; labels from the palette's distinct hues.
+        info.color = iso ? surface_color(i, meshes.size()) : surface_color(i + 2, meshes.size() + 2);
         ids.push_back(add_mesh(std::move(meshes[i]), info));
     }
     return ids;

@@ -87,6 +87,7 @@ public:
     void export_mesh(SurfaceId id, const std::string& path) const;
 
 private:
+    std::vector<SurfaceId> add_extracted(std::vector<Mesh> meshes, SurfaceInfo::Kind kind, const std::vector<double>& values);
     struct Impl;
     std::unique_ptr<Impl> impl_;
 };
