@@ -29,12 +29,14 @@ namespace iso::graph {
 enum class Format : std::uint8_t { RGBA8, RGBA16F, RGBA32F, R32F, RG16F, R32UI, RGBA32UI, Depth32F };
 std::size_t bytes_per_pixel(Format f);
 
-// depth > 1: a 3D texture; layers > 1: a 2D array texture (not both).
+// depth > 1: a 3D texture; array (or layers > 1): a 2D array texture of
+// `layers` layers (shaders sampling an array need one even of one layer).
 struct TextureDesc {
     int width = 1, height = 1;
     Format format = Format::RGBA8;
     int layers = 1;
     int depth = 1;
+    bool array = false;
     bool operator==(const TextureDesc&) const = default;
 };
 std::size_t bytes_of(const TextureDesc& d);

@@ -14,7 +14,7 @@ graph::TextureHandle ambient_occlusion(graph::FrameGraph& fg, const FrameContext
     const ConeAoSettings& st = plan->settings;
     AoResources res;
     res.zrange = fg.history("zrange", graph::BufferDesc{8});
-    res.slicemap = fg.history("slicemap", graph::TextureDesc{plan->grid_w, plan->grid_h, graph::Format::RGBA32UI, st.layers});
+    res.slicemap = fg.history("slicemap", graph::TextureDesc{plan->grid_w, plan->grid_h, graph::Format::RGBA32UI, st.layers, 1, true});
     if (plan->voxelize) {
         res.zrange = zrange(fg, ctx, gb, res.zrange);
         res.slicemap = voxelize(fg, ctx, plan, res.zrange, res.slicemap);
@@ -22,7 +22,7 @@ graph::TextureHandle ambient_occlusion(graph::FrameGraph& fg, const FrameContext
     const auto history = fg.history(plan->coarse ? "ao_coarse" : "ao_accum",
                                     graph::TextureDesc{plan->ao_w, plan->ao_h, plan->coarse ? graph::Format::RGBA32F : graph::Format::R32F});
     const auto traced = cone_ao(fg, ctx, plan, gb, res, history);
-    if (ctx.opt.read_slicemap) read_slicemap(fg, ctx, plan, res);
+    if (ctx.hooks.read_slicemap) read_slicemap(fg, ctx, plan, res);
     return plan->coarse ? ao_upsample(fg, ctx, plan, gb, traced) : traced;
 }
 

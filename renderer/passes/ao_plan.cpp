@@ -93,9 +93,9 @@ AoPlan plan_ao(const FrameContext& ctx) {
                                double(ctx.geometry_version)});
     for (const auto& d : ctx.draws) p.key.push_back(double(d.id)); // which objects are visible
     const bool kept = ctx.pool && ctx.ao &&
-                      ctx.pool->has_history("slicemap", graph::TextureDesc{p.grid_w, p.grid_h, graph::Format::RGBA32UI, st.layers}) &&
+                      ctx.pool->has_history("slicemap", graph::TextureDesc{p.grid_w, p.grid_h, graph::Format::RGBA32UI, st.layers, 1, true}) &&
                       ctx.pool->has_history("zrange", graph::BufferDesc{8});
-    p.voxelize = !kept || !ctx.ao || p.key != ctx.ao->view_key || ctx.opt.ao_force_voxelize;
+    p.voxelize = !kept || !ctx.ao || p.key != ctx.ao->view_key || ctx.hooks.ao_force_voxelize;
     // cone_pattern(): cone axes, one vec4 per jitter set, then the sets' samples.
     p.pattern_bytes = std::size_t(st.cones + st.jitter_sets * (1 + st.samples)) * sizeof(glm::vec4);
     return p;

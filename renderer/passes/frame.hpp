@@ -44,6 +44,7 @@ struct FrameContext {
     graph::ResourcePool* pool = nullptr;
     Camera camera;
     RenderOptions opt;
+    RenderHooks hooks;
     int width = 1, height = 1;
     glm::mat4 view_projection{1.0f};
     glm::mat3 world_to_view{1.0f};

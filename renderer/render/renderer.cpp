@@ -105,7 +105,7 @@ Bounds Renderer::bounds() const {
     return b;
 }
 
-RenderResult Renderer::render(const Camera& camera, const RenderOptions& opt) {
+RenderResult Renderer::render(const Camera& camera, const RenderOptions& opt, const RenderHooks& hooks) {
     if (opt.width < 1 || opt.height < 1 || opt.width > 16384 || opt.height > 16384)
         throw Error("render", "image size " + std::to_string(opt.width) + "x" + std::to_string(opt.height) +
                                   " is out of range (1..16384)");
@@ -119,6 +119,7 @@ RenderResult Renderer::render(const Camera& camera, const RenderOptions& opt) {
         draws.push_back({m.vao.id(), m.count, std::uint32_t(i + 1), m.object.color});
     }
     passes::FrameContext ctx = passes::make_context(camera, opt, std::move(draws), bounds());
+    ctx.hooks = hooks;
     ctx.gl = &im.gl;
     ctx.pool = &im.pool;
     ctx.geometry_version = im.geometry_version;

@@ -51,7 +51,11 @@ struct RenderOptions {
     // reads it raw). Off: its passes are culled.
     bool ao = false;
     ConeAoSettings ao_settings;
-    // Also read the slicemap back into RenderResult::slicemap (tests, the
+};
+
+// Test and benchmark hooks, apart from what a user asks for.
+struct RenderHooks {
+    // Read the slicemap back into RenderResult::slicemap (tests, the
     // voxel-grid reference).
     bool read_slicemap = false;
     // Rebuild the slicemap even if nothing changed (benchmarks time a new view).
@@ -62,7 +66,7 @@ struct RenderResult {
     Image image;                 // RGBA8 sRGB colour, or the AOV as floats
     graph::FrameStats stats;
     std::string gl_renderer;
-    SliceMap slicemap;           // with RenderOptions::read_slicemap
+    SliceMap slicemap;           // with RenderHooks::read_slicemap
     bool voxelized = false;      // the slicemap was rebuilt this frame (else reused)
     int ao_frames = 0;           // still frames accumulated into the AO so far
     double ao_guard = 0;         // guard band used by the slicemap, fraction of the viewport per side
@@ -82,7 +86,7 @@ public:
     Bounds bounds() const;
     SceneObject& object(std::uint32_t id);
 
-    RenderResult render(const Camera& camera, const RenderOptions& opt);
+    RenderResult render(const Camera& camera, const RenderOptions& opt, const RenderHooks& hooks = {});
 
     // GPU resources kept across frames (renderer/graph/resource_pool.hpp),
     // and all GL objects made so far: in a steady view neither grows.

@@ -402,6 +402,7 @@ int main(int argc, char** argv) {
                 // Cone AO sweep.
                 for (const auto& c : configs) {
                     RenderOptions ro;
+                    RenderHooks hooks;
                     ro.width = ro.height = S;
                     ro.aov = Aov::Ao;
                     ro.ao_settings.radius_mm = sc.radius;
@@ -421,12 +422,12 @@ int main(int argc, char** argv) {
                     std::vector<double> ao_ms, frame_ms;
                     std::map<std::string, std::vector<double>> pass_ms;
                     for (int rep = 0; rep < a.reps + 1; ++rep) {
-                        ro.ao_force_voxelize = true;
+                        hooks.ao_force_voxelize = true;
                         for (int f = 1; f < c.frames; ++f) { // earlier still frames (not timed)
-                            ren.render(cam, ro);
-                            ro.ao_force_voxelize = false;
+                            ren.render(cam, ro, hooks);
+                            hooks.ao_force_voxelize = false;
                         }
-                        auto r = ren.render(cam, ro);
+                        auto r = ren.render(cam, ro, hooks);
                         double ao = 0, total = 0;
                         for (const auto& p : r.stats.passes) {
                             if (!p.ran) continue;
@@ -450,6 +451,7 @@ int main(int argc, char** argv) {
                 // Default settings, still camera, temporal accumulation of 8 frames.
                 if (a.configs.empty()) {
                     RenderOptions ro;
+                    RenderHooks hooks;
                     ro.width = ro.height = S;
                     ro.aov = Aov::Ao;
                     ro.ao_settings.radius_mm = sc.radius;
@@ -457,11 +459,11 @@ int main(int argc, char** argv) {
                     Image img;
                     double ao_sum = 0;
                     const int frames = 8;
-                    ren.render(cam, ro); // warm-up; then a new view starts the accumulation
-                    ro.ao_force_voxelize = true;
+                    ren.render(cam, ro, hooks); // warm-up; then a new view starts the accumulation
+                    hooks.ao_force_voxelize = true;
                     for (int f = 0; f < frames; ++f) {
-                        auto r = ren.render(cam, ro);
-                        ro.ao_force_voxelize = false;
+                        auto r = ren.render(cam, ro, hooks);
+                        hooks.ao_force_voxelize = false;
                         for (const auto& p : r.stats.passes)
                             if (p.ran && (p.name == "zrange" || p.name == "voxelize" || p.name == "cone_ao" || p.name == "ao_upsample"))
                                 ao_sum += p.ms;
@@ -481,15 +483,16 @@ int main(int argc, char** argv) {
                     else if (a.voxel_ref_each) vcs = configs;
                     for (const auto& vc : vcs) {
                         RenderOptions ro;
+                        RenderHooks hooks;
                         ro.width = ro.height = S;
                         ro.aov = Aov::Ao;
                         ro.ao_settings.radius_mm = sc.radius;
                         ro.ao_settings.grid_scale = vc.grid;
                         ro.ao_settings.layers = vc.layers;
                         ro.ao_settings.bias = vc.bias;
-                        ro.ao_force_voxelize = true;
-                        ro.read_slicemap = true;
-                        auto r = ren.render(cam, ro);
+                        hooks.ao_force_voxelize = true;
+                        hooks.read_slicemap = true;
+                        auto r = ren.render(cam, ro, hooks);
                         RenderOptions d;
                         d.width = d.height = S;
                         d.aov = Aov::Depth;

@@ -99,8 +99,7 @@ TEST(SliceMap, TwoBoxesGiveExactBitPatterns) {
     ren.add(box({0, -10, -20}, {20, 20, 20}), {});
     const Camera cam = looking({0, -500, 0}, {0, 0, 0}, {0, 0, 1});
     auto o = ao_options(128, 100);
-    o.read_slicemap = true;
-    const auto r = ren.render(cam, o);
+    const auto r = ren.render(cam, o, {.read_slicemap = true});
     const SliceMap& sm = r.slicemap;
     ASSERT_EQ(sm.width, 128);
     ASSERT_EQ(sm.bits(), 256);
@@ -149,8 +148,7 @@ TEST(SliceMap, NestedSphericalShellsXorToTheirGap) {
     const Camera cam = looking(c + glm::dvec3(0, -400, 0), c, {0, 0, 1});
     auto o = ao_options(96, 200);
     o.ao_settings.layers = 4;
-    o.read_slicemap = true;
-    const auto r = ren.render(cam, o);
+    const auto r = ren.render(cam, o, {.read_slicemap = true});
     const SliceMap& sm = r.slicemap;
     ASSERT_EQ(sm.bits(), 512);
     EXPECT_NEAR(sm.z_near, 355.0, 0.2) << "nearest visible: the outer sphere's front";

@@ -23,7 +23,7 @@ struct Compiled {
     Passes running;
 };
 
-Compiled compile(const RenderOptions& opt) {
+Compiled compile(const RenderOptions& opt, const RenderHooks& hooks = {}) {
     NullBackend be;
     graph::ResourcePool pool(be);
     passes::AoHistory history;
@@ -35,6 +35,7 @@ Compiled compile(const RenderOptions& opt) {
     cam.set_view(PatientView::Anterior, b);
     cam.fit(b, double(opt.width) / opt.height);
     passes::FrameContext ctx = passes::make_context(cam, opt, {{0, 36, 1, glm::vec3(1)}, {0, 36, 2, glm::vec3(1)}}, b);
+    ctx.hooks = hooks;
     ctx.pool = &pool;
     ctx.ao = &history;
     ctx.result = &result;
@@ -65,8 +66,7 @@ TEST(Frame, AoOnRunsTheConeChainBeforeLighting) {
     EXPECT_EQ(compile(o).running, (Passes{"gbuffer", "zrange", "voxelize", "cone_ao", "ao_upsample", "lighting", "readback"}));
     o.ao_settings.resolution = 1.0; // traced at full size: no upsampling
     EXPECT_EQ(compile(o).running, (Passes{"gbuffer", "zrange", "voxelize", "cone_ao", "lighting", "readback"}));
-    o.read_slicemap = true;
-    EXPECT_EQ(compile(o).running, (Passes{"gbuffer", "zrange", "voxelize", "cone_ao", "read_slicemap", "lighting", "readback"}));
+    EXPECT_EQ(compile(o, {.read_slicemap = true}).running, (Passes{"gbuffer", "zrange", "voxelize", "cone_ao", "read_slicemap", "lighting", "readback"}));
 }
 
 TEST(Frame, AnAovRunsOnlyItsProducers) {
