@@ -2,6 +2,7 @@
 #include <glm/glm.hpp>
 
 #include "renderer/passes/frame.hpp"
+#include "renderer/passes/gbuffer_layout.hpp"
 
 namespace iso::passes {
 
@@ -30,8 +31,10 @@ void build_frame(graph::FrameGraph& fg, const FrameContext& ctx) {
     graph::TextureHandle color = lighting(fg, ctx, gb, opt.ao ? ao : graph::TextureHandle{});
     if (opt.annotations) color = overlay(fg, ctx, color);
     if (opt.present) return present(fg, ctx, color);
-    const graph::TextureHandle aovs[] = {color, gb.depth, gb.normal, gb.id, ao}; // in the order of enum Aov
-    readback(fg, ctx, aovs[int(opt.aov)]);
+    graph::TextureHandle source = opt.aov == Aov::None ? color : opt.aov == Aov::Depth ? gb.depth : ao;
+    for (const auto& c : kGBufferLayout)
+        if (c.aov == opt.aov && opt.aov != Aov::None) source = gb.*c.handle;
+    readback(fg, ctx, source);
 }
 
 } // namespace iso::passes

@@ -1,9 +1,25 @@
-// G-buffer: depth (reversed Z, float), world normal, object id and albedo of
-// the nearest surface, all meshes drawn once, two-sided.
-#include "renderer/passes/frame.hpp"
+// G-buffer: depth (reversed Z, float) and the channels of kGBufferLayout
+// (world normal, object id, albedo) of the nearest surface, all meshes drawn
+// once, two-sided.
+#include <cctype>
+
+#include "renderer/passes/gbuffer_layout.hpp"
 #include "renderer/passes/gl_resources.hpp"
 
 namespace iso::passes {
+
+bool is_integer(graph::Format f) { return f == graph::Format::R32UI || f == graph::Format::RGBA32UI; }
+
+std::string gbuffer_defines() {
+    std::string d;
+    int location = 0;
+    for (const auto& c : kGBufferLayout) {
+        std::string name = c.name;
+        for (auto& ch : name) ch = char(std::toupper(static_cast<unsigned char>(ch)));
+        d += "#define GB_" + name + " " + std::to_string(location++) + "\n";
+    }
+    return d;
+}
 
 GBuffer gbuffer(graph::FrameGraph& fg, const FrameContext& ctx) {
     const int W = ctx.width, H = ctx.height;
@@ -11,28 +27,30 @@ GBuffer gbuffer(graph::FrameGraph& fg, const FrameContext& ctx) {
         "gbuffer",
         [&](graph::FrameGraph::Builder& b, GBuffer& d) {
             d.depth = b.write(b.create("depth", {W, H, graph::Format::Depth32F}));
-            d.normal = b.write(b.create("normal", {W, H, graph::Format::RGBA16F}));
-            d.id = b.write(b.create("id", {W, H, graph::Format::R32UI}));
-            d.albedo = b.write(b.create("albedo", {W, H, graph::Format::RGBA8}));
+            for (const auto& c : kGBufferLayout) d.*c.handle = b.write(b.create(c.name, {W, H, c.format}));
         },
         [&ctx, W, H](const GBuffer& d, const graph::Resources& r) {
             GlResources& gl = *ctx.gl;
-            const GLuint fb = gl.framebuffer({{gl.texture(r, d.normal)}, {gl.texture(r, d.id)}, {gl.texture(r, d.albedo)}},
-                                             gl.texture(r, d.depth));
+            std::vector<GlResources::Attachment> colors;
+            for (const auto& c : kGBufferLayout) colors.push_back({gl.texture(r, d.*c.handle)});
+            const GLuint fb = gl.framebuffer(colors, gl.texture(r, d.depth));
             glBindFramebuffer(GL_FRAMEBUFFER, fb);
             glViewport(0, 0, W, H);
             const float zero[4] = {0, 0, 0, 0};
             const GLuint zero_u[4] = {0, 0, 0, 0};
+            for (GLint i = 0; const auto& c : kGBufferLayout) {
+                if (is_integer(c.format))
+                    glClearNamedFramebufferuiv(fb, GL_COLOR, i++, zero_u);
+                else
+                    glClearNamedFramebufferfv(fb, GL_COLOR, i++, zero);
+            }
             const float far_depth = 0.0f; // reversed Z
-            glClearNamedFramebufferfv(fb, GL_COLOR, 0, zero);
-            glClearNamedFramebufferuiv(fb, GL_COLOR, 1, zero_u);
-            glClearNamedFramebufferfv(fb, GL_COLOR, 2, zero);
             glClearNamedFramebufferfv(fb, GL_DEPTH, 0, &far_depth);
             glClipControl(GL_LOWER_LEFT, GL_ZERO_TO_ONE);
             glEnable(GL_DEPTH_TEST);
             glDepthFunc(GL_GREATER);
             glDisable(GL_CULL_FACE); // open surfaces show both sides
-            auto& prog = gl.program({"render/gbuffer.vert", "render/gbuffer.frag"});
+            auto& prog = gl.program({"render/gbuffer.vert", "render/gbuffer.frag"}, gbuffer_defines());
             prog.use();
             glUniformMatrix4fv(prog.uniform("view_projection"), 1, GL_FALSE, &ctx.view_projection[0][0]);
             const GLint id_loc = prog.uniform("object_id"), albedo_loc = prog.uniform("albedo");

@@ -6,9 +6,17 @@ in vec3 world_normal;
 uniform uint object_id;
 uniform vec3 albedo;
 
-layout(location = 0) out vec4 out_normal;   // RGBA16F: world normal, w = 1 on geometry
-layout(location = 1) out uint out_id;       // R32UI
-layout(location = 2) out vec4 out_albedo;   // RGBA8
+// Locations from the layout table (renderer/passes/gbuffer_layout.hpp)
+// through #defines; the fallbacks only serve the build-time validation
+// (tests/gl/gbuffer_layout_test.cpp checks the linked locations).
+#ifndef GB_NORMAL
+#define GB_NORMAL 0
+#define GB_ID 1
+#define GB_ALBEDO 2
+#endif
+layout(location = GB_NORMAL) out vec4 out_normal;   // RGBA16F: world normal, w = 1 on geometry
+layout(location = GB_ID) out uint out_id;           // R32UI
+layout(location = GB_ALBEDO) out vec4 out_albedo;   // RGBA8
 
 void main() {
     vec3 n = normalize(world_normal);
