@@ -3,7 +3,8 @@
 # is preprocessed first and the expanded text is validated as OpenGL GLSL.
 get_filename_component(ext ${SRC} EXT)
 get_filename_component(dir ${SRC} DIRECTORY)
-execute_process(COMMAND ${VALIDATOR} -E ${SRC} WORKING_DIRECTORY ${dir}
+get_filename_component(root ${CMAKE_CURRENT_LIST_DIR} ABSOLUTE)
+execute_process(COMMAND ${VALIDATOR} -E -I${root} ${SRC} WORKING_DIRECTORY ${dir}
   OUTPUT_VARIABLE expanded ERROR_VARIABLE err RESULT_VARIABLE rc)
 if(NOT rc EQUAL 0)
   message(FATAL_ERROR "${SRC}: preprocessing failed\n${expanded}${err}")

@@ -2,6 +2,7 @@
 // bilateral filter (depth plane and normal aware: no halo across silhouettes).
 #include "renderer/passes/frame.hpp"
 #include "renderer/passes/gl_resources.hpp"
+#include "renderer/passes/std140.hpp"
 
 namespace iso::passes {
 
@@ -9,6 +10,7 @@ graph::TextureHandle ao_upsample(graph::FrameGraph& fg, const FrameContext& ctx,
                                  graph::TextureHandle coarse) {
     struct Data {
         graph::TextureHandle depth, normal, coarse, ao;
+        graph::BufferHandle params;
     };
     return fg.add_pass<Data>(
                  "ao_upsample",
@@ -17,6 +19,7 @@ graph::TextureHandle ao_upsample(graph::FrameGraph& fg, const FrameContext& ctx,
                      d.normal = b.read(gb.normal);
                      d.coarse = b.read(coarse);
                      d.ao = b.write(b.create("ao", {ctx.width, ctx.height, graph::Format::R32F}));
+                     d.params = params_buffer<UpsampleParams>(b, "upsample_params");
                  },
                  [&ctx, plan](const Data& d, const graph::Resources& r) {
                      GlResources& gl = *ctx.gl;
@@ -26,12 +29,9 @@ graph::TextureHandle ao_upsample(graph::FrameGraph& fg, const FrameContext& ctx,
                      glBindTextureUnit(1, gl.texture(r, d.normal));
                      glBindTextureUnit(2, gl.texture(r, d.coarse));
                      glBindImageTexture(0, gl.texture(r, d.ao), 0, GL_FALSE, 0, GL_WRITE_ONLY, GL_R32F);
-                     glUniformMatrix3fv(prog.uniform("world_to_view"), 1, GL_FALSE, &ctx.world_to_view[0][0]);
-                     glUniform2f(prog.uniform("proj_scale"), plan->proj_scale.x, plan->proj_scale.y);
-                     glUniform1f(prog.uniform("near_plane"), plan->near_plane);
-                     glUniform1f(prog.uniform("far_plane"), plan->far_plane);
-                     glUniform2i(prog.uniform("size"), ctx.width, ctx.height);
-                     glUniform2i(prog.uniform("ao_size"), plan->ao_w, plan->ao_h);
+                     bind_params(gl, r, d.params,
+                                 UpsampleParams{std140::mat3(ctx.world_to_view), {ctx.width, ctx.height}, {plan->ao_w, plan->ao_h},
+                                                plan->proj_scale, plan->near_plane, plan->far_plane});
                      glDispatchCompute(GLuint((ctx.width + 7) / 8), GLuint((ctx.height + 7) / 8), 1);
                      glMemoryBarrier(GL_TEXTURE_FETCH_BARRIER_BIT | GL_SHADER_IMAGE_ACCESS_BARRIER_BIT);
                  })

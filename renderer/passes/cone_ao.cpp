@@ -3,6 +3,7 @@
 #include "io/error.hpp"
 #include "renderer/passes/frame.hpp"
 #include "renderer/passes/gl_resources.hpp"
+#include "renderer/passes/std140.hpp"
 
 namespace iso::passes {
 
@@ -10,7 +11,7 @@ graph::TextureHandle cone_ao(graph::FrameGraph& fg, const FrameContext& ctx, con
                              const AoResources& in, graph::TextureHandle target) {
     struct Data {
         graph::TextureHandle depth, normal, slicemap, ao;
-        graph::BufferHandle range, pattern;
+        graph::BufferHandle range, pattern, params;
     };
     return fg.add_pass<Data>(
                  "cone_ao",
@@ -21,6 +22,7 @@ graph::TextureHandle cone_ao(graph::FrameGraph& fg, const FrameContext& ctx, con
                      d.range = b.read(in.zrange);
                      d.pattern = b.write(b.create("cone_pattern", graph::BufferDesc{plan->pattern_bytes}));
                      d.ao = b.write(target);
+                     d.params = params_buffer<ConeParams>(b, "cone_params");
                  },
                  [&ctx, plan](const Data& d, const graph::Resources& r) {
                      GlResources& gl = *ctx.gl;
@@ -47,27 +49,29 @@ graph::TextureHandle cone_ao(graph::FrameGraph& fg, const FrameContext& ctx, con
                      glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, gl.buffer(r, d.range));
                      glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 1, gl.buffer(r, d.pattern));
                      glBindImageTexture(0, gl.texture(r, d.ao), 0, GL_FALSE, 0, GL_READ_WRITE, plan->coarse ? GL_RGBA32F : GL_R32F);
-                     glUniformMatrix3fv(prog.uniform("world_to_view"), 1, GL_FALSE, &ctx.world_to_view[0][0]);
-                     glUniform2f(prog.uniform("proj_scale"), plan->proj_scale.x, plan->proj_scale.y);
-                     glUniform2f(prog.uniform("sm_proj_scale"), plan->sm_scale.x * plan->proj_scale.x, plan->sm_scale.y * plan->proj_scale.y);
-                     glUniform1f(prog.uniform("near_plane"), plan->near_plane);
-                     glUniform1f(prog.uniform("far_plane"), plan->far_plane);
-                     glUniform1f(prog.uniform("scene_far"), plan->scene_far);
-                     glUniform1f(prog.uniform("near_margin"), plan->near_margin);
-                     glUniform2i(prog.uniform("size"), ctx.width, ctx.height);
-                     glUniform2i(prog.uniform("ao_size"), plan->ao_w, plan->ao_h);
-                     glUniform2i(prog.uniform("grid"), plan->grid_w, plan->grid_h);
-                     glUniform1f(prog.uniform("radius"), plan->radius);
-                     glUniform1f(prog.uniform("strength"), float(st.strength));
-                     glUniform1f(prog.uniform("persistence"), float(st.persistence));
-                     glUniform1f(prog.uniform("attenuation"), float(st.attenuation));
-                     glUniform1f(prog.uniform("bias"), float(st.bias));
-                     glUniform1f(prog.uniform("ray_weight"), float(st.ray_weight));
-                     glUniform1i(prog.uniform("cones"), st.cones);
-                     glUniform1i(prog.uniform("spheres"), st.spheres);
-                     glUniform1i(prog.uniform("samples"), st.samples);
-                     glUniform1i(prog.uniform("sets"), st.jitter_sets);
-                     glUniform1f(prog.uniform("history_weight"), history_weight);
+                     ConeParams p;
+                     p.world_to_view = std140::mat3(ctx.world_to_view);
+                     p.proj_scale = plan->proj_scale;
+                     p.sm_proj_scale = plan->sm_scale * plan->proj_scale;
+                     p.size = {ctx.width, ctx.height};
+                     p.grid = {plan->grid_w, plan->grid_h};
+                     p.ao_size = {plan->ao_w, plan->ao_h};
+                     p.near_plane = plan->near_plane;
+                     p.far_plane = plan->far_plane;
+                     p.scene_far = plan->scene_far;
+                     p.near_margin = plan->near_margin;
+                     p.radius = plan->radius;
+                     p.strength = float(st.strength);
+                     p.persistence = float(st.persistence);
+                     p.attenuation = float(st.attenuation);
+                     p.bias = float(st.bias);
+                     p.ray_weight = float(st.ray_weight);
+                     p.history_weight = history_weight;
+                     p.cones = st.cones;
+                     p.spheres = st.spheres;
+                     p.samples = st.samples;
+                     p.sets = st.jitter_sets;
+                     bind_params(gl, r, d.params, p);
                      glDispatchCompute(GLuint((plan->ao_w + 7) / 8), GLuint((plan->ao_h + 7) / 8), 1);
                      glMemoryBarrier(GL_TEXTURE_FETCH_BARRIER_BIT | GL_SHADER_IMAGE_ACCESS_BARRIER_BIT | GL_TEXTURE_UPDATE_BARRIER_BIT);
                  })

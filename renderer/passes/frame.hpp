@@ -63,6 +63,7 @@ FrameContext make_context(const Camera& camera, const RenderOptions& opt, std::v
 
 struct GBuffer {
     graph::TextureHandle depth, normal, id, albedo;
+    graph::BufferHandle params; // the pass's own
 };
 GBuffer gbuffer(graph::FrameGraph& fg, const FrameContext& ctx);
 

@@ -5,6 +5,7 @@
 
 #include "renderer/passes/gbuffer_layout.hpp"
 #include "renderer/passes/gl_resources.hpp"
+#include "renderer/passes/std140.hpp"
 
 namespace iso::passes {
 
@@ -28,6 +29,7 @@ GBuffer gbuffer(graph::FrameGraph& fg, const FrameContext& ctx) {
         [&](graph::FrameGraph::Builder& b, GBuffer& d) {
             d.depth = b.write(b.create("depth", {W, H, graph::Format::Depth32F}));
             for (const auto& c : kGBufferLayout) d.*c.handle = b.write(b.create(c.name, {W, H, c.format}));
+            d.params = params_buffer<GBufferParams>(b, "gbuffer_params");
         },
         [&ctx, W, H](const GBuffer& d, const graph::Resources& r) {
             GlResources& gl = *ctx.gl;
@@ -52,7 +54,7 @@ GBuffer gbuffer(graph::FrameGraph& fg, const FrameContext& ctx) {
             glDisable(GL_CULL_FACE); // open surfaces show both sides
             auto& prog = gl.program({"render/gbuffer.vert", "render/gbuffer.frag"}, gbuffer_defines());
             prog.use();
-            glUniformMatrix4fv(prog.uniform("view_projection"), 1, GL_FALSE, &ctx.view_projection[0][0]);
+            bind_params(gl, r, d.params, GBufferParams{ctx.view_projection});
             const GLint id_loc = prog.uniform("object_id"), albedo_loc = prog.uniform("albedo");
             for (const auto& m : ctx.draws) {
                 glUniform1ui(id_loc, m.id);

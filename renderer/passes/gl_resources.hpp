@@ -58,4 +58,15 @@ private:
     std::size_t created_ = 0;
 };
 
+// A pass's parameter block (renderer/passes/std140.hpp): declared in setup
+// as a graph buffer, filled and bound in execute.
+template <class P> graph::BufferHandle params_buffer(graph::FrameGraph::Builder& b, const char* name) {
+    return b.write(b.create(name, graph::BufferDesc{sizeof(P)}));
+}
+template <class P> void bind_params(const GlResources& gl, const graph::Resources& r, graph::BufferHandle h, const P& p) {
+    const GLuint buf = gl.buffer(r, h);
+    glNamedBufferSubData(buf, 0, sizeof(P), &p);
+    glBindBufferBase(GL_UNIFORM_BUFFER, P::binding, buf);
+}
+
 } // namespace iso::passes

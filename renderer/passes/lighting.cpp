@@ -2,12 +2,14 @@
 // given, tone mapping, sRGB; background where nothing was drawn.
 #include "renderer/passes/frame.hpp"
 #include "renderer/passes/gl_resources.hpp"
+#include "renderer/passes/std140.hpp"
 
 namespace iso::passes {
 
 graph::TextureHandle lighting(graph::FrameGraph& fg, const FrameContext& ctx, const GBuffer& gb, graph::TextureHandle ao) {
     struct Data {
         graph::TextureHandle normal, albedo, ao, color;
+        graph::BufferHandle params;
     };
     return fg.add_pass<Data>(
                  "lighting",
@@ -16,6 +18,7 @@ graph::TextureHandle lighting(graph::FrameGraph& fg, const FrameContext& ctx, co
                      d.albedo = b.read(gb.albedo);
                      if (ao.valid()) d.ao = b.read(ao);
                      d.color = b.write(b.create("lit", {ctx.width, ctx.height, graph::Format::RGBA8}));
+                     d.params = params_buffer<LightingParams>(b, "lighting_params");
                  },
                  [&ctx](const Data& d, const graph::Resources& r) {
                      GlResources& gl = *ctx.gl;
@@ -25,15 +28,9 @@ graph::TextureHandle lighting(graph::FrameGraph& fg, const FrameContext& ctx, co
                      prog.use();
                      glBindTextureUnit(0, gl.texture(r, d.normal));
                      glBindTextureUnit(1, gl.texture(r, d.albedo));
-                     glUniform1i(prog.uniform("normal_tex"), 0);
-                     glUniform1i(prog.uniform("albedo_tex"), 1);
-                     glUniform1i(prog.uniform("use_ao"), d.ao.valid() ? 1 : 0);
-                     if (d.ao.valid()) {
-                         glBindTextureUnit(2, gl.texture(r, d.ao));
-                         glUniform1i(prog.uniform("ao_tex"), 2);
-                     }
-                     glUniformMatrix3fv(prog.uniform("world_to_view"), 1, GL_FALSE, &ctx.world_to_view[0][0]);
-                     glUniform4fv(prog.uniform("background"), 1, &ctx.opt.background.x);
+                     if (d.ao.valid()) glBindTextureUnit(2, gl.texture(r, d.ao));
+                     bind_params(gl, r, d.params,
+                                 LightingParams{std140::mat3(ctx.world_to_view), ctx.opt.background, d.ao.valid() ? 1u : 0u});
                      glBindVertexArray(gl.vertex_array("fullscreen"));
                      glDrawArrays(GL_TRIANGLES, 0, 3);
                      glBindVertexArray(0);

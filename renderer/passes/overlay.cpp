@@ -4,13 +4,14 @@
 
 #include "renderer/passes/frame.hpp"
 #include "renderer/passes/gl_resources.hpp"
+#include "renderer/passes/std140.hpp"
 
 namespace iso::passes {
 
 graph::TextureHandle overlay(graph::FrameGraph& fg, const FrameContext& ctx, graph::TextureHandle color) {
     struct Data {
         graph::TextureHandle color;
-        graph::BufferHandle vertices;
+        graph::BufferHandle vertices, params;
     };
     // Sized to a power of two so that a changing label keeps its buffer.
     const std::size_t bytes = std::bit_ceil(std::max<std::size_t>(ctx.overlay.size() * sizeof(OverlayVertex), 256));
@@ -19,6 +20,7 @@ graph::TextureHandle overlay(graph::FrameGraph& fg, const FrameContext& ctx, gra
                  [&](graph::FrameGraph::Builder& b, Data& d) {
                      d.color = b.write(b.read(color));
                      d.vertices = b.write(b.create("overlay_vertices", graph::BufferDesc{bytes}));
+                     d.params = params_buffer<OverlayParams>(b, "overlay_params");
                  },
                  [&ctx](const Data& d, const graph::Resources& r) {
                      if (ctx.overlay.empty()) return;
@@ -37,7 +39,7 @@ graph::TextureHandle overlay(graph::FrameGraph& fg, const FrameContext& ctx, gra
                      glViewport(0, 0, ctx.width, ctx.height);
                      auto& prog = gl.program({"render/overlay.vert", "render/overlay.frag"});
                      prog.use();
-                     glUniform2f(prog.uniform("viewport"), float(ctx.width), float(ctx.height));
+                     bind_params(gl, r, d.params, OverlayParams{{float(ctx.width), float(ctx.height)}});
                      glEnable(GL_BLEND);
                      // Colour blends; alpha accumulates so a transparent background keeps annotations opaque.
                      glBlendFuncSeparate(GL_SRC_ALPHA, GL_ONE_MINUS_SRC_ALPHA, GL_ONE, GL_ONE_MINUS_SRC_ALPHA);

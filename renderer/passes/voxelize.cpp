@@ -2,13 +2,14 @@
 // columns per layer, local z range), rebuilt only when stale (ao_plan.cpp).
 #include "renderer/passes/frame.hpp"
 #include "renderer/passes/gl_resources.hpp"
+#include "renderer/passes/std140.hpp"
 
 namespace iso::passes {
 
 graph::TextureHandle voxelize(graph::FrameGraph& fg, const FrameContext& ctx, const AoPlanRef& plan, graph::BufferHandle range,
                               graph::TextureHandle slicemap) {
     struct Data {
-        graph::BufferHandle range;
+        graph::BufferHandle range, params;
         graph::TextureHandle slicemap;
     };
     return fg.add_pass<Data>(
@@ -16,6 +17,7 @@ graph::TextureHandle voxelize(graph::FrameGraph& fg, const FrameContext& ctx, co
                  [&](graph::FrameGraph::Builder& b, Data& d) {
                      d.range = b.read(range);
                      d.slicemap = b.write(slicemap);
+                     d.params = params_buffer<VoxelizeParams>(b, "voxelize_params");
                  },
                  [&ctx, plan](const Data& d, const graph::Resources& r) {
                      GlResources& gl = *ctx.gl;
@@ -36,11 +38,8 @@ graph::TextureHandle voxelize(graph::FrameGraph& fg, const FrameContext& ctx, co
                      glClipControl(GL_LOWER_LEFT, GL_ZERO_TO_ONE);
                      auto& prog = gl.program({"ao/slicemap.vert", "ao/slicemap.frag"}, "#define LAYERS " + std::to_string(layers) + "\n");
                      prog.use();
-                     glUniformMatrix4fv(prog.uniform("view_projection"), 1, GL_FALSE, &plan->sm_view_projection[0][0]);
-                     glUniformMatrix4fv(prog.uniform("view"), 1, GL_FALSE, &plan->view[0][0]);
-                     glUniform1f(prog.uniform("scene_far"), plan->scene_far);
-                     glUniform1f(prog.uniform("near_margin"), plan->near_margin);
-                     glUniform1f(prog.uniform("radius"), plan->radius);
+                     bind_params(gl, r, d.params,
+                                 VoxelizeParams{plan->sm_view_projection, plan->view, plan->scene_far, plan->near_margin, plan->radius});
                      glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, gl.buffer(r, d.range));
                      for (const auto& m : ctx.draws) {
                          glBindVertexArray(m.vao);

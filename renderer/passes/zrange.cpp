@@ -2,19 +2,21 @@
 // the slicemap's local range.
 #include "renderer/passes/frame.hpp"
 #include "renderer/passes/gl_resources.hpp"
+#include "renderer/passes/std140.hpp"
 
 namespace iso::passes {
 
 graph::BufferHandle zrange(graph::FrameGraph& fg, const FrameContext& ctx, const GBuffer& gb, graph::BufferHandle range) {
     struct Data {
         graph::TextureHandle depth;
-        graph::BufferHandle range;
+        graph::BufferHandle range, params;
     };
     return fg.add_pass<Data>(
                  "zrange",
                  [&](graph::FrameGraph::Builder& b, Data& d) {
                      d.depth = b.read(gb.depth);
                      d.range = b.write(range);
+                     d.params = params_buffer<ZRangeParams>(b, "zrange_params");
                  },
                  [&ctx](const Data& d, const graph::Resources& r) {
                      GlResources& gl = *ctx.gl;
@@ -25,9 +27,8 @@ graph::BufferHandle zrange(graph::FrameGraph& fg, const FrameContext& ctx, const
                      prog.use();
                      glBindTextureUnit(0, gl.texture(r, d.depth));
                      glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, buf);
-                     glUniform2i(prog.uniform("size"), ctx.width, ctx.height);
-                     glUniform1f(prog.uniform("near_plane"), float(ctx.camera.near_plane));
-                     glUniform1f(prog.uniform("far_plane"), float(ctx.camera.far_plane));
+                     bind_params(gl, r, d.params,
+                                 ZRangeParams{{ctx.width, ctx.height}, float(ctx.camera.near_plane), float(ctx.camera.far_plane)});
                      glDispatchCompute(GLuint((ctx.width + 15) / 16), GLuint((ctx.height + 15) / 16), 1);
                      glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
                  })

@@ -8,6 +8,8 @@
 // plain bilinear upsampling would halo. Output: 1 = unoccluded, NaN =
 // background, as cone.comp writes at full resolution.
 #include "ao_common.glsl"
+#include "std140.glsl"
+#include "upsample_params.glsl"
 
 layout(local_size_x = 8, local_size_y = 8) in;
 
@@ -16,10 +18,6 @@ layout(binding = 1) uniform sampler2D normal_tex;  // world normal
 layout(binding = 2) uniform sampler2D ao_low;      // coarse: AO, linear depth, octahedral view normal
 layout(binding = 0, r32f) writeonly uniform image2D ao_image;
 
-uniform ivec2 size, ao_size;
-uniform mat3 world_to_view;
-uniform vec2 proj_scale;
-uniform float near_plane, far_plane;
 
 vec3 eye_point_at(ivec2 pix, float D) {
     vec2 ndc = (vec2(pix) + 0.5) / vec2(size) * 2.0 - 1.0;

@@ -8,6 +8,8 @@
 // becomes a bit range, masked and counted with bitCount. Spheres combine
 // front to back, cones average. Output: 1 = unoccluded, NaN = background.
 #include "ao_common.glsl"
+#include "std140.glsl"
+#include "cone_params.glsl"
 
 layout(local_size_x = 8, local_size_y = 8) in;
 
@@ -26,15 +28,6 @@ layout(binding = 0, rgba32f) uniform image2D ao_image;
 layout(binding = 0, r32f) uniform image2D ao_image;   // running mean over still frames
 #endif
 
-uniform mat3 world_to_view;
-uniform vec2 proj_scale;          // projection[0][0], projection[1][1]
-uniform vec2 sm_proj_scale;       // the slicemap's: smaller by its guard band
-uniform float near_plane, far_plane, scene_far, near_margin;
-uniform ivec2 size, grid;
-uniform ivec2 ao_size;            // the AO image's size (= size at resolution 1)
-uniform float radius, strength, persistence, attenuation, bias, ray_weight;
-uniform int cones, spheres, samples, sets;
-uniform float history_weight;     // 0: overwrite; k/(k+1) for the (k+1)-th still frame
 
 uint hash(uvec2 v) { // PCG-style 2D hash
     v = v * 1664525u + 1013904223u;

@@ -4,12 +4,12 @@
 // (glLogicOp) of a column's front and back faces leaves the voxels between
 // them set: a solid voxelization in one pass, with no depth test or culling.
 #include "ao_common.glsl"
+#include "std140.glsl"
+#include "voxelize_params.glsl"
 
 in float view_depth;
 
 layout(std430, binding = 0) readonly buffer ZRange { uint zmin_bits; uint zmax_bits; };
-uniform float scene_far, near_margin;
-uniform float radius;
 
 layout(location = 0) out uvec4 out_mask[LAYERS];
 

@@ -1,11 +1,12 @@
 #version 450
+#extension GL_GOOGLE_include_directive : require
 // Slicemap voxelization (Eisemann & Decoret): the scene drawn into the
 // screen-aligned grid with the frame's own projection; depth clamp on, so
 // nothing is clipped by the near or far plane.
+#include "std140.glsl"
+#include "voxelize_params.glsl"
 layout(location = 0) in vec3 position;
 
-uniform mat4 view_projection;
-uniform mat4 view;
 
 out float view_depth; // linear depth, mm
 

@@ -1,13 +1,14 @@
 #version 450
+#extension GL_GOOGLE_include_directive : require
 // Nearest and farthest visible linear depth of the frame (the local
 // slicemap's range), by a workgroup reduction and two global atomics.
+#include "std140.glsl"
+#include "zrange_params.glsl"
 layout(local_size_x = 16, local_size_y = 16) in;
 
 layout(binding = 0) uniform sampler2D depth_tex;   // reversed-Z, 0 = background
 layout(std430, binding = 0) buffer ZRange { uint zmin_bits; uint zmax_bits; };
 
-uniform ivec2 size;
-uniform float near_plane, far_plane;
 
 shared uint s_min, s_max;
 

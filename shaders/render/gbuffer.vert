@@ -1,9 +1,11 @@
 #version 450
+#extension GL_GOOGLE_include_directive : require
 // G-buffer: positions in LPS mm, normals in LPS (world) space.
+#include "std140.glsl"
+#include "gbuffer_params.glsl"
 layout(location = 0) in vec3 position;
 layout(location = 1) in vec3 normal;
 
-uniform mat4 view_projection;
 
 out vec3 world_normal;
 

@@ -1,18 +1,18 @@
 #version 450
+#extension GL_GOOGLE_include_directive : require
 // Deferred lighting: a key light from the upper left of the viewer and a
 // headlight, Lambert diffuse plus a normalized Blinn-Phong highlight, a
 // hemispherical ambient term that ambient occlusion modulates, ACES-fitted
 // tone mapping and sRGB encoding. With AO the ambient (sky) light is
 // stronger and the headlight weaker, so folds and cavities read darker while
 // the overall brightness stays about the same.
+#include "std140.glsl"
+#include "lighting_params.glsl"
 in vec2 uv;
 
-uniform sampler2D normal_tex;
-uniform sampler2D albedo_tex;
-uniform mat3 world_to_view;   // rotation part of the view matrix
-uniform vec4 background;      // linear RGB, alpha
-uniform bool use_ao;
-uniform sampler2D ao_tex;     // R32F, 1 = unoccluded
+layout(binding = 0) uniform sampler2D normal_tex;
+layout(binding = 1) uniform sampler2D albedo_tex;
+layout(binding = 2) uniform sampler2D ao_tex;     // R32F, 1 = unoccluded
 
 layout(location = 0) out vec4 out_color;
 

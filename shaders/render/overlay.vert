@@ -1,8 +1,10 @@
 #version 450
+#extension GL_GOOGLE_include_directive : require
 // Overlay geometry in pixels (origin top left), coloured per vertex.
+#include "std140.glsl"
+#include "overlay_params.glsl"
 layout(location = 0) in vec2 pixel;
 layout(location = 1) in vec4 color;
-uniform vec2 viewport;
 out vec4 v_color;
 void main() {
     v_color = color;

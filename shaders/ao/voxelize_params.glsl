@@ -1,0 +1,8 @@
+// voxelize pass parameters (slicemap.vert and slicemap.frag; std140)
+ISO_BLOCK_BEGIN(VoxelizeParams, 0)
+ISO_MEMBER(mat4, view_projection)
+ISO_MEMBER(mat4, view)
+ISO_MEMBER(float, scene_far)
+ISO_MEMBER(float, near_margin)
+ISO_MEMBER(float, radius)
+ISO_BLOCK_END(VoxelizeParams)

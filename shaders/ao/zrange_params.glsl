@@ -1,0 +1,6 @@
+// zrange pass parameters (std140; shaders/std140.glsl)
+ISO_BLOCK_BEGIN(ZRangeParams, 0)
+ISO_MEMBER(ivec2, size)
+ISO_MEMBER(float, near_plane)
+ISO_MEMBER(float, far_plane)
+ISO_BLOCK_END(ZRangeParams)
