@@ -120,234 +120,275 @@ void open_input(iso::core::Scene& scene, const std::string& input, const std::st
         for (const auto& w : scene.mesh(id).warnings) std::cerr << "warning: " << scene.info(id).name << ": " << w << "\n";
 }
 
+// Cone-AO tunables, shared by `render` and `view`.
+void add_cone_options(CLI::App* cmd, iso::ConeAoSettings& c) {
+    cmd->add_option("--ao-cones", c.cones, "Cones over the hemisphere (cone AO)")->check(CLI::Range(1, 64));
+    cmd->add_option("--ao-spheres", c.spheres, "Spheres per cone (cone AO)")->check(CLI::Range(1, 32));
+    cmd->add_option("--ao-samples", c.samples, "Poisson-disk columns per sphere (cone AO)")->check(CLI::Range(1, 64));
+    cmd->add_option("--ao-strength", c.strength, "AO = 1 - strength * occlusion (cone AO)")->check(CLI::Range(0.0, 4.0));
+    cmd->add_option("--ao-layers", c.layers, "Slicemap depth: 128 z-voxels per layer, 1..8 (cone AO)")->check(CLI::Range(1, 8));
+    cmd->add_option("--ao-grid", c.grid_scale, "Slicemap texels per image pixel, 0.125..2 (cone AO)")->check(CLI::Range(0.125, 2.0));
+    cmd->add_option("--ao-jitter", c.jitter_sets, "Jitter distributions chosen per pixel by a screen hash (cone AO)")->check(CLI::Range(1, 64));
+    cmd->add_option("--ao-persistence", c.persistence, "Sphere combination along a cone: 0 independent absorbers, 1 one solid (cone AO)")
+        ->check(CLI::Range(0.0, 1.0));
+    cmd->add_option("--ao-ray-weight", c.ray_weight,
+                    "Sphere occlusion: 0 occupied volume fraction, 1 blocked-ray fraction of a cutting plane (cone AO)")
+        ->check(CLI::Range(0.0, 1.0));
+    cmd->add_option("--ao-resolution", c.resolution, "Cone-pass pixels per image pixel, 0.25..1; below 1 a bilateral upsampling follows (cone AO)")
+        ->check(CLI::Range(0.25, 1.0));
+    cmd->add_option("--ao-guard", c.guard,
+                    "Largest guard band around the view, fraction of the viewport per side, for occluders just off screen; 0 none (cone AO)")
+        ->check(CLI::Range(0.0, 0.5));
+}
+
+// ---- isoscope info ---------------------------------------------------------
+
+struct InfoArgs {
+    std::string path, series;
+    bool json = false;
+};
+
+CLI::App* add_info(CLI::App& app, InfoArgs& a) {
+    auto* c = app.add_subcommand("info", "Describe a volume: dimensions, type, spacing, range, index->LPS affine");
+    c->add_option("path", a.path, "Volume file or DICOM folder")->required();
+    c->add_option("--series", a.series, "DICOM series to load: index in the listing or SeriesInstanceUID");
+    c->add_flag("--json", a.json, "Print one JSON object");
+    return c;
+}
+
+int run_info(const InfoArgs& a) {
+    iso::LoadOptions opt;
+    opt.series = a.series;
+    opt.progress = progress_bar();
+    const auto j = iso::core::describe(iso::core::open_volume(a.path, opt));
+    if (a.json)
+        std::cout << j.dump(2) << "\n";
+    else
+        print_info(j, std::cout);
+    return 0;
+}
+
+// ---- isoscope mesh ---------------------------------------------------------
+
+struct MeshArgs {
+    std::string in, out, series;
+    std::vector<double> isos, label_values;
+    bool labels = false;
+    iso::PostProcessOptions post;
+    int threads = 0, chunk = 32;
+};
+
+CLI::App* add_mesh(CLI::App& app, MeshArgs& a) {
+    auto* c = app.add_subcommand("mesh", "Extract isosurfaces (or label surfaces) and write them in LPS mm");
+    c->add_option("input", a.in, "Volume file or DICOM folder")->required();
+    c->add_option("--iso", a.isos, "Iso value (repeat for several surfaces, e.g. --iso -500 --iso 300)")->allow_extra_args(false);
+    c->add_flag("--labels", a.labels, "Label map: one surface per label");
+    c->add_option("--label", a.label_values, "With --labels: only these labels (repeatable)")->allow_extra_args(false);
+    c->add_option("--smooth", a.post.smooth, "Windowed-sinc smoothing factor, 0..1 (Slicer's scale)")->check(CLI::Range(0.0, 1.0));
+    c->add_option("--decimate", a.post.decimate, "Fraction of triangles to remove, 0..<1")->check(CLI::Range(0.0, 0.999));
+    c->add_flag("--largest", a.post.keep_largest, "Keep only the largest connected component");
+    c->add_option("--series", a.series, "DICOM series to load: index or SeriesInstanceUID");
+    c->add_option("--threads", a.threads, "Threads (default: all cores)")->check(CLI::NonNegativeNumber);
+    c->add_option("--chunk", a.chunk, "Chunk size in cells per side")->check(CLI::Range(2, 1024));
+    c->add_option("-o,--output", a.out, "Output " + iso::mesh_extensions_text() + " (several surfaces: NAME-iso<V>.ext)")->required();
+    return c;
+}
+
+int run_mesh(const MeshArgs& a) {
+    if (a.isos.empty() && !a.labels) throw iso::Error("isoscope mesh", "give --iso V (repeatable) or --labels");
+    if (!a.isos.empty() && a.labels) throw iso::Error("isoscope mesh", "--iso and --labels exclude each other");
+    namespace fs = std::filesystem;
+    const fs::path out(a.out);
+    if (!iso::is_mesh_path(a.out)) throw iso::Error(a.out, "unsupported mesh format (write " + iso::mesh_extensions_text() + ")");
+    iso::check_writable_destination(a.out); // fail before the long part
+    iso::LoadOptions lo;
+    lo.series = a.series;
+    lo.progress = progress_bar();
+    iso::core::Scene scene;
+    if (scene.open(a.in, lo) != 0) throw iso::Error(a.in, "is a mesh; isoscope mesh extracts surfaces from volumes");
+    for (const auto& w : scene.volume().meta.warnings) std::cerr << "warning: " << w << "\n";
+    iso::ExtractOptions eo;
+    eo.threads = a.threads;
+    eo.chunk_size = a.chunk;
+    const auto ids = a.labels ? scene.add_label_surfaces(a.label_values, eo, a.post, progress_bar())
+                              : scene.add_isosurfaces(a.isos, eo, a.post, progress_bar());
+    const std::string ext = out.extension().string();
+    for (const auto id : ids) {
+        const auto& s = scene.info(id);
+        std::string path = a.out;
+        if (ids.size() > 1) {
+            char suffix[64];
+            std::snprintf(suffix, sizeof suffix, a.labels ? "-label%g" : "-iso%g", s.value);
+            path = (out.parent_path() / (out.stem().string() + suffix + ext)).string();
+        }
+        const auto& m = scene.mesh(id);
+        for (const auto& w : m.warnings) std::cerr << "warning: " << s.name << ": " << w << "\n";
+        scene.export_mesh(id, path);
+        const auto st = iso::mesh_stats(m);
+        std::cout << s.name << ": " << st.triangles << " triangles, " << st.vertices << " vertices, area " << st.area << " mm^2, volume "
+                  << st.volume << " mm^3 -> " << path << "\n";
+    }
+    return 0;
+}
+
+// ---- isoscope render -------------------------------------------------------
+
+struct RenderArgs {
+    std::string in, out, view = "anterior", size = "1024x1024", aov, series, ao = "off", cache;
+    std::vector<double> isos;
+    float scale = 1.0f;
+    bool stats = false, no_annotations = false, transparent = false;
+    double ao_radius = 10.0;
+    int ao_rays = 1024, ao_frames = 1;
+    iso::ConeAoSettings cone;
+};
+
+CLI::App* add_render(CLI::App& app, RenderArgs& a) {
+    auto* c = app.add_subcommand("render", "Render surfaces of a volume (or a mesh) to an annotated image");
+    c->add_option("input", a.in, "Volume file, DICOM folder, or mesh (" + iso::mesh_extensions_text() + ")")->required();
+    c->add_option("--iso", a.isos, "Iso value (repeatable) for volume inputs")->allow_extra_args(false);
+    c->add_option("--view", a.view, "anterior, posterior, left, right, superior or inferior");
+    c->add_option("--size", a.size, "Image size WxH (default 1024x1024)");
+    c->add_option("--scale", a.scale, "Scale of text, lines and glyphs (e.g. 2 for a 2x export)")->check(CLI::Range(0.1, 20.0));
+    c->add_option("--aov", a.aov, "Write a buffer instead of the colour image: depth, normal, id or ao (EXR)");
+    c->add_option("--ao", a.ao, "Ambient occlusion: off, cone (cone tracing), or reference (Embree ray tracing; with --aov ao)");
+    c->add_option("--ao-radius", a.ao_radius, "AO radius R_max in mm")->check(CLI::PositiveNumber);
+    c->add_option("--ao-rays", a.ao_rays, "Rays per pixel for --ao reference")->check(CLI::Range(1, 1 << 20));
+    add_cone_options(c, a.cone);
+    c->add_option("--ao-frames", a.ao_frames, "Still frames accumulated with new jitter sets (cone AO)")->check(CLI::Range(1, 4096));
+    c->add_option("--ao-cache", a.cache, "Folder caching AO references ('-': none; default ~/.cache/isoscope)");
+    c->add_flag("--no-annotations", a.no_annotations, "No scale bar, orientation letters or labels");
+    c->add_flag("--transparent", a.transparent, "Transparent background");
+    c->add_flag("--stats", a.stats, "Print per-pass statistics");
+    c->add_option("--series", a.series, "DICOM series to load: index or SeriesInstanceUID");
+    c->add_option("-o,--output", a.out, "Output .png, .tif or .exr")->required();
+    return c;
+}
+
+void print_stats(const iso::graph::FrameStats& stats) {
+    std::cout << std::left << std::setw(14) << "pass" << std::setw(8) << "ran" << std::setw(12) << "ms" << "created\n";
+    double total = 0;
+    for (const auto& p : stats.passes) {
+        std::cout << std::setw(14) << p.name << std::setw(8) << (p.ran ? "yes" : "culled") << std::setw(12) << std::fixed << std::setprecision(2)
+                  << p.ms << human_bytes(double(p.bytes_created)) << "\n";
+        total += p.ms;
+    }
+    std::cout << "total " << total << " ms; " << stats.physical_resources << " resources created, " << stats.reused_resources
+              << " reused; peak " << human_bytes(double(stats.peak_bytes)) << "\n";
+}
+
+int run_render(const RenderArgs& a) {
+    iso::core::RenderRequest req;
+    req.view = a.view;
+    if (std::sscanf(a.size.c_str(), "%dx%d", &req.width, &req.height) != 2 || req.width < 1 || req.height < 1)
+        throw iso::Error("--size", "expected WxH, e.g. 1920x1080, got '" + a.size + "'");
+    req.scale = a.scale;
+    req.aov_ao = a.aov == "ao";
+    req.aov = req.aov_ao ? iso::Aov::None : iso::aov_from_name(a.aov);
+    req.ao = a.ao;
+    req.ao_radius_mm = a.ao_radius;
+    req.ao_rays = a.ao_rays;
+    req.cone = a.cone;
+    req.ao_frames = a.ao_frames;
+    req.cache_dir = a.cache;
+    req.annotations = !a.no_annotations;
+    req.transparent = a.transparent;
+    req.time_passes = a.stats;
+    req.progress = progress_bar();
+    iso::check_writable_destination(a.out);
+    iso::core::Scene scene;
+    open_input(scene, a.in, a.series, a.isos, "render");
+    const auto out = iso::core::render_image(scene, req);
+    iso::core::export_image(out.image, out.meta, a.out);
+    std::cout << "rendered " << out.image.width << "x" << out.image.height << " (" << out.gl_renderer << ") -> " << a.out << "\n";
+    if (a.stats) print_stats(out.stats);
+    return 0;
+}
+
+// ---- isoscope view ---------------------------------------------------------
+
+struct ViewArgs {
+    std::string in, view = "anterior", screenshot, series, ao = "cone";
+    std::vector<double> isos;
+    iso::gui::ViewerOptions opt;
+};
+
+CLI::App* add_view(CLI::App& app, ViewArgs& a) {
+    auto* c = app.add_subcommand("view", "Open a window showing the surfaces (mouse: orbit, pan, zoom; keys a p l r s i: views)");
+    c->add_option("input", a.in, "Volume file, DICOM folder, or mesh")->required();
+    c->add_option("--iso", a.isos, "Iso value (repeatable) for volume inputs")->allow_extra_args(false);
+    c->add_option("--view", a.view, "Initial view: anterior, posterior, left, right, superior or inferior");
+    c->add_option("--series", a.series, "DICOM series to load: index or SeriesInstanceUID");
+    c->add_option("--screenshot", a.screenshot, "Save the first converged frame to this PNG and quit (tests)");
+    c->add_option("--ao", a.ao, "Ambient occlusion: cone (default) or off; key O toggles it")->check(CLI::IsMember({"cone", "off"}));
+    c->add_option("--ao-radius", a.opt.cone.radius_mm, "AO radius R_max in mm")->check(CLI::PositiveNumber);
+    add_cone_options(c, a.opt.cone);
+    c->add_option("--ao-frames", a.opt.still_frames, "Still frames accumulated with new jitter sets while nothing moves")
+        ->check(CLI::Range(1, 4096));
+    return c;
+}
+
+int run_view(ViewArgs a, char* argv0) {
+    const auto initial = iso::patient_view_from_name(a.view);
+    iso::validate(a.opt.cone); // before the long part
+    iso::core::Scene scene;
+    open_input(scene, a.in, a.series, a.isos, "view");
+    QSurfaceFormat fmt;
+    fmt.setVersion(4, 5);
+    fmt.setProfile(QSurfaceFormat::CoreProfile);
+    fmt.setDepthBufferSize(24);
+    QSurfaceFormat::setDefaultFormat(fmt);
+    int qargc = 1;
+    char* qargv[] = {argv0, nullptr};
+    QApplication qapp(qargc, qargv);
+    a.opt.ao = a.ao == "cone";
+    iso::gui::Viewer w(scene, initial, a.opt);
+    w.setWindowTitle(QString::fromStdString("isoscope - " + a.in));
+    w.resize(800, 600);
+    w.show();
+    QTimer poll;
+    if (!a.screenshot.empty()) {
+        // Grab once the picture has converged (the first frame without AO;
+        // all still frames with it), then quit.
+        QObject::connect(&poll, &QTimer::timeout, [&] {
+            if (!w.converged() && w.error().empty()) return;
+            poll.stop();
+            if (!w.error().empty()) {
+                qapp.exit(1);
+                return;
+            }
+            if (!w.grabFramebuffer().save(QString::fromStdString(a.screenshot))) {
+                std::cerr << "isoscope: error: " << a.screenshot << ": cannot save the screenshot\n";
+                qapp.exit(1);
+                return;
+            }
+            qapp.exit(0);
+        });
+        poll.start(50);
+    }
+    return qapp.exec();
+}
+
 } // namespace
 
 int main(int argc, char** argv) {
     CLI::App app{"isoscope: inspect CT volumes, reconstruct and render isosurfaces"};
     app.set_version_flag("--version", std::string("isoscope ") + iso::core::version());
     app.require_subcommand(1);
-
-    std::string info_path, info_series;
-    bool info_json = false;
-    auto* info = app.add_subcommand("info", "Describe a volume: dimensions, type, spacing, range, index->LPS affine");
-    info->add_option("path", info_path, "Volume file or DICOM folder")->required();
-    info->add_option("--series", info_series, "DICOM series to load: index in the listing or SeriesInstanceUID");
-    info->add_flag("--json", info_json, "Print one JSON object");
-
-    std::string mesh_in, mesh_out, mesh_series;
-    std::vector<double> mesh_isos, mesh_label_values;
-    bool mesh_labels = false;
-    iso::PostProcessOptions post;
-    int mesh_threads = 0, mesh_chunk = 32;
-    auto* mesh = app.add_subcommand("mesh", "Extract isosurfaces (or label surfaces) and write them in LPS mm");
-    mesh->add_option("input", mesh_in, "Volume file or DICOM folder")->required();
-    mesh->add_option("--iso", mesh_isos, "Iso value (repeat for several surfaces, e.g. --iso -500 --iso 300)")
-        ->allow_extra_args(false);
-    mesh->add_flag("--labels", mesh_labels, "Label map: one surface per label");
-    mesh->add_option("--label", mesh_label_values, "With --labels: only these labels (repeatable)")
-        ->allow_extra_args(false);
-    mesh->add_option("--smooth", post.smooth, "Windowed-sinc smoothing factor, 0..1 (Slicer's scale)")->check(CLI::Range(0.0, 1.0));
-    mesh->add_option("--decimate", post.decimate, "Fraction of triangles to remove, 0..<1")->check(CLI::Range(0.0, 0.999));
-    mesh->add_flag("--largest", post.keep_largest, "Keep only the largest connected component");
-    mesh->add_option("--series", mesh_series, "DICOM series to load: index or SeriesInstanceUID");
-    mesh->add_option("--threads", mesh_threads, "Threads (default: all cores)")->check(CLI::NonNegativeNumber);
-    mesh->add_option("--chunk", mesh_chunk, "Chunk size in cells per side")->check(CLI::Range(2, 1024));
-    mesh->add_option("-o,--output", mesh_out, "Output .stl, .ply, .obj or .vtp (several surfaces: NAME-iso<V>.ext)")->required();
-
-    // Cone-AO tunables, shared by `render` and `view`.
-    auto add_cone_options = [](CLI::App* cmd, iso::ConeAoSettings& c) {
-        cmd->add_option("--ao-cones", c.cones, "Cones over the hemisphere (cone AO)")->check(CLI::Range(1, 64));
-        cmd->add_option("--ao-spheres", c.spheres, "Spheres per cone (cone AO)")->check(CLI::Range(1, 32));
-        cmd->add_option("--ao-samples", c.samples, "Poisson-disk columns per sphere (cone AO)")->check(CLI::Range(1, 64));
-        cmd->add_option("--ao-strength", c.strength, "AO = 1 - strength * occlusion (cone AO)")->check(CLI::Range(0.0, 4.0));
-        cmd->add_option("--ao-layers", c.layers, "Slicemap depth: 128 z-voxels per layer, 1..8 (cone AO)")->check(CLI::Range(1, 8));
-        cmd->add_option("--ao-grid", c.grid_scale, "Slicemap texels per image pixel, 0.125..2 (cone AO)")->check(CLI::Range(0.125, 2.0));
-        cmd->add_option("--ao-jitter", c.jitter_sets, "Jitter distributions chosen per pixel by a screen hash (cone AO)")
-            ->check(CLI::Range(1, 64));
-        cmd->add_option("--ao-persistence", c.persistence,
-                        "Sphere combination along a cone: 0 independent absorbers, 1 one solid (cone AO)")
-            ->check(CLI::Range(0.0, 1.0));
-        cmd->add_option("--ao-ray-weight", c.ray_weight,
-                        "Sphere occlusion: 0 occupied volume fraction, 1 blocked-ray fraction of a cutting plane (cone AO)")
-            ->check(CLI::Range(0.0, 1.0));
-        cmd->add_option("--ao-resolution", c.resolution,
-                        "Cone-pass pixels per image pixel, 0.25..1; below 1 a bilateral upsampling follows (cone AO)")
-            ->check(CLI::Range(0.25, 1.0));
-        cmd->add_option("--ao-guard", c.guard,
-                        "Largest guard band around the view, fraction of the viewport per side, for occluders just off screen; 0 none (cone AO)")
-            ->check(CLI::Range(0.0, 0.5));
-    };
-
-    std::string r_in, r_out, r_view = "anterior", r_size = "1024x1024", r_aov, r_series;
-    std::vector<double> r_isos;
-    float r_scale = 1.0f;
-    bool r_stats = false, r_no_annotations = false, r_transparent = false;
-    auto* render = app.add_subcommand("render", "Render surfaces of a volume (or a mesh) to an annotated image");
-    render->add_option("input", r_in, "Volume file, DICOM folder, or mesh (.stl .ply .obj .vtp)")->required();
-    render->add_option("--iso", r_isos, "Iso value (repeatable) for volume inputs")->allow_extra_args(false);
-    render->add_option("--view", r_view, "anterior, posterior, left, right, superior or inferior");
-    render->add_option("--size", r_size, "Image size WxH (default 1024x1024)");
-    render->add_option("--scale", r_scale, "Scale of text, lines and glyphs (e.g. 2 for a 2x export)")->check(CLI::Range(0.1, 20.0));
-    render->add_option("--aov", r_aov, "Write a buffer instead of the colour image: depth, normal, id or ao (EXR)");
-    std::string r_ao = "off";
-    double r_ao_radius = 10.0;
-    int r_ao_rays = 1024;
-    iso::ConeAoSettings r_cone;
-    int r_ao_frames = 1;
-    std::string r_cache;
-    render->add_option("--ao", r_ao, "Ambient occlusion: off, cone (cone tracing), or reference (Embree ray tracing; with --aov ao)");
-    render->add_option("--ao-radius", r_ao_radius, "AO radius R_max in mm")->check(CLI::PositiveNumber);
-    render->add_option("--ao-rays", r_ao_rays, "Rays per pixel for --ao reference")->check(CLI::Range(1, 1 << 20));
-    add_cone_options(render, r_cone);
-    render->add_option("--ao-frames", r_ao_frames, "Still frames accumulated with new jitter sets (cone AO)")->check(CLI::Range(1, 4096));
-    render->add_option("--ao-cache", r_cache, "Folder caching AO references ('-': none; default ~/.cache/isoscope)");
-    render->add_flag("--no-annotations", r_no_annotations, "No scale bar, orientation letters or labels");
-    render->add_flag("--transparent", r_transparent, "Transparent background");
-    render->add_flag("--stats", r_stats, "Print per-pass statistics");
-    render->add_option("--series", r_series, "DICOM series to load: index or SeriesInstanceUID");
-    render->add_option("-o,--output", r_out, "Output .png, .tif or .exr")->required();
-
-    std::string v_in, v_view = "anterior", v_shot, v_series;
-    std::vector<double> v_isos;
-    auto* view = app.add_subcommand("view", "Open a window showing the surfaces (mouse: orbit, pan, zoom; keys a p l r s i: views)");
-    view->add_option("input", v_in, "Volume file, DICOM folder, or mesh")->required();
-    view->add_option("--iso", v_isos, "Iso value (repeatable) for volume inputs")->allow_extra_args(false);
-    view->add_option("--view", v_view, "Initial view: anterior, posterior, left, right, superior or inferior");
-    view->add_option("--series", v_series, "DICOM series to load: index or SeriesInstanceUID");
-    view->add_option("--screenshot", v_shot, "Save the first converged frame to this PNG and quit (tests)");
-    std::string v_ao = "cone";
-    iso::gui::ViewerOptions v_opt;
-    view->add_option("--ao", v_ao, "Ambient occlusion: cone (default) or off; key O toggles it")->check(CLI::IsMember({"cone", "off"}));
-    view->add_option("--ao-radius", v_opt.cone.radius_mm, "AO radius R_max in mm")->check(CLI::PositiveNumber);
-    add_cone_options(view, v_opt.cone);
-    view->add_option("--ao-frames", v_opt.still_frames, "Still frames accumulated with new jitter sets while nothing moves")
-        ->check(CLI::Range(1, 4096));
-
+    InfoArgs info_args;
+    MeshArgs mesh_args;
+    RenderArgs render_args;
+    ViewArgs view_args;
+    auto* info = add_info(app, info_args);
+    auto* mesh = add_mesh(app, mesh_args);
+    auto* render = add_render(app, render_args);
+    auto* view = add_view(app, view_args);
     CLI11_PARSE(app, argc, argv);
-
     try {
-        if (*info) {
-            iso::LoadOptions opt;
-            opt.series = info_series;
-            opt.progress = progress_bar();
-            const auto v = iso::core::open_volume(info_path, opt);
-            const auto j = iso::core::describe(v);
-            if (info_json)
-                std::cout << j.dump(2) << "\n";
-            else
-                print_info(j, std::cout);
-        }
-        if (*mesh) {
-            if (mesh_isos.empty() && !mesh_labels) throw iso::Error("isoscope mesh", "give --iso V (repeatable) or --labels");
-            if (!mesh_isos.empty() && mesh_labels) throw iso::Error("isoscope mesh", "--iso and --labels exclude each other");
-            namespace fs = std::filesystem;
-            const fs::path out(mesh_out);
-            if (!iso::is_mesh_path(mesh_out))
-                throw iso::Error(mesh_out, "unsupported mesh format (write " + iso::mesh_extensions_text() + ")");
-            iso::check_writable_destination(mesh_out); // fail before the long part
-            iso::LoadOptions lo;
-            lo.series = mesh_series;
-            lo.progress = progress_bar();
-            iso::core::Scene scene;
-            if (scene.open(mesh_in, lo) != 0) throw iso::Error(mesh_in, "is a mesh; isoscope mesh extracts surfaces from volumes");
-            for (const auto& w : scene.volume().meta.warnings) std::cerr << "warning: " << w << "\n";
-            iso::ExtractOptions eo;
-            eo.threads = mesh_threads;
-            eo.chunk_size = mesh_chunk;
-            const auto ids = mesh_labels ? scene.add_label_surfaces(mesh_label_values, eo, post, progress_bar())
-                                         : scene.add_isosurfaces(mesh_isos, eo, post, progress_bar());
-            const std::string ext = out.extension().string();
-            for (const auto id : ids) {
-                const auto& s = scene.info(id);
-                std::string path = mesh_out;
-                if (ids.size() > 1) {
-                    char suffix[64];
-                    std::snprintf(suffix, sizeof suffix, mesh_labels ? "-label%g" : "-iso%g", s.value);
-                    path = (out.parent_path() / (out.stem().string() + suffix + ext)).string();
-                }
-                const auto& m = scene.mesh(id);
-                for (const auto& w : m.warnings) std::cerr << "warning: " << s.name << ": " << w << "\n";
-                scene.export_mesh(id, path);
-                const auto st = iso::mesh_stats(m);
-                std::cout << s.name << ": " << st.triangles << " triangles, " << st.vertices << " vertices, area "
-                          << st.area << " mm^2, volume " << st.volume << " mm^3 -> " << path << "\n";
-            }
-        }
-        if (*view) {
-            const auto initial = iso::patient_view_from_name(v_view);
-            iso::validate(v_opt.cone); // before the long part
-            iso::core::Scene scene;
-            open_input(scene, v_in, v_series, v_isos, "view");
-            QSurfaceFormat fmt;
-            fmt.setVersion(4, 5);
-            fmt.setProfile(QSurfaceFormat::CoreProfile);
-            fmt.setDepthBufferSize(24);
-            QSurfaceFormat::setDefaultFormat(fmt);
-            int qargc = 1;
-            char* qargv[] = {argv[0], nullptr};
-            QApplication qapp(qargc, qargv);
-            v_opt.ao = v_ao == "cone";
-            iso::gui::Viewer w(scene, initial, v_opt);
-            w.setWindowTitle(QString::fromStdString("isoscope - " + v_in));
-            w.resize(800, 600);
-            w.show();
-            if (!v_shot.empty()) {
-                // Grab once the picture has converged (the first frame without
-                // AO; all still frames with it), then quit.
-                QTimer poll;
-                QObject::connect(&poll, &QTimer::timeout, [&] {
-                    if (!w.converged()) return;
-                    poll.stop();
-                    if (!w.grabFramebuffer().save(QString::fromStdString(v_shot))) {
-                        std::cerr << "isoscope: error: " << v_shot << ": cannot save the screenshot\n";
-                        qapp.exit(1);
-                        return;
-                    }
-                    qapp.exit(0);
-                });
-                poll.start(50);
-                return qapp.exec();
-            }
-            return qapp.exec();
-        }
-        if (*render) {
-            iso::core::RenderRequest req;
-            req.isos = r_isos;
-            req.series = r_series;
-            req.view = r_view;
-            if (std::sscanf(r_size.c_str(), "%dx%d", &req.width, &req.height) != 2 || req.width < 1 || req.height < 1)
-                throw iso::Error("--size", "expected WxH, e.g. 1920x1080, got '" + r_size + "'");
-            req.scale = r_scale;
-            req.aov_ao = r_aov == "ao";
-            req.aov = req.aov_ao ? iso::Aov::None : iso::aov_from_name(r_aov);
-            req.ao = r_ao;
-            req.ao_radius_mm = r_ao_radius;
-            req.ao_rays = r_ao_rays;
-            req.cone = r_cone;
-            req.ao_frames = r_ao_frames;
-            req.cache_dir = r_cache;
-            req.annotations = !r_no_annotations;
-            req.transparent = r_transparent;
-            req.time_passes = r_stats;
-            req.progress = progress_bar();
-            iso::check_writable_destination(r_out);
-            iso::core::Scene scene;
-            open_input(scene, r_in, r_series, r_isos, "render");
-            const auto out = iso::core::render_image(scene, req);
-            iso::core::export_image(out.image, out.meta, r_out);
-            std::cout << "rendered " << out.image.width << "x" << out.image.height << " (" << out.gl_renderer << ") -> " << r_out << "\n";
-            if (r_stats) {
-                std::cout << std::left << std::setw(12) << "pass" << std::setw(8) << "ran" << std::setw(12) << "ms" << "created\n";
-                double total = 0;
-                for (const auto& p : out.stats.passes) {
-                    std::cout << std::setw(12) << p.name << std::setw(8) << (p.ran ? "yes" : "culled") << std::setw(12) << std::fixed
-                              << std::setprecision(2) << p.ms << human_bytes(double(p.bytes_created)) << "\n";
-                    total += p.ms;
-                }
-                std::cout << "total " << total << " ms; " << out.stats.physical_resources << " textures, peak "
-                          << human_bytes(double(out.stats.peak_bytes)) << "\n";
-            }
-        }
+        if (*info) return run_info(info_args);
+        if (*mesh) return run_mesh(mesh_args);
+        if (*render) return run_render(render_args);
+        if (*view) return run_view(view_args, argv[0]);
     } catch (const iso::Error& e) {
         std::cerr << "isoscope: error: " << cli_message(e) << "\n";
         return 1;
