@@ -7,20 +7,16 @@
 
 #include <glm/glm.hpp>
 
-#include "renderer/gl/context.hpp"
+#include "gl_test.hpp"
 #include "renderer/gl/objects.hpp"
 #include "renderer/render/overlay.hpp"
 #include "renderer/iso/extract.hpp"
 #include "test_util.hpp"
 
 using namespace iso;
+using Render = test::GlTest;
 
 namespace {
-
-gl::HeadlessContext& context() {
-    static gl::HeadlessContext ctx(true);
-    return ctx;
-}
 
 // A fine mesh of a sphere (radius r around c) from a distance field.
 Mesh sphere_mesh(glm::dvec3 c, double r, double voxel) {
@@ -38,8 +34,7 @@ float at(const Image& img, int x, int y, int c = 0) { return img.floats[(std::si
 
 } // namespace
 
-TEST(Render, DepthAndNormalAovsMatchTheAnalyticSphere) {
-    context();
+TEST_F(Render, DepthAndNormalAovsMatchTheAnalyticSphere) {
     const glm::dvec3 c(10, -20, 30);
     const double r = 40.0;
     Renderer ren;
@@ -84,8 +79,7 @@ TEST(Render, DepthAndNormalAovsMatchTheAnalyticSphere) {
     }
 }
 
-TEST(Render, IdAovAndAnteriorOrientation) {
-    context();
+TEST_F(Render, IdAovAndAnteriorOrientation) {
     Renderer ren;
     // Patient's left (+x) sphere and patient's right (-x) sphere.
     const auto left = ren.add(sphere_mesh({60, 0, 0}, 20, 2.0), {"left"});
@@ -112,8 +106,7 @@ TEST(Render, IdAovAndAnteriorOrientation) {
     EXPECT_EQ(at(back, bl.x, bl.y), float(left));
 }
 
-TEST(Render, ExtremeScalesAndNearFarRatio) {
-    context();
+TEST_F(Render, ExtremeScalesAndNearFarRatio) {
     // A 0.1 mm sphere seen from 2 m: near/far planes must still resolve it.
     Renderer tiny;
     tiny.add(sphere_mesh({0, 0, 0}, 0.05, 0.004), {});
@@ -137,8 +130,7 @@ TEST(Render, ExtremeScalesAndNearFarRatio) {
     }
 }
 
-TEST(Render, DegenerateAndEmptyScenes) {
-    context();
+TEST_F(Render, DegenerateAndEmptyScenes) {
     Renderer empty;
     Camera cam;
     cam.set_view(PatientView::Anterior, empty.bounds());
@@ -155,12 +147,11 @@ TEST(Render, DegenerateAndEmptyScenes) {
     EXPECT_THROW(degenerate.render(cam, {.width = 0, .height = 10}), Error);
 }
 
-TEST(Render, SteadyFramesMakeNoNewGlObjects) {
+TEST_F(Render, SteadyFramesMakeNoNewGlObjects) {
     // The viewer's case: the same view redrawn (still frames accumulating AO,
     // annotations on, presented into a window's framebuffer, then read back).
     // After the first frame of each kind, nothing is created: the pool's and
     // the GL objects' counts stay put.
-    context();
     Renderer ren;
     ren.add(sphere_mesh({0, 0, 0}, 20, 2.0), {});
     Bounds b = ren.bounds();
