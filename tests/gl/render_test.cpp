@@ -3,6 +3,7 @@
 // extreme scales, degenerate and empty scenes.
 #include "renderer/render/renderer.hpp"
 
+#include <array>
 #include <cmath>
 
 #include <glm/glm.hpp>
@@ -134,8 +135,29 @@ TEST_F(Render, DegenerateAndEmptyScenes) {
     Renderer empty;
     Camera cam;
     cam.set_view(PatientView::Anterior, empty.bounds());
-    const auto img = empty.render(cam, {.width = 32, .height = 16}).image;
+    RenderOptions opt{.width = 32, .height = 16};
+    const auto img = empty.render(cam, opt).image;
+    ASSERT_FALSE(img.is_float);
+    ASSERT_EQ(img.channels, 4);
     ASSERT_EQ(img.bytes.size(), 32u * 16u * 4u);
+    // Nothing is drawn: every pixel is the background, which the lighting
+    // pass writes sRGB-encoded (IEC 61966-2-1) and not tone mapped, as
+    // RGBA8 (round to nearest). The default (0.08, 0.09, 0.11) linear is
+    // 255 * sRGB = 79.89, 84.62, 93.22: far from a rounding tie.
+    const auto srgb8 = [](double linear) {
+        const double s = linear <= 0.0031308 ? 12.92 * linear : 1.055 * std::pow(linear, 1 / 2.4) - 0.055;
+        return int(std::lround(255 * s));
+    };
+    const std::array<int, 4> background{srgb8(opt.background.r), srgb8(opt.background.g), srgb8(opt.background.b),
+                                        int(std::lround(255 * opt.background.a))};
+    ASSERT_EQ(background, (std::array<int, 4>{80, 85, 93, 255}));
+    std::size_t other = 0;
+    for (std::size_t p = 0; p < img.bytes.size() / 4; ++p) {
+        const std::array<int, 4> px{img.bytes[p * 4], img.bytes[p * 4 + 1], img.bytes[p * 4 + 2], img.bytes[p * 4 + 3]};
+        if (px == background) continue;
+        if (++other <= 3) ADD_FAILURE() << "pixel " << p % 32 << "," << p / 32 << " is not the background";
+    }
+    EXPECT_EQ(other, 0u) << "of " << img.bytes.size() / 4 << " pixels";
     Renderer degenerate;
     Mesh m;
     m.positions = {{0, 0, 0}, {0, 0, 0}, {1, 0, 0}, {2, 0, 0}, {0, 0, 0}};
