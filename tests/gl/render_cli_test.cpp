@@ -187,8 +187,11 @@ TEST(RenderCli, ReferenceAoIsCachedByItsInputs) {
     render(args + " -o " + (dir / "b.exr"));
     EXPECT_EQ(load_image(dir / "a.exr").floats.size(), load_image(dir / "b.exr").floats.size());
     const auto a = load_image(dir / "a.exr"), b = load_image(dir / "b.exr");
-    for (std::size_t i = 0; i < a.floats.size(); ++i)
-        if (!std::isnan(a.floats[i])) ASSERT_EQ(a.floats[i], b.floats[i]);
+    for (std::size_t i = 0; i < a.floats.size(); ++i) {
+        if (!std::isnan(a.floats[i])) {
+            ASSERT_EQ(a.floats[i], b.floats[i]);
+        }
+    }
     entries = 0;
     for (const auto& e : std::filesystem::recursive_directory_iterator(dir / "cache")) entries += e.is_regular_file();
     EXPECT_EQ(entries, 1u) << "the second run hit the cache";
