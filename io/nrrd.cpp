@@ -1,6 +1,6 @@
 // NRRD through teem, the format's reference library: raw and gzip encodings,
 // attached (.nrrd) and detached (.nhdr) headers. VTK's reader handles raw
-// only (platform.md), so it is not used.
+// only (no gzip; docs/architecture.md, formats), so it is not used.
 #include <cmath>
 #include <cstring>
 #include <filesystem>

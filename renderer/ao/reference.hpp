@@ -2,7 +2,7 @@
 // the cosine-weighted visibility of the hemisphere around the normal,
 // limited to distance R (a ray that hits nothing within R counts as
 // unoccluded), 1 = unoccluded. This is the one AO definition every method is
-// measured against (../shared/docs/measuring.md).
+// measured against (docs/ao.md, "Definition and ground truth").
 //
 // Directions are cosine-distributed (Malley: uniform points of the unit disk
 // lifted to the hemisphere), so the estimate is the plain fraction of

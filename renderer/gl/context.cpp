@@ -134,14 +134,56 @@ void HeadlessContext::make_current() {
         throw Error("OpenGL", std::string("eglMakeCurrent failed: ") + egl_error_name(eglGetError()));
 }
 
-namespace {
-void GLAPIENTRY on_debug_message(GLenum source, GLenum type, GLuint id, GLenum severity, GLsizei, const GLchar* message,
-                                 const void*) {
+std::size_t DebugLog::errors() const {
+    std::lock_guard lock(mutex_);
+    return errors_;
+}
+
+std::vector<std::string> DebugLog::messages() const {
+    std::lock_guard lock(mutex_);
+    return {messages_.begin(), messages_.end()};
+}
+
+void DebugLog::clear() {
+    std::lock_guard lock(mutex_);
+    errors_ = 0;
+    messages_.clear();
+}
+
+void DebugLog::set_echo(bool on) {
+    std::lock_guard lock(mutex_);
+    echo_ = on;
+}
+
+bool DebugLog::echo() const {
+    std::lock_guard lock(mutex_);
+    return echo_;
+}
+
+void DebugLog::record(unsigned type, unsigned id, unsigned severity, const std::string& text) {
+    // Notifications (e.g. buffer placement hints) are noise.
     if (severity == GL_DEBUG_SEVERITY_NOTIFICATION) return;
-    if (type != GL_DEBUG_TYPE_ERROR && type != GL_DEBUG_TYPE_UNDEFINED_BEHAVIOR &&
-        type != GL_DEBUG_TYPE_DEPRECATED_BEHAVIOR && type != GL_DEBUG_TYPE_PORTABILITY)
-        return;
-    std::fprintf(stderr, "GL %s (id %u): %s\n", type == GL_DEBUG_TYPE_ERROR ? "error" : "warning", id, message);
+    const bool error = type == GL_DEBUG_TYPE_ERROR;
+    const bool warning = type == GL_DEBUG_TYPE_UNDEFINED_BEHAVIOR || type == GL_DEBUG_TYPE_DEPRECATED_BEHAVIOR ||
+                         type == GL_DEBUG_TYPE_PORTABILITY;
+    const std::string line =
+        std::string("GL ") + (error ? "error" : warning ? "warning" : "note") + " (id " + std::to_string(id) + "): " + text;
+    std::lock_guard lock(mutex_);
+    errors_ += error;
+    messages_.push_back(line);
+    if (messages_.size() > kKept) messages_.pop_front();
+    if (echo_ && (error || warning)) std::fprintf(stderr, "%s\n", line.c_str());
+}
+
+DebugLog& debug_log() {
+    static DebugLog log;
+    return log;
+}
+
+namespace {
+void GLAPIENTRY on_debug_message(GLenum, GLenum type, GLuint id, GLenum severity, GLsizei length, const GLchar* message,
+                                 const void*) {
+    debug_log().record(type, id, severity, length >= 0 ? std::string(message, std::size_t(length)) : std::string(message));
 }
 } // namespace
 

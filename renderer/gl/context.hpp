@@ -5,8 +5,12 @@
 // works with EGL and GLX contexts alike (the Qt widget uses the same code).
 #pragma once
 
+#include <cstddef>
+#include <deque>
 #include <memory>
+#include <mutex>
 #include <string>
+#include <vector>
 
 namespace iso::gl {
 
@@ -19,8 +23,8 @@ struct ContextInfo {
 class HeadlessContext {
 public:
     // Throws iso::Error when no GL 4.5 core context can be made.
-    // `debug`: a debug context with GL_KHR_debug messages routed to stderr
-    // (default: on in debug builds).
+    // `debug`: a debug context whose GL_KHR_debug messages go to debug_log()
+    // (default: on in debug builds, or with ISOSCOPE_GL_DEBUG set).
     explicit HeadlessContext(bool debug = default_debug());
     ~HeadlessContext();
     HeadlessContext(const HeadlessContext&) = delete;
@@ -37,8 +41,39 @@ private:
     ContextInfo info_;
 };
 
-// Installs a GL_KHR_debug callback on the current context that prints
-// errors and warnings to stderr (performance/other notes are dropped).
+// What the GL_KHR_debug callback of a debug context saw, for the whole
+// process (all debug contexts report here). Tests read and reset it after
+// each test (tests/gl/gl_test.hpp); the CLI and the viewer keep today's
+// behaviour: errors and warnings echoed to stderr (set_echo).
+class DebugLog {
+public:
+    static constexpr std::size_t kKept = 16; // messages kept, newest last
+
+    // Messages of type GL_DEBUG_TYPE_ERROR since the last clear().
+    std::size_t errors() const;
+    // The last kKept messages (notifications excluded) since the last
+    // clear(), as "GL error (id N): text" or "GL warning (...)", "GL note (...)".
+    std::vector<std::string> messages() const;
+    void clear();
+    // Echo errors and warnings (undefined behaviour, deprecated, portability)
+    // to stderr as they arrive; on by default.
+    void set_echo(bool on);
+    bool echo() const;
+
+    // Called by the debug callback (GLenum values as unsigned).
+    void record(unsigned type, unsigned id, unsigned severity, const std::string& text);
+
+private:
+    mutable std::mutex mutex_;
+    std::size_t errors_ = 0;
+    std::deque<std::string> messages_;
+    bool echo_ = true;
+};
+
+DebugLog& debug_log();
+
+// Installs the GL_KHR_debug callback (into debug_log()) on the current
+// context when it is a debug context; does nothing otherwise.
 void install_debug_output();
 
 } // namespace iso::gl

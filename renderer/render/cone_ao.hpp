@@ -1,5 +1,5 @@
 // Cone-traced ambient occlusion in a screen-aligned solid voxelization
-// (../shared/docs/techniques.md section 1; docs/ao.md). The GL passes live in
+// (docs/ao.md). The GL passes live in
 // renderer/passes/ (ambient_occlusion.cpp and the files it calls); this header holds their settings, the CPU side of the sample
 // patterns (cone directions, Poisson-disk columns, jitter sets) and the
 // slicemap as read back for tests and for the voxel-grid reference.

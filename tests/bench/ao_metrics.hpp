@@ -1,6 +1,6 @@
 // Error of an AO image against a reference over the pixels where both are
 // finite (the foreground): bias, MAE, RMSE, p95 and p99 of |error|
-// (../shared/docs/measuring.md). Used by the AO benchmark and the AO tests.
+// (the figures docs/ao.md reports). Used by the AO benchmark and the AO tests.
 #pragma once
 
 #include <algorithm>

@@ -12,21 +12,18 @@
 #include <gtest/gtest.h>
 
 #include "../bench/ao_metrics.hpp"
+#include "gl_test.hpp"
 #include "renderer/ao/reference.hpp"
 #include "renderer/core/api.hpp"
-#include "renderer/gl/context.hpp"
 #include "renderer/iso/extract.hpp"
 #include "renderer/render/renderer.hpp"
 #include "test_util.hpp"
 
 using namespace iso;
+using ConeAo = test::GlTest;
+using ConeAoStress = test::GlTest;
 
 namespace {
-
-gl::HeadlessContext& context() {
-    static gl::HeadlessContext ctx(true);
-    return ctx;
-}
 
 // A closed axis-aligned box, outward winding, flat normals (each face has
 // its own vertices: shared corners would get averaged, tilted normals).
@@ -91,8 +88,12 @@ RenderOptions ao_options(int size, double radius) {
 
 } // namespace
 
-TEST(SliceMap, TwoBoxesGiveExactBitPatterns) {
-    context();
+// The suite's name is also that of iso::SliceMap: its fixture alias lives in
+// a namespace of its own so that neither name hides the other.
+namespace slicemap_suite {
+using SliceMap = test::GlTest;
+
+TEST_F(SliceMap, TwoBoxesGiveExactBitPatterns) {
     // Seen from the front (camera on -y looking +y): box A spans depths 480..500, box B 490..520.
     Renderer ren;
     ren.add(box({-20, -20, -20}, {0, 0, 20}), {});
@@ -100,7 +101,7 @@ TEST(SliceMap, TwoBoxesGiveExactBitPatterns) {
     const Camera cam = looking({0, -500, 0}, {0, 0, 0}, {0, 0, 1});
     auto o = ao_options(128, 100);
     const auto r = ren.render(cam, o, {.read_slicemap = true});
-    const SliceMap& sm = r.slicemap;
+    const auto& sm = r.slicemap;
     ASSERT_EQ(sm.width, 128);
     ASSERT_EQ(sm.bits(), 256);
     EXPECT_FLOAT_EQ(float(sm.z_near), 480.0f) << "nearest visible depth";
@@ -139,8 +140,7 @@ TEST(SliceMap, TwoBoxesGiveExactBitPatterns) {
     EXPECT_GT(checked_empty, 1000);
 }
 
-TEST(SliceMap, NestedSphericalShellsXorToTheirGap) {
-    context();
+TEST_F(SliceMap, NestedSphericalShellsXorToTheirGap) {
     const glm::dvec3 c(5, 0, -3);
     Renderer ren;
     ren.add(sphere_mesh(c, 45, 0.75), {});
@@ -149,7 +149,7 @@ TEST(SliceMap, NestedSphericalShellsXorToTheirGap) {
     auto o = ao_options(96, 200);
     o.ao_settings.layers = 4;
     const auto r = ren.render(cam, o, {.read_slicemap = true});
-    const SliceMap& sm = r.slicemap;
+    const auto& sm = r.slicemap;
     ASSERT_EQ(sm.bits(), 512);
     EXPECT_NEAR(sm.z_near, 355.0, 0.2) << "nearest visible: the outer sphere's front";
     EXPECT_NEAR(sm.z_far, 445.0, 0.5) << "the scene's far bound";
@@ -184,8 +184,9 @@ TEST(SliceMap, NestedSphericalShellsXorToTheirGap) {
     EXPECT_EQ(columns, 256);
 }
 
-TEST(ConeAo, SphereOcclusionByAHalfSpaceIsItsVolumeFraction) {
-    context();
+} // namespace slicemap_suite
+
+TEST_F(ConeAo, SphereOcclusionByAHalfSpaceIsItsVolumeFraction) {
     // A floor (top at z = 0) and a wall filling x > 0, seen from above. With
     // one cone (the whole hemisphere) and one sphere, each floor point's AO is
     // 1 - the fraction of the sphere of radius R/2 above it that lies in the wall.
@@ -242,8 +243,7 @@ TEST(ConeAo, SphereOcclusionByAHalfSpaceIsItsVolumeFraction) {
     }
 }
 
-TEST(ConeAo, CtSkinAndBunnyAgainstTheEmbreeReference) {
-    context();
+TEST_F(ConeAo, CtSkinAndBunnyAgainstTheEmbreeReference) {
     struct Case {
         std::string input, view;
         std::vector<double> isos;
@@ -279,8 +279,7 @@ TEST(ConeAo, CtSkinAndBunnyAgainstTheEmbreeReference) {
     }
 }
 
-TEST(ConeAo, CoarseConePassIsUpsampledAlongSurfacesNotAcrossEdges) {
-    context();
+TEST_F(ConeAo, CoarseConePassIsUpsampledAlongSurfacesNotAcrossEdges) {
     // 1. Accuracy: at half resolution the error against the reference stays
     //    within 0.005 of the full-resolution error (the benchmark measures it
     //    a little lower: the bilateral upsampling also averages jitter noise),
@@ -358,8 +357,7 @@ TEST(ConeAo, CoarseConePassIsUpsampledAlongSurfacesNotAcrossEdges) {
     }
 }
 
-TEST(ConeAo, GuardBandKeepsOccludersJustOffScreen) {
-    context();
+TEST_F(ConeAo, GuardBandKeepsOccludersJustOffScreen) {
     // A floor seen from above, zoomed in; a wall starts 3 mm beyond the
     // view's right edge and rises 40 mm. Floor points at the edge are within
     // R of it: the Embree reference (whole meshes) sees it, a slicemap cut at
@@ -428,8 +426,7 @@ TEST(ConeAo, GuardBandKeepsOccludersJustOffScreen) {
     EXPECT_EQ(small.render(looking({0, -300, 0}, {0, 0, 0}, {0, 0, 1}), ao_options(64, R)).ao_guard, 0.0);
 }
 
-TEST(ConeAo, PassesAreCulledWhenOffAndTheSlicemapIsReusedWhenStill) {
-    context();
+TEST_F(ConeAo, PassesAreCulledWhenOffAndTheSlicemapIsReusedWhenStill) {
     Renderer ren;
     ren.add(box({-20, -20, -20}, {20, 20, 20}), {});
     const Camera cam = looking({30, -300, 40}, {0, 0, 0}, {0, 0, 1});
@@ -478,8 +475,7 @@ TEST(ConeAo, PassesAreCulledWhenOffAndTheSlicemapIsReusedWhenStill) {
     EXPECT_TRUE(ren.render(moved, o).voxelized) << "the scene changed";
 }
 
-TEST(ConeAo, StillFramesConvergeInsteadOfFlickering) {
-    context();
+TEST_F(ConeAo, StillFramesConvergeInsteadOfFlickering) {
     Renderer ren;
     ren.add(box({-100, -100, -10}, {100, 100, 0}), {});
     ren.add(box({-10, -10, 0}, {10, 10, 15}), {});
@@ -514,8 +510,7 @@ TEST(ConeAo, StillFramesConvergeInsteadOfFlickering) {
 
 // ---- stress cases -------------------------------------------------------
 
-TEST(ConeAoStress, GrazingViewOfAnOpenPlaneStaysUnoccluded) {
-    context();
+TEST_F(ConeAoStress, GrazingViewOfAnOpenPlaneStaysUnoccluded) {
     Renderer ren;
     ren.add(box({-400, -400, -10}, {400, 400, 0}), {});
     // 85 degrees from the normal.
@@ -535,8 +530,7 @@ TEST(ConeAoStress, GrazingViewOfAnOpenPlaneStaysUnoccluded) {
     EXPECT_LT(double(dark) / double(n), 0.02);
 }
 
-TEST(ConeAoStress, ThinSheetAndDeepCavityAgainstTheReference) {
-    context();
+TEST_F(ConeAoStress, ThinSheetAndDeepCavityAgainstTheReference) {
     // Floor, a 0.3 mm sheet standing on it (thinner than a voxel), and a 10 x 10 x 40 mm well built
     // from boxes that share faces.
     std::vector<Mesh> meshes = {box({-100, -100, -10}, {100, 100, 0}), box({-40, -30, 0}, {-39.7f, 30, 25}),
@@ -611,8 +605,7 @@ TEST(ConeAoStress, ThinSheetAndDeepCavityAgainstTheReference) {
                 sheet_cone / sheet, sheet_ref / sheet);
 }
 
-TEST(ConeAoStress, NearPlaneEmptySceneAndSingleTriangle) {
-    context();
+TEST_F(ConeAoStress, NearPlaneEmptySceneAndSingleTriangle) {
     {
         // The near plane cuts through the object: nothing is clipped from the slicemap (depth clamp), values stay finite.
         Renderer ren;

@@ -6,13 +6,13 @@
 #include "renderer/gl/context.hpp"
 #include "renderer/gl/objects.hpp"
 #include "renderer/iso/extract.hpp"
+#include "gl_test.hpp"
 #include "test_util.hpp"
 
 using namespace iso;
+using GBufferLayout = test::GlTest;
 
-TEST(GBufferLayout, ShaderOutputsSitAtTheTablesLocations) {
-    static gl::HeadlessContext ctx(true);
-    ctx.make_current();
+TEST_F(GBufferLayout, ShaderOutputsSitAtTheTablesLocations) {
     auto prog = gl::Program::from_files({"render/gbuffer.vert", "render/gbuffer.frag"}, passes::gbuffer_defines());
     GLint location = 0;
     for (const auto& c : passes::kGBufferLayout) {
@@ -22,9 +22,7 @@ TEST(GBufferLayout, ShaderOutputsSitAtTheTablesLocations) {
     EXPECT_EQ(passes::gbuffer_defines(), "#define GB_NORMAL 0\n#define GB_ID 1\n#define GB_ALBEDO 2\n");
 }
 
-TEST(GBufferLayout, EveryAovChannelReadsBack) {
-    static gl::HeadlessContext ctx(true);
-    ctx.make_current();
+TEST_F(GBufferLayout, EveryAovChannelReadsBack) {
     // A plate facing the camera at the anterior side (normal -y in LPS).
     Mesh m;
     m.positions = {{-10, 0, -10}, {10, 0, -10}, {10, 0, 10}, {-10, 0, 10}};

@@ -1,22 +1,20 @@
 // RAII GL wrappers on a real context: moving transfers ownership, the
-// moved-from object owns nothing, destruction deletes the GL object.
+// moved-from object owns nothing, destruction deletes the GL object; shader
+// errors name the file; and the GL test fixture itself fails a test that
+// leaves a GL error behind.
 #include "renderer/gl/objects.hpp"
 
+#include <gtest/gtest-spi.h>
+
+#include "gl_test.hpp"
 #include "io/error.hpp"
-#include "renderer/gl/context.hpp"
 #include "test_util.hpp"
 
 using namespace iso;
+using GlObjects = test::GlTest;
+using GlFixture = test::GlTest;
 
-namespace {
-gl::HeadlessContext& context() {
-    static gl::HeadlessContext ctx(true);
-    return ctx;
-}
-} // namespace
-
-TEST(GlObjects, BufferMoveAndDestroy) {
-    context();
+TEST_F(GlObjects, BufferMoveAndDestroy) {
     GLuint name = 0;
     {
         const std::uint32_t data[4] = {1, 2, 3, 4};
@@ -35,8 +33,7 @@ TEST(GlObjects, BufferMoveAndDestroy) {
     EXPECT_FALSE(glIsBuffer(name)) << "destroyed with its last owner";
 }
 
-TEST(GlObjects, TextureFramebufferProgramLifetimes) {
-    context();
+TEST_F(GlObjects, TextureFramebufferProgramLifetimes) {
     GLuint tex = 0, fbo = 0, prog = 0;
     {
         auto t = gl::Texture::create_2d(GL_RGBA8, 8, 4);
@@ -59,19 +56,66 @@ TEST(GlObjects, TextureFramebufferProgramLifetimes) {
     EXPECT_FALSE(glIsProgram(prog));
 }
 
-TEST(GlObjects, ShaderErrorsNameTheFile) {
-    context();
+TEST_F(GlObjects, ShaderErrorsNameTheFile) {
     try {
         gl::Program::from_files({"no/such.comp"});
         FAIL();
     } catch (const Error& e) {
         EXPECT_NE(std::string(e.what()).find("no/such.comp"), std::string::npos);
     }
-    // A variant that does not compile reports the log with the file name.
+    // A variant that does not compile reports the log with the file name. The
+    // log must be that of our #error (a real newline puts it on its own
+    // line), not of some other compile error.
     try {
-        gl::Program::from_files({"iso/mc.comp"}, "#define PASS 1\\n#error deliberate");
+        gl::Program::from_files({"iso/mc.comp"}, "#define PASS 1\n#error deliberate");
         FAIL();
     } catch (const Error& e) {
-        EXPECT_NE(std::string(e.what()).find("iso/mc.comp"), std::string::npos) << e.what();
+        const std::string what = e.what();
+        EXPECT_NE(what.find("iso/mc.comp"), std::string::npos) << what;
+        EXPECT_NE(what.find("deliberate"), std::string::npos) << what;
     }
+    // A driver may also report the failed compile as a GL debug error
+    // (llvmpipe does not): expected here, so taken before the fixture checks.
+    test::take_gl_errors();
+}
+
+namespace {
+// Runs the fixture's end-of-test check on demand.
+struct FixtureProbe : test::GlTest {
+    void TestBody() override {}
+    using test::GlTest::TearDown;
+};
+} // namespace
+
+TEST_F(GlFixture, FailsATestThatLeavesAGlError) {
+    const GLenum bogus_target = 0xDEAD;
+    // 1. Through GL_KHR_debug: the bad call is counted in the debug log.
+    ASSERT_EQ(gl::debug_log().errors(), 0u);
+    glBindTexture(bogus_target, 0);
+    EXPECT_EQ(gl::debug_log().errors(), 1u);
+    ASSERT_FALSE(gl::debug_log().messages().empty());
+    EXPECT_NE(gl::debug_log().messages().back().find("GL error"), std::string::npos) << gl::debug_log().messages().back();
+    EXPECT_EQ(glGetError(), GLenum(GL_INVALID_ENUM)); // taken: only the debug log still has it
+    {
+        FixtureProbe probe;
+        EXPECT_NONFATAL_FAILURE(probe.TearDown(), "GL debug errors: 1");
+    }
+    EXPECT_EQ(gl::debug_log().errors(), 0u) << "the check forgets what it reported";
+    // 2. Through glGetError() alone (debug output off, as in a non-debug context).
+    glDisable(GL_DEBUG_OUTPUT);
+    glBindTexture(bogus_target, 0);
+    glEnable(GL_DEBUG_OUTPUT);
+    EXPECT_EQ(gl::debug_log().errors(), 0u);
+    {
+        FixtureProbe probe;
+        EXPECT_NONFATAL_FAILURE(probe.TearDown(), "glGetError: 0x500");
+    }
+    // 3. Clearing by hand: what a test that provokes an error on purpose does.
+    glBindTexture(bogus_target, 0);
+    const auto taken = test::take_gl_errors();
+    EXPECT_EQ(taken.debug_errors, 1u);
+    EXPECT_EQ(taken.get_error_codes, "0x500 ");
+    EXPECT_EQ(gl::debug_log().errors(), 0u);
+    EXPECT_EQ(glGetError(), GLenum(GL_NO_ERROR));
+    // Nothing left: this test passes.
 }

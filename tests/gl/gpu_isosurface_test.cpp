@@ -10,18 +10,13 @@
 
 #include <glm/gtc/matrix_transform.hpp>
 
-#include "renderer/gl/context.hpp"
+#include "gl_test.hpp"
 #include "test_util.hpp"
 
 using namespace iso;
+using GpuIsosurface = test::GlTest;
 
 namespace {
-
-gl::HeadlessContext& context() {
-    static gl::HeadlessContext ctx(/*debug=*/true);
-    return ctx;
-}
-
 // Compares two chunked surfaces chunk by chunk: same vertex keys, positions
 // within `pos_tol` mm, normals within 1e-5, same triangles as key triples.
 void expect_same(const ChunkedSurface& a, const ChunkedSurface& b, double pos_tol) {
@@ -73,15 +68,14 @@ void expect_same(const ChunkedSurface& a, const ChunkedSurface& b, double pos_to
 
 } // namespace
 
-TEST(GpuIsosurface, ContextIsGl45) {
-    const auto& info = context().info();
+TEST_F(GpuIsosurface, ContextIsGl45) {
+    const auto& info = test::gl_context().info();
     std::printf("GL: %s | %s | %s | platform %s\n", info.vendor.c_str(), info.renderer.c_str(), info.version.c_str(),
                 info.platform.c_str());
     EXPECT_NE(info.version.find("4.5"), std::string::npos);
 }
 
-TEST(GpuIsosurface, SameAsCpuOnObliqueSphere) {
-    context();
+TEST_F(GpuIsosurface, SameAsCpuOnObliqueSphere) {
     const glm::dmat4 aff = glm::translate(glm::dmat4(1.0), glm::dvec3(-40, 12, 300)) *
                            glm::rotate(glm::dmat4(1.0), glm::radians(30.0), glm::normalize(glm::dvec3(1, 2, 0.5))) *
                            glm::scale(glm::dmat4(1.0), glm::dvec3(0.7, 0.9, -2.5));
@@ -100,8 +94,7 @@ TEST(GpuIsosurface, SameAsCpuOnObliqueSphere) {
     EXPECT_EQ(weld(cpu).triangles.size(), weld(gpu).triangles.size());
 }
 
-TEST(GpuIsosurface, SameAsCpuWithTiesAndNaN) {
-    context();
+TEST_F(GpuIsosurface, SameAsCpuWithTiesAndNaN) {
     std::mt19937 rng(5);
     std::uniform_int_distribution<int> u(0, 3);
     auto v = Volume::dense({19, 17, 16}, VoxelType::F32, glm::dmat4(1.0));
@@ -116,8 +109,7 @@ TEST(GpuIsosurface, SameAsCpuWithTiesAndNaN) {
     }
 }
 
-TEST(GpuIsosurface, SmallBatchesGiveTheSameResult) {
-    context();
+TEST_F(GpuIsosurface, SmallBatchesGiveTheSameResult) {
     auto v = Volume::dense({40, 33, 29}, VoxelType::I16, glm::dmat4(1.0));
     std::mt19937 rng(9);
     std::uniform_int_distribution<int> u(-100, 100);

@@ -12,11 +12,15 @@
 
 #include <glm/glm.hpp>
 
+#include "gl_test.hpp"
 #include "orientation_landmarks.hpp"
 #include "renderer/core/api.hpp"
 #include "test_util.hpp"
 
 using namespace iso;
+// core::render_input() renders in this process, on its own context: the
+// fixture checks it for GL errors too.
+using BundledHeadImage = test::GlTest;
 
 namespace {
 
@@ -33,7 +37,7 @@ Pixel project(const core::RenderOutput& out, const glm::dvec3& p) {
 
 } // namespace
 
-TEST(BundledHeadImage, AnteriorViewHasTheFaceUpright) {
+TEST_F(BundledHeadImage, AnteriorViewHasTheFaceUpright) {
     core::RenderRequest req;
     req.isos = {500.0};
     req.view = "anterior";

@@ -9,13 +9,13 @@
 #include "renderer/gl/objects.hpp"
 #include "renderer/iso/extract.hpp"
 #include "renderer/render/renderer.hpp"
+#include "gl_test.hpp"
 #include "test_util.hpp"
 
 using namespace iso;
+using PassVariants = test::GlTest;
 
-TEST(PassVariants, AoForEveryLayerCountAndResolution) {
-    static gl::HeadlessContext ctx(true);
-    ctx.make_current();
+TEST_F(PassVariants, AoForEveryLayerCountAndResolution) {
     // A block standing on a slab: the crease around its foot is occluded.
     const int n = 24;
     auto v = Volume::dense({n, n, n}, VoxelType::F32, make_affine(glm::dvec3(2.0), glm::dvec3(-24.0)));

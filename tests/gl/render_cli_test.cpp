@@ -1,16 +1,15 @@
 // isoscope render as a real process: PNG with embedded metadata, AOVs as EXR,
 // transparent background, annotation scale, and a golden image.
 #include <cmath>
-#include <cstdlib>
 #include <filesystem>
 #include <sstream>
 
+#include "image_compare.hpp"
 #include "io/image.hpp"
 #include "test_util.hpp"
 
 using namespace iso;
 using iso::test::TempDir;
-namespace fs = std::filesystem;
 
 namespace {
 
@@ -110,39 +109,11 @@ TEST(RenderCli, GoldenImage) {
     // differently; allow 1 % of pixels to differ by more than 24/255 in any
     // channel (silhouette edges) and a mean absolute difference of 2/255.
     TempDir dir;
-    const std::string golden = std::string(ISOSCOPE_SOURCE_DIR) + "/tests/golden/headsq_skin_anterior_160x120.png";
     render(test::data("headsq.nhdr") + " --iso 500 --size 160x120 -o " + (dir / "actual.png"));
-    const Image a = load_image(dir / "actual.png");
-    if (std::getenv("ISOSCOPE_UPDATE_GOLDEN")) {
-        fs::copy_file(dir / "actual.png", golden, fs::copy_options::overwrite_existing);
-        GTEST_SKIP() << "golden image written: " << golden;
-    }
-    ASSERT_TRUE(fs::exists(golden)) << golden << " is missing (ISOSCOPE_UPDATE_GOLDEN=1 writes it)";
-    const Image g = load_image(golden);
-    ASSERT_EQ(a.width, g.width);
-    ASSERT_EQ(a.height, g.height);
-    ASSERT_EQ(a.bytes.size(), g.bytes.size());
-    Image diff = a;
-    std::size_t off = 0;
-    double sum = 0;
-    for (std::size_t p = 0; p < a.bytes.size() / 4; ++p) {
-        int worst = 0;
-        for (int c = 0; c < 4; ++c) {
-            const int d = std::abs(int(a.bytes[p * 4 + c]) - int(g.bytes[p * 4 + c]));
-            worst = std::max(worst, d);
-            sum += d;
-            diff.bytes[p * 4 + c] = c == 3 ? 255 : std::uint8_t(std::min(255, d * 8));
-        }
-        if (worst > 24) ++off;
-    }
-    const double mean = sum / double(a.bytes.size()), frac = double(off) / double(a.bytes.size() / 4);
-    if (mean > 2.0 || frac > 0.01) {
-        const std::string keep = std::string(ISOSCOPE_BINARY_DIR) + "/golden-failures";
-        fs::create_directories(keep);
-        fs::copy_file(dir / "actual.png", keep + "/headsq_skin_anterior_actual.png", fs::copy_options::overwrite_existing);
-        save_image(diff, keep + "/headsq_skin_anterior_diff.png");
-        ADD_FAILURE() << "golden image differs: mean |diff| " << mean << ", " << 100 * frac << " % of pixels off; actual and diff in " << keep;
-    }
+    const std::string golden = std::string(ISOSCOPE_SOURCE_DIR) + "/tests/golden/headsq_skin_anterior_160x120.png";
+    EXPECT_TRUE(test::matches_golden(load_image(dir / "actual.png"), golden,
+                                     {.off_threshold = 24, .max_off_fraction = 0.01, .max_mean = 2.0}));
+    if (test::updating_golden()) GTEST_SKIP() << "golden image written: " << golden;
 }
 
 TEST(RenderCli, MeshFilesRenderToo) {
@@ -187,8 +158,11 @@ TEST(RenderCli, ReferenceAoIsCachedByItsInputs) {
     render(args + " -o " + (dir / "b.exr"));
     EXPECT_EQ(load_image(dir / "a.exr").floats.size(), load_image(dir / "b.exr").floats.size());
     const auto a = load_image(dir / "a.exr"), b = load_image(dir / "b.exr");
-    for (std::size_t i = 0; i < a.floats.size(); ++i)
-        if (!std::isnan(a.floats[i])) ASSERT_EQ(a.floats[i], b.floats[i]);
+    for (std::size_t i = 0; i < a.floats.size(); ++i) {
+        if (!std::isnan(a.floats[i])) {
+            ASSERT_EQ(a.floats[i], b.floats[i]);
+        }
+    }
     entries = 0;
     for (const auto& e : std::filesystem::recursive_directory_iterator(dir / "cache")) entries += e.is_regular_file();
     EXPECT_EQ(entries, 1u) << "the second run hit the cache";

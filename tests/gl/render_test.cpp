@@ -3,24 +3,21 @@
 // extreme scales, degenerate and empty scenes.
 #include "renderer/render/renderer.hpp"
 
+#include <array>
 #include <cmath>
 
 #include <glm/glm.hpp>
 
-#include "renderer/gl/context.hpp"
+#include "gl_test.hpp"
 #include "renderer/gl/objects.hpp"
 #include "renderer/render/overlay.hpp"
 #include "renderer/iso/extract.hpp"
 #include "test_util.hpp"
 
 using namespace iso;
+using Render = test::GlTest;
 
 namespace {
-
-gl::HeadlessContext& context() {
-    static gl::HeadlessContext ctx(true);
-    return ctx;
-}
 
 // A fine mesh of a sphere (radius r around c) from a distance field.
 Mesh sphere_mesh(glm::dvec3 c, double r, double voxel) {
@@ -38,8 +35,7 @@ float at(const Image& img, int x, int y, int c = 0) { return img.floats[(std::si
 
 } // namespace
 
-TEST(Render, DepthAndNormalAovsMatchTheAnalyticSphere) {
-    context();
+TEST_F(Render, DepthAndNormalAovsMatchTheAnalyticSphere) {
     const glm::dvec3 c(10, -20, 30);
     const double r = 40.0;
     Renderer ren;
@@ -84,8 +80,7 @@ TEST(Render, DepthAndNormalAovsMatchTheAnalyticSphere) {
     }
 }
 
-TEST(Render, IdAovAndAnteriorOrientation) {
-    context();
+TEST_F(Render, IdAovAndAnteriorOrientation) {
     Renderer ren;
     // Patient's left (+x) sphere and patient's right (-x) sphere.
     const auto left = ren.add(sphere_mesh({60, 0, 0}, 20, 2.0), {"left"});
@@ -112,8 +107,7 @@ TEST(Render, IdAovAndAnteriorOrientation) {
     EXPECT_EQ(at(back, bl.x, bl.y), float(left));
 }
 
-TEST(Render, ExtremeScalesAndNearFarRatio) {
-    context();
+TEST_F(Render, ExtremeScalesAndNearFarRatio) {
     // A 0.1 mm sphere seen from 2 m: near/far planes must still resolve it.
     Renderer tiny;
     tiny.add(sphere_mesh({0, 0, 0}, 0.05, 0.004), {});
@@ -137,13 +131,33 @@ TEST(Render, ExtremeScalesAndNearFarRatio) {
     }
 }
 
-TEST(Render, DegenerateAndEmptyScenes) {
-    context();
+TEST_F(Render, DegenerateAndEmptyScenes) {
     Renderer empty;
     Camera cam;
     cam.set_view(PatientView::Anterior, empty.bounds());
-    const auto img = empty.render(cam, {.width = 32, .height = 16}).image;
+    RenderOptions opt{.width = 32, .height = 16};
+    const auto img = empty.render(cam, opt).image;
+    ASSERT_FALSE(img.is_float);
+    ASSERT_EQ(img.channels, 4);
     ASSERT_EQ(img.bytes.size(), 32u * 16u * 4u);
+    // Nothing is drawn: every pixel is the background, which the lighting
+    // pass writes sRGB-encoded (IEC 61966-2-1) and not tone mapped, as
+    // RGBA8 (round to nearest). The default (0.08, 0.09, 0.11) linear is
+    // 255 * sRGB = 79.89, 84.62, 93.22: far from a rounding tie.
+    const auto srgb8 = [](double linear) {
+        const double s = linear <= 0.0031308 ? 12.92 * linear : 1.055 * std::pow(linear, 1 / 2.4) - 0.055;
+        return int(std::lround(255 * s));
+    };
+    const std::array<int, 4> background{srgb8(opt.background.r), srgb8(opt.background.g), srgb8(opt.background.b),
+                                        int(std::lround(255 * opt.background.a))};
+    ASSERT_EQ(background, (std::array<int, 4>{80, 85, 93, 255}));
+    std::size_t other = 0;
+    for (std::size_t p = 0; p < img.bytes.size() / 4; ++p) {
+        const std::array<int, 4> px{img.bytes[p * 4], img.bytes[p * 4 + 1], img.bytes[p * 4 + 2], img.bytes[p * 4 + 3]};
+        if (px == background) continue;
+        if (++other <= 3) ADD_FAILURE() << "pixel " << p % 32 << "," << p / 32 << " is not the background";
+    }
+    EXPECT_EQ(other, 0u) << "of " << img.bytes.size() / 4 << " pixels";
     Renderer degenerate;
     Mesh m;
     m.positions = {{0, 0, 0}, {0, 0, 0}, {1, 0, 0}, {2, 0, 0}, {0, 0, 0}};
@@ -155,12 +169,11 @@ TEST(Render, DegenerateAndEmptyScenes) {
     EXPECT_THROW(degenerate.render(cam, {.width = 0, .height = 10}), Error);
 }
 
-TEST(Render, SteadyFramesMakeNoNewGlObjects) {
+TEST_F(Render, SteadyFramesMakeNoNewGlObjects) {
     // The viewer's case: the same view redrawn (still frames accumulating AO,
     // annotations on, presented into a window's framebuffer, then read back).
     // After the first frame of each kind, nothing is created: the pool's and
     // the GL objects' counts stay put.
-    context();
     Renderer ren;
     ren.add(sphere_mesh({0, 0, 0}, 20, 2.0), {});
     Bounds b = ren.bounds();

@@ -4,13 +4,13 @@
 #include "renderer/core/scene.hpp"
 
 #include "renderer/gl/context.hpp"
+#include "gl_test.hpp"
 #include "test_util.hpp"
 
 using namespace iso;
+using SceneGl = test::GlTest;
 
-TEST(SceneGl, EditsShowInTheNextFrame) {
-    static gl::HeadlessContext ctx(true);
-    ctx.make_current();
+TEST_F(SceneGl, EditsShowInTheNextFrame) {
     core::Scene s;
     s.open(test::data("headsq.nhdr"));
     s.add_isosurfaces({500, 1150});

@@ -7,9 +7,11 @@
 #include "renderer/gl/context.hpp"
 #include "renderer/gl/objects.hpp"
 #include "renderer/passes/gbuffer_layout.hpp"
+#include "gl_test.hpp"
 #include "test_util.hpp"
 
 using namespace iso;
+using UniformBlocks = test::GlTest;
 using namespace iso::passes;
 
 namespace {
@@ -43,9 +45,7 @@ template <class P> void expect_block_matches(const gl::Program& prog, const std:
 
 } // namespace
 
-TEST(UniformBlocks, CppStructsMatchTheLinkedPrograms) {
-    static gl::HeadlessContext ctx(true);
-    ctx.make_current();
+TEST_F(UniformBlocks, CppStructsMatchTheLinkedPrograms) {
     expect_block_matches<GBufferParams>(gl::Program::from_files({"render/gbuffer.vert", "render/gbuffer.frag"}, gbuffer_defines()),
                                         "gbuffer");
     expect_block_matches<LightingParams>(gl::Program::from_files({"render/fullscreen.vert", "render/lighting.frag"}), "lighting");
@@ -60,7 +60,7 @@ TEST(UniformBlocks, CppStructsMatchTheLinkedPrograms) {
     }
 }
 
-TEST(UniformBlocks, Std140LayoutOfTheCppStructs) {
+TEST_F(UniformBlocks, Std140LayoutOfTheCppStructs) {
     // Hand-computed std140 offsets of the block with every member type.
     EXPECT_EQ(offsetof(ConeParams, world_to_view), 0u);
     EXPECT_EQ(offsetof(ConeParams, proj_scale), 48u) << "mat3: three vec4 columns";

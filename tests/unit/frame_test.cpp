@@ -1,4 +1,4 @@
-// The renderer's real frame (renderer/passes/build_frame), compiled without a
+// The renderer's real frame (build_frame() in renderer/passes/frame.hpp), compiled without a
 // GPU for each configuration: which passes run is decided by the graph's
 // culling from what the frame reads, never by the caller. No GL context: the
 // passes' GL work would only run in execute().

@@ -3,6 +3,7 @@
 #include "renderer/iso/extract.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <map>
 #include <random>
@@ -183,6 +184,89 @@ TEST(Isosurface, MatchesFlyingEdgesOnObliqueAnisotropicSphere) {
         for (int k = 0; k < 3; ++k) worst = std::max(worst, double(std::abs(our_pos[i][k] - fe_pos[i][k])));
     EXPECT_LT(worst, tol);
     EXPECT_EQ(bad_edges(ours), 0u);
+}
+
+// Single cells checked by hand: one 2x2x2 volume (one cell), spacing
+// (0.5, 2, 3) mm and origin (10, -20, 5) in LPS, so index (i, j, k) is at
+// (10 + 0.5 i, -20 + 2 j, 5 + 3 k). A sample is inside when it is >= iso
+// (extract.cpp, IsoClassifier::inside; here no sample ties the iso value).
+// A cut edge's vertex lies where the linear interpolation of its two
+// samples reaches iso. Triangles face away from the inside samples.
+namespace {
+
+// values[i + 2 j + 4 k]
+Volume one_cell(const std::array<float, 8>& values) {
+    auto v = Volume::dense({2, 2, 2}, VoxelType::F32, make_affine({0.5, 2.0, 3.0}, {10.0, -20.0, 5.0}));
+    for (int n = 0; n < 8; ++n) v.as<float>()[v.linear_index(n & 1, (n >> 1) & 1, n >> 2)] = values[std::size_t(n)];
+    return v;
+}
+
+glm::dvec3 face_normal(const Mesh& m, const std::array<std::uint32_t, 3>& t) {
+    const glm::dvec3 a(m.positions[t[0]]), b(m.positions[t[1]]), c(m.positions[t[2]]);
+    return glm::cross(b - a, c - a);
+}
+
+// Index of the vertex at `p` (within 1e-5 mm), or -1.
+int vertex_at(const Mesh& m, glm::dvec3 p) {
+    for (std::size_t i = 0; i < m.positions.size(); ++i)
+        if (glm::length(glm::dvec3(m.positions[i]) - p) < 1e-5) return int(i);
+    return -1;
+}
+
+} // namespace
+
+TEST(Isosurface, OneInsideCornerGivesOneHandComputedTriangle) {
+    // Corner (0,0,0) = 100 is inside at iso 40; its neighbours along i, j, k
+    // are -20, 20 and -140, the other four corners 0. From the corner, the
+    // vertex on each edge sits at t = (40 - 100) / (s1 - 100): 1/2 along i,
+    // 3/4 along j, 1/4 along k.
+    const Mesh m = extract_isosurface(one_cell({100, -20, 20, 0, -140, 0, 0, 0}), 40.0);
+    ASSERT_EQ(m.triangles.size(), 1u);
+    ASSERT_EQ(m.positions.size(), 3u);
+    const glm::dvec3 corner(10, -20, 5);
+    const glm::dvec3 on_i(10.25, -20, 5), on_j(10, -18.5, 5), on_k(10, -20, 5.75); // index (0.5,0,0), (0,0.75,0), (0,0,0.25)
+    const int a = vertex_at(m, on_i), b = vertex_at(m, on_j), c = vertex_at(m, on_k);
+    ASSERT_TRUE(a >= 0 && b >= 0 && c >= 0) << "vertices at the hand-computed positions";
+    // Facing away from the corner: (on_j - on_i) x (on_k - on_i) = (1.125, 0.1875, 0.375),
+    // which points from the corner to the triangle; so the winding is i, j, k (up to rotation).
+    auto t = m.triangles[0];
+    for (int r = 0; r < 3 && int(t[0]) != a; ++r) std::rotate(t.begin(), t.begin() + 1, t.end());
+    EXPECT_EQ(int(t[1]), b);
+    EXPECT_EQ(int(t[2]), c);
+    const glm::dvec3 n = face_normal(m, m.triangles[0]);
+    EXPECT_NEAR(n.x, 1.125, 1e-5);
+    EXPECT_NEAR(n.y, 0.1875, 1e-5);
+    EXPECT_NEAR(n.z, 0.375, 1e-5);
+    EXPECT_GT(glm::dot(n, (on_i + on_j + on_k) / 3.0 - corner), 0.0);
+    for (const auto& vn : m.normals) EXPECT_GT(glm::dot(glm::dvec3(vn), n), 0.0) << "gradient normals agree";
+}
+
+TEST(Isosurface, TwoAdjacentInsideCornersGiveAHandComputedQuad) {
+    // Corners (0,0,0) and (1,0,0) = 100 inside at iso 40, the other six -20:
+    // the four edges along j and k from them are cut at t = 1/2, a planar
+    // 0.5 mm x sqrt(1 + 1.5^2) mm rectangle parallel to the inside edge.
+    const Mesh m = extract_isosurface(one_cell({100, 100, -20, -20, -20, -20, -20, -20}), 40.0);
+    ASSERT_EQ(m.triangles.size(), 2u);
+    ASSERT_EQ(m.positions.size(), 4u);
+    const glm::dvec3 quad[4] = {{10, -19, 5}, {10.5, -19, 5}, {10.5, -20, 6.5}, {10, -20, 6.5}}; // index (0,.5,0) (1,.5,0) (1,0,.5) (0,0,.5)
+    for (const auto& p : quad) EXPECT_GE(vertex_at(m, p), 0) << p.x << " " << p.y << " " << p.z;
+    // Both triangles face away from the inside edge (y = -20, z = 5): along
+    // (0, 1.5, 1) / |(0, 1.5, 1)|, perpendicular to the rectangle.
+    const glm::dvec3 outward = glm::normalize(glm::dvec3(0, 1.5, 1));
+    double area = 0;
+    for (const auto& t : m.triangles) {
+        const glm::dvec3 n = face_normal(m, t);
+        EXPECT_NEAR(glm::dot(glm::normalize(n), outward), 1.0, 1e-9);
+        area += 0.5 * glm::length(n);
+    }
+    EXPECT_NEAR(area, 0.5 * std::sqrt(1 + 1.5 * 1.5), 1e-5) << "the two triangles cover the rectangle once";
+    // They share one edge (a diagonal), traversed in opposite directions.
+    std::set<std::pair<std::uint32_t, std::uint32_t>> first;
+    for (int k = 0; k < 3; ++k) first.insert({m.triangles[0][k], m.triangles[0][(k + 1) % 3]});
+    int shared = 0;
+    for (int k = 0; k < 3; ++k) shared += first.count({m.triangles[1][(k + 1) % 3], m.triangles[1][k]}) ? 1 : 0;
+    EXPECT_EQ(shared, 1);
+    EXPECT_EQ(bad_edges(m), 4u) << "an open quad: its four sides are boundary edges";
 }
 
 TEST(Isosurface, ChunkingDoesNotChangeTheMesh) {
