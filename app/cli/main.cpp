@@ -362,6 +362,8 @@ int run_view(ViewArgs a, char* argv0) {
                 qapp.exit(1);
                 return;
             }
+            std::cout << "view: " << w.frames() << " frames; " << w.gl_objects_since_first_frame()
+                      << " GL objects created after the first -> " << a.screenshot << "\n";
             qapp.exit(0);
         });
         poll.start(50);

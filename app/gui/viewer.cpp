@@ -36,7 +36,10 @@ void clear_to_background() {
 }
 } // namespace
 
-void Viewer::initializeGL() { camera_.set_view(initial_view_, scene_.bounds()); }
+double Viewer::aspect() const { return double(std::max(1, width())) / double(std::max(1, height())); }
+
+// The same framing as `isoscope render`: the scene's camera for the view.
+void Viewer::initializeGL() { camera_ = scene_.camera(initial_view_, aspect()); }
 
 void Viewer::paintGL() {
     if (!error_.empty()) {
@@ -69,6 +72,10 @@ void Viewer::draw() {
     opt.ao_settings = options_.cone;
     const auto r = scene_.render(camera_, opt);
     ++frames_;
+    // GL objects made after the first frame: none while the view is steady.
+    const std::size_t objects = scene_.renderer().gl_objects_created();
+    if (frames_ == 1) objects_after_first_frame_ = objects;
+    objects_since_first_frame_ = objects - objects_after_first_frame_;
     ao_frames_ = options_.ao ? r.ao_frames : 0;
     // Progressive AO: while the camera and the scene stay still, keep
     // drawing so new jitter sets accumulate and the noise averages out; any
@@ -104,7 +111,7 @@ void Viewer::keyPressEvent(QKeyEvent* e) {
     }
     for (auto [k, v] : keys)
         if (e->key() == k) {
-            camera_.set_view(v, scene_.bounds());
+            camera_ = scene_.camera(v, aspect());
             update();
             return;
         }

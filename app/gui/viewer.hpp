@@ -38,6 +38,9 @@ public:
     // all accumulated.
     bool converged() const { return frames_ > 0 && (!options_.ao || ao_frames_ >= options_.still_frames); }
     int ao_frames() const { return ao_frames_; }
+    // GL objects the renderer made after the first frame (0 in a steady
+    // view: resources live across frames).
+    std::size_t gl_objects_since_first_frame() const { return objects_since_first_frame_; }
     // The last rendering error (empty: none). paintGL never lets one escape:
     // it clears to the background, reports it here and on stderr, and stops.
     const std::string& error() const { return error_; }
@@ -59,8 +62,10 @@ private:
     std::unique_ptr<Annotations> annotations_;
     Camera camera_;
     QPoint last_;
+    double aspect() const;
     int frames_ = 0;
     int ao_frames_ = 0;
+    std::size_t objects_after_first_frame_ = 0, objects_since_first_frame_ = 0;
 };
 
 } // namespace iso::gui
