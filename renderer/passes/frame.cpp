@@ -7,6 +7,14 @@
 namespace iso::passes {
 
 FrameContext make_context(const Camera& camera, const RenderOptions& opt, std::vector<DrawItem> draws, const Bounds& bounds) {
+    // Translucent surfaces go to the VOIT lists, opaque ones to the G-buffer.
+    std::vector<DrawItem> opaque, translucent;
+    std::vector<glm::vec4> objects(1, glm::vec4(0.0f));
+    for (const auto& d : draws) {
+        (d.opacity < 1.0f ? translucent : opaque).push_back(d);
+        if (objects.size() <= d.id) objects.resize(d.id + 1, glm::vec4(0.0f));
+        objects[d.id] = glm::vec4(d.color, d.opacity);
+    }
     FrameContext ctx;
     ctx.camera = camera;
     ctx.opt = opt;
@@ -15,7 +23,9 @@ FrameContext make_context(const Camera& camera, const RenderOptions& opt, std::v
     const double aspect = double(opt.width) / double(opt.height);
     ctx.view_projection = glm::mat4(camera.projection(aspect) * camera.view());
     ctx.world_to_view = glm::mat3(glm::mat4(camera.view()));
-    ctx.draws = std::move(draws);
+    ctx.draws = std::move(opaque);
+    ctx.translucent = std::move(translucent);
+    ctx.objects = std::move(objects);
     ctx.bounds = bounds;
     if (opt.annotations) ctx.overlay = build_overlay(*opt.annotations, camera, opt.width, opt.height, opt.scale);
     return ctx;
@@ -29,6 +39,9 @@ void build_frame(graph::FrameGraph& fg, const FrameContext& ctx) {
     // Declared always: culled by the graph when neither lighting nor the read-back reads it.
     const graph::TextureHandle ao = ambient_occlusion(fg, ctx, gb);
     graph::TextureHandle color = lighting(fg, ctx, gb, opt.ao ? ao : graph::TextureHandle{});
+    // Scene content, not an output request, decides this one: no translucent
+    // object, no list passes.
+    if (!ctx.translucent.empty()) color = voit(fg, ctx, gb, color);
     if (opt.annotations) color = overlay(fg, ctx, color);
     if (opt.present) return present(fg, ctx, color);
     graph::TextureHandle source = opt.aov == Aov::None ? color : opt.aov == Aov::Depth ? gb.depth : ao;

@@ -30,6 +30,7 @@ struct DrawItem {
     std::int32_t count = 0;  // indices
     std::uint32_t id = 0;    // object id (1-based) written to the id AOV
     glm::vec3 color{1.0f};   // linear albedo
+    float opacity = 1.0f;
 };
 
 // What the AO passes keep between frames besides their history resources.
@@ -48,7 +49,10 @@ struct FrameContext {
     int width = 1, height = 1;
     glm::mat4 view_projection{1.0f};
     glm::mat3 world_to_view{1.0f};
-    std::vector<DrawItem> draws;
+    std::vector<DrawItem> draws;        // opaque (opacity 1): the G-buffer and AO
+    std::vector<DrawItem> translucent;  // opacity < 1: the VOIT lists
+    std::vector<glm::vec4> objects;     // per object id (0 unused): linear albedo, opacity
+    std::size_t oit_capacity = 0;       // nodes of the VOIT pool this frame
     Bounds bounds;                      // of the visible meshes
     std::uint64_t geometry_version = 0; // changes when meshes are added
     std::vector<OverlayVertex> overlay; // annotation triangles (empty: none)
@@ -105,6 +109,9 @@ graph::TextureHandle ambient_occlusion(graph::FrameGraph& fg, const FrameContext
 // Deferred lighting; `ao` invalid: no AO.
 graph::TextureHandle lighting(graph::FrameGraph& fg, const FrameContext& ctx, const GBuffer& gb, graph::TextureHandle ao);
 graph::TextureHandle overlay(graph::FrameGraph& fg, const FrameContext& ctx, graph::TextureHandle color);
+// VOIT (docs/voit.md): the translucent fragments' lists, then their
+// front-to-back composite over `color`; returns the composited colour.
+graph::TextureHandle voit(graph::FrameGraph& fg, const FrameContext& ctx, const GBuffer& gb, graph::TextureHandle color);
 void present(graph::FrameGraph& fg, const FrameContext& ctx, graph::TextureHandle color);
 void readback(graph::FrameGraph& fg, const FrameContext& ctx, graph::TextureHandle source);
 

@@ -31,6 +31,7 @@ inline glm::mat3x4 mat3(const glm::mat3& m) {
 // GLSL type -> C++ type and std140 base alignment.
 #define ISO_STD140_TYPE_float float
 #define ISO_STD140_TYPE_int std::int32_t
+#define ISO_STD140_TYPE_uint std::uint32_t
 #define ISO_STD140_TYPE_bool std::uint32_t
 #define ISO_STD140_TYPE_vec2 glm::vec2
 #define ISO_STD140_TYPE_ivec2 glm::ivec2
@@ -39,6 +40,7 @@ inline glm::mat3x4 mat3(const glm::mat3& m) {
 #define ISO_STD140_TYPE_mat4 glm::mat4
 #define ISO_STD140_ALIGN_float 4
 #define ISO_STD140_ALIGN_int 4
+#define ISO_STD140_ALIGN_uint 4
 #define ISO_STD140_ALIGN_bool 4
 #define ISO_STD140_ALIGN_vec2 8
 #define ISO_STD140_ALIGN_ivec2 8
@@ -62,6 +64,7 @@ namespace iso::passes {
 #include "shaders/ao/voxelize_params.glsl"
 #include "shaders/ao/cone_params.glsl"
 #include "shaders/ao/upsample_params.glsl"
+#include "shaders/render/oit_params.glsl"
 #undef ISO_BLOCK_BEGIN
 #undef ISO_MEMBER
 #undef ISO_BLOCK_END
@@ -83,6 +86,7 @@ namespace iso::passes {
 #include "shaders/ao/voxelize_params.glsl"
 #include "shaders/ao/cone_params.glsl"
 #include "shaders/ao/upsample_params.glsl"
+#include "shaders/render/oit_params.glsl"
 #undef ISO_BLOCK_BEGIN
 #undef ISO_MEMBER
 #undef ISO_BLOCK_END

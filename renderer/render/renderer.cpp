@@ -1,6 +1,7 @@
 #include "renderer/render/renderer.hpp"
 
 #include <algorithm>
+#include <bit>
 #include <cmath>
 #include <cstring>
 #include <limits>
@@ -26,6 +27,9 @@ Aov aov_from_name(const std::string& n) {
 }
 
 namespace {
+
+constexpr std::size_t kOitNodeBytes = 20;       // OitNode (shaders/render/oit_common.glsl)
+constexpr std::size_t kOitMinNodes = 1 << 16;   // the pool never shrinks below this
 
 struct GpuMesh {
     gl::VertexArray vao;
@@ -57,6 +61,7 @@ struct Renderer::Impl {
     graph::ResourcePool pool{gl};
     std::uint64_t geometry_version = 0;
     passes::AoHistory ao;
+    std::size_t oit_next_capacity = kOitMinNodes; // VOIT pool nodes for the next frame
 };
 
 Renderer::Renderer() : impl_(std::make_unique<Impl>()) {}
@@ -109,27 +114,53 @@ RenderResult Renderer::render(const Camera& camera, const RenderOptions& opt, co
     if (opt.width < 1 || opt.height < 1 || opt.width > 16384 || opt.height > 16384)
         throw Error("render", "image size " + std::to_string(opt.width) + "x" + std::to_string(opt.height) +
                                   " is out of range (1..16384)");
+    if (!(opt.oit_epsilon >= 0.0f && opt.oit_epsilon < 1.0f))
+        throw Error("transparency epsilon", "must be at least 0 and below 1, got " + std::to_string(opt.oit_epsilon));
+    if (opt.oit_memory_bytes < (std::size_t(1) << 20))
+        throw Error("transparency memory", "the fragment pool needs at least 1 MiB");
     Impl& im = *impl_;
-    RenderResult result;
-    result.gl_renderer = reinterpret_cast<const char*>(glGetString(GL_RENDERER));
     std::vector<passes::DrawItem> draws;
     for (std::size_t i = 0; i < im.meshes.size(); ++i) {
         const auto& m = im.meshes[i];
         if (!m.object.visible || m.count == 0) continue;
-        draws.push_back({m.vao.id(), m.count, std::uint32_t(i + 1), m.object.color});
+        draws.push_back({m.vao.id(), m.count, std::uint32_t(i + 1), m.object.color, std::clamp(m.object.opacity, 0.0f, 1.0f)});
     }
-    passes::FrameContext ctx = passes::make_context(camera, opt, std::move(draws), bounds());
-    ctx.hooks = hooks;
-    ctx.gl = &im.gl;
-    ctx.pool = &im.pool;
-    ctx.geometry_version = im.geometry_version;
-    ctx.ao = &im.ao;
-    ctx.result = &result;
-    graph::FrameGraph fg;
-    if (opt.time_passes) fg.set_pass_epilogue([] { glFinish(); });
-    passes::build_frame(fg, ctx);
-    result.stats = fg.execute(im.pool);
-    return result;
+    const Bounds b = bounds();
+    // The VOIT pool: sized from the last frame's fragment count; a frame that
+    // overflows it is drawn again with a pool large enough, up to the cap.
+    const std::size_t cap_max = opt.oit_memory_bytes / kOitNodeBytes;
+    std::size_t capacity = std::min(im.oit_next_capacity, cap_max);
+    if (capacity == 0) throw Error("transparency memory", "too small for one fragment");
+    for (int redraws = 0;; ++redraws) {
+        RenderResult result;
+        result.gl_renderer = reinterpret_cast<const char*>(glGetString(GL_RENDERER));
+        passes::FrameContext ctx = passes::make_context(camera, opt, draws, b);
+        ctx.hooks = hooks;
+        ctx.gl = &im.gl;
+        ctx.pool = &im.pool;
+        ctx.geometry_version = im.geometry_version;
+        ctx.ao = &im.ao;
+        ctx.result = &result;
+        ctx.oit_capacity = capacity;
+        graph::FrameGraph fg;
+        if (opt.time_passes) fg.set_pass_epilogue([] { glFinish(); });
+        passes::build_frame(fg, ctx);
+        result.stats = fg.execute(im.pool);
+        if (ctx.translucent.empty()) return result;
+        // Sizes are powers of two and shrink only when four times too large,
+        // so a moving view keeps its pool instead of remaking it each frame.
+        const std::size_t n = std::size_t(result.oit.fragments);
+        const auto fit = [&](std::size_t need) { return std::min(cap_max, std::max(kOitMinNodes, std::bit_ceil(need))); };
+        if (n > capacity)
+            im.oit_next_capacity = fit(n + n / 4);
+        else if (n < capacity / 4)
+            im.oit_next_capacity = fit(2 * n);
+        else
+            im.oit_next_capacity = capacity;
+        result.oit.redraws = redraws;
+        if (result.oit.dropped == 0 || capacity >= cap_max) return result;
+        capacity = im.oit_next_capacity;
+    }
 }
 
 const graph::ResourcePool& Renderer::pool() const { return impl_->pool; }

@@ -47,6 +47,15 @@ struct RenderOptions {
     // Finish the GPU's work at the end of each pass so that per-pass times
     // are real (costs some throughput; for --stats and benchmarks).
     bool time_passes = false;
+    // Flat shading: every surface is its albedo (no lighting, no AO), so
+    // transparency compositing can be checked exactly.
+    bool flat_shading = false;
+    // VOIT (order-independent transparency through per-pixel fragment
+    // lists) for objects with opacity < 1: stop compositing a pixel once the
+    // remaining transmittance is below oit_epsilon; the node pool grows up
+    // to oit_memory_bytes.
+    float oit_epsilon = 1.0f / 512.0f;
+    std::size_t oit_memory_bytes = std::size_t(256) << 20;
     // Cone-traced ambient occlusion (modulates the ambient term; Aov::Ao
     // reads it raw). Off: its passes are culled.
     bool ao = false;
@@ -60,6 +69,20 @@ struct RenderHooks {
     bool read_slicemap = false;
     // Rebuild the slicemap even if nothing changed (benchmarks time a new view).
     bool ao_force_voxelize = false;
+    // Read the VOIT lists back: each pixel's list length into
+    // RenderResult::oit_lists (rows top to bottom; tests).
+    bool read_oit_lists = false;
+};
+
+// What the VOIT passes did this frame (all zero without translucent objects).
+struct OitStats {
+    std::uint64_t fragments = 0;  // translucent fragments in front of the opaque surfaces
+    std::uint64_t dropped = 0;    // fragments that found the pool full at its cap (not composited)
+    std::uint64_t capacity = 0;   // nodes the pool held
+    std::uint32_t max_list = 0;   // longest pixel list
+    std::uint64_t shaded = 0;     // fragments shaded (the rest were behind an opaque-enough front)
+    std::uint64_t lists = 0;      // pixels with a list
+    int redraws = 0;              // frames redrawn with a larger pool
 };
 
 struct RenderResult {
@@ -70,6 +93,8 @@ struct RenderResult {
     bool voxelized = false;      // the slicemap was rebuilt this frame (else reused)
     int ao_frames = 0;           // still frames accumulated into the AO so far
     double ao_guard = 0;         // guard band used by the slicemap, fraction of the viewport per side
+    OitStats oit;
+    std::vector<std::uint32_t> oit_lists; // with RenderHooks::read_oit_lists
 };
 
 class Renderer {

@@ -1,0 +1,174 @@
+// VOIT (docs/voit.md; the seeds' Virtual OIT): translucent surfaces are
+// rasterized once into per-pixel linked lists of fragments (depth, object,
+// primitive, packed normal: what shading needs, not a colour), then a
+// compute pass sorts each list and composites it front to back over the
+// opaque image with an early exit. Two passes:
+//   oit_fragments  reads the opaque depth; writes heads, counters, nodes
+//   oit_resolve    reads heads, nodes, objects; writes the colour's next version
+#include <cstring>
+
+#include "renderer/passes/frame.hpp"
+#include "renderer/passes/gl_resources.hpp"
+#include "renderer/passes/std140.hpp"
+
+namespace iso::passes {
+
+namespace {
+
+constexpr std::size_t kNodeBytes = 20; // OitNode in shaders/render/oit_common.glsl
+
+OitParams oit_params(const FrameContext& ctx) {
+    OitParams p;
+    p.world_to_view = std140::mat3(ctx.world_to_view);
+    p.size = {ctx.width, ctx.height};
+    p.capacity = std::uint32_t(ctx.oit_capacity);
+    p.epsilon = ctx.opt.oit_epsilon;
+    p.flat_shading = ctx.opt.flat_shading ? 1u : 0u;
+    return p;
+}
+
+struct Lists {
+    graph::TextureHandle depth, heads;
+    graph::BufferHandle counters, nodes, objects, params, gbuffer_params;
+};
+
+Lists fragment_lists(graph::FrameGraph& fg, const FrameContext& ctx, const GBuffer& gb) {
+    const int W = ctx.width, H = ctx.height;
+    const std::size_t object_bytes = ctx.objects.size() * sizeof(glm::vec4);
+    const std::size_t node_bytes = std::max<std::size_t>(ctx.oit_capacity, 1) * kNodeBytes;
+    return fg.add_pass<Lists>(
+        "oit_fragments",
+        [&](graph::FrameGraph::Builder& b, Lists& d) {
+            d.depth = b.read(gb.depth);
+            d.heads = b.write(b.create("oit_heads", {W, H, graph::Format::R32UI}));
+            d.counters = b.write(b.create("oit_counters", graph::BufferDesc{8}));
+            d.nodes = b.write(fg.history("oit_nodes", graph::BufferDesc{node_bytes}));
+            d.objects = b.write(b.create("oit_objects", graph::BufferDesc{object_bytes}));
+            d.params = params_buffer<OitParams>(b, "oit_params");
+            d.gbuffer_params = params_buffer<GBufferParams>(b, "oit_gbuffer_params");
+        },
+        [&ctx, W, H](const Lists& d, const graph::Resources& r) {
+            GlResources& gl = *ctx.gl;
+            const GLuint heads = gl.texture(r, d.heads);
+            const GLuint end = 0xFFFFFFFFu;
+            glClearTexImage(heads, 0, GL_RED_INTEGER, GL_UNSIGNED_INT, &end);
+            const GLuint zero = 0;
+            glClearNamedBufferData(gl.buffer(r, d.counters), GL_R32UI, GL_RED_INTEGER, GL_UNSIGNED_INT, &zero);
+            glNamedBufferSubData(gl.buffer(r, d.objects), 0, GLsizeiptr(ctx.objects.size() * sizeof(glm::vec4)), ctx.objects.data());
+            // Depth test against the opaque surfaces, no depth writes: a
+            // fragment behind them never reaches the shader (early tests).
+            glBindFramebuffer(GL_FRAMEBUFFER, gl.framebuffer({}, gl.texture(r, d.depth)));
+            glViewport(0, 0, W, H);
+            glClipControl(GL_LOWER_LEFT, GL_ZERO_TO_ONE);
+            glEnable(GL_DEPTH_TEST);
+            glDepthFunc(GL_GREATER);
+            glDepthMask(GL_FALSE);
+            glDisable(GL_CULL_FACE);
+            auto& prog = gl.program({"render/gbuffer.vert", "render/oit_fragments.frag"});
+            prog.use();
+            bind_params(gl, r, d.gbuffer_params, GBufferParams{ctx.view_projection});
+            bind_params(gl, r, d.params, oit_params(ctx));
+            glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, gl.buffer(r, d.counters));
+            glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 1, gl.buffer(r, d.nodes));
+            glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 2, gl.buffer(r, d.objects));
+            glBindImageTexture(0, heads, 0, GL_FALSE, 0, GL_READ_WRITE, GL_R32UI);
+            const GLint id_loc = prog.uniform("object_id");
+            for (const auto& m : ctx.translucent) {
+                glUniform1ui(id_loc, m.id);
+                glBindVertexArray(m.vao);
+                glDrawElements(GL_TRIANGLES, m.count, GL_UNSIGNED_INT, nullptr);
+            }
+            glBindVertexArray(0);
+            glDepthMask(GL_TRUE);
+            glDisable(GL_DEPTH_TEST);
+            glClipControl(GL_LOWER_LEFT, GL_NEGATIVE_ONE_TO_ONE);
+            glBindFramebuffer(GL_FRAMEBUFFER, 0);
+            glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_SHADER_IMAGE_ACCESS_BARRIER_BIT);
+        });
+}
+
+} // namespace
+
+// Tests: every pixel's list length, counted on the CPU from the read-back
+// head image and node pool.
+void read_lists(graph::FrameGraph& fg, const FrameContext& ctx, const Lists& lists) {
+    struct Data {
+        graph::TextureHandle heads;
+        graph::BufferHandle nodes;
+    };
+    fg.add_pass<Data>(
+        "read_oit_lists",
+        [&](graph::FrameGraph::Builder& b, Data& d) {
+            d.heads = b.read(lists.heads);
+            d.nodes = b.read(lists.nodes);
+            b.side_effect();
+        },
+        [&ctx](const Data& d, const graph::Resources& r) {
+            GlResources& gl = *ctx.gl;
+            const int W = ctx.width, H = ctx.height;
+            std::vector<std::uint32_t> heads(std::size_t(W) * std::size_t(H));
+            glGetTextureImage(gl.texture(r, d.heads), 0, GL_RED_INTEGER, GL_UNSIGNED_INT, GLsizei(heads.size() * 4), heads.data());
+            std::vector<std::uint32_t> nodes(r.desc(d.nodes).bytes / 4);
+            glGetNamedBufferSubData(gl.buffer(r, d.nodes), 0, GLsizeiptr(nodes.size() * 4), nodes.data());
+            auto& out = ctx.result->oit_lists;
+            out.assign(heads.size(), 0);
+            const std::size_t capacity = nodes.size() / 5;
+            for (int y = 0; y < H; ++y)
+                for (int x = 0; x < W; ++x) {
+                    std::uint32_t n = 0;
+                    for (std::uint32_t i = heads[std::size_t(y) * W + x]; i != 0xFFFFFFFFu && i < capacity && n <= capacity; i = nodes[i * 5 + 4])
+                        ++n;
+                    out[std::size_t(H - 1 - y) * W + x] = n; // GL rows are bottom-up
+                }
+        });
+}
+
+graph::TextureHandle voit(graph::FrameGraph& fg, const FrameContext& ctx, const GBuffer& gb, graph::TextureHandle color) {
+    const Lists lists = fragment_lists(fg, ctx, gb);
+    if (ctx.hooks.read_oit_lists) read_lists(fg, ctx, lists);
+    struct Data {
+        graph::TextureHandle heads, color;
+        graph::BufferHandle counters, nodes, objects, params, stats;
+    };
+    return fg.add_pass<Data>(
+                 "oit_resolve",
+                 [&](graph::FrameGraph::Builder& b, Data& d) {
+                     d.heads = b.read(lists.heads);
+                     d.counters = b.read(lists.counters);
+                     d.nodes = b.read(lists.nodes);
+                     d.objects = b.read(lists.objects);
+                     d.color = b.write(b.read(color));
+                     d.params = params_buffer<OitParams>(b, "oit_resolve_params");
+                     d.stats = b.write(b.create("oit_stats", graph::BufferDesc{12}));
+                 },
+                 [&ctx](const Data& d, const graph::Resources& r) {
+                     GlResources& gl = *ctx.gl;
+                     const GLuint zero = 0;
+                     glClearNamedBufferData(gl.buffer(r, d.stats), GL_R32UI, GL_RED_INTEGER, GL_UNSIGNED_INT, &zero);
+                     auto& prog = gl.program({"render/oit_resolve.comp"});
+                     prog.use();
+                     bind_params(gl, r, d.params, oit_params(ctx));
+                     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, gl.buffer(r, d.counters));
+                     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 1, gl.buffer(r, d.nodes));
+                     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 2, gl.buffer(r, d.objects));
+                     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 3, gl.buffer(r, d.stats));
+                     glBindImageTexture(0, gl.texture(r, d.heads), 0, GL_FALSE, 0, GL_READ_ONLY, GL_R32UI);
+                     glBindImageTexture(1, gl.texture(r, d.color), 0, GL_FALSE, 0, GL_READ_WRITE, GL_RGBA8);
+                     glDispatchCompute(GLuint((ctx.width + 7) / 8), GLuint((ctx.height + 7) / 8), 1);
+                     glMemoryBarrier(GL_ALL_BARRIER_BITS);
+                     // The frame's counts: the renderer grows the pool from them.
+                     GLuint counters[2], stats[3];
+                     glGetNamedBufferSubData(gl.buffer(r, d.counters), 0, 8, counters);
+                     glGetNamedBufferSubData(gl.buffer(r, d.stats), 0, 12, stats);
+                     OitStats& s = ctx.result->oit;
+                     s.fragments = counters[0];
+                     s.dropped = counters[1];
+                     s.capacity = ctx.oit_capacity;
+                     s.max_list = stats[0];
+                     s.shaded = stats[1];
+                     s.lists = stats[2];
+                 })
+        .color;
+}
+
+} // namespace iso::passes
