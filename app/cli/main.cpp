@@ -105,19 +105,60 @@ std::string cli_message(const iso::Error& e) {
     return where.empty() ? e.reason() : where + ": " + e.reason();
 }
 
+// How the surfaces of `render` and `view` look: per surface in the order of
+// --iso (one each for a mesh), and the frame's background and shading.
+struct Look {
+    std::vector<double> opacity;
+    std::vector<std::string> color;
+    std::string background, shading = "lit";
+};
+
+void add_look_options(CLI::App* cmd, Look& l) {
+    cmd->add_option("--opacity", l.opacity, "Surface opacity 0..1, repeatable in the order of --iso (translucent: VOIT)")
+        ->check(CLI::Range(0.0, 1.0))
+        ->allow_extra_args(false);
+    cmd->add_option("--color", l.color, "Surface colour '#rrggbb' (sRGB), repeatable in the order of --iso")->allow_extra_args(false);
+    cmd->add_option("--background", l.background, "Background colour '#rrggbb' (sRGB)");
+    cmd->add_option("--shading", l.shading, "lit, or flat (each surface its colour: no lighting, no AO)")->check(CLI::IsMember({"lit", "flat"}));
+}
+
+glm::vec3 hex_option(const std::string& flag, const std::string& text) {
+    try {
+        return iso::core::linear_from_hex(text);
+    } catch (const iso::Error& e) {
+        throw iso::Error(flag, e.reason());
+    }
+}
+
 // Opens the input of `render` and `view`: a mesh, or a volume and its
-// isosurfaces (--iso required).
+// isosurfaces (--iso required), and gives the surfaces their look.
 void open_input(iso::core::Scene& scene, const std::string& input, const std::string& series, const std::vector<double>& isos,
-                const std::string& command) {
+                const Look& look, const std::string& command) {
     iso::LoadOptions lo;
     lo.series = series;
     lo.progress = progress_bar();
     scene.open(input, lo);
-    if (!scene.has_volume()) return;
-    for (const auto& w : scene.volume().meta.warnings) std::cerr << "warning: " << w << "\n";
-    if (isos.empty()) throw iso::Error("isoscope " + command, input + " is a volume: give --iso V (repeatable)");
-    for (const auto id : scene.add_isosurfaces(isos, {}, {}, progress_bar()))
-        for (const auto& w : scene.mesh(id).warnings) std::cerr << "warning: " << scene.info(id).name << ": " << w << "\n";
+    std::vector<iso::core::SurfaceId> in_order; // as the user gave them
+    if (scene.has_volume()) {
+        for (const auto& w : scene.volume().meta.warnings) std::cerr << "warning: " << w << "\n";
+        if (isos.empty()) throw iso::Error("isoscope " + command, input + " is a volume: give --iso V (repeatable)");
+        const auto ids = scene.add_isosurfaces(isos, {}, {}, progress_bar());
+        for (const auto id : ids)
+            for (const auto& w : scene.mesh(id).warnings) std::cerr << "warning: " << scene.info(id).name << ": " << w << "\n";
+        for (const double v : isos)
+            for (const auto id : ids)
+                if (scene.info(id).value == v) in_order.push_back(id);
+    } else {
+        in_order = scene.surfaces();
+    }
+    const auto per_surface = [&](const char* flag, std::size_t n) {
+        if (n > in_order.size())
+            throw iso::Error(flag, std::to_string(n) + " given for " + std::to_string(in_order.size()) + " surface(s)");
+    };
+    per_surface("--opacity", look.opacity.size());
+    per_surface("--color", look.color.size());
+    for (std::size_t i = 0; i < look.opacity.size(); ++i) scene.info(in_order[i]).opacity = float(look.opacity[i]);
+    for (std::size_t i = 0; i < look.color.size(); ++i) scene.info(in_order[i]).color = hex_option("--color", look.color[i]);
 }
 
 // Cone-AO tunables, shared by `render` and `view`.
@@ -241,6 +282,9 @@ struct RenderArgs {
     double ao_radius = 10.0;
     int ao_rays = 1024, ao_frames = 1;
     iso::ConeAoSettings cone;
+    Look look;
+    float oit_epsilon = 1.0f / 512.0f;
+    double oit_memory = 256;
 };
 
 CLI::App* add_render(CLI::App& app, RenderArgs& a) {
@@ -261,11 +305,15 @@ CLI::App* add_render(CLI::App& app, RenderArgs& a) {
     c->add_flag("--transparent", a.transparent, "Transparent background");
     c->add_flag("--stats", a.stats, "Print per-pass statistics");
     c->add_option("--series", a.series, "DICOM series to load: index or SeriesInstanceUID");
+    add_look_options(c, a.look);
+    c->add_option("--oit-epsilon", a.oit_epsilon, "Translucent surfaces: stop compositing a pixel below this transmittance (default 1/512)")
+        ->check(CLI::Range(0.0, 0.999));
+    c->add_option("--oit-memory", a.oit_memory, "Translucent surfaces: fragment pool cap in MiB (default 256)")->check(CLI::Range(1.0, 65536.0));
     c->add_option("-o,--output", a.out, "Output .png, .tif or .exr")->required();
     return c;
 }
 
-void print_stats(const iso::graph::FrameStats& stats) {
+void print_stats(const iso::graph::FrameStats& stats, const iso::OitStats& oit) {
     std::cout << std::left << std::setw(14) << "pass" << std::setw(8) << "ran" << std::setw(12) << "ms" << "created\n";
     double total = 0;
     for (const auto& p : stats.passes) {
@@ -275,6 +323,10 @@ void print_stats(const iso::graph::FrameStats& stats) {
     }
     std::cout << "total " << total << " ms; " << stats.physical_resources << " resources created, " << stats.reused_resources
               << " reused; peak " << human_bytes(double(stats.peak_bytes)) << "\n";
+    if (oit.fragments > 0)
+        std::cout << "transparency: " << oit.fragments << " fragments in " << oit.lists << " pixel lists (longest " << oit.max_list << "), "
+                  << oit.shaded << " shaded, " << oit.dropped << " dropped; pool " << oit.capacity << " nodes, " << oit.redraws
+                  << " redraw(s)\n";
 }
 
 int run_render(const RenderArgs& a) {
@@ -295,13 +347,20 @@ int run_render(const RenderArgs& a) {
     req.transparent = a.transparent;
     req.time_passes = a.stats;
     req.progress = progress_bar();
+    if (!a.look.background.empty()) req.background = hex_option("--background", a.look.background);
+    req.flat_shading = a.look.shading == "flat";
+    req.oit_epsilon = a.oit_epsilon;
+    req.oit_memory_mib = a.oit_memory;
     iso::check_writable_destination(a.out);
     iso::core::Scene scene;
-    open_input(scene, a.in, a.series, a.isos, "render");
+    open_input(scene, a.in, a.series, a.isos, a.look, "render");
     const auto out = iso::core::render_image(scene, req);
     iso::core::export_image(out.image, out.meta, a.out);
     std::cout << "rendered " << out.image.width << "x" << out.image.height << " (" << out.gl_renderer << ") -> " << a.out << "\n";
-    if (a.stats) print_stats(out.stats);
+    if (a.stats) print_stats(out.stats, out.oit);
+    if (out.oit.dropped > 0)
+        std::cerr << "warning: " << out.oit.dropped << " translucent fragments did not fit the " << a.oit_memory
+                  << " MiB pool and were left out (--oit-memory)\n";
     return 0;
 }
 
@@ -311,6 +370,7 @@ struct ViewArgs {
     std::string in, view = "anterior", screenshot, series, ao = "cone";
     std::vector<double> isos;
     iso::gui::ViewerOptions opt;
+    Look look;
 };
 
 CLI::App* add_view(CLI::App& app, ViewArgs& a) {
@@ -325,6 +385,7 @@ CLI::App* add_view(CLI::App& app, ViewArgs& a) {
     add_cone_options(c, a.opt.cone);
     c->add_option("--ao-frames", a.opt.still_frames, "Still frames accumulated with new jitter sets while nothing moves")
         ->check(CLI::Range(1, 4096));
+    add_look_options(c, a.look);
     return c;
 }
 
@@ -332,7 +393,9 @@ int run_view(ViewArgs a, char* argv0) {
     const auto initial = iso::patient_view_from_name(a.view);
     iso::validate(a.opt.cone); // before the long part
     iso::core::Scene scene;
-    open_input(scene, a.in, a.series, a.isos, "view");
+    open_input(scene, a.in, a.series, a.isos, a.look, "view");
+    if (!a.look.background.empty()) a.opt.background = hex_option("--background", a.look.background);
+    a.opt.flat_shading = a.look.shading == "flat";
     QSurfaceFormat fmt;
     fmt.setVersion(4, 5);
     fmt.setProfile(QSurfaceFormat::CoreProfile);

@@ -70,6 +70,8 @@ void Viewer::draw() {
     opt.target_framebuffer = defaultFramebufferObject();
     opt.ao = options_.ao;
     opt.ao_settings = options_.cone;
+    opt.background = glm::vec4(options_.background, 1.0f);
+    opt.flat_shading = options_.flat_shading;
     const auto r = scene_.render(camera_, opt);
     ++frames_;
     // GL objects made after the first frame: none while the view is steady.

@@ -10,6 +10,8 @@
 
 #include <QOpenGLWidget>
 
+#include <glm/vec3.hpp>
+
 #include "renderer/render/cone_ao.hpp"
 #include "renderer/scene/camera.hpp"
 
@@ -26,6 +28,8 @@ struct ViewerOptions {
     bool ao = true;          // cone-traced AO (key O toggles it)
     ConeAoSettings cone;     // its settings
     int still_frames = 16;   // while nothing moves, this many frames accumulate new jitter sets
+    glm::vec3 background{0.08f, 0.09f, 0.11f}; // linear RGB
+    bool flat_shading = false;
 };
 
 class Viewer : public QOpenGLWidget {

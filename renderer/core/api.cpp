@@ -1,6 +1,8 @@
 #include "renderer/core/api.hpp"
 
 #include <algorithm>
+#include <cmath>
+#include <cstdio>
 #include <cstdlib>
 #include <map>
 #include <filesystem>
@@ -136,7 +138,12 @@ RenderOptions render_options(const RenderRequest& req) {
     ro.height = req.height;
     ro.aov = req.aov;
     ro.scale = req.scale;
-    if (req.transparent) ro.background.a = 0.0f;
+    ro.background = glm::vec4(req.background, req.transparent ? 0.0f : 1.0f);
+    ro.flat_shading = req.flat_shading;
+    ro.oit_epsilon = req.oit_epsilon;
+    if (!(req.oit_memory_mib >= 1.0 && req.oit_memory_mib <= 65536.0))
+        throw Error("transparency memory", "expected 1..65536 MiB, got " + std::to_string(req.oit_memory_mib));
+    ro.oit_memory_bytes = std::size_t(req.oit_memory_mib * 1048576.0);
     ro.time_passes = req.time_passes;
     if (req.ao != "off" && req.ao != "cone" && req.ao != "reference")
         throw Error("ambient occlusion", "method must be off, cone or reference, got '" + req.ao + "'");
@@ -155,6 +162,19 @@ RenderOptions render_options(const RenderRequest& req) {
     return ro;
 }
 } // namespace
+
+glm::vec3 linear_from_hex(const std::string& text) {
+    unsigned r = 0, g = 0, b = 0;
+    char tail = 0;
+    if (text.size() != 7 || text[0] != '#' || std::sscanf(text.c_str() + 1, "%2x%2x%2x%c", &r, &g, &b, &tail) != 3 ||
+        text.find_first_not_of("0123456789abcdefABCDEF", 1) != std::string::npos)
+        throw Error("colour", "expected #rrggbb (sRGB hex), got '" + text + "'");
+    const auto lin = [](unsigned v) {
+        const double c = v / 255.0;
+        return float(c <= 0.04045 ? c / 12.92 : std::pow((c + 0.055) / 1.055, 2.4));
+    };
+    return {lin(r), lin(g), lin(b)};
+}
 
 RenderOutput render_input(const std::string& input, const RenderRequest& req) {
     Scene scene;
@@ -196,6 +216,7 @@ RenderOutput render_image(Scene& scene, const RenderRequest& req) {
     } release{scene};
     out.image = std::move(r.image);
     out.stats = std::move(r.stats);
+    out.oit = r.oit;
     out.gl_renderer = r.gl_renderer;
     out.camera = cam;
     auto& t = out.meta.text;
@@ -218,8 +239,25 @@ RenderOutput render_image(Scene& scene, const RenderRequest& req) {
     t["isoscope:camera"] = cs.str();
     t["isoscope:world"] = "LPS millimetres";
     t["isoscope:renderer"] = out.gl_renderer;
+    // Each visible surface: name, linear albedo, opacity.
+    std::string surfaces;
+    for (const SurfaceId id : scene.surfaces()) {
+        const auto& si = scene.info(id);
+        if (!si.visible) continue;
+        char b[160];
+        std::snprintf(b, sizeof b, "%s%s: albedo %.6g %.6g %.6g, opacity %.6g", surfaces.empty() ? "" : "; ", si.name.c_str(), si.color.r,
+                      si.color.g, si.color.b, si.opacity);
+        surfaces += b;
+    }
+    t["isoscope:surfaces"] = surfaces;
+    t["isoscope:shading"] = req.flat_shading ? "flat (albedo only)" : "lit";
+    if (r.oit.fragments > 0) {
+        t["isoscope:transparency"] = "VOIT per-pixel fragment lists, front to back, epsilon " + std::to_string(req.oit_epsilon) + "; " +
+                                     std::to_string(r.oit.fragments) + " fragments, " + std::to_string(r.oit.dropped) + " dropped";
+    }
     if (req.aov != Aov::None && !req.aov_ao)
-        t["isoscope:aov"] = req.aov == Aov::Depth ? "depth (mm along the view axis)" : req.aov == Aov::Normal ? "normal (LPS)" : "id";
+        t["isoscope:aov"] = std::string(req.aov == Aov::Depth ? "depth (mm along the view axis)" : req.aov == Aov::Normal ? "normal (LPS)" : "id") +
+                            "; of the nearest opaque surface (translucent surfaces are not in the AOVs)";
     auto num = [](double v) {
         char b[64];
         std::snprintf(b, sizeof b, "%.9g", v);

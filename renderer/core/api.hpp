@@ -40,6 +40,10 @@ struct RenderRequest {
     Aov aov = Aov::None;
     bool annotations = true;
     bool transparent = false;        // transparent background (colour images)
+    glm::vec3 background{0.08f, 0.09f, 0.11f}; // linear RGB
+    bool flat_shading = false;       // each surface its albedo: no lighting, no AO
+    float oit_epsilon = 1.0f / 512.0f;  // translucent surfaces: stop below this transmittance
+    double oit_memory_mib = 256;     // translucent surfaces: fragment pool cap
     bool time_passes = false;        // real per-pass GPU times (glFinish after each pass)
     // Ambient occlusion: "off", "cone" (cone tracing in the slicemap; in the
     // colour image it darkens the ambient light) or "reference" (Embree ray
@@ -58,6 +62,10 @@ struct RenderRequest {
     ProgressFn progress;
 };
 
+// "#rrggbb" (sRGB, as colour pickers and CSS give it) -> linear RGB.
+// Throws iso::Error("colour", ...) naming the text.
+glm::vec3 linear_from_hex(const std::string& text);
+
 struct RenderOutput {
     Image image;
     ImageMetadata meta;              // embedded in the exported file
@@ -65,6 +73,7 @@ struct RenderOutput {
     std::string gl_renderer;
     Camera camera;
     bool ao_cache_hit = false;       // the AO reference came from the cache
+    OitStats oit;                    // translucent surfaces (zero without)
 };
 
 // Renders the scene headlessly (its own EGL context, made on first use) as

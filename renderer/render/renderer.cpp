@@ -61,7 +61,7 @@ struct Renderer::Impl {
     graph::ResourcePool pool{gl};
     std::uint64_t geometry_version = 0;
     passes::AoHistory ao;
-    std::size_t oit_next_capacity = kOitMinNodes; // VOIT pool nodes for the next frame
+    std::size_t oit_next_capacity = 0; // VOIT pool nodes for the next frame (0: none drawn yet)
 };
 
 Renderer::Renderer() : impl_(std::make_unique<Impl>()) {}
@@ -129,7 +129,9 @@ RenderResult Renderer::render(const Camera& camera, const RenderOptions& opt, co
     // The VOIT pool: sized from the last frame's fragment count; a frame that
     // overflows it is drawn again with a pool large enough, up to the cap.
     const std::size_t cap_max = opt.oit_memory_bytes / kOitNodeBytes;
-    std::size_t capacity = std::min(im.oit_next_capacity, cap_max);
+    // A first frame guesses two fragments per pixel.
+    const std::size_t first_guess = std::bit_ceil(std::max(kOitMinNodes, 2 * std::size_t(opt.width) * std::size_t(opt.height)));
+    std::size_t capacity = std::min(im.oit_next_capacity ? im.oit_next_capacity : first_guess, cap_max);
     if (capacity == 0) throw Error("transparency memory", "too small for one fragment");
     for (int redraws = 0;; ++redraws) {
         RenderResult result;

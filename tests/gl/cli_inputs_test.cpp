@@ -55,3 +55,53 @@ TEST(CliInputs, VolumeWithoutIsoAndSettingNamesAreReportedAsFlags) {
     EXPECT_EQ(bad_aov.exit_code, 1);
     EXPECT_NE(bad_aov.out.find("--aov: unknown AOV 'colour'"), std::string::npos) << bad_aov.out;
 }
+
+TEST(CliInputs, SurfaceColourOpacityBackgroundAndFlatShading) {
+    TempDir dir;
+    // Flat shading: the bone is exactly its colour, the background exactly its colour.
+    const auto r = test::run_command(test::cli() + " render " + test::data("headsq.nhdr") +
+                                         " --iso 1150 --color '#33cc66' --background '#102030' --shading flat --no-annotations --size 64x64 -o " +
+                                         (dir / "flat.png"),
+                                     true);
+    ASSERT_EQ(r.exit_code, 0) << r.out;
+    ImageMetadata meta;
+    const Image img = load_image(dir / "flat.png", &meta);
+    const auto px = [&](int x, int y) { return &img.bytes[(std::size_t(y) * img.width + x) * img.channels]; };
+    EXPECT_EQ(int(px(0, 0)[0]), 0x10);
+    EXPECT_EQ(int(px(0, 0)[1]), 0x20);
+    EXPECT_EQ(int(px(0, 0)[2]), 0x30);
+    std::size_t bone = 0;
+    for (int y = 0; y < 64; ++y)
+        for (int x = 0; x < 64; ++x) {
+            const auto* p = px(x, y);
+            // The albedo passes an 8-bit linear G-buffer: within 2/255 of the colour after sRGB encoding.
+            bone += std::abs(int(p[0]) - 0x33) <= 2 && std::abs(int(p[1]) - 0xcc) <= 2 && std::abs(int(p[2]) - 0x66) <= 2;
+        }
+    EXPECT_GT(bone, 300u);
+    EXPECT_EQ(meta.text["isoscope:shading"], "flat (albedo only)");
+    EXPECT_NE(meta.text["isoscope:surfaces"].find("iso 1150"), std::string::npos);
+    // Translucent skin over the bone: the skin's opacity is the first --opacity (the order of --iso, not sorted).
+    const auto t = test::run_command(test::cli() + " render " + test::data("headsq.nhdr") +
+                                         " --iso 1150 --iso 500 --opacity 1 --opacity 0.3 --stats --size 64x64 -o " + (dir / "glass.png"),
+                                     true);
+    ASSERT_EQ(t.exit_code, 0) << t.out;
+    EXPECT_NE(t.out.find("oit_resolve"), std::string::npos) << t.out;
+    EXPECT_NE(t.out.find("transparency: "), std::string::npos) << t.out;
+    ImageMetadata gm;
+    load_image(dir / "glass.png", &gm);
+    EXPECT_NE(gm.text["isoscope:surfaces"].find("iso 500: albedo 0.93 0.72 0.6, opacity 0.3"), std::string::npos)
+        << gm.text["isoscope:surfaces"];
+    // Bad values name the flag, and nothing is written.
+    for (const auto& [args, flag] : std::vector<std::pair<std::string, std::string>>{
+             {" --iso 500 --opacity 1.5", "--opacity"},
+             {" --iso 500 --opacity 0.5 --opacity 0.5", "--opacity: 2 given for 1 surface(s)"},
+             {" --iso 500 --color red", "--color: expected #rrggbb"},
+             {" --iso 500 --background '#12345'", "--background: expected #rrggbb"},
+             {" --iso 500 --shading toon", "--shading"},
+             {" --iso 500 --oit-memory 0", "--oit-memory"}}) {
+        const auto b = test::run_command(test::cli() + " render " + test::data("headsq.nhdr") + args + " --size 16x16 -o " + (dir / "bad.png"), true);
+        EXPECT_NE(b.exit_code, 0) << args;
+        EXPECT_NE(b.out.find(flag), std::string::npos) << args << ": " << b.out;
+        EXPECT_FALSE(fs::exists(dir / "bad.png")) << args;
+    }
+}

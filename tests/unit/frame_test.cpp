@@ -23,7 +23,7 @@ struct Compiled {
     Passes running;
 };
 
-Compiled compile(const RenderOptions& opt, const RenderHooks& hooks = {}) {
+Compiled compile(const RenderOptions& opt, const RenderHooks& hooks = {}, float second_opacity = 1.0f) {
     NullBackend be;
     graph::ResourcePool pool(be);
     passes::AoHistory history;
@@ -34,7 +34,7 @@ Compiled compile(const RenderOptions& opt, const RenderHooks& hooks = {}) {
     Camera cam;
     cam.set_view(PatientView::Anterior, b);
     cam.fit(b, double(opt.width) / opt.height);
-    passes::FrameContext ctx = passes::make_context(cam, opt, {{0, 36, 1, glm::vec3(1)}, {0, 36, 2, glm::vec3(1)}}, b);
+    passes::FrameContext ctx = passes::make_context(cam, opt, {{0, 36, 1, glm::vec3(1), 1.0f}, {0, 36, 2, glm::vec3(1), second_opacity}}, b);
     ctx.hooks = hooks;
     ctx.pool = &pool;
     ctx.ao = &history;
@@ -104,4 +104,18 @@ TEST(Frame, BadAoSettingsAreRefusedOnlyWhenAoIsAskedFor) {
     } catch (const Error& e) {
         EXPECT_NE(std::string(e.what()).find("cones"), std::string::npos) << e.what();
     }
+}
+
+TEST(Frame, TranslucentObjectsAddTheListPassesAndAovsCullThem) {
+    RenderOptions o = options();
+    EXPECT_EQ(compile(o, {}, 0.4f).running, (Passes{"gbuffer", "lighting", "oit_fragments", "oit_resolve", "readback"}));
+    EXPECT_EQ(compile(o, {.read_oit_lists = true}, 0.4f).running,
+              (Passes{"gbuffer", "lighting", "oit_fragments", "read_oit_lists", "oit_resolve", "readback"}));
+    o.ao = true; // AO of the opaque surfaces still runs under the glass
+    EXPECT_EQ(compile(o, {}, 0.4f).running,
+              (Passes{"gbuffer", "zrange", "voxelize", "cone_ao", "ao_upsample", "lighting", "oit_fragments", "oit_resolve", "readback"}));
+    o.aov = Aov::Depth; // the AOVs describe the opaque surfaces: no list is built
+    EXPECT_EQ(compile(o, {}, 0.4f).running, (Passes{"gbuffer", "readback"}));
+    o = options();
+    EXPECT_EQ(compile(o, {}, 1.0f).running, (Passes{"gbuffer", "lighting", "readback"})) << "all opaque: no list passes";
 }
