@@ -90,7 +90,11 @@ void check_vtk_xml_headers(const std::string& path) {
          it != std::sregex_iterator(); ++it) {
         const std::string tag = it->str();
         const std::string format = attr(tag, "format");
-        if (format != "appended" && format != "binary") continue;
+        // VTK reads any format that is not "ascii" or "binary" as appended
+        // data at `offset` (and then trusts its headers): refuse the others.
+        if (format == "ascii") continue;
+        if (format != "appended" && format != "binary")
+            throw Error(path, "an array's format '" + format + "' is not ascii, binary or appended");
         std::string head; // the header bytes
         std::size_t data_start = 0;
         const std::size_t want = compressed ? 3 * hs : hs;

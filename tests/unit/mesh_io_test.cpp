@@ -161,6 +161,14 @@ TEST(MeshIo, BadInput) {
     expect_error(dir / "nan.obj", "NaN");
     write(dir / "bad.vtp", "<VTKFile type=\"PolyData\"><broken");
     expect_error(dir / "bad.vtp", "");
+    // A mangled array format: VTK would read it as appended data and trust its
+    // compression header (a division by zero the fuzz smoke found).
+    {
+        std::string v = slurp(ISOSCOPE_SOURCE_DIR "/tests/fuzz/regressions/vtp/crash-vtp-crash-4eaf944ab1554cf45e1a8a8200df37f552b003a3");
+        ASSERT_FALSE(v.empty());
+        write(dir / "format.vtp", v);
+        expect_error(dir / "format.vtp", "format 'appe' is not ascii, binary or appended");
+    }
     // Writing: a bad index is refused; a missing folder is named; nothing overwritten.
     Mesh bad = cube();
     bad.triangles.push_back({0, 1, 99});
