@@ -63,6 +63,24 @@ struct FrameContext {
 // Builds the context of a frame: matrices, bounds and the AO/overlay inputs.
 FrameContext make_context(const Camera& camera, const RenderOptions& opt, std::vector<DrawItem> draws, const Bounds& bounds);
 
+// A pass that only reads (a read-back, a presentation) and runs for that
+// side effect: `execute(const Reads&, const graph::Resources&)` gets the
+// handles in the order given.
+struct Reads {
+    std::vector<graph::TextureHandle> textures;
+    std::vector<graph::BufferHandle> buffers;
+};
+template <class Execute> void side_effect_pass(graph::FrameGraph& fg, const char* name, const Reads& reads, Execute&& execute) {
+    fg.add_pass<Reads>(
+        name,
+        [&](graph::FrameGraph::Builder& b, Reads& d) {
+            for (const auto h : reads.textures) d.textures.push_back(b.read(h));
+            for (const auto h : reads.buffers) d.buffers.push_back(b.read(h));
+            b.side_effect();
+        },
+        std::forward<Execute>(execute));
+}
+
 // ---- passes (one file each) ----------------------------------------------
 
 struct GBuffer {

@@ -5,21 +5,12 @@
 namespace iso::passes {
 
 void present(graph::FrameGraph& fg, const FrameContext& ctx, graph::TextureHandle color) {
-    struct Data {
-        graph::TextureHandle source;
-    };
-    fg.add_pass<Data>(
-        "present",
-        [&](graph::FrameGraph::Builder& b, Data& d) {
-            d.source = b.read(color);
-            b.side_effect();
-        },
-        [&ctx](const Data& d, const graph::Resources& r) {
-            GlResources& gl = *ctx.gl;
-            const GLuint fb = gl.framebuffer({{gl.texture(r, d.source)}});
-            const int W = ctx.width, H = ctx.height;
-            glBlitNamedFramebuffer(fb, ctx.opt.target_framebuffer, 0, 0, W, H, 0, 0, W, H, GL_COLOR_BUFFER_BIT, GL_NEAREST);
-        });
+    side_effect_pass(fg, "present", {{color}, {}}, [&ctx](const Reads& d, const graph::Resources& r) {
+        GlResources& gl = *ctx.gl;
+        const GLuint fb = gl.framebuffer({{gl.texture(r, d.textures[0])}});
+        const int W = ctx.width, H = ctx.height;
+        glBlitNamedFramebuffer(fb, ctx.opt.target_framebuffer, 0, 0, W, H, 0, 0, W, H, GL_COLOR_BUFFER_BIT, GL_NEAREST);
+    });
 }
 
 } // namespace iso::passes

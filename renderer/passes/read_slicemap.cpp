@@ -9,18 +9,7 @@
 namespace iso::passes {
 
 void read_slicemap(graph::FrameGraph& fg, const FrameContext& ctx, const AoPlanRef& plan, const AoResources& in) {
-    struct Data {
-        graph::TextureHandle slicemap;
-        graph::BufferHandle range;
-    };
-    fg.add_pass<Data>(
-        "read_slicemap",
-        [&](graph::FrameGraph::Builder& b, Data& d) {
-            d.slicemap = b.read(in.slicemap);
-            d.range = b.read(in.zrange);
-            b.side_effect();
-        },
-        [&ctx, plan](const Data& d, const graph::Resources& r) {
+    side_effect_pass(fg, "read_slicemap", {{in.slicemap}, {in.zrange}}, [&ctx, plan](const Reads& d, const graph::Resources& r) {
             GlResources& gl = *ctx.gl;
             SliceMap& sm = ctx.result->slicemap;
             const int gw = plan->grid_w, gh = plan->grid_h, layers = plan->settings.layers;
@@ -31,7 +20,7 @@ void read_slicemap(graph::FrameGraph& fg, const FrameContext& ctx, const AoPlanR
             sm.projection = plan->sm_projection;
             const std::size_t texels = std::size_t(gw) * std::size_t(gh);
             std::vector<std::uint32_t> raw(texels * std::size_t(layers) * 4);
-            glGetTextureImage(gl.texture(r, d.slicemap), 0, GL_RGBA_INTEGER, GL_UNSIGNED_INT, GLsizei(raw.size() * 4), raw.data());
+            glGetTextureImage(gl.texture(r, d.textures[0]), 0, GL_RGBA_INTEGER, GL_UNSIGNED_INT, GLsizei(raw.size() * 4), raw.data());
             // GL returns layer after layer; SliceMap keeps a texel's layers together.
             sm.words.resize(raw.size());
             for (int l = 0; l < layers; ++l)
@@ -40,7 +29,7 @@ void read_slicemap(graph::FrameGraph& fg, const FrameContext& ctx, const AoPlanR
                         sm.words[(t * std::size_t(layers) + std::size_t(l)) * 4 + std::size_t(c)] =
                             raw[(std::size_t(l) * texels + t) * 4 + std::size_t(c)];
             GLuint bits[2];
-            glGetNamedBufferSubData(gl.buffer(r, d.range), 0, 8, bits);
+            glGetNamedBufferSubData(gl.buffer(r, d.buffers[0]), 0, 8, bits);
             float zn, zx;
             std::memcpy(&zn, &bits[0], 4);
             std::memcpy(&zx, &bits[1], 4);

@@ -68,16 +68,9 @@ void read_texture(const FrameContext& ctx, GLuint tex, Image& img) {
 } // namespace
 
 void readback(graph::FrameGraph& fg, const FrameContext& ctx, graph::TextureHandle source) {
-    struct Data {
-        graph::TextureHandle source;
-    };
-    fg.add_pass<Data>(
-        "readback",
-        [&](graph::FrameGraph::Builder& b, Data& d) {
-            d.source = b.read(source);
-            b.side_effect();
-        },
-        [&ctx](const Data& d, const graph::Resources& r) { read_texture(ctx, ctx.gl->texture(r, d.source), ctx.result->image); });
+    side_effect_pass(fg, "readback", {{source}, {}}, [&ctx](const Reads& d, const graph::Resources& r) {
+        read_texture(ctx, ctx.gl->texture(r, d.textures[0]), ctx.result->image);
+    });
 }
 
 } // namespace iso::passes

@@ -92,24 +92,13 @@ Lists fragment_lists(graph::FrameGraph& fg, const FrameContext& ctx, const GBuff
 // Tests: every pixel's list length, counted on the CPU from the read-back
 // head image and node pool.
 void read_lists(graph::FrameGraph& fg, const FrameContext& ctx, const Lists& lists) {
-    struct Data {
-        graph::TextureHandle heads;
-        graph::BufferHandle nodes;
-    };
-    fg.add_pass<Data>(
-        "read_oit_lists",
-        [&](graph::FrameGraph::Builder& b, Data& d) {
-            d.heads = b.read(lists.heads);
-            d.nodes = b.read(lists.nodes);
-            b.side_effect();
-        },
-        [&ctx](const Data& d, const graph::Resources& r) {
+    side_effect_pass(fg, "read_oit_lists", {{lists.heads}, {lists.nodes}}, [&ctx](const Reads& d, const graph::Resources& r) {
             GlResources& gl = *ctx.gl;
             const int W = ctx.width, H = ctx.height;
             std::vector<std::uint32_t> heads(std::size_t(W) * std::size_t(H));
-            glGetTextureImage(gl.texture(r, d.heads), 0, GL_RED_INTEGER, GL_UNSIGNED_INT, GLsizei(heads.size() * 4), heads.data());
-            std::vector<std::uint32_t> nodes(r.desc(d.nodes).bytes / 4);
-            glGetNamedBufferSubData(gl.buffer(r, d.nodes), 0, GLsizeiptr(nodes.size() * 4), nodes.data());
+            glGetTextureImage(gl.texture(r, d.textures[0]), 0, GL_RED_INTEGER, GL_UNSIGNED_INT, GLsizei(heads.size() * 4), heads.data());
+            std::vector<std::uint32_t> nodes(r.desc(d.buffers[0]).bytes / 4);
+            glGetNamedBufferSubData(gl.buffer(r, d.buffers[0]), 0, GLsizeiptr(nodes.size() * 4), nodes.data());
             auto& out = ctx.result->oit_lists;
             out.assign(heads.size(), 0);
             const std::size_t capacity = nodes.size() / 5;
