@@ -67,7 +67,9 @@ TEST(MeshIo, RoundTripsEveryFormat) {
             EXPECT_NEAR(s.volume, ref.volume, 1e-6 * std::abs(ref.volume) + 1e-9) << ext;
             EXPECT_EQ(s.bounds_min, ref.bounds_min) << ext;
             EXPECT_EQ(s.bounds_max, ref.bounds_max) << ext;
-            if (std::string(ext) != ".stl") EXPECT_EQ(r.positions.size(), m.positions.size()) << ext;
+            if (std::string(ext) != ".stl") {
+                EXPECT_EQ(r.positions.size(), m.positions.size()) << ext;
+            }
         }
     }
 }
