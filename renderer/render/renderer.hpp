@@ -1,7 +1,10 @@
-// Renders a scene of meshes headlessly (or into the GUI's context) through
-// the pass graph: G-buffer -> deferred lighting -> read-back, with AOVs
-// (depth, normal, id) as extra requested outputs. Needs a current GL 4.5
-// context.
+// Renders meshes headlessly (or into the GUI's context) through the pass
+// graph: the frame is renderer/passes/build_frame (G-buffer, cone AO,
+// lighting, VOIT for translucent objects, overlay, read-back or present;
+// docs/pass_graph.md), its GPU resources kept across frames in a
+// ResourcePool. AOVs (depth, normal, id, ao) are other read-backs of the same
+// frame. Needs a current GL 4.5 context; front ends use it through
+// core::Scene.
 #pragma once
 
 #include <array>
