@@ -11,10 +11,9 @@ namespace iso::passes {
 
 graph::TextureHandle ambient_occlusion(graph::FrameGraph& fg, const FrameContext& ctx, const GBuffer& gb) {
     const auto plan = std::make_shared<const AoPlan>(plan_ao(ctx));
-    const ConeAoSettings& st = plan->settings;
     AoResources res;
-    res.zrange = fg.history("zrange", graph::BufferDesc{8});
-    res.slicemap = fg.history("slicemap", graph::TextureDesc{plan->grid_w, plan->grid_h, graph::Format::RGBA32UI, st.layers, 1, true});
+    res.zrange = fg.history("zrange", AoPlan::kZRangeDesc);
+    res.slicemap = fg.history("slicemap", plan->slicemap_desc);
     if (plan->voxelize) {
         res.zrange = zrange(fg, ctx, gb, res.zrange);
         res.slicemap = voxelize(fg, ctx, plan, res.zrange, res.slicemap);

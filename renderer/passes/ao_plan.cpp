@@ -26,7 +26,7 @@ double guard_band(const FrameContext& ctx, const ConeAoSettings& st, double aspe
     bool outside = false;
     double nearest = std::numeric_limits<double>::infinity();
     for (int c = 0; !sb.empty() && c < 8; ++c) {
-        const glm::dvec4 w((c & 1) ? sb.max.x : sb.min.x, (c & 2) ? sb.max.y : sb.min.y, (c & 4) ? sb.max.z : sb.min.z, 1.0);
+        const glm::dvec4 w(sb.corner(c), 1.0);
         const glm::dvec4 clip = vp * w;
         outside |= clip.w <= 0 || std::abs(clip.x) > clip.w || std::abs(clip.y) > clip.w;
         nearest = std::min(nearest, -(v * w).z);
@@ -70,10 +70,7 @@ AoPlan plan_ao(const FrameContext& ctx) {
     double scene_far = 0;
     const Bounds& sb = ctx.bounds;
     if (!sb.empty())
-        for (int c = 0; c < 8; ++c) {
-            const glm::dvec3 corner((c & 1) ? sb.max.x : sb.min.x, (c & 2) ? sb.max.y : sb.min.y, (c & 4) ? sb.max.z : sb.min.z);
-            scene_far = std::max(scene_far, -(ctx.camera.view() * glm::dvec4(corner, 1.0)).z);
-        }
+        for (int c = 0; c < 8; ++c) scene_far = std::max(scene_far, -(ctx.camera.view() * glm::dvec4(sb.corner(c), 1.0)).z);
     p.scene_far = float(scene_far);
     p.radius = float(st.radius_mm);
     p.near_margin = p.guard > 0 ? p.radius : 0.0f;
@@ -92,9 +89,9 @@ AoPlan plan_ao(const FrameContext& ctx) {
     p.key.insert(p.key.end(), {double(W), double(H), double(p.grid_w), double(p.grid_h), p.guard, double(st.layers), st.radius_mm,
                                double(ctx.geometry_version)});
     for (const auto& d : ctx.draws) p.key.push_back(double(d.id)); // which objects are visible
-    const bool kept = ctx.pool && ctx.ao &&
-                      ctx.pool->has_history("slicemap", graph::TextureDesc{p.grid_w, p.grid_h, graph::Format::RGBA32UI, st.layers, 1, true}) &&
-                      ctx.pool->has_history("zrange", graph::BufferDesc{8});
+    p.slicemap_desc = graph::TextureDesc{p.grid_w, p.grid_h, graph::Format::RGBA32UI, st.layers, 1, true};
+    const bool kept = ctx.pool && ctx.ao && ctx.pool->has_history("slicemap", p.slicemap_desc) &&
+                      ctx.pool->has_history("zrange", AoPlan::kZRangeDesc);
     p.voxelize = !kept || !ctx.ao || p.key != ctx.ao->view_key || ctx.hooks.ao_force_voxelize;
     // cone_pattern(): cone axes, one vec4 per jitter set, then the sets' samples.
     p.pattern_bytes = std::size_t(st.cones + st.jitter_sets * (1 + st.samples)) * sizeof(glm::vec4);

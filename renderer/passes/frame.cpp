@@ -44,9 +44,12 @@ void build_frame(graph::FrameGraph& fg, const FrameContext& ctx) {
     if (!ctx.translucent.empty()) color = voit(fg, ctx, gb, color);
     if (opt.annotations) color = overlay(fg, ctx, color);
     if (opt.present) return present(fg, ctx, color);
-    graph::TextureHandle source = opt.aov == Aov::None ? color : opt.aov == Aov::Depth ? gb.depth : ao;
+    // The colour image, or the AOV: depth, AO, or the G-buffer channel the layout table names.
+    graph::TextureHandle source = color;
+    if (opt.aov == Aov::Depth) source = gb.depth;
+    if (opt.aov == Aov::Ao) source = ao;
     for (const auto& c : kGBufferLayout)
-        if (c.aov == opt.aov && opt.aov != Aov::None) source = gb.*c.handle;
+        if (opt.aov != Aov::None && c.aov == opt.aov) source = gb.*c.handle;
     readback(fg, ctx, source);
 }
 

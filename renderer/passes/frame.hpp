@@ -24,6 +24,10 @@ namespace iso::passes {
 
 class GlResources;
 
+// A VOIT list node (OitNode in shaders/render/oit_common.glsl): five 32-bit
+// words, the link to the next node last.
+constexpr std::size_t kOitNodeWords = 5, kOitNodeNextWord = 4, kOitNodeBytes = 4 * kOitNodeWords;
+
 // A visible, non-empty mesh as the passes draw it.
 struct DrawItem {
     std::uint32_t vao = 0;   // GL vertex array (positions at 0, normals at 1)
@@ -102,6 +106,9 @@ struct AoPlan {
     glm::mat4 sm_view_projection{1.0f}, view{1.0f};
     std::vector<double> key;
     std::size_t pattern_bytes = 0;
+    // The history resources the plan checks and the chain declares.
+    graph::TextureDesc slicemap_desc;
+    static constexpr graph::BufferDesc kZRangeDesc{8}; // nearest and farthest depth, float bits
 };
 AoPlan plan_ao(const FrameContext& ctx);
 // Passes keep the plan until they execute.

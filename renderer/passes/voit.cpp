@@ -15,8 +15,6 @@ namespace iso::passes {
 
 namespace {
 
-constexpr std::size_t kNodeBytes = 20; // OitNode in shaders/render/oit_common.glsl
-
 OitParams oit_params(const FrameContext& ctx) {
     OitParams p;
     p.world_to_view = std140::mat3(ctx.world_to_view);
@@ -35,7 +33,7 @@ struct Lists {
 Lists fragment_lists(graph::FrameGraph& fg, const FrameContext& ctx, const GBuffer& gb) {
     const int W = ctx.width, H = ctx.height;
     const std::size_t object_bytes = ctx.objects.size() * sizeof(glm::vec4);
-    const std::size_t node_bytes = std::max<std::size_t>(ctx.oit_capacity, 1) * kNodeBytes;
+    const std::size_t node_bytes = std::max<std::size_t>(ctx.oit_capacity, 1) * kOitNodeBytes;
     return fg.add_pass<Lists>(
         "oit_fragments",
         [&](graph::FrameGraph::Builder& b, Lists& d) {
@@ -101,11 +99,11 @@ void read_lists(graph::FrameGraph& fg, const FrameContext& ctx, const Lists& lis
             glGetNamedBufferSubData(gl.buffer(r, d.buffers[0]), 0, GLsizeiptr(nodes.size() * 4), nodes.data());
             auto& out = ctx.result->oit_lists;
             out.assign(heads.size(), 0);
-            const std::size_t capacity = nodes.size() / 5;
+            const std::size_t capacity = nodes.size() / kOitNodeWords;
             for (int y = 0; y < H; ++y)
                 for (int x = 0; x < W; ++x) {
                     std::uint32_t n = 0;
-                    for (std::uint32_t i = heads[std::size_t(y) * W + x]; i != 0xFFFFFFFFu && i < capacity && n <= capacity; i = nodes[i * 5 + 4])
+                    for (std::uint32_t i = heads[std::size_t(y) * W + x]; i != 0xFFFFFFFFu && i < capacity && n <= capacity; i = nodes[i * kOitNodeWords + kOitNodeNextWord])
                         ++n;
                     out[std::size_t(H - 1 - y) * W + x] = n; // GL rows are bottom-up
                 }

@@ -28,7 +28,6 @@ Aov aov_from_name(const std::string& n) {
 
 namespace {
 
-constexpr std::size_t kOitNodeBytes = 20;       // OitNode (shaders/render/oit_common.glsl)
 constexpr std::size_t kOitMinNodes = 1 << 16;   // the pool never shrinks below this
 
 struct GpuMesh {
@@ -128,20 +127,19 @@ RenderResult Renderer::render(const Camera& camera, const RenderOptions& opt, co
     const Bounds b = bounds();
     // The VOIT pool: sized from the last frame's fragment count; a frame that
     // overflows it is drawn again with a pool large enough, up to the cap.
-    const std::size_t cap_max = opt.oit_memory_bytes / kOitNodeBytes;
+    const std::size_t cap_max = opt.oit_memory_bytes / passes::kOitNodeBytes;
     // A first frame guesses two fragments per pixel.
     const std::size_t first_guess = std::bit_ceil(std::max(kOitMinNodes, 2 * std::size_t(opt.width) * std::size_t(opt.height)));
     std::size_t capacity = std::min(im.oit_next_capacity ? im.oit_next_capacity : first_guess, cap_max);
-    if (capacity == 0) throw Error("transparency memory", "too small for one fragment");
+    passes::FrameContext ctx = passes::make_context(camera, opt, std::move(draws), b);
+    ctx.hooks = hooks;
+    ctx.gl = &im.gl;
+    ctx.pool = &im.pool;
+    ctx.geometry_version = im.geometry_version;
+    ctx.ao = &im.ao;
     for (int redraws = 0;; ++redraws) {
         RenderResult result;
         result.gl_renderer = reinterpret_cast<const char*>(glGetString(GL_RENDERER));
-        passes::FrameContext ctx = passes::make_context(camera, opt, draws, b);
-        ctx.hooks = hooks;
-        ctx.gl = &im.gl;
-        ctx.pool = &im.pool;
-        ctx.geometry_version = im.geometry_version;
-        ctx.ao = &im.ao;
         ctx.result = &result;
         ctx.oit_capacity = capacity;
         graph::FrameGraph fg;

@@ -18,6 +18,8 @@ struct Bounds {
         max = glm::max(max, p);
     }
     glm::dvec3 center() const { return 0.5 * (min + max); }
+    // Corner c = 0..7: bit 0 picks max.x, bit 1 max.y, bit 2 max.z.
+    glm::dvec3 corner(int c) const { return {(c & 1) ? max.x : min.x, (c & 2) ? max.y : min.y, (c & 4) ? max.z : min.z}; }
     double radius() const; // half the diagonal
 };
 
