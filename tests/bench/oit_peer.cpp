@@ -32,15 +32,12 @@
 #include "io/image.hpp"
 #include "io/mesh.hpp"
 #include "io/vtk_mesh.hpp"
+#include "vtk_peer.hpp"
 
 namespace {
 
-double quantile(std::vector<double> v, double q) {
-    std::sort(v.begin(), v.end());
-    return v.empty() ? 0.0 : v[std::min(v.size() - 1, std::size_t(q * double(v.size())))];
-}
-
-bool vec3(const std::string& s, double out[3]) { return std::sscanf(s.c_str(), "%lf,%lf,%lf", &out[0], &out[1], &out[2]) == 3; }
+using iso::vtk_peer::quantile;
+using iso::vtk_peer::vec3;
 
 struct Surface {
     std::string mesh;
@@ -155,15 +152,7 @@ int main(int argc, char** argv) {
                 img.bytes[dst + 3] = 255;
             }
         iso::save_image(img, out);
-        std::string renderer = "unknown";
-        if (const char* caps = win->ReportCapabilities()) {
-            const std::string c = caps;
-            const auto p = c.find("OpenGL renderer string:");
-            if (p != std::string::npos) {
-                renderer = c.substr(p + 23, c.find('\n', p) - p - 23);
-                renderer.erase(0, renderer.find_first_not_of(' '));
-            }
-        }
+        const std::string renderer = iso::vtk_peer::renderer_name(win);
         std::printf("{\"ms_median\": %.4f, \"ms_p25\": %.4f, \"ms_p75\": %.4f, \"renderer\": \"%s\", \"mode\": \"%s\", \"peels\": %d}\n",
                     quantile(ms, 0.5), quantile(ms, 0.25), quantile(ms, 0.75), renderer.c_str(), mode.c_str(), peels);
     } catch (const std::exception& e) {

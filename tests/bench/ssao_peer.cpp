@@ -38,17 +38,10 @@
 #include "io/image.hpp"
 #include "io/mesh.hpp"
 #include "io/vtk_mesh.hpp"
+#include "vtk_peer.hpp"
 
-namespace {
-
-double median(std::vector<double> v, double q = 0.5) {
-    std::sort(v.begin(), v.end());
-    return v.empty() ? 0.0 : v[std::min(v.size() - 1, std::size_t(q * double(v.size())))];
-}
-
-bool vec3(const std::string& s, double out[3]) { return std::sscanf(s.c_str(), "%lf,%lf,%lf", &out[0], &out[1], &out[2]) == 3; }
-
-} // namespace
+using iso::vtk_peer::quantile;
+using iso::vtk_peer::vec3;
 
 int main(int argc, char** argv) {
     std::vector<std::string> meshes;
@@ -182,19 +175,10 @@ int main(int argc, char** argv) {
                 img.floats[dst] = z[src] >= 1.0f ? std::numeric_limits<float>::quiet_NaN() : rgba->GetValue(vtkIdType(src * 4));
             }
         iso::save_image(img, out);
-        const char* gl = win->ReportCapabilities();
-        std::string renderer = "unknown";
-        if (gl) {
-            const std::string caps = gl;
-            const auto p = caps.find("OpenGL renderer string:");
-            if (p != std::string::npos) {
-                renderer = caps.substr(p + 23, caps.find('\n', p) - p - 23);
-                renderer.erase(0, renderer.find_first_not_of(' '));
-            }
-        }
+        const std::string renderer = iso::vtk_peer::renderer_name(win);
         std::printf("{\"ms_median\": %.4f, \"ms_p25\": %.4f, \"ms_p75\": %.4f, \"ms_plain_median\": %.4f, \"renderer\": \"%s\", "
                     "\"width\": %d, \"height\": %d, \"kernel\": %d, \"radius\": %.9g, \"bias\": %.9g, \"blur\": %d}\n",
-                    median(with), median(with, 0.25), median(with, 0.75), median(without), renderer.c_str(), W, H, kernel, radius, bias,
+                    quantile(with), quantile(with, 0.25), quantile(with, 0.75), quantile(without), renderer.c_str(), W, H, kernel, radius, bias,
                     blur);
     } catch (const std::exception& e) {
         std::cerr << "ssao_peer: " << e.what() << "\n";
