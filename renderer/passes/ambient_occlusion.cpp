@@ -9,7 +9,7 @@
 
 namespace iso::passes {
 
-graph::TextureHandle ambient_occlusion(graph::FrameGraph& fg, const FrameContext& ctx, const GBuffer& gb) {
+AmbientOcclusion ambient_occlusion(graph::FrameGraph& fg, const FrameContext& ctx, const GBuffer& gb) {
     const auto plan = std::make_shared<const AoPlan>(plan_ao(ctx));
     AoResources res;
     res.zrange = fg.history("zrange", AoPlan::kZRangeDesc);
@@ -20,9 +20,13 @@ graph::TextureHandle ambient_occlusion(graph::FrameGraph& fg, const FrameContext
     }
     const auto history = fg.history(plan->coarse ? "ao_coarse" : "ao_accum",
                                     graph::TextureDesc{plan->ao_w, plan->ao_h, plan->coarse ? graph::Format::RGBA32F : graph::Format::R32F});
-    const auto traced = cone_ao(fg, ctx, plan, gb, res, history);
+    AmbientOcclusion out;
+    out.cones = cone_ao(fg, ctx, plan, gb, res, history);
     if (ctx.hooks.read_slicemap) read_slicemap(fg, ctx, plan, res);
-    return plan->coarse ? ao_upsample(fg, ctx, plan, gb, traced) : traced;
+    out.ao = plan->coarse ? ao_upsample(fg, ctx, plan, gb, out.cones.ao) : out.cones.ao;
+    out.tracer = res;
+    out.layers = plan->settings.layers;
+    return out;
 }
 
 } // namespace iso::passes

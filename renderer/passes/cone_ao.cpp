@@ -7,13 +7,13 @@
 
 namespace iso::passes {
 
-graph::TextureHandle cone_ao(graph::FrameGraph& fg, const FrameContext& ctx, const AoPlanRef& plan, const GBuffer& gb,
+ConeTrace cone_ao(graph::FrameGraph& fg, const FrameContext& ctx, const AoPlanRef& plan, const GBuffer& gb,
                              const AoResources& in, graph::TextureHandle target) {
     struct Data {
         graph::TextureHandle depth, normal, slicemap, ao;
         graph::BufferHandle range, pattern, params;
     };
-    return fg.add_pass<Data>(
+    const Data& out = fg.add_pass<Data>(
                  "cone_ao",
                  [&](graph::FrameGraph::Builder& b, Data& d) {
                      d.depth = b.read(gb.depth);
@@ -73,9 +73,10 @@ graph::TextureHandle cone_ao(graph::FrameGraph& fg, const FrameContext& ctx, con
                      p.sets = st.jitter_sets;
                      bind_params(gl, r, d.params, p);
                      glDispatchCompute(GLuint((plan->ao_w + 7) / 8), GLuint((plan->ao_h + 7) / 8), 1);
-                     glMemoryBarrier(GL_TEXTURE_FETCH_BARRIER_BIT | GL_SHADER_IMAGE_ACCESS_BARRIER_BIT | GL_TEXTURE_UPDATE_BARRIER_BIT);
-                 })
-        .ao;
+                     glMemoryBarrier(GL_TEXTURE_FETCH_BARRIER_BIT | GL_SHADER_IMAGE_ACCESS_BARRIER_BIT | GL_TEXTURE_UPDATE_BARRIER_BIT |
+                                     GL_UNIFORM_BARRIER_BIT | GL_SHADER_STORAGE_BARRIER_BIT);
+                 });
+    return {out.ao, out.pattern, out.params};
 }
 
 } // namespace iso::passes

@@ -37,17 +37,17 @@ void build_frame(graph::FrameGraph& fg, const FrameContext& ctx) {
     if (ao_wanted) validate(opt.ao_settings);
     const GBuffer gb = gbuffer(fg, ctx);
     // Declared always: culled by the graph when neither lighting nor the read-back reads it.
-    const graph::TextureHandle ao = ambient_occlusion(fg, ctx, gb);
-    graph::TextureHandle color = lighting(fg, ctx, gb, opt.ao ? ao : graph::TextureHandle{});
+    const AmbientOcclusion ao = ambient_occlusion(fg, ctx, gb);
+    graph::TextureHandle color = lighting(fg, ctx, gb, opt.ao ? ao.ao : graph::TextureHandle{});
     // Scene content, not an output request, decides this one: no translucent
-    // object, no list passes.
-    if (!ctx.translucent.empty()) color = voit(fg, ctx, gb, color);
+    // object, no list passes. Lit translucent fragments get their own AO.
+    if (!ctx.translucent.empty()) color = voit(fg, ctx, gb, color, opt.ao && !opt.flat_shading ? &ao : nullptr);
     if (opt.annotations) color = overlay(fg, ctx, color);
     if (opt.present) return present(fg, ctx, color);
     // The colour image, or the AOV: depth, AO, or the G-buffer channel the layout table names.
     graph::TextureHandle source = color;
     if (opt.aov == Aov::Depth) source = gb.depth;
-    if (opt.aov == Aov::Ao) source = ao;
+    if (opt.aov == Aov::Ao) source = ao.ao;
     for (const auto& c : kGBufferLayout)
         if (opt.aov != Aov::None && c.aov == opt.aov) source = gb.*c.handle;
     readback(fg, ctx, source);

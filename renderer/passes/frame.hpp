@@ -121,22 +121,38 @@ struct AoResources {
 graph::BufferHandle zrange(graph::FrameGraph& fg, const FrameContext& ctx, const GBuffer& gb, graph::BufferHandle range);
 graph::TextureHandle voxelize(graph::FrameGraph& fg, const FrameContext& ctx, const AoPlanRef& plan, graph::BufferHandle range,
                               graph::TextureHandle slicemap);
+// What the cone tracer reads besides the slicemap: this frame's cones and
+// jitter sets, and the parameters (the VOIT resolve traces with both).
+struct ConeTrace {
+    graph::TextureHandle ao;
+    graph::BufferHandle pattern, params;
+};
 // Traces the cones into `target` (history: accumulates over still frames).
-graph::TextureHandle cone_ao(graph::FrameGraph& fg, const FrameContext& ctx, const AoPlanRef& plan, const GBuffer& gb,
+ConeTrace cone_ao(graph::FrameGraph& fg, const FrameContext& ctx, const AoPlanRef& plan, const GBuffer& gb,
                              const AoResources& in, graph::TextureHandle target);
 graph::TextureHandle ao_upsample(graph::FrameGraph& fg, const FrameContext& ctx, const AoPlanRef& plan, const GBuffer& gb,
                                  graph::TextureHandle coarse);
 void read_slicemap(graph::FrameGraph& fg, const FrameContext& ctx, const AoPlanRef& plan, const AoResources& in);
+// The AO chain's outputs: the full-resolution AO image (1 = unoccluded),
+// and what tracing more points needs (the VOIT resolve's translucent AO).
+struct AmbientOcclusion {
+    graph::TextureHandle ao;
+    AoResources tracer;          // slicemap and its z range
+    ConeTrace cones;             // pattern and parameters
+    int layers = 1;              // the slicemap's, for the tracer's LAYERS
+};
 // Declares the AO chain (zrange, voxelize when stale, cone_ao, ao_upsample
-// when coarser): returns the full-resolution AO image (1 = unoccluded).
-graph::TextureHandle ambient_occlusion(graph::FrameGraph& fg, const FrameContext& ctx, const GBuffer& gb);
+// when coarser).
+AmbientOcclusion ambient_occlusion(graph::FrameGraph& fg, const FrameContext& ctx, const GBuffer& gb);
 
 // Deferred lighting; `ao` invalid: no AO.
 graph::TextureHandle lighting(graph::FrameGraph& fg, const FrameContext& ctx, const GBuffer& gb, graph::TextureHandle ao);
 graph::TextureHandle overlay(graph::FrameGraph& fg, const FrameContext& ctx, graph::TextureHandle color);
 // VOIT (docs/voit.md): the translucent fragments' lists, then their
 // front-to-back composite over `color`; returns the composited colour.
-graph::TextureHandle voit(graph::FrameGraph& fg, const FrameContext& ctx, const GBuffer& gb, graph::TextureHandle color);
+// `ao` non-null: each shaded fragment traces its own AO through that chain.
+graph::TextureHandle voit(graph::FrameGraph& fg, const FrameContext& ctx, const GBuffer& gb, graph::TextureHandle color,
+                          const AmbientOcclusion* ao = nullptr);
 void present(graph::FrameGraph& fg, const FrameContext& ctx, graph::TextureHandle color);
 void readback(graph::FrameGraph& fg, const FrameContext& ctx, graph::TextureHandle source);
 

@@ -7,15 +7,36 @@
 // transmittance is below epsilon: fragments that cannot change the pixel
 // are never shaded. Short lists (up to LOCAL_NODES) are sorted in a local
 // array; longer ones are merge-sorted in place in the node pool.
+//
+// Without AO this is one pass. With cone AO on (lit shading), translucent
+// fragments get their own AO, traced from each fragment's own point and
+// normal through the opaque surfaces' slicemap with the cone AO pass's
+// tracer (oit_ao.comp): occlusion by the opaque surfaces, as the opaque
+// surfaces' AO has it; translucent surfaces do not occlude. Tracing inside
+// this pass would make every SIMD lane wait for its group's longest list
+// (7x slower per trace on llvmpipe), so the work is split in three:
+//   OIT_SORT    sorts each list and relinks it front to back (new head),
+//               and appends the fragments that will be shaded (pixel, node)
+//               to a compact list, with the indirect dispatch's size;
+//   oit_ao.comp traces one listed fragment per invocation;
+//   OIT_SORTED  composites the sorted lists with those AO values.
 #include "std140.glsl"
 #include "oit_params.glsl"
 #include "oit_common.glsl"
 #include "shading.glsl"
+#include "oit_trace.glsl"
 
 layout(local_size_x = 8, local_size_y = 8) in;
 
+#ifdef OIT_SORT
+layout(binding = 0, r32ui) uniform uimage2D heads;   // the sorted list's head out
+#else
 layout(binding = 0, r32ui) readonly uniform uimage2D heads;
 layout(binding = 1, rgba8) uniform image2D color;   // opaque result in, composite out (sRGB-encoded RGBA8)
+#endif
+#ifdef OIT_SORTED
+layout(std430, binding = 4) readonly buffer OitAo { float oit_ao[]; };   // per node, from oit_ao.comp
+#endif
 // Per pixel, written for the statistics: fragments in the list, fragments shaded.
 layout(std430, binding = 3) buffer OitStats { uint stat_max_list; uint stat_shaded; uint stat_lists; };
 
@@ -32,18 +53,38 @@ uvec2 key_of(uint i) { return uvec2(oit_nodes[i].object, oit_nodes[i].primitive)
 vec3 fragment_color(uint i) {
     vec4 o = oit_objects[oit_nodes[i].object];
     if (flat_shading) return o.rgb;
-    return shade(normalize(world_to_view * unpack_normal(oit_nodes[i].normal)), o.rgb, false, 1.0);
+    vec3 n = normalize(view_rotation * unpack_normal(oit_nodes[i].normal));
+#ifdef OIT_SORTED
+    return shade(n, o.rgb, true, oit_ao[i]);
+#else
+    return shade(n, o.rgb, false, 1.0);
+#endif
+}
+
+vec3 acc = vec3(0.0);
+float transmittance = 1.0;
+uint shaded = 0u;
+
+// The next fragment front to back: shade it (or list it for tracing).
+void take(uint i, ivec2 p) {
+    float alpha = oit_objects[oit_nodes[i].object].a;
+#ifdef OIT_SORT
+    oit_trace_append(p, i);
+#else
+    acc += transmittance * alpha * fragment_color(i);
+#endif
+    transmittance *= 1.0 - alpha;
+    ++shaded;
 }
 
 void main() {
     ivec2 p = ivec2(gl_GlobalInvocationID.xy);
-    if (p.x >= size.x || p.y >= size.y) return;
+    if (p.x >= image_size.x || p.y >= image_size.y) return;
     uint head = imageLoad(heads, p).r;
     if (head == OIT_END) return;   // nothing translucent here: the opaque result stays
-    vec4 under = imageLoad(color, p);
-    vec3 acc = vec3(0.0);
-    float transmittance = 1.0;
-    uint shaded = 0u;
+#ifdef OIT_SORTED
+    for (uint i = head; i != OIT_END && transmittance >= epsilon; i = oit_nodes[i].next) take(i, p);
+#else
 
     // Gather up to LOCAL_NODES into a local array, counting the list.
     uint idx[LOCAL_NODES];
@@ -76,12 +117,12 @@ void main() {
             dep[b + 1] = td;
             key[b + 1] = tk;
         }
-        for (uint a = 0u; a < n && transmittance >= epsilon; ++a) {
-            float alpha = oit_objects[oit_nodes[idx[a]].object].a;
-            acc += transmittance * alpha * fragment_color(idx[a]);
-            transmittance *= 1.0 - alpha;
-            ++shaded;
-        }
+        for (uint a = 0u; a < n && transmittance >= epsilon; ++a) take(idx[a], p);
+#ifdef OIT_SORT
+        for (uint a = 0u; a + 1u < n; ++a) oit_nodes[idx[a]].next = idx[a + 1u];
+        oit_nodes[idx[n - 1u]].next = OIT_END;
+        imageStore(heads, p, uvec4(idx[0]));
+#endif
     } else {
         // Long list: sort it in place, relinking the nodes (bottom-up merge
         // sort of a linked list: O(n log n) steps, no extra memory, stable),
@@ -125,17 +166,19 @@ void main() {
             oit_nodes[tail].next = OIT_END;
             if (merges <= 1u) break;
         }
-        for (uint i = list; i != OIT_END && transmittance >= epsilon; i = oit_nodes[i].next) {
-            float alpha = oit_objects[oit_nodes[i].object].a;
-            acc += transmittance * alpha * fragment_color(i);
-            transmittance *= 1.0 - alpha;
-            ++shaded;
-        }
+        for (uint i = list; i != OIT_END && transmittance >= epsilon; i = oit_nodes[i].next) take(i, p);
+#ifdef OIT_SORT
+        imageStore(heads, p, uvec4(list));
+#endif
     }
-    vec3 result = acc + transmittance * srgb_to_linear(under.rgb);
-    float alpha = 1.0 - transmittance * (1.0 - under.a);
-    imageStore(color, p, vec4(srgb(result), alpha));
     atomicMax(stat_max_list, length);
     atomicAdd(stat_shaded, shaded);
     atomicAdd(stat_lists, 1u);
+#endif
+#ifndef OIT_SORT
+    vec4 under = imageLoad(color, p);
+    vec3 result = acc + transmittance * srgb_to_linear(under.rgb);
+    float alpha = 1.0 - transmittance * (1.0 - under.a);
+    imageStore(color, p, vec4(srgb(result), alpha));
+#endif
 }

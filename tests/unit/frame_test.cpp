@@ -113,7 +113,7 @@ TEST(Frame, TranslucentObjectsAddTheListPassesAndAovsCullThem) {
               (Passes{"gbuffer", "lighting", "oit_fragments", "read_oit_lists", "oit_resolve", "readback"}));
     o.ao = true; // AO of the opaque surfaces still runs under the glass
     EXPECT_EQ(compile(o, {}, 0.4f).running,
-              (Passes{"gbuffer", "zrange", "voxelize", "cone_ao", "ao_upsample", "lighting", "oit_fragments", "oit_resolve", "readback"}));
+              (Passes{"gbuffer", "zrange", "voxelize", "cone_ao", "ao_upsample", "lighting", "oit_fragments", "oit_sort", "oit_ao", "oit_resolve", "readback"}));
     o.aov = Aov::Depth; // the AOVs describe the opaque surfaces: no list is built
     EXPECT_EQ(compile(o, {}, 0.4f).running, (Passes{"gbuffer", "readback"}));
     o = options();
