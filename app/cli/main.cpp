@@ -325,8 +325,11 @@ void print_stats(const iso::graph::FrameStats& stats, const iso::OitStats& oit) 
               << " reused; peak " << human_bytes(double(stats.peak_bytes)) << "\n";
     if (oit.fragments > 0)
         std::cout << "transparency: " << oit.fragments << " fragments in " << oit.lists << " pixel lists (longest " << oit.max_list << "), "
-                  << oit.shaded << " shaded, " << oit.dropped << " dropped; pool " << oit.capacity << " nodes, " << oit.redraws
+                  << oit.shaded << " shaded, " << oit.merged << " merged past the cap; pool " << oit.capacity << " nodes, " << oit.redraws
                   << " redraw(s)\n";
+    if (oit.merged > 0)
+        std::cout << "transparency: merged fragments in " << oit.merged_pixels << " pixels, error at most " << std::setprecision(4)
+                  << oit.merge_error_max << " (linear colour, per channel)\n";
 }
 
 int run_render(const RenderArgs& a) {
@@ -358,9 +361,10 @@ int run_render(const RenderArgs& a) {
     iso::core::export_image(out.image, out.meta, a.out);
     std::cout << "rendered " << out.image.width << "x" << out.image.height << " (" << out.gl_renderer << ") -> " << a.out << "\n";
     if (a.stats) print_stats(out.stats, out.oit);
-    if (out.oit.dropped > 0)
-        std::cerr << "warning: " << out.oit.dropped << " translucent fragments did not fit the " << a.oit_memory
-                  << " MiB pool and were left out (--oit-memory)\n";
+    if (out.oit.merged > 0)
+        std::cerr << "warning: " << out.oit.merged << " translucent fragments in " << out.oit.merged_pixels << " pixels did not fit the "
+                  << a.oit_memory << " MiB pool (--oit-memory) and were merged, order-independently: error at most " << std::setprecision(3)
+                  << out.oit.merge_error_max << " per channel\n";
     return 0;
 }
 

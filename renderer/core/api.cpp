@@ -253,7 +253,10 @@ RenderOutput render_image(Scene& scene, const RenderRequest& req) {
     t["isoscope:shading"] = req.flat_shading ? "flat (albedo only)" : "lit";
     if (r.oit.fragments > 0) {
         t["isoscope:transparency"] = "VOIT per-pixel fragment lists, front to back, epsilon " + std::to_string(req.oit_epsilon) + "; " +
-                                     std::to_string(r.oit.fragments) + " fragments, " + std::to_string(r.oit.dropped) + " dropped";
+                                     std::to_string(r.oit.fragments) + " fragments" +
+                                     (r.oit.merged ? ", " + std::to_string(r.oit.merged) + " merged past the memory cap (error at most " +
+                                                         std::to_string(r.oit.merge_error_max) + " per channel)"
+                                                   : std::string());
     }
     if (req.aov != Aov::None && !req.aov_ao)
         t["isoscope:aov"] = std::string(req.aov == Aov::Depth ? "depth (mm along the view axis)" : req.aov == Aov::Normal ? "normal (LPS)" : "id") +

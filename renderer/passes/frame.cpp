@@ -1,4 +1,6 @@
 // The frame, assembled from the passes; and its context.
+#include <algorithm>
+
 #include <glm/glm.hpp>
 
 #include "renderer/passes/frame.hpp"
@@ -23,8 +25,29 @@ FrameContext make_context(const Camera& camera, const RenderOptions& opt, std::v
     const double aspect = double(opt.width) / double(opt.height);
     ctx.view_projection = glm::mat4(camera.projection(aspect) * camera.view());
     ctx.world_to_view = glm::mat3(glm::mat4(camera.view()));
+    // Translucent draws go near to far (by their bounds' nearest corner along
+    // the view axis): when the pool is full at its cap, the fragments left
+    // over, which are merged rather than stored, are then mostly the farther
+    // objects'.
+    const glm::dvec3 eye = camera.eye, forward = camera.forward();
+    auto nearest = [&](const DrawItem& d) {
+        double z = 1e300;
+        for (int c = 0; c < 8; ++c) z = std::min(z, glm::dot(d.bounds.corner(c) - eye, forward));
+        return d.bounds.empty() ? 1e300 : z;
+    };
+    std::stable_sort(translucent.begin(), translucent.end(), [&](const DrawItem& a, const DrawItem& b) { return nearest(a) < nearest(b); });
+    double z0 = 1e300, z1 = -1e300;
+    for (const auto& d : translucent)
+        for (int c = 0; c < 8 && !d.bounds.empty(); ++c) {
+            const double z = glm::dot(d.bounds.corner(c) - eye, forward);
+            z0 = std::min(z0, z);
+            z1 = std::max(z1, z);
+        }
+    z0 = std::max(z0, camera.near_plane);
+    z1 = std::min(z1, camera.far_plane);
     ctx.draws = std::move(opaque);
     ctx.translucent = std::move(translucent);
+    if (z0 < z1) ctx.translucent_depth = glm::vec2(float(z0), float(z1));
     ctx.objects = std::move(objects);
     ctx.bounds = bounds;
     if (opt.annotations) ctx.overlay = build_overlay(*opt.annotations, camera, opt.width, opt.height, opt.scale);

@@ -35,6 +35,7 @@ struct DrawItem {
     std::uint32_t id = 0;    // object id (1-based) written to the id AOV
     glm::vec3 color{1.0f};   // linear albedo
     float opacity = 1.0f;
+    Bounds bounds;           // LPS mm: orders the translucent draws near to far
 };
 
 // What the AO passes keep between frames besides their history resources.
@@ -57,6 +58,9 @@ struct FrameContext {
     std::vector<DrawItem> translucent;  // opacity < 1: the VOIT lists
     std::vector<glm::vec4> objects;     // per object id (0 unused): linear albedo, opacity
     std::size_t oit_capacity = 0;       // nodes of the VOIT pool this frame
+    bool oit_merge = false;             // the pool is at its cap: fragments that find it full are merged, not redrawn
+    bool oit_cut = false;               // at the cap, merge each pixel's farthest fragments (a depth cut) so the rest fit
+    glm::vec2 translucent_depth{0.0f};  // linear depth (mm) the translucent objects' bounds span, within near..far
     Bounds bounds;                      // of the visible meshes
     std::uint64_t geometry_version = 0; // changes when meshes are added
     std::vector<OverlayVertex> overlay; // annotation triangles (empty: none)

@@ -61,6 +61,7 @@ struct Renderer::Impl {
     std::uint64_t geometry_version = 0;
     passes::AoHistory ao;
     std::size_t oit_next_capacity = 0; // VOIT pool nodes for the next frame (0: none drawn yet)
+    bool oit_cut = false;              // the last frame at the VOIT cap needed the depth cut: start with it
 };
 
 Renderer::Renderer() : impl_(std::make_unique<Impl>()) {}
@@ -122,7 +123,7 @@ RenderResult Renderer::render(const Camera& camera, const RenderOptions& opt, co
     for (std::size_t i = 0; i < im.meshes.size(); ++i) {
         const auto& m = im.meshes[i];
         if (!m.object.visible || m.count == 0) continue;
-        draws.push_back({m.vao.id(), m.count, std::uint32_t(i + 1), m.object.color, std::clamp(m.object.opacity, 0.0f, 1.0f)});
+        draws.push_back({m.vao.id(), m.count, std::uint32_t(i + 1), m.object.color, std::clamp(m.object.opacity, 0.0f, 1.0f), m.bounds});
     }
     const Bounds b = bounds();
     // The VOIT pool: sized from the last frame's fragment count; a frame that
@@ -142,6 +143,8 @@ RenderResult Renderer::render(const Camera& camera, const RenderOptions& opt, co
         result.gl_renderer = reinterpret_cast<const char*>(glGetString(GL_RENDERER));
         ctx.result = &result;
         ctx.oit_capacity = capacity;
+        ctx.oit_merge = capacity >= cap_max;
+        ctx.oit_cut = ctx.oit_merge && im.oit_cut;
         graph::FrameGraph fg;
         if (opt.time_passes) fg.set_pass_epilogue([] { glFinish(); });
         passes::build_frame(fg, ctx);
@@ -158,7 +161,17 @@ RenderResult Renderer::render(const Camera& camera, const RenderOptions& opt, co
         else
             im.oit_next_capacity = capacity;
         result.oit.redraws = redraws;
-        if (result.oit.dropped == 0 || capacity >= cap_max) return result;
+        // At the cap, a frame with more fragments than fit is drawn again
+        // with the depth cut (so the farthest are merged, not the last
+        // rasterized), and so are the following frames until they fit.
+        const bool over = result.oit.merged > 0;
+        if (capacity >= cap_max) {
+            const bool was_cut = ctx.oit_cut;
+            im.oit_cut = over;
+            if (!over || was_cut) return result;
+        } else if (!over) {
+            return result;
+        }
         capacity = im.oit_next_capacity;
     }
 }

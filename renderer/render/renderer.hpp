@@ -80,7 +80,20 @@ struct RenderHooks {
 // What the VOIT passes did this frame (all zero without translucent objects).
 struct OitStats {
     std::uint64_t fragments = 0;  // translucent fragments in front of the opaque surfaces
-    std::uint64_t dropped = 0;    // fragments that found the pool full at its cap (not composited)
+    // Fragments that found the pool full at its cap. They are merged per
+    // pixel (order-independent: their opacity-weighted mean colour and their
+    // total coverage 1 - prod(1 - alpha)) and composited behind the pixel's
+    // sorted list. A frame that finds the cap too small is drawn again with a
+    // per-pixel depth cut (a depth histogram of each pixel's fragments): each
+    // pixel keeps its nearest fragments, up to a common level that fits the
+    // pool, and merges those beyond. Merged fragments then all lie behind
+    // the stored ones, and the pixel's error is at most the transmittance
+    // reaching them times their coverage (docs/voit.md): merge_error_max is
+    // the largest over the image, in [0, 1] per channel of linear colour.
+    std::uint64_t merged = 0;
+    std::uint64_t overflowed = 0; // of them, found the pool full (the depth cut did not make room: the looser bound)
+    std::uint64_t merged_pixels = 0;
+    double merge_error_max = 0;
     std::uint64_t capacity = 0;   // nodes the pool held
     std::uint32_t max_list = 0;   // longest pixel list
     std::uint64_t shaded = 0;     // fragments shaded (the rest were behind an opaque-enough front)

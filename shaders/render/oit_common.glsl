@@ -10,9 +10,11 @@ struct OitNode {
 const uint OIT_END = 0xFFFFFFFFu;
 
 layout(std430, binding = 0) coherent buffer OitCounters {
-    uint oit_count;      // fragments offered (stored or not)
-    uint oit_overflow;   // fragments that found the pool full
+    uint oit_count;       // fragments offered to the pool (stored or not)
+    uint oit_overflow;    // fragments that found the pool full
+    uint oit_cut_merged;  // fragments beyond their pixel's depth cut (OIT_CUT): merged
 };
+#define OIT_BINS 16       // depth bins of the cut's histogram
 layout(std430, binding = 1) coherent buffer OitNodes { OitNode oit_nodes[]; };
 // Per object: linear albedo (rgb) and opacity (a), index = object id.
 layout(std430, binding = 2) readonly buffer OitObjects { vec4 oit_objects[]; };
@@ -31,3 +33,21 @@ vec3 unpack_normal(uint p) {
     if (n.z < 0.0) n.xy = oct_wrap(n.xy);
     return normalize(n);
 }
+
+// Past the pool's cap (OIT_MERGE), fragments that find it full are merged
+// per pixel, order-independently, in fixed point (integer atomics: GL 4.5
+// has no float atomics): their count, the sum of alpha * colour, the sum of
+// alpha, the sum of -log2(1 - alpha) (the product of transmittances), and
+// the range of their colours.
+// The resolve composites them behind the sorted list.
+struct OitTail {
+    uint count;
+    uint color[3];     // sum of alpha * colour, OIT_TAIL_ONE per unit
+    uint alpha;        // sum of alpha, OIT_TAIL_ONE per unit
+    uint optical;      // sum of -log2(1 - alpha), OIT_TAIL_LOG_ONE per unit, each at most OIT_TAIL_LOG_MAX
+    uint lo[3], hi[3]; // the colours' range per channel, 65535 per unit: bounds the lost order's error
+};
+#define OIT_TAIL_ONE 16384.0      // 2^14: 2^18 fragments per pixel before a sum wraps
+#define OIT_TAIL_LOG_ONE 4096.0   // 2^12
+#define OIT_TAIL_LOG_MAX 24.0     // alpha 1 counts as transmittance 2^-24
+layout(std430, binding = 3) coherent buffer OitTails { OitTail oit_tails[]; };   // per pixel, with OIT_MERGE

@@ -38,7 +38,10 @@ layout(binding = 1, rgba8) uniform image2D color;   // opaque result in, composi
 layout(std430, binding = 4) readonly buffer OitAo { float oit_ao[]; };   // per node, from oit_ao.comp
 #endif
 // Per pixel, written for the statistics: fragments in the list, fragments shaded.
-layout(std430, binding = 3) buffer OitStats { uint stat_max_list; uint stat_shaded; uint stat_lists; };
+// Per pixel, written for the statistics: fragments in the list, fragments
+// shaded, pixels with a list; with OIT_MERGE, pixels with merged fragments
+// and the largest merged coverage (the error bound; float bits).
+layout(std430, binding = 5) buffer OitStats { uint stat_max_list; uint stat_shaded; uint stat_lists; uint stat_merged_pixels; uint stat_merge_bound; };
 
 #ifndef LOCAL_NODES
 #define LOCAL_NODES 32
@@ -81,7 +84,12 @@ void main() {
     ivec2 p = ivec2(gl_GlobalInvocationID.xy);
     if (p.x >= image_size.x || p.y >= image_size.y) return;
     uint head = imageLoad(heads, p).r;
-    if (head == OIT_END) return;   // nothing translucent here: the opaque result stays
+#if defined(OIT_MERGE) && !defined(OIT_SORT)
+    uint t = uint(p.y) * uint(image_size.x) + uint(p.x);
+    if (head == OIT_END && oit_tails[t].count == 0u) return;   // nothing translucent here: the opaque result stays
+#else
+    if (head == OIT_END) return;
+#endif
 #ifdef OIT_SORTED
     for (uint i = head; i != OIT_END && transmittance >= epsilon; i = oit_nodes[i].next) take(i, p);
 #else
@@ -171,11 +179,35 @@ void main() {
         imageStore(heads, p, uvec4(list));
 #endif
     }
-    atomicMax(stat_max_list, length);
-    atomicAdd(stat_shaded, shaded);
-    atomicAdd(stat_lists, 1u);
+    if (length > 0u) {
+        atomicMax(stat_max_list, length);
+        atomicAdd(stat_shaded, shaded);
+        atomicAdd(stat_lists, 1u);
+    }
 #endif
 #ifndef OIT_SORT
+#ifdef OIT_MERGE
+    // The merged fragments, behind the list: their opacity-weighted mean
+    // colour over their total coverage. Merged by the depth cut, they all lie
+    // behind the list's fragments, so only their order among themselves is
+    // lost: whatever it was, their true contribution is the transmittance
+    // reaching them times their coverage times some mean of their colours,
+    // so each channel (linear) is off by at most that product times the
+    // channel's colour range. Fragments that found the pool full (overflow)
+    // may lie anywhere: then by at most their coverage (docs/voit.md).
+    if (oit_tails[t].count > 0u) {
+        float coverage = 1.0 - exp2(-float(oit_tails[t].optical) / OIT_TAIL_LOG_ONE);
+        float alpha_sum = float(oit_tails[t].alpha);
+        vec3 mean = alpha_sum > 0.0 ? vec3(oit_tails[t].color[0], oit_tails[t].color[1], oit_tails[t].color[2]) / alpha_sum : vec3(0.0);
+        float spread = 0.0;
+        for (int k = 0; k < 3; ++k) spread = max(spread, float(oit_tails[t].hi[k] - oit_tails[t].lo[k]) / 65535.0);
+        float bound = oit_overflow == 0u ? transmittance * coverage * spread : coverage;
+        acc += transmittance * coverage * mean;
+        transmittance *= 1.0 - coverage;
+        atomicAdd(stat_merged_pixels, 1u);
+        atomicMax(stat_merge_bound, floatBitsToUint(bound));
+    }
+#endif
     vec4 under = imageLoad(color, p);
     vec3 result = acc + transmittance * srgb_to_linear(under.rgb);
     float alpha = 1.0 - transmittance * (1.0 - under.a);
