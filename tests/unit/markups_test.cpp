@@ -203,7 +203,8 @@ TEST(Markups, AngleWithoutArmHasNoValue) {
     save_markups(f, dir / "a.mrk.json");
     const auto j = nlohmann::json::parse(slurp(dir / "a.mrk.json"));
     EXPECT_FALSE(j["markups"][0]["measurements"][0].contains("value"));
-    const auto* m = find(load_markups(dir / "a.mrk.json").markups[0], "angle");
+    const MarkupsFile back = load_markups(dir / "a.mrk.json");
+    const auto* m = find(back.markups[0], "angle");
     ASSERT_NE(m, nullptr);
     EXPECT_FALSE(m->value.has_value());
 }
