@@ -47,7 +47,7 @@ struct Markup {
     std::vector<MarkupControlPoint> points;
     std::vector<MarkupMeasurement> measurements;
     bool locked = false;
-    // Slicer's display colours, linear RGB in [0, 1], when the file has them.
+    // Slicer's display colours, RGB components in [0, 1] as Slicer stores them, when the file has them.
     // Points are selected by default, so `selected_color` is what Slicer shows.
     std::optional<glm::dvec3> color;
     std::optional<glm::dvec3> selected_color;
