@@ -57,7 +57,7 @@ if [[ -f tests/fuzz/smoke.sh ]]; then
   CC=clang CXX=clang++ cmake -S . -B build-fuzz -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DISOSCOPE_FUZZ=ON >/dev/null
   cmake --build build-fuzz -j "$jobs" --target fuzzers
   if tests/fuzz/smoke.sh build-fuzz ${ISOSCOPE_FUZZ_SECONDS:-}; then
-    passed=$((passed + 10))
+    passed=$((passed + 11)) # one per fuzz target (tests/fuzz/smoke.sh)
   else
     failed=$((failed + 1))
     summary

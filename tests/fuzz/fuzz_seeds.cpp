@@ -1,5 +1,6 @@
 // Writes a small seed corpus for every fuzz target with the project's own
-// writers (and, for DICOM, vtkDICOMWriter): fuzz_seeds OUT_DIR
+// writers (and, for DICOM, vtkDICOMWriter; for markups, the Slicer-style
+// fixtures in datasets/markups/ too): fuzz_seeds OUT_DIR
 #include <filesystem>
 #include <fstream>
 #include <iostream>
@@ -12,6 +13,7 @@
 #include <vtkShortArray.h>
 #include <vtkXMLImageDataWriter.h>
 
+#include "io/markups.hpp"
 #include "io/mesh.hpp"
 #include "io/volume_io.hpp"
 
@@ -77,6 +79,30 @@ int main(int argc, char** argv) {
         std::ofstream p(out / "ply" / "ascii.ply");
         p << "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
              "element face 1\nproperty list uchar int vertex_indices\nend_header\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n";
+    }
+    {
+        const fs::path markups = dir("markups");
+        for (const auto& e : fs::directory_iterator(fs::path(ISOSCOPE_DATA_DIR) / "markups"))
+            if (e.path().string().ends_with(".mrk.json")) fs::copy_file(e.path(), markups / e.path().filename());
+        iso::MarkupsFile f;
+        iso::Markup pts, line, angle;
+        pts.type = iso::MarkupType::Fiducial;
+        pts.name = "F";
+        pts.points.resize(2);
+        pts.points[0].label = "F-1";
+        pts.points[0].position = {1.5, -2, 3};
+        pts.points[1].status = iso::PositionStatus::Undefined;
+        line.type = iso::MarkupType::Line;
+        line.points.resize(2);
+        line.points[1].position = {3, 4, 0};
+        line.color = glm::dvec3(1, 0, 0);
+        angle.type = iso::MarkupType::Angle;
+        angle.points.resize(3);
+        angle.points[0].position = {1, 0, 0};
+        angle.points[2].position = {0, 1, 0};
+        angle.measurements.push_back({"HU mean", 12.5, "[hnsf'U]", true, "", ""});
+        f.markups = {pts, line, angle};
+        iso::save_markups(f, (markups / "ours.mrk.json").string());
     }
     std::cout << "seeds written to " << out << "\n";
     return 0;

@@ -1,9 +1,12 @@
 // One libFuzzer target per parser: this file is compiled once per format
-// with FUZZ_EXT (the file extension the loader dispatches on) and FUZZ_MESH
-// (1 for mesh formats). The input bytes become a file that the real loader
-// reads. iso::Error is the expected outcome for bad input; a crash, a
-// sanitizer report, a hang or any other exception is a finding.
+// with FUZZ_EXT (the file extension the loader dispatches on) and one of
+// FUZZ_VOLUME, FUZZ_MESH or FUZZ_MARKUPS (the loader). The input bytes become
+// a file that the real loader reads. iso::Error is the expected outcome for
+// bad input; a crash, a sanitizer report, a hang or any other exception is a
+// finding. Markups also check that whatever was read is written and read back
+// the same (the writer and the reader agree on what a valid file is).
 #include <cstdint>
+#include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -11,6 +14,7 @@
 #include <string>
 
 #include "io/error.hpp"
+#include "io/markups.hpp"
 #include "io/mesh.hpp"
 #include "io/volume_io.hpp"
 
@@ -42,6 +46,39 @@ std::string input_path() {
     }();
     return path;
 }
+
+#if defined(FUZZ_MARKUPS)
+[[noreturn]] void finding(const std::string& what) {
+    std::fprintf(stderr, "markups round trip: %s\n", what.c_str());
+    std::abort();
+}
+
+// A file the reader accepted is written (curves excepted: read only) and
+// read back with the same markups, points and positions.
+void round_trip(const iso::MarkupsFile& f) {
+    for (const auto& m : f.markups) {
+        (void)iso::computed_measurement(m);
+        if (m.type == iso::MarkupType::Curve || m.type == iso::MarkupType::ClosedCurve) return;
+    }
+    const std::string out = input_path() + ".out.mrk.json";
+    iso::MarkupsFile g;
+    try {
+        iso::save_markups(f, out);
+        g = iso::load_markups(out);
+    } catch (const iso::Error& e) {
+        finding(std::string("a file that was read could not be written and read back: ") + e.what());
+    }
+    if (g.markups.size() != f.markups.size()) finding("markup count changed");
+    for (std::size_t i = 0; i < f.markups.size(); ++i) {
+        const auto &a = f.markups[i], &b = g.markups[i];
+        if (a.type != b.type || a.name != b.name || a.points.size() != b.points.size()) finding("markup changed");
+        for (std::size_t k = 0; k < a.points.size(); ++k)
+            if (a.points[k].status != b.points[k].status || a.points[k].label != b.points[k].label ||
+                (a.points[k].status == iso::PositionStatus::Defined && a.points[k].position != b.points[k].position))
+                finding("control point changed");
+    }
+}
+#endif
 } // namespace
 
 extern "C" int LLVMFuzzerInitialize(int*, char***) {
@@ -60,9 +97,11 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
         f.write(reinterpret_cast<const char*>(data), std::streamsize(size));
     }
     try {
-#if FUZZ_MESH
+#if defined(FUZZ_MESH)
         const iso::Mesh m = iso::load_mesh(path);
         (void)iso::mesh_stats(m);
+#elif defined(FUZZ_MARKUPS)
+        round_trip(iso::load_markups(path));
 #else
         const iso::Volume v = iso::load_volume(path);
         (void)v.value_range();

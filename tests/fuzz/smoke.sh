@@ -27,9 +27,10 @@ trap 'rm -rf "$work"' EXIT
 # Inputs per target in deterministic mode (about 10 s each on a 2-core
 # machine; the VDB target forks a reader process per input).
 declare -A runs=([nrrd]=20000 [nifti]=20000 [metaimage]=20000 [vti]=10000 [vdb]=60 [dicom]=600
-                 [stl]=20000 [ply]=20000 [obj]=20000 [vtp]=10000)
+                 [stl]=20000 [ply]=20000 [obj]=20000 [vtp]=10000 [markups]=8000)
+targets=(nrrd nifti metaimage vti vdb dicom stl ply obj vtp markups)
 failed=()
-for target in nrrd nifti metaimage vti vdb dicom stl ply obj vtp; do
+for target in "${targets[@]}"; do
   exe="$build/tests/fuzz/fuzz_$target"
   corpus="$work/corpus-$target"
   mkdir -p "$corpus"
@@ -58,4 +59,4 @@ if ((${#failed[@]})); then
   echo "fuzz smoke: findings in ${failed[*]} (inputs saved under $artifacts/)"
   exit 1
 fi
-echo "fuzz smoke: all 10 targets ran clean"
+echo "fuzz smoke: all ${#targets[@]} targets ran clean"
