@@ -94,16 +94,17 @@ void main() {
     for (uint i = head; i != OIT_END && transmittance >= epsilon; i = oit_nodes[i].next) take(i, p);
 #else
 
-    // Gather up to LOCAL_NODES into a local array, counting the list.
+    // Gather up to LOCAL_NODES into a local array, counting the list. Only
+    // the depth and the node index are kept (llvmpipe keeps dynamically
+    // indexed arrays in memory: fewer words, less traffic); equal depths,
+    // rare, fetch their object and primitive to break the tie.
     uint idx[LOCAL_NODES];
     float dep[LOCAL_NODES];
-    uvec2 key[LOCAL_NODES];
     uint n = 0u, length = 0u;
     for (uint i = head; i != OIT_END; i = oit_nodes[i].next) {
         if (n < LOCAL_NODES) {
             idx[n] = i;
             dep[n] = oit_nodes[i].depth;
-            key[n] = key_of(i);
             ++n;
         }
         ++length;
@@ -112,18 +113,15 @@ void main() {
         // Insertion sort, nearest first.
         for (uint a = 1u; a < n; ++a) {
             uint ti = idx[a];
-            uvec2 tk = key[a];
             float td = dep[a];
             int b = int(a) - 1;
-            while (b >= 0 && in_front(td, tk, dep[b], key[b])) {
+            while (b >= 0 && (td > dep[b] || (td == dep[b] && in_front(td, key_of(ti), dep[b], key_of(idx[b]))))) {
                 idx[b + 1] = idx[b];
                 dep[b + 1] = dep[b];
-                key[b + 1] = key[b];
                 --b;
             }
             idx[b + 1] = ti;
             dep[b + 1] = td;
-            key[b + 1] = tk;
         }
         for (uint a = 0u; a < n && transmittance >= epsilon; ++a) take(idx[a], p);
 #ifdef OIT_SORT
