@@ -25,6 +25,9 @@
 #include "oit_common.glsl"
 #include "shading.glsl"
 #include "oit_trace.glsl"
+#define LIST_NEXT(i) oit_nodes[i].next
+#define LIST_BEFORE(a, b) in_front(oit_nodes[a].depth, key_of(a), oit_nodes[b].depth, key_of(b))
+#define LIST_END OIT_END
 
 layout(local_size_x = 8, local_size_y = 8) in;
 
@@ -52,6 +55,7 @@ bool in_front(float da, uvec2 ka, float db, uvec2 kb) {
     return da > db || (da == db && (ka.x < kb.x || (ka.x == kb.x && ka.y < kb.y)));
 }
 uvec2 key_of(uint i) { return uvec2(oit_nodes[i].object, oit_nodes[i].primitive); }
+#include "list_sort.glsl"
 
 vec3 fragment_color(uint i) {
     vec4 o = oit_objects[oit_nodes[i].object];
@@ -130,48 +134,9 @@ void main() {
         imageStore(heads, p, uvec4(idx[0]));
 #endif
     } else {
-        // Long list: sort it in place, relinking the nodes (bottom-up merge
-        // sort of a linked list: O(n log n) steps, no extra memory, stable),
-        // then composite from the front. A selection walk would take n^2
-        // steps, and llvmpipe stops any shader after 65535 loop iterations in
-        // all (LP_MAX_TGSI_LOOP_ITERATIONS): this keeps about 2500 fragments
-        // per pixel within it; a GPU has no such limit.
-        uint list = head;
-        for (uint width = 1u;; width *= 2u) {
-            uint p = list, tail = OIT_END, merges = 0u;
-            list = OIT_END;
-            while (p != OIT_END) {
-                ++merges;
-                uint q = p, psize = 0u;
-                for (uint i = 0u; i < width && q != OIT_END; ++i) {
-                    ++psize;
-                    q = oit_nodes[q].next;
-                }
-                uint qsize = width;
-                while (psize > 0u || (qsize > 0u && q != OIT_END)) {
-                    uint e;
-                    bool take_q = psize == 0u ||
-                                  (qsize > 0u && q != OIT_END && in_front(oit_nodes[q].depth, key_of(q), oit_nodes[p].depth, key_of(p)));
-                    if (take_q) {
-                        e = q;
-                        q = oit_nodes[q].next;
-                        --qsize;
-                    } else {
-                        e = p;
-                        p = oit_nodes[p].next;
-                        --psize;
-                    }
-                    if (tail == OIT_END)
-                        list = e;
-                    else
-                        oit_nodes[tail].next = e;
-                    tail = e;
-                }
-                p = q;
-            }
-            oit_nodes[tail].next = OIT_END;
-            if (merges <= 1u) break;
-        }
+        // Long list: sorted in place in the pool (list_sort.glsl), then
+        // composited from the front.
+        uint list = list_sort(head);
         for (uint i = list; i != OIT_END && transmittance >= epsilon; i = oit_nodes[i].next) take(i, p);
 #ifdef OIT_SORT
         imageStore(heads, p, uvec4(list));
