@@ -87,21 +87,13 @@ TransparencyImage transparency_reference(const std::vector<ReferenceSurface>& su
     out.foreground.assign(n, 0);
     out.hits.assign(n, 0);
     const double aspect = double(width) / double(height);
-    const glm::dmat4 inv = glm::inverse(camera.projection(aspect) * camera.view());
     const glm::dvec3 forward = camera.forward();
-    const auto unproject = [&](double x, double y, double z) {
-        const glm::dvec4 p = inv * glm::dvec4(x, y, z, 1.0);
-        return glm::dvec3(p) / p.w;
-    };
     tbb::task_arena arena(threads > 0 ? threads : tbb::task_arena::automatic);
     arena.execute([&] {
         tbb::parallel_for(0, height, [&](int py) {
             std::vector<Hit> hits;
             for (int px = 0; px < width; ++px) {
-                const double x = (px + 0.5) / width * 2.0 - 1.0, y = 1.0 - (py + 0.5) / height * 2.0;
-                // Reversed Z: depth 1 at the near plane, 0 at the far plane.
-                const glm::dvec3 a = unproject(x, y, 1.0), b = unproject(x, y, 0.5);
-                const glm::dvec3 dir = glm::normalize(b - a);
+                const glm::dvec3 dir = camera.pixel_ray(px + 0.5, py + 0.5, width, height).dir;
                 RTCRayHit rh{};
                 rh.ray.org_x = float(camera.eye.x);
                 rh.ray.org_y = float(camera.eye.y);

@@ -48,6 +48,12 @@ FrameContext make_context(const Camera& camera, const RenderOptions& opt, std::v
     ctx.draws = std::move(opaque);
     ctx.translucent = std::move(translucent);
     if (z0 < z1) ctx.translucent_depth = glm::vec2(float(z0), float(z1));
+    if (opt.pick) { // clipped to the image; an empty region picks nothing
+        const int x0 = std::max(opt.pick->x, 0), y0 = std::max(opt.pick->y, 0);
+        const int x1 = std::min(opt.pick->x + std::max(opt.pick->width, 0), opt.width);
+        const int y1 = std::min(opt.pick->y + std::max(opt.pick->height, 0), opt.height);
+        if (x1 > x0 && y1 > y0) ctx.pick = PickRegion{x0, y0, x1 - x0, y1 - y0};
+    }
     ctx.objects = std::move(objects);
     ctx.bounds = bounds;
     if (opt.annotations) ctx.overlay = build_overlay(*opt.annotations, camera, opt.width, opt.height, opt.scale);
@@ -64,7 +70,9 @@ void build_frame(graph::FrameGraph& fg, const FrameContext& ctx) {
     graph::TextureHandle color = lighting(fg, ctx, gb, opt.ao ? ao.ao : graph::TextureHandle{});
     // Scene content, not an output request, decides this one: no translucent
     // object, no list passes. Lit translucent fragments get their own AO.
-    if (!ctx.translucent.empty()) color = voit(fg, ctx, gb, color, opt.ao && !opt.flat_shading ? &ao : nullptr);
+    PickBuffers picked = gb.pick;
+    if (!ctx.translucent.empty()) color = voit(fg, ctx, gb, color, opt.ao && !opt.flat_shading ? &ao : nullptr, picked);
+    if (picked.valid()) pick(fg, ctx, picked);
     if (opt.annotations) color = overlay(fg, ctx, color);
     if (opt.present) return present(fg, ctx, color);
     // The colour image, or the AOV: depth, AO, or the G-buffer channel the layout table names.

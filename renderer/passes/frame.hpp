@@ -10,15 +10,22 @@
 
 #include <cstdint>
 #include <memory>
+#include <optional>
+#include <string>
 #include <vector>
 
 #include <glm/mat3x3.hpp>
+#include <glm/vec4.hpp>
 #include <glm/mat4x4.hpp>
 
 #include "renderer/graph/frame_graph.hpp"
 #include "renderer/graph/resource_pool.hpp"
 #include "renderer/render/overlay.hpp"
 #include "renderer/render/renderer.hpp"
+
+namespace iso::gl {
+class Program;
+}
 
 namespace iso::passes {
 
@@ -60,6 +67,7 @@ struct FrameContext {
     std::size_t oit_capacity = 0;       // nodes of the VOIT pool this frame
     bool oit_merge = false;             // the pool is at its cap: fragments that find it full are merged, not redrawn
     bool oit_cut = false;               // at the cap, merge each pixel's farthest fragments (a depth cut) so the rest fit
+    std::optional<PickRegion> pick;     // clipped to the image; none when empty
     glm::vec2 translucent_depth{0.0f};  // linear depth (mm) the translucent objects' bounds span, within near..far
     Bounds bounds;                      // of the visible meshes
     std::uint64_t geometry_version = 0; // changes when meshes are added
@@ -91,9 +99,31 @@ template <class Execute> void side_effect_pass(graph::FrameGraph& fg, const char
 
 // ---- passes (one file each) ----------------------------------------------
 
+// The pick's lists (pick.cpp), written by the geometry passes of the frame
+// it rides on: counters (offered, capacity), entries, per-pixel heads.
+struct PickBuffers {
+    graph::BufferHandle counters, entries, heads;
+    bool valid() const { return counters.valid(); }
+};
+// The pick region in GL window pixels (bottom-up): x, y, width, height.
+glm::ivec4 pick_rect_gl(const FrameContext& ctx);
+// Entries the pick's pool holds: 64 layers per region pixel, at least 4096.
+std::size_t pick_capacity(const FrameContext& ctx);
+// In a geometry pass's setup: the first writer creates the lists, later
+// ones write new versions.
+PickBuffers write_pick(graph::FrameGraph::Builder& b, const FrameContext& ctx, const PickBuffers& previous);
+// In its execute: binds them and the region to `prog` (the first writer
+// also clears them). The shader needs PICK_APPEND (pick_defines()).
+void bind_pick(GlResources& gl, const graph::Resources& r, const FrameContext& ctx, const PickBuffers& p, iso::gl::Program& prog,
+               bool first);
+inline std::string pick_defines(const PickBuffers& p) { return p.valid() ? "#define PICK_APPEND 1\n" : ""; }
+// The compute step (sort each pixel's list, transmittances) and the read-back into RenderResult::pick.
+void pick(graph::FrameGraph& fg, const FrameContext& ctx, const PickBuffers& lists);
+
 struct GBuffer {
     graph::TextureHandle depth, normal, id, albedo;
     graph::BufferHandle params; // the pass's own
+    PickBuffers pick;           // with a pick
 };
 GBuffer gbuffer(graph::FrameGraph& fg, const FrameContext& ctx);
 
@@ -155,8 +185,10 @@ graph::TextureHandle overlay(graph::FrameGraph& fg, const FrameContext& ctx, gra
 // VOIT (docs/voit.md): the translucent fragments' lists, then their
 // front-to-back composite over `color`; returns the composited colour.
 // `ao` non-null: each shaded fragment traces its own AO through that chain.
+// `pick` (valid with a pick): the translucent fragments in its region are
+// listed too; updated to the lists' new versions.
 graph::TextureHandle voit(graph::FrameGraph& fg, const FrameContext& ctx, const GBuffer& gb, graph::TextureHandle color,
-                          const AmbientOcclusion* ao = nullptr);
+                          const AmbientOcclusion* ao, PickBuffers& pick);
 void present(graph::FrameGraph& fg, const FrameContext& ctx, graph::TextureHandle color);
 void readback(graph::FrameGraph& fg, const FrameContext& ctx, graph::TextureHandle source);
 

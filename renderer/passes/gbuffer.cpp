@@ -30,6 +30,7 @@ GBuffer gbuffer(graph::FrameGraph& fg, const FrameContext& ctx) {
             d.depth = b.write(b.create("depth", {W, H, graph::Format::Depth32F}));
             for (const auto& c : kGBufferLayout) d.*c.handle = b.write(b.create(c.name, {W, H, c.format}));
             d.params = params_buffer<GBufferParams>(b, "gbuffer_params");
+            d.pick = write_pick(b, ctx, {});
         },
         [&ctx, W, H](const GBuffer& d, const graph::Resources& r) {
             GlResources& gl = *ctx.gl;
@@ -52,8 +53,9 @@ GBuffer gbuffer(graph::FrameGraph& fg, const FrameContext& ctx) {
             glEnable(GL_DEPTH_TEST);
             glDepthFunc(GL_GREATER);
             glDisable(GL_CULL_FACE); // open surfaces show both sides
-            auto& prog = gl.program({"render/gbuffer.vert", "render/gbuffer.frag"}, gbuffer_defines());
+            auto& prog = gl.program({"render/gbuffer.vert", "render/gbuffer.frag"}, gbuffer_defines() + pick_defines(d.pick));
             prog.use();
+            bind_pick(gl, r, ctx, d.pick, prog, true);
             bind_params(gl, r, d.params, GBufferParams{ctx.view_projection});
             const GLint id_loc = prog.uniform("object_id"), albedo_loc = prog.uniform("albedo");
             for (const auto& m : ctx.draws) {
@@ -63,6 +65,7 @@ GBuffer gbuffer(graph::FrameGraph& fg, const FrameContext& ctx) {
                 glDrawElements(GL_TRIANGLES, m.count, GL_UNSIGNED_INT, nullptr);
             }
             glBindVertexArray(0);
+            if (d.pick.valid()) glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
             glDisable(GL_DEPTH_TEST);
             glClipControl(GL_LOWER_LEFT, GL_NEGATIVE_ONE_TO_ONE);
             glBindFramebuffer(GL_FRAMEBUFFER, 0);

@@ -132,6 +132,7 @@ struct Lists {
     graph::TextureHandle depth, heads, cut;
     graph::BufferHandle counters, nodes, objects, params, gbuffer_params;
     graph::BufferHandle tails; // per pixel, at the pool's cap (FrameContext::oit_merge)
+    PickBuffers pick;          // with a pick: its lists' next versions
 };
 
 std::string merge_define(const FrameContext& ctx) { return ctx.oit_merge ? "#define OIT_MERGE 1\n" : ""; }
@@ -139,7 +140,7 @@ constexpr std::size_t kCountersBytes = 3 * 4; // OitCounters in oit_common.glsl
 constexpr std::size_t kTailWords = 12;    // OitTail in oit_common.glsl
 constexpr std::size_t kTailBytes = kTailWords * 4;
 
-Lists fragment_lists(graph::FrameGraph& fg, const FrameContext& ctx, const GBuffer& gb, graph::TextureHandle cut) {
+Lists fragment_lists(graph::FrameGraph& fg, const FrameContext& ctx, const GBuffer& gb, graph::TextureHandle cut, const PickBuffers& pick) {
     const int W = ctx.width, H = ctx.height;
     const std::size_t object_bytes = ctx.objects.size() * sizeof(glm::vec4);
     const std::size_t node_bytes = std::max<std::size_t>(ctx.oit_capacity, 1) * kOitNodeBytes;
@@ -150,6 +151,7 @@ Lists fragment_lists(graph::FrameGraph& fg, const FrameContext& ctx, const GBuff
             d.heads = b.write(b.create("oit_heads", {W, H, graph::Format::R32UI}));
             d.counters = b.write(b.create("oit_counters", graph::BufferDesc{kCountersBytes}));
             if (cut.valid()) d.cut = b.read(cut);
+            if (pick.valid()) d.pick = write_pick(b, ctx, pick);
             d.nodes = b.write(fg.history("oit_nodes", graph::BufferDesc{node_bytes}));
             d.objects = b.write(b.create("oit_objects", graph::BufferDesc{object_bytes}));
             d.params = params_buffer<OitParams>(b, "oit_params");
@@ -172,8 +174,9 @@ Lists fragment_lists(graph::FrameGraph& fg, const FrameContext& ctx, const GBuff
                 glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 3, gl.buffer(r, d.tails));
             }
             auto& prog = gl.program({"render/gbuffer.vert", "render/oit_fragments.frag"},
-                                    merge_define(ctx) + (d.cut.valid() ? "#define OIT_CUT 1\n" : ""));
+                                    merge_define(ctx) + (d.cut.valid() ? "#define OIT_CUT 1\n" : "") + pick_defines(d.pick));
             prog.use();
+            bind_pick(gl, r, ctx, d.pick, prog, false);
             bind_params(gl, r, d.gbuffer_params, GBufferParams{ctx.view_projection});
             bind_params(gl, r, d.params, oit_params(ctx));
             glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, gl.buffer(r, d.counters));
@@ -385,8 +388,9 @@ graph::TextureHandle resolve_with_ao(graph::FrameGraph& fg, const FrameContext& 
 } // namespace
 
 graph::TextureHandle voit(graph::FrameGraph& fg, const FrameContext& ctx, const GBuffer& gb, graph::TextureHandle color,
-                          const AmbientOcclusion* ao) {
-    const Lists lists = fragment_lists(fg, ctx, gb, ctx.oit_cut ? depth_cut(fg, ctx, gb) : graph::TextureHandle{});
+                          const AmbientOcclusion* ao, PickBuffers& pick) {
+    const Lists lists = fragment_lists(fg, ctx, gb, ctx.oit_cut ? depth_cut(fg, ctx, gb) : graph::TextureHandle{}, pick);
+    if (pick.valid()) pick = lists.pick;
     if (ctx.hooks.read_oit_lists) read_lists(fg, ctx, lists);
     return ao ? resolve_with_ao(fg, ctx, lists, color, *ao) : resolve(fg, ctx, lists, color);
 }

@@ -10,6 +10,7 @@
 #include <array>
 #include <cstdint>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -35,6 +36,30 @@ struct SceneObject {
 
 enum class Aov { None, Depth, Normal, Id, Ao };
 Aov aov_from_name(const std::string& name); // "depth", "normal", "id", "ao"; throws iso::Error
+
+// A pick region in image pixels, from the image's top-left corner.
+struct PickRegion {
+    int x = 0, y = 0, width = 1, height = 1;
+};
+
+// One fragment of a picked pixel, as the frame rasterized it.
+struct PickFragment {
+    float depth = 0;              // reversed Z (larger is nearer)
+    std::uint32_t object = 0;     // 1-based object id
+    std::uint32_t primitive = 0;  // the triangle in the object's mesh
+    float alpha = 1;              // the object's opacity (1: opaque)
+    float transmittance = 1;      // of everything in front of it in this pixel
+};
+
+// What a pick found: per pixel of the region (clipped to the image; row by
+// row from its top-left), the fragments front to back (ties by object, then
+// triangle). Opaque surfaces list every layer along the pixel (hidden ones
+// too); translucent ones only in front of the nearest opaque.
+struct PickList {
+    PickRegion region{0, 0, 0, 0};
+    std::vector<std::vector<PickFragment>> pixels;
+    std::uint64_t offered = 0, capacity = 0; // entries offered and stored: offered > capacity lost some
+};
 
 struct RenderOptions {
     int width = 512, height = 512;
@@ -63,6 +88,10 @@ struct RenderOptions {
     // reads it raw). Off: its passes are culled.
     bool ao = false;
     ConeAoSettings ao_settings;
+    // A pick riding on this frame (docs/picking.md): image pixels from the
+    // top-left; clipped to the image. Fragments inside are listed by the
+    // frame's own geometry passes; RenderResult::pick holds the lists.
+    std::optional<PickRegion> pick;
 };
 
 // Test and benchmark hooks, apart from what a user asks for.
@@ -111,6 +140,7 @@ struct RenderResult {
     double ao_guard = 0;         // guard band used by the slicemap, fraction of the viewport per side
     OitStats oit;
     std::vector<std::uint32_t> oit_lists; // with RenderHooks::read_oit_lists
+    PickList pick;                        // with RenderOptions::pick
 };
 
 class Renderer {

@@ -109,4 +109,16 @@ double Camera::linear_depth(double d) const {
     return n * f / (d * (f - n) + n);
 }
 
+Ray Camera::pixel_ray(double x, double y, int width, int height) const {
+    const double aspect = double(width) / double(height);
+    const glm::dmat4 inv = glm::inverse(projection(aspect) * view());
+    const double nx = x / width * 2.0 - 1.0, ny = 1.0 - y / height * 2.0;
+    const auto unproject = [&](double z) {
+        const glm::dvec4 p = inv * glm::dvec4(nx, ny, z, 1.0);
+        return glm::dvec3(p) / p.w;
+    };
+    // Reversed Z: depth 1 at the near plane, 0.5 on the way to the far one.
+    return {eye, glm::normalize(unproject(0.5) - unproject(1.0))};
+}
+
 } // namespace iso

@@ -28,6 +28,11 @@ enum class PatientView { Anterior, Posterior, Left, Right, Superior, Inferior };
 PatientView patient_view_from_name(const std::string& name);
 const char* patient_view_name(PatientView v);
 
+// A ray: origin and unit direction.
+struct Ray {
+    glm::dvec3 origin{0.0}, dir{0.0, 0.0, -1.0};
+};
+
 class Camera {
 public:
     glm::dvec3 eye{0, -500, 0}, target{0, 0, 0}, up{0, 0, 1};
@@ -51,6 +56,10 @@ public:
     glm::dvec3 forward() const { return glm::normalize(target - eye); }
     // Linear eye depth (distance along the view axis) from a reversed-Z depth value.
     double linear_depth(double d) const;
+    // The ray from the eye through image point (x, y) of a width x height
+    // image, in pixels from its top-left corner (pixel i's centre is i + 0.5),
+    // as the rasterizer samples it: picking and the ray-traced references.
+    Ray pixel_ray(double x, double y, int width, int height) const;
 };
 
 } // namespace iso

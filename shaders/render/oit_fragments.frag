@@ -22,6 +22,9 @@
 #ifdef OIT_MERGE
 #include "shading.glsl"
 #endif
+#ifdef PICK_APPEND
+#include "pick_common.glsl"   // a pick rides on this frame: translucent fragments in its region are listed
+#endif
 
 layout(early_fragment_tests) in;
 
@@ -65,6 +68,9 @@ void main() {
 #ifdef OIT_HISTOGRAM
     atomicAdd(oit_histogram[t * uint(OIT_BINS) + uint(depth_bin())], 1u);
     return;
+#endif
+#ifdef PICK_APPEND
+    pick_append(object_id, oit_objects[object_id].a);
 #endif
 #ifdef OIT_CUT
     if (uint(depth_bin()) >= imageLoad(cut_bins, ivec2(gl_FragCoord.xy)).r) {
