@@ -125,9 +125,10 @@ struct SurfaceMeasures {
     // different places. Per component, M(2h) sums the coarse components
     // matched to it (most of their vertices nearest to it on the grid; none:
     // M(2h) = 0, so U = |M(h)|). On the ball phantoms it covered the true
-    // error in every case where the edge is resolved (blur >= 0.5 voxel, or a
-    // linear ramp), typically 2-4x over; not for sharper edges (see
-    // edge_fraction_spread) and not for label-map surfaces. docs/measure.md.
+    // error in every case where the edge is resolved (blur >= 0.35 voxel, or
+    // a linear ramp), typically 3-4x over and never under 1.06x; not the
+    // area for sharper edges (see edge_fraction_spread), and not label-map
+    // surfaces. docs/measure.md.
     double area_uncertainty_mm2 = kNoUncertainty;
     double volume_uncertainty_ml = kNoUncertainty;
     // measure_isosurface: does the grid resolve the structure's edge? Each
@@ -171,7 +172,8 @@ SurfaceMeasures measure_surface(const Mesh& m, const MeasureOptions& opt = {});
 // edge fraction spread is measured on `surface`. Axes with fewer than 3
 // samples are not coarsened; if fewer than two axes can be (a coarsening
 // ratio below 1.3), the uncertainty stays NaN with a warning.
-// About 4x the cost of measure_surface plus a quarter of the extraction.
+// About 5x the time of measure_surface, 3x the extraction's (docs/measure.md).
+// Note: measure_isosurface(v, iso, {}) is ambiguous; leave the options out.
 SurfaceMeasures measure_isosurface(const Volume& v, double iso, const Mesh& surface,
                                    const MeasureOptions& opt = {});
 // Extracts the isosurface too.
@@ -183,5 +185,10 @@ SurfaceMeasures measure_isosurface(const Volume& v, double iso, const MeasureOpt
 // steps to the old per axis in `ratio`. Used by measure_isosurface, public for
 // tests and benchmarks.
 Volume coarsen_2x(const Volume& v, glm::dvec3* ratio = nullptr);
+// The volume resampled (trilinearly, float32) to `dims` samples spanning the
+// same extent: the first and last sample of every axis keep their positions.
+// Throws iso::Error("resample", ...) for fewer than 2 samples on an axis of
+// more than one.
+Volume resample_extent(const Volume& v, std::array<std::int64_t, 3> dims, glm::dvec3* ratio = nullptr);
 
 } // namespace iso
