@@ -1,0 +1,841 @@
+// Measurements (measure.hpp, docs/measure.md).
+//
+// Written here rather than taken from VTK: vtkMassProperties (Slicer's
+// Segment Statistics) assumes a closed surface and never checks, so on an
+// open surface its volume is meaningless; vtkMultiObjectMassProperties flags
+// open objects but neither caps them nor reports their boundaries; neither
+// welds STL triangle soups, runs in parallel or estimates an uncertainty.
+#include "renderer/iso/measure.hpp"
+
+#include <algorithm>
+#include <atomic>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <numeric>
+#include <unordered_map>
+
+#include <glm/geometric.hpp>
+#include <glm/mat4x4.hpp>
+#include <glm/matrix.hpp>
+#include <glm/trigonometric.hpp>
+#include <tbb/blocked_range.h>
+#include <tbb/enumerable_thread_specific.h>
+#include <tbb/parallel_for.h>
+#include <tbb/parallel_sort.h>
+#include <tbb/task_arena.h>
+
+#include "io/error.hpp"
+#include "io/sparse.hpp"
+
+namespace iso {
+namespace {
+
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+constexpr std::uint32_t kNone = ~std::uint32_t(0);
+constexpr const char* kWhere = "surface measure";
+
+int effective_threads(int requested) {
+    const int hw = tbb::this_task_arena::max_concurrency();
+    return requested > 0 ? std::min(requested, hw) : hw;
+}
+
+template <class F> void in_arena(int threads, F&& f) {
+    tbb::task_arena arena(effective_threads(threads));
+    arena.execute(std::forward<F>(f));
+}
+
+bool finite(const glm::dvec3& p) { return std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z); }
+
+// a + (b - a) t that ignores b at t == 0 (and a at t == 1), so a NaN sample
+// with no weight does not spread.
+double lerp(double a, double b, double t) { return t == 0.0 ? a : t == 1.0 ? b : a + (b - a) * t; }
+
+// ---- welding by exact position ---------------------------------------------------
+
+struct PosKey {
+    std::uint32_t x, y, z;
+    bool operator==(const PosKey&) const = default;
+};
+
+PosKey pos_key(const glm::vec3& p) {
+    auto bits = [](float f) {
+        if (f == 0.0f) f = 0.0f; // -0 and +0 are one position
+        std::uint32_t u;
+        std::memcpy(&u, &f, sizeof u);
+        return u;
+    };
+    return {bits(p.x), bits(p.y), bits(p.z)};
+}
+
+std::uint64_t mix64(std::uint64_t h) { // splitmix64's finalizer
+    h ^= h >> 30;
+    h *= 0xbf58476d1ce4e5b9ULL;
+    h ^= h >> 27;
+    h *= 0x94d049bb133111ebULL;
+    return h ^ (h >> 31);
+}
+
+std::uint64_t hash_key(const PosKey& k) {
+    return mix64(((std::uint64_t(k.x) << 32) | k.y) ^ mix64(k.z + 0x9e3779b97f4a7c15ULL));
+}
+
+// For each vertex, the smallest index of a vertex at the same position. The
+// vertices are partitioned by the top bits of their hash, and each partition
+// is welded through its own small open-addressing table (cache-resident) in
+// parallel; partitions keep index order, so the result is deterministic.
+std::vector<std::uint32_t> weld_positions(const std::vector<glm::vec3>& p) {
+    const std::size_t n = p.size();
+    std::vector<std::uint32_t> canon(n);
+    if (n == 0) return canon;
+    int bits = 0;
+    while ((std::size_t(4096) << bits) < n && bits < 16) ++bits;
+    const std::size_t parts = std::size_t(1) << bits;
+    auto part_of = [&](std::uint64_t h) { return bits ? std::size_t(h >> (64 - bits)) : 0; };
+    // The vertices as (key, index) records, grouped by partition in index order.
+    struct Record {
+        PosKey key;
+        std::uint32_t index;
+    };
+    std::vector<std::uint64_t> h(n);
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 1 << 14), [&](const auto& r) {
+        for (std::size_t i = r.begin(); i != r.end(); ++i) h[i] = hash_key(pos_key(p[i]));
+    });
+    std::vector<std::size_t> start(parts + 1, 0);
+    for (std::size_t i = 0; i < n; ++i) ++start[part_of(h[i]) + 1];
+    std::partial_sum(start.begin(), start.end(), start.begin());
+    std::vector<Record> records(n);
+    {
+        std::vector<std::size_t> cur(start.begin(), start.end() - 1);
+        for (std::size_t i = 0; i < n; ++i) records[cur[part_of(h[i])]++] = {pos_key(p[i]), std::uint32_t(i)};
+    }
+    h = {};
+    tbb::enumerable_thread_specific<std::vector<std::uint32_t>> tables; // slot -> record offset in the partition
+    tbb::parallel_for(std::size_t(0), parts, [&](std::size_t part) {
+        const Record* rec = records.data() + start[part];
+        const std::size_t count = start[part + 1] - start[part];
+        if (count == 0) return;
+        std::size_t cap = 16;
+        while (cap < 2 * count) cap *= 2;
+        auto& table = tables.local();
+        table.assign(cap, kNone);
+        const std::size_t mask = cap - 1;
+        for (std::uint32_t o = 0; o < count; ++o) {
+            for (std::size_t s = hash_key(rec[o].key) & mask;; s = (s + 1) & mask) {
+                if (table[s] == kNone) {
+                    table[s] = o;
+                    canon[rec[o].index] = rec[o].index;
+                    break;
+                }
+                if (rec[table[s]].key == rec[o].key) {
+                    canon[rec[o].index] = rec[table[s]].index;
+                    break;
+                }
+            }
+        }
+    });
+    return canon;
+}
+
+// ---- the analysis ----------------------------------------------------------------
+
+struct Analysis {
+    SurfaceMeasures m;
+    // Per input vertex: its component (index into m.components), kNone when
+    // no triangle uses it.
+    std::vector<std::uint32_t> vertex_component;
+};
+
+struct Accum {
+    double area = 0, volume = 0; // mm^2, mm^3 (relative to the component's reference point)
+    std::size_t triangles = 0, degenerate = 0;
+};
+
+struct BoundaryEdge {
+    std::uint32_t from, to;
+    bool operator<(const BoundaryEdge& o) const { return from != o.from ? from < o.from : to < o.to; }
+};
+
+Analysis analyse(const Mesh& mesh) {
+    Analysis out;
+    SurfaceMeasures& m = out.m;
+    const auto& P = mesh.positions;
+    const auto& T = mesh.triangles;
+    const std::size_t nv = P.size(), nt = T.size();
+    m.triangles = nt;
+    // Vertex indices fit 31 bits (edge entries) and 3 x triangles fit 32 (edge offsets).
+    if (nv >= (std::size_t(1) << 31) || nt >= (std::size_t(1) << 30))
+        throw Error(kWhere, "more than 2^31 vertices or 2^30 triangles");
+
+    // Input checks, in parallel: the first bad triangle or vertex is named.
+    std::atomic<std::size_t> bad_tri{nt}, bad_vertex{nv};
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nt, 1 << 14), [&](const auto& r) {
+        for (std::size_t t = r.begin(); t != r.end(); ++t)
+            if (T[t][0] >= nv || T[t][1] >= nv || T[t][2] >= nv) {
+                std::size_t cur = bad_tri.load();
+                while (t < cur && !bad_tri.compare_exchange_weak(cur, t)) {}
+            }
+    });
+    if (bad_tri.load() < nt) {
+        const std::size_t t = bad_tri.load();
+        throw Error(kWhere, "triangle " + std::to_string(t) + " names vertex " +
+                                std::to_string(std::max({T[t][0], T[t][1], T[t][2]})) + " of " + std::to_string(nv));
+    }
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nv, 1 << 14), [&](const auto& r) {
+        for (std::size_t i = r.begin(); i != r.end(); ++i)
+            if (!finite(glm::dvec3(P[i]))) {
+                std::size_t cur = bad_vertex.load();
+                while (i < cur && !bad_vertex.compare_exchange_weak(cur, i)) {}
+            }
+    });
+    if (bad_vertex.load() < nv) throw Error(kWhere, "vertex " + std::to_string(bad_vertex.load()) + " is not finite");
+
+    // 1. Weld: triangles over canonical vertices (equal positions are one vertex).
+    const std::vector<std::uint32_t> canon = weld_positions(P);
+    std::vector<std::array<std::uint32_t, 3>> W(nt);
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nt, 1 << 14), [&](const auto& r) {
+        for (std::size_t t = r.begin(); t != r.end(); ++t) W[t] = {canon[T[t][0]], canon[T[t][1]], canon[T[t][2]]};
+    });
+    auto collapsed = [](const std::array<std::uint32_t, 3>& w) { return w[0] == w[1] || w[1] == w[2] || w[0] == w[2]; };
+
+    // 2. Components: union-find over canonical vertices, the smaller index
+    // becoming the root (deterministic). Collapsed triangles connect too.
+    std::vector<std::uint32_t> parent(nv);
+    std::iota(parent.begin(), parent.end(), 0u);
+    std::vector<std::uint8_t> used(nv, 0);
+    auto find = [&](std::uint32_t x) {
+        while (parent[x] != x) {
+            parent[x] = parent[parent[x]];
+            x = parent[x];
+        }
+        return x;
+    };
+    auto unite = [&](std::uint32_t a, std::uint32_t b) {
+        a = find(a);
+        b = find(b);
+        if (a == b) return;
+        if (a < b) parent[b] = a;
+        else parent[a] = b;
+    };
+    for (const auto& w : W) {
+        used[w[0]] = used[w[1]] = used[w[2]] = 1;
+        unite(w[0], w[1]);
+        unite(w[0], w[2]);
+    }
+    std::vector<std::uint32_t> label(nv, kNone);
+    std::uint32_t ncomp = 0;
+    for (std::uint32_t v = 0; v < nv; ++v) {
+        if (!used[v]) continue;
+        parent[v] = find(v);
+        if (parent[v] == v) label[v] = ncomp++;
+    }
+    auto comp_of = [&](std::uint32_t canonical) { return label[parent[canonical]]; };
+
+    // Per component: bounds and the reference point (bounds' centre).
+    std::vector<glm::dvec3> lo(ncomp, glm::dvec3(std::numeric_limits<double>::max())),
+        hi(ncomp, glm::dvec3(std::numeric_limits<double>::lowest()));
+    for (std::uint32_t v = 0; v < nv; ++v) {
+        if (!used[v] || canon[v] != v) continue;
+        const std::uint32_t c = comp_of(v);
+        lo[c] = glm::min(lo[c], glm::dvec3(P[v]));
+        hi[c] = glm::max(hi[c], glm::dvec3(P[v]));
+        ++m.vertices;
+    }
+    std::vector<glm::dvec3> ref(ncomp);
+    for (std::uint32_t c = 0; c < ncomp; ++c) ref[c] = 0.5 * (lo[c] + hi[c]);
+
+    // 3. Edges, bucketed by their lower vertex (counting sort), then each
+    // bucket sorted and its runs classified. An entry is (upper << 1) | 1 when
+    // the triangle runs lower -> upper (vertices < 2^31: 32 bits).
+    std::vector<std::uint32_t> off(nv + 1, 0);
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nt, 1 << 14), [&](const auto& r) {
+        for (std::size_t t = r.begin(); t != r.end(); ++t) {
+            const auto& w = W[t];
+            if (collapsed(w)) continue;
+            for (int k = 0; k < 3; ++k)
+                std::atomic_ref<std::uint32_t>(off[std::min(w[k], w[(k + 1) % 3]) + 1]).fetch_add(1, std::memory_order_relaxed);
+        }
+    });
+    std::partial_sum(off.begin(), off.end(), off.begin());
+    std::vector<std::uint32_t> entries(off[nv]);
+    {
+        std::vector<std::uint32_t> cursor(off.begin(), off.end() - 1);
+        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nt, 1 << 14), [&](const auto& r) {
+            for (std::size_t t = r.begin(); t != r.end(); ++t) {
+                const auto& w = W[t];
+                if (collapsed(w)) continue;
+                for (int k = 0; k < 3; ++k) {
+                    const std::uint32_t a = w[k], b = w[(k + 1) % 3];
+                    const std::uint32_t l = std::min(a, b), u = std::max(a, b);
+                    const std::uint32_t slot = std::atomic_ref<std::uint32_t>(cursor[l]).fetch_add(1, std::memory_order_relaxed);
+                    entries[slot] = (u << 1) | std::uint32_t(a < b);
+                }
+            }
+        });
+    }
+    struct EdgeLocal {
+        std::size_t boundary = 0, non_manifold = 0, misoriented = 0;
+        std::vector<BoundaryEdge> chain;          // boundary edges, directed as the triangles use them (with multiplicity)
+        std::vector<std::uint32_t> boundary_comp; // component of each boundary edge (undirected, once)
+        std::vector<std::uint32_t> misoriented_comp;
+    };
+    tbb::enumerable_thread_specific<EdgeLocal> edge_locals;
+    tbb::parallel_for(tbb::blocked_range<std::uint32_t>(0, std::uint32_t(nv), 4096), [&](const auto& r) {
+        auto& L = edge_locals.local();
+        for (std::uint32_t l = r.begin(); l != r.end(); ++l) {
+            auto* b = entries.data() + off[l];
+            auto* e = entries.data() + off[l + 1];
+            if (b == e) continue;
+            std::sort(b, e);
+            for (auto* run = b; run != e;) {
+                const std::uint32_t upper = *run >> 1;
+                std::size_t fwd = 0, back = 0;
+                for (; run != e && (*run >> 1) == upper; ++run) (*run & 1 ? fwd : back)++;
+                const std::uint32_t u = std::uint32_t(upper);
+                const std::size_t uses = fwd + back;
+                if (uses >= 3) ++L.non_manifold;
+                if (fwd == back) continue;
+                if (uses == 2) { // two triangles, same direction
+                    ++L.misoriented;
+                    L.misoriented_comp.push_back(comp_of(l));
+                    continue;
+                }
+                ++L.boundary;
+                L.boundary_comp.push_back(comp_of(l));
+                const BoundaryEdge d = fwd > back ? BoundaryEdge{l, u} : BoundaryEdge{u, l};
+                for (std::size_t x = 0; x < (fwd > back ? fwd - back : back - fwd); ++x) L.chain.push_back(d);
+            }
+        }
+    });
+    std::vector<BoundaryEdge> chain;
+    std::vector<std::size_t> comp_boundary(ncomp, 0), comp_misoriented(ncomp, 0);
+    for (auto& L : edge_locals) {
+        m.boundary_edges += L.boundary;
+        m.non_manifold_edges += L.non_manifold;
+        m.misoriented_edges += L.misoriented;
+        chain.insert(chain.end(), L.chain.begin(), L.chain.end());
+        for (auto c : L.boundary_comp) ++comp_boundary[c];
+        for (auto c : L.misoriented_comp) ++comp_misoriented[c];
+    }
+    std::sort(chain.begin(), chain.end());
+    entries = {};
+    off = {};
+
+    // 4. Area and volume per component: triangles ordered by component
+    // (counting sort), summed by fixed blocks in parallel, the blocks' partial
+    // sums added in order (deterministic whatever the thread count).
+    std::vector<Accum> acc(ncomp);
+    {
+        std::vector<std::uint32_t> first(ncomp + 1, 0);
+        for (const auto& w : W) ++first[comp_of(w[0]) + 1];
+        std::partial_sum(first.begin(), first.end(), first.begin());
+        std::vector<std::uint32_t> order(nt);
+        if (ncomp == 1) {
+            std::iota(order.begin(), order.end(), 0u);
+        } else {
+            std::vector<std::uint32_t> cur(first.begin(), first.end() - 1);
+            for (std::uint32_t t = 0; t < nt; ++t) order[cur[comp_of(W[t][0])]++] = t;
+        }
+        struct Partial {
+            std::uint32_t comp;
+            Accum a;
+        };
+        constexpr std::size_t kBlock = 16384;
+        const std::size_t nblocks = (nt + kBlock - 1) / kBlock;
+        std::vector<std::vector<Partial>> partials(nblocks);
+        tbb::parallel_for(std::size_t(0), nblocks, [&](std::size_t blk) {
+            auto& out_p = partials[blk];
+            const std::size_t b = blk * kBlock, e = std::min(nt, b + kBlock);
+            for (std::size_t o = b; o < e; ++o) {
+                const auto& w = W[order[o]];
+                const std::uint32_t c = comp_of(w[0]);
+                if (out_p.empty() || out_p.back().comp != c) out_p.push_back({c, {}});
+                Accum& a = out_p.back().a;
+                ++a.triangles;
+                if (collapsed(w)) { ++a.degenerate; continue; }
+                const glm::dvec3 p0 = glm::dvec3(P[w[0]]) - ref[c], p1 = glm::dvec3(P[w[1]]) - ref[c],
+                                 p2 = glm::dvec3(P[w[2]]) - ref[c];
+                const double area = 0.5 * glm::length(glm::cross(p1 - p0, p2 - p0));
+                if (area == 0.0) ++a.degenerate;
+                a.area += area;
+                a.volume += glm::dot(p0, glm::cross(p1, p2)) / 6.0;
+            }
+        });
+        for (const auto& blk : partials)
+            for (const auto& part : blk) {
+                Accum& a = acc[part.comp];
+                a.area += part.a.area;
+                a.volume += part.a.volume;
+                a.triangles += part.a.triangles;
+                a.degenerate += part.a.degenerate;
+            }
+    }
+
+    // 5. Boundary loops: the boundary edges, as the triangles use them, form
+    // closed walks (the boundary of a boundary is empty) when no edge is
+    // misoriented. Each walk is closed as soon as it returns to its start
+    // (two loops touching at a vertex stay two) and capped by a fan around
+    // its length-weighted centroid; the fan runs against the boundary's
+    // direction, so the capped surface is closed and oriented as the mesh.
+    std::vector<std::size_t> comp_loops(ncomp, 0);
+    std::vector<double> comp_length(ncomp, 0.0), comp_cap(ncomp, 0.0);
+    bool open_chain = false;
+    {
+        const std::size_t ne = chain.size();
+        std::vector<std::uint8_t> done(ne, 0);
+        std::unordered_map<std::uint32_t, std::size_t> next_out; // vertex -> first possibly unused outgoing edge
+        auto outgoing = [&](std::uint32_t v) -> std::size_t {
+            auto it = next_out.find(v);
+            std::size_t i = it != next_out.end() ? it->second
+                                                 : std::size_t(std::lower_bound(chain.begin(), chain.end(), BoundaryEdge{v, 0}) -
+                                                               chain.begin());
+            while (i < ne && chain[i].from == v && done[i]) ++i;
+            next_out[v] = i;
+            return i < ne && chain[i].from == v ? i : ne;
+        };
+        std::vector<std::size_t> walk;
+        for (std::size_t e0 = 0; e0 < ne; ++e0) {
+            if (done[e0]) continue;
+            walk.clear();
+            const std::uint32_t start = chain[e0].from;
+            std::size_t cur = e0;
+            for (;;) {
+                done[cur] = 1;
+                walk.push_back(cur);
+                const std::uint32_t x = chain[cur].to;
+                if (x == start) break;
+                cur = outgoing(x);
+                if (cur == ne) { open_chain = true; break; }
+            }
+            const std::uint32_t c = comp_of(start);
+            const glm::dvec3 r = ref[c];
+            double length = 0;
+            glm::dvec3 mid(0.0), mean(0.0);
+            for (auto i : walk) {
+                const glm::dvec3 a = glm::dvec3(P[chain[i].from]) - r, b = glm::dvec3(P[chain[i].to]) - r;
+                const double l = glm::length(b - a);
+                length += l;
+                mid += l * 0.5 * (a + b);
+                mean += a;
+            }
+            const glm::dvec3 apex = length > 0 ? mid / length : mean / double(walk.size());
+            double cap = 0;
+            for (auto i : walk) {
+                const glm::dvec3 a = glm::dvec3(P[chain[i].from]) - r, b = glm::dvec3(P[chain[i].to]) - r;
+                cap += glm::dot(b, glm::cross(a, apex)) / 6.0;
+            }
+            ++comp_loops[c];
+            comp_length[c] += length;
+            comp_cap[c] += cap;
+        }
+    }
+
+    // 6. Components, totals, order.
+    std::vector<SurfacePart> parts(ncomp);
+    for (std::uint32_t c = 0; c < ncomp; ++c) {
+        SurfacePart& s = parts[c];
+        s.triangles = acc[c].triangles;
+        s.area_mm2 = acc[c].area;
+        s.boundary_edges = comp_boundary[c];
+        s.boundary_loops = comp_loops[c];
+        s.boundary_length_mm = comp_length[c];
+        s.closed = comp_boundary[c] == 0;
+        s.volume_kind = comp_misoriented[c] ? VolumeKind::Undefined : s.closed ? VolumeKind::Enclosed : VolumeKind::LowerBound;
+        s.volume_ml = s.volume_kind == VolumeKind::Undefined ? kNaN : (acc[c].volume + comp_cap[c]) / 1000.0;
+        s.bounds_min = lo[c];
+        s.bounds_max = hi[c];
+        m.degenerate_triangles += acc[c].degenerate;
+    }
+    std::vector<std::uint32_t> perm(ncomp);
+    std::iota(perm.begin(), perm.end(), 0u);
+    std::stable_sort(perm.begin(), perm.end(), [&](std::uint32_t a, std::uint32_t b) {
+        const SurfacePart &x = parts[a], &y = parts[b];
+        const bool ux = x.volume_kind == VolumeKind::Undefined, uy = y.volume_kind == VolumeKind::Undefined;
+        if (ux != uy) return uy;
+        if (!ux && x.volume_ml != y.volume_ml) return x.volume_ml > y.volume_ml;
+        return x.area_mm2 > y.area_mm2;
+    });
+    std::vector<std::uint32_t> rank(ncomp);
+    m.components.reserve(ncomp);
+    for (std::uint32_t i = 0; i < ncomp; ++i) {
+        rank[perm[i]] = i;
+        m.components.push_back(parts[perm[i]]);
+    }
+    m.volume_kind = VolumeKind::Enclosed;
+    m.bounds_min = m.bounds_max = glm::dvec3(0.0);
+    bool first_part = true;
+    for (const auto& s : m.components) {
+        m.area_mm2 += s.area_mm2;
+        m.boundary_loops += s.boundary_loops;
+        m.boundary_length_mm += s.boundary_length_mm;
+        if (s.volume_kind == VolumeKind::Undefined) m.volume_kind = VolumeKind::Undefined;
+        else if (s.volume_kind == VolumeKind::LowerBound && m.volume_kind == VolumeKind::Enclosed) m.volume_kind = VolumeKind::LowerBound;
+        if (s.volume_kind != VolumeKind::Undefined) m.volume_ml += s.volume_ml;
+        m.bounds_min = first_part ? s.bounds_min : glm::min(m.bounds_min, s.bounds_min);
+        m.bounds_max = first_part ? s.bounds_max : glm::max(m.bounds_max, s.bounds_max);
+        first_part = false;
+    }
+    if (m.volume_kind == VolumeKind::Undefined) m.volume_ml = kNaN;
+    m.closed = m.boundary_edges == 0;
+
+    out.vertex_component.assign(nv, kNone);
+    for (std::uint32_t v = 0; v < nv; ++v)
+        if (used[canon[v]]) out.vertex_component[v] = rank[comp_of(canon[v])];
+
+    if (m.misoriented_edges)
+        m.warnings.push_back(std::to_string(m.misoriented_edges) +
+                             " edges are used twice in the same direction: the triangles are not consistently "
+                             "oriented, so the volume is undefined");
+    if (m.non_manifold_edges)
+        m.warnings.push_back(std::to_string(m.non_manifold_edges) + " edges are shared by three or more triangles (non-manifold)");
+    if (m.boundary_edges && m.volume_kind == VolumeKind::LowerBound)
+        m.warnings.push_back("the surface is open (" + std::to_string(m.boundary_edges) + " boundary edges in " +
+                             std::to_string(m.boundary_loops) +
+                             " loops): its volume is a lower bound, with the loops capped");
+    if (open_chain)
+        m.warnings.push_back("some boundary edges do not form closed loops");
+    if (m.degenerate_triangles)
+        m.warnings.push_back(std::to_string(m.degenerate_triangles) + " degenerate triangles (zero area) count as zero");
+    return out;
+}
+
+// ---- coarse comparison -------------------------------------------------------------
+
+// Which fine component has vertices near each grid sample: every fine
+// vertex is entered at the sample it rounds to (the smallest component index
+// wins where several meet), in an open-addressing table.
+class FineCells {
+public:
+    FineCells(const Volume& v, const Mesh& fine, const std::vector<std::uint32_t>& fine_comp)
+        : inv_(glm::inverse(v.index_to_lps)), dims_(v.dims) {
+        std::size_t cap = 16;
+        while (cap < 2 * fine.positions.size()) cap *= 2;
+        keys_.assign(cap, kEmptyKey);
+        comps_.assign(cap, kNone);
+        for (std::size_t i = 0; i < fine.positions.size(); ++i) {
+            if (fine_comp[i] == kNone) continue;
+            const std::uint64_t k = key(sample_of(fine.positions[i]));
+            std::size_t s = mix64(k) & (cap - 1);
+            while (keys_[s] != kEmptyKey && keys_[s] != k) s = (s + 1) & (cap - 1);
+            keys_[s] = k;
+            comps_[s] = std::min(comps_[s], fine_comp[i]);
+        }
+    }
+
+    // The fine component at the sample nearest to p, else the smallest at the
+    // 26 neighbours, else within two samples; kNone if none.
+    std::uint32_t nearest(const glm::vec3& p) const {
+        const auto s = sample_of(p);
+        std::uint32_t found = kNone;
+        for (int radius = 0; radius <= 2 && found == kNone; ++radius)
+            for (int dz = -radius; dz <= radius; ++dz)
+                for (int dy = -radius; dy <= radius; ++dy)
+                    for (int dx = -radius; dx <= radius; ++dx) {
+                        if (std::max({std::abs(dx), std::abs(dy), std::abs(dz)}) != radius) continue;
+                        found = std::min(found, at(key({s[0] + dx, s[1] + dy, s[2] + dz})));
+                    }
+        return found;
+    }
+
+private:
+    static constexpr std::uint64_t kEmptyKey = ~std::uint64_t(0);
+    std::array<std::int64_t, 3> sample_of(const glm::vec3& p) const {
+        const glm::dvec3 x(inv_ * glm::dvec4(glm::dvec3(p), 1.0));
+        std::array<std::int64_t, 3> s{};
+        for (int a = 0; a < 3; ++a) s[a] = std::llround(std::clamp(x[a], -4.0, double(dims_[a]) + 3.0));
+        return s;
+    }
+    std::uint64_t key(const std::array<std::int64_t, 3>& s) const {
+        return std::uint64_t((s[0] + 8) + (dims_[0] + 16) * ((s[1] + 8) + (dims_[1] + 16) * (s[2] + 8)));
+    }
+    std::uint32_t at(std::uint64_t k) const {
+        for (std::size_t s = mix64(k) & (keys_.size() - 1);; s = (s + 1) & (keys_.size() - 1)) {
+            if (keys_[s] == k) return comps_[s];
+            if (keys_[s] == kEmptyKey) return kNone;
+        }
+    }
+    glm::dmat4 inv_;
+    std::array<std::int64_t, 3> dims_;
+    std::vector<std::uint64_t> keys_;
+    std::vector<std::uint32_t> comps_;
+};
+
+// Matches each coarse component to the fine component that most of its
+// vertices are nearest to (FineCells); kNone when none is near.
+std::vector<std::uint32_t> match_components(const FineCells& cells, const Mesh& coarse,
+                                            const std::vector<std::uint32_t>& coarse_comp, std::size_t coarse_count) {
+    // Voters: the first 64 vertices of every component, then every 16th
+    // (a majority needs no more, and each lookup is a few cache misses).
+    std::vector<std::uint32_t> voters, seen(coarse_count, 0);
+    for (std::size_t i = 0; i < coarse.positions.size(); ++i) {
+        const std::uint32_t c = coarse_comp[i];
+        if (c != kNone && (seen[c]++ < 64 || i % 16 == 0)) voters.push_back(std::uint32_t(i));
+    }
+    std::vector<std::pair<std::uint32_t, std::uint32_t>> votes(voters.size());
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, voters.size(), 1024), [&](const auto& r) {
+        for (std::size_t n = r.begin(); n != r.end(); ++n)
+            votes[n] = {coarse_comp[voters[n]], cells.nearest(coarse.positions[voters[n]])};
+    });
+    tbb::parallel_sort(votes.begin(), votes.end());
+    std::vector<std::uint32_t> match(coarse_count, kNone);
+    std::vector<std::size_t> best(coarse_count, 0);
+    for (std::size_t i = 0; i < votes.size();) {
+        std::size_t j = i;
+        while (j < votes.size() && votes[j] == votes[i]) ++j;
+        const auto [c, f] = votes[i];
+        if (c != kNone && f != kNone && j - i > best[c]) {
+            best[c] = j - i;
+            match[c] = f;
+        }
+        i = j;
+    }
+    return match;
+}
+
+// Samples per axis of the coarse grids: about half (ceil((n - 1) / 2) + 1), plus `extra`.
+std::array<std::int64_t, 3> coarse_dims(const std::array<std::int64_t, 3>& dims, int extra) {
+    std::array<std::int64_t, 3> m{};
+    for (int a = 0; a < 3; ++a) m[a] = dims[a] >= 3 ? std::min(dims[a], dims[a] / 2 + 1 + extra) : dims[a];
+    return m;
+}
+
+// SurfaceMeasures::edge_fraction_spread: 4 x the mean |t - 1/2| over the
+// vertices that lie inside a grid edge (not on a sample).
+double edge_fraction_spread(const Volume& v, const Mesh& mesh, const std::vector<std::uint32_t>& used) {
+    const glm::dmat4 inv = glm::inverse(v.index_to_lps);
+    double sum = 0;
+    std::size_t count = 0;
+    for (std::size_t i = 0; i < mesh.positions.size(); ++i) {
+        if (used[i] == kNone) continue;
+        const glm::dvec3 x(inv * glm::dvec4(glm::dvec3(mesh.positions[i]), 1.0));
+        double d = 0; // distance of the edge coordinate from the nearest sample, 0..1/2
+        for (int a = 0; a < 3; ++a) d = std::max(d, std::abs(x[a] - std::round(x[a])));
+        if (d < 1e-3) continue; // on a sample (a tie)
+        sum += 0.5 - d;
+        ++count;
+    }
+    return count ? 4.0 * sum / double(count) : kNaN;
+}
+
+} // namespace
+
+// ---- public ------------------------------------------------------------------------
+
+double distance_mm(const glm::dvec3& a, const glm::dvec3& b) {
+    if (!finite(a) || !finite(b)) throw Error("distance", "a point is not finite");
+    return glm::length(b - a);
+}
+
+double angle_deg(const glm::dvec3& a, const glm::dvec3& vertex, const glm::dvec3& c) {
+    if (!finite(a) || !finite(vertex) || !finite(c)) throw Error("angle", "a point is not finite");
+    const glm::dvec3 u = a - vertex, w = c - vertex;
+    if (glm::length(u) < 1e-9 || glm::length(w) < 1e-9)
+        throw Error("angle", "an end point coincides with the vertex (the middle point), so the angle has no direction");
+    return glm::degrees(std::atan2(glm::length(glm::cross(u, w)), glm::dot(u, w)));
+}
+
+std::optional<VolumeSample> sample_volume(const Volume& v, const glm::dvec3& lps) {
+    if (!finite(lps)) throw Error("volume sample", "the point is not finite");
+    if (v.voxel_count() <= 0) return std::nullopt;
+    VolumeSample s;
+    s.index = glm::dvec3(glm::inverse(v.index_to_lps) * glm::dvec4(lps, 1.0));
+    constexpr double kEps = 1e-9; // voxels: rounding of the inverse affine at the grid's outer faces
+    std::array<std::int64_t, 3> i0{}, i1{};
+    std::array<double, 3> f{};
+    for (int a = 0; a < 3; ++a) {
+        const double n = double(v.dims[a]);
+        // Within rounding of a voxel centre: exactly there (its value, not an interpolation off by 1e-12).
+        const double x = std::abs(s.index[a] - std::round(s.index[a])) < kEps ? std::round(s.index[a]) : s.index[a];
+        if (!(x >= -0.5 - kEps && x <= n - 0.5 + kEps)) return std::nullopt;
+        const double c = std::clamp(x, 0.0, n - 1.0);
+        if (std::abs(c - x) > kEps) s.clamped = true;
+        s.voxel[a] = std::clamp<std::int64_t>(std::int64_t(std::floor(x + 0.5)), 0, v.dims[a] - 1);
+        i0[a] = std::clamp<std::int64_t>(std::int64_t(std::floor(c)), 0, std::max<std::int64_t>(v.dims[a] - 2, 0));
+        i1[a] = std::min(i0[a] + 1, v.dims[a] - 1);
+        f[a] = i1[a] == i0[a] ? 0.0 : std::clamp(c - double(i0[a]), 0.0, 1.0);
+    }
+    auto at = [&](int di, int dj, int dk) { return v.value(di ? i1[0] : i0[0], dj ? i1[1] : i0[1], dk ? i1[2] : i0[2]); };
+    // Only the samples with weight are read, so a NaN neighbour with zero weight does not spread.
+    auto row = [&](int dj, int dk) { return f[0] == 0 ? at(0, dj, dk) : lerp(at(0, dj, dk), at(1, dj, dk), f[0]); };
+    auto plane = [&](int dk) { return f[1] == 0 ? row(0, dk) : lerp(row(0, dk), row(1, dk), f[1]); };
+    s.value = f[2] == 0 ? plane(0) : lerp(plane(0), plane(1), f[2]);
+    s.voxel_lps = v.index_to_world(glm::dvec3(double(s.voxel[0]), double(s.voxel[1]), double(s.voxel[2])));
+    s.voxel_value = v.value(s.voxel[0], s.voxel[1], s.voxel[2]);
+    return s;
+}
+
+const char* volume_kind_name(VolumeKind k) {
+    switch (k) {
+    case VolumeKind::Enclosed: return "enclosed";
+    case VolumeKind::LowerBound: return "lower bound";
+    case VolumeKind::Undefined: return "undefined";
+    }
+    return "undefined";
+}
+
+SurfaceMeasures measure_surface(const Mesh& m, const MeasureOptions& opt) {
+    SurfaceMeasures r;
+    in_arena(opt.threads, [&] { r = analyse(m).m; });
+    return r;
+}
+
+Volume resample_extent(const Volume& v, std::array<std::int64_t, 3> m, glm::dvec3* ratio_out) {
+    glm::dvec3 ratio(1.0);
+    glm::dmat4 affine = v.index_to_lps;
+    for (int a = 0; a < 3; ++a) {
+        const std::int64_t n = v.dims[a];
+        if (m[a] < 1 || (n > 1 && m[a] < 2) || (n <= 1 && m[a] != n))
+            throw Error("resample", "cannot resample " + std::to_string(n) + " samples to " + std::to_string(m[a]));
+        if (n > 1) ratio[a] = double(n - 1) / double(m[a] - 1);
+        affine[a] *= ratio[a];
+    }
+    if (ratio_out) *ratio_out = ratio;
+    Volume c = Volume::dense(m, VoxelType::F32, affine);
+    c.meta.source = v.meta.source;
+    if (v.voxel_count() == 0) return c;
+    // NaN and Inf as extraction substitutes them (ChunkIndex): NaN below every
+    // finite sample, Inf clamped to the finite range.
+    const bool floating = v.is_sparse() || v.type == VoxelType::F32 || v.type == VoxelType::F64;
+    const ValueRange r = floating ? v.value_range() : ValueRange{};
+    const bool any_finite = r.min <= r.max && (r.nan_count + r.inf_count) < std::size_t(v.voxel_count());
+    const double lowest = any_finite ? r.min : 0.0, highest = any_finite ? r.max : 0.0;
+    const double nan_value = lowest - std::max(1.0, std::abs(lowest) * 1e-3);
+    auto clean = [&](double s) { return std::isnan(s) ? nan_value : std::isinf(s) ? (s > 0 ? highest : lowest) : s; };
+    // Per axis and coarse index: the two fine samples and the weight of the upper one.
+    struct Axis {
+        std::vector<std::int64_t> i0, i1;
+        std::vector<double> f;
+    };
+    std::array<Axis, 3> ax;
+    for (int a = 0; a < 3; ++a)
+        for (std::int64_t I = 0; I < m[a]; ++I) {
+            const double x = std::min(double(I) * ratio[a], double(v.dims[a] - 1));
+            const std::int64_t i0 = std::min<std::int64_t>(std::int64_t(std::floor(x)), std::max<std::int64_t>(v.dims[a] - 2, 0));
+            const std::int64_t i1 = std::min(i0 + 1, v.dims[a] - 1);
+            ax[a].i0.push_back(i0);
+            ax[a].i1.push_back(i1);
+            ax[a].f.push_back(i1 == i0 ? 0.0 : std::clamp(x - double(i0), 0.0, 1.0));
+        }
+    auto out = c.as<float>();
+    // make_get() gives a sampler (i, j, k) -> double per slice (a sparse
+    // grid's accessor caches its path through the tree). Samples without
+    // weight are not read (a ratio of exactly 2 reads one sample per point).
+    auto resample = [&](auto&& make_get) {
+        tbb::parallel_for(std::int64_t(0), m[2], [&](std::int64_t K) {
+            auto get = make_get();
+            const std::int64_t k0 = ax[2].i0[K], k1 = ax[2].i1[K];
+            const double fz = ax[2].f[K];
+            for (std::int64_t J = 0; J < m[1]; ++J) {
+                const std::int64_t j0 = ax[1].i0[J], j1 = ax[1].i1[J];
+                const double fy = ax[1].f[J];
+                float* dst = out.data() + c.linear_index(0, J, K);
+                for (std::int64_t I = 0; I < m[0]; ++I) {
+                    const std::int64_t i0 = ax[0].i0[I], i1 = ax[0].i1[I];
+                    const double fx = ax[0].f[I];
+                    auto row = [&](std::int64_t j, std::int64_t k) {
+                        return fx == 0 ? get(i0, j, k) : lerp(get(i0, j, k), get(i1, j, k), fx);
+                    };
+                    auto plane = [&](std::int64_t k) { return fy == 0 ? row(j0, k) : lerp(row(j0, k), row(j1, k), fy); };
+                    dst[I] = float(fz == 0 ? plane(k0) : lerp(plane(k0), plane(k1), fz));
+                }
+            }
+        });
+    };
+    if (v.is_sparse()) {
+        const auto& g = *v.sparse_grid();
+        resample([&] {
+            return [&g, &clean, acc = g.grid->getConstAccessor()](std::int64_t i, std::int64_t j, std::int64_t k) mutable {
+                return clean(double(acc.getValue(openvdb::Coord(int(i) + g.offset.x(), int(j) + g.offset.y(), int(k) + g.offset.z()))));
+            };
+        });
+    } else {
+        dispatch_voxel_type(v.type, [&](auto tag) {
+            using T = decltype(tag);
+            const T* src = v.as<T>().data();
+            const std::int64_t sx = v.dims[0], sxy = v.dims[0] * v.dims[1];
+            resample([&] {
+                return [&](std::int64_t i, std::int64_t j, std::int64_t k) {
+                    const double x = double(src[i + sx * j + sxy * k]);
+                    if constexpr (std::is_floating_point_v<T>) return clean(x);
+                    else return x;
+                };
+            });
+        });
+    }
+    return c;
+}
+
+Volume coarsen_2x(const Volume& v, glm::dvec3* ratio) { return resample_extent(v, coarse_dims(v.dims, 0), ratio); }
+
+SurfaceMeasures measure_isosurface(const Volume& v, double iso, const Mesh& surface, const MeasureOptions& opt) {
+    SurfaceMeasures result;
+    in_arena(opt.threads, [&] {
+        Analysis fine = analyse(surface);
+        result = std::move(fine.m);
+        const std::size_t nf = result.components.size();
+        std::vector<double> ua(nf, 0.0), uv(nf, 0.0);
+        double ua_total = 0, uv_total = 0;
+        const FineCells cells(v, surface, fine.vertex_component);
+        int grids = 0;
+        for (int g = 0; g < std::max(opt.coarse_grids, 1); ++g) {
+            glm::dvec3 ratio;
+            const auto dims = coarse_dims(v.dims, g);
+            Volume coarse = resample_extent(v, dims, &ratio);
+            // The representative cell size ratio (Celik et al. 2008): cube root of the cell volume ratio.
+            const double r = std::cbrt(ratio.x * ratio.y * ratio.z);
+            if (r < 1.3) continue;
+            ++grids;
+            ExtractOptions eo;
+            eo.normals = false;
+            eo.threads = opt.threads;
+            const Mesh cm = extract_isosurface(coarse, iso, eo);
+            const Analysis co = analyse(cm);
+            const double k = 3.0 / (r * r - 1.0); // Fs / (r^p - 1), Fs = 3, p = 2
+            ua_total = std::max(ua_total, k * std::abs(result.area_mm2 - co.m.area_mm2));
+            uv_total = std::max(uv_total, k * std::abs(result.volume_ml - co.m.volume_ml));
+            const auto match = match_components(cells, cm, co.vertex_component, co.m.components.size());
+            std::vector<double> area_c(nf, 0.0), vol_c(nf, 0.0);
+            for (std::size_t c = 0; c < match.size(); ++c) {
+                if (match[c] == kNone) continue;
+                area_c[match[c]] += co.m.components[c].area_mm2;
+                if (co.m.components[c].volume_kind != VolumeKind::Undefined) vol_c[match[c]] += co.m.components[c].volume_ml;
+            }
+            for (std::size_t f = 0; f < nf; ++f) {
+                const auto& s = result.components[f];
+                ua[f] = std::max(ua[f], k * std::abs(s.area_mm2 - area_c[f]));
+                uv[f] = std::max(uv[f], k * std::abs(s.volume_ml - vol_c[f]));
+            }
+        }
+        result.edge_fraction_spread = edge_fraction_spread(v, surface, fine.vertex_component);
+        if (result.edge_fraction_spread < kResolvedEdgeSpread) {
+            char buf[64];
+            std::snprintf(buf, sizeof buf, "%.2f", result.edge_fraction_spread);
+            result.warnings.push_back(std::string("the edge is sharper than the voxel grid resolves (edge fraction spread ") +
+                                      buf +
+                                      ", below 0.8): the area is biased upward by more than its uncertainty (balls: "
+                                      "1.6 % at a blur of 0.25 voxel, 11 % for a binary mask)");
+        }
+        if (grids == 0) {
+            result.warnings.push_back("no uncertainty: the volume is too thin to coarsen (fewer than 3 samples along "
+                                      "two axes)");
+            return;
+        }
+        result.area_uncertainty_mm2 = ua_total;
+        result.volume_uncertainty_ml = result.volume_kind == VolumeKind::Undefined ? kNaN : uv_total;
+        for (std::size_t f = 0; f < nf; ++f) {
+            auto& s = result.components[f];
+            s.area_uncertainty_mm2 = ua[f];
+            s.volume_uncertainty_ml = s.volume_kind == VolumeKind::Undefined ? kNaN : uv[f];
+        }
+    });
+    return result;
+}
+
+SurfaceMeasures measure_isosurface(const Volume& v, double iso, const MeasureOptions& opt) {
+    ExtractOptions eo;
+    eo.normals = false;
+    eo.threads = opt.threads;
+    return measure_isosurface(v, iso, extract_isosurface(v, iso, eo), opt);
+}
+
+} // namespace iso
