@@ -21,7 +21,10 @@
 #include <QTimer>
 
 #include "app/gui/viewer.hpp"
+#include "io/markups.hpp"
 #include "renderer/core/api.hpp"
+#include "renderer/core/measure.hpp"
+#include "renderer/core/pick.hpp"
 
 namespace {
 
@@ -274,41 +277,70 @@ int run_mesh(const MeshArgs& a) {
 
 // ---- isoscope render -------------------------------------------------------
 
-struct RenderArgs {
-    std::string in, out, view = "anterior", size = "1024x1024", aov, series, ao = "off", cache;
+// What fixes a frame, shared by `render` and `pick`: a pick's pixel is a
+// pixel of the image `render` writes with the same options.
+struct FrameArgs {
+    std::string in, view = "anterior", size = "1024x1024", series, ao = "off";
     std::vector<double> isos;
-    float scale = 1.0f;
-    bool stats = false, no_annotations = false, transparent = false;
     double ao_radius = 10.0;
-    int ao_rays = 1024, ao_frames = 1;
+    int ao_frames = 1;
     iso::ConeAoSettings cone;
     Look look;
     float oit_epsilon = 1.0f / 512.0f;
     double oit_memory = 256;
 };
 
-CLI::App* add_render(CLI::App& app, RenderArgs& a) {
-    auto* c = app.add_subcommand("render", "Render surfaces of a volume (or a mesh) to an annotated image");
+void add_frame_options(CLI::App* c, FrameArgs& a) {
     c->add_option("input", a.in, "Volume file, DICOM folder, or mesh (" + iso::mesh_extensions_text() + ")")->required();
     c->add_option("--iso", a.isos, "Iso value (repeatable) for volume inputs")->allow_extra_args(false);
     c->add_option("--view", a.view, "anterior, posterior, left, right, superior or inferior");
     c->add_option("--size", a.size, "Image size WxH (default 1024x1024)");
-    c->add_option("--scale", a.scale, "Scale of text, lines and glyphs (e.g. 2 for a 2x export)")->check(CLI::Range(0.1, 20.0));
-    c->add_option("--aov", a.aov, "Write a buffer instead of the colour image: depth, normal, id or ao (EXR)");
     c->add_option("--ao", a.ao, "Ambient occlusion: off, cone (cone tracing), or reference (Embree ray tracing; with --aov ao)");
     c->add_option("--ao-radius", a.ao_radius, "AO radius R_max in mm")->check(CLI::PositiveNumber);
-    c->add_option("--ao-rays", a.ao_rays, "Rays per pixel for --ao reference")->check(CLI::Range(1, 1 << 20));
     add_cone_options(c, a.cone);
     c->add_option("--ao-frames", a.ao_frames, "Still frames accumulated with new jitter sets (cone AO)")->check(CLI::Range(1, 4096));
-    c->add_option("--ao-cache", a.cache, "Folder caching AO references ('-': none; default ~/.cache/isoscope)");
-    c->add_flag("--no-annotations", a.no_annotations, "No scale bar, orientation letters or labels");
-    c->add_flag("--transparent", a.transparent, "Transparent background");
-    c->add_flag("--stats", a.stats, "Print per-pass statistics");
     c->add_option("--series", a.series, "DICOM series to load: index or SeriesInstanceUID");
     add_look_options(c, a.look);
     c->add_option("--oit-epsilon", a.oit_epsilon, "Translucent surfaces: stop compositing a pixel below this transmittance (default 1/512)")
         ->check(CLI::Range(0.0, 0.999));
     c->add_option("--oit-memory", a.oit_memory, "Translucent surfaces: fragment pool cap in MiB (default 256)")->check(CLI::Range(1.0, 65536.0));
+}
+
+iso::core::RenderRequest frame_request(const FrameArgs& a) {
+    iso::core::RenderRequest req;
+    req.view = a.view;
+    if (std::sscanf(a.size.c_str(), "%dx%d", &req.width, &req.height) != 2 || req.width < 1 || req.height < 1)
+        throw iso::Error("--size", "expected WxH, e.g. 1920x1080, got '" + a.size + "'");
+    req.ao = a.ao;
+    req.ao_radius_mm = a.ao_radius;
+    req.cone = a.cone;
+    req.ao_frames = a.ao_frames;
+    req.progress = progress_bar();
+    if (!a.look.background.empty()) req.background = hex_option("--background", a.look.background);
+    req.flat_shading = a.look.shading == "flat";
+    req.oit_epsilon = a.oit_epsilon;
+    req.oit_memory_mib = a.oit_memory;
+    return req;
+}
+
+struct RenderArgs {
+    FrameArgs frame;
+    std::string out, aov, cache;
+    float scale = 1.0f;
+    bool stats = false, no_annotations = false, transparent = false;
+    int ao_rays = 1024;
+};
+
+CLI::App* add_render(CLI::App& app, RenderArgs& a) {
+    auto* c = app.add_subcommand("render", "Render surfaces of a volume (or a mesh) to an annotated image");
+    add_frame_options(c, a.frame);
+    c->add_option("--scale", a.scale, "Scale of text, lines and glyphs (e.g. 2 for a 2x export)")->check(CLI::Range(0.1, 20.0));
+    c->add_option("--aov", a.aov, "Write a buffer instead of the colour image: depth, normal, id or ao (EXR)");
+    c->add_option("--ao-rays", a.ao_rays, "Rays per pixel for --ao reference")->check(CLI::Range(1, 1 << 20));
+    c->add_option("--ao-cache", a.cache, "Folder caching AO references ('-': none; default ~/.cache/isoscope)");
+    c->add_flag("--no-annotations", a.no_annotations, "No scale bar, orientation letters or labels");
+    c->add_flag("--transparent", a.transparent, "Transparent background");
+    c->add_flag("--stats", a.stats, "Print per-pass statistics");
     c->add_option("-o,--output", a.out, "Output .png, .tif or .exr")->required();
     return c;
 }
@@ -333,38 +365,177 @@ void print_stats(const iso::graph::FrameStats& stats, const iso::OitStats& oit) 
 }
 
 int run_render(const RenderArgs& a) {
-    iso::core::RenderRequest req;
-    req.view = a.view;
-    if (std::sscanf(a.size.c_str(), "%dx%d", &req.width, &req.height) != 2 || req.width < 1 || req.height < 1)
-        throw iso::Error("--size", "expected WxH, e.g. 1920x1080, got '" + a.size + "'");
+    iso::core::RenderRequest req = frame_request(a.frame);
     req.scale = a.scale;
     req.aov_ao = a.aov == "ao";
     req.aov = req.aov_ao ? iso::Aov::None : iso::aov_from_name(a.aov);
-    req.ao = a.ao;
-    req.ao_radius_mm = a.ao_radius;
     req.ao_rays = a.ao_rays;
-    req.cone = a.cone;
-    req.ao_frames = a.ao_frames;
     req.cache_dir = a.cache;
     req.annotations = !a.no_annotations;
     req.transparent = a.transparent;
     req.time_passes = a.stats;
-    req.progress = progress_bar();
-    if (!a.look.background.empty()) req.background = hex_option("--background", a.look.background);
-    req.flat_shading = a.look.shading == "flat";
-    req.oit_epsilon = a.oit_epsilon;
-    req.oit_memory_mib = a.oit_memory;
     iso::check_writable_destination(a.out);
     iso::core::Scene scene;
-    open_input(scene, a.in, a.series, a.isos, a.look, "render");
+    open_input(scene, a.frame.in, a.frame.series, a.frame.isos, a.frame.look, "render");
     const auto out = iso::core::render_image(scene, req);
     iso::core::export_image(out.image, out.meta, a.out);
     std::cout << "rendered " << out.image.width << "x" << out.image.height << " (" << out.gl_renderer << ") -> " << a.out << "\n";
     if (a.stats) print_stats(out.stats, out.oit);
     if (out.oit.merged > 0)
         std::cerr << "warning: " << out.oit.merged << " translucent fragments in " << out.oit.merged_pixels << " pixels did not fit the "
-                  << a.oit_memory << " MiB pool (--oit-memory) and were merged, order-independently: error at most " << std::setprecision(3)
+                  << a.frame.oit_memory << " MiB pool (--oit-memory) and were merged, order-independently: error at most " << std::setprecision(3)
                   << out.oit.merge_error_max << " per channel\n";
+    return 0;
+}
+
+// ---- isoscope pick ---------------------------------------------------------
+
+struct PickArgs {
+    FrameArgs frame;
+    std::string at, rect;
+    double threshold = 0.5;
+    bool all_layers = false, json = false;
+};
+
+CLI::App* add_pick(CLI::App& app, PickArgs& a) {
+    auto* c = app.add_subcommand("pick", "What is seen at a pixel of the image `render` writes with the same options: "
+                                         "surface, LPS point, normal, value (HU); every layer through translucent ones");
+    add_frame_options(c, a.frame);
+    c->add_option("--at", a.at, "Pixel X,Y from the image's top-left")->required();
+    c->add_option("--rect", a.rect, "Also list the triangles visible in the rectangle X,Y,W,H");
+    c->add_option("--threshold", a.threshold, "The visible layer: the first whose accumulated opacity reaches this (default 0.5)")
+        ->check(CLI::Range(0.0, 1.0));
+    c->add_flag("--all-layers", a.all_layers, "List every layer down to the first opaque one");
+    c->add_flag("--json", a.json, "Print JSON");
+    return c;
+}
+
+std::vector<int> ints(const std::string& flag, const std::string& text, std::size_t n) {
+    std::vector<int> v;
+    std::stringstream ss(text);
+    std::string item;
+    while (std::getline(ss, item, ',')) {
+        try {
+            std::size_t used = 0;
+            v.push_back(std::stoi(item, &used));
+            if (used != item.size()) throw std::invalid_argument(item);
+        } catch (const std::exception&) {
+            v.clear();
+            break;
+        }
+    }
+    if (v.size() != n) throw iso::Error(flag, "expected " + std::to_string(n) + " integers separated by commas, got '" + text + "'");
+    return v;
+}
+
+int run_pick(const PickArgs& a) {
+    const iso::core::RenderRequest req = frame_request(a.frame);
+    iso::core::PickRequest p;
+    const auto at = ints("--at", a.at, 2);
+    p.x = at[0];
+    p.y = at[1];
+    if (!a.rect.empty()) {
+        const auto r = ints("--rect", a.rect, 4);
+        if (r[2] < 1 || r[3] < 1) throw iso::Error("--rect", "width and height must be at least 1, got '" + a.rect + "'");
+        p.rect = {r[0], r[1], r[2], r[3]};
+    }
+    p.threshold = a.threshold;
+    p.all_layers = a.all_layers;
+    iso::core::Scene scene;
+    open_input(scene, a.frame.in, a.frame.series, a.frame.isos, a.frame.look, "pick");
+    const auto r = iso::core::pick(scene, req, p);
+    if (!r.complete) std::cerr << "warning: the pick's lists overflowed: some layers are missing\n";
+    if (a.json) {
+        std::cout << iso::core::pick_json(r).dump(2) << "\n";
+        return 0;
+    }
+    std::cout << "pixel " << r.x << "," << r.y << " of " << r.width << "x" << r.height << ": ";
+    if (r.layers.empty()) std::cout << "background\n";
+    else if (!r.visible) std::cout << "nothing opaque enough (threshold " << a.threshold << ")\n";
+    else std::cout << r.layers[*r.visible].name << "\n";
+    std::cout << std::fixed;
+    for (std::size_t i = 0; i < r.layers.size(); ++i) {
+        const auto& l = r.layers[i];
+        std::cout << (r.visible && *r.visible == i ? "* " : "  ") << std::setw(10) << std::left << l.name << std::right << std::setprecision(2)
+                  << " LPS (" << l.lps.x << ", " << l.lps.y << ", " << l.lps.z << ") mm, depth " << l.depth_mm << " mm, alpha "
+                  << std::setprecision(3) << l.alpha << ", share " << l.share;
+        if (l.hu) std::cout << ", value " << std::setprecision(1) << *l.hu;
+        if (l.voxel) std::cout << ", voxel (" << (*l.voxel)[0] << ", " << (*l.voxel)[1] << ", " << (*l.voxel)[2] << ")";
+        std::cout << ", triangle " << l.triangle << "\n";
+    }
+    if (r.rect.width > 0) std::cout << r.triangles.size() << " triangles visible in the rectangle\n";
+    return 0;
+}
+
+// ---- isoscope measure ------------------------------------------------------
+
+struct MeasureArgs {
+    std::string in, series, out;
+    std::vector<double> isos;
+    std::vector<std::string> distance, angle, hu;
+    bool json = false;
+};
+
+CLI::App* add_measure(CLI::App& app, MeasureArgs& a) {
+    auto* c = app.add_subcommand("measure", "Measure surfaces (area, volume, closed/open, components, uncertainty) and points "
+                                            "(distance, angle, value) in LPS mm");
+    c->add_option("input", a.in, "Volume file, DICOM folder, or mesh (" + iso::mesh_extensions_text() + ")")->required();
+    c->add_option("--iso", a.isos, "Iso value (repeatable) for volume inputs")->allow_extra_args(false);
+    c->add_option("--series", a.series, "DICOM series to load: index or SeriesInstanceUID");
+    c->add_option("--distance", a.distance, "Distance between two points: --distance X,Y,Z X,Y,Z (LPS mm; repeatable)")->expected(2)->multi_option_policy(CLI::MultiOptionPolicy::TakeAll);
+    c->add_option("--angle", a.angle, "Angle at the middle of three points: --angle P1 P2 P3 (repeatable)")->expected(3)->multi_option_policy(CLI::MultiOptionPolicy::TakeAll);
+    c->add_option("--hu", a.hu, "The volume's value (HU for CT) at a point X,Y,Z (repeatable)")->expected(1)->multi_option_policy(CLI::MultiOptionPolicy::TakeAll);
+    c->add_flag("--json", a.json, "Print JSON");
+    c->add_option("-o,--output", a.out, "Write the points, distances and angles as 3D Slicer markups (.mrk.json, LPS)");
+    return c;
+}
+
+int run_measure(const MeasureArgs& a) {
+    iso::core::PointMeasurements points;
+    for (std::size_t i = 0; i + 1 < a.distance.size(); i += 2)
+        points.distances.push_back({iso::core::parse_point("--distance", a.distance[i]), iso::core::parse_point("--distance", a.distance[i + 1])});
+    for (std::size_t i = 0; i + 2 < a.angle.size(); i += 3)
+        points.angles.push_back({iso::core::parse_point("--angle", a.angle[i]), iso::core::parse_point("--angle", a.angle[i + 1]),
+                                 iso::core::parse_point("--angle", a.angle[i + 2])});
+    for (const auto& t : a.hu) points.values.push_back(iso::core::parse_point("--hu", t));
+    if (!a.out.empty()) {
+        const std::string suffix = ".mrk.json";
+        if (a.out.size() < suffix.size() || a.out.compare(a.out.size() - suffix.size(), suffix.size(), suffix) != 0)
+            throw iso::Error("--output", "markups are written as .mrk.json, got '" + a.out + "'");
+        iso::check_writable_destination(a.out);
+    }
+    iso::core::Scene scene;
+    open_input(scene, a.in, a.series, a.isos, {}, "measure");
+    const auto surfaces = iso::core::measure_surfaces(scene);
+    const auto j = iso::core::measure_json(scene, surfaces, points);
+    if (!a.out.empty()) iso::save_markups(iso::core::point_markups(scene, points), a.out);
+    if (a.json) {
+        std::cout << j.dump(2) << "\n";
+    } else {
+        std::cout << std::fixed;
+        for (const auto& s : j["surfaces"]) {
+            std::cout << s["surface"].get<std::string>() << ": area " << std::setprecision(1) << s["area_mm2"].get<double>() << " mm2";
+            if (!s["area_uncertainty_mm2"].is_null()) std::cout << " +- " << s["area_uncertainty_mm2"].get<double>();
+            const std::string kind = s["volume_kind"].get<std::string>();
+            if (s["volume_ml"].is_null())
+                std::cout << ", volume undefined (" << kind << ")";
+            else
+                std::cout << ", volume " << (kind == "lower bound" ? ">= " : "") << std::setprecision(3) << s["volume_ml"].get<double>() << " mL";
+            if (!s["volume_uncertainty_ml"].is_null()) std::cout << " +- " << s["volume_uncertainty_ml"].get<double>();
+            std::cout << (s["closed"].get<bool>() ? ", closed" : ", open (boundary " + std::to_string(s["boundary"]["length_mm"].get<double>()) + " mm)")
+                      << ", " << s["components"].size() << " component(s)\n";
+            for (const auto& w : s["warnings"]) std::cout << "  note: " << w.get<std::string>() << "\n";
+        }
+        for (const auto& d : j["distances"]) std::cout << "distance " << std::setprecision(3) << d["distance_mm"].get<double>() << " mm\n";
+        for (const auto& an : j["angles"]) std::cout << "angle " << std::setprecision(3) << an["angle_deg"].get<double>() << " deg\n";
+        for (const auto& v : j["values"]) {
+            if (v["value"].is_null())
+                std::cout << "value: outside the volume\n";
+            else
+                std::cout << "value " << std::setprecision(2) << v["value"].get<double>() << "\n";
+        }
+    }
+    if (!a.out.empty()) std::cerr << "markups -> " << a.out << "\n";
     return 0;
 }
 
@@ -448,16 +619,22 @@ int main(int argc, char** argv) {
     MeshArgs mesh_args;
     RenderArgs render_args;
     ViewArgs view_args;
+    PickArgs pick_args;
+    MeasureArgs measure_args;
     auto* info = add_info(app, info_args);
     auto* mesh = add_mesh(app, mesh_args);
     auto* render = add_render(app, render_args);
     auto* view = add_view(app, view_args);
+    auto* pick = add_pick(app, pick_args);
+    auto* measure = add_measure(app, measure_args);
     CLI11_PARSE(app, argc, argv);
     try {
         if (*info) return run_info(info_args);
         if (*mesh) return run_mesh(mesh_args);
         if (*render) return run_render(render_args);
         if (*view) return run_view(view_args, argv[0]);
+        if (*pick) return run_pick(pick_args);
+        if (*measure) return run_measure(measure_args);
     } catch (const iso::Error& e) {
         std::cerr << "isoscope: error: " << cli_message(e) << "\n";
         return 1;

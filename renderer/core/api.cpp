@@ -145,6 +145,7 @@ RenderOptions render_options(const RenderRequest& req) {
         throw Error("transparency memory", "expected 1..65536 MiB, got " + std::to_string(req.oit_memory_mib));
     ro.oit_memory_bytes = std::size_t(req.oit_memory_mib * 1048576.0);
     ro.time_passes = req.time_passes;
+    ro.pick = req.pick;
     if (req.ao != "off" && req.ao != "cone" && req.ao != "reference")
         throw Error("ambient occlusion", "method must be off, cone or reference, got '" + req.ao + "'");
     if (req.ao == "reference" && !req.aov_ao)
@@ -217,6 +218,7 @@ RenderOutput render_image(Scene& scene, const RenderRequest& req) {
     out.image = std::move(r.image);
     out.stats = std::move(r.stats);
     out.oit = r.oit;
+    out.pick = std::move(r.pick);
     out.gl_renderer = r.gl_renderer;
     out.camera = cam;
     auto& t = out.meta.text;

@@ -2,6 +2,7 @@
 // presentation (no printing, no widgets) and no file-format code of its own.
 #pragma once
 
+#include <optional>
 #include <string>
 
 #include <nlohmann/json.hpp>
@@ -60,6 +61,8 @@ struct RenderRequest {
     // else ~/.cache/isoscope. "-": no cache.
     std::string cache_dir;
     ProgressFn progress;
+    // A pick riding on this frame (core::pick() sets it): image pixels from the top-left.
+    std::optional<PickRegion> pick;
 };
 
 // "#rrggbb" (sRGB, as colour pickers and CSS give it) -> linear RGB.
@@ -74,6 +77,7 @@ struct RenderOutput {
     Camera camera;
     bool ao_cache_hit = false;       // the AO reference came from the cache
     OitStats oit;                    // translucent surfaces (zero without)
+    PickList pick;                   // with RenderRequest::pick
 };
 
 // Renders the scene headlessly (its own EGL context, made on first use) as

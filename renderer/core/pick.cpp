@@ -1,0 +1,188 @@
+#include "renderer/core/pick.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <map>
+
+#include <glm/glm.hpp>
+
+#include "io/error.hpp"
+#include "renderer/iso/measure.hpp"
+
+namespace iso::core {
+
+namespace {
+
+struct Crossing {
+    double t = 0;
+    glm::dvec3 bary{0.0};
+    bool inside = true;
+};
+
+// The ray against the triangle's plane, in double precision (Möller-Trumbore
+// without the early outs): where it meets the plane and the barycentric
+// coordinates there, so a ray the rasterizer gave to this triangle across
+// an edge still lands on its plane, flagged.
+std::optional<Crossing> cross_triangle(const Ray& ray, const glm::dvec3& a, const glm::dvec3& b, const glm::dvec3& c) {
+    const glm::dvec3 e1 = b - a, e2 = c - a, p = glm::cross(ray.dir, e2);
+    const double det = glm::dot(e1, p);
+    if (!(std::abs(det) > 1e-300)) return std::nullopt; // degenerate, or seen edge-on
+    const glm::dvec3 s = ray.origin - a, q = glm::cross(s, e1);
+    const double u = glm::dot(s, p) / det, v = glm::dot(ray.dir, q) / det;
+    Crossing x;
+    x.t = glm::dot(e2, q) / det;
+    x.bary = {1.0 - u - v, u, v};
+    x.inside = u >= 0 && v >= 0 && u + v <= 1;
+    return x;
+}
+
+std::vector<double> column_major(const glm::dmat4& m) {
+    std::vector<double> v;
+    for (int c = 0; c < 4; ++c)
+        for (int r = 0; r < 4; ++r) v.push_back(m[c][r]);
+    return v;
+}
+
+} // namespace
+
+PickResult pick(Scene& scene, const RenderRequest& req, const PickRequest& p) {
+    if (p.x < 0 || p.y < 0 || p.x >= req.width || p.y >= req.height)
+        throw Error("pick", "pixel " + std::to_string(p.x) + "," + std::to_string(p.y) + " is outside the " + std::to_string(req.width) + "x" +
+                                std::to_string(req.height) + " image");
+    if (!(p.threshold > 0.0 && p.threshold <= 1.0))
+        throw Error("pick threshold", "expected a value in (0, 1], got " + std::to_string(p.threshold));
+    // One region holds the pixel and the rectangle.
+    int x0 = p.x, y0 = p.y, x1 = p.x + 1, y1 = p.y + 1;
+    const bool rect = p.rect.width > 0 && p.rect.height > 0;
+    if (rect) {
+        x0 = std::min(x0, p.rect.x);
+        y0 = std::min(y0, p.rect.y);
+        x1 = std::max(x1, p.rect.x + p.rect.width);
+        y1 = std::max(y1, p.rect.y + p.rect.height);
+    }
+    RenderRequest r = req;
+    r.pick = PickRegion{x0, y0, x1 - x0, y1 - y0};
+    const auto t0 = std::chrono::steady_clock::now();
+    const RenderOutput frame = render_image(scene, r);
+    PickResult out;
+    out.frame_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+    out.x = p.x;
+    out.y = p.y;
+    out.width = req.width;
+    out.height = req.height;
+    out.view = frame.camera.view();
+    out.projection = frame.camera.projection(double(req.width) / double(req.height));
+    const PickList& list = frame.pick;
+    out.complete = list.offered <= list.capacity;
+    const auto at = [&](int x, int y) -> const std::vector<PickFragment>& {
+        return list.pixels[std::size_t(y - list.region.y) * std::size_t(list.region.width) + std::size_t(x - list.region.x)];
+    };
+    // The pixel's layers: down to the first opaque one (nothing behind it
+    // reaches the pixel), or to the visible one unless all are asked for.
+    const Ray ray = frame.camera.pixel_ray(p.x + 0.5, p.y + 0.5, req.width, req.height);
+    const glm::dvec3 forward = frame.camera.forward();
+    const Volume* volume = scene.has_volume() ? &scene.volume() : nullptr;
+    for (const PickFragment& f : at(p.x, p.y)) {
+        PickLayer l;
+        l.surface = f.object;
+        const SurfaceInfo& info = scene.info(f.object);
+        l.name = info.name;
+        l.kind = info.kind;
+        l.value = info.value;
+        l.triangle = f.primitive;
+        l.alpha = f.alpha;
+        l.share = double(f.transmittance) * double(f.alpha);
+        l.accumulated_alpha = 1.0 - double(f.transmittance) * (1.0 - double(f.alpha));
+        const Mesh& mesh = scene.mesh(f.object);
+        if (f.primitive >= mesh.triangles.size()) throw Error("pick", "triangle " + std::to_string(f.primitive) + " is not in " + info.name);
+        const auto& tri = mesh.triangles[f.primitive];
+        const glm::dvec3 a(mesh.positions[tri[0]]), b(mesh.positions[tri[1]]), c(mesh.positions[tri[2]]);
+        if (const auto x = cross_triangle(ray, a, b, c)) {
+            l.lps = ray.origin + x->t * ray.dir;
+            l.barycentric = x->bary;
+            l.on_triangle = x->inside;
+            l.depth_mm = x->t * glm::dot(ray.dir, forward);
+        } else { // seen exactly edge-on: the triangle's centroid
+            l.lps = (a + b + c) / 3.0;
+            l.barycentric = glm::dvec3(1.0 / 3.0);
+            l.on_triangle = false;
+            l.depth_mm = glm::dot(l.lps - ray.origin, forward);
+        }
+        glm::dvec3 n = glm::cross(b - a, c - a);
+        if (!mesh.normals.empty())
+            n = l.barycentric.x * glm::dvec3(mesh.normals[tri[0]]) + l.barycentric.y * glm::dvec3(mesh.normals[tri[1]]) +
+                l.barycentric.z * glm::dvec3(mesh.normals[tri[2]]);
+        l.normal = glm::length(n) > 0 ? glm::normalize(n) : n;
+        if (volume && info.kind != SurfaceInfo::Kind::Mesh)
+            if (const auto s = sample_volume(*volume, l.lps)) {
+                l.hu = s->value;
+                l.voxel = s->voxel;
+            }
+        const bool reaches = l.accumulated_alpha >= p.threshold;
+        if (reaches && !out.visible) out.visible = out.layers.size();
+        out.layers.push_back(std::move(l));
+        if (f.alpha >= 1.0f) break;
+        if (reaches && !p.all_layers) break;
+    }
+    if (rect) {
+        out.rect = {std::max(p.rect.x, 0), std::max(p.rect.y, 0), 0, 0};
+        out.rect.width = std::min(p.rect.x + p.rect.width, req.width) - out.rect.x;
+        out.rect.height = std::min(p.rect.y + p.rect.height, req.height) - out.rect.y;
+        std::map<std::pair<SurfaceId, std::uint32_t>, std::size_t> seen;
+        for (int y = out.rect.y; y < out.rect.y + out.rect.height; ++y)
+            for (int x = out.rect.x; x < out.rect.x + out.rect.width; ++x) {
+                // The pixel's visible layer, by the same rule.
+                for (const PickFragment& f : at(x, y))
+                    if (1.0 - double(f.transmittance) * (1.0 - double(f.alpha)) >= p.threshold) {
+                        ++seen[{f.object, f.primitive}];
+                        break;
+                    }
+            }
+        for (const auto& [k, n] : seen) out.triangles.push_back({k.first, k.second, n});
+        std::stable_sort(out.triangles.begin(), out.triangles.end(),
+                         [](const PickedTriangle& a, const PickedTriangle& b) { return a.pixels > b.pixels; });
+    }
+    return out;
+}
+
+nlohmann::json pick_json(const PickResult& r) {
+    using nlohmann::json;
+    const auto vec = [](const glm::dvec3& v) { return json::array({v.x, v.y, v.z}); };
+    json layers = json::array();
+    for (const auto& l : r.layers) {
+        json j;
+        j["surface"] = l.name;
+        j["surface_id"] = l.surface;
+        j["iso"] = l.kind == SurfaceInfo::Kind::Iso ? json(l.value) : json(nullptr);
+        if (l.kind == SurfaceInfo::Kind::Label) j["label"] = l.value;
+        j["lps"] = vec(l.lps);
+        j["normal"] = vec(l.normal);
+        j["triangle"] = l.triangle;
+        j["on_triangle"] = l.on_triangle;
+        j["depth_mm"] = l.depth_mm;
+        j["alpha"] = l.alpha;
+        j["share"] = l.share;
+        j["hu"] = l.hu ? json(*l.hu) : json(nullptr);
+        j["voxel"] = l.voxel ? json::array({(*l.voxel)[0], (*l.voxel)[1], (*l.voxel)[2]}) : json(nullptr);
+        layers.push_back(std::move(j));
+    }
+    json j;
+    j["pixel"] = {r.x, r.y};
+    j["image"] = {r.width, r.height};
+    j["visible"] = r.visible ? json(*r.visible) : json(nullptr);
+    j["layers"] = std::move(layers);
+    j["view"] = column_major(r.view);
+    j["projection"] = column_major(r.projection);
+    j["coordinates"] = "LPS mm";
+    j["complete"] = r.complete;
+    if (r.rect.width > 0 && r.rect.height > 0) {
+        json tris = json::array();
+        for (const auto& t : r.triangles) tris.push_back({{"surface_id", t.surface}, {"triangle", t.triangle}, {"pixels", t.pixels}});
+        j["rect"] = {{"x", r.rect.x}, {"y", r.rect.y}, {"width", r.rect.width}, {"height", r.rect.height}, {"triangles", std::move(tris)}};
+    }
+    j["frame_ms"] = r.frame_ms;
+    return j;
+}
+
+} // namespace iso::core

@@ -1,0 +1,83 @@
+// Picking through the core API (docs/picking.md): what the user sees at a
+// pixel of the image render_image() would write with the same request, and
+// every layer behind it. The pick rides on that frame (its geometry passes
+// list the fragments); positions are then exact: the pixel's ray meets the
+// listed triangle in double precision (not a depth buffer unprojected), and
+// from the LPS point come the normal, the voxel and the value (HU) there.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <glm/mat4x4.hpp>
+#include <glm/vec3.hpp>
+#include <nlohmann/json.hpp>
+
+#include "renderer/core/api.hpp"
+#include "renderer/core/scene.hpp"
+
+namespace iso::core {
+
+struct PickRequest {
+    // The pixel, from the image's top-left corner (of the image render_image
+    // writes with the same RenderRequest).
+    int x = 0, y = 0;
+    // Optional rectangle (image pixels from the top-left): every triangle
+    // visible in it is listed too. Empty (width or height 0): none.
+    PickRegion rect{0, 0, 0, 0};
+    // The visible layer: the first whose accumulated alpha reaches this.
+    double threshold = 0.5;
+    // List every layer (down to the first opaque one), not only those up to the visible one.
+    bool all_layers = false;
+};
+
+struct PickLayer {
+    SurfaceId surface = 0;
+    std::string name;                  // "iso 500", a mesh file's name
+    SurfaceInfo::Kind kind = SurfaceInfo::Kind::Mesh;
+    double value = 0;                  // iso value or label (Iso, Label surfaces)
+    std::uint32_t triangle = 0;        // index into the surface's mesh
+    glm::dvec3 lps{0.0};               // where the pixel's ray meets the triangle, LPS mm
+    glm::dvec3 normal{0.0};            // the surface's normal there (interpolated), LPS, unit
+    glm::dvec3 barycentric{0.0};       // of lps in the triangle
+    bool on_triangle = true;           // false: the ray passes just outside (an edge the rasterizer gave it); lps is on its plane
+    double depth_mm = 0;               // distance along the view axis
+    double alpha = 1;                  // the surface's opacity
+    double share = 0;                  // of the pixel's colour: transmittance in front x alpha
+    double accumulated_alpha = 0;      // 1 - transmittance behind this layer
+    std::optional<double> hu;          // the volume's value there (trilinear, after rescale)
+    std::optional<std::array<std::int64_t, 3>> voxel; // the nearest voxel
+};
+
+// A triangle visible somewhere in the pick rectangle, with its pixel count.
+struct PickedTriangle {
+    SurfaceId surface = 0;
+    std::uint32_t triangle = 0;
+    std::size_t pixels = 0;
+};
+
+struct PickResult {
+    int x = 0, y = 0, width = 0, height = 0; // the pixel and the image size
+    std::optional<std::size_t> visible;      // index into layers; none: background, or nothing opaque enough
+    std::vector<PickLayer> layers;           // front to back
+    PickRegion rect{0, 0, 0, 0};             // clipped to the image
+    std::vector<PickedTriangle> triangles;   // visible in rect (with a rect), most pixels first
+    glm::dmat4 view{1.0}, projection{1.0};   // as in the image metadata
+    double frame_ms = 0;                     // request to result, the frame it rides on included
+    bool complete = true;                    // false: the pick's list pool overflowed (some layers missing)
+};
+
+// Renders `req` with the pick riding on the frame and resolves it. Throws
+// iso::Error: a pixel outside the image, a threshold outside (0, 1].
+PickResult pick(Scene& scene, const RenderRequest& req, const PickRequest& p);
+
+// The JSON `isoscope pick --json` prints: visible, layers (surface, iso,
+// lps, normal, triangle, depth_mm, alpha, share, hu, voxel), view and
+// projection (column-major, as the image metadata), and the rectangle's
+// triangles when asked.
+nlohmann::json pick_json(const PickResult& r);
+
+} // namespace iso::core
