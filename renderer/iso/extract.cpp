@@ -1,3 +1,4 @@
+#include "renderer/iso/arena.hpp"
 #include "renderer/iso/extract.hpp"
 
 #include <algorithm>
@@ -36,16 +37,6 @@ template <class V> void advise_huge_pages(V& v) {
     if (hi > lo) ::madvise(reinterpret_cast<void*>(lo), hi - lo, MADV_HUGEPAGE);
 }
 
-int effective_threads(int requested) {
-    const int hw = tbb::this_task_arena::max_concurrency();
-    return requested > 0 ? std::min(requested, hw) : hw;
-}
-
-// Runs f inside an arena of `threads` threads.
-template <class F> void in_arena(int threads, F&& f) {
-    tbb::task_arena arena(effective_threads(threads));
-    arena.execute(std::forward<F>(f));
-}
 
 struct ChunkGeom {
     std::array<std::int64_t, 3> p0, p1; // first and last sample (inclusive) of the chunk

@@ -5,6 +5,8 @@
 // open surface its volume is meaningless; vtkMultiObjectMassProperties flags
 // open objects but neither caps them nor reports their boundaries; neither
 // welds STL triangle soups, runs in parallel or estimates an uncertainty.
+#include "io/markups.hpp"
+#include "renderer/iso/arena.hpp"
 #include "renderer/iso/measure.hpp"
 
 #include <algorithm>
@@ -35,15 +37,6 @@ constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 constexpr std::uint32_t kNone = ~std::uint32_t(0);
 constexpr const char* kWhere = "surface measure";
 
-int effective_threads(int requested) {
-    const int hw = tbb::this_task_arena::max_concurrency();
-    return requested > 0 ? std::min(requested, hw) : hw;
-}
-
-template <class F> void in_arena(int threads, F&& f) {
-    tbb::task_arena arena(effective_threads(threads));
-    arena.execute(std::forward<F>(f));
-}
 
 bool finite(const glm::dvec3& p) { return std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z); }
 
@@ -621,9 +614,11 @@ double edge_fraction_spread(const Volume& v, const Mesh& mesh, const std::vector
 
 // ---- public ------------------------------------------------------------------------
 
+// The formulas are the markups' (io/markups.hpp: what a Slicer line or
+// angle shows); here with the checks a measurement needs.
 double distance_mm(const glm::dvec3& a, const glm::dvec3& b) {
     if (!finite(a) || !finite(b)) throw Error("distance", "a point is not finite");
-    return glm::length(b - a);
+    return line_length_mm(a, b);
 }
 
 double angle_deg(const glm::dvec3& a, const glm::dvec3& vertex, const glm::dvec3& c) {
@@ -631,7 +626,7 @@ double angle_deg(const glm::dvec3& a, const glm::dvec3& vertex, const glm::dvec3
     const glm::dvec3 u = a - vertex, w = c - vertex;
     if (glm::length(u) < 1e-9 || glm::length(w) < 1e-9)
         throw Error("angle", "an end point coincides with the vertex (the middle point), so the angle has no direction");
-    return glm::degrees(std::atan2(glm::length(glm::cross(u, w)), glm::dot(u, w)));
+    return *angle_degrees(a, vertex, c);
 }
 
 std::optional<VolumeSample> sample_volume(const Volume& v, const glm::dvec3& lps) {

@@ -5,7 +5,12 @@
 
 #include <cmath>
 #include <cstdint>
+#include <filesystem>
+#include <fstream>
 #include <random>
+#include <string>
+
+#include <unistd.h>
 
 #include <glm/glm.hpp>
 #include <tbb/parallel_for.h>
@@ -53,6 +58,26 @@ inline Volume ct_phantom(std::array<std::int64_t, 3> dims, glm::dvec3 spacing = 
                 s[v.linear_index(i, j, k)] = std::int16_t(std::lround(std::clamp(hu, -1024.0, 3071.0)));
             }
     });
+    return v;
+}
+
+// ct_phantom(size) cached as raw int16 in the temporary folder (it takes
+// seconds to make; benchmark children share the copy).
+inline Volume cached_ct_phantom(std::array<std::int64_t, 3> size) {
+    namespace fs = std::filesystem;
+    const std::string cache = (fs::temp_directory_path() / ("isoscope-phantom-" + std::to_string(size[0]) + "x" +
+                                                            std::to_string(size[1]) + "x" + std::to_string(size[2]) + ".raw"))
+                                  .string();
+    auto v = Volume::dense(size, VoxelType::I16, make_affine({0.7, 0.7, 1.0}, {0, 0, 0}));
+    std::ifstream in(cache, std::ios::binary);
+    if (in && fs::file_size(cache) == v.bytes().size()) {
+        in.read(reinterpret_cast<char*>(v.bytes().data()), std::streamsize(v.bytes().size()));
+        return v;
+    }
+    v = ct_phantom(size);
+    const std::string tmp = cache + ".tmp" + std::to_string(::getpid());
+    std::ofstream(tmp, std::ios::binary).write(reinterpret_cast<const char*>(v.bytes().data()), std::streamsize(v.bytes().size()));
+    fs::rename(tmp, cache);
     return v;
 }
 

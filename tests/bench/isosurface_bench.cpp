@@ -60,21 +60,7 @@ struct Args {
 // The phantom takes seconds to make: children share a cached raw copy.
 Volume load_data(const std::string& data, const std::array<std::int64_t, 3>& size) {
     if (data != "phantom") return load_volume(data);
-    const std::string cache = (fs::temp_directory_path() / ("isoscope-phantom-" + std::to_string(size[0]) + "x" +
-                                                            std::to_string(size[1]) + "x" + std::to_string(size[2]) + ".raw"))
-                                  .string();
-    auto v = Volume::dense(size, VoxelType::I16, make_affine({0.7, 0.7, 1.0}, {0, 0, 0}));
-    std::ifstream in(cache, std::ios::binary);
-    if (in && fs::file_size(cache) == v.bytes().size()) {
-        in.read(reinterpret_cast<char*>(v.bytes().data()), std::streamsize(v.bytes().size()));
-        return v;
-    }
-    v = ct_phantom(size);
-    const std::string tmp = cache + ".tmp";
-    std::ofstream(tmp, std::ios::binary).write(reinterpret_cast<const char*>(v.bytes().data()),
-                                               std::streamsize(v.bytes().size()));
-    fs::rename(tmp, cache);
-    return v;
+    return cached_ct_phantom(size);
 }
 
 vtkNew<vtkImageData> as_vtk(Volume& v) {

@@ -164,24 +164,6 @@ Ball make_ball(double scale, double r, const glm::dvec3& offset) {
 }
 
 
-// The CT phantom of the isosurface benchmark (ct_phantom.hpp), cached as
-// raw int16 in the temporary folder (it takes 20 s to make on 2 cores).
-Volume load_phantom(std::array<std::int64_t, 3> size) {
-    const std::string cache = (fs::temp_directory_path() / ("isoscope-phantom-" + std::to_string(size[0]) + "x" +
-                                                            std::to_string(size[1]) + "x" + std::to_string(size[2]) + ".raw"))
-                                  .string();
-    auto v = Volume::dense(size, VoxelType::I16, make_affine({0.7, 0.7, 1.0}, {0, 0, 0}));
-    std::ifstream in(cache, std::ios::binary);
-    if (in && fs::file_size(cache) == v.bytes().size()) {
-        in.read(reinterpret_cast<char*>(v.bytes().data()), std::streamsize(v.bytes().size()));
-        return v;
-    }
-    v = ct_phantom(size);
-    const std::string tmp = cache + ".tmp" + std::to_string(::getpid());
-    std::ofstream(tmp, std::ios::binary).write(reinterpret_cast<const char*>(v.bytes().data()), std::streamsize(v.bytes().size()));
-    fs::rename(tmp, cache);
-    return v;
-}
 
 // Edge profiles of the coverage table: sigma of the Gaussian blur in voxels
 // (mean step), 0 for a binary mask, < 0 for a linear ramp (distance field).
@@ -346,7 +328,7 @@ int main(int argc, char** argv) {
     // 4. Millions of triangles: the CT phantom of the isosurface benchmark.
     if (large) {
         const std::array<std::int64_t, 3> size{512, 512, 400};
-        const Volume v = load_phantom(size);
+        const Volume v = cached_ct_phantom(size);
         std::cout << "\n## Large surfaces: CT phantom 512 x 512 x 400 (int16, 0.7 x 0.7 x 1 mm), " << threads
                   << " threads, median of " << reps << " (ours and VTK alternating)\n\n"
                   << "| surface | tris | components | closed | area ours mm2 | volume ours mL | ours / VTK - 1 (area, volume) | "

@@ -22,39 +22,20 @@
 #include <vtkFloatArray.h>
 #include <vtkShortArray.h>
 
+#include "measure_phantoms.hpp"
 #include "test_util.hpp"
 
 using namespace iso;
+using iso::test::plain_sums;
+using iso::test::sample_field;
 
 namespace {
 
-struct AreaVolume {
-    double area = 0, volume = 0;
-};
-AreaVolume stats(const Mesh& m) {
-    AreaVolume r;
-    for (const auto& t : m.triangles) {
-        const glm::dvec3 a(m.positions[t[0]]), b(m.positions[t[1]]), c(m.positions[t[2]]);
-        r.area += 0.5 * glm::length(glm::cross(b - a, c - a));
-        r.volume += glm::dot(a, glm::cross(b, c)) / 6.0;
-    }
-    return r;
-}
 
-// A float volume sampling f(world position), world = affine * index.
-template <class F> Volume field(std::array<std::int64_t, 3> dims, const glm::dmat4& affine, F f) {
-    auto v = Volume::dense(dims, VoxelType::F32, affine);
-    auto s = v.as<float>();
-    for (std::int64_t k = 0; k < dims[2]; ++k)
-        for (std::int64_t j = 0; j < dims[1]; ++j)
-            for (std::int64_t i = 0; i < dims[0]; ++i)
-                s[v.linear_index(i, j, k)] = float(f(v.index_to_world({double(i), double(j), double(k)})));
-    return v;
-}
 
 // Distance field of a sphere (inside = larger values, as in CT): value = r - |p - c|.
 Volume sphere(std::array<std::int64_t, 3> dims, const glm::dmat4& affine, glm::dvec3 c, double r) {
-    return field(dims, affine, [&](glm::dvec3 p) { return r - glm::length(p - c); });
+    return sample_field(dims, affine, [&](glm::dvec3 p) { return r - glm::length(p - c); });
 }
 
 // Runs vtkFlyingEdges3D in index space (origin 0, spacing 1) and maps its
@@ -166,10 +147,10 @@ TEST(Isosurface, MatchesFlyingEdgesOnObliqueAnisotropicSphere) {
     ASSERT_GT(fe.triangles.size(), 500u);
     EXPECT_EQ(ours.triangles.size(), fe.triangles.size());
     EXPECT_EQ(ours.positions.size(), fe.positions.size());
-    const auto a = stats(ours), b = stats(fe);
+    const auto a = plain_sums(ours), b = plain_sums(fe);
     EXPECT_NEAR(a.area, b.area, 1e-5 * b.area);
-    EXPECT_NEAR(a.volume, b.volume, 1e-5 * b.volume);
-    EXPECT_GT(a.volume, 0.0) << "triangles must face outward";
+    EXPECT_NEAR(a.volume_mm3, b.volume_mm3, 1e-5 * b.volume_mm3);
+    EXPECT_GT(a.volume_mm3, 0.0) << "triangles must face outward";
     // Same vertices: every one of ours has an FE vertex within 1e-5 voxel.
     std::vector<std::array<float, 3>> fe_pos;
     for (auto p : fe.positions) fe_pos.push_back({p.x, p.y, p.z});
@@ -334,7 +315,7 @@ TEST(Isosurface, OneVoxelThickSheetIsClosed) {
     const Mesh m = extract_isosurface(v, 100, {.chunk_size = 5});
     EXPECT_GT(m.triangles.size(), 50u);
     EXPECT_EQ(bad_edges(m), 0u);
-    EXPECT_GT(stats(m).volume, 0.0);
+    EXPECT_GT(plain_sums(m).volume_mm3, 0.0);
 }
 
 TEST(Isosurface, NaNSamplesAreOutside) {
@@ -346,14 +327,14 @@ TEST(Isosurface, NaNSamplesAreOutside) {
     const Mesh m = extract_isosurface(v, 0.0, {.chunk_size = 4});
     EXPECT_EQ(m.triangles.size(), ref.triangles.size());
     for (auto& p : m.positions) EXPECT_TRUE(std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z));
-    EXPECT_NEAR(stats(m).area, stats(ref).area, 1e-9 * stats(ref).area);
+    EXPECT_NEAR(plain_sums(m).area, plain_sums(ref).area, 1e-9 * plain_sums(ref).area);
 }
 
 TEST(Isosurface, MirroredAffineStillFacesOutward) {
     const auto aff = glm::scale(glm::dmat4(1.0), glm::dvec3(-1.0, 1.0, 1.0)); // NIfTI-style flip
     const auto v = sphere({16, 16, 16}, aff, {-7.5, 7.5, 7.5}, 5.0);
     const Mesh m = extract_isosurface(v, 0.0, {});
-    EXPECT_NEAR(stats(m).volume, 4.0 / 3.0 * M_PI * 125.0, 0.03 * 4.0 / 3.0 * M_PI * 125.0);
+    EXPECT_NEAR(plain_sums(m).volume_mm3, 4.0 / 3.0 * M_PI * 125.0, 0.03 * 4.0 / 3.0 * M_PI * 125.0);
 }
 
 TEST(Isosurface, NormalsAreWorldSpaceForAnisotropicRotatedGrids) {
@@ -393,7 +374,7 @@ TEST(Isosurface, SeveralIsoValuesInOnePass) {
     ASSERT_EQ(meshes.size(), 2u);
     EXPECT_EQ(canonical(meshes[0]), canonical(extract_isosurface(v, 0.0, {})));
     EXPECT_EQ(canonical(meshes[1]), canonical(extract_isosurface(v, 3.0, {})));
-    EXPECT_GT(stats(meshes[0]).volume, stats(meshes[1]).volume);
+    EXPECT_GT(plain_sums(meshes[0]).volume_mm3, plain_sums(meshes[1]).volume_mm3);
 }
 
 TEST(Isosurface, CancelStops) {
@@ -439,41 +420,41 @@ TEST(Isosurface, LabelMapOneSurfacePerLabelInOnePass) {
         const Mesh fe = discrete_flying_edges(v, ls.label);
         EXPECT_EQ(ls.mesh.triangles.size(), fe.triangles.size()) << "label " << ls.label;
         EXPECT_EQ(bad_edges(ls.mesh), 0u) << "label " << ls.label;
-        EXPECT_NEAR(stats(ls.mesh).area, stats(fe).area, 1e-9 * stats(fe).area) << "label " << ls.label;
-        EXPECT_GT(stats(ls.mesh).volume, 0.0) << "label " << ls.label;
+        EXPECT_NEAR(plain_sums(ls.mesh).area, plain_sums(fe).area, 1e-9 * plain_sums(fe).area) << "label " << ls.label;
+        EXPECT_GT(plain_sums(ls.mesh).volume_mm3, 0.0) << "label " << ls.label;
     }
     // Label 2 spans 5 x 14 x 12 samples. With vertices at edge midpoints the
     // surface is that box (faces half a sample out) with every edge chamfered
     // by a right prism of cross-section 1/8 and each corner giving back 1/12:
     // V = 5*14*12 - (4*(5+14+12))/8 + 8/12.
-    EXPECT_NEAR(stats(surfaces[1].mesh).volume, 5.0 * 14.0 * 12.0 - 4.0 * (5 + 14 + 12) / 8.0 + 8.0 / 12.0, 1e-9);
+    EXPECT_NEAR(plain_sums(surfaces[1].mesh).volume_mm3, 5.0 * 14.0 * 12.0 - 4.0 * (5 + 14 + 12) / 8.0 + 8.0 / 12.0, 1e-9);
 }
 
 #include "renderer/iso/postprocess.hpp"
 
 TEST(Postprocess, SmoothDecimateKeepLargest) {
     // Two spheres of different sizes.
-    auto v = field({48, 32, 32}, glm::dmat4(1.0), [](glm::dvec3 p) {
+    auto v = sample_field({48, 32, 32}, glm::dmat4(1.0), [](glm::dvec3 p) {
         return std::max(10.0 - glm::length(p - glm::dvec3(15, 15.5, 15.5)), 5.0 - glm::length(p - glm::dvec3(38, 15.5, 15.5)));
     });
     const Mesh m = extract_isosurface(v, 0.0, {});
-    const auto base = stats(m);
+    const auto base = plain_sums(m);
 
     const Mesh largest = postprocess(m, {.keep_largest = true});
     EXPECT_LT(largest.triangles.size(), m.triangles.size());
-    EXPECT_NEAR(stats(largest).volume, 4.0 / 3.0 * M_PI * 1000.0, 0.02 * 4.0 / 3.0 * M_PI * 1000.0);
+    EXPECT_NEAR(plain_sums(largest).volume_mm3, 4.0 / 3.0 * M_PI * 1000.0, 0.02 * 4.0 / 3.0 * M_PI * 1000.0);
     EXPECT_EQ(bad_edges(largest), 0u);
 
     const Mesh dec = postprocess(m, {.decimate = 0.75});
     EXPECT_LT(dec.triangles.size(), m.triangles.size() * 0.3);
-    EXPECT_NEAR(stats(dec).volume, base.volume, 0.03 * base.volume);
-    EXPECT_GT(stats(dec).volume, 0.0) << "orientation kept";
+    EXPECT_NEAR(plain_sums(dec).volume_mm3, base.volume_mm3, 0.03 * base.volume_mm3);
+    EXPECT_GT(plain_sums(dec).volume_mm3, 0.0) << "orientation kept";
 
     const Mesh smooth = postprocess(m, {.smooth = 0.5});
     EXPECT_EQ(smooth.triangles.size(), m.triangles.size());
     EXPECT_EQ(smooth.normals.size(), smooth.positions.size());
-    EXPECT_NEAR(stats(smooth).volume, base.volume, 0.03 * base.volume);
-    EXPECT_LT(stats(smooth).area, base.area) << "smoothing removes the staircase";
+    EXPECT_NEAR(plain_sums(smooth).volume_mm3, base.volume_mm3, 0.03 * base.volume_mm3);
+    EXPECT_LT(plain_sums(smooth).area, base.area) << "smoothing removes the staircase";
 
     EXPECT_THROW(postprocess(m, {.smooth = 2.0}), Error);
     EXPECT_THROW(postprocess(m, {.decimate = 1.0}), Error);

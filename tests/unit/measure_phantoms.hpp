@@ -12,6 +12,7 @@
 #include <glm/mat4x4.hpp>
 #include <glm/vec3.hpp>
 
+#include "io/mesh.hpp"
 #include "io/volume.hpp"
 
 namespace iso::test {
@@ -62,6 +63,21 @@ inline constexpr double kBallIso = 500.0;
 inline Volume ct_ball(std::array<std::int64_t, 3> dims, const glm::dmat4& affine, const glm::dvec3& c, double r,
                       double sigma) {
     return sample_field(dims, affine, [&](const glm::dvec3& p) { return ct_edge(r - glm::length(p - c), sigma); });
+}
+
+// A plain loop over the triangles, independent of measure.cpp and of the extraction: area and
+// signed volume (relative to the origin, in double).
+struct Plain {
+    double area = 0, volume_mm3 = 0;
+};
+inline Plain plain_sums(const Mesh& m) {
+    Plain p;
+    for (const auto& t : m.triangles) {
+        const glm::dvec3 a(m.positions[t[0]]), b(m.positions[t[1]]), c(m.positions[t[2]]);
+        p.area += 0.5 * glm::length(glm::cross(b - a, c - a));
+        p.volume_mm3 += glm::dot(a, glm::cross(b, c)) / 6.0;
+    }
+    return p;
 }
 
 } // namespace iso::test

@@ -36,20 +36,6 @@ double cap_ml(double r, double d) {
     return kPi * h * h * (3.0 * r - h) / 3.0 / 1000.0;
 }
 
-// A plain loop over the triangles, independent of measure.cpp: area and
-// signed volume (relative to the origin, in double).
-struct Plain {
-    double area = 0, volume_mm3 = 0;
-};
-Plain plain_sums(const Mesh& m) {
-    Plain p;
-    for (const auto& t : m.triangles) {
-        const glm::dvec3 a(m.positions[t[0]]), b(m.positions[t[1]]), c(m.positions[t[2]]);
-        p.area += 0.5 * glm::length(glm::cross(b - a, c - a));
-        p.volume_mm3 += glm::dot(a, glm::cross(b, c)) / 6.0;
-    }
-    return p;
-}
 
 // An axis-aligned box [lo, hi] as 8 vertices and 12 outward triangles.
 Mesh box(glm::dvec3 lo, glm::dvec3 hi) {
