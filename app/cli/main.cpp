@@ -522,8 +522,13 @@ int run_measure(const MeasureArgs& a) {
             else
                 std::cout << ", volume " << (kind == "lower bound" ? ">= " : "") << std::setprecision(3) << s["volume_ml"].get<double>() << " mL";
             if (!s["volume_uncertainty_ml"].is_null()) std::cout << " +- " << s["volume_uncertainty_ml"].get<double>();
-            std::cout << (s["closed"].get<bool>() ? ", closed" : ", open (boundary " + std::to_string(s["boundary"]["length_mm"].get<double>()) + " mm)")
-                      << ", " << s["components"].size() << " component(s)\n";
+            if (!s["volume_extrapolated_ml"].is_null() && kind == "enclosed")
+                std::cout << " (extrapolated to zero voxel size: " << s["volume_extrapolated_ml"].get<double>() << ")";
+            if (s["closed"].get<bool>())
+                std::cout << ", closed";
+            else
+                std::cout << ", open (boundary " << std::setprecision(1) << s["boundary"]["length_mm"].get<double>() << " mm)";
+            std::cout << ", " << s["components"].size() << " component(s)\n";
             for (const auto& w : s["warnings"]) std::cout << "  note: " << w.get<std::string>() << "\n";
         }
         for (const auto& d : j["distances"]) std::cout << "distance " << std::setprecision(3) << d["distance_mm"].get<double>() << " mm\n";

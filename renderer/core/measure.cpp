@@ -84,6 +84,8 @@ nlohmann::json measure_json(const Scene& scene, const std::vector<SurfaceMeasure
         o["bounds_lps"] = {vec(m.bounds_min), vec(m.bounds_max)};
         o["area_uncertainty_mm2"] = number(m.area_uncertainty_mm2);
         o["volume_uncertainty_ml"] = number(m.volume_uncertainty_ml);
+        o["area_extrapolated_mm2"] = number(m.area_extrapolated_mm2);
+        o["volume_extrapolated_ml"] = number(m.volume_extrapolated_ml);
         json parts = json::array();
         for (const auto& p : m.components) parts.push_back(part_json(p));
         o["components"] = std::move(parts);

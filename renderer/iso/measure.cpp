@@ -786,6 +786,11 @@ SurfaceMeasures measure_isosurface(const Volume& v, double iso, const Mesh& surf
             const Mesh cm = extract_isosurface(coarse, iso, eo);
             const Analysis co = analyse(cm);
             const double k = 3.0 / (r * r - 1.0); // Fs / (r^p - 1), Fs = 3, p = 2
+            if (grids == 1) { // Richardson, p = 2, from the first coarse grid
+                result.area_extrapolated_mm2 = result.area_mm2 + (result.area_mm2 - co.m.area_mm2) / (r * r - 1.0);
+                if (result.volume_kind != VolumeKind::Undefined)
+                    result.volume_extrapolated_ml = result.volume_ml + (result.volume_ml - co.m.volume_ml) / (r * r - 1.0);
+            }
             ua_total = std::max(ua_total, k * std::abs(result.area_mm2 - co.m.area_mm2));
             uv_total = std::max(uv_total, k * std::abs(result.volume_ml - co.m.volume_ml));
             const auto match = match_components(cells, cm, co.vertex_component, co.m.components.size());
