@@ -147,3 +147,23 @@ TEST(Overlay, LabelsThatAreNotAsciiAndTheScale) {
     };
     EXPECT_NEAR(extent(2.0f) / extent(1.0f), 2.0, 1e-5);
 }
+
+TEST(Overlay, TheHeadExampleShowsTheDocumentedValues) {
+    // datasets/markups/headsq-face.mrk.json, as docs/markups.md and its README describe it; our writer keeps it.
+    const auto f = load_markups(test::data("markups/headsq-face.mrk.json"));
+    ASSERT_EQ(f.markups.size(), 4u);
+    EXPECT_EQ(f.markups[0].points.size(), 3u);
+    EXPECT_EQ(markup_measurement_text(f.markups[1]), "145.3 mm");
+    EXPECT_EQ(markup_measurement_text(f.markups[2]), "46.8 mm");
+    EXPECT_EQ(markup_measurement_text(f.markups[3]), "70.8\xC2\xB0");
+    EXPECT_EQ(markup_color(f.markups[2], -1), glm::vec3(1.0f, 0.85f, 0.2f));
+    test::TempDir dir;
+    save_markups(f, dir / "copy.mrk.json");
+    const auto g = load_markups(dir / "copy.mrk.json");
+    ASSERT_EQ(g.markups.size(), 4u);
+    for (std::size_t i = 0; i < 4; ++i) {
+        EXPECT_EQ(g.markups[i].name, f.markups[i].name);
+        ASSERT_EQ(g.markups[i].points.size(), f.markups[i].points.size());
+        for (std::size_t k = 0; k < f.markups[i].points.size(); ++k) EXPECT_EQ(g.markups[i].points[k].position, f.markups[i].points[k].position);
+    }
+}
