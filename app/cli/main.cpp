@@ -326,6 +326,7 @@ iso::core::RenderRequest frame_request(const FrameArgs& a) {
 struct RenderArgs {
     FrameArgs frame;
     std::string out, aov, cache;
+    std::vector<std::string> markups;
     float scale = 1.0f;
     bool stats = false, no_annotations = false, transparent = false;
     int ao_rays = 1024;
@@ -338,7 +339,10 @@ CLI::App* add_render(CLI::App& app, RenderArgs& a) {
     c->add_option("--aov", a.aov, "Write a buffer instead of the colour image: depth, normal, id or ao (EXR)");
     c->add_option("--ao-rays", a.ao_rays, "Rays per pixel for --ao reference")->check(CLI::Range(1, 1 << 20));
     c->add_option("--ao-cache", a.cache, "Folder caching AO references ('-': none; default ~/.cache/isoscope)");
-    c->add_flag("--no-annotations", a.no_annotations, "No scale bar, orientation letters or labels");
+    c->add_flag("--no-annotations", a.no_annotations, "No scale bar, orientation letters or labels (--markups are still drawn)");
+    c->add_option("--markups", a.markups, "3D Slicer markups file (.mrk.json) to draw: points, lines with their length, angles "
+                                          "(repeatable; dimmed where a surface hides them)")
+        ->allow_extra_args(false);
     c->add_flag("--transparent", a.transparent, "Transparent background");
     c->add_flag("--stats", a.stats, "Print per-pass statistics");
     c->add_option("-o,--output", a.out, "Output .png, .tif or .exr")->required();
@@ -374,7 +378,15 @@ int run_render(const RenderArgs& a) {
     req.annotations = !a.no_annotations;
     req.transparent = a.transparent;
     req.time_passes = a.stats;
+    if (!a.markups.empty() && !a.aov.empty()) throw iso::Error("--markups", "markups are drawn on the colour image, not on an AOV (--aov)");
     iso::check_writable_destination(a.out);
+    // Markups before the volume: a bad file fails fast, naming itself.
+    for (const auto& path : a.markups) {
+        auto f = iso::load_markups(path);
+        for (const auto& w : f.warnings) std::cerr << "warning: " << path << ": " << w << "\n";
+        for (auto& m : f.markups) req.markups.push_back(std::move(m));
+        req.markups_files.push_back(path);
+    }
     iso::core::Scene scene;
     open_input(scene, a.frame.in, a.frame.series, a.frame.isos, a.frame.look, "render");
     const auto out = iso::core::render_image(scene, req);

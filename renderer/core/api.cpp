@@ -203,7 +203,10 @@ RenderOutput render_image(Scene& scene, const RenderRequest& req) {
         }
     RenderOptions ro = render_options(req);
     Annotations ann;
-    if (req.annotations && req.aov == Aov::None) ro.annotations = &ann;
+    ann.markups = req.markups;
+    ann.scale_bar = ann.orientation = req.annotations;
+    const bool colour_image = req.aov == Aov::None && !req.aov_ao; // annotations and markups go on it only
+    if ((req.annotations || !ann.markups.empty()) && colour_image) ro.annotations = &ann;
     const Camera cam = scene.camera(patient_view_from_name(req.view), double(req.width) / double(req.height));
     const bool cone = req.ao == "cone";
     // Still frames: each adds new jitter sets to the running mean of the AO.
@@ -231,6 +234,28 @@ RenderOutput render_image(Scene& scene, const RenderRequest& req) {
     }
     t["isoscope:input"] = inputs;
     t["isoscope:input_sha256"] = hashes;
+    if (colour_image && !ann.markups.empty()) {
+        std::string files, sums;
+        for (const auto& f : req.markups_files) {
+            files += (files.empty() ? "" : "\n") + std::filesystem::absolute(f).string();
+            sums += (sums.empty() ? "" : "\n") + sha256_of_path(f);
+        }
+        if (!files.empty()) {
+            t["isoscope:markups"] = files;
+            t["isoscope:markups_sha256"] = sums;
+        }
+        // What was drawn, one markup a line: type, name, points, the value shown (ASCII: "deg" for the degree sign).
+        std::string drawn;
+        for (const auto& m : ann.markups) {
+            std::size_t defined = 0;
+            for (const auto& p : m.points) defined += p.status == PositionStatus::Defined;
+            std::string value = markup_measurement_text(m);
+            if (const auto deg = value.find("\xC2\xB0"); deg != std::string::npos) value.replace(deg, 2, " deg");
+            drawn += (drawn.empty() ? "" : "\n") + std::string(markup_type_name(m.type)) + (m.name.empty() ? "" : " '" + m.name + "'") + ": " +
+                     std::to_string(defined) + " defined point(s)" + (value.empty() ? "" : ", " + value);
+        }
+        t["isoscope:markups_drawn"] = drawn;
+    }
     if (!isos_text.empty()) t["isoscope:iso"] = isos_text;
     t["isoscope:view_name"] = req.view;
     std::ostringstream cs;

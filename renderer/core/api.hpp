@@ -7,6 +7,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "io/markups.hpp"
 #include "io/mesh.hpp"
 #include "renderer/core/scene.hpp"
 #include "renderer/render/overlay.hpp"
@@ -39,7 +40,14 @@ struct RenderRequest {
     int width = 1024, height = 1024;
     float scale = 1.0f;              // annotation scale (text, lines, glyphs)
     Aov aov = Aov::None;
-    bool annotations = true;
+    bool annotations = true;         // scale bar and orientation letters
+    // 3D Slicer markups (LPS mm; io/markups.hpp) drawn over the colour image,
+    // with annotations on or off, never on AOVs: glyphs, labels, lines with
+    // their length, angles with their value; dimmed where a surface hides
+    // them (docs/markups.md, "Drawing markups"). `markups_files` names the
+    // files they came from, recorded with their SHA-256 in the metadata.
+    std::vector<Markup> markups;
+    std::vector<std::string> markups_files;
     bool transparent = false;        // transparent background (colour images)
     glm::vec3 background{0.08f, 0.09f, 0.11f}; // linear RGB
     bool flat_shading = false;       // each surface its albedo: no lighting, no AO
@@ -81,9 +89,10 @@ struct RenderOutput {
 };
 
 // Renders the scene headlessly (its own EGL context, made on first use) as
-// asked: camera from the patient view, annotations, AO (cone or the Embree
-// reference), AOVs; the output carries the metadata to embed (sources and
-// their SHA-256, iso values, camera, matrices). `isos` and `series` of the
+// asked: camera from the patient view, annotations and markups, AO (cone or
+// the Embree reference), AOVs; the output carries the metadata to embed
+// (sources and their SHA-256, iso values, camera, matrices, markups files
+// and the measurements drawn). `isos` and `series` of the
 // request are not used here. Throws iso::Error.
 RenderOutput render_image(Scene& scene, const RenderRequest& req);
 

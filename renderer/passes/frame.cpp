@@ -73,7 +73,7 @@ void build_frame(graph::FrameGraph& fg, const FrameContext& ctx) {
     PickBuffers picked = gb.pick;
     if (!ctx.translucent.empty()) color = voit(fg, ctx, gb, color, opt.ao && !opt.flat_shading ? &ao : nullptr, picked);
     if (picked.valid()) pick(fg, ctx, picked);
-    if (opt.annotations) color = overlay(fg, ctx, color);
+    if (opt.annotations) color = overlay(fg, ctx, color, gb.depth);
     if (opt.present) return present(fg, ctx, color);
     // The colour image, or the AOV: depth, AO, or the G-buffer channel the layout table names.
     graph::TextureHandle source = color;

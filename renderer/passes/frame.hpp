@@ -181,7 +181,8 @@ AmbientOcclusion ambient_occlusion(graph::FrameGraph& fg, const FrameContext& ct
 
 // Deferred lighting; `ao` invalid: no AO.
 graph::TextureHandle lighting(graph::FrameGraph& fg, const FrameContext& ctx, const GBuffer& gb, graph::TextureHandle ao);
-graph::TextureHandle overlay(graph::FrameGraph& fg, const FrameContext& ctx, graph::TextureHandle color);
+// Annotations over `color`; markups are dimmed where the G-buffer's `depth` is in front of them.
+graph::TextureHandle overlay(graph::FrameGraph& fg, const FrameContext& ctx, graph::TextureHandle color, graph::TextureHandle depth);
 // VOIT (docs/voit.md): the translucent fragments' lists, then their
 // front-to-back composite over `color`; returns the composited colour.
 // `ao` non-null: each shaded fragment traces its own AO through that chain.

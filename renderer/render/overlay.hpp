@@ -1,9 +1,13 @@
 // Annotations drawn over the rendered image: text labels at 3D points, lines
-// and points, a scale bar in millimetres, and the patient orientation letters
-// (L/R/A/P/S/I) at the viewport edges. Built on the CPU as coloured
-// triangles in pixel coordinates; text comes from stb_easy_font (Debian's
-// libstb-dev), so no font file is needed. Everything scales with `scale`
-// so that a 4x export has 4x thicker lines and larger text.
+// and points, 3D Slicer markups (point lists, lines with their length,
+// angles with their value), a scale bar in millimetres, and the patient
+// orientation letters (L/R/A/P/S/I) at the viewport edges. Built on the CPU
+// as coloured triangles in pixel coordinates; text comes from stb_easy_font
+// (Debian's libstb-dev), so no font file is needed. Everything scales with
+// `scale` so that a 4x export has 4x thicker lines and larger text. Markups
+// carry the depth of the 3D point each vertex draws: the overlay pass
+// compares it with the frame's depth and dims (and dashes) what lies behind
+// a surface (docs/markups.md, "Drawing markups").
 #pragma once
 
 #include <string>
@@ -13,6 +17,7 @@
 #include <glm/vec3.hpp>
 #include <glm/vec4.hpp>
 
+#include "io/markups.hpp"
 #include "renderer/scene/camera.hpp"
 
 namespace iso {
@@ -29,15 +34,54 @@ struct Annotations {
     std::vector<Line> lines;
     std::vector<glm::dvec3> points;
     bool scale_bar = true, orientation = true;
+    // 3D Slicer markups (io/markups.hpp), LPS mm. Points that are not
+    // Defined or not visible are skipped. Parts behind the nearest opaque
+    // surface of the frame (its G-buffer depth) by more than
+    // `occlusion_tolerance_mm` are drawn at `hidden_opacity` without their
+    // dark outline, hidden line parts also dashed; a glyph and its label
+    // are hidden as a whole only when the surface is in front at every pixel
+    // of the 3x3 block around their point.
+    std::vector<Markup> markups;
+    float hidden_opacity = 0.35f;
+    float occlusion_tolerance_mm = 1.0f;
 };
 
 struct OverlayVertex {
-    glm::vec2 pixel;
-    glm::vec4 color;
+    glm::vec2 pixel;  // from the image's top-left corner
+    glm::vec4 color;  // sRGB, straight alpha
+    // Markups only. The pixel (top-left origin) whose 3x3 block decides
+    // whether this vertex's glyph or label is hidden; negative: each
+    // fragment's own pixel decides (lines).
+    glm::vec2 anchor{-1.0f};
+    // 1 / (the drawn 3D point's depth along the view axis, mm); 0: a 2D
+    // annotation, never compared or dimmed. Interpolated linearly in the
+    // image, which is exact for a projected segment.
+    float inv_depth = 0.0f;
+    // Pixels along a line from its start, for dashing hidden parts; negative: solid.
+    float along = -1.0f;
+    // The alpha factor when hidden: Annotations::hidden_opacity for the
+    // colour, 0 for outlines and text shadows.
+    float hidden_alpha = 1.0f;
 };
 
 // Triangles (3 vertices each) for the annotations of a W x H view.
 std::vector<OverlayVertex> build_overlay(const Annotations& a, const Camera& cam, int width, int height, float scale);
+
+// The text drawn with a Line or an Angle: its length as "42.3 mm" or its
+// angle as "87.5\u00b0" (UTF-8 degree sign; the overlay draws the sign
+// itself, stb_easy_font has ASCII only), one decimal. The file's own
+// "length"/"angle" measurement is used when it has a value in mm
+// (length) or degrees (angle), else computed_measurement()'s. Empty for
+// other types and when there is no value (a point not Defined, a
+// zero-length arm).
+std::string markup_measurement_text(const Markup& m);
+
+// The colour of a markup's control point `point`, or of its lines (point
+// -1: as if selected when any Defined point is): Slicer's selectedColor
+// for selected points (the default), its color for the others, else a
+// default per type (points pink-red, lines cyan, angles green, curves
+// orange); sRGB components in [0, 1] as Slicer stores them.
+glm::vec3 markup_color(const Markup& m, int point = -1);
 
 // The letters of the patient directions pointing to the right and top of the
 // view ("L", "P", ...), and the scale bar's length in mm for a view of that width.
