@@ -320,8 +320,9 @@ namespace {
 
 // Radiopaedia, "Windowing (CT)" (https://radiopaedia.org/articles/windowing-ct):
 // brain W:80 L:40; soft tissues W:350-400 L:20-60 (W:400 L:40 taken); lungs
-// W:1500 L:-600; bone W:1800 L:400. Angio: W:600 L:170, a common CTA window
-// (neither Radiopaedia's table nor Slicer's presets have one).
+// W:1500 L:-600; bone W:1800 L:400. Angio: W:600 L:170, the CTA preset some
+// open viewers use (e.g. the ctviewer project's); neither Radiopaedia's table
+// nor Slicer's presets have one.
 constexpr WindowPreset kCtPresets[] = {
     {"brain", {40.0, 80.0}},  {"soft tissue", {40.0, 400.0}}, {"lung", {-600.0, 1500.0}},
     {"bone", {400.0, 1800.0}}, {"angio", {170.0, 600.0}},

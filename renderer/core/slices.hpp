@@ -163,8 +163,9 @@ struct WindowPreset {
     WindowLevel window;
 };
 // CT presets in HU, from Radiopaedia's "Windowing (CT)" table (brain, soft
-// tissue, lung, bone), and a CT angiography window (W 600 / L 170, a common
-// vendor-independent value; Radiopaedia and Slicer list none): docs/slices.md.
+// tissue, lung, bone), and a CT angiography window (W 600 / L 170, the CTA
+// preset some open viewers use; Radiopaedia's table and Slicer list none):
+// docs/slices.md.
 std::span<const WindowPreset> ct_window_presets();
 // The preset of that name (case-sensitive: "brain", "soft tissue", "lung", "bone", "angio").
 std::optional<WindowLevel> ct_window_preset(std::string_view name);
