@@ -1,0 +1,445 @@
+// Slice views' headless half (slices.hpp, docs/slices.md): planes, reslicing,
+// window/level, pixel <-> LPS and surface outlines.
+//
+// Reslicing is written here rather than taken from VTK (vtkImageReslice):
+// the values must be exactly what the core API's value at a point
+// (sample_volume) reports for the same LPS point, including its inside test,
+// its clamped outer half voxel and its NaN rule, and VTK's image data has no
+// sheared (gantry-tilt) geometry.
+#include "renderer/core/slices.hpp"
+
+#include <algorithm>
+#include <atomic>
+#include <cmath>
+#include <limits>
+#include <type_traits>
+
+#include <glm/common.hpp>
+#include <glm/geometric.hpp>
+#include <glm/mat3x3.hpp>
+#include <glm/matrix.hpp>
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include "io/error.hpp"
+
+namespace iso::core {
+
+namespace {
+
+constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
+constexpr int kMaxImageSide = 16384;
+// Voxels: the rounding allowance of sample_volume (renderer/iso/measure.cpp)
+// at the grid's outer faces and at voxel centres; kept equal to it.
+constexpr double kIndexEps = 1e-9;
+
+struct Axes {
+    glm::dvec3 right, up, normal;
+};
+
+// Slicer's vtkMRMLSliceNode orientations written in LPS (Slicer's RAS
+// columns with x and y negated): axial L, A, normal S; coronal L, S, normal
+// P; sagittal P, S, normal L. The normals are the positive LPS axes (Slicer
+// uses S, A, R), so an offset reads as an LPS coordinate.
+Axes orientation_axes(SliceOrientation o) {
+    switch (o) {
+    case SliceOrientation::Axial: return {{1, 0, 0}, {0, -1, 0}, {0, 0, 1}};
+    case SliceOrientation::Coronal: return {{1, 0, 0}, {0, 0, 1}, {0, 1, 0}};
+    case SliceOrientation::Sagittal: return {{0, 1, 0}, {0, 0, 1}, {1, 0, 0}};
+    }
+    return {{1, 0, 0}, {0, -1, 0}, {0, 0, 1}};
+}
+
+bool finite(const glm::dvec3& p) { return std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z); }
+
+double lerp(double a, double b, double t) { return t == 0.0 ? a : t == 1.0 ? b : a + (b - a) * t; }
+
+// sample_volume's rules from a continuous index, value only (the sparse path
+// and the NaN fallback of the dense path). Kept in step with measure.cpp.
+float sample_index(const Volume& v, const glm::dvec3& index, Interp interp) {
+    std::array<std::int64_t, 3> i0{}, i1{}, voxel{};
+    std::array<double, 3> f{};
+    for (int a = 0; a < 3; ++a) {
+        const double n = double(v.dims[a]);
+        const double x = std::abs(index[a] - std::round(index[a])) < kIndexEps ? std::round(index[a]) : index[a];
+        if (!(x >= -0.5 - kIndexEps && x <= n - 0.5 + kIndexEps)) return kNaN;
+        const double c = std::clamp(x, 0.0, n - 1.0);
+        voxel[a] = std::clamp<std::int64_t>(std::int64_t(std::floor(x + 0.5)), 0, v.dims[a] - 1);
+        i0[a] = std::clamp<std::int64_t>(std::int64_t(std::floor(c)), 0, std::max<std::int64_t>(v.dims[a] - 2, 0));
+        i1[a] = std::min(i0[a] + 1, v.dims[a] - 1);
+        f[a] = i1[a] == i0[a] ? 0.0 : std::clamp(c - double(i0[a]), 0.0, 1.0);
+    }
+    if (interp == Interp::Nearest) return float(v.value(voxel[0], voxel[1], voxel[2]));
+    auto at = [&](int di, int dj, int dk) { return v.value(di ? i1[0] : i0[0], dj ? i1[1] : i0[1], dk ? i1[2] : i0[2]); };
+    // Only samples with weight are read, so a NaN neighbour with zero weight does not spread.
+    auto row = [&](int dj, int dk) { return f[0] == 0 ? at(0, dj, dk) : lerp(at(0, dj, dk), at(1, dj, dk), f[0]); };
+    auto plane = [&](int dk) { return f[1] == 0 ? row(0, dk) : lerp(row(0, dk), row(1, dk), f[1]); };
+    return float(f[2] == 0 ? plane(0) : lerp(plane(0), plane(1), f[2]));
+}
+
+// The continuous index of pixel (0, 0)'s centre and the index steps per column and per row.
+struct IndexSteps {
+    glm::dvec3 first, per_column, per_row;
+};
+IndexSteps index_steps(const Volume& v, const SliceGrid& g) {
+    const glm::dmat4 inv = glm::inverse(v.index_to_lps);
+    return {glm::dvec3(inv * glm::dvec4(pixel_to_lps(g, {0.5, 0.5}), 1.0)), glm::dvec3(inv * glm::dvec4(g.dx, 0.0)),
+            glm::dvec3(inv * glm::dvec4(g.dy, 0.0))};
+}
+
+// Rows [r0, r1) of a dense volume of type T. The inner loop is the index by
+// two multiply-adds per axis, the inside test, and the 8 (or 1) fetches.
+template <class T>
+void reslice_dense_rows(const Volume& v, const IndexSteps& s, int width, int r0, int r1, Interp interp, float* out) {
+    const T* data = v.as<T>().data();
+    const std::int64_t nx = v.dims[0], ny = v.dims[1], nz = v.dims[2];
+    const std::int64_t sy = nx, sz = nx * ny;
+    // Neighbour offsets; 0 on an axis of one sample (its weight is 0 then).
+    const std::int64_t ox = nx > 1 ? 1 : 0, oy = ny > 1 ? sy : 0, oz = nz > 1 ? sz : 0;
+    const double lo = -0.5 - kIndexEps;
+    const double hx = double(nx) - 0.5 + kIndexEps, hy = double(ny) - 0.5 + kIndexEps, hz = double(nz) - 0.5 + kIndexEps;
+    const double mx = double(nx - 1), my = double(ny - 1), mz = double(nz - 1);
+    const std::int64_t lx = std::max<std::int64_t>(nx - 2, 0), ly = std::max<std::int64_t>(ny - 2, 0),
+                       lz = std::max<std::int64_t>(nz - 2, 0);
+    for (int r = r0; r < r1; ++r) {
+        const glm::dvec3 base = s.first + double(r) * s.per_row;
+        float* o = out + std::size_t(r) * std::size_t(width);
+        for (int c = 0; c < width; ++c) {
+            const double x = base.x + double(c) * s.per_column.x;
+            const double y = base.y + double(c) * s.per_column.y;
+            const double z = base.z + double(c) * s.per_column.z;
+            if (!(x >= lo && x <= hx && y >= lo && y <= hy && z >= lo && z <= hz)) {
+                o[c] = kNaN;
+                continue;
+            }
+            if (interp == Interp::Nearest) {
+                const std::int64_t i = std::clamp<std::int64_t>(std::int64_t(std::floor(x + 0.5)), 0, nx - 1);
+                const std::int64_t j = std::clamp<std::int64_t>(std::int64_t(std::floor(y + 0.5)), 0, ny - 1);
+                const std::int64_t k = std::clamp<std::int64_t>(std::int64_t(std::floor(z + 0.5)), 0, nz - 1);
+                o[c] = float(data[i + sy * j + sz * k]);
+                continue;
+            }
+            const double cx = std::clamp(x, 0.0, mx), cy = std::clamp(y, 0.0, my), cz = std::clamp(z, 0.0, mz);
+            const std::int64_t i = std::min(std::int64_t(cx), lx), j = std::min(std::int64_t(cy), ly),
+                               k = std::min(std::int64_t(cz), lz);
+            const double fx = cx - double(i), fy = cy - double(j), fz = cz - double(k);
+            const T* p = data + i + sy * j + sz * k;
+            const double c00 = double(p[0]) + (double(p[ox]) - double(p[0])) * fx;
+            const double c10 = double(p[oy]) + (double(p[oy + ox]) - double(p[oy])) * fx;
+            const double c01 = double(p[oz]) + (double(p[oz + ox]) - double(p[oz])) * fx;
+            const double c11 = double(p[oz + oy]) + (double(p[oz + oy + ox]) - double(p[oz + oy])) * fx;
+            const double c0 = c00 + (c10 - c00) * fy, c1 = c01 + (c11 - c01) * fy;
+            double value = c0 + (c1 - c0) * fz;
+            if constexpr (std::is_floating_point_v<T>) {
+                // A NaN sample read with zero weight must not spread (sample_volume reads only weighted ones).
+                if (std::isnan(value)) value = sample_index(v, {x, y, z}, Interp::Linear);
+            }
+            o[c] = float(value);
+        }
+    }
+}
+
+// One crossing point per edge, computed from (below, above) in that order
+// whichever triangle asks, in one function (no inlined copies that a
+// compiler could contract differently), so neighbours agree bitwise.
+[[gnu::noinline]] glm::dvec3 crossing(const glm::vec3& below, double d_below, const glm::vec3& above, double d_above) {
+    if (d_above == 0.0) return glm::dvec3(above);
+    const double t = d_below / (d_below - d_above);
+    const glm::dvec3 a(below), b(above);
+    return a + t * (b - a);
+}
+
+} // namespace
+
+// ---- Planes ------------------------------------------------------------------
+
+const char* slice_orientation_name(SliceOrientation o) {
+    switch (o) {
+    case SliceOrientation::Axial: return "axial";
+    case SliceOrientation::Coronal: return "coronal";
+    case SliceOrientation::Sagittal: return "sagittal";
+    }
+    return "axial";
+}
+
+double SlicePlane::offset_mm() const { return glm::dot(origin, normal); }
+
+double slice_step_mm(const Volume& v, const glm::dvec3& normal) {
+    const glm::dvec3 d = glm::inverse(glm::dmat3(v.index_to_lps)) * normal;
+    const double m = std::max({std::abs(d.x), std::abs(d.y), std::abs(d.z)});
+    return m > 0 ? 1.0 / m : 1.0;
+}
+
+SlicePlane default_plane(const Volume& v, SliceOrientation o) {
+    if (v.voxel_count() <= 0) throw Error("slice views", "there is no volume to slice (no voxels)");
+    glm::dvec3 lo(std::numeric_limits<double>::max()), hi(-std::numeric_limits<double>::max());
+    for (int corner = 0; corner < 8; ++corner) {
+        const glm::dvec3 ijk(corner & 1 ? double(v.dims[0]) - 0.5 : -0.5, corner & 2 ? double(v.dims[1]) - 0.5 : -0.5,
+                             corner & 4 ? double(v.dims[2]) - 0.5 : -0.5);
+        const glm::dvec3 p = v.index_to_world(ijk);
+        lo = glm::min(lo, p);
+        hi = glm::max(hi, p);
+    }
+    const Axes ax = orientation_axes(o);
+    const glm::dvec3 extent = hi - lo;
+    SlicePlane p;
+    p.orientation = o;
+    p.origin = p.center = 0.5 * (lo + hi);
+    p.right = ax.right;
+    p.up = ax.up;
+    p.normal = ax.normal;
+    p.fov_mm = {glm::dot(glm::abs(ax.right), extent), glm::dot(glm::abs(ax.up), extent)};
+    const glm::dvec3 sp = v.spacing();
+    p.pixel_mm = std::min({sp.x, sp.y, sp.z});
+    p.step_mm = slice_step_mm(v, ax.normal);
+    return p;
+}
+
+std::array<SlicePlane, 3> default_planes(const Volume& v) {
+    return {default_plane(v, SliceOrientation::Axial), default_plane(v, SliceOrientation::Coronal),
+            default_plane(v, SliceOrientation::Sagittal)};
+}
+
+void scroll_slices(SlicePlane& p, double steps) {
+    const glm::dvec3 d = steps * p.step_mm * p.normal;
+    p.origin += d;
+    p.center += d;
+}
+
+void set_offset(SlicePlane& p, double offset_mm) {
+    p.origin += (offset_mm - glm::dot(p.origin, p.normal)) * p.normal;
+    p.center += (offset_mm - glm::dot(p.center, p.normal)) * p.normal;
+}
+
+void set_crosshair(std::span<SlicePlane> planes, const glm::dvec3& lps) {
+    for (auto& p : planes) {
+        p.origin = lps;
+        p.center += glm::dot(lps - p.center, p.normal) * p.normal;
+    }
+}
+
+void zoom_to_fit(SlicePlane& p, int width, int height) {
+    if (width < 1 || height < 1) return;
+    const double s = std::max(p.fov_mm.x / double(width), p.fov_mm.y / double(height));
+    if (s > 0 && std::isfinite(s)) p.pixel_mm = s;
+}
+
+std::array<int, 2> native_size(const SlicePlane& p) {
+    auto side = [&](double fov) {
+        const double n = p.pixel_mm > 0 ? std::ceil(fov / p.pixel_mm - 1e-9) : 1.0;
+        return std::isfinite(n) ? int(std::clamp(n, 1.0, double(kMaxImageSide))) : 1;
+    };
+    return {side(p.fov_mm.x), side(p.fov_mm.y)};
+}
+
+// ---- Pixels <-> LPS --------------------------------------------------------------
+
+SliceGrid slice_grid(const SlicePlane& p, int width, int height) {
+    if (width < 1 || height < 1 || width > kMaxImageSide || height > kMaxImageSide)
+        throw Error("slice image", "size " + std::to_string(width) + " x " + std::to_string(height) +
+                                       " is outside 1 .. " + std::to_string(kMaxImageSide) + " pixels per side");
+    if (!(p.pixel_mm > 0) || !std::isfinite(p.pixel_mm))
+        throw Error("slice image", "pixel size " + std::to_string(p.pixel_mm) + " mm is not a positive number");
+    constexpr double kTol = 1e-6;
+    const bool unit = std::abs(glm::length(p.right) - 1) < kTol && std::abs(glm::length(p.up) - 1) < kTol &&
+                      std::abs(glm::length(p.normal) - 1) < kTol;
+    const bool orthogonal = std::abs(glm::dot(p.right, p.up)) < kTol && std::abs(glm::dot(p.right, p.normal)) < kTol &&
+                            std::abs(glm::dot(p.up, p.normal)) < kTol;
+    if (!unit || !orthogonal || !finite(p.origin) || !finite(p.center))
+        throw Error("slice image", std::string("the ") + slice_orientation_name(p.orientation) +
+                                       " plane's axes are not orthonormal or its points are not finite");
+    SliceGrid g;
+    g.width = width;
+    g.height = height;
+    g.normal = p.normal;
+    g.offset_mm = p.offset_mm();
+    g.pixel_mm = p.pixel_mm;
+    g.dx = p.pixel_mm * p.right;
+    g.dy = -p.pixel_mm * p.up;
+    // The centre is put on the plane through the crosshair, whatever the caller left in it.
+    const glm::dvec3 c = p.center - glm::dot(p.center - p.origin, p.normal) * p.normal;
+    g.corner = c - 0.5 * double(width) * g.dx - 0.5 * double(height) * g.dy;
+    return g;
+}
+
+glm::dvec3 pixel_to_lps(const SliceGrid& g, const glm::dvec2& pixel) {
+    return g.corner + pixel.x * g.dx + pixel.y * g.dy;
+}
+
+SlicePoint lps_to_pixel(const SliceGrid& g, const glm::dvec3& lps) {
+    const glm::dvec3 rel = lps - g.corner;
+    const double s2 = g.pixel_mm * g.pixel_mm;
+    return {{glm::dot(rel, g.dx) / s2, glm::dot(rel, g.dy) / s2}, glm::dot(lps, g.normal) - g.offset_mm};
+}
+
+std::optional<VolumeSample> sample_at_pixel(const Volume& v, const SliceGrid& g, const glm::dvec2& pixel) {
+    return sample_volume(v, pixel_to_lps(g, pixel));
+}
+
+// ---- Reslicing ---------------------------------------------------------------------
+
+void reslice(const Volume& v, const SliceGrid& g, Interp interp, SliceImage& out) {
+    out.width = g.width;
+    out.height = g.height;
+    out.values.resize(std::size_t(g.width) * std::size_t(g.height));
+    if (v.voxel_count() <= 0) {
+        std::fill(out.values.begin(), out.values.end(), kNaN);
+        return;
+    }
+    const IndexSteps s = index_steps(v, g);
+    float* dst = out.values.data();
+    const int width = g.width;
+    // A few rows per task: a 512-pixel row is a few microseconds of work.
+    const tbb::blocked_range<int> rows(0, g.height, 8);
+    if (v.is_sparse()) {
+        tbb::parallel_for(rows, [&](const tbb::blocked_range<int>& r) {
+            for (int row = r.begin(); row < r.end(); ++row)
+                for (int c = 0; c < width; ++c)
+                    dst[std::size_t(row) * std::size_t(width) + std::size_t(c)] =
+                        sample_index(v, s.first + double(row) * s.per_row + double(c) * s.per_column, interp);
+        });
+        return;
+    }
+    dispatch_voxel_type(v.type, [&](auto t) {
+        using T = decltype(t);
+        tbb::parallel_for(rows, [&](const tbb::blocked_range<int>& r) {
+            reslice_dense_rows<T>(v, s, width, r.begin(), r.end(), interp, dst);
+        });
+    });
+}
+
+SliceImage reslice(const Volume& v, const SlicePlane& p, int width, int height, Interp interp) {
+    SliceImage img;
+    reslice(v, slice_grid(p, width, height), interp, img);
+    return img;
+}
+
+// ---- Window / level ------------------------------------------------------------------
+
+namespace {
+
+// Radiopaedia, "Windowing (CT)" (https://radiopaedia.org/articles/windowing-ct):
+// brain W:80 L:40; soft tissues W:350-400 L:20-60 (W:400 L:40 taken); lungs
+// W:1500 L:-600; bone W:1800 L:400. Angio: W:600 L:170, the CTA preset some
+// open viewers use (e.g. the ctviewer project's); neither Radiopaedia's table
+// nor Slicer's presets have one.
+constexpr WindowPreset kCtPresets[] = {
+    {"brain", {40.0, 80.0}},  {"soft tissue", {40.0, 400.0}}, {"lung", {-600.0, 1500.0}},
+    {"bone", {400.0, 1800.0}}, {"angio", {170.0, 600.0}},
+};
+
+constexpr double kMinWidth = 1e-9;
+
+} // namespace
+
+std::span<const WindowPreset> ct_window_presets() { return kCtPresets; }
+
+std::optional<WindowLevel> ct_window_preset(std::string_view name) {
+    for (const auto& p : kCtPresets)
+        if (p.name == name) return p.window;
+    return std::nullopt;
+}
+
+WindowLevel default_window(std::string_view modality, const ValueRange& range) {
+    if (modality == "CT") return *ct_window_preset("soft tissue");
+    if (!(range.max > range.min)) return {range.min, 1.0};
+    return {0.5 * (range.min + range.max), range.max - range.min};
+}
+
+WindowLevel default_window(const Volume& v) {
+    if (v.meta.modality == "CT") return default_window("CT", ValueRange{});
+    return default_window(v.meta.modality, v.value_range());
+}
+
+std::uint8_t window_grey(double value, const WindowLevel& w) {
+    if (std::isnan(value)) return 0;
+    if (!(w.width >= kMinWidth)) return value >= w.center ? 255 : 0;
+    // Divided, not multiplied by 255 / width: the centre then lands on 127.5 exactly (rounds to 128).
+    const double t = (value - (w.center - 0.5 * w.width)) / w.width * 255.0;
+    return std::uint8_t(std::clamp(t, 0.0, 255.0) + 0.5);
+}
+
+std::vector<std::uint8_t> apply_window(const SliceImage& img, const WindowLevel& w, PixelFormat format) {
+    const std::size_t n = std::size_t(img.width) * std::size_t(img.height);
+    const std::size_t bpp = format == PixelFormat::Rgba8 ? 4 : 1;
+    std::vector<std::uint8_t> out(n * bpp);
+    for (std::size_t i = 0; i < n; ++i) {
+        const float v = img.values[i];
+        const std::uint8_t g = window_grey(v, w);
+        if (bpp == 1) {
+            out[i] = g;
+        } else {
+            const std::uint8_t a = std::isnan(v) ? 0 : 255;
+            const std::uint8_t c = std::isnan(v) ? 0 : g;
+            out[4 * i] = out[4 * i + 1] = out[4 * i + 2] = c;
+            out[4 * i + 3] = a;
+        }
+    }
+    return out;
+}
+
+// ---- Surface outlines ------------------------------------------------------------------
+
+std::vector<SliceSegment> mesh_outline(const Mesh& m, const SliceGrid& g) {
+    const std::size_t nv = m.positions.size(), nt = m.triangles.size();
+    if (nt == 0) return {};
+    // Signed distances once per vertex; a triangle then only compares signs.
+    std::vector<double> d(nv);
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nv, 1 << 14), [&](const tbb::blocked_range<std::size_t>& r) {
+        for (std::size_t i = r.begin(); i < r.end(); ++i) d[i] = glm::dot(glm::dvec3(m.positions[i]), g.normal) - g.offset_mm;
+    });
+    const double s2 = g.pixel_mm * g.pixel_mm;
+    auto to_pixel = [&](const glm::dvec3& p) {
+        const glm::dvec3 rel = p - g.corner;
+        return glm::vec2(float(glm::dot(rel, g.dx) / s2), float(glm::dot(rel, g.dy) / s2));
+    };
+    constexpr std::size_t kBlock = 1 << 15;
+    const std::size_t blocks = (nt + kBlock - 1) / kBlock;
+    std::vector<std::vector<SliceSegment>> parts(blocks);
+    std::atomic<std::size_t> bad{std::numeric_limits<std::size_t>::max()};
+    tbb::parallel_for(std::size_t(0), blocks, [&](std::size_t b) {
+        auto& part = parts[b];
+        const std::size_t end = std::min(nt, (b + 1) * kBlock);
+        for (std::size_t t = b * kBlock; t < end; ++t) {
+            const auto& tri = m.triangles[t];
+            if (tri[0] >= nv || tri[1] >= nv || tri[2] >= nv) {
+                std::size_t expected = bad.load();
+                while (t < expected && !bad.compare_exchange_weak(expected, t)) {}
+                continue;
+            }
+            const double dd[3] = {d[tri[0]], d[tri[1]], d[tri[2]]};
+            // Vertices on the plane (d == 0) and NaN count as above.
+            const bool below[3] = {dd[0] < 0, dd[1] < 0, dd[2] < 0};
+            const int nb = int(below[0]) + int(below[1]) + int(below[2]);
+            if (nb == 0 || nb == 3) continue;
+            // Walking the triangle's edges in winding order, one goes down
+            // through the plane (above -> below) and one up: the segment runs
+            // from the down crossing to the up crossing, so a neighbour
+            // (which walks the shared edge the other way) starts where this ends.
+            glm::dvec3 down{0.0}, up{0.0};
+            for (int k = 0; k < 3; ++k) {
+                const int k1 = (k + 1) % 3;
+                if (below[k] == below[k1]) continue;
+                const std::uint32_t lo = below[k] ? tri[k] : tri[k1], hi = below[k] ? tri[k1] : tri[k];
+                const glm::dvec3 p = crossing(m.positions[lo], d[lo], m.positions[hi], d[hi]);
+                (below[k] ? up : down) = p;
+            }
+            const SliceSegment s{to_pixel(down), to_pixel(up)};
+            if (s.a == s.b || !std::isfinite(s.a.x) || !std::isfinite(s.a.y) || !std::isfinite(s.b.x) ||
+                !std::isfinite(s.b.y))
+                continue;
+            part.push_back(s);
+        }
+    });
+    if (const std::size_t t = bad.load(); t != std::numeric_limits<std::size_t>::max())
+        throw Error("slice outline", "triangle " + std::to_string(t) + " names a vertex beyond the mesh's " +
+                                         std::to_string(nv) + " vertices");
+    std::size_t total = 0;
+    for (const auto& p : parts) total += p.size();
+    std::vector<SliceSegment> out;
+    out.reserve(total);
+    for (const auto& p : parts) out.insert(out.end(), p.begin(), p.end());
+    return out;
+}
+
+} // namespace iso::core

@@ -1,0 +1,746 @@
+// Slice views (renderer/core/slices.hpp): planes, reslicing, clicks, window
+// and level, surface outlines. The volumes are sampled on an oblique,
+// anisotropic grid (measure_phantoms.hpp: 0.7 x 1.0 x 1.3 mm, rotated 25
+// degrees) from a field that is linear in LPS, so trilinear reslicing is
+// exact and every pixel's expected value is the field at the pixel's LPS
+// centre. The expected pixel positions come from the conventions written out
+// here as patient directions, not from slice_grid; the expected values at a
+// click from the core API (core::value_at on a Scene that opened the volume
+// from a file).
+#include "renderer/core/slices.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <map>
+#include <random>
+
+#include <glm/common.hpp>
+#include <glm/geometric.hpp>
+#include <glm/matrix.hpp>
+#include <openvdb/openvdb.h>
+#include <tbb/task_arena.h>
+
+#include "io/error.hpp"
+#include "io/sparse.hpp"
+#include "io/volume_io.hpp"
+#include "measure_phantoms.hpp"
+#include "renderer/core/measure.hpp"
+#include "renderer/core/scene.hpp"
+#include "test_util.hpp"
+
+using namespace iso;
+using namespace iso::core;
+using namespace iso::test;
+
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+
+// The oblique grid's centre: not round, far from the origin.
+const glm::dvec3 kCentre(12.3, -45.6, 78.9);
+
+// A field linear in LPS (about -120..220 on the phantom: float32 keeps 1e-5).
+double field(const glm::dvec3& p) {
+    return 50.0 + 2.0 * (p.x - kCentre.x) - 1.5 * (p.y - kCentre.y) + 0.75 * (p.z - kCentre.z);
+}
+
+Volume oblique_linear(std::array<std::int64_t, 3> dims = {40, 34, 28}) {
+    return sample_field(dims, oblique_affine(dims, 1.0, kCentre), field);
+}
+
+// The conventions as patient directions in LPS (x left, y posterior, z superior):
+// what lies to the image's right and what is up.
+struct Convention {
+    glm::dvec3 image_right, image_up;
+};
+Convention convention(SliceOrientation o) {
+    const glm::dvec3 left(1, 0, 0), anterior(0, -1, 0), posterior(0, 1, 0), superior(0, 0, 1);
+    switch (o) {
+    case SliceOrientation::Axial: return {left, anterior};       // from the feet: patient's right on the image's left
+    case SliceOrientation::Coronal: return {left, superior};     // from the front
+    case SliceOrientation::Sagittal: return {posterior, superior}; // from the patient's left: anterior on the image's left
+    }
+    return {};
+}
+
+// The LPS centre of pixel (c, r) of a w x h image whose centre is `centre`.
+glm::dvec3 expected_lps(SliceOrientation o, const glm::dvec3& centre, double s, int w, int h, double c, double r) {
+    const Convention cv = convention(o);
+    return centre + (c + 0.5 - 0.5 * w) * s * cv.image_right - (r + 0.5 - 0.5 * h) * s * cv.image_up;
+}
+
+// Continuous index of an LPS point, computed here.
+glm::dvec3 index_of(const Volume& v, const glm::dvec3& p) {
+    return glm::dvec3(glm::inverse(v.index_to_lps) * glm::dvec4(p, 1.0));
+}
+
+enum class Where { Outside, Rim, Interior, Edge };
+// Interior: within the voxel centres' hull (the field is exact there); Rim:
+// in the outer half voxel (values clamped); Outside; Edge: within 1e-6 voxel
+// of a boundary, where rounding decides (not checked).
+Where where(const Volume& v, const glm::dvec3& idx) {
+    bool rim = false;
+    for (int a = 0; a < 3; ++a) {
+        const double n = double(v.dims[a]), x = idx[a];
+        if (std::abs(x + 0.5) < 1e-6 || std::abs(x - (n - 0.5)) < 1e-6) return Where::Edge;
+        if (x < -0.5 || x > n - 0.5) return Where::Outside;
+        if (x < 0 || x > n - 1) rim = true;
+    }
+    return rim ? Where::Rim : Where::Interior;
+}
+
+// A UV sphere of radius r about c: `stacks` rings (even: one ring on the
+// equator), `slices` segments, outward-facing, closed and indexed.
+Mesh uv_sphere(const glm::dvec3& c, double r, int stacks, int slices) {
+    Mesh m;
+    m.positions.emplace_back(glm::vec3(c + glm::dvec3(0, 0, r))); // north pole, 0
+    for (int i = 1; i < stacks; ++i) {
+        const double th = kPi * double(i) / double(stacks);
+        // Exactly 0 on the equator, so its vertices lie exactly on the plane z = c.z.
+        const double z = 2 * i == stacks ? 0.0 : std::cos(th);
+        for (int j = 0; j < slices; ++j) {
+            const double ph = 2 * kPi * double(j) / double(slices);
+            m.positions.emplace_back(glm::vec3(c + r * glm::dvec3(std::sin(th) * std::cos(ph), std::sin(th) * std::sin(ph), z)));
+        }
+    }
+    m.positions.emplace_back(glm::vec3(c - glm::dvec3(0, 0, r))); // south pole
+    const auto south = std::uint32_t(m.positions.size() - 1);
+    auto ring = [&](int i, int j) { return std::uint32_t(1 + (i - 1) * slices + (j % slices)); };
+    for (int j = 0; j < slices; ++j) m.triangles.push_back({0, ring(1, j), ring(1, j + 1)});
+    for (int i = 1; i + 1 < stacks; ++i)
+        for (int j = 0; j < slices; ++j) {
+            m.triangles.push_back({ring(i, j), ring(i + 1, j), ring(i + 1, j + 1)});
+            m.triangles.push_back({ring(i, j), ring(i + 1, j + 1), ring(i, j + 1)});
+        }
+    for (int j = 0; j < slices; ++j) m.triangles.push_back({south, ring(stacks - 1, j + 1), ring(stacks - 1, j)});
+    return m;
+}
+
+// An axis-aligned box [lo, hi] as 8 vertices and 12 outward triangles.
+Mesh box(glm::dvec3 lo, glm::dvec3 hi) {
+    Mesh m;
+    for (int k = 0; k < 8; ++k) m.positions.emplace_back(k & 1 ? hi.x : lo.x, k & 2 ? hi.y : lo.y, k & 4 ? hi.z : lo.z);
+    const int quads[6][4] = {{0, 2, 3, 1}, {4, 5, 7, 6}, {0, 1, 5, 4}, {2, 6, 7, 3}, {0, 4, 6, 2}, {1, 3, 7, 5}};
+    for (const auto& q : quads) {
+        m.triangles.push_back({std::uint32_t(q[0]), std::uint32_t(q[1]), std::uint32_t(q[2])});
+        m.triangles.push_back({std::uint32_t(q[0]), std::uint32_t(q[2]), std::uint32_t(q[3])});
+    }
+    return m;
+}
+
+// Follows b -> next a by exact equality; returns the loops' lengths (empty
+// and `ok` false when an endpoint does not chain exactly once).
+struct Loops {
+    bool ok = true;
+    std::vector<std::size_t> lengths;
+};
+Loops chain(const std::vector<SliceSegment>& s) {
+    Loops out;
+    auto key = [](glm::vec2 p) { return std::pair<float, float>(p.x, p.y); };
+    std::map<std::pair<float, float>, std::size_t> starts;
+    for (std::size_t i = 0; i < s.size(); ++i)
+        if (!starts.emplace(key(s[i].a), i).second) out.ok = false; // two segments start at one point
+    std::vector<bool> used(s.size(), false);
+    for (std::size_t first = 0; first < s.size(); ++first) {
+        if (used[first]) continue;
+        std::size_t n = 0, i = first;
+        while (!used[i]) {
+            used[i] = true;
+            ++n;
+            const auto next = starts.find(key(s[i].b));
+            if (next == starts.end()) {
+                out.ok = false;
+                return out;
+            }
+            i = next->second;
+        }
+        if (i != first) out.ok = false; // ran into another loop's middle
+        out.lengths.push_back(n);
+    }
+    return out;
+}
+
+template <class F> double median_ms(int runs, F f) {
+    std::vector<double> t;
+    for (int i = 0; i < runs; ++i) {
+        const auto t0 = std::chrono::steady_clock::now();
+        f();
+        t.push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
+    }
+    std::sort(t.begin(), t.end());
+    return t[t.size() / 2];
+}
+
+} // namespace
+
+// ---- planes ------------------------------------------------------------------
+
+TEST(SlicePlanes, DefaultPlanesFitTheObliqueVolumesBoundingBox) {
+    const Volume v = oblique_linear();
+    // The box of the voxels' extent, from the 8 corners, here.
+    glm::dvec3 lo(1e300), hi(-1e300);
+    for (int c = 0; c < 8; ++c) {
+        const glm::dvec3 p = v.index_to_world({c & 1 ? v.dims[0] - 0.5 : -0.5, c & 2 ? v.dims[1] - 0.5 : -0.5,
+                                               c & 4 ? v.dims[2] - 0.5 : -0.5});
+        lo = glm::min(lo, p);
+        hi = glm::max(hi, p);
+    }
+    const auto planes = default_planes(v);
+    const glm::dvec2 fov[3] = {{hi.x - lo.x, hi.y - lo.y}, {hi.x - lo.x, hi.z - lo.z}, {hi.y - lo.y, hi.z - lo.z}};
+    const char* names[3] = {"axial", "coronal", "sagittal"};
+    for (int i = 0; i < 3; ++i) {
+        const SlicePlane& p = planes[std::size_t(i)];
+        EXPECT_STREQ(slice_orientation_name(p.orientation), names[i]);
+        for (int a = 0; a < 3; ++a) {
+            EXPECT_NEAR(p.origin[a], 0.5 * (lo[a] + hi[a]), 1e-9);
+            EXPECT_NEAR(p.center[a], 0.5 * (lo[a] + hi[a]), 1e-9);
+        }
+        EXPECT_NEAR(p.fov_mm.x, fov[i].x, 1e-9) << names[i];
+        EXPECT_NEAR(p.fov_mm.y, fov[i].y, 1e-9) << names[i];
+        EXPECT_NEAR(p.pixel_mm, 0.7, 1e-12);
+        const Convention cv = convention(p.orientation);
+        EXPECT_EQ(p.right, cv.image_right);
+        EXPECT_EQ(p.up, cv.image_up);
+    }
+    // The normals: offset_mm reads as the slice's LPS coordinate.
+    EXPECT_EQ(planes[0].normal, glm::dvec3(0, 0, 1));
+    EXPECT_EQ(planes[1].normal, glm::dvec3(0, 1, 0));
+    EXPECT_EQ(planes[2].normal, glm::dvec3(1, 0, 0));
+    EXPECT_NEAR(planes[0].offset_mm(), 0.5 * (lo.z + hi.z), 1e-9);
+    EXPECT_THROW(default_planes(Volume{}), Error);
+}
+
+TEST(SlicePlanes, OneScrollStepIsOneVoxelAlongTheNormal) {
+    // Axis-aligned: the spacing along each normal.
+    const std::array<std::int64_t, 3> dims{8, 9, 10};
+    const Volume straight = Volume::dense(dims, VoxelType::I16, make_affine({0.7, 1.0, 1.3}, {5, 6, 7}));
+    const auto sp = default_planes(straight);
+    EXPECT_NEAR(sp[0].step_mm, 1.3, 1e-12);
+    EXPECT_NEAR(sp[1].step_mm, 1.0, 1e-12);
+    EXPECT_NEAR(sp[2].step_mm, 0.7, 1e-12);
+    // Oblique: one step changes the continuous index by exactly one voxel on some axis, and by no more on any.
+    const Volume v = oblique_linear();
+    for (auto p : default_planes(v)) {
+        const glm::dvec3 i0 = index_of(v, p.origin);
+        const double offset = p.offset_mm();
+        scroll_slices(p, 1);
+        EXPECT_NEAR(p.offset_mm() - offset, p.step_mm, 1e-9);
+        const glm::dvec3 d = glm::abs(index_of(v, p.origin) - i0);
+        EXPECT_NEAR(std::max({d.x, d.y, d.z}), 1.0, 1e-9) << slice_orientation_name(p.orientation);
+        // The centre moves with it (no in-plane drift).
+        EXPECT_NEAR(glm::dot(p.center - p.origin, p.normal), 0.0, 1e-9);
+        scroll_slices(p, -3);
+        EXPECT_NEAR(p.offset_mm() - offset, -2 * p.step_mm, 1e-9);
+        set_offset(p, offset + 4.25);
+        EXPECT_NEAR(p.offset_mm(), offset + 4.25, 1e-9);
+        EXPECT_NEAR(glm::dot(p.center, p.normal), offset + 4.25, 1e-9);
+    }
+}
+
+TEST(SlicePlanes, TheCrosshairMovesEveryPlaneThroughTheSamePoint) {
+    const Volume v = oblique_linear();
+    auto planes = default_planes(v);
+    const auto before = planes;
+    const glm::dvec3 pick = kCentre + glm::dvec3(3.3, -4.4, 5.5);
+    set_crosshair(planes, pick);
+    for (std::size_t i = 0; i < 3; ++i) {
+        const SlicePlane& p = planes[i];
+        EXPECT_EQ(p.origin, pick);
+        EXPECT_NEAR(glm::dot(p.center - pick, p.normal), 0.0, 1e-9);
+        // No pan: the centre keeps its in-plane coordinates.
+        EXPECT_NEAR(glm::dot(p.center - before[i].center, p.right), 0.0, 1e-9);
+        EXPECT_NEAR(glm::dot(p.center - before[i].center, p.up), 0.0, 1e-9);
+        // The crosshair's pixel in each view is where the pick is, on the plane.
+        const SliceGrid g = slice_grid(p, 300, 200);
+        const SlicePoint sp = lps_to_pixel(g, pick);
+        EXPECT_NEAR(sp.distance_mm, 0.0, 1e-9);
+        const glm::dvec3 back = pixel_to_lps(g, sp.pixel);
+        EXPECT_NEAR(glm::length(back - pick), 0.0, 1e-9);
+    }
+}
+
+TEST(SlicePlanes, ZoomAndNativeSize) {
+    SlicePlane p = default_planes(oblique_linear())[0];
+    const auto n = native_size(p);
+    EXPECT_EQ(n[0], int(std::ceil(p.fov_mm.x / 0.7 - 1e-9)));
+    EXPECT_EQ(n[1], int(std::ceil(p.fov_mm.y / 0.7 - 1e-9)));
+    zoom_to_fit(p, 512, 256);
+    EXPECT_NEAR(p.pixel_mm, std::max(p.fov_mm.x / 512, p.fov_mm.y / 256), 1e-12);
+    EXPECT_THROW(slice_grid(p, 0, 10), Error);
+    EXPECT_THROW(slice_grid(p, 10, 20000), Error);
+    SlicePlane bad = p;
+    bad.pixel_mm = 0;
+    EXPECT_THROW(slice_grid(bad, 10, 10), Error);
+    bad = p;
+    bad.up = bad.right;
+    EXPECT_THROW(slice_grid(bad, 10, 10), Error);
+}
+
+// ---- pixels <-> LPS ------------------------------------------------------------
+
+TEST(SlicePixels, PixelsFollowTheRadiologicalConventionAndRoundTrip) {
+    const Volume v = oblique_linear();
+    std::mt19937 rng(7);
+    std::uniform_real_distribution<double> u(-20, 420);
+    for (auto p : default_planes(v)) {
+        set_crosshair(std::span<SlicePlane>(&p, 1), kCentre + glm::dvec3(1.1, 2.2, -3.3));
+        p.center += 4.0 * p.right - 2.5 * p.up; // panned
+        p.pixel_mm = 0.55;
+        const int w = 401, h = 333;
+        const SliceGrid g = slice_grid(p, w, h);
+        for (int n = 0; n < 200; ++n) {
+            const glm::dvec2 px(u(rng), u(rng));
+            const glm::dvec3 lps = pixel_to_lps(g, px);
+            const glm::dvec3 want = expected_lps(p.orientation, p.center, 0.55, w, h, px.x - 0.5, px.y - 0.5);
+            ASSERT_NEAR(glm::length(lps - want), 0.0, 1e-9) << slice_orientation_name(p.orientation);
+            EXPECT_NEAR(glm::dot(lps, p.normal), p.offset_mm(), 1e-9);
+            const SlicePoint back = lps_to_pixel(g, lps);
+            EXPECT_NEAR(back.pixel.x, px.x, 1e-9);
+            EXPECT_NEAR(back.pixel.y, px.y, 1e-9);
+            EXPECT_NEAR(back.distance_mm, 0.0, 1e-9);
+            // Off the plane: the projection's pixel and the signed distance rebuild the point.
+            const glm::dvec3 off = lps + 2.75 * p.normal;
+            const SlicePoint o = lps_to_pixel(g, off);
+            EXPECT_NEAR(o.distance_mm, 2.75, 1e-9);
+            EXPECT_NEAR(glm::length(pixel_to_lps(g, o.pixel) + o.distance_mm * p.normal - off), 0.0, 1e-9);
+        }
+    }
+}
+
+TEST(SlicePixels, PatientLeftIsOnTheImagesRightInAxialAndCoronal) {
+    // A ball at the patient's left, anterior and superior of the centre, on the oblique grid.
+    const glm::dvec3 ball = kCentre + glm::dvec3(8, -7, 6);
+    const std::array<std::int64_t, 3> dims{40, 34, 28};
+    const Volume v = sample_field(dims, oblique_affine(dims, 1.0, kCentre),
+                                  [&](const glm::dvec3& p) { return glm::length(p - ball) < 3.0 ? 1000.0 : 0.0; });
+    auto planes = default_planes(v);
+    set_crosshair(planes, ball);
+    // Where the brightest pixel lies, relative to the image centre: (+1, +1) = right and up.
+    auto quadrant = [&](const SlicePlane& p) {
+        const SliceImage img = reslice(v, p, 101, 101, Interp::Nearest);
+        double sx = 0, sy = 0, sw = 0;
+        for (int r = 0; r < img.height; ++r)
+            for (int c = 0; c < img.width; ++c)
+                if (img.at(c, r) > 500) {
+                    sx += c + 0.5 - 50.5;
+                    sy += 50.5 - (r + 0.5);
+                    sw += 1;
+                }
+        EXPECT_GT(sw, 10) << slice_orientation_name(p.orientation);
+        return glm::ivec2(sx > 0 ? 1 : -1, sy > 0 ? 1 : -1);
+    };
+    for (auto& p : planes) p.center = kCentre + glm::dot(ball - kCentre, p.normal) * p.normal; // view centred on the grid
+    EXPECT_EQ(quadrant(planes[0]), glm::ivec2(1, 1));  // axial: left on the right, anterior up
+    EXPECT_EQ(quadrant(planes[1]), glm::ivec2(1, 1));  // coronal: left on the right, superior up
+    EXPECT_EQ(quadrant(planes[2]), glm::ivec2(-1, 1)); // sagittal: anterior on the left, superior up
+}
+
+// The check: the voxel under a slice-view click has the LPS position
+// and HU the core API gives for it, on an oblique volume.
+TEST(SlicePixels, AClickGivesTheCoreApisPointValueAndVoxel) {
+    TempDir dir;
+    const Volume original = oblique_linear();
+    save_volume(original, dir / "oblique.nrrd");
+    Scene scene;
+    scene.open(dir / "oblique.nrrd");
+    const Volume& v = scene.volume();
+    for (int c = 0; c < 4; ++c)
+        for (int r = 0; r < 4; ++r) ASSERT_NEAR(v.index_to_lps[c][r], original.index_to_lps[c][r], 1e-9);
+    std::mt19937 rng(11);
+    int inside = 0;
+    for (auto p : default_planes(v)) {
+        set_crosshair(std::span<SlicePlane>(&p, 1), kCentre + glm::dvec3(-2.1, 1.7, 0.9));
+        const int w = 256, h = 200;
+        zoom_to_fit(p, w, h);
+        const SliceGrid g = slice_grid(p, w, h);
+        std::uniform_real_distribution<double> ux(0, w), uy(0, h);
+        for (int n = 0; n < 300; ++n) {
+            const glm::dvec2 click(ux(rng), uy(rng));
+            const glm::dvec3 lps = pixel_to_lps(g, click);
+            ASSERT_NEAR(glm::length(lps - expected_lps(p.orientation, p.center, p.pixel_mm, w, h, click.x - 0.5, click.y - 0.5)),
+                        0.0, 1e-9);
+            const auto mine = sample_at_pixel(v, g, click);
+            const auto core = value_at(scene, lps);
+            ASSERT_EQ(mine.has_value(), core.has_value());
+            if (!mine) {
+                EXPECT_NE(where(v, index_of(v, lps)), Where::Interior);
+                continue;
+            }
+            ++inside;
+            EXPECT_EQ(mine->value, core->value);
+            EXPECT_EQ(mine->voxel, core->voxel);
+            EXPECT_EQ(mine->voxel_lps, core->voxel_lps);
+            EXPECT_EQ(mine->voxel_value, core->voxel_value);
+            // And what the field says: at the point (interior), at the voxel's centre.
+            if (where(v, index_of(v, lps)) == Where::Interior) {
+                EXPECT_NEAR(mine->value, field(lps), 1e-4);
+            }
+            EXPECT_NEAR(mine->voxel_value, field(mine->voxel_lps), 1e-4);
+            // The voxel is the nearest one: its centre is within half a voxel on every axis.
+            const glm::dvec3 d = glm::abs(index_of(v, lps) - glm::dvec3(mine->voxel[0], mine->voxel[1], mine->voxel[2]));
+            EXPECT_LE(std::max({d.x, d.y, d.z}), 0.5 + 1e-9);
+        }
+    }
+    EXPECT_GT(inside, 300); // of 900 clicks: the fitted view of an oblique grid has empty corners
+}
+
+// ---- reslicing ------------------------------------------------------------------------
+
+TEST(SliceReslice, EveryPixelIsTheFieldAtItsCentreOnTheObliqueGrid) {
+    const Volume v = oblique_linear();
+    std::size_t interior = 0, rim = 0, outside = 0;
+    for (auto p : default_planes(v)) {
+        // Off-centre slices, so the plane cuts the oblique grid unevenly.
+        set_crosshair(std::span<SlicePlane>(&p, 1), kCentre + glm::dvec3(2.3, -3.1, 4.7));
+        p.pixel_mm = 0.45;
+        const auto [w, h] = native_size(p);
+        const SliceImage img = reslice(v, p, w + 10, h + 6, Interp::Linear);
+        ASSERT_EQ(img.width, w + 10);
+        ASSERT_EQ(img.height, h + 6);
+        for (int r = 0; r < img.height; ++r)
+            for (int c = 0; c < img.width; ++c) {
+                const glm::dvec3 lps = expected_lps(p.orientation, p.center, 0.45, img.width, img.height, c, r);
+                const glm::dvec3 idx = index_of(v, lps);
+                const float got = img.at(c, r);
+                switch (where(v, idx)) {
+                case Where::Outside:
+                    ++outside;
+                    ASSERT_TRUE(std::isnan(got)) << c << "," << r;
+                    break;
+                case Where::Interior:
+                    ++interior;
+                    ASSERT_NEAR(got, field(lps), 1e-4) << slice_orientation_name(p.orientation) << " " << c << "," << r;
+                    break;
+                case Where::Rim: {
+                    // The outer half voxel: the border samples extend as constants, i.e. the field at the clamped index.
+                    ++rim;
+                    const glm::dvec3 clamped = glm::clamp(idx, glm::dvec3(0.0), glm::dvec3(v.dims[0] - 1, v.dims[1] - 1, v.dims[2] - 1));
+                    ASSERT_NEAR(got, field(v.index_to_world(clamped)), 1e-4) << c << "," << r;
+                    break;
+                }
+                case Where::Edge: break;
+                }
+            }
+    }
+    EXPECT_GT(interior, 10000u);
+    EXPECT_GT(rim, 300u);
+    EXPECT_GT(outside, 1000u);
+}
+
+TEST(SliceReslice, PixelsEqualSampleVolumeAtTheirCentresLinearAndNearest) {
+    const Volume v = oblique_linear({23, 19, 17});
+    for (auto p : default_planes(v)) {
+        p.pixel_mm = 0.37;
+        const int w = 97, h = 83;
+        const SliceGrid g = slice_grid(p, w, h);
+        SliceImage lin, near;
+        reslice(v, g, Interp::Linear, lin);
+        reslice(v, g, Interp::Nearest, near);
+        for (int r = 0; r < h; ++r)
+            for (int c = 0; c < w; ++c) {
+                const auto s = sample_volume(v, pixel_to_lps(g, {c + 0.5, r + 0.5}));
+                if (!s) {
+                    EXPECT_TRUE(std::isnan(lin.at(c, r)) && std::isnan(near.at(c, r)));
+                    continue;
+                }
+                EXPECT_NEAR(lin.at(c, r), s->value, 1e-4);
+                EXPECT_EQ(near.at(c, r), float(s->voxel_value));
+            }
+    }
+}
+
+TEST(SliceReslice, ShearedGridsAndEveryVoxelType) {
+    // A gantry-tilted grid: the slice step has a y component (shear), spacing anisotropic.
+    glm::dmat4 a(1.0);
+    a[0] = {0.6, 0.0, 0.0, 0.0};
+    a[1] = {0.0, 0.8, 0.0, 0.0};
+    a[2] = {0.0, 0.9, 2.0, 0.0}; // 24 degree tilt
+    a[3] = {-5.0, 3.0, 11.0, 1.0};
+    const std::array<std::int64_t, 3> dims{21, 18, 9};
+    for (VoxelType t : {VoxelType::U8, VoxelType::I16, VoxelType::U16, VoxelType::I32, VoxelType::F32, VoxelType::F64}) {
+        Volume v = Volume::dense(dims, t, a);
+        // Integer-valued linear field in the index (so every type stores it exactly).
+        dispatch_voxel_type(t, [&](auto z) {
+            using T = decltype(z);
+            auto s = v.as<T>();
+            for (std::int64_t k = 0; k < dims[2]; ++k)
+                for (std::int64_t j = 0; j < dims[1]; ++j)
+                    for (std::int64_t i = 0; i < dims[0]; ++i) s[v.linear_index(i, j, k)] = T(i + 2 * j + 3 * k);
+        });
+        for (auto p : default_planes(v)) {
+            const auto [w, h] = native_size(p);
+            const SliceGrid g = slice_grid(p, w, h);
+            SliceImage img;
+            reslice(v, g, Interp::Linear, img);
+            int checked = 0;
+            for (int r = 0; r < h; ++r)
+                for (int c = 0; c < w; ++c) {
+                    const glm::dvec3 idx = index_of(v, pixel_to_lps(g, {c + 0.5, r + 0.5}));
+                    const Where at = where(v, idx);
+                    if (at == Where::Outside) {
+                        ASSERT_TRUE(std::isnan(img.at(c, r)));
+                    }
+                    if (at != Where::Interior) continue;
+                    ASSERT_NEAR(img.at(c, r), idx.x + 2 * idx.y + 3 * idx.z, 1e-4) << voxel_type_name(t);
+                    ++checked;
+                }
+            EXPECT_GT(checked, 100) << voxel_type_name(t) << " " << slice_orientation_name(p.orientation);
+        }
+    }
+}
+
+TEST(SliceReslice, NanVoxelsSpreadOnlyWhereTheyHaveWeight) {
+    // As sample_volume: a NaN neighbour with zero weight does not spread.
+    const std::array<std::int64_t, 3> dims{4, 4, 4};
+    Volume v = Volume::dense(dims, VoxelType::F32, make_affine({1, 1, 1}, {0, 0, 0}));
+    for (auto& x : v.as<float>()) x = 10.0f;
+    v.as<float>()[v.linear_index(2, 1, 1)] = NAN;
+    SlicePlane p = default_planes(v)[0];
+    set_offset(p, 1.0); // the plane k = 1 exactly: z weight 0
+    p.pixel_mm = 0.5;
+    p.center = {1.75, 1.75, 1.0};
+    const SliceGrid g = slice_grid(p, 8, 8); // pixel centres at x, y = 0, 0.5, ..., 3.5
+    const SliceImage img = reslice(v, p, 8, 8);
+    for (int r = 0; r < 8; ++r)
+        for (int c = 0; c < 8; ++c) {
+            const auto s = sample_volume(v, pixel_to_lps(g, {c + 0.5, r + 0.5}));
+            ASSERT_TRUE(s);
+            if (std::isnan(s->value)) {
+                EXPECT_TRUE(std::isnan(img.at(c, r))) << c << "," << r;
+            } else {
+                EXPECT_EQ(img.at(c, r), float(s->value)) << c << "," << r;
+            }
+        }
+    // The NaN voxel's own centre and the pixels between it and its neighbours are NaN; one voxel away is not.
+    EXPECT_TRUE(std::isnan(img.at(4, 2)));  // (2, 1)
+    EXPECT_TRUE(std::isnan(img.at(5, 2)));  // (2.5, 1)
+    EXPECT_EQ(img.at(6, 2), 10.0f);         // (3, 1): the NaN has weight 0
+    EXPECT_EQ(img.at(2, 2), 10.0f);         // (1, 1)
+}
+
+TEST(SliceReslice, SparseVolumesResliceAsDense) {
+    const Volume dense = oblique_linear({15, 13, 11});
+    auto grid = openvdb::FloatGrid::create(-1000.0f);
+    auto acc = grid->getAccessor();
+    const openvdb::Coord offset(100, -50, 7);
+    for (int k = 0; k < 11; ++k)
+        for (int j = 0; j < 13; ++j)
+            for (int i = 0; i < 15; ++i) acc.setValue(openvdb::Coord(i, j, k) + offset, float(dense.value(i, j, k)));
+    auto sg = std::make_shared<SparseGrid>();
+    sg->grid = grid;
+    sg->offset = offset;
+    const Volume sparse = Volume::sparse(sg, dense.dims, dense.index_to_lps);
+    for (auto p : default_planes(dense)) {
+        p.pixel_mm = 0.4;
+        for (Interp interp : {Interp::Linear, Interp::Nearest}) {
+            const SliceImage a = reslice(dense, p, 70, 60, interp), b = reslice(sparse, p, 70, 60, interp);
+            for (std::size_t i = 0; i < a.values.size(); ++i) {
+                if (std::isnan(a.values[i])) {
+                    EXPECT_TRUE(std::isnan(b.values[i]));
+                } else {
+                    EXPECT_NEAR(a.values[i], b.values[i], 1e-4);
+                }
+            }
+        }
+    }
+}
+
+TEST(SliceReslice, TimingOf512x512) {
+    // A print, not an assertion (tests never assert on time). A CT-sized
+    // int16 volume on the oblique grid; ISOSCOPE_SLICES_BIG=1 uses 512 x 512 x 400.
+    const bool big = std::getenv("ISOSCOPE_SLICES_BIG") != nullptr;
+    const std::array<std::int64_t, 3> dims = big ? std::array<std::int64_t, 3>{512, 512, 400}
+                                                 : std::array<std::int64_t, 3>{256, 256, 200};
+    Volume v = Volume::dense(dims, VoxelType::I16, oblique_affine(dims, big ? 0.7 : 1.4, kCentre));
+    auto s = v.as<std::int16_t>();
+    for (std::size_t i = 0; i < s.size(); ++i) s[i] = std::int16_t((i * 2654435761u) >> 20);
+    std::printf("reslice 512x512 from %lldx%lldx%lld int16 (oblique), median of 15, %d TBB threads:\n", (long long)dims[0],
+                (long long)dims[1], (long long)dims[2], tbb::this_task_arena::max_concurrency());
+    SliceImage img;
+    for (auto p : default_planes(v)) {
+        zoom_to_fit(p, 512, 512);
+        const SliceGrid g = slice_grid(p, 512, 512);
+        for (Interp interp : {Interp::Linear, Interp::Nearest}) {
+            const double ms = median_ms(15, [&] { reslice(v, g, interp, img); });
+            std::printf("  %-8s %-7s %7.2f ms\n", slice_orientation_name(p.orientation),
+                        interp == Interp::Linear ? "linear" : "nearest", ms);
+        }
+    }
+    const double wl = median_ms(15, [&] { (void)apply_window(img, {40, 400}, PixelFormat::Rgba8); });
+    std::printf("  window/level 512x512 -> RGBA8 %.2f ms\n", wl);
+    if (big) {
+        // Sparse storage goes through Volume::value (an OpenVDB tree lookup per sample).
+        const std::array<std::int64_t, 3> sd{256, 256, 200};
+        auto grid = openvdb::FloatGrid::create(0.0f);
+        auto acc = grid->getAccessor();
+        for (int k = 0; k < sd[2]; ++k)
+            for (int j = 0; j < sd[1]; ++j)
+                for (int i = 0; i < sd[0]; ++i) acc.setValue(openvdb::Coord(i, j, k), float((i * 7 + j * 3 + k) % 1000));
+        auto sg = std::make_shared<SparseGrid>();
+        sg->grid = grid;
+        const Volume sparse = Volume::sparse(sg, sd, oblique_affine(sd, 1.4, kCentre));
+        for (auto p : default_planes(sparse)) {
+            zoom_to_fit(p, 512, 512);
+            const SliceGrid g = slice_grid(p, 512, 512);
+            const double ms = median_ms(5, [&] { reslice(sparse, g, Interp::Linear, img); });
+            std::printf("  sparse 256x256x200 (all active) %-8s linear %7.2f ms\n", slice_orientation_name(p.orientation), ms);
+        }
+    }
+    SUCCEED();
+}
+
+// ---- window / level --------------------------------------------------------------------------
+
+TEST(SliceWindow, EndsOfTheWindowAreBlackAndWhite) {
+    for (const WindowLevel w : {WindowLevel{40, 400}, WindowLevel{-600, 1500}, WindowLevel{0.5, 0.25}}) {
+        EXPECT_EQ(window_grey(w.center - w.width / 2, w), 0);
+        EXPECT_EQ(window_grey(w.center + w.width / 2, w), 255);
+        EXPECT_EQ(window_grey(w.center - w.width, w), 0);
+        EXPECT_EQ(window_grey(w.center + w.width, w), 255);
+        EXPECT_EQ(window_grey(w.center, w), 128); // 127.5 rounds up
+        EXPECT_EQ(window_grey(w.center - w.width / 2 + w.width / 255.0, w), 1);
+        EXPECT_EQ(window_grey(w.center + w.width / 4, w), 191); // 191.25
+    }
+    EXPECT_EQ(window_grey(NAN, {40, 400}), 0);
+    EXPECT_EQ(window_grey(39.9, {40, 0}), 0); // zero width: a threshold
+    EXPECT_EQ(window_grey(40, {40, 0}), 255);
+
+    SliceImage img{3, 1, {-160.0f, NAN, 240.0f}};
+    EXPECT_EQ(apply_window(img, {40, 400}), (std::vector<std::uint8_t>{0, 0, 255}));
+    EXPECT_EQ(apply_window(img, {40, 400}, PixelFormat::Rgba8),
+              (std::vector<std::uint8_t>{0, 0, 0, 255, 0, 0, 0, 0, 255, 255, 255, 255}));
+}
+
+TEST(SliceWindow, PresetsAndDefaults) {
+    ASSERT_EQ(ct_window_presets().size(), 5u);
+    auto is = [](std::string_view name, double c, double w) {
+        const auto p = ct_window_preset(name);
+        ASSERT_TRUE(p) << name;
+        EXPECT_EQ(p->center, c) << name;
+        EXPECT_EQ(p->width, w) << name;
+    };
+    is("brain", 40, 80);
+    is("soft tissue", 40, 400);
+    is("lung", -600, 1500);
+    is("bone", 400, 1800);
+    is("angio", 170, 600);
+    EXPECT_FALSE(ct_window_preset("liver"));
+
+    Volume v = oblique_linear({9, 8, 7});
+    const ValueRange r = v.value_range();
+    WindowLevel w = default_window(v);
+    EXPECT_NEAR(w.center, 0.5 * (r.min + r.max), 1e-9);
+    EXPECT_NEAR(w.width, r.max - r.min, 1e-9);
+    v.meta.modality = "CT";
+    w = default_window(v);
+    EXPECT_EQ(w.center, 40);
+    EXPECT_EQ(w.width, 400);
+    w = default_window("MR", ValueRange{5, 5});
+    EXPECT_EQ(w.center, 5);
+    EXPECT_EQ(w.width, 1);
+}
+
+// ---- outlines -------------------------------------------------------------------------------
+
+TEST(SliceOutline, ASpheresOutlineThroughItsCentreIsOneClosedLoopAtItsRadius) {
+    const glm::dvec3 c(10.25, -20.5, 30.75); // float-exact: the equator's vertices lie exactly on the plane
+    const double R = 25.0;
+    const Mesh sphere = uv_sphere(c, R, 40, 72);
+    double longest = 0; // the longest edge: the chord error bound
+    for (const auto& t : sphere.triangles)
+        for (int k = 0; k < 3; ++k)
+            longest = std::max(longest, glm::length(glm::dvec3(sphere.positions[t[k]]) - glm::dvec3(sphere.positions[t[(k + 1) % 3]])));
+    const double inner = std::sqrt(R * R - 0.25 * longest * longest) - 1e-4;
+
+    for (const double h : {0.0, 0.37 * R, -0.81 * R}) {
+        SlicePlane p;
+        p.orientation = SliceOrientation::Axial;
+        p.right = {1, 0, 0};
+        p.up = {0, -1, 0};
+        p.normal = {0, 0, 1};
+        p.origin = p.center = c + glm::dvec3(0, 0, h);
+        p.pixel_mm = 0.25;
+        const SliceGrid g = slice_grid(p, 256, 256);
+        const auto segs = mesh_outline(sphere, g);
+        ASSERT_FALSE(segs.empty());
+        double area = 0; // shoelace in LPS (x, y), about the normal +z
+        for (const auto& s : segs) {
+            for (const glm::vec2& e : {s.a, s.b}) {
+                const glm::dvec3 q = pixel_to_lps(g, glm::dvec2(e));
+                const double d = glm::length(q - c);
+                EXPECT_LE(d, R + 1e-4);
+                EXPECT_GE(d, inner);
+                EXPECT_NEAR(q.z, c.z + h, 1e-9);
+            }
+            const glm::dvec3 a = pixel_to_lps(g, glm::dvec2(s.a)) - c, b = pixel_to_lps(g, glm::dvec2(s.b)) - c;
+            area += 0.5 * (a.x * b.y - a.y * b.x);
+        }
+        const Loops loops = chain(segs);
+        EXPECT_TRUE(loops.ok) << "h = " << h;
+        ASSERT_EQ(loops.lengths.size(), 1u) << "h = " << h;
+        EXPECT_EQ(loops.lengths[0], segs.size());
+        // Counter-clockwise about the normal around the solid, and about the circle's area.
+        const double rr = R * R - h * h;
+        EXPECT_GT(area, 0);
+        EXPECT_NEAR(area, kPi * rr, 0.02 * kPi * rr) << "h = " << h;
+    }
+    // The equator plane: 72 segments along the 72 equator edges (their vertices are on the plane).
+    SlicePlane p = default_planes(Volume::dense({2, 2, 2}, VoxelType::U8, make_affine({1, 1, 1}, {0, 0, 0})))[0];
+    p.origin = p.center = c;
+    EXPECT_EQ(mesh_outline(sphere, slice_grid(p, 64, 64)).size(), 72u);
+}
+
+TEST(SliceOutline, FacesInThePlaneAndDegenerateTriangles) {
+    const Mesh cube = box({0, 0, 0}, {2, 2, 2});
+    SlicePlane p;
+    p.pixel_mm = 0.5;
+    p.origin = p.center = {1, 1, 2}; // the top face
+    auto top = mesh_outline(cube, slice_grid(p, 16, 16));
+    // A vertex on the plane counts as above: the solid is below, so its top face's border is drawn, once.
+    Loops loops = chain(top);
+    EXPECT_TRUE(loops.ok);
+    ASSERT_EQ(loops.lengths.size(), 1u);
+    double length = 0;
+    for (const auto& s : top) length += glm::length(s.b - s.a) * 0.5;
+    EXPECT_NEAR(length, 8.0, 1e-5); // the square's perimeter
+    p.origin = p.center = {1, 1, 0}; // the bottom face: the solid is above, nothing crosses
+    EXPECT_TRUE(mesh_outline(cube, slice_grid(p, 16, 16)).empty());
+    p.origin = p.center = {1, 1, 1};
+    loops = chain(mesh_outline(cube, slice_grid(p, 16, 16)));
+    EXPECT_TRUE(loops.ok);
+    EXPECT_EQ(loops.lengths.size(), 1u);
+
+    // Crossing the plane z = 1: a zero-area triangle (two equal vertices, on the plane) gives a
+    // zero-length segment, dropped; a proper triangle with an edge in the plane gives that edge.
+    Mesh m;
+    m.positions = {{0, 0, -1}, {1, 0, 1}, {1, 0, 1}, {2, 0, 1}};
+    m.triangles = {{0, 1, 2}, {0, 1, 3}};
+    const auto segs = mesh_outline(m, slice_grid(p, 16, 16));
+    EXPECT_EQ(segs.size(), 1u);
+    // Nothing to intersect, or a broken index.
+    EXPECT_TRUE(mesh_outline(Mesh{}, slice_grid(p, 16, 16)).empty());
+    m.triangles.push_back({0, 1, 9});
+    try {
+        mesh_outline(m, slice_grid(p, 16, 16));
+        ADD_FAILURE() << "no error";
+    } catch (const Error& e) {
+        EXPECT_EQ(e.where(), "slice outline");
+        EXPECT_NE(e.reason().find("triangle 2"), std::string::npos) << e.reason();
+    }
+}
+
+TEST(SliceOutline, TimingOfAMillionTriangles) {
+    const Mesh sphere = uv_sphere({1, 2, 3}, 80, 640, 1024); // 1.31 M triangles
+    SlicePlane p;
+    p.origin = p.center = {1, 2, 3.3};
+    p.pixel_mm = 0.35;
+    const SliceGrid g = slice_grid(p, 512, 512);
+    std::size_t n = 0;
+    const double ms = median_ms(9, [&] { n = mesh_outline(sphere, g).size(); });
+    std::printf("outline of %zu triangles: %zu segments, median of 9 %.2f ms (%d TBB threads)\n", sphere.triangles.size(), n,
+                ms, tbb::this_task_arena::max_concurrency());
+    EXPECT_TRUE(chain(mesh_outline(sphere, g)).ok);
+}
