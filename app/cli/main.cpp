@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <iomanip>
 #include <iostream>
 #include <sstream>
@@ -20,6 +21,7 @@
 #include <QSurfaceFormat>
 #include <QTimer>
 
+#include "app/gui/main_window.hpp"
 #include "app/gui/viewer.hpp"
 #include "io/markups.hpp"
 #include "renderer/core/api.hpp"
@@ -626,9 +628,32 @@ int run_view(ViewArgs a, char* argv0) {
     return qapp.exec();
 }
 
+// ---- isoscope gui -----------------------------------------------------------
+
+// The desktop app (docs/gui.md); also what `isoscope` with no arguments
+// starts where there is a display.
+int run_gui(const std::string& in, char* argv0) {
+    QSurfaceFormat fmt;
+    fmt.setVersion(4, 5);
+    fmt.setProfile(QSurfaceFormat::CoreProfile);
+    fmt.setDepthBufferSize(24);
+    QSurfaceFormat::setDefaultFormat(fmt);
+    int qargc = 1;
+    char* qargv[] = {argv0, nullptr};
+    QApplication qapp(qargc, qargv);
+    QApplication::setOrganizationName("isoscope");
+    QApplication::setApplicationName("isoscope");
+    iso::gui::MainWindow w;
+    w.show();
+    if (!in.empty()) w.open_path(QString::fromStdString(in));
+    return qapp.exec();
+}
+
 } // namespace
 
 int main(int argc, char** argv) {
+    // No arguments: the desktop app where there is a display, the help otherwise.
+    if (argc == 1 && (std::getenv("DISPLAY") || std::getenv("WAYLAND_DISPLAY"))) return run_gui("", argv[0]);
     CLI::App app{"isoscope: inspect CT volumes, reconstruct and render isosurfaces"};
     app.set_version_flag("--version", std::string("isoscope ") + iso::core::version());
     app.require_subcommand(1);
@@ -644,6 +669,9 @@ int main(int argc, char** argv) {
     auto* view = add_view(app, view_args);
     auto* pick = add_pick(app, pick_args);
     auto* measure = add_measure(app, measure_args);
+    std::string gui_in;
+    auto* gui = app.add_subcommand("gui", "Open the desktop app (main window with the 3D and slice views)");
+    gui->add_option("input", gui_in, "Volume file, DICOM folder, or mesh to open");
     CLI11_PARSE(app, argc, argv);
     try {
         if (*info) return run_info(info_args);
@@ -652,6 +680,7 @@ int main(int argc, char** argv) {
         if (*view) return run_view(view_args, argv[0]);
         if (*pick) return run_pick(pick_args);
         if (*measure) return run_measure(measure_args);
+        if (*gui) return run_gui(gui_in, argv[0]);
     } catch (const iso::Error& e) {
         std::cerr << "isoscope: error: " << cli_message(e) << "\n";
         return 1;

@@ -1,0 +1,546 @@
+#include "app/gui/main_window.hpp"
+
+#include <QCheckBox>
+#include <QColorDialog>
+#include <QComboBox>
+#include <QDockWidget>
+#include <QDoubleSpinBox>
+#include <QDragEnterEvent>
+#include <QDropEvent>
+#include <QFileDialog>
+#include <QFileInfo>
+#include <QGridLayout>
+#include <QHBoxLayout>
+#include <QLabel>
+#include <QMenuBar>
+#include <QMessageBox>
+#include <QMimeData>
+#include <QProgressDialog>
+#include <QPushButton>
+#include <QSettings>
+#include <QSlider>
+#include <QStackedWidget>
+#include <QStatusBar>
+#include <QThread>
+#include <QTimer>
+#include <QToolBar>
+#include <QVBoxLayout>
+
+#include <mutex>
+
+#include "app/gui/slice_view.hpp"
+#include "app/gui/viewer.hpp"
+#include "io/error.hpp"
+#include "renderer/core/scene.hpp"
+
+namespace iso::gui {
+
+namespace {
+constexpr int kRecentMax = 8;
+
+// Iso values the Surfaces dock offers. The bundled head CT (datasets/headsq,
+// VTK's "headsq") is not in HU: its skin is at ~500 and its bone at ~1150
+// (the README's command). The HU values are common rules of thumb for
+// calibrated CT (air/skin boundary, cortical bone, contrast-filled vessels),
+// not tuned on a dataset here; the spin box edits any of them.
+struct IsoPreset {
+    const char* name;
+    double value;
+};
+constexpr IsoPreset kIsoPresets[] = {
+    {"skin (headsq)", 500}, {"bone (headsq)", 1150}, {"skin (CT, HU)", -500}, {"bone (CT, HU)", 300}, {"vessels with contrast (CT, HU)", 200},
+};
+} // namespace
+
+struct MainWindow::Job {
+    QThread* thread = nullptr;
+    QProgressDialog* dialog = nullptr;
+    QTimer* timer = nullptr;
+    QString title;
+    bool abandonable = false;
+    std::atomic<double> fraction{0.0};
+    std::atomic<bool> cancel{false}, abandoned{false};
+    std::mutex stage_mutex;
+    std::string stage;
+    std::exception_ptr error;
+    std::function<void(std::exception_ptr)> done;
+};
+
+MainWindow::MainWindow(QWidget* parent) : QMainWindow(parent), scene_(std::make_unique<core::Scene>()) {
+    setWindowTitle("isoscope");
+    setAcceptDrops(true);
+    resize(1280, 900);
+
+    // ---- views: 3D top left, axial top right, coronal and sagittal below
+    auto* central = new QWidget(this);
+    auto* grid = new QGridLayout(central);
+    grid->setContentsMargins(2, 2, 2, 2);
+    grid->setSpacing(2);
+    view3d_ = new QStackedWidget(central);
+    placeholder_ = new QLabel("Open a volume (File > Open, or drop a file or folder here),\nthen add a surface in the Surfaces panel.",
+                              view3d_);
+    placeholder_->setAlignment(Qt::AlignCenter);
+    view3d_->addWidget(placeholder_);
+    view3d_->setMinimumSize(320, 240);
+    grid->addWidget(view3d_, 0, 0);
+    const core::SliceOrientation orientations[] = {core::SliceOrientation::Axial, core::SliceOrientation::Coronal,
+                                                   core::SliceOrientation::Sagittal};
+    const std::pair<int, int> cells[] = {{0, 1}, {1, 0}, {1, 1}};
+    for (int i = 0; i < 3; ++i) {
+        auto* v = new SliceView(orientations[i], central);
+        v->setObjectName(core::slice_orientation_name(orientations[i]));
+        v->on_click = [this](SliceView& view, QPointF p) { slice_clicked(view, p); };
+        v->on_scroll = [this](SliceView& view, double steps) { slice_scrolled(view, steps); };
+        views_[std::size_t(i)] = v;
+        grid->addWidget(v, cells[i].first, cells[i].second);
+    }
+    grid->setRowStretch(0, 1);
+    grid->setRowStretch(1, 1);
+    grid->setColumnStretch(0, 1);
+    grid->setColumnStretch(1, 1);
+    setCentralWidget(central);
+
+    // ---- File menu
+    auto* file = menuBar()->addMenu("&File");
+    file->addAction("&Open file...", QKeySequence::Open, this, [this] { open_file_dialog(); });
+    file->addAction("Open DICOM &folder...", this, [this] { open_folder_dialog(); });
+    recent_menu_ = file->addMenu("&Recent files");
+    rebuild_recent_menu();
+    file->addSeparator();
+    file->addAction("&Quit", QKeySequence::Quit, this, [this] { close(); });
+
+    // ---- window / level bar
+    auto* wl = addToolBar("Window/level");
+    wl->setObjectName("window_level");
+    wl->addWidget(new QLabel(" Window: "));
+    window_preset_ = new QComboBox(wl);
+    window_preset_->setObjectName("window_preset");
+    window_preset_->addItem("default");
+    for (const auto& p : core::ct_window_presets())
+        window_preset_->addItem(QString("%1 (W %2 / L %3)")
+                                    .arg(QString::fromUtf8(p.name.data(), qsizetype(p.name.size())))
+                                    .arg(p.window.width)
+                                    .arg(p.window.center));
+    wl->addWidget(window_preset_);
+    wl->addWidget(new QLabel(" Level (center): "));
+    center_ = new QDoubleSpinBox(wl);
+    center_->setObjectName("window_center");
+    center_->setRange(-1e6, 1e6);
+    center_->setDecimals(1);
+    wl->addWidget(center_);
+    wl->addWidget(new QLabel(" Width: "));
+    width_ = new QDoubleSpinBox(wl);
+    width_->setObjectName("window_width");
+    width_->setRange(0, 2e6);
+    width_->setDecimals(1);
+    wl->addWidget(width_);
+    connect(window_preset_, &QComboBox::currentIndexChanged, this, [this](int index) {
+        if (updating_window_ || index < 0) return;
+        if (index == 0) {
+            if (scene_->has_volume()) set_window_level(core::default_window(scene_->volume()));
+            return;
+        }
+        set_window_level(core::ct_window_presets()[std::size_t(index - 1)].window);
+    });
+    const auto spin_changed = [this] {
+        if (updating_window_) return;
+        set_window_level({center_->value(), width_->value()});
+    };
+    connect(center_, &QDoubleSpinBox::valueChanged, this, spin_changed);
+    connect(width_, &QDoubleSpinBox::valueChanged, this, spin_changed);
+    set_window_level(window_);
+
+    // ---- Surfaces dock
+    auto* dock = new QDockWidget("Surfaces", this);
+    dock->setObjectName("surfaces");
+    auto* panel = new QWidget(dock);
+    auto* col = new QVBoxLayout(panel);
+    iso_preset_ = new QComboBox(panel);
+    iso_preset_->setObjectName("iso_preset");
+    for (const auto& p : kIsoPresets) iso_preset_->addItem(QString("%1: %2").arg(p.name).arg(p.value));
+    col->addWidget(iso_preset_);
+    auto* add_row = new QHBoxLayout;
+    add_row->addWidget(new QLabel("Iso value"));
+    iso_ = new QDoubleSpinBox(panel);
+    iso_->setObjectName("iso_value");
+    iso_->setRange(-1e6, 1e6);
+    iso_->setDecimals(1);
+    iso_->setValue(kIsoPresets[0].value);
+    add_row->addWidget(iso_);
+    auto* add = new QPushButton("Add surface", panel);
+    add->setObjectName("add_surface");
+    add_row->addWidget(add);
+    col->addLayout(add_row);
+    connect(iso_preset_, &QComboBox::activated, this, [this](int i) { iso_->setValue(kIsoPresets[i].value); });
+    connect(add, &QPushButton::clicked, this, [this] { add_surface(iso_->value()); });
+    surface_rows_ = new QVBoxLayout;
+    col->addLayout(surface_rows_);
+    col->addStretch(1);
+    dock->setWidget(panel);
+    addDockWidget(Qt::RightDockWidgetArea, dock);
+
+    statusBar()->showMessage("Ready");
+    for (std::size_t i = 0; i < 3; ++i) views_[i]->set_content(scene_.get(), &planes_[i]);
+}
+
+MainWindow::~MainWindow() {
+    // Workers still running (an abandoned load, an extraction) finish before
+    // the scene they may use goes; extractions stop at their next progress call.
+    for (auto& j : running_) {
+        j->cancel = true;
+        j->thread->wait();
+    }
+    // The viewer releases its GL objects through the scene: it goes first.
+    delete viewer_;
+    viewer_ = nullptr;
+}
+
+// ---- background jobs ---------------------------------------------------------------
+
+void MainWindow::run_job(const QString& title, bool abandonable, std::function<void(const ProgressFn&)> work,
+                         std::function<void(std::exception_ptr)> done) {
+    auto job = std::make_shared<Job>();
+    job->title = title;
+    job->abandonable = abandonable;
+    job->done = std::move(done);
+    Job* j = job.get();
+    // The core calls this on the worker; returning false makes it throw iso::Cancelled.
+    ProgressFn progress = [j](double f, std::string_view stage) {
+        j->fraction = f;
+        {
+            std::lock_guard lock(j->stage_mutex);
+            j->stage = stage;
+        }
+        return !j->cancel.load();
+    };
+    job->thread = QThread::create([j, work = std::move(work), progress] {
+        try {
+            work(progress);
+        } catch (...) {
+            j->error = std::current_exception();
+        }
+    });
+    job->dialog = new QProgressDialog(title, "Cancel", 0, 1000, this);
+    job->dialog->setObjectName("progress");
+    job->dialog->setWindowModality(Qt::WindowModal);
+    job->dialog->setAutoClose(false);
+    job->dialog->setAutoReset(false);
+    job->dialog->setMinimumDuration(300);
+    job->dialog->setValue(0);
+    connect(job->dialog, &QProgressDialog::canceled, this, [this, j] {
+        j->cancel = true;
+        if (!j->abandonable) {
+            j->dialog->setLabelText(j->title + "\ncancelling...");
+            return;
+        }
+        // The core's load reports no progress for most formats, so it cannot
+        // stop early: the window stops waiting and drops the result.
+        j->abandoned = true;
+        if (job_.get() == j) job_.reset();
+        QObject::disconnect(j->dialog, nullptr, this, nullptr);
+        j->dialog->hide();
+        statusBar()->showMessage(j->title + ": cancelled");
+    });
+    job->timer = new QTimer(this);
+    connect(job->timer, &QTimer::timeout, this, [j] {
+        if (j->abandoned) return;
+        std::string stage;
+        {
+            std::lock_guard lock(j->stage_mutex);
+            stage = j->stage;
+        }
+        j->dialog->setValue(int(std::clamp(j->fraction.load(), 0.0, 1.0) * 1000));
+        if (!j->cancel && !stage.empty()) j->dialog->setLabelText(j->title + "\n" + QString::fromStdString(stage));
+    });
+    job->timer->start(50);
+    connect(job->thread, &QThread::finished, this, [this, job] { finish_job(job); });
+    job_ = job;
+    running_.push_back(job);
+    job->thread->start();
+}
+
+void MainWindow::finish_job(const std::shared_ptr<Job>& job) {
+    std::erase(running_, job);
+    job->timer->stop();
+    job->timer->deleteLater();
+    QObject::disconnect(job->dialog, nullptr, this, nullptr);
+    job->dialog->hide();
+    job->dialog->deleteLater();
+    job->thread->deleteLater();
+    if (job->abandoned) return;
+    if (job_ == job) job_.reset();
+    job->done(job->error);
+}
+
+void MainWindow::show_error(const QString& title, const QString& what, std::exception_ptr e) {
+    QString reason;
+    try {
+        std::rethrow_exception(e);
+    } catch (const Cancelled&) {
+        statusBar()->showMessage(what + ": cancelled");
+        return;
+    } catch (const std::exception& ex) {
+        reason = QString::fromStdString(ex.what());
+    } catch (...) {
+        reason = "unknown error";
+    }
+    statusBar()->showMessage(what + ": failed");
+    // Not exec(): the window keeps running (and tests can find and close the box).
+    auto* box = new QMessageBox(QMessageBox::Critical, title, what + "\n\n" + reason, QMessageBox::Ok, this);
+    box->setObjectName("error");
+    box->setAttribute(Qt::WA_DeleteOnClose);
+    box->open();
+}
+
+// ---- opening -------------------------------------------------------------------------
+
+void MainWindow::open_path(const QString& path) {
+    if (busy()) {
+        statusBar()->showMessage("Busy: wait for the current task or cancel it");
+        return;
+    }
+    auto result = std::make_shared<std::unique_ptr<core::Scene>>();
+    const std::string p = path.toStdString();
+    run_job("Opening " + path, true,
+            [result, p](const ProgressFn& progress) {
+                // A fresh scene on the worker: the one on screen stays untouched
+                // until the load succeeded.
+                auto s = std::make_unique<core::Scene>();
+                LoadOptions opt;
+                opt.progress = progress;
+                s->open(p, opt);
+                *result = std::move(s);
+            },
+            [this, result, path](std::exception_ptr e) {
+                if (e) {
+                    show_error("Cannot open", "Cannot open " + path, e);
+                    return;
+                }
+                set_scene(std::move(*result), path);
+            });
+}
+
+void MainWindow::set_scene(std::unique_ptr<core::Scene> scene, const QString& path) {
+    // The viewer's GL objects belong to the old scene: the viewer goes with it.
+    if (viewer_) {
+        view3d_->removeWidget(viewer_);
+        delete viewer_;
+        viewer_ = nullptr;
+    }
+    view3d_->setCurrentWidget(placeholder_);
+    clear_surface_rows();
+    scene_ = std::move(scene);
+    path_ = path;
+    planes_ = {};
+    if (scene_->has_volume()) {
+        planes_ = core::default_planes(scene_->volume());
+        updating_window_ = true;
+        window_preset_->setCurrentIndex(0);
+        updating_window_ = false;
+        set_window_level(core::default_window(scene_->volume()));
+    }
+    for (std::size_t i = 0; i < 3; ++i) views_[i]->set_content(scene_.get(), &planes_[i]);
+    add_surface_rows(scene_->surfaces());
+    update_3d();
+    setWindowTitle("isoscope - " + QFileInfo(path).fileName());
+    remember_recent(path);
+    if (scene_->has_volume()) {
+        const auto& v = scene_->volume();
+        statusBar()->showMessage(QString("Opened %1: %2 x %3 x %4").arg(path).arg(v.dims[0]).arg(v.dims[1]).arg(v.dims[2]));
+    } else {
+        statusBar()->showMessage("Opened " + path);
+    }
+}
+
+void MainWindow::open_file_dialog() {
+    const QString f = QFileDialog::getOpenFileName(this, "Open file", QString(),
+                                                   "Volumes and meshes (*.nrrd *.nhdr *.nii *.nii.gz *.mha *.mhd *.vti *.vdb *.dcm "
+                                                   "*.stl *.ply *.obj *.vtp *.vtk);;All files (*)");
+    if (!f.isEmpty()) open_path(f);
+}
+
+void MainWindow::open_folder_dialog() {
+    const QString d = QFileDialog::getExistingDirectory(this, "Open DICOM folder");
+    if (!d.isEmpty()) open_path(d);
+}
+
+void MainWindow::remember_recent(const QString& path) {
+    QSettings s;
+    QStringList list = s.value("recent_files").toStringList();
+    const QString abs = QFileInfo(path).absoluteFilePath();
+    list.removeAll(abs);
+    list.prepend(abs);
+    while (list.size() > kRecentMax) list.removeLast();
+    s.setValue("recent_files", list);
+    rebuild_recent_menu();
+}
+
+void MainWindow::rebuild_recent_menu() {
+    recent_menu_->clear();
+    const QStringList list = QSettings().value("recent_files").toStringList();
+    for (const auto& f : list) recent_menu_->addAction(f, this, [this, f] { open_path(f); });
+    recent_menu_->setEnabled(!list.isEmpty());
+}
+
+void MainWindow::dragEnterEvent(QDragEnterEvent* e) {
+    if (e->mimeData()->hasUrls() && !e->mimeData()->urls().isEmpty() && e->mimeData()->urls().front().isLocalFile())
+        e->acceptProposedAction();
+}
+
+void MainWindow::dropEvent(QDropEvent* e) {
+    const auto urls = e->mimeData()->urls();
+    if (urls.isEmpty() || !urls.front().isLocalFile()) return;
+    e->acceptProposedAction();
+    // Queued: the drag source is not kept waiting for the load to start.
+    const QString path = urls.front().toLocalFile();
+    QTimer::singleShot(0, this, [this, path] { open_path(path); });
+}
+
+// ---- surfaces --------------------------------------------------------------------------
+
+void MainWindow::add_surface(double iso) {
+    if (busy()) {
+        statusBar()->showMessage("Busy: wait for the current task or cancel it");
+        return;
+    }
+    if (!scene_->has_volume()) {
+        statusBar()->showMessage("Open a volume first");
+        return;
+    }
+    // The worker adds to the scene the views draw: they do not read its
+    // surfaces until it is done (the progress dialog is window-modal, so
+    // nothing else edits them).
+    if (viewer_) viewer_->setUpdatesEnabled(false);
+    for (auto* v : views_) v->set_outlines_enabled(false);
+    auto ids = std::make_shared<std::vector<core::SurfaceId>>();
+    core::Scene* s = scene_.get();
+    const std::size_t existing = s->surfaces().size();
+    run_job(QString("Extracting the isosurface at %1").arg(iso), false,
+            [s, iso, ids](const ProgressFn& progress) { *ids = s->add_isosurfaces({iso}, {}, {}, progress); },
+            [this, ids, iso, existing](std::exception_ptr e) {
+                if (viewer_) viewer_->setUpdatesEnabled(true);
+                for (auto* v : views_) v->set_outlines_enabled(true);
+                if (e) {
+                    show_error("Surface extraction failed", QString("Cannot extract the isosurface at %1").arg(iso), e);
+                } else {
+                    // Later surfaces further along the skin-to-bone palette.
+                    for (auto id : *ids) scene_->info(id).color = core::surface_color(existing, existing + 1);
+                    add_surface_rows(*ids);
+                    std::size_t triangles = 0;
+                    for (auto id : *ids) triangles += scene_->mesh(id).triangles.size();
+                    statusBar()->showMessage(QString("Added the isosurface at %1: %2 triangles").arg(iso).arg(triangles));
+                }
+                update_3d();
+                refresh_slices();
+            });
+}
+
+void MainWindow::clear_surface_rows() {
+    while (auto* item = surface_rows_->takeAt(0)) {
+        delete item->widget();
+        delete item;
+    }
+}
+
+void MainWindow::add_surface_rows(const std::vector<std::uint32_t>& ids) {
+    for (auto id : ids) {
+        auto& info = scene_->info(id);
+        auto* row = new QWidget;
+        row->setObjectName(QString("surface_%1").arg(id));
+        auto* h = new QHBoxLayout(row);
+        h->setContentsMargins(0, 0, 0, 0);
+        auto* visible = new QCheckBox(QString::fromStdString(info.name), row);
+        visible->setObjectName("visible");
+        visible->setChecked(info.visible);
+        auto* color = new QPushButton(row);
+        color->setObjectName("color");
+        color->setFixedSize(24, 20);
+        const auto paint_button = [color](const QColor& c) { color->setStyleSheet("background-color: " + c.name()); };
+        paint_button(to_qcolor(info.color));
+        auto* opacity = new QSlider(Qt::Horizontal, row);
+        opacity->setObjectName("opacity");
+        opacity->setRange(0, 100);
+        opacity->setValue(int(std::lround(info.opacity * 100)));
+        opacity->setToolTip("Opacity");
+        h->addWidget(visible);
+        h->addWidget(color);
+        h->addWidget(opacity, 1);
+        connect(visible, &QCheckBox::toggled, this, [this, id](bool on) {
+            scene_->info(id).visible = on;
+            update_3d();
+            refresh_slices();
+        });
+        connect(opacity, &QSlider::valueChanged, this, [this, id](int v) {
+            scene_->info(id).opacity = float(v) / 100.0f;
+            update_3d();
+        });
+        connect(color, &QPushButton::clicked, this, [this, id, paint_button] {
+            const QColor c = QColorDialog::getColor(to_qcolor(scene_->info(id).color), this, "Surface colour");
+            if (!c.isValid()) return;
+            scene_->info(id).color = from_qcolor(c);
+            paint_button(c);
+            update_3d();
+            refresh_slices();
+        });
+        surface_rows_->addWidget(row);
+    }
+}
+
+// ---- views -----------------------------------------------------------------------------
+
+void MainWindow::update_3d() {
+    bool any_visible = false;
+    for (auto id : scene_->surfaces()) any_visible |= scene_->info(id).visible;
+    if (!any_visible) {
+        // The camera frames the visible surfaces: with none there is nothing to frame.
+        view3d_->setCurrentWidget(placeholder_);
+        return;
+    }
+    if (!viewer_) {
+        viewer_ = new Viewer(*scene_, PatientView::Anterior);
+        viewer_->setObjectName("viewer");
+        view3d_->addWidget(viewer_);
+    }
+    view3d_->setCurrentWidget(viewer_);
+    viewer_->update();
+}
+
+void MainWindow::refresh_slices() {
+    for (auto* v : views_) v->refresh();
+}
+
+void MainWindow::set_window_level(const core::WindowLevel& w) {
+    window_ = w;
+    updating_window_ = true;
+    center_->setValue(w.center);
+    width_->setValue(w.width);
+    updating_window_ = false;
+    for (auto* v : views_) v->set_window(w);
+}
+
+void MainWindow::slice_clicked(SliceView& view, QPointF pixel) {
+    if (!scene_->has_volume()) return;
+    const glm::dvec2 px{pixel.x(), pixel.y()};
+    const auto& g = view.grid();
+    const glm::dvec3 lps = core::pixel_to_lps(g, px);
+    const auto s = core::sample_at_pixel(scene_->volume(), g, px);
+    core::set_crosshair(planes_, lps);
+    QString msg = QString("LPS (%1, %2, %3) mm").arg(lps.x, 0, 'f', 2).arg(lps.y, 0, 'f', 2).arg(lps.z, 0, 'f', 2);
+    if (s)
+        msg += QString(", value %1, voxel (%2, %3, %4)").arg(s->value, 0, 'f', 2).arg(s->voxel[0]).arg(s->voxel[1]).arg(s->voxel[2]);
+    else
+        msg += ", outside the volume";
+    statusBar()->showMessage(msg);
+    refresh_slices();
+}
+
+void MainWindow::slice_scrolled(SliceView& view, double steps) {
+    if (!scene_->has_volume()) return;
+    auto& plane = planes_[std::size_t(view.orientation())];
+    core::scroll_slices(plane, steps);
+    // The other views' crosshair lines follow the moved slice.
+    core::set_crosshair(planes_, plane.origin);
+    refresh_slices();
+}
+
+} // namespace iso::gui

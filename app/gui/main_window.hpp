@@ -1,0 +1,108 @@
+// The desktop application's main window (issue 14, docs/gui.md): the 3D view
+// and the axial, coronal and sagittal slice views of one core::Scene, a
+// window/level bar, File > Open (files, DICOM folders, recent files, drag
+// and drop) loading in the background, and a Surfaces dock adding
+// isosurfaces in the background. Presentation only: loading, extraction,
+// reslicing, outlines and sampling are the core's (renderer/core).
+#pragma once
+
+#include <array>
+#include <atomic>
+#include <exception>
+#include <functional>
+#include <memory>
+#include <vector>
+
+#include <QMainWindow>
+#include <QString>
+
+#include "io/progress.hpp"
+#include "renderer/core/slices.hpp"
+
+class QComboBox;
+class QDoubleSpinBox;
+class QLabel;
+class QMenu;
+class QProgressDialog;
+class QStackedWidget;
+class QThread;
+class QVBoxLayout;
+
+namespace iso::core {
+class Scene;
+}
+
+namespace iso::gui {
+
+class SliceView;
+class Viewer;
+
+class MainWindow : public QMainWindow {
+public:
+    explicit MainWindow(QWidget* parent = nullptr);
+    ~MainWindow() override;
+
+    // File > Open's path: loads a volume file, DICOM folder or mesh in the
+    // background (progress dialog with Cancel); on success it replaces the
+    // scene, on failure a dialog names the file and the reason.
+    void open_path(const QString& path);
+    // The Surfaces dock's "Add surface": extracts an isosurface of the
+    // volume in the background.
+    void add_surface(double iso);
+    // A background job (load or extraction) is running.
+    bool busy() const { return job_ != nullptr; }
+
+    const core::Scene& scene() const { return *scene_; }
+    core::Scene& scene() { return *scene_; }
+    SliceView* slice_view(core::SliceOrientation o) const { return views_[std::size_t(o)]; }
+    Viewer* viewer() const { return viewer_; }
+    const core::WindowLevel& window_level() const { return window_; }
+    void set_window_level(const core::WindowLevel& w);
+
+protected:
+    void dragEnterEvent(QDragEnterEvent* e) override;
+    void dropEvent(QDropEvent* e) override;
+
+private:
+    struct Job;
+    // Runs `work` on a worker thread with a progress dialog; `done` runs on
+    // the GUI thread with the exception the work threw (null: success) unless
+    // the job was abandoned. `abandonable`: Cancel closes the dialog at once
+    // and drops the result (the work touches nothing the window shares).
+    void run_job(const QString& title, bool abandonable, std::function<void(const ProgressFn&)> work,
+                 std::function<void(std::exception_ptr)> done);
+    void finish_job(const std::shared_ptr<Job>& job);
+    void set_scene(std::unique_ptr<core::Scene> scene, const QString& path);
+    void show_error(const QString& title, const QString& what, std::exception_ptr e);
+    void refresh_slices();
+    void update_3d();
+    void add_surface_rows(const std::vector<std::uint32_t>& ids);
+    void clear_surface_rows();
+    void slice_clicked(SliceView& view, QPointF pixel);
+    void slice_scrolled(SliceView& view, double steps);
+    void remember_recent(const QString& path);
+    void rebuild_recent_menu();
+    void open_file_dialog();
+    void open_folder_dialog();
+
+    std::unique_ptr<core::Scene> scene_;
+    std::array<core::SlicePlane, 3> planes_{};
+    std::array<SliceView*, 3> views_{};
+    Viewer* viewer_ = nullptr;
+    QStackedWidget* view3d_ = nullptr; // the placeholder label or the viewer
+    QLabel* placeholder_ = nullptr;
+    core::WindowLevel window_;
+    QComboBox* window_preset_ = nullptr;
+    QDoubleSpinBox* center_ = nullptr;
+    QDoubleSpinBox* width_ = nullptr;
+    QDoubleSpinBox* iso_ = nullptr;
+    QComboBox* iso_preset_ = nullptr;
+    QVBoxLayout* surface_rows_ = nullptr;
+    QMenu* recent_menu_ = nullptr;
+    QString path_;
+    std::shared_ptr<Job> job_;                   // the job the window waits for
+    std::vector<std::shared_ptr<Job>> running_;  // every worker still running (abandoned ones too)
+    bool updating_window_ = false;
+};
+
+} // namespace iso::gui

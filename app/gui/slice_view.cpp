@@ -1,0 +1,135 @@
+#include "app/gui/slice_view.hpp"
+
+#include <QKeyEvent>
+#include <QMouseEvent>
+#include <QPainter>
+#include <QWheelEvent>
+
+#include <cmath>
+#include <iostream>
+
+#include "renderer/core/scene.hpp"
+
+namespace iso::gui {
+
+namespace {
+// The scene's colours are linear; the painter works in sRGB (a plain gamma
+// curve is close enough for an outline's colour).
+double to_srgb(double c) { return std::pow(std::clamp(c, 0.0, 1.0), 1.0 / 2.2); }
+} // namespace
+
+QColor to_qcolor(const glm::vec3& c) { return QColor::fromRgbF(float(to_srgb(c.r)), float(to_srgb(c.g)), float(to_srgb(c.b))); }
+
+glm::vec3 from_qcolor(const QColor& c) {
+    return {float(std::pow(c.redF(), 2.2)), float(std::pow(c.greenF(), 2.2)), float(std::pow(c.blueF(), 2.2))};
+}
+
+SliceView::SliceView(core::SliceOrientation orientation, QWidget* parent) : QWidget(parent), orientation_(orientation) {
+    setFocusPolicy(Qt::StrongFocus);
+    setMinimumSize(160, 160);
+    setAttribute(Qt::WA_OpaquePaintEvent);
+}
+
+void SliceView::set_content(const core::Scene* scene, core::SlicePlane* plane) {
+    scene_ = scene;
+    plane_ = plane;
+    fitted_ = false;
+    refresh();
+}
+
+void SliceView::set_window(const core::WindowLevel& w) {
+    window_ = w;
+    if (!values_.values.empty()) {
+        grey_ = core::apply_window(values_, window_, core::PixelFormat::Grey8);
+        image_ = QImage(grey_.data(), values_.width, values_.height, values_.width, QImage::Format_Grayscale8).copy();
+    }
+    update();
+}
+
+void SliceView::set_outlines_enabled(bool on) {
+    outlines_enabled_ = on;
+    if (!on) outlines_.clear();
+}
+
+std::size_t SliceView::outline_segments() const {
+    std::size_t n = 0;
+    for (const auto& o : outlines_) n += o.segments.size();
+    return n;
+}
+
+void SliceView::refresh() {
+    image_ = QImage();
+    outlines_.clear();
+    if (!scene_ || !plane_ || !scene_->has_volume() || width() < 1 || height() < 1) {
+        update();
+        return;
+    }
+    try {
+        if (!fitted_) {
+            core::zoom_to_fit(*plane_, width(), height());
+            fitted_ = true;
+        }
+        grid_ = core::slice_grid(*plane_, width(), height());
+        core::reslice(scene_->volume(), grid_, core::Interp::Linear, values_);
+        grey_ = core::apply_window(values_, window_, core::PixelFormat::Grey8);
+        image_ = QImage(grey_.data(), values_.width, values_.height, values_.width, QImage::Format_Grayscale8).copy();
+        if (outlines_enabled_)
+            for (auto id : scene_->surfaces()) {
+                const auto& info = scene_->info(id);
+                if (!info.visible) continue;
+                outlines_.push_back({core::mesh_outline(scene_->mesh(id), grid_), to_qcolor(info.color)});
+            }
+    } catch (const std::exception& e) {
+        // Nothing escapes into Qt's event loop.
+        std::cerr << "isoscope gui: " << core::slice_orientation_name(orientation_) << " view: " << e.what() << "\n";
+        image_ = QImage();
+    }
+    update();
+}
+
+void SliceView::paintEvent(QPaintEvent*) {
+    QPainter p(this);
+    p.fillRect(rect(), Qt::black);
+    if (image_.isNull()) return;
+    p.drawImage(0, 0, image_);
+    p.setRenderHint(QPainter::Antialiasing);
+    for (const auto& o : outlines_) {
+        p.setPen(QPen(o.color, 1.5));
+        for (const auto& s : o.segments) p.drawLine(QPointF(s.a.x, s.a.y), QPointF(s.b.x, s.b.y));
+    }
+    const auto c = core::lps_to_pixel(grid_, plane_->origin).pixel;
+    p.setPen(QPen(QColor(255, 200, 0, 160), 1.0, Qt::DashLine));
+    p.drawLine(QPointF(c.x, 0), QPointF(c.x, height()));
+    p.drawLine(QPointF(0, c.y), QPointF(width(), c.y));
+    p.setPen(Qt::yellow);
+    p.drawText(QPointF(6, 16), QString("%1  %2 mm").arg(core::slice_orientation_name(orientation_)).arg(plane_->offset_mm(), 0, 'f', 1));
+}
+
+void SliceView::resizeEvent(QResizeEvent*) {
+    fitted_ = false;
+    refresh();
+}
+
+void SliceView::mousePressEvent(QMouseEvent* e) {
+    if (e->button() == Qt::LeftButton && on_click && !image_.isNull()) on_click(*this, e->position());
+}
+
+void SliceView::wheelEvent(QWheelEvent* e) {
+    wheel_ += e->angleDelta().y();
+    const double steps = std::trunc(wheel_ / 120.0);
+    if (steps != 0 && on_scroll) {
+        wheel_ -= steps * 120.0;
+        on_scroll(*this, steps);
+    }
+    e->accept();
+}
+
+void SliceView::keyPressEvent(QKeyEvent* e) {
+    if ((e->key() == Qt::Key_PageUp || e->key() == Qt::Key_PageDown) && on_scroll) {
+        on_scroll(*this, e->key() == Qt::Key_PageUp ? 1.0 : -1.0);
+        return;
+    }
+    QWidget::keyPressEvent(e);
+}
+
+} // namespace iso::gui

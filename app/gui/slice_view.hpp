@@ -1,0 +1,84 @@
+// One slice view of the main window (issue 14, docs/gui.md): paints the
+// volume resliced on its plane through the window (core::reslice,
+// core::apply_window), the surfaces' outlines (core::mesh_outline) and the
+// crosshair. Presentation only: the plane belongs to the main window, which
+// also decides what a click or a scroll does (core::set_crosshair,
+// core::scroll_slices). The geometry is the core's (renderer/core/slices.hpp).
+#pragma once
+
+#include <functional>
+#include <vector>
+
+#include <QColor>
+#include <QImage>
+#include <QWidget>
+
+#include "renderer/core/slices.hpp"
+
+namespace iso {
+class Volume;
+namespace core {
+class Scene;
+}
+} // namespace iso
+
+namespace iso::gui {
+
+class SliceView : public QWidget {
+public:
+    SliceView(core::SliceOrientation orientation, QWidget* parent = nullptr);
+
+    // What to show: the scene (its volume and visible surfaces; null: nothing)
+    // and this view's plane (owned by the main window, outliving the view).
+    void set_content(const core::Scene* scene, core::SlicePlane* plane);
+    void set_window(const core::WindowLevel& w);
+    // While a background job changes the scene's surfaces, outlines are not
+    // read (the image, from the unchanged volume, still is).
+    void set_outlines_enabled(bool on);
+    // Recomputes the image and outlines from the plane (call after it changed).
+    void refresh();
+
+    core::SliceOrientation orientation() const { return orientation_; }
+    // The image's grid (one image pixel per widget pixel); valid after refresh
+    // with content.
+    const core::SliceGrid& grid() const { return grid_; }
+    bool has_image() const { return !image_.isNull(); }
+    const QImage& image() const { return image_; }
+    std::size_t outline_segments() const;
+
+    // A left click at continuous pixel coordinates, and scroll steps (wheel
+    // notches, PageUp/PageDown).
+    std::function<void(SliceView&, QPointF)> on_click;
+    std::function<void(SliceView&, double)> on_scroll;
+
+protected:
+    void paintEvent(QPaintEvent*) override;
+    void resizeEvent(QResizeEvent*) override;
+    void mousePressEvent(QMouseEvent* e) override;
+    void wheelEvent(QWheelEvent* e) override;
+    void keyPressEvent(QKeyEvent* e) override;
+
+private:
+    struct Outline {
+        std::vector<core::SliceSegment> segments;
+        QColor color;
+    };
+    core::SliceOrientation orientation_;
+    const core::Scene* scene_ = nullptr;
+    core::SlicePlane* plane_ = nullptr;
+    core::WindowLevel window_;
+    bool outlines_enabled_ = true;
+    bool fitted_ = false;
+    core::SliceGrid grid_;
+    core::SliceImage values_;
+    std::vector<std::uint8_t> grey_;
+    QImage image_;
+    std::vector<Outline> outlines_;
+    double wheel_ = 0; // accumulated angle delta (touchpads send fractions of a notch)
+};
+
+// Linear RGB (the scene's surface colours) -> an sRGB QColor, and back.
+QColor to_qcolor(const glm::vec3& linear);
+glm::vec3 from_qcolor(const QColor& c);
+
+} // namespace iso::gui
