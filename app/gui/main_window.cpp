@@ -189,6 +189,7 @@ MainWindow::~MainWindow() {
     for (auto& j : running_) {
         j->cancel = true;
         j->thread->wait();
+        delete j->thread;
     }
     // The viewer releases its GL objects through the scene: it goes first.
     delete viewer_;
