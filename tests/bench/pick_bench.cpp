@@ -21,7 +21,7 @@
 // render_image: the scene is uploaded and freed on each call and the
 // colour image read back, so it is not a per-pick latency of a live view.
 //
-//   pick_bench [--out DIR] [--sizes 512,1024] [--picks 20] [--reps 3] [--api-picks 5] [--pass-frames 5] [--seed 13] [--peer PATH]
+//   pick_bench [--out DIR] [--sizes 512,1024] [--picks 20] [--reps 3] [--api-picks 5] [--pass-frames 8] [--seed 13] [--peer PATH]
 // Prints markdown tables, writes pick_bench.csv and pick_latency.png in DIR.
 #include <algorithm>
 #include <array>
@@ -55,7 +55,7 @@ namespace {
 struct Args {
     std::string out = "bench-results", peer = ISOSCOPE_PICK_PEER;
     std::vector<int> sizes{512, 1024};
-    int picks = 20, reps = 3, api_picks = 5, pass_frames = 5;
+    int picks = 20, reps = 3, api_picks = 5, pass_frames = 8, block_frames = 6, block_pairs = 3;
     unsigned seed = 13;
 };
 
@@ -188,22 +188,28 @@ struct PickRow {
     int api_surface = -1;
     std::optional<std::uint32_t> api_triangle;
     // VTK
-    double cp_ms = 0, sel_ms = 0;
+    double cp_ms = 0, sel_ms = 0;            // medians over the repetitions
+    std::vector<double> cp_all, sel_all;
     int cp_surface = -1, sel_surface = -1;
     long long cp_cell = -1, sel_cell = -1;
     std::optional<glm::dvec3> cp_point, sel_point;
 };
 
+// Median, quartiles (nearest rank) and extremes.
 struct Stat {
-    double median = 0, min = 0, max = 0;
+    double median = 0, p25 = 0, p75 = 0, min = 0, max = 0;
     std::size_t n = 0;
 };
-Stat stat(const std::vector<double>& v) {
+Stat stat(std::vector<double> v) {
     Stat s;
     if (v.empty()) return s;
     s.median = bench::median(v);
-    s.min = *std::min_element(v.begin(), v.end());
-    s.max = *std::max_element(v.begin(), v.end());
+    std::sort(v.begin(), v.end());
+    const auto q = [&](double f) { return v[std::min(v.size() - 1, std::size_t(f * double(v.size())))]; };
+    s.p25 = q(0.25);
+    s.p75 = q(0.75);
+    s.min = v.front();
+    s.max = v.back();
     s.n = v.size();
     return s;
 }
@@ -257,7 +263,7 @@ int main(int argc, char** argv) {
                 std::stringstream ss(next());
                 for (std::string t; std::getline(ss, t, ',');) a.sizes.push_back(std::stoi(t));
             } else {
-                std::cerr << "usage: pick_bench [--out DIR] [--sizes 512,1024] [--picks 20] [--reps 3] [--api-picks 5] [--pass-frames 5] [--seed 13] [--peer PATH]\n";
+                std::cerr << "usage: pick_bench [--out DIR] [--sizes 512,1024] [--picks 20] [--reps 3] [--api-picks 5] [--pass-frames 8] [--seed 13] [--peer PATH]\n";
                 return 2;
             }
         } catch (const std::exception& e) {
@@ -368,6 +374,25 @@ int main(int argc, char** argv) {
                     r.b.push_back(tb);
                     r.c.push_back(tb - ta);
                 }
+            // Toggling: in blocks of frames all without or all with a pick (a new pixel each, as hover picking would),
+            // the first frame of a block follows a frame of the other kind; the rest follow their own kind.
+            std::vector<double> steady_a, steady_b, toggle_a, toggle_b, created_toggle_a, created_toggle_b, created_steady;
+            for (int block = 0; block < 2 * a.block_pairs; ++block) {
+                const bool with = block % 2 == 1;
+                for (int k = 0; k < a.block_frames; ++k) {
+                    RenderOptions o = plain;
+                    if (with) o.pick = PickRegion{rows[std::size_t(k) % rows.size()].x, rows[std::size_t(k) % rows.size()].y, 1, 1};
+                    const double t0 = bench::now_s();
+                    RenderResult r = scene.render(cam, o);
+                    glFinish();
+                    if (with) resolve(r.pick, cam, o.pick->x, o.pick->y, S, ours_meshes);
+                    const double ms = 1000.0 * (bench::now_s() - t0);
+                    const double created = double(r.stats.physical_resources);
+                    if (block == 0) continue; // the first block follows the A/B loop's last frame
+                    if (k == 0) (with ? toggle_b : toggle_a).push_back(ms), (with ? created_toggle_b : created_toggle_a).push_back(created);
+                    else (with ? steady_b : steady_a).push_back(ms), created_steady.push_back(created);
+                }
+            }
             // Where the pick's cost goes: per-pass times (glFinish after each pass), frames without and with a pick, alternating.
             std::map<std::string, std::pair<std::vector<double>, std::vector<double>>> pass_ms;
             std::vector<std::string> pass_order;
@@ -416,18 +441,18 @@ int main(int argc, char** argv) {
                 cmd << " --mesh " << files[i] << " --color " << v3(glm::dvec3(scene.info(ids[i]).color)) << " --opacity " << opacity[i];
             cmd << " --eye " << v3(cam.eye) << " --target " << v3(cam.target) << " --up " << v3(cam.up) << " --fov " << cam.fov_y_degrees
                 << " --near " << cam.near_plane << " --far " << cam.far_plane << " --size " << S << "x" << S << " --background "
-                << v3(glm::dvec3(glm::vec3(plain.background))) << " --reps " << a.reps;
+                << v3(glm::dvec3(glm::vec3(plain.background))) << " --reps " << a.reps << " --frames 10";
             for (const auto& r : rows) cmd << " --pixel " << r.x << "," << r.y;
             cmd << " 2>" << peer_log;
             const std::string line = bench::capture(cmd.str());
             double vtk_frame = -1;
-            std::size_t vtk_frames = 0;
+            std::vector<double> vtk_frames;
             std::vector<double> locator_ms;
             bool have_vtk = false;
             try {
                 const auto j = nlohmann::json::parse(line.substr(line.find('{')));
                 vtk_frame = j.at("frame_ms").get<double>();
-                vtk_frames = j.at("frame_ms_all").size();
+                vtk_frames = j.at("frame_ms_all").get<std::vector<double>>();
                 locator_ms = j.at("locator_build_ms").get<std::vector<double>>();
                 vtk_renderer = j.at("renderer").get<std::string>();
                 const auto& picks = j.at("picks");
@@ -439,6 +464,7 @@ int main(int argc, char** argv) {
                     const Ray ray = cam.pixel_ray(r.x + 0.5, r.y + 0.5, S, S);
                     const auto& cp = p.at("cell_picker");
                     r.cp_ms = cp.at("ms").get<double>();
+                    r.cp_all = cp.at("ms_all").get<std::vector<double>>();
                     r.cp_surface = cp.at("actor").get<int>();
                     r.cp_cell = cp.at("cell").get<long long>();
                     if (cp.at("hit").get<bool>()) {
@@ -447,6 +473,7 @@ int main(int argc, char** argv) {
                     }
                     const auto& hs = p.at("selector");
                     r.sel_ms = hs.at("ms").get<double>();
+                    r.sel_all = hs.at("ms_all").get<std::vector<double>>();
                     r.sel_surface = hs.at("actor").get<int>();
                     r.sel_cell = hs.at("cell").get<long long>();
                     if (r.sel_surface >= 0 && r.sel_cell >= 0)
@@ -458,39 +485,51 @@ int main(int argc, char** argv) {
             }
 
             // ---- latency table ----
+            // Every sample: picks x repetitions (ours, the selector, the cell picker), frames (VTK's), calls (core::pick).
             std::vector<double> va, vb, vc, vapi, vapi_frame, vcp, vsel;
             for (const auto& r : rows) {
-                va.push_back(bench::median(r.a));
-                vb.push_back(bench::median(r.b));
-                vc.push_back(bench::median(r.c));
+                va.insert(va.end(), r.a.begin(), r.a.end());
+                vb.insert(vb.end(), r.b.begin(), r.b.end());
+                vc.insert(vc.end(), r.c.begin(), r.c.end());
                 if (r.api_ms) vapi.push_back(*r.api_ms), vapi_frame.push_back(*r.api_frame_ms);
-                if (have_vtk) vcp.push_back(r.cp_ms), vsel.push_back(r.sel_ms);
+                vcp.insert(vcp.end(), r.cp_all.begin(), r.cp_all.end());
+                vsel.insert(vsel.end(), r.sel_all.begin(), r.sel_all.end());
             }
             SizeSummary sum{S, {}};
             sum.latency.push_back({"ours: frame, no pick (a)", stat(va)});
             sum.latency.push_back({"ours: frame with the pick riding on it, to the result (b)", stat(vb)});
-            sum.latency.push_back({"ours: the pick's added cost, (b) - (a) paired", stat(vc)});
+            sum.latency.push_back({"ours: the pick's added cost, (b) - (a) of each pair", stat(vc)});
             sum.latency.push_back({"ours: core::pick (API; uploads the scene, reads the image back)", stat(vapi)});
             if (have_vtk) {
-                sum.latency.push_back({"VTK: frame (Render + WaitForCompletion)", stat({vtk_frame})});
+                sum.latency.push_back({"VTK: frame (Render + WaitForCompletion)", stat(vtk_frames)});
                 sum.latency.push_back({"VTK: vtkHardwareSelector::Select, 1 px, cells", stat(vsel)});
                 sum.latency.push_back({"VTK: vtkCellPicker::Pick (vtkCellLocator built once)", stat(vcp)});
             }
-            std::printf("\n### Latency, %dx%d: %zu triangles, %zu picks, median of %d repetitions each\n\n", S, S, triangles, rows.size(),
-                        a.reps);
-            std::printf("| method | ms, median over picks | min | max |\n|---|---:|---:|---:|\n");
+            std::printf("\n### Latency, %dx%d: %zu triangles, %zu picks x %d repetitions\n\n", S, S, triangles, rows.size(), a.reps);
+            std::printf("| method | samples | ms, median | p25 | p75 |\n|---|---:|---:|---:|---:|\n");
             for (const auto& [name, st] : sum.latency)
-                if (st.n) std::printf("| %s | %.2f | %.2f | %.2f |\n", name.c_str(), st.median, st.min, st.max);
-            std::vector<double> all_c;
-            for (const auto& r : rows) all_c.insert(all_c.end(), r.c.begin(), r.c.end());
-            const Stat call = stat(all_c);
-            std::printf("\n(b) - (a) over all %zu pairs: median %.2f ms, min %.2f, max %.2f\n", call.n, call.median, call.min, call.max);
-            std::printf("core::pick's own frame_ms (render_image inside it): median %.1f ms over %zu picks\n", stat(vapi_frame).median,
-                        vapi_frame.size());
+                if (st.n) std::printf("| %s | %zu | %s | %s | %s |\n", name.c_str(), st.n, fmt_ms(st.median).c_str(), fmt_ms(st.p25).c_str(),
+                                      fmt_ms(st.p75).c_str());
+            std::printf("\ncore::pick's own frame_ms (render_image inside it): median %.1f ms\n", stat(vapi_frame).median);
             if (have_vtk)
-                std::printf("VTK: the frame is one run of %zu frames (median); vtkCellLocator builds %.1f ms (skin) and %.1f ms (bone), once\n",
-                            vtk_frames, locator_ms.size() > 0 ? locator_ms[0] : 0.0, locator_ms.size() > 1 ? locator_ms[1] : 0.0);
+                std::printf("VTK: vtkCellLocator builds %.1f ms (skin) and %.1f ms (bone), once, before the picks\n",
+                            locator_ms.size() > 0 ? locator_ms[0] : 0.0, locator_ms.size() > 1 ? locator_ms[1] : 0.0);
 
+            if (!steady_a.empty() && !steady_b.empty()) {
+                std::printf("\nIn blocks of %d frames (%d blocks each, alternating): a frame after one of the same kind, and the first after "
+                            "one of the other kind (ms, median):\n\n", a.block_frames, a.block_pairs);
+                std::printf("| frame | after the same kind | first after the other kind | GPU resources created, first frame |\n|---|---:|---:|---:|\n");
+                std::printf("| no pick | %s | %s | %.0f |\n", fmt_ms(bench::median(steady_a)).c_str(), fmt_ms(bench::median(toggle_a)).c_str(),
+                            bench::median(created_toggle_a));
+                std::printf("| with a pick | %s | %s | %.0f |\n", fmt_ms(bench::median(steady_b)).c_str(), fmt_ms(bench::median(toggle_b)).c_str(),
+                            bench::median(created_toggle_b));
+                std::printf("\nsteady frames create %.0f resources (median); a pick in a run of picking frames adds %.2f ms\n",
+                            bench::median(created_steady), bench::median(steady_b) - bench::median(steady_a));
+                csv << S << ",-1,-1,steady_frame_no_pick," << bench::median(steady_a) << ",,,,,,,,,\n";
+                csv << S << ",-1,-1,steady_frame_with_pick," << bench::median(steady_b) << ",,,,,,,,,\n";
+                csv << S << ",-1,-1,toggle_frame_no_pick," << bench::median(toggle_a) << ",,,,,,,,,\n";
+                csv << S << ",-1,-1,toggle_frame_with_pick," << bench::median(toggle_b) << ",,,,,,,,,\n";
+            }
             if (!pass_order.empty()) {
                 std::printf("\nPer pass (time_passes: glFinish after each pass), median of %d frames without and %d with a pick:\n\n", a.pass_frames,
                             a.pass_frames);
@@ -560,7 +599,7 @@ int main(int argc, char** argv) {
             }
             if (!ours_vs_vtk.empty()) {
                 const Stat d = stat(ours_vs_vtk);
-                std::printf("\nours (visible layer) to vtkCellPicker's point: median %.2f mm, min %.2f, max %.2f (different surfaces: see the table below)\n",
+                std::printf("\nours (visible layer) to vtkCellPicker's point: median %.2f mm, min %.2f, max %.2f (different surfaces: see below)\n",
                             d.median, d.min, d.max);
             }
             // ---- per pick ----
@@ -631,26 +670,24 @@ int main(int argc, char** argv) {
                     same_as_ours ? "bit-identical" : "DIFFERENT (the reference uses the written ones)", gl_renderer.c_str(), vtk_renderer.c_str(),
                     bench::now_s() - t_start);
 
-        // ---- plot: median ms (min-max over picks) against the image size, log scale ----
+        // ---- plot: one group of bars per method, one bar per image size (median, IQR bars), log scale ----
+        const char* const short_names[] = {"ours: frame (a)", "ours: frame + pick (b)", "ours: pick added (c)", "ours: core::pick",
+                                           "VTK: frame", "VTK: HW selector", "VTK: cell picker"};
         std::ofstream gp(a.out + "/pick_latency.gp");
-        gp << "set terminal pngcairo size 820,720\nset output '" << a.out << "/pick_latency.png'\n"
-           << "set logscale y\nset xlabel 'image size (px per side)'\nset ylabel 'ms (median over picks; bars: min-max)'\n"
+        gp << "set terminal pngcairo size 900,560\nset output '" << a.out << "/pick_latency.png'\n"
            << "set title 'Pick latency, head CT (skin 0.3 over bone); " << gl_renderer << "' noenhanced\n"
-           << "set key outside below vertical noenhanced\nset grid\nset xtics (";
-        for (std::size_t i = 0; i < summaries.size(); ++i) gp << (i ? ", " : "") << "'" << summaries[i].size << "' " << i;
-        gp << ")\nset xrange [-0.5:" << double(summaries.size()) - 0.5 << "]\nplot";
-        const std::size_t nseries = summaries.empty() ? 0 : summaries.front().latency.size();
-        for (std::size_t k = 0; k < nseries; ++k)
-            gp << (k ? "," : "") << " '-' using 1:2:3:4 with yerrorlines pt 7 title \"" << summaries.front().latency[k].first
-               << (k == 2 ? " (<= 0.01 drawn at 0.01)" : "") << "\"";
+           << "set logscale y\nset yrange [0.05:*]\nset ylabel 'ms (median; bars: p25-p75; values below 0.05 drawn at 0.05)'\n"
+           << "set style data histogram\nset style histogram errorbars gap 1 lw 1\nset style fill solid 0.7 border -1\n"
+           << "set xtics rotate by -25 noenhanced\nset grid ytics\nset key top left\nplot";
+        for (std::size_t i = 0; i < summaries.size(); ++i)
+            gp << (i ? "," : "") << " '-' using 2:3:4" << (i ? "" : ":xtic(1)") << " title '" << summaries[i].size << "x" << summaries[i].size << "'";
         gp << "\n";
-        for (std::size_t k = 0; k < nseries; ++k) {
-            for (std::size_t i = 0; i < summaries.size(); ++i) {
-                if (k >= summaries[i].latency.size()) continue;
-                const Stat& st = summaries[i].latency[k].second;
-                if (!st.n) continue;
-                const auto c = [](double v) { return std::max(v, 0.01); };
-                gp << i << " " << c(st.median) << " " << c(st.min) << " " << c(st.max) << "\n";
+        for (const auto& sm : summaries) {
+            for (std::size_t k = 0; k < sm.latency.size() && k < 7; ++k) {
+                const Stat& st = sm.latency[k].second;
+                const auto c = [](double v) { return std::max(v, 0.05); };
+                gp << "\"" << short_names[k] << "\" " << (st.n ? c(st.median) : 0.05) << " " << (st.n ? c(st.p25) : 0.05) << " "
+                   << (st.n ? c(st.p75) : 0.05) << "\n";
             }
             gp << "e\n";
         }
