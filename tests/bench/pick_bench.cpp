@@ -445,13 +445,11 @@ int main(int argc, char** argv) {
             for (const auto& r : rows) cmd << " --pixel " << r.x << "," << r.y;
             cmd << " 2>" << peer_log;
             const std::string line = bench::capture(cmd.str());
-            double vtk_frame = -1;
             std::vector<double> vtk_frames;
             std::vector<double> locator_ms;
             bool have_vtk = false;
             try {
                 const auto j = nlohmann::json::parse(line.substr(line.find('{')));
-                vtk_frame = j.at("frame_ms").get<double>();
                 vtk_frames = j.at("frame_ms_all").get<std::vector<double>>();
                 locator_ms = j.at("locator_build_ms").get<std::vector<double>>();
                 vtk_renderer = j.at("renderer").get<std::string>();
@@ -662,7 +660,7 @@ int main(int argc, char** argv) {
                             r.cp_cell >= 0 ? std::optional<std::uint32_t>(std::uint32_t(r.cp_cell)) : std::nullopt, r.cp_point, "first", first);
                 }
             }
-            if (have_vtk) csv << S << ",-1,-1,vtk_frame," << vtk_frame << ",,,,,,,,,\n";
+            if (have_vtk) csv << S << ",-1,-1,vtk_frame," << bench::median(vtk_frames) << ",,,,,,,,,\n";
             summaries.push_back(std::move(sum));
         }
         csv.close();
