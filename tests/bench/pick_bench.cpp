@@ -20,6 +20,9 @@
 // and core::pick (the API the CLI calls), which renders through
 // render_image: the scene is uploaded and freed on each call and the
 // colour image read back, so it is not a per-pick latency of a live view.
+// Also: frames in blocks all without or all with a pick (does switching
+// cost anything?), and per-pass times (time_passes) without and with a pick
+// (where the added cost goes).
 //
 //   pick_bench [--out DIR] [--sizes 512,1024] [--picks 20] [--reps 3] [--api-picks 5] [--pass-frames 8] [--seed 13] [--peer PATH]
 // Prints markdown tables, writes pick_bench.csv and pick_latency.png in DIR.
