@@ -70,9 +70,9 @@ void build_frame(graph::FrameGraph& fg, const FrameContext& ctx) {
     graph::TextureHandle color = lighting(fg, ctx, gb, opt.ao ? ao.ao : graph::TextureHandle{});
     // Scene content, not an output request, decides this one: no translucent
     // object, no list passes. Lit translucent fragments get their own AO.
-    PickBuffers picked = gb.pick;
+    PickBuffers picked;
     if (!ctx.translucent.empty()) color = voit(fg, ctx, gb, color, opt.ao && !opt.flat_shading ? &ao : nullptr, picked);
-    if (picked.valid()) pick(fg, ctx, picked);
+    if (ctx.pick) pick(fg, ctx, gb, picked);
     if (opt.annotations) color = overlay(fg, ctx, color, gb.depth);
     if (opt.present) return present(fg, ctx, color);
     // The colour image, or the AOV: depth, AO, or the G-buffer channel the layout table names.

@@ -109,23 +109,25 @@ struct PickBuffers {
 glm::ivec4 pick_rect_gl(const FrameContext& ctx);
 // Entries the pick's pool holds: 64 layers per region pixel, at least 4096.
 std::size_t pick_capacity(const FrameContext& ctx);
-// In a geometry pass's setup: the first writer creates the lists, later
-// ones write new versions.
+// In a pass's setup: the first writer (the VOIT list pass, or else
+// pick_resolve) creates the lists, later ones write new versions.
 PickBuffers write_pick(graph::FrameGraph::Builder& b, const FrameContext& ctx, const PickBuffers& previous);
 // In its execute: binds them and the region to `prog` (the first writer
 // also clears them). The shader needs PICK_APPEND (pick_defines()).
 void bind_pick(GlResources& gl, const graph::Resources& r, const FrameContext& ctx, const PickBuffers& p, iso::gl::Program& prog,
                bool first);
 inline std::string pick_defines(const PickBuffers& p) { return p.valid() ? "#define PICK_APPEND 1\n" : ""; }
-// The compute step (sort each pixel's list, transmittances) and the read-back into RenderResult::pick.
-void pick(graph::FrameGraph& fg, const FrameContext& ctx, const PickBuffers& lists);
 
 struct GBuffer {
     graph::TextureHandle depth, normal, id, albedo;
     graph::BufferHandle params; // the pass's own
-    PickBuffers pick;           // with a pick
+    graph::TextureHandle primitive; // with a pick: the nearest opaque surface's triangle (R32UI)
 };
 GBuffer gbuffer(graph::FrameGraph& fg, const FrameContext& ctx);
+// The compute step (add each pixel's nearest opaque surface from the
+// G-buffer, sort each list, transmittances) and the read-back into
+// RenderResult::pick. `lists`: the translucent fragments' (invalid: none).
+void pick(graph::FrameGraph& fg, const FrameContext& ctx, const GBuffer& gb, const PickBuffers& lists);
 
 // The cone-AO passes' shared plan for this frame (ao_plan.cpp): grid sizes,
 // guard band, z range bounds, whether the slicemap must be rebuilt.
@@ -186,8 +188,8 @@ graph::TextureHandle overlay(graph::FrameGraph& fg, const FrameContext& ctx, gra
 // VOIT (docs/voit.md): the translucent fragments' lists, then their
 // front-to-back composite over `color`; returns the composited colour.
 // `ao` non-null: each shaded fragment traces its own AO through that chain.
-// `pick` (valid with a pick): the translucent fragments in its region are
-// listed too; updated to the lists' new versions.
+// With a pick (ctx.pick), the translucent fragments in its region are
+// listed too: `pick` is set to the lists.
 graph::TextureHandle voit(graph::FrameGraph& fg, const FrameContext& ctx, const GBuffer& gb, graph::TextureHandle color,
                           const AmbientOcclusion* ao, PickBuffers& pick);
 void present(graph::FrameGraph& fg, const FrameContext& ctx, graph::TextureHandle color);

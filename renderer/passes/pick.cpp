@@ -1,10 +1,12 @@
 // Picking (docs/picking.md): a pick rides on a frame. The frame's own
-// geometry passes (gbuffer for opaque surfaces, oit_fragments for
-// translucent ones) append every fragment inside the pick region to that
-// region pixel's linked list (shaders/render/pick_common.glsl): no extra
-// pass over the scene. Then two small passes:
-//   pick_resolve  compute: sorts each pixel's list front to back, writes the
-//                 transmittance in front of each entry
+// geometry passes give it what it needs, with no extra pass over the scene:
+// the G-buffer writes each pixel's triangle next to its object id (the
+// nearest opaque surface), and the VOIT list pass appends every translucent
+// fragment inside the pick region to that region pixel's linked list
+// (shaders/render/pick_common.glsl). Then two small passes:
+//   pick_resolve  compute: adds the G-buffer's opaque surface to each
+//                 pixel's list, sorts it front to back, ends it there,
+//                 writes the transmittance in front of each entry
 //   read_pick     reads the lists back into RenderResult::pick
 #include <algorithm>
 #include <cstring>
@@ -64,18 +66,30 @@ void bind_pick(GlResources& gl, const graph::Resources& r, const FrameContext& c
     glUniform4i(prog.uniform("pick_rect"), rect.x, rect.y, rect.z, rect.w);
 }
 
-void pick(graph::FrameGraph& fg, const FrameContext& ctx, const PickBuffers& lists) {
+void pick(graph::FrameGraph& fg, const FrameContext& ctx, const GBuffer& gb, const PickBuffers& lists) {
     struct Data {
         PickBuffers lists;
+        graph::TextureHandle depth, id, primitive;
+        bool first = false; // no list pass ran: the lists start here
     };
     const Data& sorted = fg.add_pass<Data>(
-        "pick_resolve", [&](graph::FrameGraph::Builder& b, Data& d) { d.lists = write_pick(b, ctx, lists); },
+        "pick_resolve",
+        [&](graph::FrameGraph::Builder& b, Data& d) {
+            d.first = !lists.valid();
+            d.lists = write_pick(b, ctx, lists);
+            d.depth = b.read(gb.depth);
+            d.id = b.read(gb.id);
+            d.primitive = b.read(gb.primitive);
+        },
         [&ctx](const Data& d, const graph::Resources& r) {
             GlResources& gl = *ctx.gl;
             auto& prog = gl.program({"render/pick_resolve.comp"});
             prog.use();
             glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
-            bind_pick(gl, r, ctx, d.lists, prog, false);
+            bind_pick(gl, r, ctx, d.lists, prog, d.first);
+            glBindTextureUnit(0, gl.texture(r, d.depth));
+            glBindTextureUnit(1, gl.texture(r, d.id));
+            glBindTextureUnit(2, gl.texture(r, d.primitive));
             glDispatchCompute(GLuint((region_pixels(ctx) + 63) / 64), 1, 1);
             glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT);
         });

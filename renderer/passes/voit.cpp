@@ -151,7 +151,7 @@ Lists fragment_lists(graph::FrameGraph& fg, const FrameContext& ctx, const GBuff
             d.heads = b.write(b.create("oit_heads", {W, H, graph::Format::R32UI}));
             d.counters = b.write(b.create("oit_counters", graph::BufferDesc{kCountersBytes}));
             if (cut.valid()) d.cut = b.read(cut);
-            if (pick.valid()) d.pick = write_pick(b, ctx, pick);
+            d.pick = write_pick(b, ctx, pick);
             d.nodes = b.write(fg.history("oit_nodes", graph::BufferDesc{node_bytes}));
             d.objects = b.write(b.create("oit_objects", graph::BufferDesc{object_bytes}));
             d.params = params_buffer<OitParams>(b, "oit_params");
@@ -176,7 +176,7 @@ Lists fragment_lists(graph::FrameGraph& fg, const FrameContext& ctx, const GBuff
             auto& prog = gl.program({"render/gbuffer.vert", "render/oit_fragments.frag"},
                                     merge_define(ctx) + (d.cut.valid() ? "#define OIT_CUT 1\n" : "") + pick_defines(d.pick));
             prog.use();
-            bind_pick(gl, r, ctx, d.pick, prog, false);
+            bind_pick(gl, r, ctx, d.pick, prog, true);
             bind_params(gl, r, d.gbuffer_params, GBufferParams{ctx.view_projection});
             bind_params(gl, r, d.params, oit_params(ctx));
             glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, gl.buffer(r, d.counters));
@@ -390,7 +390,7 @@ graph::TextureHandle resolve_with_ao(graph::FrameGraph& fg, const FrameContext& 
 graph::TextureHandle voit(graph::FrameGraph& fg, const FrameContext& ctx, const GBuffer& gb, graph::TextureHandle color,
                           const AmbientOcclusion* ao, PickBuffers& pick) {
     const Lists lists = fragment_lists(fg, ctx, gb, ctx.oit_cut ? depth_cut(fg, ctx, gb) : graph::TextureHandle{}, pick);
-    if (pick.valid()) pick = lists.pick;
+    pick = lists.pick;
     if (ctx.hooks.read_oit_lists) read_lists(fg, ctx, lists);
     return ao ? resolve_with_ao(fg, ctx, lists, color, *ao) : resolve(fg, ctx, lists, color);
 }

@@ -1,10 +1,8 @@
 #version 450
-#extension GL_GOOGLE_include_directive : require
 // Writes the world normal, the object id and the albedo; depth goes to the
-// (reversed-Z, float) depth attachment. With PICK_APPEND (a pick rides on
-// this frame), fragments in the pick region are appended to its lists:
-// without early fragment tests, every opaque layer along the ray is listed,
-// hidden ones included (docs/picking.md).
+// (reversed-Z, float) depth attachment. With GB_PRIMITIVE (a pick rides on
+// this frame), the triangle too (gl_PrimitiveID): the pick's opaque layer
+// (docs/picking.md). No side effects, so the depth test stays early.
 in vec3 world_normal;
 
 uniform uint object_id;
@@ -21,8 +19,8 @@ uniform vec3 albedo;
 layout(location = GB_NORMAL) out vec4 out_normal;   // RGBA16F: world normal, w = 1 on geometry
 layout(location = GB_ID) out uint out_id;           // R32UI
 layout(location = GB_ALBEDO) out vec4 out_albedo;   // RGBA8
-#ifdef PICK_APPEND
-#include "pick_common.glsl"
+#ifdef GB_PRIMITIVE
+layout(location = GB_PRIMITIVE) out uint out_primitive;   // R32UI
 #endif
 
 void main() {
@@ -32,7 +30,7 @@ void main() {
     out_normal = vec4(n, 1.0);
     out_id = object_id;
     out_albedo = vec4(albedo, 1.0);
-#ifdef PICK_APPEND
-    pick_append(object_id, 1.0);
+#ifdef GB_PRIMITIVE
+    out_primitive = uint(gl_PrimitiveID);
 #endif
 }

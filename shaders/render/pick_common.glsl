@@ -1,9 +1,10 @@
 // Picking in the frame's own geometry passes (docs/picking.md): every
-// fragment inside the pick region, opaque (G-buffer pass) and translucent
-// (VOIT list pass) alike, appends (depth, object, primitive, alpha) to its
-// region pixel's linked list: an entry from a pool by an atomic counter,
-// linked in by exchanging the pixel's head. pick_resolve.comp then sorts
-// each list front to back and writes the transmittance before each entry.
+// translucent fragment inside the pick region (VOIT list pass) appends
+// (depth, object, primitive, alpha) to its region pixel's linked list: an
+// entry from a pool by an atomic counter, linked in by exchanging the
+// pixel's head. pick_resolve.comp adds the nearest opaque surface from the
+// G-buffer (its id and, with a pick, triangle channels), sorts each list
+// front to back and writes the transmittance before each entry.
 struct PickEntry {
     float depth;          // reversed Z: larger is nearer
     uint object;          // 1-based object id
