@@ -137,8 +137,7 @@ struct Lists {
 
 std::string merge_define(const FrameContext& ctx) { return ctx.oit_merge ? "#define OIT_MERGE 1\n" : ""; }
 constexpr std::size_t kCountersBytes = 3 * 4; // OitCounters in oit_common.glsl
-constexpr std::size_t kTailWords = 12;    // OitTail in oit_common.glsl
-constexpr std::size_t kTailBytes = kTailWords * 4;
+constexpr std::size_t kTailBytes = 12 * 4; // OitTail in oit_common.glsl
 
 Lists fragment_lists(graph::FrameGraph& fg, const FrameContext& ctx, const GBuffer& gb, graph::TextureHandle cut, const PickBuffers& pick) {
     const int W = ctx.width, H = ctx.height;
@@ -167,10 +166,7 @@ Lists fragment_lists(graph::FrameGraph& fg, const FrameContext& ctx, const GBuff
             glClearNamedBufferData(gl.buffer(r, d.counters), GL_R32UI, GL_RED_INTEGER, GL_UNSIGNED_INT, &zero);
             glNamedBufferSubData(gl.buffer(r, d.objects), 0, GLsizeiptr(ctx.objects.size() * sizeof(glm::vec4)), ctx.objects.data());
             if (d.tails.valid()) {
-                // Sums and highs start at 0, lows at the top.
-                std::vector<GLuint> init(std::size_t(ctx.width) * std::size_t(ctx.height) * kTailWords, 0u);
-                for (std::size_t i = 0; i < init.size(); i += kTailWords) init[i + 6] = init[i + 7] = init[i + 8] = 0xFFFFFFFFu;
-                glNamedBufferSubData(gl.buffer(r, d.tails), 0, GLsizeiptr(init.size() * 4), init.data());
+                glClearNamedBufferData(gl.buffer(r, d.tails), GL_R32UI, GL_RED_INTEGER, GL_UNSIGNED_INT, &zero); // the empty tail
                 glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 3, gl.buffer(r, d.tails));
             }
             auto& prog = gl.program({"render/gbuffer.vert", "render/oit_fragments.frag"},

@@ -45,7 +45,10 @@ struct OitTail {
     uint color[3];     // sum of alpha * colour, OIT_TAIL_ONE per unit
     uint alpha;        // sum of alpha, OIT_TAIL_ONE per unit
     uint optical;      // sum of -log2(1 - alpha), OIT_TAIL_LOG_ONE per unit, each at most OIT_TAIL_LOG_MAX
-    uint lo[3], hi[3]; // the colours' range per channel, 65535 per unit: bounds the lost order's error
+    // The colours' range per channel, 65535 per unit (bounds the lost
+    // order's error): the low end stored as 65535 - low and raised with
+    // atomicMax, so that an all-zero buffer is the empty tail.
+    uint lo_complement[3], hi[3];
 };
 #define OIT_TAIL_ONE 16384.0      // 2^14: 2^18 fragments per pixel before a sum wraps
 #define OIT_TAIL_LOG_ONE 4096.0   // 2^12

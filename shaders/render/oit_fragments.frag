@@ -53,7 +53,7 @@ void merge(vec3 n, uint t) {
     for (int k = 0; k < 3; ++k) {
         float ck = clamp(c[k], 0.0, 1.0);
         atomicAdd(oit_tails[t].color[k], uint(round(o.a * ck * OIT_TAIL_ONE)));
-        atomicMin(oit_tails[t].lo[k], uint(floor(ck * 65535.0)));
+        atomicMax(oit_tails[t].lo_complement[k], 65535u - uint(floor(ck * 65535.0)));
         atomicMax(oit_tails[t].hi[k], uint(ceil(ck * 65535.0)));
     }
     atomicAdd(oit_tails[t].alpha, uint(round(o.a * OIT_TAIL_ONE)));

@@ -163,7 +163,7 @@ void main() {
         float alpha_sum = float(oit_tails[t].alpha);
         vec3 mean = alpha_sum > 0.0 ? vec3(oit_tails[t].color[0], oit_tails[t].color[1], oit_tails[t].color[2]) / alpha_sum : vec3(0.0);
         float spread = 0.0;
-        for (int k = 0; k < 3; ++k) spread = max(spread, float(oit_tails[t].hi[k] - oit_tails[t].lo[k]) / 65535.0);
+        for (int k = 0; k < 3; ++k) spread = max(spread, float(oit_tails[t].hi[k] - (65535u - oit_tails[t].lo_complement[k])) / 65535.0);
         float bound = oit_overflow == 0u ? transmittance * coverage * spread : coverage;
         acc += transmittance * coverage * mean;
         transmittance *= 1.0 - coverage;
