@@ -560,6 +560,16 @@ int run_measure(const MeasureArgs& a) {
 
 // ---- isoscope view ---------------------------------------------------------
 
+// Qt's windows get a GL 4.5 core context with a depth buffer (before the
+// QApplication is made), as the renderer needs.
+void use_gl45_surfaces() {
+    QSurfaceFormat fmt;
+    fmt.setVersion(4, 5);
+    fmt.setProfile(QSurfaceFormat::CoreProfile);
+    fmt.setDepthBufferSize(24);
+    QSurfaceFormat::setDefaultFormat(fmt);
+}
+
 struct ViewArgs {
     std::string in, view = "anterior", screenshot, series, ao = "cone";
     std::vector<double> isos;
@@ -590,11 +600,7 @@ int run_view(ViewArgs a, char* argv0) {
     open_input(scene, a.in, a.series, a.isos, a.look, "view");
     if (!a.look.background.empty()) a.opt.background = hex_option("--background", a.look.background);
     a.opt.flat_shading = a.look.shading == "flat";
-    QSurfaceFormat fmt;
-    fmt.setVersion(4, 5);
-    fmt.setProfile(QSurfaceFormat::CoreProfile);
-    fmt.setDepthBufferSize(24);
-    QSurfaceFormat::setDefaultFormat(fmt);
+    use_gl45_surfaces();
     int qargc = 1;
     char* qargv[] = {argv0, nullptr};
     QApplication qapp(qargc, qargv);
@@ -633,11 +639,7 @@ int run_view(ViewArgs a, char* argv0) {
 // The desktop app (docs/gui.md); also what `isoscope` with no arguments
 // starts where there is a display.
 int run_gui(const std::string& in, char* argv0) {
-    QSurfaceFormat fmt;
-    fmt.setVersion(4, 5);
-    fmt.setProfile(QSurfaceFormat::CoreProfile);
-    fmt.setDepthBufferSize(24);
-    QSurfaceFormat::setDefaultFormat(fmt);
+    use_gl45_surfaces();
     int qargc = 1;
     char* qargv[] = {argv0, nullptr};
     QApplication qapp(qargc, qargv);

@@ -38,10 +38,8 @@ struct Comparison {
     std::size_t foreground = 0;
 };
 
-// Renders the layers (flat shading) and compares with the reference over foreground pixels, in sRGB units [0, 1].
-Comparison compare(const std::vector<Layer>& layers, const Camera& cam, int size, RenderResult* out = nullptr,
-                   const RenderHooks& hooks = {}) {
-    Renderer ren;
+// Adds the layers to the renderer; the same surfaces for the reference.
+std::vector<ReferenceSurface> add_layers(Renderer& ren, const std::vector<Layer>& layers) {
     std::vector<ReferenceSurface> ref;
     for (const auto& l : layers) {
         SceneObject o;
@@ -50,6 +48,14 @@ Comparison compare(const std::vector<Layer>& layers, const Camera& cam, int size
         ren.add(l.mesh, o);
         ref.push_back({&l.mesh, l.color, l.opacity});
     }
+    return ref;
+}
+
+// Renders the layers (flat shading) and compares with the reference over foreground pixels, in sRGB units [0, 1].
+Comparison compare(const std::vector<Layer>& layers, const Camera& cam, int size, RenderResult* out = nullptr,
+                   const RenderHooks& hooks = {}) {
+    Renderer ren;
+    const std::vector<ReferenceSurface> ref = add_layers(ren, layers);
     RenderOptions o;
     o.width = o.height = size;
     o.flat_shading = true;
@@ -163,14 +169,7 @@ TEST_F(Voit, PastTheCapFragmentsAreMergedWithinTheirStatedBound) {
     }
     std::shuffle(layers.begin(), layers.end(), std::mt19937(3)); // added out of depth order: the renderer orders the draws
     Renderer ren;
-    std::vector<ReferenceSurface> ref;
-    for (const auto& l : layers) {
-        SceneObject o;
-        o.color = l.color;
-        o.opacity = l.opacity;
-        ren.add(l.mesh, o);
-        ref.push_back({&l.mesh, l.color, l.opacity});
-    }
+    const std::vector<ReferenceSurface> ref = add_layers(ren, layers);
     RenderOptions o;
     o.width = o.height = 128;
     o.flat_shading = true;
