@@ -11,47 +11,25 @@
 //            [--frames 10] [--warmup 2] --out image.png
 // Prints one JSON line: median and quartiles of ms per frame, the renderer.
 #include <algorithm>
-#include <chrono>
 #include <cstdio>
 #include <iostream>
 #include <string>
 #include <vector>
 
-#include <vtkActor.h>
-#include <vtkCamera.h>
 #include <vtkNew.h>
-#include <vtkOpenGLRenderer.h>
 #include <vtkOutputWindow.h>
-#include <vtkPolyData.h>
-#include <vtkPolyDataMapper.h>
 #include <vtkProperty.h>
 #include <vtkRenderWindow.h>
 #include <vtkUnsignedCharArray.h>
 
-#include "io/error.hpp"
 #include "io/image.hpp"
-#include "io/mesh.hpp"
-#include "io/vtk_mesh.hpp"
 #include "vtk_peer.hpp"
 
-namespace {
-
 using iso::vtk_peer::quantile;
-using iso::vtk_peer::vec3;
-
-struct Surface {
-    std::string mesh;
-    double color[3] = {1, 1, 1};
-    double opacity = 1;
-};
-
-} // namespace
 
 int main(int argc, char** argv) {
-    std::vector<Surface> surfaces;
-    double eye[3] = {0, 0, 0}, target[3] = {0, 0, 0}, up[3] = {0, 0, 1}, background[3] = {0, 0, 0};
-    double fov = 30, near_plane = 1, far_plane = 1000;
-    int W = 512, H = 512, peels = 4, frames = 10, warmup = 2;
+    iso::vtk_peer::Scene sc;
+    int peels = 4, frames = 10, warmup = 2;
     std::string mode = "wboit", out;
     for (int i = 1; i < argc; ++i) {
         const std::string a = argv[i];
@@ -61,51 +39,35 @@ int main(int argc, char** argv) {
         }
         const std::string v = argv[++i];
         bool ok = true;
-        if (a == "--mesh") surfaces.push_back({v});
-        else if (a == "--color") ok = !surfaces.empty() && vec3(v, surfaces.back().color);
-        else if (a == "--opacity") ok = !surfaces.empty() && (surfaces.back().opacity = std::stod(v), true);
-        else if (a == "--eye") ok = vec3(v, eye);
-        else if (a == "--target") ok = vec3(v, target);
-        else if (a == "--up") ok = vec3(v, up);
-        else if (a == "--background") ok = vec3(v, background);
-        else if (a == "--fov") fov = std::stod(v);
-        else if (a == "--near") near_plane = std::stod(v);
-        else if (a == "--far") far_plane = std::stod(v);
-        else if (a == "--size") ok = std::sscanf(v.c_str(), "%dx%d", &W, &H) == 2 && W > 0 && H > 0;
-        else if (a == "--mode") ok = (mode = v, v == "wboit" || v == "peel");
-        else if (a == "--peels") peels = std::stoi(v);
-        else if (a == "--frames") frames = std::stoi(v);
-        else if (a == "--warmup") warmup = std::stoi(v);
-        else if (a == "--out") out = v;
-        else ok = false;
+        if (!sc.option(a, v, ok)) {
+            if (a == "--mode") ok = (mode = v, v == "wboit" || v == "peel");
+            else if (a == "--peels") peels = std::stoi(v);
+            else if (a == "--frames") frames = std::stoi(v);
+            else if (a == "--warmup") warmup = std::stoi(v);
+            else if (a == "--out") out = v;
+            else ok = false;
+        }
         if (!ok) {
             std::cerr << "oit_peer: bad option " << a << " " << v << "\n";
             return 2;
         }
     }
-    if (surfaces.empty() || out.empty()) {
+    if (sc.surfaces.empty() || out.empty()) {
         std::cerr << "oit_peer: needs --mesh and --out\n";
         return 2;
     }
+    const int W = sc.W, H = sc.H;
     try {
         vtkOutputWindow::GetInstance()->SetDisplayModeToAlwaysStdErr();
-        vtkNew<vtkOpenGLRenderer> ren;
-        ren->SetBackground(background);
-        for (const auto& s : surfaces) {
-            vtkNew<vtkPolyDataMapper> mapper;
-            mapper->SetInputData(iso::to_polydata(iso::load_mesh(s.mesh), false));
-            mapper->ScalarVisibilityOff();
-            vtkNew<vtkActor> actor;
-            actor->SetMapper(mapper);
+        const auto view = iso::vtk_peer::make_view(sc);
+        for (const auto& actor : view->actors) { // flat: a fragment is its colour
             auto* p = actor->GetProperty();
-            p->SetColor(s.color[0], s.color[1], s.color[2]);
-            p->SetOpacity(s.opacity);
             p->SetAmbient(1.0);
             p->SetDiffuse(0.0);
             p->SetSpecular(0.0);
             p->BackfaceCullingOff();
-            ren->AddActor(actor);
         }
+        vtkOpenGLRenderer* ren = view->ren;
         if (mode == "peel") {
             ren->SetUseDepthPeeling(true);
             ren->SetMaximumNumberOfPeels(peels);
@@ -115,28 +77,8 @@ int main(int argc, char** argv) {
             // VTK 9.1 draws translucent geometry with its weighted-blended
             // OIT pass (McGuire and Bavoil) whenever depth peeling is off.
         }
-        vtkCamera* cam = ren->GetActiveCamera();
-        cam->SetPosition(eye);
-        cam->SetFocalPoint(target);
-        cam->SetViewUp(up);
-        cam->SetViewAngle(fov);
-        vtkNew<vtkRenderWindow> win;
-        win->SetMultiSamples(0);
-        win->SetAlphaBitPlanes(1);
-        win->SetSize(W, H);
-        win->AddRenderer(ren);
-        win->SetOffScreenRendering(1);
-        using clock = std::chrono::steady_clock;
-        std::vector<double> ms;
-        for (int f = 0; f < warmup + frames; ++f) {
-            cam->SetClippingRange(near_plane, far_plane);
-            const auto t0 = clock::now();
-            win->Render();
-            win->WaitForCompletion();
-            if (f >= warmup) ms.push_back(std::chrono::duration<double, std::milli>(clock::now() - t0).count());
-        }
-        int* sz = win->GetSize();
-        if (sz[0] != W || sz[1] != H) throw iso::Error("oit_peer", "window is " + std::to_string(sz[0]) + "x" + std::to_string(sz[1]));
+        vtkRenderWindow* win = view->win;
+        const std::vector<double> ms = iso::vtk_peer::timed_frames(*view, sc, warmup, frames, "oit_peer");
         vtkNew<vtkUnsignedCharArray> rgb;
         win->GetPixelData(0, 0, W - 1, H - 1, 0, rgb, 0);
         iso::Image img;

@@ -59,25 +59,16 @@
 namespace {
 
 using iso::vtk_peer::quantile;
-using iso::vtk_peer::vec3;
 using clock_type = std::chrono::steady_clock;
-
-struct Surface {
-    std::string mesh;
-    double color[3] = {1, 1, 1};
-    double opacity = 1;
-};
 
 double ms_since(clock_type::time_point t0) { return std::chrono::duration<double, std::milli>(clock_type::now() - t0).count(); }
 
 } // namespace
 
 int main(int argc, char** argv) {
-    std::vector<Surface> surfaces;
+    iso::vtk_peer::Scene sc;
     std::vector<std::array<int, 2>> pixels;
-    double eye[3] = {0, 0, 0}, target[3] = {0, 0, 0}, up[3] = {0, 0, 1}, background[3] = {0, 0, 0};
-    double fov = 30, near_plane = 1, far_plane = 1000;
-    int W = 512, H = 512, reps = 3, frames = 5, warmup = 2;
+    int reps = 3, frames = 5, warmup = 2;
     for (int i = 1; i < argc; ++i) {
         const std::string a = argv[i];
         if (i + 1 >= argc) {
@@ -86,74 +77,35 @@ int main(int argc, char** argv) {
         }
         const std::string v = argv[++i];
         bool ok = true;
-        if (a == "--mesh") surfaces.push_back({v});
-        else if (a == "--color") ok = !surfaces.empty() && vec3(v, surfaces.back().color);
-        else if (a == "--opacity") ok = !surfaces.empty() && (surfaces.back().opacity = std::stod(v), true);
-        else if (a == "--eye") ok = vec3(v, eye);
-        else if (a == "--target") ok = vec3(v, target);
-        else if (a == "--up") ok = vec3(v, up);
-        else if (a == "--background") ok = vec3(v, background);
-        else if (a == "--fov") fov = std::stod(v);
-        else if (a == "--near") near_plane = std::stod(v);
-        else if (a == "--far") far_plane = std::stod(v);
-        else if (a == "--size") ok = std::sscanf(v.c_str(), "%dx%d", &W, &H) == 2 && W > 0 && H > 0;
-        else if (a == "--pixel") {
-            std::array<int, 2> p{};
-            ok = std::sscanf(v.c_str(), "%d,%d", &p[0], &p[1]) == 2;
-            pixels.push_back(p);
-        } else if (a == "--reps") ok = (reps = std::stoi(v)) > 0;
-        else if (a == "--frames") ok = (frames = std::stoi(v)) > 0;
-        else if (a == "--warmup") warmup = std::stoi(v);
-        else ok = false;
+        if (!sc.option(a, v, ok)) {
+            if (a == "--pixel") {
+                std::array<int, 2> p{};
+                ok = std::sscanf(v.c_str(), "%d,%d", &p[0], &p[1]) == 2;
+                pixels.push_back(p);
+            } else if (a == "--reps") ok = (reps = std::stoi(v)) > 0;
+            else if (a == "--frames") ok = (frames = std::stoi(v)) > 0;
+            else if (a == "--warmup") warmup = std::stoi(v);
+            else ok = false;
+        }
         if (!ok) {
             std::cerr << "pick_peer: bad option " << a << " " << v << "\n";
             return 2;
         }
     }
-    if (surfaces.empty() || pixels.empty()) {
+    if (sc.surfaces.empty() || pixels.empty()) {
         std::cerr << "pick_peer: needs --mesh and --pixel\n";
         return 2;
     }
+    const int W = sc.W, H = sc.H;
     try {
         vtkOutputWindow::GetInstance()->SetDisplayModeToAlwaysStdErr();
-        vtkNew<vtkOpenGLRenderer> ren;
-        ren->SetBackground(background);
-        std::vector<vtkSmartPointer<vtkActor>> actors;
-        std::vector<vtkSmartPointer<vtkPolyData>> data;
-        for (const auto& s : surfaces) {
-            data.push_back(iso::to_polydata(iso::load_mesh(s.mesh), false));
-            vtkNew<vtkPolyDataMapper> mapper;
-            mapper->SetInputData(data.back());
-            mapper->ScalarVisibilityOff();
-            auto actor = vtkSmartPointer<vtkActor>::New();
-            actor->SetMapper(mapper);
-            actor->GetProperty()->SetColor(s.color[0], s.color[1], s.color[2]);
-            actor->GetProperty()->SetOpacity(s.opacity);
-            ren->AddActor(actor);
-            actors.push_back(actor);
-        }
-        vtkCamera* cam = ren->GetActiveCamera();
-        cam->SetPosition(eye);
-        cam->SetFocalPoint(target);
-        cam->SetViewUp(up);
-        cam->SetViewAngle(fov);
-        vtkNew<vtkRenderWindow> win;
-        win->SetMultiSamples(0); // the selector's colour-coded ids break under multisampling
-        win->SetAlphaBitPlanes(1);
-        win->SetSize(W, H);
-        win->AddRenderer(ren);
-        win->SetOffScreenRendering(1);
+        const auto view = iso::vtk_peer::make_view(sc);
+        vtkOpenGLRenderer* ren = view->ren;
+        vtkRenderWindow* win = view->win;
+        const auto& actors = view->actors;
+        auto& data = view->data;
         // The frame a user looks at while picking.
-        std::vector<double> frame_ms;
-        for (int f = 0; f < warmup + frames; ++f) {
-            cam->SetClippingRange(near_plane, far_plane);
-            const auto t0 = clock_type::now();
-            win->Render();
-            win->WaitForCompletion();
-            if (f >= warmup) frame_ms.push_back(ms_since(t0));
-        }
-        int* sz = win->GetSize();
-        if (sz[0] != W || sz[1] != H) throw iso::Error("pick_peer", "window is " + std::to_string(sz[0]) + "x" + std::to_string(sz[1]));
+        const std::vector<double> frame_ms = iso::vtk_peer::timed_frames(*view, sc, warmup, frames, "pick_peer");
         // The cell picker's locators: built once, before any pick.
         vtkNew<vtkCellPicker> picker;
         nlohmann::json locator_ms = nlohmann::json::array();
