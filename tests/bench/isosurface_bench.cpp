@@ -30,6 +30,7 @@
 
 #include "bench_util.hpp"
 #include "ct_phantom.hpp"
+#include "vtk_volume.hpp"
 #include "io/volume_io.hpp"
 #include "renderer/gl/context.hpp"
 #include "renderer/gl/objects.hpp"
@@ -63,17 +64,6 @@ Volume load_data(const std::string& data, const std::array<std::int64_t, 3>& siz
     return cached_ct_phantom(size);
 }
 
-vtkNew<vtkImageData> as_vtk(Volume& v) {
-    vtkNew<vtkImageData> img;
-    img->SetDimensions(int(v.dims[0]), int(v.dims[1]), int(v.dims[2]));
-    const auto sp = v.spacing();
-    img->SetSpacing(sp.x, sp.y, sp.z);
-    img->SetOrigin(v.index_to_lps[3][0], v.index_to_lps[3][1], v.index_to_lps[3][2]);
-    vtkNew<vtkShortArray> arr;
-    arr->SetArray(v.as<std::int16_t>().data(), v.voxel_count(), /*save=*/1); // no copy
-    img->GetPointData()->SetScalars(arr);
-    return img;
-}
 
 // Child: one method, several repetitions, one RESULT line.
 int run_one(const Args& a) {

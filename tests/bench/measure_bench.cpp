@@ -43,6 +43,7 @@
 #include "../unit/measure_phantoms.hpp"
 #include "bench_util.hpp"
 #include "ct_phantom.hpp"
+#include "vtk_volume.hpp"
 #include "renderer/iso/extract.hpp"
 #include "renderer/iso/measure.hpp"
 
@@ -355,14 +356,7 @@ int main(int argc, char** argv) {
                 t_meas1.push_back(t3 - t2);
                 t_iso.push_back(t4 - t3);
                 // VTK: Flying Edges on the same samples (axis-aligned grid, so VTK's spacing and origin suffice).
-                vtkNew<vtkImageData> img;
-                img->SetDimensions(int(v.dims[0]), int(v.dims[1]), int(v.dims[2]));
-                const auto sp = v.spacing();
-                img->SetSpacing(sp.x, sp.y, sp.z);
-                img->SetOrigin(v.index_to_lps[3][0], v.index_to_lps[3][1], v.index_to_lps[3][2]);
-                vtkNew<vtkShortArray> arr;
-                arr->SetArray(const_cast<std::int16_t*>(v.as<std::int16_t>().data()), v.voxel_count(), 1);
-                img->GetPointData()->SetScalars(arr);
+                auto img = as_vtk(v);
                 vtkNew<vtkFlyingEdges3D> fe;
                 fe->SetInputData(img);
                 fe->SetValue(0, iso);
