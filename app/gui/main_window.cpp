@@ -295,33 +295,34 @@ void MainWindow::show_error(const QString& title, const QString& what, std::exce
 
 // ---- opening -------------------------------------------------------------------------
 
-void MainWindow::open_path(const QString& path) {
+void MainWindow::open_path(const QString& path, const QString& series) {
     if (busy()) {
         statusBar()->showMessage("Busy: wait for the current task or cancel it");
         return;
     }
     auto result = std::make_shared<std::unique_ptr<core::Scene>>();
-    const std::string p = path.toStdString();
+    const std::string p = path.toStdString(), chosen = series.toStdString();
     run_job("Opening " + path, true,
-            [result, p](const ProgressFn& progress) {
+            [result, p, chosen](const ProgressFn& progress) {
                 // A fresh scene on the worker: the one on screen stays untouched
                 // until the load succeeded.
                 auto s = std::make_unique<core::Scene>();
                 LoadOptions opt;
                 opt.progress = progress;
+                opt.series = chosen;
                 s->open(p, opt);
                 *result = std::move(s);
             },
-            [this, result, path](std::exception_ptr e) {
+            [this, result, path, series](std::exception_ptr e) {
                 if (e) {
                     show_error("Cannot open", "Cannot open " + path, e);
                     return;
                 }
-                set_scene(std::move(*result), path);
+                set_scene(std::move(*result), path, series);
             });
 }
 
-void MainWindow::set_scene(std::unique_ptr<core::Scene> scene, const QString& path) {
+void MainWindow::set_scene(std::unique_ptr<core::Scene> scene, const QString& path, const QString& series) {
     // The viewer's GL objects belong to the old scene: the viewer goes with it.
     if (viewer_) {
         view3d_->removeWidget(viewer_);
@@ -332,6 +333,8 @@ void MainWindow::set_scene(std::unique_ptr<core::Scene> scene, const QString& pa
     clear_surface_rows();
     scene_ = std::move(scene);
     path_ = path;
+    series_ = series;
+    markups_.clear(); // measurements belong to what was open
     planes_ = {};
     if (scene_->has_volume()) {
         planes_ = core::default_planes(scene_->volume());
@@ -504,6 +507,12 @@ void MainWindow::update_3d() {
     }
     view3d_->setCurrentWidget(viewer_);
     viewer_->update();
+}
+
+void MainWindow::set_markups(std::vector<Markup> m) {
+    markups_ = std::move(m);
+    refresh_slices();
+    if (viewer_) viewer_->update();
 }
 
 void MainWindow::refresh_slices() {

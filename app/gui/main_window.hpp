@@ -16,6 +16,7 @@
 #include <QMainWindow>
 #include <QString>
 
+#include "io/markups.hpp"
 #include "io/progress.hpp"
 #include "renderer/core/slices.hpp"
 
@@ -45,7 +46,12 @@ public:
     // File > Open's path: loads a volume file, DICOM folder or mesh in the
     // background (progress dialog with Cancel); on success it replaces the
     // scene, on failure a dialog names the file and the reason.
-    void open_path(const QString& path);
+    // `series`: the DICOM series to load (LoadOptions::series: index or UID);
+    // empty: the only one.
+    void open_path(const QString& path, const QString& series = {});
+    // What is open: the file or folder and the DICOM series chosen (empty: none).
+    const QString& path() const { return path_; }
+    const QString& series() const { return series_; }
     // The Surfaces dock's "Add surface": extracts an isosurface of the
     // volume in the background.
     void add_surface(double iso);
@@ -58,6 +64,11 @@ public:
     Viewer* viewer() const { return viewer_; }
     const core::WindowLevel& window_level() const { return window_; }
     void set_window_level(const core::WindowLevel& w);
+
+    // The measurements (3D Slicer markups, LPS mm) the views draw, the
+    // measurements panel lists, sessions and exported images carry.
+    const std::vector<Markup>& markups() const { return markups_; }
+    void set_markups(std::vector<Markup> m);
 
 protected:
     void dragEnterEvent(QDragEnterEvent* e) override;
@@ -72,7 +83,7 @@ private:
     void run_job(const QString& title, bool abandonable, std::function<void(const ProgressFn&)> work,
                  std::function<void(std::exception_ptr)> done);
     void finish_job(const std::shared_ptr<Job>& job);
-    void set_scene(std::unique_ptr<core::Scene> scene, const QString& path);
+    void set_scene(std::unique_ptr<core::Scene> scene, const QString& path, const QString& series);
     void show_error(const QString& title, const QString& what, std::exception_ptr e);
     void refresh_slices();
     void update_3d();
@@ -99,7 +110,8 @@ private:
     QComboBox* iso_preset_ = nullptr;
     QVBoxLayout* surface_rows_ = nullptr;
     QMenu* recent_menu_ = nullptr;
-    QString path_;
+    QString path_, series_;
+    std::vector<Markup> markups_;
     std::shared_ptr<Job> job_;                   // the job the window waits for
     std::vector<std::shared_ptr<Job>> running_;  // every worker still running (abandoned ones too)
     bool updating_window_ = false;

@@ -39,7 +39,10 @@ void clear_to_background() {
 double Viewer::aspect() const { return double(std::max(1, width())) / double(std::max(1, height())); }
 
 // The same framing as `isoscope render`: the scene's camera for the view.
-void Viewer::initializeGL() { camera_ = scene_.camera(initial_view_, aspect()); }
+// A camera set before the first frame (a session) is kept.
+void Viewer::initializeGL() {
+    if (!camera_set_) camera_ = scene_.camera(initial_view_, aspect());
+}
 
 void Viewer::paintGL() {
     if (!error_.empty()) {
@@ -85,6 +88,19 @@ void Viewer::draw() {
     if (options_.ao && ao_frames_ < options_.still_frames) QTimer::singleShot(0, this, [this] { update(); });
 }
 
+void Viewer::set_camera(const Camera& c) {
+    camera_ = c;
+    camera_set_ = true;
+    update();
+}
+
+void Viewer::set_view(PatientView v) { set_camera(scene_.camera(v, aspect())); }
+
+void Viewer::set_options(const ViewerOptions& o) {
+    options_ = o;
+    update();
+}
+
 void Viewer::mousePressEvent(QMouseEvent* e) { last_ = e->pos(); }
 
 void Viewer::mouseMoveEvent(QMouseEvent* e) {
@@ -113,8 +129,7 @@ void Viewer::keyPressEvent(QKeyEvent* e) {
     }
     for (auto [k, v] : keys)
         if (e->key() == k) {
-            camera_ = scene_.camera(v, aspect());
-            update();
+            set_view(v);
             return;
         }
     QOpenGLWidget::keyPressEvent(e);

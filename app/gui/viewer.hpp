@@ -49,6 +49,14 @@ public:
     // it clears to the background, reports it here and on stderr, and stops.
     const std::string& error() const { return error_; }
 
+    // The camera the view draws with (LPS mm); setting it redraws.
+    const Camera& camera() const { return camera_; }
+    void set_camera(const Camera& c);
+    // The view's patient-view framing (as `isoscope render --view`), fitted to the widget.
+    void set_view(PatientView v);
+    const ViewerOptions& options() const { return options_; }
+    void set_options(const ViewerOptions& o);
+
 protected:
     void initializeGL() override;
     void paintGL() override;
@@ -65,6 +73,7 @@ private:
     std::string error_;
     std::unique_ptr<Annotations> annotations_;
     Camera camera_;
+    bool camera_set_ = false;
     QPoint last_;
     double aspect() const;
     int frames_ = 0;

@@ -25,48 +25,17 @@
 #include "app/gui/viewer.hpp"
 #include "renderer/core/scene.hpp"
 #include "renderer/core/slices.hpp"
-#include "test_util.hpp"
+#include "gui_test_util.hpp"
 
 using namespace iso;
 
 namespace {
-
 constexpr const char* kInner = "ISOSCOPE_MAIN_WINDOW_TEST_IN_XVFB";
-
-bool wait_until(const std::function<bool()>& ready, int timeout_ms) {
-    QElapsedTimer t;
-    t.start();
-    while (!ready()) {
-        if (t.elapsed() > timeout_ms) return false;
-        QTest::qWait(20);
-    }
-    return true;
-}
-
-// Pixels brighter than black: the slice shows tissue, not an empty frame.
-double lit_fraction(const QImage& img) {
-    if (img.isNull()) return 0;
-    const QImage g = img.convertToFormat(QImage::Format_Grayscale8);
-    std::size_t lit = 0;
-    for (int y = 0; y < g.height(); ++y)
-        for (int x = 0; x < g.width(); ++x) lit += g.constScanLine(y)[x] > 20;
-    return double(lit) / double(g.width() * g.height());
-}
-
+using test::lit_fraction;
+using test::wait_until;
 } // namespace
 
-TEST(MainWindow, UnderXvfb) {
-    if (std::getenv(kInner)) GTEST_SKIP() << "already inside xvfb-run";
-    if (test::run_command("command -v xvfb-run").exit_code != 0) GTEST_SKIP() << "xvfb-run is not installed (./setup.sh)";
-    const std::string self = std::filesystem::read_symlink("/proc/self/exe").string();
-    const auto r = test::run_command(std::string(kInner) + "=1 xvfb-run -a -s '-screen 0 1600x1200x24' " + self +
-                                         " --gtest_filter='MainWindowInXvfb.*'",
-                                     true);
-    EXPECT_EQ(r.exit_code, 0) << r.out;
-    // It ran (a skip inside would also exit 0).
-    EXPECT_NE(r.out.find("[  PASSED  ] 1 test"), std::string::npos) << r.out;
-    EXPECT_EQ(r.out.find("SKIPPED"), std::string::npos) << r.out;
-}
+TEST(MainWindow, UnderXvfb) { test::run_inner_under_xvfb(kInner, "MainWindowInXvfb.*"); }
 
 TEST(MainWindow, NoArgumentsWithoutADisplayStaysACommandLineTool) {
     // The README's headless commands keep working: no display, no window.
@@ -82,18 +51,7 @@ TEST(MainWindowInXvfb, OpenSlicesClickSurfaceAndBrokenFile) {
     if (!std::getenv(kInner)) GTEST_SKIP() << "runs inside xvfb-run, started by MainWindow.UnderXvfb";
     test::TempDir dir;
     // Recent files go to a throwaway settings folder, not the user's.
-    ::setenv("XDG_CONFIG_HOME", (dir / "config").c_str(), 1);
-    QSurfaceFormat fmt;
-    fmt.setVersion(4, 5);
-    fmt.setProfile(QSurfaceFormat::CoreProfile);
-    fmt.setDepthBufferSize(24);
-    QSurfaceFormat::setDefaultFormat(fmt);
-    static int argc = 1;
-    static char name[] = "main_window_test";
-    static char* argv[] = {name, nullptr};
-    QApplication app(argc, argv);
-    QApplication::setOrganizationName("isoscope-test");
-    QApplication::setApplicationName("main_window_test");
+    const auto app = test::make_app("main_window_test", dir / "config");
 
     gui::MainWindow w;
     w.resize(1400, 1000);
@@ -184,8 +142,7 @@ TEST(MainWindowInXvfb, OpenSlicesClickSurfaceAndBrokenFile) {
     EXPECT_TRUE(w.viewer()->error().empty()) << w.viewer()->error();
 
     // ---- a screenshot of the window into the test's output folder
-    const std::filesystem::path out = std::filesystem::path(ISOSCOPE_BINARY_DIR) / "test_output" / "main_window";
-    std::filesystem::create_directories(out);
+    const std::filesystem::path out = test::output_dir("main_window");
     QTest::qWait(200);
     const QImage shot = w.grab().toImage();
     EXPECT_TRUE(shot.save(QString::fromStdString((out / "main_window.png").string())));
