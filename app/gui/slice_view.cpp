@@ -103,6 +103,7 @@ void SliceView::paintEvent(QPaintEvent*) {
     p.drawLine(QPointF(0, c.y), QPointF(width(), c.y));
     p.setPen(Qt::yellow);
     p.drawText(QPointF(6, 16), QString("%1  %2 mm").arg(core::slice_orientation_name(orientation_)).arg(plane_->offset_mm(), 0, 'f', 1));
+    if (on_paint_overlay) on_paint_overlay(*this, p);
 }
 
 void SliceView::resizeEvent(QResizeEvent*) {

@@ -11,6 +11,7 @@
 
 #include <QColor>
 #include <QImage>
+#include <QPainter>
 #include <QWidget>
 
 #include "renderer/core/slices.hpp"
@@ -50,6 +51,9 @@ public:
     // notches, PageUp/PageDown).
     std::function<void(SliceView&, QPointF)> on_click;
     std::function<void(SliceView&, double)> on_scroll;
+    // Draws over the slice after the outlines and the crosshair (the
+    // measurements); the painter's coordinates are the grid's pixels.
+    std::function<void(SliceView&, QPainter&)> on_paint_overlay;
 
 protected:
     void paintEvent(QPaintEvent*) override;

@@ -20,6 +20,7 @@ Viewer::Viewer(core::Scene& scene, PatientView view, ViewerOptions options, QWid
       annotations_(std::make_unique<Annotations>()) {
     setFocusPolicy(Qt::StrongFocus);
     setMinimumSize(320, 240);
+    setMouseTracking(true); // hover readout
 }
 
 Viewer::~Viewer() {
@@ -62,7 +63,8 @@ void Viewer::paintGL() {
 
 void Viewer::draw() {
     const qreal dpr = devicePixelRatioF();
-    const int w = std::max(1, int(width() * dpr)), h = std::max(1, int(height() * dpr));
+    const QSize size = image_size();
+    const int w = size.width(), h = size.height();
     camera_.fit_planes(scene_.bounds());
     RenderOptions opt;
     opt.width = w;
@@ -101,9 +103,29 @@ void Viewer::set_options(const ViewerOptions& o) {
     update();
 }
 
-void Viewer::mousePressEvent(QMouseEvent* e) { last_ = e->pos(); }
+QSize Viewer::image_size() const {
+    const qreal dpr = devicePixelRatioF();
+    return {std::max(1, int(width() * dpr)), std::max(1, int(height() * dpr))};
+}
+
+QPointF Viewer::to_image(QPointF widget) const { return widget * devicePixelRatioF(); }
+
+void Viewer::mousePressEvent(QMouseEvent* e) {
+    last_ = press_ = e->pos();
+    dragged_ = false;
+}
+
+void Viewer::mouseReleaseEvent(QMouseEvent* e) {
+    if (e->button() == Qt::LeftButton && !dragged_ && on_click) on_click(*this, to_image(e->position()));
+}
 
 void Viewer::mouseMoveEvent(QMouseEvent* e) {
+    if (e->buttons() == Qt::NoButton) {
+        if (on_hover) on_hover(*this, to_image(e->position()));
+        return;
+    }
+    if ((e->pos() - press_).manhattanLength() > 3) dragged_ = true;
+    if (!dragged_) return;
     const QPoint d = e->pos() - last_;
     last_ = e->pos();
     if (e->buttons() & Qt::LeftButton)

@@ -4,6 +4,7 @@
 // the interaction.
 #pragma once
 
+#include <functional>
 #include <memory>
 #include <string>
 #include <vector>
@@ -57,12 +58,21 @@ public:
     const ViewerOptions& options() const { return options_; }
     void set_options(const ViewerOptions& o);
 
+    // A left click (press and release within a few pixels, no drag) and the
+    // pointer moving with no button held, at the image pixel (device pixels
+    // from the top-left, the pixel render_image / core::pick use).
+    std::function<void(Viewer&, QPointF)> on_click;
+    std::function<void(Viewer&, QPointF)> on_hover;
+    // The size of the image the view draws (device pixels).
+    QSize image_size() const;
+
 protected:
     void initializeGL() override;
     void paintGL() override;
     void draw();
     void mousePressEvent(QMouseEvent* e) override;
     void mouseMoveEvent(QMouseEvent* e) override;
+    void mouseReleaseEvent(QMouseEvent* e) override;
     void wheelEvent(QWheelEvent* e) override;
     void keyPressEvent(QKeyEvent* e) override;
 
@@ -74,7 +84,9 @@ private:
     std::unique_ptr<Annotations> annotations_;
     Camera camera_;
     bool camera_set_ = false;
-    QPoint last_;
+    QPoint last_, press_;
+    bool dragged_ = false;
+    QPointF to_image(QPointF widget) const;
     double aspect() const;
     int frames_ = 0;
     int ao_frames_ = 0;
