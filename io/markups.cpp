@@ -489,22 +489,42 @@ MarkupsFile load_markups(const std::string& path) {
     }
 }
 
-void save_markups(const MarkupsFile& f, const std::string& path) {
-    check_writable_destination(path);
-    if (f.markups.empty()) throw Error(path, "no markups to write (Slicer cannot open a file without any)");
+std::string markups_json_text(const MarkupsFile& f, const std::string& where) {
+    if (f.markups.empty()) throw Error(where, "no markups to write (Slicer cannot open a file without any)");
     ordered_json root;
     root["@schema"] = kSchemaUrl;
     root["markups"] = ordered_json::array();
     for (std::size_t i = 0; i < f.markups.size(); ++i) {
-        check_for_writing(f.markups[i], i, path);
+        check_for_writing(f.markups[i], i, where);
         root["markups"].push_back(markup_json(f.markups[i]));
     }
     std::string text;
     try {
         write_value(text, root, 0);
     } catch (const ordered_json::exception& e) {
-        throw Error(path, "a name, label or text is not valid UTF-8 (" + json_message(e) + ")");
+        throw Error(where, "a name, label or text is not valid UTF-8 (" + json_message(e) + ")");
     }
+    return text;
+}
+
+MarkupsFile parse_markups(const std::string& text, const std::string& where) {
+    try {
+        if (text.empty()) throw Error(where, "no markups text");
+        json root;
+        try {
+            root = json::parse(text);
+        } catch (const json::exception& e) {
+            throw Error(where, "not valid JSON: " + json_message(e));
+        }
+        return Reader(where).read(root);
+    } catch (const std::bad_alloc&) {
+        throw Error(where, "not enough memory to read these markups");
+    }
+}
+
+void save_markups(const MarkupsFile& f, const std::string& path) {
+    check_writable_destination(path);
+    std::string text = markups_json_text(f, path);
     text += "\n";
     write_atomically(path, [&](const std::string& tmp) {
         std::ofstream out(tmp, std::ios::binary | std::ios::trunc);

@@ -93,4 +93,10 @@ MarkupsFile load_markups(const std::string& path);
 // markups).
 void save_markups(const MarkupsFile& f, const std::string& path);
 
+// The same JSON text save_markups writes, in memory (sessions embed it), and
+// reading such text (checked as load_markups checks a file). `where` is the
+// file or field named in errors.
+std::string markups_json_text(const MarkupsFile& f, const std::string& where);
+MarkupsFile parse_markups(const std::string& text, const std::string& where);
+
 } // namespace iso
