@@ -8,6 +8,8 @@
 #include <filesystem>
 #include <sstream>
 
+#include <epoxy/egl.h>
+
 #include "renderer/ao/reference.hpp"
 #include "renderer/gl/context.hpp"
 
@@ -177,6 +179,17 @@ glm::vec3 linear_from_hex(const std::string& text) {
     return {lin(r), lin(g), lin(b)};
 }
 
+std::string hex_from_linear(const glm::vec3& linear) {
+    const auto enc = [](float v) {
+        const double c = std::clamp(double(v), 0.0, 1.0);
+        const double s = c <= 0.0031308 ? 12.92 * c : 1.055 * std::pow(c, 1.0 / 2.4) - 0.055;
+        return unsigned(std::lround(std::clamp(s, 0.0, 1.0) * 255.0));
+    };
+    char b[8];
+    std::snprintf(b, sizeof b, "#%02x%02x%02x", enc(linear.r), enc(linear.g), enc(linear.b));
+    return b;
+}
+
 RenderOutput render_input(const std::string& input, const RenderRequest& req) {
     Scene scene;
     LoadOptions lo;
@@ -207,16 +220,27 @@ RenderOutput render_image(Scene& scene, const RenderRequest& req) {
     ann.scale_bar = ann.orientation = req.annotations;
     const bool colour_image = req.aov == Aov::None && !req.aov_ao; // annotations and markups go on it only
     if ((req.annotations || !ann.markups.empty()) && colour_image) ro.annotations = &ann;
-    const Camera cam = scene.camera(patient_view_from_name(req.view), double(req.width) / double(req.height));
+    Camera cam;
+    if (req.camera) {
+        cam = *req.camera;
+        cam.fit_planes(scene.bounds());
+    } else {
+        cam = scene.camera(patient_view_from_name(req.view), double(req.width) / double(req.height));
+    }
     const bool cone = req.ao == "cone";
     // Still frames: each adds new jitter sets to the running mean of the AO.
     for (int f = 1; cone && f < req.ao_frames; ++f) scene.render(cam, ro);
     auto r = scene.render(cam, ro);
     // One GL context serves every scene of the process: free this one's GPU
     // resources while it is current.
+    // The context is released too, so that the next call may come from
+    // another thread (the desktop app renders exports on worker threads).
     struct Release {
         Scene& s;
-        ~Release() { s.release_gpu(); }
+        ~Release() {
+            s.release_gpu();
+            eglMakeCurrent(eglGetCurrentDisplay(), EGL_NO_SURFACE, EGL_NO_SURFACE, EGL_NO_CONTEXT);
+        }
     } release{scene};
     out.image = std::move(r.image);
     out.stats = std::move(r.stats);
@@ -257,7 +281,11 @@ RenderOutput render_image(Scene& scene, const RenderRequest& req) {
         t["isoscope:markups_drawn"] = drawn;
     }
     if (!isos_text.empty()) t["isoscope:iso"] = isos_text;
-    t["isoscope:view_name"] = req.view;
+    t["isoscope:view_name"] = req.camera ? "the request's camera" : req.view;
+    if (!req.session_file.empty()) {
+        t["isoscope:session"] = std::filesystem::absolute(req.session_file).lexically_normal().string();
+        t["isoscope:session_sha256"] = sha256_of_path(req.session_file);
+    }
     std::ostringstream cs;
     cs.precision(9);
     cs << "eye " << cam.eye.x << ' ' << cam.eye.y << ' ' << cam.eye.z << "; target " << cam.target.x << ' ' << cam.target.y << ' '

@@ -71,11 +71,21 @@ struct RenderRequest {
     ProgressFn progress;
     // A pick riding on this frame (core::pick() sets it): image pixels from the top-left.
     std::optional<PickRegion> pick;
+    // The camera to draw with instead of `view`'s (a session's, the 3D
+    // view's): its eye, target, up and field of view are kept, its near and
+    // far planes fitted to the visible surfaces (as the 3D view does).
+    std::optional<Camera> camera;
+    // The session file this state came from (core/session.hpp): its path
+    // and SHA-256 go into the metadata.
+    std::string session_file;
 };
 
 // "#rrggbb" (sRGB, as colour pickers and CSS give it) -> linear RGB.
 // Throws iso::Error("colour", ...) naming the text.
 glm::vec3 linear_from_hex(const std::string& text);
+// Linear RGB (clamped to [0, 1]) -> "#rrggbb" sRGB, rounded to the nearest
+// 8-bit value: linear_from_hex(hex_from_linear(c)) is within half a step.
+std::string hex_from_linear(const glm::vec3& linear);
 
 struct RenderOutput {
     Image image;
@@ -88,11 +98,12 @@ struct RenderOutput {
     PickList pick;                   // with RenderRequest::pick
 };
 
-// Renders the scene headlessly (its own EGL context, made on first use) as
-// asked: camera from the patient view, annotations and markups, AO (cone or
+// Renders the scene headlessly (its own EGL context, made on first use and
+// released again before returning, so that any one thread at a time may
+// call it) as asked: camera from the patient view or `req.camera`, annotations and markups, AO (cone or
 // the Embree reference), AOVs; the output carries the metadata to embed
 // (sources and their SHA-256, iso values, camera, matrices, markups files
-// and the measurements drawn). `isos` and `series` of the
+// and the measurements drawn, the session file and its SHA-256). `isos` and `series` of the
 // request are not used here. Throws iso::Error.
 RenderOutput render_image(Scene& scene, const RenderRequest& req);
 
