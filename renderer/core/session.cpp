@@ -1,0 +1,412 @@
+#include "renderer/core/session.hpp"
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+
+#include <glm/geometric.hpp>
+
+#include "io/atomic_file.hpp"
+#include "io/error.hpp"
+#include "io/image.hpp"
+
+namespace iso::core {
+namespace fs = std::filesystem;
+using nlohmann::json;
+using nlohmann::ordered_json;
+
+namespace {
+
+constexpr const char* kFormat = "isoscope-session";
+
+fs::path normal_absolute(const std::string& p) { return fs::absolute(fs::path(p)).lexically_normal(); }
+
+fs::path session_folder(const std::string& session_path) { return normal_absolute(session_path).parent_path(); }
+
+// Below the session's folder: relative to it (the pair can move together);
+// anywhere else: absolute.
+std::string stored_path(const std::string& path, const std::string& session_path) {
+    const fs::path abs = normal_absolute(path);
+    const fs::path rel = abs.lexically_relative(session_folder(session_path));
+    if (!rel.empty() && *rel.begin() != "..") return rel.generic_string();
+    return abs.string();
+}
+
+const char* kind_name(SurfaceInfo::Kind k) {
+    switch (k) {
+    case SurfaceInfo::Kind::Iso: return "iso";
+    case SurfaceInfo::Kind::Label: return "label";
+    case SurfaceInfo::Kind::Mesh: return "mesh";
+    }
+    return "mesh";
+}
+
+ordered_json vec_json(const glm::dvec3& v) { return ordered_json::array({v.x, v.y, v.z}); }
+
+// Reads one session; every failure names the file and the field.
+class Reader {
+public:
+    explicit Reader(const std::string& path) : path_(path) {}
+
+    Session read(const json& root) const {
+        if (!root.is_object()) fail("", "the top level is a JSON " + std::string(root.type_name()) + ", not an object");
+        const json* format = member(root, "format");
+        if (!format || !format->is_string() || format->get<std::string>() != kFormat)
+            fail("format", "not an isoscope session (expected \"format\": \"" + std::string(kFormat) + "\")");
+        const json* version = member(root, "version");
+        if (!version) fail("version", "missing");
+        if (!version->is_number_integer()) fail("version", "must be an integer, not a " + std::string(version->type_name()));
+        if (version->get<long long>() != kSessionVersion)
+            fail("version", std::to_string(version->get<long long>()) + " is not supported (this isoscope reads version " +
+                                std::to_string(kSessionVersion) + ")");
+        Session s;
+        const json& input = object(root, "input", "input", true);
+        s.input = resolve(string(input, "path", "input.path", true));
+        if (s.input.empty()) fail("input.path", "is empty");
+        s.input_sha256 = string(input, "sha256", "input.sha256", false);
+        s.series = string(input, "series", "input.series", false);
+
+        if (const json* list = member(root, "surfaces"); list && !list->is_null()) {
+            if (!list->is_array()) fail("surfaces", "must be an array, not a " + std::string(list->type_name()));
+            for (std::size_t i = 0; i < list->size(); ++i) s.surfaces.push_back(surface((*list)[i], "surfaces[" + std::to_string(i) + "]"));
+        }
+        if (const json* c = member(root, "camera"); c && !c->is_null()) s.camera = camera(*c);
+        if (const json* w = member(root, "window_level"); w && !w->is_null()) {
+            if (!w->is_object()) fail("window_level", "must be an object");
+            WindowLevel wl;
+            wl.center = number(require(*w, "center", "window_level.center"), "window_level.center");
+            wl.width = number(require(*w, "width", "window_level.width"), "window_level.width");
+            if (!(wl.width > 0)) fail("window_level.width", "must be positive");
+            s.window = wl;
+        }
+        if (const json* v = member(root, "view"); v && !v->is_null()) {
+            if (!v->is_object()) fail("view", "must be an object");
+            s.ao = boolean(*v, "ao", "view.ao", true);
+        }
+        if (const json* m = member(root, "markups"); m && !m->is_null()) {
+            try {
+                auto f = parse_markups(m->dump(), "markups");
+                s.markups = std::move(f.markups);
+                for (auto& w : f.warnings) s.warnings.push_back(w);
+            } catch (const Error& e) {
+                throw Error(path_, e.what());
+            }
+        }
+        return s;
+    }
+
+private:
+    [[noreturn]] void fail(const std::string& field, const std::string& reason) const {
+        throw Error(path_, field.empty() ? reason : field + ": " + reason);
+    }
+
+    static const json* member(const json& obj, const char* key) {
+        const auto it = obj.find(key);
+        return it == obj.end() ? nullptr : &*it;
+    }
+
+    const json& require(const json& obj, const char* key, const std::string& field) const {
+        const json* v = member(obj, key);
+        if (!v) fail(field, "missing");
+        return *v;
+    }
+
+    const json& object(const json& obj, const char* key, const std::string& field, bool required) const {
+        static const json empty = json::object();
+        const json* v = member(obj, key);
+        if (!v) {
+            if (required) fail(field, "missing");
+            return empty;
+        }
+        if (!v->is_object()) fail(field, "must be an object, not a " + std::string(v->type_name()));
+        return *v;
+    }
+
+    std::string string(const json& obj, const char* key, const std::string& field, bool required) const {
+        const json* v = member(obj, key);
+        if (!v) {
+            if (required) fail(field, "missing");
+            return {};
+        }
+        if (!v->is_string()) fail(field, "must be a string, not a " + std::string(v->type_name()));
+        return v->get<std::string>();
+    }
+
+    bool boolean(const json& obj, const char* key, const std::string& field, bool fallback) const {
+        const json* v = member(obj, key);
+        if (!v) return fallback;
+        if (!v->is_boolean()) fail(field, "must be true or false, not a " + std::string(v->type_name()));
+        return v->get<bool>();
+    }
+
+    double number(const json& v, const std::string& field) const {
+        if (!v.is_number()) fail(field, "must be a number, not " + (v.is_null() ? std::string("null (NaN?)") : "a " + std::string(v.type_name())));
+        const double d = v.get<double>();
+        if (!std::isfinite(d)) fail(field, "is NaN or infinite");
+        return d;
+    }
+
+    double number_or(const json& obj, const char* key, const std::string& field, double fallback) const {
+        const json* v = member(obj, key);
+        return v ? number(*v, field) : fallback;
+    }
+
+    glm::dvec3 vec3(const json& v, const std::string& field) const {
+        if (!v.is_array() || v.size() != 3) fail(field, "must be an array of 3 numbers");
+        return {number(v[0], field), number(v[1], field), number(v[2], field)};
+    }
+
+    std::string resolve(const std::string& stored) const {
+        if (stored.empty()) return stored;
+        const fs::path p(stored);
+        return (p.is_absolute() ? p : session_folder(path_) / p).lexically_normal().string();
+    }
+
+    SessionSurface surface(const json& item, const std::string& where) const {
+        if (!item.is_object()) fail(where, "must be an object, not a " + std::string(item.type_name()));
+        SessionSurface s;
+        const std::string kind = string(item, "kind", where + ".kind", true);
+        if (kind == "iso") s.kind = SurfaceInfo::Kind::Iso;
+        else if (kind == "label") s.kind = SurfaceInfo::Kind::Label;
+        else if (kind == "mesh") s.kind = SurfaceInfo::Kind::Mesh;
+        else fail(where + ".kind", "'" + kind + "' is not iso, label or mesh");
+        if (s.kind != SurfaceInfo::Kind::Mesh) s.value = number(require(item, "value", where + ".value"), where + ".value");
+        s.name = string(item, "name", where + ".name", false);
+        s.source = resolve(string(item, "source", where + ".source", false));
+        if (const json* c = member(item, "color")) {
+            if (!c->is_string()) fail(where + ".color", "must be a string \"#rrggbb\", not a " + std::string(c->type_name()));
+            s.color = c->get<std::string>();
+            try {
+                linear_from_hex(s.color);
+            } catch (const Error& e) {
+                fail(where + ".color", e.reason());
+            }
+        }
+        const double opacity = number_or(item, "opacity", where + ".opacity", 1.0);
+        if (opacity < 0.0 || opacity > 1.0) fail(where + ".opacity", "must be between 0 and 1");
+        s.opacity = float(opacity);
+        s.visible = boolean(item, "visible", where + ".visible", true);
+        s.post.smooth = number_or(item, "smoothing", where + ".smoothing", 0.0);
+        if (s.post.smooth < 0.0 || s.post.smooth > 1.0) fail(where + ".smoothing", "must be between 0 and 1");
+        s.post.decimate = number_or(item, "decimate", where + ".decimate", 0.0);
+        if (s.post.decimate < 0.0 || s.post.decimate >= 1.0) fail(where + ".decimate", "must be at least 0 and below 1");
+        s.post.keep_largest = boolean(item, "keep_largest", where + ".keep_largest", false);
+        return s;
+    }
+
+    Camera camera(const json& c) const {
+        if (!c.is_object()) fail("camera", "must be an object, not a " + std::string(c.type_name()));
+        Camera cam;
+        cam.eye = vec3(require(c, "eye", "camera.eye"), "camera.eye");
+        cam.target = vec3(require(c, "target", "camera.target"), "camera.target");
+        cam.up = vec3(require(c, "up", "camera.up"), "camera.up");
+        cam.fov_y_degrees = number(require(c, "fov_y_degrees", "camera.fov_y_degrees"), "camera.fov_y_degrees");
+        if (!(cam.fov_y_degrees > 0.0 && cam.fov_y_degrees < 180.0)) fail("camera.fov_y_degrees", "must be between 0 and 180");
+        const glm::dvec3 forward = cam.target - cam.eye;
+        if (!(glm::length(forward) > 0.0)) fail("camera", "eye and target are the same point");
+        if (!(glm::length(glm::cross(forward, cam.up)) > 1e-12 * glm::length(forward) * glm::length(cam.up)))
+            fail("camera.up", "is zero or along the viewing direction");
+        return cam;
+    }
+
+    const std::string& path_;
+};
+
+std::string slurp(const std::string& path) {
+    std::error_code ec;
+    if (!fs::is_regular_file(path, ec)) throw Error(path, fs::exists(path, ec) ? "not a regular file" : "no such file");
+    std::ifstream f(path, std::ios::binary);
+    if (!f) throw Error(path, "cannot open");
+    std::string s((std::istreambuf_iterator<char>(f)), {});
+    if (f.bad()) throw Error(path, "read failed");
+    return s;
+}
+
+} // namespace
+
+Session capture_session(const Scene& scene, const std::string& input, const std::string& series, const std::optional<Camera>& camera,
+                        const std::optional<WindowLevel>& window, bool ao, std::vector<Markup> markups,
+                        const std::function<PostProcessOptions(SurfaceId)>& post) {
+    Session s;
+    s.input = input.empty() ? std::string() : normal_absolute(input).string();
+    s.series = series;
+    for (const SurfaceId id : scene.surfaces()) {
+        const auto& info = scene.info(id);
+        SessionSurface ss;
+        ss.kind = info.kind;
+        ss.value = info.value;
+        ss.name = info.name;
+        ss.source = info.source.empty() ? s.input : normal_absolute(info.source).string();
+        ss.color = hex_from_linear(info.color);
+        ss.opacity = info.opacity;
+        ss.visible = info.visible;
+        if (post) ss.post = post(id);
+        s.surfaces.push_back(std::move(ss));
+    }
+    s.camera = camera;
+    s.window = window;
+    s.ao = ao;
+    s.markups = std::move(markups);
+    return s;
+}
+
+ordered_json session_json(const Session& s, const std::string& session_path) {
+    ordered_json j;
+    j["format"] = kFormat;
+    j["version"] = kSessionVersion;
+    j["input"] = {{"path", stored_path(s.input, session_path)}, {"sha256", s.input_sha256}, {"series", s.series}};
+    j["surfaces"] = ordered_json::array();
+    for (const auto& ss : s.surfaces) {
+        ordered_json o;
+        o["kind"] = kind_name(ss.kind);
+        if (ss.kind != SurfaceInfo::Kind::Mesh) o["value"] = ss.value;
+        o["name"] = ss.name;
+        o["source"] = ss.source.empty() ? std::string() : stored_path(ss.source, session_path);
+        o["color"] = ss.color;
+        o["opacity"] = double(ss.opacity);
+        o["visible"] = ss.visible;
+        if (ss.kind != SurfaceInfo::Kind::Mesh) {
+            o["smoothing"] = ss.post.smooth;
+            o["decimate"] = ss.post.decimate;
+            o["keep_largest"] = ss.post.keep_largest;
+        }
+        j["surfaces"].push_back(o);
+    }
+    if (s.camera)
+        j["camera"] = {{"eye", vec_json(s.camera->eye)},
+                       {"target", vec_json(s.camera->target)},
+                       {"up", vec_json(s.camera->up)},
+                       {"fov_y_degrees", s.camera->fov_y_degrees}};
+    else
+        j["camera"] = nullptr;
+    if (s.window)
+        j["window_level"] = {{"center", s.window->center}, {"width", s.window->width}};
+    else
+        j["window_level"] = nullptr;
+    j["view"] = {{"ao", s.ao}};
+    if (s.markups.empty()) {
+        j["markups"] = nullptr;
+    } else {
+        MarkupsFile f;
+        f.markups = s.markups;
+        j["markups"] = ordered_json::parse(markups_json_text(f, session_path + ": markups"));
+    }
+    return j;
+}
+
+Session session_from_json(const json& j, const std::string& session_path) { return Reader(session_path).read(j); }
+
+void save_session(const Session& s, const std::string& path) {
+    check_writable_destination(path);
+    if (s.input.empty()) throw Error(path, "nothing is open: a session needs an input");
+    Session copy = s;
+    if (copy.input_sha256.empty()) copy.input_sha256 = sha256_of_path(copy.input);
+    std::string text;
+    try {
+        text = session_json(copy, path).dump(2) + "\n";
+    } catch (const ordered_json::exception& e) {
+        throw Error(path, std::string("a name or label is not valid UTF-8 (") + e.what() + ")");
+    }
+    write_atomically(path, [&](const std::string& tmp) {
+        std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
+        if (!out) throw Error(path, "cannot create the file");
+        out.write(text.data(), std::streamsize(text.size()));
+        out.flush();
+        if (!out) throw Error(path, "write failed (disk full?)");
+    });
+}
+
+Session read_session(const std::string& path) {
+    const std::string text = slurp(path);
+    if (text.empty()) throw Error(path, "file is empty");
+    json root;
+    try {
+        root = json::parse(text);
+    } catch (const json::exception& e) {
+        throw Error(path, std::string("not valid JSON: ") + e.what());
+    }
+    return session_from_json(root, path);
+}
+
+Session load_session(const std::string& path) {
+    Session s = read_session(path);
+    std::error_code ec;
+    if (!fs::exists(s.input, ec)) throw Error(path, "input.path: '" + s.input + "' does not exist");
+    if (!s.input_sha256.empty() && sha256_of_path(s.input) != s.input_sha256)
+        s.warnings.push_back(s.input + " changed since the session was saved (its SHA-256 differs): the surfaces may differ");
+    return s;
+}
+
+bool same_state(const Session& a, const Session& b) {
+    // Compared as stored next to each other: paths, colours and numbers as written.
+    const std::string where = (fs::temp_directory_path() / "same_state.json").string();
+    auto ja = session_json(a, where), jb = session_json(b, where);
+    ja["input"]["sha256"] = jb["input"]["sha256"] = "";
+    return ja == jb;
+}
+
+OpenedSession open_session(const Session& s, const ProgressFn& progress) {
+    OpenedSession o;
+    o.session = s;
+    o.scene = std::make_unique<Scene>();
+    Scene& scene = *o.scene;
+    // The load is a third of the bar, the surfaces the rest.
+    const std::size_t n = s.surfaces.size();
+    const auto part = [&](double from, double to) -> ProgressFn {
+        if (!progress) return {};
+        return [progress, from, to](double f, std::string_view stage) { return progress(from + f * (to - from), stage); };
+    };
+    LoadOptions lo;
+    lo.series = s.series;
+    lo.progress = part(0.0, n ? 0.3 : 1.0);
+    scene.open(s.input, lo);
+    std::vector<SurfaceId> meshes = scene.surfaces(); // a mesh input's surface
+    std::size_t next_mesh = 0;
+    for (std::size_t i = 0; i < n; ++i) {
+        const auto& ss = s.surfaces[i];
+        const auto where = "surface " + std::to_string(i + 1) + " ('" + ss.name + "')";
+        const ProgressFn p = part(0.3 + 0.7 * double(i) / double(n), 0.3 + 0.7 * double(i + 1) / double(n));
+        std::vector<SurfaceId> ids;
+        if (ss.kind == SurfaceInfo::Kind::Mesh) {
+            if (next_mesh >= meshes.size()) throw Error(s.input, where + ": a mesh surface, but the input is not a mesh file");
+            ids = {meshes[next_mesh++]};
+        } else if (!scene.has_volume()) {
+            throw Error(s.input, where + ": an " + std::string(kind_name(ss.kind)) + " surface, but the input is not a volume");
+        } else if (ss.kind == SurfaceInfo::Kind::Iso) {
+            ids = scene.add_isosurfaces({ss.value}, {}, ss.post, p);
+        } else {
+            ids = scene.add_label_surfaces({ss.value}, {}, ss.post, p);
+            if (ids.empty()) throw Error(s.input, where + ": the volume has no label " + std::to_string(ss.value));
+        }
+        for (const SurfaceId id : ids) {
+            auto& info = scene.info(id);
+            if (!ss.name.empty()) info.name = ss.name;
+            info.color = linear_from_hex(ss.color);
+            info.opacity = ss.opacity;
+            info.visible = ss.visible;
+            o.surfaces.push_back(id);
+        }
+    }
+    return o;
+}
+
+OpenedSession open_session(const std::string& path, const ProgressFn& progress) {
+    Session s = load_session(path);
+    return open_session(s, progress);
+}
+
+RenderRequest session_request(const Session& s, const std::string& session_file, const SessionRenderOptions& o) {
+    RenderRequest req;
+    req.width = o.width;
+    req.height = o.height;
+    req.scale = o.scale;
+    req.annotations = o.annotations;
+    req.transparent = o.transparent;
+    if (o.markups) req.markups = s.markups;
+    req.camera = s.camera;
+    req.ao = o.ao.empty() ? (s.ao ? "cone" : "off") : o.ao;
+    req.session_file = session_file;
+    return req;
+}
+
+} // namespace iso::core

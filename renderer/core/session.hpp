@@ -1,0 +1,116 @@
+// Sessions: what the user sees in the desktop app, as a small JSON file that
+// reopens it (File > Save session / Open session, `isoscope gui S.json`) and
+// that `isoscope render --session S.json` renders. The format is in
+// docs/sessions.md: a version field, the input (path relative to the
+// session's folder when it is below it, absolute otherwise; its SHA-256),
+// the DICOM series, the surfaces (kind, value, name, source, "#rrggbb" sRGB
+// colour, opacity, visibility, the post-processing they were extracted
+// with), the 3D camera, window/level, view options and the markups (inline,
+// as 3D Slicer markups JSON in LPS).
+#pragma once
+
+#include <functional>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "io/markups.hpp"
+#include "io/progress.hpp"
+#include "renderer/core/api.hpp"
+#include "renderer/core/scene.hpp"
+#include "renderer/core/slices.hpp"
+#include "renderer/iso/postprocess.hpp"
+#include "renderer/scene/camera.hpp"
+
+namespace iso::core {
+
+// The version this isoscope writes and the only one it reads.
+constexpr int kSessionVersion = 1;
+
+struct SessionSurface {
+    SurfaceInfo::Kind kind = SurfaceInfo::Kind::Iso;
+    double value = 0;             // iso value or label (mesh: unused)
+    std::string name;
+    std::string source;           // absolute path in memory
+    std::string color = "#e6e6e6"; // sRGB, as colour pickers give it
+    float opacity = 1.0f;
+    bool visible = true;
+    // What the surface was extracted with (iso and label surfaces).
+    PostProcessOptions post;
+};
+
+struct Session {
+    std::string input;        // absolute path of the file or folder opened
+    std::string input_sha256; // empty: not recorded (save_session fills it in)
+    std::string series;       // DICOM series (LoadOptions::series); empty: the only one
+    std::vector<SessionSurface> surfaces; // in the scene's order
+    // The 3D view's camera: eye, target, up, field of view (near and far
+    // are fitted to the surfaces when drawn). None: the anterior view.
+    std::optional<Camera> camera;
+    std::optional<WindowLevel> window; // the slice views' window/level
+    bool ao = true;                    // the 3D view's ambient occlusion (cone) on
+    std::vector<Markup> markups;       // LPS mm
+    // Found while loading, not stored: e.g. the input changed since saving.
+    std::vector<std::string> warnings;
+};
+
+// What the window shows, as a session (no file access: the SHA-256 is left
+// empty). `post(id)` gives the post-processing a surface was made with
+// (null: none).
+Session capture_session(const Scene& scene, const std::string& input, const std::string& series, const std::optional<Camera>& camera,
+                        const std::optional<WindowLevel>& window, bool ao, std::vector<Markup> markups,
+                        const std::function<PostProcessOptions(SurfaceId)>& post = {});
+
+// The JSON of a session stored at `session_path` (paths below its folder
+// relative) and back. from_json checks every field and throws iso::Error
+// naming `session_path` and the field; it does not touch the input.
+nlohmann::ordered_json session_json(const Session& s, const std::string& session_path);
+Session session_from_json(const nlohmann::json& j, const std::string& session_path);
+
+// Writes the session atomically (the old file stays whole on failure),
+// filling in the input's SHA-256 when it is empty. Throws iso::Error.
+void save_session(const Session& s, const std::string& path);
+// Reads and checks a session file: the JSON, every field, that the input
+// exists; a changed input (SHA-256) is a warning. Throws iso::Error naming
+// the file and the field.
+Session load_session(const std::string& path);
+// The same without looking at the input (no existence check, no hashing).
+Session read_session(const std::string& path);
+
+// The same state: same input, series, surfaces, camera, window, view
+// options and markups (the recorded SHA-256s and warnings aside).
+bool same_state(const Session& a, const Session& b);
+
+struct OpenedSession {
+    Session session;
+    std::unique_ptr<Scene> scene;
+    std::vector<SurfaceId> surfaces; // the session's surfaces, in its order
+};
+
+// Builds the session's scene: opens the input with the series, extracts
+// the iso and label surfaces (each with its post-processing, in the
+// session's order), applies names, colours, opacities and visibility.
+// Throws iso::Error (iso::Cancelled when `progress` returns false).
+OpenedSession open_session(const Session& s, const ProgressFn& progress = {});
+OpenedSession open_session(const std::string& path, const ProgressFn& progress = {});
+
+// How to render a session: `isoscope render --session` and the desktop
+// app's File > Export image both build their request with session_request.
+struct SessionRenderOptions {
+    int width = 1024, height = 1024;
+    float scale = 1.0f;       // annotation scale
+    bool annotations = true;  // scale bar and orientation letters
+    bool markups = true;      // the session's markups
+    bool transparent = false; // transparent background
+    std::string ao;           // "off", "cone"; empty: the session's view option
+};
+
+// The render request for the session's state: its camera (else the
+// anterior view), markups, AO; `session_file` (may be empty) is recorded
+// in the image's metadata with its SHA-256.
+RenderRequest session_request(const Session& s, const std::string& session_file, const SessionRenderOptions& o);
+
+} // namespace iso::core

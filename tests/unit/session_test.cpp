@@ -1,0 +1,347 @@
+// Session files (renderer/core/session.hpp, docs/sessions.md): what is
+// stored and read back, relative and absolute input paths, every refusal
+// naming the file and the field, a changed input, the scene a session
+// opens, the render request it makes, and `isoscope render --session`'s
+// refusals as a real process.
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+#include <nlohmann/json.hpp>
+
+#include "io/error.hpp"
+#include "io/image.hpp"
+#include "renderer/core/session.hpp"
+#include "test_util.hpp"
+
+using namespace iso;
+using iso::test::TempDir;
+namespace fs = std::filesystem;
+
+namespace {
+
+Markup line(glm::dvec3 a, glm::dvec3 b, const std::string& name) {
+    Markup m;
+    m.type = MarkupType::Line;
+    m.name = name;
+    m.points.resize(2);
+    m.points[0].position = a;
+    m.points[0].label = name + "-1";
+    m.points[1].position = b;
+    m.points[1].label = name + "-2";
+    return m;
+}
+
+core::Session example(const std::string& input) {
+    core::Session s;
+    s.input = fs::absolute(input).lexically_normal().string();
+    core::SessionSurface skin;
+    skin.kind = core::SurfaceInfo::Kind::Iso;
+    skin.value = 500;
+    skin.name = "skin";
+    skin.source = s.input;
+    skin.color = "#f0b090";
+    skin.opacity = 0.3f;
+    core::SessionSurface bone = skin;
+    bone.value = 1150;
+    bone.name = "iso 1150";
+    bone.color = "#f2ecd8";
+    bone.opacity = 1.0f;
+    bone.visible = false;
+    bone.post.smooth = 0.25;
+    bone.post.keep_largest = true;
+    s.surfaces = {skin, bone};
+    Camera c;
+    c.eye = {12.25, -480.125, 33.0 / 7.0};
+    c.target = {100.0 / 3.0, 102.4, -69.75};
+    c.up = {0.1, 0.2, 0.97};
+    c.fov_y_degrees = 27.5;
+    s.camera = c;
+    s.window = core::WindowLevel{1963.5, 3926.25};
+    s.ao = false;
+    s.markups = {line({1.5, 2.25, -3.0}, {40.0, 50.0 / 3.0, -60.0}, "ruler")};
+    return s;
+}
+
+std::string slurp(const std::string& path) {
+    std::ifstream f(path);
+    std::stringstream ss;
+    ss << f.rdbuf();
+    return ss.str();
+}
+
+void write(const std::string& path, const std::string& text) {
+    std::ofstream f(path, std::ios::trunc);
+    f << text;
+}
+
+// The message of the iso::Error that loading `text` as a session throws ("" when none).
+std::string load_error(const TempDir& dir, const std::string& text) {
+    const std::string path = dir / "broken.json";
+    write(path, text);
+    try {
+        core::load_session(path);
+    } catch (const Error& e) {
+        return e.what();
+    }
+    return "";
+}
+
+} // namespace
+
+TEST(Session, SavedAndLoadedBackExactly) {
+    TempDir dir;
+    const core::Session s = example(test::data("headsq.nhdr"));
+    const std::string path = dir / "sub/s.json";
+    fs::create_directories(dir.path() / "sub");
+    core::save_session(s, path);
+    const auto j = nlohmann::json::parse(slurp(path));
+    EXPECT_EQ(j["format"], "isoscope-session");
+    EXPECT_EQ(j["version"], core::kSessionVersion);
+    // Not below the session's folder: absolute.
+    EXPECT_EQ(j["input"]["path"], s.input);
+    EXPECT_EQ(j["input"]["sha256"], sha256_of_path(s.input));
+    EXPECT_EQ(j["surfaces"][0]["color"], "#f0b090");
+    EXPECT_EQ(j["markups"]["markups"][0]["type"], "Line");
+    EXPECT_EQ(j["markups"]["markups"][0]["coordinateSystem"], "LPS");
+
+    const core::Session r = core::load_session(path);
+    EXPECT_TRUE(r.warnings.empty());
+    EXPECT_EQ(r.input, s.input);
+    EXPECT_EQ(r.input_sha256, sha256_of_path(s.input));
+    ASSERT_EQ(r.surfaces.size(), 2u);
+    for (std::size_t i = 0; i < 2; ++i) {
+        EXPECT_EQ(r.surfaces[i].kind, s.surfaces[i].kind);
+        EXPECT_EQ(r.surfaces[i].value, s.surfaces[i].value);
+        EXPECT_EQ(r.surfaces[i].name, s.surfaces[i].name);
+        EXPECT_EQ(r.surfaces[i].source, s.surfaces[i].source);
+        EXPECT_EQ(r.surfaces[i].color, s.surfaces[i].color);
+        EXPECT_EQ(r.surfaces[i].opacity, s.surfaces[i].opacity);
+        EXPECT_EQ(r.surfaces[i].visible, s.surfaces[i].visible);
+        EXPECT_EQ(r.surfaces[i].post.smooth, s.surfaces[i].post.smooth);
+        EXPECT_EQ(r.surfaces[i].post.keep_largest, s.surfaces[i].post.keep_largest);
+    }
+    ASSERT_TRUE(r.camera.has_value());
+    // Bit for bit: the numbers are written with round-trip precision.
+    EXPECT_EQ(r.camera->eye, s.camera->eye);
+    EXPECT_EQ(r.camera->target, s.camera->target);
+    EXPECT_EQ(r.camera->up, s.camera->up);
+    EXPECT_EQ(r.camera->fov_y_degrees, s.camera->fov_y_degrees);
+    ASSERT_TRUE(r.window.has_value());
+    EXPECT_EQ(r.window->center, 1963.5);
+    EXPECT_EQ(r.window->width, 3926.25);
+    EXPECT_FALSE(r.ao);
+    ASSERT_EQ(r.markups.size(), 1u);
+    EXPECT_EQ(r.markups[0].name, "ruler");
+    EXPECT_EQ(r.markups[0].points[1].position, s.markups[0].points[1].position);
+    EXPECT_EQ(r.markups[0].points[1].label, "ruler-2");
+    EXPECT_TRUE(core::same_state(r, s));
+    core::Session moved = r;
+    moved.camera->eye.x += 1e-9;
+    EXPECT_FALSE(core::same_state(moved, s));
+}
+
+TEST(Session, InputBelowTheSessionFolderIsRelativeAndMovesWithIt) {
+    TempDir dir;
+    fs::create_directories(dir.path() / "a" / "data");
+    for (const char* f : {"headsq.nhdr", "headsq.raw"}) fs::copy_file(test::data(f), dir.path() / "a" / "data" / f);
+    core::Session s = example(dir / "a/data/headsq.nhdr");
+    core::save_session(s, dir / "a/s.json");
+    EXPECT_EQ(nlohmann::json::parse(slurp(dir / "a/s.json"))["input"]["path"], "data/headsq.nhdr");
+    EXPECT_EQ(nlohmann::json::parse(slurp(dir / "a/s.json"))["surfaces"][0]["source"], "data/headsq.nhdr");
+    fs::rename(dir.path() / "a", dir.path() / "b");
+    const auto r = core::load_session(dir / "b/s.json");
+    EXPECT_EQ(r.input, (dir.path() / "b" / "data" / "headsq.nhdr").string());
+    EXPECT_TRUE(r.warnings.empty());
+}
+
+TEST(Session, AChangedInputIsAWarning) {
+    TempDir dir;
+    for (const char* f : {"headsq.nhdr", "headsq.raw"}) fs::copy_file(test::data(f), dir.path() / f);
+    core::save_session(example(dir / "headsq.nhdr"), dir / "s.json");
+    EXPECT_TRUE(core::load_session(dir / "s.json").warnings.empty());
+    {
+        std::ofstream f(dir / "headsq.nhdr", std::ios::app);
+        f << "# edited\n";
+    }
+    const auto r = core::load_session(dir / "s.json");
+    ASSERT_EQ(r.warnings.size(), 1u);
+    EXPECT_NE(r.warnings[0].find("changed since the session was saved"), std::string::npos) << r.warnings[0];
+}
+
+TEST(Session, RefusalsNameTheFileAndTheField) {
+    TempDir dir;
+    const std::string file = dir / "broken.json";
+    core::save_session(example(test::data("headsq.nhdr")), dir / "good.json");
+    const std::string good = slurp(dir / "good.json");
+    const auto edited = [&](const std::function<void(nlohmann::json&)>& edit) {
+        auto j = nlohmann::json::parse(good);
+        edit(j);
+        return j.dump(1);
+    };
+    struct Case {
+        std::string text, expect;
+    };
+    const Case cases[] = {
+        {"", "file is empty"},
+        {"{ not json", "not valid JSON"},
+        {"[1, 2]", "not an object"},
+        {edited([](auto& j) { j.erase("format"); }), "format: not an isoscope session"},
+        {edited([](auto& j) { j["version"] = 2; }), "version: 2 is not supported"},
+        {edited([](auto& j) { j["version"] = "1"; }), "version: must be an integer"},
+        {edited([](auto& j) { j.erase("input"); }), "input: missing"},
+        {edited([](auto& j) { j["input"]["path"] = "/no/such/dir/headsq.nhdr"; }), "input.path: '/no/such/dir/headsq.nhdr' does not exist"},
+        {edited([](auto& j) { j["surfaces"][1]["color"] = "red"; }), "surfaces[1].color: expected #rrggbb"},
+        {edited([](auto& j) { j["surfaces"][0]["opacity"] = 1.5; }), "surfaces[0].opacity: must be between 0 and 1"},
+        {edited([](auto& j) { j["surfaces"][0]["kind"] = "blob"; }), "surfaces[0].kind: 'blob' is not iso, label or mesh"},
+        {edited([](auto& j) { j["surfaces"][0].erase("value"); }), "surfaces[0].value: missing"},
+        {edited([](auto& j) { j["surfaces"][0]["smoothing"] = -1; }), "surfaces[0].smoothing: must be between 0 and 1"},
+        // JSON has no NaN: writers put null (nlohmann does) or an overflowing number.
+        {edited([](auto& j) { j["camera"]["eye"][1] = nullptr; }), "camera.eye: must be a number, not null"},
+        {edited([](auto& j) { j["camera"]["target"] = {1, 2}; }), "camera.target: must be an array of 3 numbers"},
+        {edited([](auto& j) { j["camera"]["fov_y_degrees"] = 0; }), "camera.fov_y_degrees: must be between 0 and 180"},
+        {edited([](auto& j) { j["camera"]["up"] = j["camera"]["target"]; j["camera"]["eye"] = {0, 0, 0}; }), "camera.up: is zero or along"},
+        {edited([](auto& j) { j["window_level"]["width"] = 0; }), "window_level.width: must be positive"},
+        {edited([](auto& j) { j["view"]["ao"] = "yes"; }), "view.ao: must be true or false"},
+        {edited([](auto& j) { j["markups"]["markups"][0]["controlPoints"].erase(1); }), "markups: markup 1 (Line 'ruler'): a Line needs 2"},
+    };
+    for (const auto& c : cases) {
+        const std::string msg = load_error(dir, c.text);
+        EXPECT_EQ(msg.rfind(file + ": ", 0), 0u) << "names the file: " << msg;
+        EXPECT_NE(msg.find(c.expect), std::string::npos) << "expected '" << c.expect << "' in: " << msg;
+    }
+    // An overflowing number (how some writers put infinity) is refused by the JSON parser.
+    std::string inf = good;
+    const auto at = inf.find("\"fov_y_degrees\"");
+    ASSERT_NE(at, std::string::npos);
+    inf.insert(inf.find(':', at) + 1, " 1e999, \"unused\":");
+    const std::string msg = load_error(dir, inf);
+    EXPECT_EQ(msg.rfind(file + ": not valid JSON", 0), 0u) << msg;
+    EXPECT_NE(msg.find("number overflow parsing '1e999'"), std::string::npos) << msg;
+    // A missing file names itself.
+    try {
+        core::load_session(dir / "none.json");
+        ADD_FAILURE() << "no error";
+    } catch (const Error& e) {
+        EXPECT_EQ(e.where(), dir / "none.json");
+    }
+}
+
+TEST(Session, SavingKeepsTheOldFileWholeOnFailure) {
+    TempDir dir;
+    core::Session s = example(test::data("headsq.nhdr"));
+    core::save_session(s, dir / "s.json");
+    const std::string before = slurp(dir / "s.json");
+    s.markups[0].points.pop_back(); // a Line with one point cannot be written
+    EXPECT_THROW(core::save_session(s, dir / "s.json"), Error);
+    EXPECT_EQ(slurp(dir / "s.json"), before);
+    EXPECT_THROW(core::save_session(s, dir / "no/such/folder/s.json"), Error);
+}
+
+TEST(Session, HexColoursRoundTrip) {
+    for (unsigned v = 0; v < 256; ++v) {
+        char hex[8];
+        std::snprintf(hex, sizeof hex, "#%02x%02x%02x", v, 255 - v, (v * 7) % 256);
+        EXPECT_EQ(core::hex_from_linear(core::linear_from_hex(hex)), hex);
+    }
+}
+
+TEST(Session, OpensItsSceneAndCapturesItBack) {
+    TempDir dir;
+    core::Session s = example(test::data("headsq.nhdr"));
+    s.surfaces[1].post = {}; // plain extraction (quick)
+    core::save_session(s, dir / "s.json");
+    double last = -1;
+    bool monotonic = true;
+    const auto opened = core::open_session(dir / "s.json", [&](double f, std::string_view) {
+        monotonic &= f >= last - 1e-12;
+        last = f;
+        return true;
+    });
+    EXPECT_TRUE(monotonic);
+    const core::Scene& scene = *opened.scene;
+    ASSERT_TRUE(scene.has_volume());
+    ASSERT_EQ(opened.surfaces.size(), 2u);
+    ASSERT_EQ(scene.surfaces(), opened.surfaces);
+    for (std::size_t i = 0; i < 2; ++i) {
+        const auto& info = scene.info(opened.surfaces[i]);
+        EXPECT_EQ(info.kind, core::SurfaceInfo::Kind::Iso);
+        EXPECT_EQ(info.value, s.surfaces[i].value);
+        EXPECT_EQ(info.name, s.surfaces[i].name);
+        EXPECT_EQ(info.color, core::linear_from_hex(s.surfaces[i].color));
+        EXPECT_EQ(info.opacity, s.surfaces[i].opacity);
+        EXPECT_EQ(info.visible, s.surfaces[i].visible);
+        EXPECT_GT(scene.mesh(opened.surfaces[i]).triangles.size(), 10000u);
+    }
+    // What the scene shows, captured again, is the same state.
+    const auto back = core::capture_session(scene, opened.session.input, opened.session.series, opened.session.camera,
+                                            opened.session.window, opened.session.ao, opened.session.markups);
+    EXPECT_TRUE(core::same_state(back, s));
+
+    // Cancelled through the progress function.
+    EXPECT_THROW(core::open_session(dir / "s.json", [](double, std::string_view) { return false; }), Cancelled);
+
+    // A mesh surface on a volume input is refused, naming the surface.
+    s.surfaces[0].kind = core::SurfaceInfo::Kind::Mesh;
+    try {
+        core::open_session(s);
+        ADD_FAILURE() << "no error";
+    } catch (const Error& e) {
+        EXPECT_NE(std::string(e.what()).find("surface 1 ('skin'): a mesh surface"), std::string::npos) << e.what();
+    }
+}
+
+TEST(Session, RenderRequest) {
+    const core::Session s = example(test::data("headsq.nhdr"));
+    core::SessionRenderOptions o;
+    o.width = 640;
+    o.height = 480;
+    o.scale = 2;
+    o.annotations = false;
+    o.transparent = true;
+    auto r = core::session_request(s, "x.json", o);
+    EXPECT_EQ(r.width, 640);
+    EXPECT_EQ(r.height, 480);
+    EXPECT_EQ(r.scale, 2.0f);
+    EXPECT_FALSE(r.annotations);
+    EXPECT_TRUE(r.transparent);
+    ASSERT_TRUE(r.camera.has_value());
+    EXPECT_EQ(r.camera->eye, s.camera->eye);
+    EXPECT_EQ(r.markups.size(), 1u);
+    EXPECT_EQ(r.ao, "off"); // the session's view option
+    EXPECT_EQ(r.session_file, "x.json");
+    o.markups = false;
+    o.ao = "cone";
+    r = core::session_request(s, "", o);
+    EXPECT_TRUE(r.markups.empty());
+    EXPECT_EQ(r.ao, "cone");
+}
+
+TEST(SessionCli, RefusalsNameTheSessionAndTheFlag) {
+    TempDir dir;
+    const auto run = [](const std::string& args) { return test::run_command(test::cli() + " render " + args, true); };
+    auto r = run("--session " + (dir / "none.json") + " -o " + (dir / "x.png"));
+    EXPECT_EQ(r.exit_code, 1) << r.out;
+    EXPECT_NE(r.out.find(dir / "none.json"), std::string::npos) << r.out;
+    EXPECT_NE(r.out.find("no such file"), std::string::npos) << r.out;
+
+    core::save_session(example(test::data("headsq.nhdr")), dir / "s.json");
+    auto j = nlohmann::json::parse(slurp(dir / "s.json"));
+    j["surfaces"][0]["color"] = "#12345";
+    write(dir / "bad.json", j.dump());
+    r = run("--session " + (dir / "bad.json") + " -o " + (dir / "x.png"));
+    EXPECT_EQ(r.exit_code, 1) << r.out;
+    EXPECT_NE(r.out.find(dir / "bad.json" + ": surfaces[0].color: expected #rrggbb"), std::string::npos) << r.out;
+
+    r = run(test::data("headsq.nhdr") + " --session " + (dir / "s.json") + " -o " + (dir / "x.png"));
+    EXPECT_EQ(r.exit_code, 1) << r.out;
+    EXPECT_NE(r.out.find("--session: the session names its input"), std::string::npos) << r.out;
+    r = run("--session " + (dir / "s.json") + " --iso 300 -o " + (dir / "x.png"));
+    EXPECT_EQ(r.exit_code, 1) << r.out;
+    EXPECT_NE(r.out.find("--iso: the session holds the surfaces"), std::string::npos) << r.out;
+    r = run("-o " + (dir / "x.png"));
+    EXPECT_EQ(r.exit_code, 1) << r.out;
+    EXPECT_NE(r.out.find("give an INPUT (or --session FILE)"), std::string::npos) << r.out;
+    EXPECT_FALSE(fs::exists(dir / "x.png"));
+}
