@@ -27,6 +27,7 @@
 #include "renderer/core/api.hpp"
 #include "renderer/core/measure.hpp"
 #include "renderer/core/pick.hpp"
+#include "renderer/core/session.hpp"
 
 namespace {
 
@@ -292,8 +293,9 @@ struct FrameArgs {
     double oit_memory = 256;
 };
 
-void add_frame_options(CLI::App* c, FrameArgs& a) {
-    c->add_option("input", a.in, "Volume file, DICOM folder, or mesh (" + iso::mesh_extensions_text() + ")")->required();
+void add_frame_options(CLI::App* c, FrameArgs& a, bool input_required = true) {
+    auto* in = c->add_option("input", a.in, "Volume file, DICOM folder, or mesh (" + iso::mesh_extensions_text() + ")");
+    if (input_required) in->required();
     c->add_option("--iso", a.isos, "Iso value (repeatable) for volume inputs")->allow_extra_args(false);
     c->add_option("--view", a.view, "anterior, posterior, left, right, superior or inferior");
     c->add_option("--size", a.size, "Image size WxH (default 1024x1024)");
@@ -327,16 +329,20 @@ iso::core::RenderRequest frame_request(const FrameArgs& a) {
 
 struct RenderArgs {
     FrameArgs frame;
-    std::string out, aov, cache;
+    std::string out, aov, cache, session;
     std::vector<std::string> markups;
     float scale = 1.0f;
-    bool stats = false, no_annotations = false, transparent = false;
+    bool stats = false, no_annotations = false, transparent = false, no_markups = false;
+    bool view_given = false, ao_given = false; // with --session: replace the session's camera / view option
     int ao_rays = 1024;
 };
 
 CLI::App* add_render(CLI::App& app, RenderArgs& a) {
     auto* c = app.add_subcommand("render", "Render surfaces of a volume (or a mesh) to an annotated image");
-    add_frame_options(c, a.frame);
+    add_frame_options(c, a.frame, false);
+    c->add_option("--session", a.session, "Render a session file of the desktop app (its input, surfaces, camera, markups, AO) "
+                                          "instead of INPUT; --view replaces its camera, --ao its AO setting");
+    c->add_flag("--no-markups", a.no_markups, "With --session: leave out the session's markups");
     c->add_option("--scale", a.scale, "Scale of text, lines and glyphs (e.g. 2 for a 2x export)")->check(CLI::Range(0.1, 20.0));
     c->add_option("--aov", a.aov, "Write a buffer instead of the colour image: depth, normal, id or ao (EXR)");
     c->add_option("--ao-rays", a.ao_rays, "Rays per pixel for --ao reference")->check(CLI::Range(1, 1 << 20));
@@ -370,8 +376,54 @@ void print_stats(const iso::graph::FrameStats& stats, const iso::OitStats& oit) 
                   << oit.merge_error_max << " (linear colour, per channel)\n";
 }
 
+// `isoscope render --session`: the request comes from core::session_request,
+// as the desktop app's File > Export image builds it; the frame's other
+// options (size, background, AO tunables, ...) apply on top.
+iso::core::RenderRequest session_render_request(const RenderArgs& a, iso::core::OpenedSession& opened) {
+    const auto& f = a.frame;
+    if (!f.in.empty()) throw iso::Error("--session", "the session names its input: give INPUT or --session, not both");
+    for (const auto& [given, flag] : {std::pair{!f.isos.empty(), "--iso"}, {!f.series.empty(), "--series"},
+                                     {!f.look.opacity.empty(), "--opacity"}, {!f.look.color.empty(), "--color"}})
+        if (given) throw iso::Error(flag, "the session holds the surfaces and the series: not with --session");
+    const iso::core::RenderRequest frame = frame_request(f);
+    iso::core::SessionRenderOptions o;
+    o.width = frame.width;
+    o.height = frame.height;
+    o.scale = a.scale;
+    o.annotations = !a.no_annotations;
+    o.transparent = a.transparent;
+    o.markups = !a.no_markups;
+    if (a.ao_given) o.ao = f.ao;
+    iso::core::RenderRequest req = iso::core::session_request(opened.session, a.session, o);
+    if (a.view_given) {
+        req.camera.reset();
+        req.view = f.view;
+    }
+    req.background = frame.background;
+    req.flat_shading = frame.flat_shading;
+    req.oit_epsilon = frame.oit_epsilon;
+    req.oit_memory_mib = frame.oit_memory_mib;
+    req.ao_radius_mm = frame.ao_radius_mm;
+    req.cone = frame.cone;
+    req.ao_frames = frame.ao_frames;
+    req.progress = frame.progress;
+    return req;
+}
+
 int run_render(const RenderArgs& a) {
-    iso::core::RenderRequest req = frame_request(a.frame);
+    if (a.session.empty() && a.frame.in.empty()) throw iso::Error("isoscope render", "give an INPUT (or --session FILE)");
+    if (a.no_markups && a.session.empty()) throw iso::Error("--no-markups", "only with --session (without it, give no --markups)");
+    std::optional<iso::core::OpenedSession> opened;
+    iso::core::RenderRequest req;
+    if (a.session.empty()) {
+        req = frame_request(a.frame);
+    } else {
+        iso::check_writable_destination(a.out);
+        auto s = iso::core::load_session(a.session);
+        for (const auto& w : s.warnings) std::cerr << "warning: " << a.session << ": " << w << "\n";
+        opened = iso::core::open_session(s, progress_bar());
+        req = session_render_request(a, *opened);
+    }
     req.scale = a.scale;
     req.aov_ao = a.aov == "ao";
     req.aov = req.aov_ao ? iso::Aov::None : iso::aov_from_name(a.aov);
@@ -389,9 +441,9 @@ int run_render(const RenderArgs& a) {
         for (auto& m : f.markups) req.markups.push_back(std::move(m));
         req.markups_files.push_back(path);
     }
-    iso::core::Scene scene;
-    open_input(scene, a.frame.in, a.frame.series, a.frame.isos, a.frame.look, "render");
-    const auto out = iso::core::render_image(scene, req);
+    iso::core::Scene local;
+    if (!opened) open_input(local, a.frame.in, a.frame.series, a.frame.isos, a.frame.look, "render");
+    const auto out = iso::core::render_image(opened ? *opened->scene : local, req);
     iso::core::export_image(out.image, out.meta, a.out);
     std::cout << "rendered " << out.image.width << "x" << out.image.height << " (" << out.gl_renderer << ") -> " << a.out << "\n";
     if (a.stats) print_stats(out.stats, out.oit);
@@ -647,7 +699,11 @@ int run_gui(const std::string& in, char* argv0) {
     QApplication::setApplicationName("isoscope");
     iso::gui::MainWindow w;
     w.show();
-    if (!in.empty()) w.open_path(QString::fromStdString(in));
+    // A session (.json: no volume or mesh format uses it) restores what it saved.
+    const std::string json = ".json";
+    const bool session = in.size() > json.size() && in.compare(in.size() - json.size(), json.size(), json) == 0;
+    if (session) w.open_session(QString::fromStdString(in));
+    else if (!in.empty()) w.open_path(QString::fromStdString(in));
     return qapp.exec();
 }
 
@@ -673,8 +729,10 @@ int main(int argc, char** argv) {
     auto* measure = add_measure(app, measure_args);
     std::string gui_in;
     auto* gui = app.add_subcommand("gui", "Open the desktop app (main window with the 3D and slice views)");
-    gui->add_option("input", gui_in, "Volume file, DICOM folder, or mesh to open");
+    gui->add_option("input", gui_in, "Volume file, DICOM folder, mesh, or session (.json) to open");
     CLI11_PARSE(app, argc, argv);
+    render_args.view_given = render->get_option("--view")->count() > 0;
+    render_args.ao_given = render->get_option("--ao")->count() > 0;
     try {
         if (*info) return run_info(info_args);
         if (*mesh) return run_mesh(mesh_args);
