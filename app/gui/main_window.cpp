@@ -107,6 +107,8 @@ MainWindow::MainWindow(QWidget* parent) : QMainWindow(parent), scene_(std::make_
     recent_menu_ = file->addMenu("&Recent files");
     rebuild_recent_menu();
     file->addSeparator();
+    add_session_actions(file);
+    file->addSeparator();
     file->addAction("&Quit", QKeySequence::Quit, this, [this] { close(); });
 
     // ---- window / level bar
@@ -334,6 +336,7 @@ void MainWindow::set_scene(std::unique_ptr<core::Scene> scene, const QString& pa
     scene_ = std::move(scene);
     path_ = path;
     series_ = series;
+    session_path_.clear(); // open_session sets it again
     markups_.clear(); // measurements belong to what was open
     planes_ = {};
     if (scene_->has_volume()) {

@@ -31,7 +31,9 @@ class QVBoxLayout;
 
 namespace iso::core {
 class Scene;
-}
+struct Session;
+struct SessionRenderOptions;
+} // namespace iso::core
 
 namespace iso::gui {
 
@@ -70,6 +72,24 @@ public:
     const std::vector<Markup>& markups() const { return markups_; }
     void set_markups(std::vector<Markup> m);
 
+    // Sessions and export (app/gui/session_io.cpp, docs/sessions.md).
+    // What the window shows as a core::Session (input, series, surfaces,
+    // the 3D view's camera and AO, window/level, markups).
+    core::Session current_session() const;
+    // The session file last saved or opened (empty: none).
+    const QString& session_path() const { return session_path_; }
+    // File > Save session / Open session: in the background; an open
+    // replaces the scene and restores the camera, window/level and markups.
+    void save_session(const QString& path);
+    void open_session(const QString& path);
+    // File > Export image: renders the current state as `isoscope render
+    // --session` does (the session file it names: the current one when
+    // the state is unchanged since it was saved or opened, else PATH.session.json
+    // written next to the image).
+    void export_image(const QString& path, const core::SessionRenderOptions& options);
+    // File > Save surfaces: one surface in LPS mm (.stl, .ply, .obj, .vtp).
+    void save_surface(std::uint32_t id, const QString& path);
+
 protected:
     void dragEnterEvent(QDragEnterEvent* e) override;
     void dropEvent(QDropEvent* e) override;
@@ -95,6 +115,7 @@ private:
     void rebuild_recent_menu();
     void open_file_dialog();
     void open_folder_dialog();
+    void add_session_actions(QMenu* file); // File menu entries (session_io.cpp)
 
     std::unique_ptr<core::Scene> scene_;
     std::array<core::SlicePlane, 3> planes_{};
@@ -112,6 +133,7 @@ private:
     QMenu* recent_menu_ = nullptr;
     QString path_, series_;
     std::vector<Markup> markups_;
+    QString session_path_;
     std::shared_ptr<Job> job_;                   // the job the window waits for
     std::vector<std::shared_ptr<Job>> running_;  // every worker still running (abandoned ones too)
     bool updating_window_ = false;

@@ -1,0 +1,198 @@
+#include "app/gui/export_dialog.hpp"
+
+#include <QCheckBox>
+#include <QComboBox>
+#include <QDialogButtonBox>
+#include <QDir>
+#include <QDoubleSpinBox>
+#include <QFileDialog>
+#include <QFileInfo>
+#include <QFormLayout>
+#include <QHBoxLayout>
+#include <QLabel>
+#include <QLineEdit>
+#include <QPushButton>
+#include <QSpinBox>
+#include <QVBoxLayout>
+
+namespace iso::gui {
+
+namespace {
+QLineEdit* file_row(QWidget* parent, QFormLayout* form, const QString& file, const QString& filter) {
+    auto* row = new QHBoxLayout;
+    auto* edit = new QLineEdit(file, parent);
+    edit->setObjectName("file");
+    edit->setMinimumWidth(360);
+    auto* browse = new QPushButton("Browse...", parent);
+    browse->setObjectName("browse");
+    row->addWidget(edit, 1);
+    row->addWidget(browse);
+    form->addRow("File:", row);
+    QObject::connect(browse, &QPushButton::clicked, parent, [parent, edit, filter] {
+        const QString f = QFileDialog::getSaveFileName(parent, "Save as", edit->text(), filter);
+        if (!f.isEmpty()) edit->setText(f);
+    });
+    return edit;
+}
+
+QLabel* problem_label(QWidget* parent) {
+    auto* l = new QLabel(parent);
+    l->setObjectName("problem");
+    l->setStyleSheet("color: #c03030");
+    l->setWordWrap(true);
+    l->hide();
+    return l;
+}
+
+QDialogButtonBox* buttons(QDialog* d, const QString& ok) {
+    auto* b = new QDialogButtonBox(QDialogButtonBox::Ok | QDialogButtonBox::Cancel, d);
+    b->button(QDialogButtonBox::Ok)->setText(ok);
+    QObject::connect(b, &QDialogButtonBox::accepted, d, &QDialog::accept);
+    QObject::connect(b, &QDialogButtonBox::rejected, d, &QDialog::reject);
+    return b;
+}
+} // namespace
+
+// ---- Export image ----------------------------------------------------------------------
+
+ExportDialog::ExportDialog(QSize size, bool ao, const QString& file, const QString& session_note, QWidget* parent) : QDialog(parent) {
+    setWindowTitle("Export image");
+    setObjectName("export_dialog");
+    auto* col = new QVBoxLayout(this);
+    auto* form = new QFormLayout;
+    auto* size_row = new QHBoxLayout;
+    width_ = new QSpinBox(this);
+    height_ = new QSpinBox(this);
+    for (auto* s : {width_, height_}) s->setRange(16, 16384);
+    width_->setObjectName("width");
+    height_->setObjectName("height");
+    width_->setValue(size.width());
+    height_->setValue(size.height());
+    size_row->addWidget(width_);
+    size_row->addWidget(new QLabel("x", this));
+    size_row->addWidget(height_);
+    size_row->addStretch(1);
+    form->addRow("Size (pixels):", size_row);
+    scale_ = new QDoubleSpinBox(this);
+    scale_->setObjectName("scale");
+    scale_->setRange(0.1, 20.0);
+    scale_->setSingleStep(0.5);
+    scale_->setValue(1.0);
+    scale_->setToolTip("Scale of text, lines and glyphs (2 for an image twice the view's size)");
+    form->addRow("Annotation scale:", scale_);
+    annotations_ = new QCheckBox("Scale bar and orientation letters", this);
+    annotations_->setObjectName("annotations");
+    annotations_->setChecked(true);
+    form->addRow("Annotations:", annotations_);
+    markups_ = new QCheckBox("Points, rulers and angles", this);
+    markups_->setObjectName("markups");
+    markups_->setChecked(true);
+    form->addRow("Markups:", markups_);
+    transparent_ = new QCheckBox("Transparent background", this);
+    transparent_->setObjectName("transparent");
+    form->addRow("Background:", transparent_);
+    ao_ = new QComboBox(this);
+    ao_->setObjectName("ao");
+    ao_->addItem("off", "off");
+    ao_->addItem("cone traced", "cone");
+    ao_->setCurrentIndex(ao ? 1 : 0);
+    form->addRow("Ambient occlusion:", ao_);
+    file_ = file_row(this, form, file, "PNG (*.png);;TIFF (*.tif *.tiff);;OpenEXR (*.exr)");
+    col->addLayout(form);
+    auto* note = new QLabel(session_note, this);
+    note->setObjectName("session_note");
+    note->setWordWrap(true);
+    col->addWidget(note);
+    problem_ = problem_label(this);
+    col->addWidget(problem_);
+    col->addWidget(buttons(this, "Export"));
+}
+
+core::SessionRenderOptions ExportDialog::options() const {
+    core::SessionRenderOptions o;
+    o.width = width_->value();
+    o.height = height_->value();
+    o.scale = float(scale_->value());
+    o.annotations = annotations_->isChecked();
+    o.transparent = transparent_->isChecked();
+    o.markups = markups_->isChecked();
+    o.ao = ao_->currentData().toString().toStdString();
+    return o;
+}
+
+QString ExportDialog::path() const { return file_->text().trimmed(); }
+
+void ExportDialog::accept() {
+    const QString suffix = QFileInfo(path()).suffix().toLower();
+    if (path().isEmpty()) {
+        problem_->setText("Choose a file name.");
+    } else if (suffix != "png" && suffix != "tif" && suffix != "tiff" && suffix != "exr") {
+        problem_->setText("The file name must end in .png, .tif or .exr.");
+    } else {
+        QDialog::accept();
+        return;
+    }
+    problem_->show();
+}
+
+// ---- Save surfaces ---------------------------------------------------------------------
+
+namespace {
+const char* const kMeshFormats[][2] = {{"STL", "stl"}, {"PLY", "ply"}, {"OBJ", "obj"}, {"VTP (VTK XML)", "vtp"}};
+}
+
+SaveSurfacesDialog::SaveSurfacesDialog(const core::Scene& scene, const QString& folder, QWidget* parent) : QDialog(parent) {
+    setWindowTitle("Save surfaces");
+    setObjectName("save_surfaces_dialog");
+    auto* col = new QVBoxLayout(this);
+    auto* form = new QFormLayout;
+    surface_ = new QComboBox(this);
+    surface_->setObjectName("surface");
+    for (const auto id : scene.surfaces())
+        surface_->addItem(QString("%1 (%2 triangles)").arg(QString::fromStdString(scene.info(id).name)).arg(scene.mesh(id).triangles.size()),
+                          id);
+    form->addRow("Surface:", surface_);
+    format_ = new QComboBox(this);
+    format_->setObjectName("format");
+    for (const auto& f : kMeshFormats) format_->addItem(f[0], f[1]);
+    form->addRow("Format:", format_);
+    file_ = file_row(this, form, QDir(folder).filePath("surface.stl"), "Meshes (*.stl *.ply *.obj *.vtp)");
+    col->addLayout(form);
+    auto* note = new QLabel("Positions in LPS millimetres, tagged LPS in the file.", this);
+    col->addWidget(note);
+    problem_ = problem_label(this);
+    col->addWidget(problem_);
+    col->addWidget(buttons(this, "Save"));
+    // The file name follows the surface (iso 500 -> iso-500.stl) and the format.
+    const auto rename = [this] {
+        QFileInfo fi(file_->text());
+        QString stem = surface_->currentText().section(" (", 0, 0);
+        stem.replace(' ', '-');
+        if (stem.isEmpty()) stem = "surface";
+        file_->setText(fi.dir().filePath(stem + "." + format_->currentData().toString()));
+    };
+    connect(surface_, &QComboBox::currentIndexChanged, this, rename);
+    connect(format_, &QComboBox::currentIndexChanged, this, rename);
+    rename();
+}
+
+std::uint32_t SaveSurfacesDialog::surface() const { return surface_->currentData().toUInt(); }
+
+QString SaveSurfacesDialog::path() const { return file_->text().trimmed(); }
+
+void SaveSurfacesDialog::accept() {
+    const QString suffix = QFileInfo(path()).suffix().toLower();
+    if (surface_->count() == 0) {
+        problem_->setText("There is no surface to save.");
+    } else if (path().isEmpty()) {
+        problem_->setText("Choose a file name.");
+    } else if (suffix != format_->currentData().toString()) {
+        problem_->setText("The file name must end in ." + format_->currentData().toString() + " for " + format_->currentText() + ".");
+    } else {
+        QDialog::accept();
+        return;
+    }
+    problem_->show();
+}
+
+} // namespace iso::gui

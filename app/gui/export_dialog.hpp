@@ -1,0 +1,60 @@
+// File > Export image and File > Save surfaces (docs/gui.md, "Export"):
+// dialogs that only collect the user's choices. What they choose is done by
+// MainWindow::export_image / save_surface through the core
+// (core::session_request, core::render_image, core::export_image,
+// core::Scene::export_mesh).
+#pragma once
+
+#include <cstdint>
+
+#include <QDialog>
+#include <QString>
+
+#include "renderer/core/session.hpp"
+
+class QCheckBox;
+class QComboBox;
+class QDoubleSpinBox;
+class QLabel;
+class QLineEdit;
+class QSpinBox;
+
+namespace iso::gui {
+
+// Size, annotation scale, annotations, transparent background, markups,
+// AO (off / cone) and the file (.png, .tif, .exr). Widgets are named
+// (width, height, scale, annotations, transparent, markups, ao, file) for
+// tests; OK refuses an empty name or another extension, saying why.
+class ExportDialog : public QDialog {
+public:
+    ExportDialog(QSize size, bool ao, const QString& file, const QString& session_note, QWidget* parent = nullptr);
+    core::SessionRenderOptions options() const;
+    QString path() const;
+    void accept() override;
+
+private:
+    QSpinBox *width_, *height_;
+    QDoubleSpinBox* scale_;
+    QCheckBox *annotations_, *transparent_, *markups_;
+    QComboBox* ao_;
+    QLineEdit* file_;
+    QLabel* problem_;
+};
+
+// A surface of the scene (named by its row: name, triangles) and a format
+// (STL, PLY, OBJ, VTP); the file name's extension follows the format.
+// Widgets: surface, format, file.
+class SaveSurfacesDialog : public QDialog {
+public:
+    SaveSurfacesDialog(const core::Scene& scene, const QString& folder, QWidget* parent = nullptr);
+    std::uint32_t surface() const;
+    QString path() const;
+    void accept() override;
+
+private:
+    QComboBox *surface_, *format_;
+    QLineEdit* file_;
+    QLabel* problem_;
+};
+
+} // namespace iso::gui

@@ -1,0 +1,211 @@
+// MainWindow's sessions and export (docs/sessions.md, docs/gui.md
+// "Sessions and export"): File > Save session, Open session, Export image,
+// Save surfaces. Member functions of MainWindow kept out of main_window.cpp;
+// what they do is the core's (renderer/core/session.hpp, api.hpp, scene.hpp).
+#include <QAction>
+#include <QDir>
+#include <QFileDialog>
+#include <QFileInfo>
+#include <QMenu>
+#include <QSettings>
+#include <QStatusBar>
+
+#include "app/gui/export_dialog.hpp"
+#include "app/gui/main_window.hpp"
+#include "app/gui/viewer.hpp"
+#include "io/atomic_file.hpp"
+#include "io/error.hpp"
+#include "renderer/core/api.hpp"
+#include "renderer/core/scene.hpp"
+#include "renderer/core/session.hpp"
+
+namespace iso::gui {
+
+namespace {
+QString settings_folder(const char* key) {
+    const QString f = QSettings().value(key).toString();
+    return f.isEmpty() ? QDir::homePath() : f;
+}
+
+void remember_folder(const char* key, const QString& file) { QSettings().setValue(key, QFileInfo(file).absolutePath()); }
+
+// The session file an export names: the current one when it holds this
+// state, else one written next to the image.
+QString export_session_path(const QString& session, const core::Session& now, const QString& image, bool& write) {
+    write = false;
+    if (!session.isEmpty()) {
+        try {
+            if (core::same_state(core::read_session(session.toStdString()), now)) return session;
+        } catch (const Error&) {
+            // Gone or damaged since: a fresh one next to the image.
+        }
+    }
+    write = true;
+    return image + ".session.json";
+}
+} // namespace
+
+core::Session MainWindow::current_session() const {
+    std::optional<Camera> camera;
+    // The viewer's camera once it drew (before its first frame it holds the default one).
+    if (viewer_ && viewer_->frames() > 0) camera = viewer_->camera();
+    std::optional<core::WindowLevel> window;
+    if (scene_->has_volume()) window = window_;
+    return core::capture_session(*scene_, path_.toStdString(), series_.toStdString(), camera, window, viewer_ ? viewer_->options().ao : true,
+                                 markups_);
+}
+
+void MainWindow::add_session_actions(QMenu* file) {
+    file->addAction("Open &session...", this, [this] {
+        const QString f = QFileDialog::getOpenFileName(this, "Open session", settings_folder("session_folder"),
+                                                       "isoscope sessions (*.json);;All files (*)");
+        if (!f.isEmpty()) open_session(f);
+    });
+    file->addAction("Sa&ve session...", QKeySequence::Save, this, [this] {
+        const QString start = session_path_.isEmpty() ? QDir(settings_folder("session_folder")).filePath("session.isoscope.json") : session_path_;
+        const QString f = QFileDialog::getSaveFileName(this, "Save session", start, "isoscope sessions (*.json)");
+        if (!f.isEmpty()) save_session(f);
+    });
+    file->addSeparator();
+    file->addAction("&Export image...", this, [this] {
+        if (path_.isEmpty()) {
+            statusBar()->showMessage("Open a volume or mesh first");
+            return;
+        }
+        bool write = false;
+        const QString image = QDir(settings_folder("export_folder")).filePath(QFileInfo(path_).completeBaseName() + ".png");
+        const QString named = export_session_path(session_path_, current_session(), image, write);
+        const QString note = write ? "The state is also saved as a session next to the image (IMAGE.session.json); the image's "
+                                     "metadata names it, so `isoscope render --session` can make it again."
+                                   : "The image's metadata names the current session, " + named + " (unchanged since saved).";
+        auto* d = new ExportDialog(viewer_ ? viewer_->image_size() : QSize(1024, 1024), viewer_ ? viewer_->options().ao : true, image, note,
+                                   this);
+        d->setAttribute(Qt::WA_DeleteOnClose);
+        connect(d, &QDialog::accepted, this, [this, d] { export_image(d->path(), d->options()); });
+        d->open();
+    });
+    file->addAction("Save s&urfaces...", this, [this] {
+        if (scene_->surfaces().empty()) {
+            statusBar()->showMessage("No surface to save: add one in the Surfaces panel");
+            return;
+        }
+        auto* d = new SaveSurfacesDialog(*scene_, settings_folder("surface_folder"), this);
+        d->setAttribute(Qt::WA_DeleteOnClose);
+        connect(d, &QDialog::accepted, this, [this, d] { save_surface(d->surface(), d->path()); });
+        d->open();
+    });
+}
+
+void MainWindow::save_session(const QString& path) {
+    if (busy()) {
+        statusBar()->showMessage("Busy: wait for the current task or cancel it");
+        return;
+    }
+    if (path_.isEmpty()) {
+        statusBar()->showMessage("Nothing to save: open a volume or mesh first");
+        return;
+    }
+    auto session = std::make_shared<core::Session>(current_session());
+    const std::string p = path.toStdString();
+    // The input's SHA-256 is computed on the worker (a DICOM folder can be large).
+    run_job("Saving the session " + path, false, [session, p](const ProgressFn&) { core::save_session(*session, p); },
+            [this, path](std::exception_ptr e) {
+                if (e) {
+                    show_error("Cannot save the session", "Cannot save the session " + path, e);
+                    return;
+                }
+                session_path_ = path;
+                remember_folder("session_folder", path);
+                statusBar()->showMessage("Saved the session " + path);
+            });
+}
+
+void MainWindow::open_session(const QString& path) {
+    if (busy()) {
+        statusBar()->showMessage("Busy: wait for the current task or cancel it");
+        return;
+    }
+    auto result = std::make_shared<core::OpenedSession>();
+    const std::string p = path.toStdString();
+    // A fresh scene on the worker, as open_path: the one on screen stays
+    // until the session opened.
+    run_job("Opening the session " + path, true, [result, p](const ProgressFn& progress) { *result = core::open_session(p, progress); },
+            [this, result, path](std::exception_ptr e) {
+                if (e) {
+                    show_error("Cannot open the session", "Cannot open the session " + path, e);
+                    return;
+                }
+                const core::Session& s = result->session;
+                set_scene(std::move(result->scene), QString::fromStdString(s.input), QString::fromStdString(s.series));
+                session_path_ = path;
+                remember_folder("session_folder", path);
+                if (s.window) set_window_level(*s.window);
+                set_markups(s.markups);
+                if (viewer_) {
+                    auto o = viewer_->options();
+                    o.ao = s.ao;
+                    viewer_->set_options(o);
+                    if (s.camera) viewer_->set_camera(*s.camera);
+                }
+                QString msg = "Opened the session " + path;
+                for (const auto& w : s.warnings) msg += "; warning: " + QString::fromStdString(w);
+                statusBar()->showMessage(msg);
+            });
+}
+
+void MainWindow::export_image(const QString& path, const core::SessionRenderOptions& options) {
+    if (busy()) {
+        statusBar()->showMessage("Busy: wait for the current task or cancel it");
+        return;
+    }
+    if (path_.isEmpty()) {
+        statusBar()->showMessage("Open a volume or mesh first");
+        return;
+    }
+    auto now = std::make_shared<core::Session>(current_session());
+    bool write = false;
+    const QString session = export_session_path(session_path_, *now, path, write);
+    const std::string image = path.toStdString(), session_file = session.toStdString();
+    // Exactly `isoscope render --session SESSION`: the session file is read
+    // back and opened into a scene of its own (the window's scene and its GL
+    // objects belong to the 3D view), rendered headlessly and written.
+    run_job("Exporting " + path, false,
+            [now, write, image, session_file, options](const ProgressFn& progress) {
+                check_writable_destination(image);
+                if (write) core::save_session(*now, session_file);
+                const auto opened = core::open_session(session_file, progress);
+                core::RenderRequest req = core::session_request(opened.session, session_file, options);
+                const auto out = core::render_image(*opened.scene, req);
+                core::export_image(out.image, out.meta, image);
+            },
+            [this, path, session](std::exception_ptr e) {
+                if (e) {
+                    show_error("Cannot export the image", "Cannot export " + path, e);
+                    return;
+                }
+                remember_folder("export_folder", path);
+                statusBar()->showMessage("Exported " + path + " (session " + session + ")");
+            });
+}
+
+void MainWindow::save_surface(std::uint32_t id, const QString& path) {
+    if (busy()) {
+        statusBar()->showMessage("Busy: wait for the current task or cancel it");
+        return;
+    }
+    const core::Scene* s = scene_.get();
+    const std::string p = path.toStdString();
+    // The worker only reads the mesh; nothing edits meshes while the
+    // window-modal progress dialog is up.
+    run_job("Saving " + path, false, [s, id, p](const ProgressFn&) { s->export_mesh(id, p); },
+            [this, path](std::exception_ptr e) {
+                if (e) {
+                    show_error("Cannot save the surface", "Cannot save " + path, e);
+                    return;
+                }
+                remember_folder("surface_folder", path);
+                statusBar()->showMessage("Saved " + path + " (LPS mm)");
+            });
+}
+
+} // namespace iso::gui

@@ -1,0 +1,259 @@
+// Sessions and export in the desktop app (docs/gui.md "Sessions and
+// export", docs/sessions.md), driven in-process through QTest under
+// xvfb-run (GuiExport.UnderXvfb starts this program again inside it). The
+// exported image is compared pixel by pixel with `isoscope render
+// --session` run as a process; the reopened session with the core's state
+// of the first window; the saved surface with the core's mesh.
+#include <QAction>
+#include <QCheckBox>
+#include <QComboBox>
+#include <QDialogButtonBox>
+#include <QLabel>
+#include <QLineEdit>
+#include <QMenu>
+#include <QMenuBar>
+#include <QMessageBox>
+#include <QPushButton>
+#include <QSpinBox>
+#include <QStatusBar>
+#include <QTest>
+
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+
+#include "app/gui/export_dialog.hpp"
+#include "app/gui/main_window.hpp"
+#include "app/gui/viewer.hpp"
+#include "gui_test_util.hpp"
+#include "io/image.hpp"
+#include "renderer/core/api.hpp"
+#include "renderer/core/scene.hpp"
+#include "renderer/core/session.hpp"
+
+using namespace iso;
+namespace fs = std::filesystem;
+
+namespace {
+constexpr const char* kInner = "ISOSCOPE_GUI_EXPORT_TEST_IN_XVFB";
+using test::wait_until;
+
+QAction* file_action(QMainWindow& w, const QString& text) {
+    for (auto* a : w.menuBar()->findChildren<QAction*>())
+        if (a->text() == text) return a;
+    return nullptr;
+}
+
+template <class T> T* wait_for_child(QWidget& w, const char* name) {
+    T* found = nullptr;
+    wait_until([&] { return (found = w.findChild<T*>(name)) && found->isVisible(); }, 10000);
+    return found;
+}
+
+std::size_t differing(const Image& a, const Image& b) {
+    if (a.width != b.width || a.height != b.height || a.channels != b.channels || a.bytes.size() != b.bytes.size()) return SIZE_MAX;
+    std::size_t n = 0;
+    for (std::size_t i = 0; i < a.bytes.size(); ++i) n += a.bytes[i] != b.bytes[i];
+    return n;
+}
+
+void screenshot(QWidget& w, const std::string& name) {
+    QTest::qWait(100);
+    const auto path = test::output_dir("gui_export") / name;
+    EXPECT_TRUE(w.grab().toImage().save(QString::fromStdString(path.string())));
+    std::printf("screenshot: %s\n", path.c_str());
+}
+} // namespace
+
+TEST(GuiExport, UnderXvfb) { test::run_inner_under_xvfb(kInner, "GuiExportInXvfb.*"); }
+
+TEST(GuiExportInXvfb, ExportSaveOpenSessionAndSurfaces) {
+    if (!std::getenv(kInner)) GTEST_SKIP() << "runs inside xvfb-run, started by GuiExport.UnderXvfb";
+    test::TempDir dir;
+    const auto app = test::make_app("gui_export_test", dir / "config");
+
+    gui::MainWindow w;
+    w.resize(1400, 1000);
+    w.show();
+    ASSERT_TRUE(QTest::qWaitForWindowExposed(&w));
+
+    // ---- the bundled CT, skin and bone
+    w.open_path(QString::fromStdString(test::data("headsq.nhdr")));
+    ASSERT_TRUE(wait_until([&] { return !w.busy(); }, 60000));
+    ASSERT_TRUE(w.scene().has_volume()) << w.statusBar()->currentMessage().toStdString();
+    for (double iso : {500.0, 1150.0}) {
+        w.add_surface(iso);
+        ASSERT_TRUE(wait_until([&] { return !w.busy(); }, 120000));
+    }
+    const auto ids = w.scene().surfaces();
+    ASSERT_EQ(ids.size(), 2u);
+    // Skin at 0.3 through the core (the Surfaces panel is another part's).
+    w.scene().info(ids[0]).opacity = 0.3f;
+    ASSERT_NE(w.viewer(), nullptr);
+    ASSERT_TRUE(wait_until([&] { return w.viewer()->frames() > 0; }, 60000));
+    // Rotate the 3D view.
+    Camera orbited = w.viewer()->camera();
+    orbited.orbit(40, 25);
+    w.viewer()->set_camera(orbited);
+    // A ruler through the measurements' hook.
+    Markup ruler;
+    ruler.type = MarkupType::Line;
+    ruler.name = "ruler";
+    ruler.points.resize(2);
+    ruler.points[0].position = orbited.target + glm::dvec3(-50, 0, 30);
+    ruler.points[1].position = orbited.target + glm::dvec3(45, -10, -20);
+    w.set_markups({ruler});
+    ASSERT_TRUE(wait_until([&] { return w.viewer()->frames() > 2; }, 60000));
+    screenshot(w, "window.png");
+
+    // ---- File > Export image through its dialog
+    QAction* export_action = file_action(w, "&Export image...");
+    ASSERT_NE(export_action, nullptr);
+    export_action->trigger();
+    auto* dialog = wait_for_child<gui::ExportDialog>(w, "export_dialog");
+    ASSERT_NE(dialog, nullptr);
+    // Defaults: the 3D view's size and AO.
+    EXPECT_EQ(dialog->findChild<QSpinBox*>("width")->value(), w.viewer()->image_size().width());
+    EXPECT_EQ(dialog->findChild<QComboBox*>("ao")->currentData().toString(), "cone");
+    screenshot(*dialog, "export_dialog.png");
+    const std::string image = dir / "export.png";
+    dialog->findChild<QSpinBox*>("width")->setValue(360);
+    dialog->findChild<QSpinBox*>("height")->setValue(270);
+    auto* file = dialog->findChild<QLineEdit*>("file");
+    // A wrong extension is refused in the dialog.
+    file->setText(QString::fromStdString(dir / "export.jpg"));
+    auto* ok = dialog->findChild<QDialogButtonBox*>()->button(QDialogButtonBox::Ok);
+    QTest::mouseClick(ok, Qt::LeftButton);
+    EXPECT_TRUE(dialog->isVisible());
+    EXPECT_TRUE(dialog->findChild<QLabel*>("problem")->isVisible());
+    file->setText(QString::fromStdString(image));
+    QTest::mouseClick(ok, Qt::LeftButton);
+    ASSERT_TRUE(wait_until([&] { return !w.busy() && w.findChild<gui::ExportDialog*>("export_dialog") == nullptr; }, 120000));
+    ASSERT_TRUE(fs::exists(image)) << w.statusBar()->currentMessage().toStdString();
+    // No session saved yet: the state went next to the image, and the metadata names it.
+    const std::string beside = image + ".session.json";
+    ASSERT_TRUE(fs::exists(beside));
+    ImageMetadata meta;
+    const Image exported = load_image(image, &meta);
+    EXPECT_EQ(exported.width, 360);
+    EXPECT_EQ(meta.text["isoscope:session"], beside);
+    EXPECT_EQ(meta.text["isoscope:session_sha256"], sha256_of_path(beside));
+    EXPECT_NE(meta.text["isoscope:markups_drawn"].find("Line 'ruler'"), std::string::npos);
+    // The session beside it holds the window's state.
+    {
+        const auto s = core::load_session(beside);
+        ASSERT_EQ(s.surfaces.size(), 2u);
+        EXPECT_EQ(s.surfaces[0].opacity, 0.3f);
+        ASSERT_TRUE(s.camera.has_value());
+        EXPECT_EQ(s.camera->eye, orbited.eye);
+    }
+
+    // ---- exactly what `isoscope render --session` writes for it
+    const std::string cli_image = dir / "cli.png";
+    const auto r = test::run_command(test::cli() + " render --session " + beside + " --size 360x270 -o " + cli_image, true);
+    ASSERT_EQ(r.exit_code, 0) << r.out;
+    ImageMetadata cli_meta;
+    const Image cli = load_image(cli_image, &cli_meta);
+    EXPECT_EQ(differing(exported, cli), 0u) << "the export and isoscope render --session differ";
+    EXPECT_EQ(cli_meta.text["isoscope:session"], meta.text["isoscope:session"]);
+    EXPECT_EQ(cli_meta.text["isoscope:session_sha256"], meta.text["isoscope:session_sha256"]);
+    EXPECT_EQ(cli_meta.text["isoscope:camera"], meta.text["isoscope:camera"]);
+
+    // ---- File > Save session; an unchanged state's export names it
+    const std::string session = dir / "study.isoscope.json";
+    w.save_session(QString::fromStdString(session));
+    ASSERT_TRUE(wait_until([&] { return !w.busy(); }, 60000));
+    ASSERT_TRUE(fs::exists(session)) << w.statusBar()->currentMessage().toStdString();
+    EXPECT_EQ(w.session_path().toStdString(), session);
+    core::SessionRenderOptions small;
+    small.width = 96;
+    small.height = 72;
+    small.ao = "off";
+    w.export_image(QString::fromStdString(dir / "again.png"), small);
+    ASSERT_TRUE(wait_until([&] { return !w.busy(); }, 120000));
+    ImageMetadata again;
+    load_image(dir / "again.png", &again);
+    EXPECT_EQ(again.text["isoscope:session"], session);
+    EXPECT_FALSE(fs::exists(dir / "again.png.session.json"));
+
+    // ---- File > Save surfaces: the bone as PLY, read back by the core
+    QAction* surfaces_action = file_action(w, "Save s&urfaces...");
+    ASSERT_NE(surfaces_action, nullptr);
+    surfaces_action->trigger();
+    auto* sd = wait_for_child<gui::SaveSurfacesDialog>(w, "save_surfaces_dialog");
+    ASSERT_NE(sd, nullptr);
+    sd->findChild<QComboBox*>("surface")->setCurrentIndex(1);
+    sd->findChild<QComboBox*>("format")->setCurrentIndex(1); // PLY
+    auto* mesh_file = sd->findChild<QLineEdit*>("file");
+    EXPECT_TRUE(mesh_file->text().endsWith("iso-1150.ply")) << mesh_file->text().toStdString();
+    const std::string ply = dir / "bone.ply";
+    mesh_file->setText(QString::fromStdString(ply));
+    QTest::mouseClick(sd->findChild<QDialogButtonBox*>()->button(QDialogButtonBox::Ok), Qt::LeftButton);
+    ASSERT_TRUE(wait_until([&] { return !w.busy() && fs::exists(ply); }, 60000)) << w.statusBar()->currentMessage().toStdString();
+    EXPECT_EQ(core::open_mesh(ply).triangles.size(), w.scene().mesh(ids[1]).triangles.size());
+
+    // ---- File > Open session in a fresh window: the same surfaces, camera, markups
+    gui::MainWindow w2;
+    w2.resize(1200, 900);
+    w2.show();
+    ASSERT_TRUE(QTest::qWaitForWindowExposed(&w2));
+    w2.open_session(QString::fromStdString(session));
+    ASSERT_TRUE(wait_until([&] { return !w2.busy(); }, 120000));
+    ASSERT_EQ(w2.scene().surfaces().size(), 2u) << w2.statusBar()->currentMessage().toStdString();
+    EXPECT_EQ(w2.path().toStdString(), fs::absolute(test::data("headsq.nhdr")).lexically_normal().string());
+    for (std::size_t i = 0; i < 2; ++i) {
+        const auto& a = w.scene().info(ids[i]);
+        const auto& b = w2.scene().info(w2.scene().surfaces()[i]);
+        EXPECT_EQ(b.value, a.value);
+        EXPECT_EQ(b.name, a.name);
+        // Stored as #rrggbb: the nearest 8-bit sRGB colour.
+        EXPECT_EQ(core::hex_from_linear(b.color), core::hex_from_linear(a.color));
+        EXPECT_NEAR(b.color.r, a.color.r, 0.01f);
+        EXPECT_EQ(b.opacity, a.opacity);
+        EXPECT_EQ(b.visible, a.visible);
+        EXPECT_EQ(w2.scene().mesh(w2.scene().surfaces()[i]).triangles.size(), w.scene().mesh(ids[i]).triangles.size());
+    }
+    ASSERT_NE(w2.viewer(), nullptr);
+    ASSERT_TRUE(wait_until([&] { return w2.viewer()->frames() > 0; }, 60000));
+    const Camera& c2 = w2.viewer()->camera();
+    for (int k = 0; k < 3; ++k) {
+        EXPECT_NEAR(c2.eye[k], orbited.eye[k], 1e-9);
+        EXPECT_NEAR(c2.target[k], orbited.target[k], 1e-9);
+        EXPECT_NEAR(c2.up[k], orbited.up[k], 1e-9);
+    }
+    EXPECT_NEAR(c2.fov_y_degrees, orbited.fov_y_degrees, 1e-9);
+    EXPECT_EQ(w2.viewer()->options().ao, w.viewer()->options().ao);
+    EXPECT_EQ(w2.window_level().center, w.window_level().center);
+    EXPECT_EQ(w2.window_level().width, w.window_level().width);
+    ASSERT_EQ(w2.markups().size(), 1u);
+    EXPECT_EQ(w2.markups()[0].name, "ruler");
+    for (int p = 0; p < 2; ++p)
+        for (int k = 0; k < 3; ++k) EXPECT_NEAR(w2.markups()[0].points[p].position[k], ruler.points[p].position[k], 1e-9);
+    EXPECT_EQ(w2.session_path().toStdString(), session);
+    EXPECT_TRUE(core::same_state(w2.current_session(), w.current_session()));
+    screenshot(w2, "reopened.png");
+
+    // ---- a broken session: a dialog names the file and the field, the window stays
+    const std::string broken = dir / "broken.json";
+    {
+        std::ifstream in(session);
+        auto j = nlohmann::json::parse(in);
+        j["surfaces"][1]["color"] = "bone white";
+        std::ofstream(broken) << j.dump(2);
+    }
+    const core::Scene* shown = &w2.scene();
+    w2.open_session(QString::fromStdString(broken));
+    ASSERT_TRUE(wait_until([&] { return !w2.busy(); }, 60000));
+    QMessageBox* box = nullptr;
+    ASSERT_TRUE(wait_until([&] { return (box = w2.findChild<QMessageBox*>("error")) && box->isVisible(); }, 10000));
+    EXPECT_TRUE(box->text().contains(QString::fromStdString(broken))) << box->text().toStdString();
+    EXPECT_TRUE(box->text().contains("surfaces[1].color")) << box->text().toStdString();
+    std::printf("error dialog: %s\n", box->text().toStdString().c_str());
+    screenshot(w2, "broken_session.png");
+    box->close();
+    QTest::qWait(50);
+    EXPECT_TRUE(w2.isVisible());
+    EXPECT_EQ(&w2.scene(), shown);
+    EXPECT_EQ(w2.scene().surfaces().size(), 2u);
+    EXPECT_EQ(w2.session_path().toStdString(), session);
+}
