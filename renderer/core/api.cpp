@@ -204,6 +204,20 @@ RenderOutput render_input(const std::string& input, const RenderRequest& req) {
 }
 
 RenderOutput render_image(Scene& scene, const RenderRequest& req) {
+    // Whatever EGL context the caller had current is current again on
+    // return (none: none), so that the next call may come from another
+    // thread (the desktop app renders exports on worker threads) and a
+    // caller's own context is left as it was.
+    struct Restore {
+        EGLDisplay display = eglGetCurrentDisplay();
+        EGLSurface draw = eglGetCurrentSurface(EGL_DRAW), read = eglGetCurrentSurface(EGL_READ);
+        EGLContext context = eglGetCurrentContext();
+        ~Restore() {
+            if (context != EGL_NO_CONTEXT) eglMakeCurrent(display, draw, read, context);
+            else if (eglGetCurrentContext() != EGL_NO_CONTEXT)
+                eglMakeCurrent(eglGetCurrentDisplay(), EGL_NO_SURFACE, EGL_NO_SURFACE, EGL_NO_CONTEXT);
+        }
+    } restore;
     static gl::HeadlessContext ctx; // one per process, made on first use
     ctx.make_current();
     RenderOutput out;
@@ -233,14 +247,9 @@ RenderOutput render_image(Scene& scene, const RenderRequest& req) {
     auto r = scene.render(cam, ro);
     // One GL context serves every scene of the process: free this one's GPU
     // resources while it is current.
-    // The context is released too, so that the next call may come from
-    // another thread (the desktop app renders exports on worker threads).
     struct Release {
         Scene& s;
-        ~Release() {
-            s.release_gpu();
-            eglMakeCurrent(eglGetCurrentDisplay(), EGL_NO_SURFACE, EGL_NO_SURFACE, EGL_NO_CONTEXT);
-        }
+        ~Release() { s.release_gpu(); }
     } release{scene};
     out.image = std::move(r.image);
     out.stats = std::move(r.stats);

@@ -98,9 +98,9 @@ struct RenderOutput {
     PickList pick;                   // with RenderRequest::pick
 };
 
-// Renders the scene headlessly (its own EGL context, made on first use and
-// released again before returning, so that any one thread at a time may
-// call it) as asked: camera from the patient view or `req.camera`, annotations and markups, AO (cone or
+// Renders the scene headlessly (its own EGL context, made on first use; the
+// caller's EGL context, or none, is current again on return, so that any
+// one thread at a time may call it) as asked: camera from the patient view or `req.camera`, annotations and markups, AO (cone or
 // the Embree reference), AOVs; the output carries the metadata to embed
 // (sources and their SHA-256, iso values, camera, matrices, markups files
 // and the measurements drawn, the session file and its SHA-256). `isos` and `series` of the
