@@ -47,8 +47,13 @@ QString export_session_path(const QString& session, const core::Session& now, co
 
 core::Session MainWindow::current_session() const {
     std::optional<Camera> camera;
-    // The viewer's camera once it drew (before its first frame it holds the default one).
-    if (viewer_ && viewer_->frames() > 0) camera = viewer_->camera();
+    // The viewer's camera once it drew or was set (before, it holds the
+    // default Camera, which frames nothing: the anterior view stands in).
+    if (viewer_) {
+        const Camera& c = viewer_->camera();
+        const Camera unset;
+        if (viewer_->frames() > 0 || c.eye != unset.eye || c.target != unset.target || c.up != unset.up) camera = c;
+    }
     std::optional<core::WindowLevel> window;
     if (scene_->has_volume()) window = window_;
     return core::capture_session(*scene_, path_.toStdString(), series_.toStdString(), camera, window, viewer_ ? viewer_->options().ao : true,

@@ -8,6 +8,7 @@
 #include <QCheckBox>
 #include <QComboBox>
 #include <QDialogButtonBox>
+#include <QElapsedTimer>
 #include <QLabel>
 #include <QLineEdit>
 #include <QMenu>
@@ -57,6 +58,9 @@ std::size_t differing(const Image& a, const Image& b) {
     return n;
 }
 
+// Seconds since the test began, per step (stdout: where the time goes under Xvfb and llvmpipe).
+void step(const QElapsedTimer& t, const char* what) { std::printf("%6.2f s  %s\n", t.elapsed() / 1000.0, what); }
+
 void screenshot(QWidget& w, const std::string& name) {
     QTest::qWait(100);
     const auto path = test::output_dir("gui_export") / name;
@@ -71,6 +75,8 @@ TEST(GuiExportInXvfb, ExportSaveOpenSessionAndSurfaces) {
     if (!std::getenv(kInner)) GTEST_SKIP() << "runs inside xvfb-run, started by GuiExport.UnderXvfb";
     test::TempDir dir;
     const auto app = test::make_app("gui_export_test", dir / "config");
+    QElapsedTimer clock;
+    clock.start();
 
     gui::MainWindow w;
     w.resize(1400, 1000);
@@ -87,6 +93,7 @@ TEST(GuiExportInXvfb, ExportSaveOpenSessionAndSurfaces) {
     }
     const auto ids = w.scene().surfaces();
     ASSERT_EQ(ids.size(), 2u);
+    step(clock, "opened headsq, added skin and bone");
     // Skin at 0.3 through the core (the Surfaces panel is another part's).
     w.scene().info(ids[0]).opacity = 0.3f;
     ASSERT_NE(w.viewer(), nullptr);
@@ -105,6 +112,7 @@ TEST(GuiExportInXvfb, ExportSaveOpenSessionAndSurfaces) {
     w.set_markups({ruler});
     ASSERT_TRUE(wait_until([&] { return w.viewer()->frames() > 2; }, 60000));
     screenshot(w, "window.png");
+    step(clock, "skin 0.3, orbited, ruler drawn");
 
     // ---- File > Export image through its dialog
     QAction* export_action = file_action(w, "&Export image...");
@@ -130,6 +138,9 @@ TEST(GuiExportInXvfb, ExportSaveOpenSessionAndSurfaces) {
     QTest::mouseClick(ok, Qt::LeftButton);
     ASSERT_TRUE(wait_until([&] { return !w.busy() && w.findChild<gui::ExportDialog*>("export_dialog") == nullptr; }, 120000));
     ASSERT_TRUE(fs::exists(image)) << w.statusBar()->currentMessage().toStdString();
+    step(clock, "exported through the dialog");
+    const auto out = test::output_dir("gui_export");
+    fs::copy_file(image, out / "export.png", fs::copy_options::overwrite_existing);
     // No session saved yet: the state went next to the image, and the metadata names it.
     const std::string beside = image + ".session.json";
     ASSERT_TRUE(fs::exists(beside));
@@ -152,6 +163,8 @@ TEST(GuiExportInXvfb, ExportSaveOpenSessionAndSurfaces) {
     const std::string cli_image = dir / "cli.png";
     const auto r = test::run_command(test::cli() + " render --session " + beside + " --size 360x270 -o " + cli_image, true);
     ASSERT_EQ(r.exit_code, 0) << r.out;
+    step(clock, "isoscope render --session");
+    fs::copy_file(cli_image, out / "cli.png", fs::copy_options::overwrite_existing);
     ImageMetadata cli_meta;
     const Image cli = load_image(cli_image, &cli_meta);
     EXPECT_EQ(differing(exported, cli), 0u) << "the export and isoscope render --session differ";
@@ -175,6 +188,7 @@ TEST(GuiExportInXvfb, ExportSaveOpenSessionAndSurfaces) {
     load_image(dir / "again.png", &again);
     EXPECT_EQ(again.text["isoscope:session"], session);
     EXPECT_FALSE(fs::exists(dir / "again.png.session.json"));
+    step(clock, "saved the session, exported the unchanged state");
 
     // ---- File > Save surfaces: the bone as PLY, read back by the core
     QAction* surfaces_action = file_action(w, "Save s&urfaces...");
@@ -191,6 +205,7 @@ TEST(GuiExportInXvfb, ExportSaveOpenSessionAndSurfaces) {
     QTest::mouseClick(sd->findChild<QDialogButtonBox*>()->button(QDialogButtonBox::Ok), Qt::LeftButton);
     ASSERT_TRUE(wait_until([&] { return !w.busy() && fs::exists(ply); }, 60000)) << w.statusBar()->currentMessage().toStdString();
     EXPECT_EQ(core::open_mesh(ply).triangles.size(), w.scene().mesh(ids[1]).triangles.size());
+    step(clock, "saved the bone as PLY");
 
     // ---- File > Open session in a fresh window: the same surfaces, camera, markups
     gui::MainWindow w2;
@@ -200,6 +215,7 @@ TEST(GuiExportInXvfb, ExportSaveOpenSessionAndSurfaces) {
     w2.open_session(QString::fromStdString(session));
     ASSERT_TRUE(wait_until([&] { return !w2.busy(); }, 120000));
     ASSERT_EQ(w2.scene().surfaces().size(), 2u) << w2.statusBar()->currentMessage().toStdString();
+    step(clock, "opened the session in a fresh window");
     EXPECT_EQ(w2.path().toStdString(), fs::absolute(test::data("headsq.nhdr")).lexically_normal().string());
     for (std::size_t i = 0; i < 2; ++i) {
         const auto& a = w.scene().info(ids[i]);
@@ -256,4 +272,5 @@ TEST(GuiExportInXvfb, ExportSaveOpenSessionAndSurfaces) {
     EXPECT_EQ(&w2.scene(), shown);
     EXPECT_EQ(w2.scene().surfaces().size(), 2u);
     EXPECT_EQ(w2.session_path().toStdString(), session);
+    step(clock, "broken session refused");
 }
