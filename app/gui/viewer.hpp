@@ -13,13 +13,16 @@
 
 #include <glm/vec3.hpp>
 
+#include "io/markups.hpp"
 #include "renderer/render/cone_ao.hpp"
 #include "renderer/scene/camera.hpp"
 
 namespace iso {
 struct Annotations;
+struct RenderOptions;
 namespace core {
 class Scene;
+struct PickResult;
 }
 } // namespace iso
 
@@ -66,10 +69,22 @@ public:
     // The size of the image the view draws (device pixels).
     QSize image_size() const;
 
+    // What the view shows at an image pixel (as on_click / on_hover give
+    // it): core::pick_in_frame on a frame of the view's own (its camera,
+    // size and surfaces; its context, the scene staying uploaded), without
+    // AO and overlay and not presented: the picture and its AO
+    // accumulation stay. Throws iso::Error: a pixel outside the image, a
+    // view that has not drawn yet or failed to.
+    core::PickResult pick_at(QPointF image_pixel);
+    // Markups (LPS mm) drawn over the view by the renderer's overlay, as
+    // `isoscope render --markups` draws them.
+    void set_markups(std::vector<Markup> markups);
+
 protected:
     void initializeGL() override;
     void paintGL() override;
     void draw();
+    RenderOptions frame_options() const;
     void mousePressEvent(QMouseEvent* e) override;
     void mouseMoveEvent(QMouseEvent* e) override;
     void mouseReleaseEvent(QMouseEvent* e) override;
