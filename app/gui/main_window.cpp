@@ -28,6 +28,8 @@
 
 #include <mutex>
 
+#include "app/gui/measure_tools.hpp"
+#include "app/gui/measurements_panel.hpp"
 #include "app/gui/slice_view.hpp"
 #include "app/gui/viewer.hpp"
 #include "io/error.hpp"
@@ -91,6 +93,7 @@ MainWindow::MainWindow(QWidget* parent) : QMainWindow(parent), scene_(std::make_
         v->setObjectName(core::slice_orientation_name(orientations[i]));
         v->on_click = [this](SliceView& view, QPointF p) { slice_clicked(view, p); };
         v->on_scroll = [this](SliceView& view, double steps) { slice_scrolled(view, steps); };
+        v->on_paint_overlay = [this](SliceView& view, QPainter& p) { tools_->paint_slice(view, p); };
         views_[std::size_t(i)] = v;
         grid->addWidget(v, cells[i].first, cells[i].second);
     }
@@ -106,6 +109,9 @@ MainWindow::MainWindow(QWidget* parent) : QMainWindow(parent), scene_(std::make_
     file->addAction("Open DICOM &folder...", this, [this] { open_folder_dialog(); });
     recent_menu_ = file->addMenu("&Recent files");
     rebuild_recent_menu();
+    file->addSeparator();
+    file->addAction("&Load markups...", this, [this] { measurements_->load_dialog(); });
+    file->addAction("&Save markups...", this, [this] { measurements_->save_dialog(); });
     file->addSeparator();
     file->addAction("&Quit", QKeySequence::Quit, this, [this] { close(); });
 
@@ -149,6 +155,7 @@ MainWindow::MainWindow(QWidget* parent) : QMainWindow(parent), scene_(std::make_
     connect(center_, &QDoubleSpinBox::valueChanged, this, spin_changed);
     connect(width_, &QDoubleSpinBox::valueChanged, this, spin_changed);
     set_window_level(window_);
+    tools_ = new MeasureTools(*this);
 
     // ---- Surfaces dock
     auto* dock = new QDockWidget("Surfaces", this);
@@ -178,6 +185,8 @@ MainWindow::MainWindow(QWidget* parent) : QMainWindow(parent), scene_(std::make_
     col->addStretch(1);
     dock->setWidget(panel);
     addDockWidget(Qt::RightDockWidgetArea, dock);
+    measurements_ = new MeasurementsPanel(*this);
+    addDockWidget(Qt::RightDockWidgetArea, measurements_);
 
     statusBar()->showMessage("Ready");
     for (std::size_t i = 0; i < 3; ++i) views_[i]->set_content(scene_.get(), &planes_[i]);
@@ -335,6 +344,8 @@ void MainWindow::set_scene(std::unique_ptr<core::Scene> scene, const QString& pa
     path_ = path;
     series_ = series;
     markups_.clear(); // measurements belong to what was open
+    tools_->reset();
+    measurements_->refresh();
     planes_ = {};
     if (scene_->has_volume()) {
         planes_ = core::default_planes(scene_->volume());
@@ -503,6 +514,8 @@ void MainWindow::update_3d() {
     if (!viewer_) {
         viewer_ = new Viewer(*scene_, PatientView::Anterior);
         viewer_->setObjectName("viewer");
+        tools_->attach(*viewer_);
+        viewer_->set_markups(markups_);
         view3d_->addWidget(viewer_);
     }
     view3d_->setCurrentWidget(viewer_);
@@ -511,8 +524,14 @@ void MainWindow::update_3d() {
 
 void MainWindow::set_markups(std::vector<Markup> m) {
     markups_ = std::move(m);
+    tools_->redraw(); // the 3D view's overlay and the slices
+    measurements_->refresh();
+}
+
+void MainWindow::set_crosshair(const glm::dvec3& lps) {
+    if (!scene_->has_volume()) return;
+    core::set_crosshair(planes_, lps);
     refresh_slices();
-    if (viewer_) viewer_->update();
 }
 
 void MainWindow::refresh_slices() {
@@ -530,6 +549,7 @@ void MainWindow::set_window_level(const core::WindowLevel& w) {
 
 void MainWindow::slice_clicked(SliceView& view, QPointF pixel) {
     if (!scene_->has_volume()) return;
+    if (tools_->slice_click(view, pixel)) return; // a point of a ruler or an angle
     const glm::dvec2 px{pixel.x(), pixel.y()};
     const auto& g = view.grid();
     const glm::dvec3 lps = core::pixel_to_lps(g, px);

@@ -35,6 +35,8 @@ class Scene;
 
 namespace iso::gui {
 
+class MeasureTools;
+class MeasurementsPanel;
 class SliceView;
 class Viewer;
 
@@ -69,6 +71,11 @@ public:
     // measurements panel lists, sessions and exported images carry.
     const std::vector<Markup>& markups() const { return markups_; }
     void set_markups(std::vector<Markup> m);
+    // Moves the slice views' shared crosshair to `lps` (a 3D pick): each plane through it.
+    void set_crosshair(const glm::dvec3& lps);
+    // The pick readout and the Ruler / Angle tools; the Measurements dock.
+    MeasureTools* measure_tools() const { return tools_; }
+    MeasurementsPanel* measurements_panel() const { return measurements_; }
 
 protected:
     void dragEnterEvent(QDragEnterEvent* e) override;
@@ -112,6 +119,8 @@ private:
     QMenu* recent_menu_ = nullptr;
     QString path_, series_;
     std::vector<Markup> markups_;
+    MeasureTools* tools_ = nullptr;
+    MeasurementsPanel* measurements_ = nullptr;
     std::shared_ptr<Job> job_;                   // the job the window waits for
     std::vector<std::shared_ptr<Job>> running_;  // every worker still running (abandoned ones too)
     bool updating_window_ = false;
