@@ -9,6 +9,7 @@
 #include <QElapsedTimer>
 #include <QMessageBox>
 #include <QMouseEvent>
+#include <QSlider>
 #include <QStatusBar>
 #include <QTableWidget>
 #include <QTest>
@@ -89,8 +90,16 @@ TEST(GuiMeasureInXvfb, PickReadoutRulerAngleMarkupsSaveAndLoad) {
     w.open_path(QString::fromStdString(headsq));
     ASSERT_TRUE(wait_until([&] { return !w.busy(); }, 60000)) << "the load did not finish";
     ASSERT_TRUE(w.scene().has_volume());
-    w.add_surface(500); // the skin
-    ASSERT_TRUE(wait_until([&] { return !w.busy(); }, 120000)) << "the extraction did not finish";
+    // The skin at opacity 0.3 (through the Surfaces dock's slider) over the bone: the pick is what is seen.
+    for (const double iso : {500.0, 1150.0}) {
+        w.add_surface(iso);
+        ASSERT_TRUE(wait_until([&] { return !w.busy(); }, 120000)) << "the extraction did not finish";
+    }
+    ASSERT_EQ(w.scene().surfaces().size(), 2u);
+    auto* skin_opacity = w.findChild<QWidget*>("surface_1")->findChild<QSlider*>("opacity");
+    ASSERT_NE(skin_opacity, nullptr);
+    skin_opacity->setValue(30);
+    ASSERT_FLOAT_EQ(w.scene().info(1).opacity, 0.3f);
     gui::Viewer* viewer = w.viewer();
     ASSERT_NE(viewer, nullptr);
     ASSERT_TRUE(wait_until([&] { return viewer->frames() > 0 || !viewer->error().empty(); }, 60000));
@@ -111,13 +120,14 @@ TEST(GuiMeasureInXvfb, PickReadoutRulerAngleMarkupsSaveAndLoad) {
     std::printf("3D click at %d,%d: %s\n", at.x(), at.y(), msg.c_str());
     const auto shown = parse_readout(msg);
     ASSERT_TRUE(shown) << msg;
-    const auto cli = test::run_command(test::cli() + " pick " + headsq + " --iso 500 --size " + std::to_string(size.width()) + "x" +
+    const auto cli = test::run_command(test::cli() + " pick " + headsq + " --iso 500 --iso 1150 --opacity 0.3 --opacity 1 --size " + std::to_string(size.width()) + "x" +
                                        std::to_string(size.height()) + " --at " + std::to_string(at.x()) + "," +
                                        std::to_string(at.y()) + " --json");
     ASSERT_EQ(cli.exit_code, 0) << cli.out;
     const auto j = nlohmann::json::parse(cli.out);
-    ASSERT_TRUE(j["visible"].is_number()) << "the pixel should see the skin: " << cli.out;
+    ASSERT_TRUE(j["visible"].is_number()) << "the pixel should see the head: " << cli.out;
     const auto& layer = j["layers"][j["visible"].get<std::size_t>()];
+    EXPECT_EQ(layer["surface"], "iso 1150") << "through the skin at 0.3 the bone is what is seen: " << cli.out;
     const glm::dvec3 expected{layer["lps"][0].get<double>(), layer["lps"][1].get<double>(), layer["lps"][2].get<double>()};
     EXPECT_NEAR(shown->lps.x, expected.x, kPrinted);
     EXPECT_NEAR(shown->lps.y, expected.y, kPrinted);
