@@ -81,8 +81,9 @@ MeasureTools::MeasureTools(MainWindow& window) : QObject(&window), window_(windo
         set_tool(ruler_->isChecked() ? Tool::Ruler : angle_->isChecked() ? Tool::Angle : Tool::None);
     });
     // Escape drops the points placed so far (the tool stays on).
-    auto* escape = new QShortcut(QKeySequence(Qt::Key_Escape), &window);
-    connect(escape, &QShortcut::activated, this, [this] {
+    escape_ = new QShortcut(QKeySequence(Qt::Key_Escape), &window);
+    escape_->setEnabled(false);
+    connect(escape_, &QShortcut::activated, this, [this] {
         if (pending_.empty()) return;
         pending_.clear();
         redraw();
@@ -119,6 +120,7 @@ void MeasureTools::reset() {
     hover_at_.reset();
     viewer_ = nullptr;
     pending_.clear();
+    escape_->setEnabled(false);
 }
 
 int MeasureTools::hover_interval_ms() const { return std::max(kHoverMinMs, int(std::ceil(2.0 * last_pick_ms_))); }
@@ -290,6 +292,7 @@ void MeasureTools::add_point(const glm::dvec3& lps) {
 }
 
 void MeasureTools::redraw() {
+    escape_->setEnabled(!pending_.empty());
     // The 3D view draws the placed points as a point list next to the markups.
     if (auto* v = window_.viewer()) {
         std::vector<Markup> drawn = window_.markups();

@@ -24,6 +24,7 @@
 
 class QAction;
 class QPainter;
+class QShortcut;
 class QTimer;
 
 namespace iso::core {
@@ -92,6 +93,7 @@ private:
     std::vector<glm::dvec3> pending_;
     QPointer<Viewer> viewer_;
     QTimer* hover_timer_ = nullptr;
+    QShortcut* escape_ = nullptr; // on only while points are being placed (it would take Escape from editors)
     std::optional<QPointF> hover_at_;
     QElapsedTimer since_hover_;
     double last_pick_ms_ = 0;

@@ -223,6 +223,14 @@ TEST(GuiMeasureInXvfb, PickReadoutRulerAngleMarkupsSaveAndLoad) {
     tools->angle_action()->trigger();
     ASSERT_EQ(tools->tool(), gui::MeasureTools::Tool::Angle);
     EXPECT_FALSE(tools->ruler_action()->isChecked());
+    // Escape drops a point placed by mistake (the tool stays on).
+    w.activateWindow();
+    ASSERT_TRUE(QTest::qWaitForWindowActive(&w));
+    QTest::mouseClick(axial, Qt::LeftButton, {}, QPoint(axial->width() / 2 + 90, axial->height() / 2 + 90));
+    EXPECT_EQ(tools->pending().size(), 1u);
+    QTest::keyClick(axial, Qt::Key_Escape);
+    EXPECT_TRUE(tools->pending().empty()) << "Escape did not drop the point";
+    EXPECT_EQ(tools->tool(), gui::MeasureTools::Tool::Angle);
     for (const QPoint& p : {b0, b1, b2}) QTest::mouseClick(axial, Qt::LeftButton, {}, p);
     ASSERT_EQ(w.markups().size(), 2u);
     EXPECT_EQ(w.markups()[1].type, MarkupType::Angle);
