@@ -31,6 +31,8 @@ struct ViewerOptions {
     int still_frames = 16;   // while nothing moves, this many frames accumulate new jitter sets
     glm::vec3 background{0.08f, 0.09f, 0.11f}; // linear RGB
     bool flat_shading = false;
+    // Off: every surface is drawn opaque whatever its opacity (RenderOptions::transparency).
+    bool transparency = true;
 };
 
 class Viewer : public QOpenGLWidget {
