@@ -60,6 +60,8 @@ void ViewToolBar::attach(Viewer& v) const {
     o.ao = ao();
     o.transparency = transparency();
     v.set_options(o);
+    // The O key in the view: the button follows (and, through toggled, sets the same again).
+    v.on_options_changed = [this](Viewer& w) { ao_->setChecked(w.options().ao); };
 }
 
 void ViewToolBar::apply_toggles() {

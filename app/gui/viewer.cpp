@@ -152,6 +152,7 @@ void Viewer::keyPressEvent(QKeyEvent* e) {
     if (e->key() == Qt::Key_O) { // ambient occlusion on / off
         options_.ao = !options_.ao;
         update();
+        if (on_options_changed) on_options_changed(*this);
         return;
     }
     for (auto [k, v] : keys)

@@ -65,6 +65,8 @@ public:
     // from the top-left, the pixel render_image / core::pick use).
     std::function<void(Viewer&, QPointF)> on_click;
     std::function<void(Viewer&, QPointF)> on_hover;
+    // The view changed its own options (the O key toggled AO), so a tool bar can follow.
+    std::function<void(Viewer&)> on_options_changed;
     // The size of the image the view draws (device pixels).
     QSize image_size() const;
 

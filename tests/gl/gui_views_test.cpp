@@ -370,6 +370,14 @@ TEST(GuiViewsInXvfb, ThreeDViewMouseAndToolBar) {
     EXPECT_TRUE(viewer->options().ao);
     bar->ao_action()->trigger();
     EXPECT_FALSE(viewer->options().ao);
+    // The O key in the view toggles it too, and the button follows.
+    viewer->setFocus();
+    QTest::keyClick(viewer, Qt::Key_O);
+    EXPECT_TRUE(viewer->options().ao);
+    EXPECT_TRUE(bar->ao());
+    QTest::keyClick(viewer, Qt::Key_O);
+    EXPECT_FALSE(viewer->options().ao);
+    EXPECT_FALSE(bar->ao());
 
     // ---- patient-view buttons and reset: the scene's camera for that view
     const double aspect = double(viewer->width()) / double(viewer->height());
