@@ -30,9 +30,12 @@
 
 #include "app/gui/measure_tools.hpp"
 #include "app/gui/measurements_panel.hpp"
+#include "app/gui/series_dialog.hpp"
 #include "app/gui/slice_view.hpp"
+#include "app/gui/view_toolbar.hpp"
 #include "app/gui/viewer.hpp"
 #include "io/error.hpp"
+#include "renderer/core/api.hpp"
 #include "renderer/core/scene.hpp"
 
 namespace iso::gui {
@@ -94,6 +97,7 @@ MainWindow::MainWindow(QWidget* parent) : QMainWindow(parent), scene_(std::make_
         v->on_click = [this](SliceView& view, QPointF p) { slice_clicked(view, p); };
         v->on_scroll = [this](SliceView& view, double steps) { slice_scrolled(view, steps); };
         v->on_paint_overlay = [this](SliceView& view, QPainter& p) { tools_->paint_slice(view, p); };
+        v->on_window = [this](SliceView&, const core::WindowLevel& w) { set_window_level(w); }; // a left drag
         views_[std::size_t(i)] = v;
         grid->addWidget(v, cells[i].first, cells[i].second);
     }
@@ -156,6 +160,10 @@ MainWindow::MainWindow(QWidget* parent) : QMainWindow(parent), scene_(std::make_
     connect(width_, &QDoubleSpinBox::valueChanged, this, spin_changed);
     set_window_level(window_);
     tools_ = new MeasureTools(*this);
+
+    // ---- 3D view bar: patient views, reset, AO and transparency toggles
+    view_bar_ = new ViewToolBar([this] { return viewer_; }, this);
+    addToolBar(view_bar_);
 
     // ---- Surfaces dock
     auto* dock = new QDockWidget("Surfaces", this);
@@ -305,6 +313,40 @@ void MainWindow::show_error(const QString& title, const QString& what, std::exce
 // ---- opening -------------------------------------------------------------------------
 
 void MainWindow::open_path(const QString& path, const QString& series) {
+    if (series.isEmpty() && !busy() && QFileInfo(path).isDir()) {
+        choose_series(path);
+        return;
+    }
+    load(path, series);
+}
+
+void MainWindow::choose_series(const QString& folder) {
+    auto list = std::make_shared<std::vector<SeriesInfo>>();
+    const std::string p = folder.toStdString();
+    // Headers only, but a large folder takes a while: in the background, abandonable.
+    run_job("Listing the DICOM series in " + folder, true, [list, p](const ProgressFn&) { *list = core::list_series(p); },
+            [this, list, folder](std::exception_ptr e) {
+                if (e) {
+                    show_error("Cannot open", "Cannot open " + folder, e);
+                    return;
+                }
+                if (list->size() <= 1) {
+                    load(folder, {});
+                    return;
+                }
+                auto* chooser = new SeriesDialog(folder, std::move(*list), this);
+                chooser->setAttribute(Qt::WA_DeleteOnClose);
+                chooser->on_chosen = [this, chooser, folder](int row) {
+                    // By UID: it names the series whatever else the folder gains.
+                    const QString uid = QString::fromStdString(chooser->series()[std::size_t(row)].uid);
+                    QTimer::singleShot(0, this, [this, folder, uid] { open_path(folder, uid); });
+                };
+                connect(chooser, &QDialog::rejected, this, [this, folder] { statusBar()->showMessage("Opening " + folder + ": cancelled"); });
+                chooser->open(); // window-modal, not exec(): the event loop (and tests) go on
+            });
+}
+
+void MainWindow::load(const QString& path, const QString& series) {
     if (busy()) {
         statusBar()->showMessage("Busy: wait for the current task or cancel it");
         return;
@@ -516,6 +558,7 @@ void MainWindow::update_3d() {
         viewer_->setObjectName("viewer");
         tools_->attach(*viewer_);
         viewer_->set_markups(markups_);
+        view_bar_->attach(*viewer_);
         view3d_->addWidget(viewer_);
     }
     view3d_->setCurrentWidget(viewer_);

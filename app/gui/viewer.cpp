@@ -13,6 +13,7 @@
 #include "io/error.hpp"
 #include "renderer/core/pick.hpp"
 #include "renderer/core/scene.hpp"
+#include "renderer/core/slices.hpp"
 #include "renderer/render/overlay.hpp"
 
 namespace iso::gui {
@@ -77,6 +78,7 @@ RenderOptions Viewer::frame_options() const {
     opt.ao_settings = options_.cone;
     opt.background = glm::vec4(options_.background, 1.0f);
     opt.flat_shading = options_.flat_shading;
+    opt.transparency = options_.transparency;
     return opt;
 }
 
@@ -162,10 +164,13 @@ void Viewer::mouseMoveEvent(QMouseEvent* e) {
     if (!dragged_) return;
     const QPoint d = e->pos() - last_;
     last_ = e->pos();
+    // 3D Slicer's mouse: left rotates, middle pans, right drags zoom (up: closer).
     if (e->buttons() & Qt::LeftButton)
         camera_.orbit(-0.4 * d.x(), -0.4 * d.y());
-    else if (e->buttons() & (Qt::RightButton | Qt::MiddleButton))
+    else if (e->buttons() & Qt::MiddleButton)
         camera_.pan(double(d.x()) / height(), double(d.y()) / height());
+    else if (e->buttons() & Qt::RightButton)
+        camera_.zoom(core::drag_zoom_factor(-double(d.y()), height()));
     update();
 }
 
@@ -181,6 +186,7 @@ void Viewer::keyPressEvent(QKeyEvent* e) {
     if (e->key() == Qt::Key_O) { // ambient occlusion on / off
         options_.ao = !options_.ao;
         update();
+        if (on_options_changed) on_options_changed(*this);
         return;
     }
     for (auto [k, v] : keys)

@@ -34,6 +34,8 @@ struct ViewerOptions {
     int still_frames = 16;   // while nothing moves, this many frames accumulate new jitter sets
     glm::vec3 background{0.08f, 0.09f, 0.11f}; // linear RGB
     bool flat_shading = false;
+    // Off: every surface is drawn opaque whatever its opacity (RenderOptions::transparency).
+    bool transparency = true;
 };
 
 class Viewer : public QOpenGLWidget {
@@ -66,6 +68,8 @@ public:
     // from the top-left, the pixel render_image / core::pick use).
     std::function<void(Viewer&, QPointF)> on_click;
     std::function<void(Viewer&, QPointF)> on_hover;
+    // The view changed its own options (the O key toggled AO), so a tool bar can follow.
+    std::function<void(Viewer&)> on_options_changed;
     // The size of the image the view draws (device pixels).
     QSize image_size() const;
 
