@@ -403,7 +403,20 @@ Scan scan(const std::vector<std::string>& inputs, const ProgressFn& progress) {
     return sc;
 }
 
-SeriesInfo info_of(const Group& g) {
+// What the headers alone say about a group's grid (the series chooser lists
+// it before any pixel is read; loading uses it): the slices sorted along the
+// normal with copies of one instance dropped, each slice's index on the
+// regular grid (missing slices leave holes), the index -> LPS affine and the
+// warnings. Throws iso::Error for what cannot be loaded.
+struct Layout {
+    std::vector<int> grid;
+    glm::dmat4 affine{1.0};
+    std::vector<std::string> warnings;
+};
+
+Layout lay_out(Group& g, const std::string& where);
+
+SeriesInfo info_of(const Group& g, const std::string& where) {
     const Slice& s = g.slices.front();
     SeriesInfo si;
     si.uid = g.uid;
@@ -414,6 +427,15 @@ SeriesInfo info_of(const Group& g) {
     for (const auto& x : g.slices) depth += x.frames;
     si.dims = {s.cols, s.rows, depth};
     si.files = g.slices.size();
+    // The warnings loading would give, from the headers (on a copy: lay_out sorts).
+    try {
+        Group copy = g;
+        const Layout l = lay_out(copy, where);
+        si.dims[2] = l.grid.back() + 1; // missing slices are filled in
+        si.warnings = l.warnings;
+    } catch (const Error& e) {
+        si.warnings.push_back(std::string("cannot be loaded: ") + e.what());
+    }
     return si;
 }
 
@@ -503,9 +525,8 @@ double median(std::vector<double> v) {
     return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
 }
 
-Volume load_group(Group& g, const Scan& sc, const ProgressFn& progress) {
+Layout lay_out(Group& g, const std::string& where) {
     const Slice first = g.slices.front(); // a copy: g.slices is rebuilt below
-    const std::string where = sc.where;
     if (first.frames > 1)
         throw Error(first.file, "multi-frame (enhanced) DICOM files are not supported yet (" +
                                     std::to_string(first.frames) + " frames in one file)");
@@ -561,7 +582,9 @@ Volume load_group(Group& g, const Scan& sc, const ProgressFn& progress) {
     }
 
     const size_t n = g.slices.size();
-    std::vector<int> grid(n, 0); // slice index on the regular grid
+    Layout out;
+    std::vector<int>& grid = out.grid;
+    grid.assign(n, 0); // slice index on the regular grid
     glm::dvec3 step_vec = normal * (first.thickness > 0 ? first.thickness : 1.0);
     if (n == 1 && first.thickness <= 0) warnings.push_back("single slice without SliceThickness: 1 mm assumed");
     if (n == 1 && (!first.has_ipp || !first.has_iop))
@@ -628,6 +651,25 @@ Volume load_group(Group& g, const Scan& sc, const ProgressFn& progress) {
     affine[2] = glm::dvec4(step_vec, 0.0);
     affine[3] = glm::dvec4(g.slices[0].ipp, 1.0);
     check_affine(where, affine, /*allow_shear=*/true);
+    const std::string desc = upper(first.description);
+    if (desc.find("SCOUT") != std::string::npos || desc.find("LOCALI") != std::string::npos ||
+        first.localizer)
+        warnings.push_back("series \"" + first.description + "\" looks like a scout/localizer (" +
+                           std::to_string(n) + " slice(s), " + fmt(glm::length(step_vec)) +
+                           " mm apart): not meant for 3D reconstruction");
+    out.affine = affine;
+    out.warnings = std::move(warnings);
+    return out;
+}
+
+Volume load_group(Group& g, const Scan& sc, const ProgressFn& progress) {
+    const std::string where = sc.where;
+    Layout layout = lay_out(g, where);
+    const Slice first = g.slices.front();
+    const glm::dmat4& affine = layout.affine;
+    const std::vector<int>& grid = layout.grid;
+    const size_t n = g.slices.size();
+    std::vector<std::string> warnings = std::move(layout.warnings);
 
     const std::int64_t nx = first.cols, ny = first.rows, nz = std::int64_t(grid[n - 1]) + 1;
     // Fail early on a size that cannot be allocated (float32 is the largest output type we pick
@@ -757,12 +799,6 @@ Volume load_group(Group& g, const Scan& sc, const ProgressFn& progress) {
     vol.meta.study_uid = first.study_uid;
     vol.meta.series_uid = first.series_uid;
     vol.meta.series_description = first.description;
-    const std::string desc = upper(first.description);
-    if (desc.find("SCOUT") != std::string::npos || desc.find("LOCALI") != std::string::npos ||
-        first.localizer)
-        warnings.push_back("series \"" + first.description + "\" looks like a scout/localizer (" +
-                           std::to_string(n) + " slice(s), " + fmt(glm::length(step_vec)) +
-                           " mm apart): not meant for 3D reconstruction");
     vol.meta.warnings = std::move(warnings);
     return vol;
 }
@@ -772,7 +808,7 @@ Volume load_group(Group& g, const Scan& sc, const ProgressFn& progress) {
 std::vector<SeriesInfo> list_dicom_series(const std::vector<std::string>& files_or_folder) {
     const Scan sc = scan(files_or_folder, {});
     std::vector<SeriesInfo> out;
-    for (const auto& g : sc.groups) out.push_back(info_of(g));
+    for (const auto& g : sc.groups) out.push_back(info_of(g, sc.where));
     return out;
 }
 
@@ -780,7 +816,7 @@ Volume read_dicom(const std::vector<std::string>& files_or_folder, const LoadOpt
     report(opt.progress, 0.0, kStage, kWhere);
     Scan sc = scan(files_or_folder, opt.progress);
     std::vector<SeriesInfo> list;
-    for (const auto& g : sc.groups) list.push_back(info_of(g));
+    for (const auto& g : sc.groups) list.push_back(info_of(g, sc.where));
     const int idx = select_series(sc, list, opt.series);
     Volume v = load_group(sc.groups[size_t(idx)], sc, opt.progress);
     v.meta.source = sc.where;

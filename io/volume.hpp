@@ -63,6 +63,10 @@ struct SeriesInfo {
     int number = 0;           // SeriesNumber
     std::array<int, 3> dims{0, 0, 0};
     std::size_t files = 0;
+    // What loading it would warn about, from the headers alone (missing
+    // slices, uneven spacing, gantry tilt, a scout, geometry that cannot be
+    // loaded): the series chooser shows them before anything is read.
+    std::vector<std::string> warnings;
 };
 
 struct Metadata {

@@ -28,9 +28,14 @@
 
 #include <mutex>
 
+#include "app/gui/measure_tools.hpp"
+#include "app/gui/measurements_panel.hpp"
+#include "app/gui/series_dialog.hpp"
 #include "app/gui/slice_view.hpp"
+#include "app/gui/view_toolbar.hpp"
 #include "app/gui/viewer.hpp"
 #include "io/error.hpp"
+#include "renderer/core/api.hpp"
 #include "renderer/core/scene.hpp"
 
 namespace iso::gui {
@@ -91,6 +96,8 @@ MainWindow::MainWindow(QWidget* parent) : QMainWindow(parent), scene_(std::make_
         v->setObjectName(core::slice_orientation_name(orientations[i]));
         v->on_click = [this](SliceView& view, QPointF p) { slice_clicked(view, p); };
         v->on_scroll = [this](SliceView& view, double steps) { slice_scrolled(view, steps); };
+        v->on_paint_overlay = [this](SliceView& view, QPainter& p) { tools_->paint_slice(view, p); };
+        v->on_window = [this](SliceView&, const core::WindowLevel& w) { set_window_level(w); }; // a left drag
         views_[std::size_t(i)] = v;
         grid->addWidget(v, cells[i].first, cells[i].second);
     }
@@ -106,6 +113,9 @@ MainWindow::MainWindow(QWidget* parent) : QMainWindow(parent), scene_(std::make_
     file->addAction("Open DICOM &folder...", this, [this] { open_folder_dialog(); });
     recent_menu_ = file->addMenu("&Recent files");
     rebuild_recent_menu();
+    file->addSeparator();
+    file->addAction("&Load markups...", this, [this] { measurements_->load_dialog(); });
+    file->addAction("&Save markups...", this, [this] { measurements_->save_dialog(); });
     file->addSeparator();
     add_session_actions(file);
     file->addSeparator();
@@ -151,6 +161,11 @@ MainWindow::MainWindow(QWidget* parent) : QMainWindow(parent), scene_(std::make_
     connect(center_, &QDoubleSpinBox::valueChanged, this, spin_changed);
     connect(width_, &QDoubleSpinBox::valueChanged, this, spin_changed);
     set_window_level(window_);
+    tools_ = new MeasureTools(*this);
+
+    // ---- 3D view bar: patient views, reset, AO and transparency toggles
+    view_bar_ = new ViewToolBar([this] { return viewer_; }, this);
+    addToolBar(view_bar_);
 
     // ---- Surfaces dock
     auto* dock = new QDockWidget("Surfaces", this);
@@ -180,6 +195,8 @@ MainWindow::MainWindow(QWidget* parent) : QMainWindow(parent), scene_(std::make_
     col->addStretch(1);
     dock->setWidget(panel);
     addDockWidget(Qt::RightDockWidgetArea, dock);
+    measurements_ = new MeasurementsPanel(*this);
+    addDockWidget(Qt::RightDockWidgetArea, measurements_);
 
     statusBar()->showMessage("Ready");
     for (std::size_t i = 0; i < 3; ++i) views_[i]->set_content(scene_.get(), &planes_[i]);
@@ -298,6 +315,40 @@ void MainWindow::show_error(const QString& title, const QString& what, std::exce
 // ---- opening -------------------------------------------------------------------------
 
 void MainWindow::open_path(const QString& path, const QString& series) {
+    if (series.isEmpty() && !busy() && QFileInfo(path).isDir()) {
+        choose_series(path);
+        return;
+    }
+    load(path, series);
+}
+
+void MainWindow::choose_series(const QString& folder) {
+    auto list = std::make_shared<std::vector<SeriesInfo>>();
+    const std::string p = folder.toStdString();
+    // Headers only, but a large folder takes a while: in the background, abandonable.
+    run_job("Listing the DICOM series in " + folder, true, [list, p](const ProgressFn&) { *list = core::list_series(p); },
+            [this, list, folder](std::exception_ptr e) {
+                if (e) {
+                    show_error("Cannot open", "Cannot open " + folder, e);
+                    return;
+                }
+                if (list->size() <= 1) {
+                    load(folder, {});
+                    return;
+                }
+                auto* chooser = new SeriesDialog(folder, std::move(*list), this);
+                chooser->setAttribute(Qt::WA_DeleteOnClose);
+                chooser->on_chosen = [this, chooser, folder](int row) {
+                    // By UID: it names the series whatever else the folder gains.
+                    const QString uid = QString::fromStdString(chooser->series()[std::size_t(row)].uid);
+                    QTimer::singleShot(0, this, [this, folder, uid] { open_path(folder, uid); });
+                };
+                connect(chooser, &QDialog::rejected, this, [this, folder] { statusBar()->showMessage("Opening " + folder + ": cancelled"); });
+                chooser->open(); // window-modal, not exec(): the event loop (and tests) go on
+            });
+}
+
+void MainWindow::load(const QString& path, const QString& series) {
     if (busy()) {
         statusBar()->showMessage("Busy: wait for the current task or cancel it");
         return;
@@ -338,6 +389,8 @@ void MainWindow::set_scene(std::unique_ptr<core::Scene> scene, const QString& pa
     series_ = series;
     session_path_.clear(); // open_session sets it again
     markups_.clear(); // measurements belong to what was open
+    tools_->reset();
+    measurements_->refresh();
     planes_ = {};
     if (scene_->has_volume()) {
         planes_ = core::default_planes(scene_->volume());
@@ -506,6 +559,9 @@ void MainWindow::update_3d() {
     if (!viewer_) {
         viewer_ = new Viewer(*scene_, PatientView::Anterior);
         viewer_->setObjectName("viewer");
+        tools_->attach(*viewer_);
+        viewer_->set_markups(markups_);
+        view_bar_->attach(*viewer_);
         view3d_->addWidget(viewer_);
     }
     view3d_->setCurrentWidget(viewer_);
@@ -514,8 +570,14 @@ void MainWindow::update_3d() {
 
 void MainWindow::set_markups(std::vector<Markup> m) {
     markups_ = std::move(m);
+    tools_->redraw(); // the 3D view's overlay and the slices
+    measurements_->refresh();
+}
+
+void MainWindow::set_crosshair(const glm::dvec3& lps) {
+    if (!scene_->has_volume()) return;
+    core::set_crosshair(planes_, lps);
     refresh_slices();
-    if (viewer_) viewer_->update();
 }
 
 void MainWindow::refresh_slices() {
@@ -533,6 +595,7 @@ void MainWindow::set_window_level(const core::WindowLevel& w) {
 
 void MainWindow::slice_clicked(SliceView& view, QPointF pixel) {
     if (!scene_->has_volume()) return;
+    if (tools_->slice_click(view, pixel)) return; // a point of a ruler or an angle
     const glm::dvec2 px{pixel.x(), pixel.y()};
     const auto& g = view.grid();
     const glm::dvec3 lps = core::pixel_to_lps(g, px);

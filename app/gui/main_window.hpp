@@ -37,8 +37,11 @@ struct SessionRenderOptions;
 
 namespace iso::gui {
 
+class MeasureTools;
+class MeasurementsPanel;
 class SliceView;
 class Viewer;
+class ViewToolBar;
 
 class MainWindow : public QMainWindow {
 public:
@@ -49,7 +52,10 @@ public:
     // background (progress dialog with Cancel); on success it replaces the
     // scene, on failure a dialog names the file and the reason.
     // `series`: the DICOM series to load (LoadOptions::series: index or UID);
-    // empty: the only one.
+    // empty: the only one. A folder opened without a series has its series
+    // listed first in the background (core::list_series); with several the
+    // series chooser (series_dialog.hpp) asks which, and opens that one by
+    // its UID (Cancel opens nothing); with one it opens directly.
     void open_path(const QString& path, const QString& series = {});
     // What is open: the file or folder and the DICOM series chosen (empty: none).
     const QString& path() const { return path_; }
@@ -64,6 +70,7 @@ public:
     core::Scene& scene() { return *scene_; }
     SliceView* slice_view(core::SliceOrientation o) const { return views_[std::size_t(o)]; }
     Viewer* viewer() const { return viewer_; }
+    ViewToolBar* view_toolbar() const { return view_bar_; }
     const core::WindowLevel& window_level() const { return window_; }
     void set_window_level(const core::WindowLevel& w);
 
@@ -71,6 +78,11 @@ public:
     // measurements panel lists, sessions and exported images carry.
     const std::vector<Markup>& markups() const { return markups_; }
     void set_markups(std::vector<Markup> m);
+    // Moves the slice views' shared crosshair to `lps` (a 3D pick): each plane through it.
+    void set_crosshair(const glm::dvec3& lps);
+    // The pick readout and the Ruler / Angle tools; the Measurements dock.
+    MeasureTools* measure_tools() const { return tools_; }
+    MeasurementsPanel* measurements_panel() const { return measurements_; }
 
     // Sessions and export (app/gui/session_io.cpp, docs/sessions.md).
     // What the window shows as a core::Session (input, series, surfaces,
@@ -103,6 +115,8 @@ private:
     void run_job(const QString& title, bool abandonable, std::function<void(const ProgressFn&)> work,
                  std::function<void(std::exception_ptr)> done);
     void finish_job(const std::shared_ptr<Job>& job);
+    void load(const QString& path, const QString& series);
+    void choose_series(const QString& folder);
     void set_scene(std::unique_ptr<core::Scene> scene, const QString& path, const QString& series);
     void show_error(const QString& title, const QString& what, std::exception_ptr e);
     void refresh_slices();
@@ -121,6 +135,7 @@ private:
     std::array<core::SlicePlane, 3> planes_{};
     std::array<SliceView*, 3> views_{};
     Viewer* viewer_ = nullptr;
+    ViewToolBar* view_bar_ = nullptr;
     QStackedWidget* view3d_ = nullptr; // the placeholder label or the viewer
     QLabel* placeholder_ = nullptr;
     core::WindowLevel window_;
@@ -134,6 +149,8 @@ private:
     QString path_, series_;
     std::vector<Markup> markups_;
     QString session_path_;
+    MeasureTools* tools_ = nullptr;
+    MeasurementsPanel* measurements_ = nullptr;
     std::shared_ptr<Job> job_;                   // the job the window waits for
     std::vector<std::shared_ptr<Job>> running_;  // every worker still running (abandoned ones too)
     bool updating_window_ = false;

@@ -34,6 +34,7 @@ void SliceView::set_content(const core::Scene* scene, core::SlicePlane* plane) {
     scene_ = scene;
     plane_ = plane;
     fitted_ = false;
+    range_.reset();
     refresh();
 }
 
@@ -112,7 +113,34 @@ void SliceView::resizeEvent(QResizeEvent*) {
 }
 
 void SliceView::mousePressEvent(QMouseEvent* e) {
-    if (e->button() == Qt::LeftButton && on_click && !image_.isNull()) on_click(*this, e->position());
+    press_ = last_ = e->position();
+    dragged_ = false;
+    window_at_press_ = window_;
+}
+
+void SliceView::mouseReleaseEvent(QMouseEvent* e) {
+    if (e->button() == Qt::LeftButton && !dragged_ && on_click && !image_.isNull()) on_click(*this, e->position());
+}
+
+void SliceView::mouseMoveEvent(QMouseEvent* e) {
+    if (e->buttons() == Qt::NoButton || image_.isNull() || !plane_) return;
+    if ((e->position() - press_).manhattanLength() > 3) dragged_ = true;
+    if (!dragged_) return;
+    const QPointF d = e->position() - last_;
+    last_ = e->position();
+    if (e->buttons() & Qt::LeftButton) {
+        if (!range_) range_ = scene_->volume().value_range();
+        const QPointF total = e->position() - press_;
+        const auto w = core::drag_window(window_at_press_, {total.x(), -total.y()}, *range_);
+        set_window(w);
+        if (on_window) on_window(*this, w);
+    } else if (e->buttons() & Qt::MiddleButton) {
+        core::pan_pixels(*plane_, {d.x(), d.y()});
+        refresh();
+    } else if (e->buttons() & Qt::RightButton) {
+        core::zoom_about(*plane_, width(), height(), {press_.x(), press_.y()}, core::drag_zoom_factor(-d.y(), height()));
+        refresh();
+    }
 }
 
 void SliceView::wheelEvent(QWheelEvent* e) {

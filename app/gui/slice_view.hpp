@@ -7,6 +7,7 @@
 #pragma once
 
 #include <functional>
+#include <optional>
 #include <vector>
 
 #include <QColor>
@@ -47,10 +48,14 @@ public:
     const QImage& image() const { return image_; }
     std::size_t outline_segments() const;
 
-    // A left click at continuous pixel coordinates, and scroll steps (wheel
-    // notches, PageUp/PageDown).
+    // A left click (press and release within a few pixels, no drag) at
+    // continuous pixel coordinates, and scroll steps (wheel notches,
+    // PageUp/PageDown).
     std::function<void(SliceView&, QPointF)> on_click;
     std::function<void(SliceView&, double)> on_scroll;
+    // A left drag changed the window (3D Slicer's: horizontal = width,
+    // vertical = level, core::drag_window); the view already shows it.
+    std::function<void(SliceView&, const core::WindowLevel&)> on_window;
     // Draws over the slice after the outlines and the crosshair (the
     // measurements); the painter's coordinates are the grid's pixels.
     std::function<void(SliceView&, QPainter&)> on_paint_overlay;
@@ -59,6 +64,8 @@ protected:
     void paintEvent(QPaintEvent*) override;
     void resizeEvent(QResizeEvent*) override;
     void mousePressEvent(QMouseEvent* e) override;
+    void mouseMoveEvent(QMouseEvent* e) override;
+    void mouseReleaseEvent(QMouseEvent* e) override;
     void wheelEvent(QWheelEvent* e) override;
     void keyPressEvent(QKeyEvent* e) override;
 
@@ -79,6 +86,12 @@ private:
     QImage image_;
     std::vector<Outline> outlines_;
     double wheel_ = 0; // accumulated angle delta (touchpads send fractions of a notch)
+    // A drag (3D Slicer's slice view): left window/level, middle pan, right
+    // zoom (core::pan_pixels, core::zoom_about on the plane's framing).
+    QPointF press_, last_;
+    bool dragged_ = false;
+    core::WindowLevel window_at_press_;
+    std::optional<ValueRange> range_; // the volume's, for the window drag's gain (computed once per content)
 };
 
 // Linear RGB (the scene's surface colours) -> an sRGB QColor, and back.

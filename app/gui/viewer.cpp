@@ -7,10 +7,13 @@
 #include <QTimer>
 #include <QWheelEvent>
 
+#include <cmath>
 #include <iostream>
 
 #include "io/error.hpp"
+#include "renderer/core/pick.hpp"
 #include "renderer/core/scene.hpp"
+#include "renderer/core/slices.hpp"
 #include "renderer/render/overlay.hpp"
 
 namespace iso::gui {
@@ -61,15 +64,13 @@ void Viewer::paintGL() {
     }
 }
 
-void Viewer::draw() {
-    const qreal dpr = devicePixelRatioF();
+// A frame as the view draws it (its picks ride on one of these too).
+RenderOptions Viewer::frame_options() const {
     const QSize size = image_size();
-    const int w = size.width(), h = size.height();
-    camera_.fit_planes(scene_.bounds());
     RenderOptions opt;
-    opt.width = w;
-    opt.height = h;
-    opt.scale = float(dpr);
+    opt.width = size.width();
+    opt.height = size.height();
+    opt.scale = float(devicePixelRatioF());
     opt.annotations = annotations_.get();
     opt.present = true;
     opt.target_framebuffer = defaultFramebufferObject();
@@ -77,6 +78,13 @@ void Viewer::draw() {
     opt.ao_settings = options_.cone;
     opt.background = glm::vec4(options_.background, 1.0f);
     opt.flat_shading = options_.flat_shading;
+    opt.transparency = options_.transparency;
+    return opt;
+}
+
+void Viewer::draw() {
+    camera_.fit_planes(scene_.bounds());
+    const RenderOptions opt = frame_options();
     const auto r = scene_.render(camera_, opt);
     ++frames_;
     // GL objects made after the first frame: none while the view is steady.
@@ -108,6 +116,34 @@ QSize Viewer::image_size() const {
     return {std::max(1, int(width() * dpr)), std::max(1, int(height() * dpr))};
 }
 
+core::PickResult Viewer::pick_at(QPointF image_pixel) {
+    if (!error_.empty()) throw Error("3D view pick", "the view cannot draw: " + error_);
+    if (!isValid() || frames_ == 0) throw Error("3D view pick", "the view has not drawn a frame yet");
+    core::PickRequest p;
+    p.x = int(std::floor(image_pixel.x()));
+    p.y = int(std::floor(image_pixel.y()));
+    // The view's frame (camera, size, surfaces) without what the lists do
+    // not depend on: no AO, no overlay, and read back rather than presented,
+    // so the picture on screen and its AO accumulation stay as they are.
+    RenderOptions opt = frame_options();
+    opt.ao = false;
+    opt.annotations = nullptr;
+    opt.present = false;
+    opt.target_framebuffer = 0;
+    makeCurrent();
+    struct Done {
+        Viewer& v;
+        ~Done() { v.doneCurrent(); }
+    } done{*this};
+    camera_.fit_planes(scene_.bounds());
+    return core::pick_in_frame(scene_, camera_, opt, p);
+}
+
+void Viewer::set_markups(std::vector<Markup> markups) {
+    annotations_->markups = std::move(markups);
+    update();
+}
+
 QPointF Viewer::to_image(QPointF widget) const { return widget * devicePixelRatioF(); }
 
 void Viewer::mousePressEvent(QMouseEvent* e) {
@@ -128,10 +164,13 @@ void Viewer::mouseMoveEvent(QMouseEvent* e) {
     if (!dragged_) return;
     const QPoint d = e->pos() - last_;
     last_ = e->pos();
+    // 3D Slicer's mouse: left rotates, middle pans, right drags zoom (up: closer).
     if (e->buttons() & Qt::LeftButton)
         camera_.orbit(-0.4 * d.x(), -0.4 * d.y());
-    else if (e->buttons() & (Qt::RightButton | Qt::MiddleButton))
+    else if (e->buttons() & Qt::MiddleButton)
         camera_.pan(double(d.x()) / height(), double(d.y()) / height());
+    else if (e->buttons() & Qt::RightButton)
+        camera_.zoom(core::drag_zoom_factor(-double(d.y()), height()));
     update();
 }
 
@@ -147,6 +186,7 @@ void Viewer::keyPressEvent(QKeyEvent* e) {
     if (e->key() == Qt::Key_O) { // ambient occlusion on / off
         options_.ao = !options_.ao;
         update();
+        if (on_options_changed) on_options_changed(*this);
         return;
     }
     for (auto [k, v] : keys)

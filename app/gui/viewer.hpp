@@ -13,13 +13,16 @@
 
 #include <glm/vec3.hpp>
 
+#include "io/markups.hpp"
 #include "renderer/render/cone_ao.hpp"
 #include "renderer/scene/camera.hpp"
 
 namespace iso {
 struct Annotations;
+struct RenderOptions;
 namespace core {
 class Scene;
+struct PickResult;
 }
 } // namespace iso
 
@@ -31,6 +34,8 @@ struct ViewerOptions {
     int still_frames = 16;   // while nothing moves, this many frames accumulate new jitter sets
     glm::vec3 background{0.08f, 0.09f, 0.11f}; // linear RGB
     bool flat_shading = false;
+    // Off: every surface is drawn opaque whatever its opacity (RenderOptions::transparency).
+    bool transparency = true;
 };
 
 class Viewer : public QOpenGLWidget {
@@ -63,13 +68,27 @@ public:
     // from the top-left, the pixel render_image / core::pick use).
     std::function<void(Viewer&, QPointF)> on_click;
     std::function<void(Viewer&, QPointF)> on_hover;
+    // The view changed its own options (the O key toggled AO), so a tool bar can follow.
+    std::function<void(Viewer&)> on_options_changed;
     // The size of the image the view draws (device pixels).
     QSize image_size() const;
+
+    // What the view shows at an image pixel (as on_click / on_hover give
+    // it): core::pick_in_frame on a frame of the view's own (its camera,
+    // size and surfaces; its context, the scene staying uploaded), without
+    // AO and overlay and not presented: the picture and its AO
+    // accumulation stay. Throws iso::Error: a pixel outside the image, a
+    // view that has not drawn yet or failed to.
+    core::PickResult pick_at(QPointF image_pixel);
+    // Markups (LPS mm) drawn over the view by the renderer's overlay, as
+    // `isoscope render --markups` draws them.
+    void set_markups(std::vector<Markup> markups);
 
 protected:
     void initializeGL() override;
     void paintGL() override;
     void draw();
+    RenderOptions frame_options() const;
     void mousePressEvent(QMouseEvent* e) override;
     void mouseMoveEvent(QMouseEvent* e) override;
     void mouseReleaseEvent(QMouseEvent* e) override;

@@ -44,44 +44,87 @@ std::vector<double> column_major(const glm::dmat4& m) {
     return v;
 }
 
-} // namespace
-
-PickResult pick(Scene& scene, const RenderRequest& req, const PickRequest& p) {
-    if (p.x < 0 || p.y < 0 || p.x >= req.width || p.y >= req.height)
-        throw Error("pick", "pixel " + std::to_string(p.x) + "," + std::to_string(p.y) + " is outside the " + std::to_string(req.width) + "x" +
-                                std::to_string(req.height) + " image");
+void validate(const PickRequest& p, int width, int height) {
+    if (p.x < 0 || p.y < 0 || p.x >= width || p.y >= height)
+        throw Error("pick", "pixel " + std::to_string(p.x) + "," + std::to_string(p.y) + " is outside the " + std::to_string(width) + "x" +
+                                std::to_string(height) + " image");
     if (!(p.threshold > 0.0 && p.threshold <= 1.0))
         throw Error("pick threshold", "expected a value in (0, 1], got " + std::to_string(p.threshold));
+}
+
+bool has_rect(const PickRequest& p) { return p.rect.width > 0 && p.rect.height > 0; }
+
+} // namespace
+
+PickRegion pick_region(const PickRequest& p) {
     // One region holds the pixel and the rectangle.
     int x0 = p.x, y0 = p.y, x1 = p.x + 1, y1 = p.y + 1;
-    const bool rect = p.rect.width > 0 && p.rect.height > 0;
-    if (rect) {
+    if (has_rect(p)) {
         x0 = std::min(x0, p.rect.x);
         y0 = std::min(y0, p.rect.y);
         x1 = std::max(x1, p.rect.x + p.rect.width);
         y1 = std::max(y1, p.rect.y + p.rect.height);
     }
+    return PickRegion{x0, y0, x1 - x0, y1 - y0};
+}
+
+PickResult pick(Scene& scene, const RenderRequest& req, const PickRequest& p) {
+    validate(p, req.width, req.height);
     RenderRequest r = req;
-    r.pick = PickRegion{x0, y0, x1 - x0, y1 - y0};
+    r.pick = pick_region(p);
     const auto t0 = std::chrono::steady_clock::now();
     const RenderOutput frame = render_image(scene, r);
-    PickResult out;
+    PickResult out = resolve_pick(scene, frame.camera, req.width, req.height, frame.pick, p);
     out.frame_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+    return out;
+}
+
+PickResult pick_in_frame(Scene& scene, const Camera& camera, RenderOptions opt, const PickRequest& p) {
+    validate(p, opt.width, opt.height);
+    opt.pick = pick_region(p);
+    const auto t0 = std::chrono::steady_clock::now();
+    const RenderResult frame = scene.render(camera, opt);
+    PickResult out = resolve_pick(scene, camera, opt.width, opt.height, frame.pick, p);
+    out.frame_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+    return out;
+}
+
+PickResult resolve_pick(const Scene& scene, const Camera& camera, int width, int height, const PickList& list,
+                        const PickRequest& p) {
+    validate(p, width, height);
+    const bool rect = has_rect(p);
+    PickResult out;
     out.x = p.x;
     out.y = p.y;
-    out.width = req.width;
-    out.height = req.height;
-    out.view = frame.camera.view();
-    out.projection = frame.camera.projection(double(req.width) / double(req.height));
-    const PickList& list = frame.pick;
+    out.width = width;
+    out.height = height;
+    out.view = camera.view();
+    out.projection = camera.projection(double(width) / double(height));
+    if (rect) {
+        out.rect = {std::max(p.rect.x, 0), std::max(p.rect.y, 0), 0, 0};
+        out.rect.width = std::max(std::min(p.rect.x + p.rect.width, width) - out.rect.x, 0);
+        out.rect.height = std::max(std::min(p.rect.y + p.rect.height, height) - out.rect.y, 0);
+    }
+    // The list must hold what is asked: a frame rendered for another pick cannot answer this one.
+    const auto holds = [&](int x, int y, int w, int h) {
+        return x >= list.region.x && y >= list.region.y && x + w <= list.region.x + list.region.width &&
+               y + h <= list.region.y + list.region.height;
+    };
+    if (list.pixels.size() != std::size_t(std::max(list.region.width, 0)) * std::size_t(std::max(list.region.height, 0)) ||
+        !holds(p.x, p.y, 1, 1) ||
+        (out.rect.width > 0 && out.rect.height > 0 && !holds(out.rect.x, out.rect.y, out.rect.width, out.rect.height)))
+        throw Error("pick", "the frame's pick lists (region " + std::to_string(list.region.x) + "," + std::to_string(list.region.y) + " " +
+                                std::to_string(list.region.width) + "x" + std::to_string(list.region.height) +
+                                ") do not cover pixel " + std::to_string(p.x) + "," + std::to_string(p.y) +
+                                (rect ? " and its rectangle" : ""));
     out.complete = list.offered <= list.capacity;
     const auto at = [&](int x, int y) -> const std::vector<PickFragment>& {
         return list.pixels[std::size_t(y - list.region.y) * std::size_t(list.region.width) + std::size_t(x - list.region.x)];
     };
     // The pixel's layers: down to the first opaque one (nothing behind it
     // reaches the pixel), or to the visible one unless all are asked for.
-    const Ray ray = frame.camera.pixel_ray(p.x + 0.5, p.y + 0.5, req.width, req.height);
-    const glm::dvec3 forward = frame.camera.forward();
+    const Ray ray = camera.pixel_ray(p.x + 0.5, p.y + 0.5, width, height);
+    const glm::dvec3 forward = camera.forward();
     const Volume* volume = scene.has_volume() ? &scene.volume() : nullptr;
     for (const PickFragment& f : at(p.x, p.y)) {
         PickLayer l;
@@ -126,9 +169,6 @@ PickResult pick(Scene& scene, const RenderRequest& req, const PickRequest& p) {
         if (reaches && !p.all_layers) break;
     }
     if (rect) {
-        out.rect = {std::max(p.rect.x, 0), std::max(p.rect.y, 0), 0, 0};
-        out.rect.width = std::min(p.rect.x + p.rect.width, req.width) - out.rect.x;
-        out.rect.height = std::min(p.rect.y + p.rect.height, req.height) - out.rect.y;
         std::map<std::pair<SurfaceId, std::uint32_t>, std::size_t> seen;
         for (int y = out.rect.y; y < out.rect.y + out.rect.height; ++y)
             for (int x = out.rect.x; x < out.rect.x + out.rect.width; ++x) {

@@ -72,7 +72,31 @@ struct PickResult {
 
 // Renders `req` with the pick riding on the frame and resolves it. Throws
 // iso::Error: a pixel outside the image, a threshold outside (0, 1].
+// A one-off: render_image uploads the scene and frees its GPU data again.
 PickResult pick(Scene& scene, const RenderRequest& req, const PickRequest& p);
+
+// The region a frame must list (RenderOptions::pick) to resolve `p`: its
+// pixel and its rectangle. Not clipped (the frame clips to the image).
+PickRegion pick_region(const PickRequest& p);
+
+// The pick of a live view, which draws `scene` with its own GL context
+// (Scene::render): with that context current, renders one frame of `opt`
+// (the view's own options: size, target framebuffer, present, AO, ...) with
+// the pick riding on it (opt.pick is set to pick_region(p)) and resolves it.
+// The scene's GPU data stays uploaded, as the view's frames leave it.
+// Throws iso::Error as pick().
+PickResult pick_in_frame(Scene& scene, const Camera& camera, RenderOptions opt, const PickRequest& p);
+
+// Resolves the lists of a frame already rendered with `camera` at
+// width x height (with RenderOptions::pick covering pick_region(p)): each
+// listed triangle meets the pixel's ray (Camera::pixel_ray) in double
+// precision; the value and voxel there come from the scene's volume.
+// pick() and pick_in_frame() both end here. frame_ms is left 0. Throws
+// iso::Error: a pixel outside the image, a threshold outside (0, 1], a
+// list whose region does not hold the pixel and rectangle, a triangle the
+// surface's mesh does not have.
+PickResult resolve_pick(const Scene& scene, const Camera& camera, int width, int height, const PickList& list,
+                        const PickRequest& p);
 
 // The JSON `isoscope pick --json` prints: visible, layers (surface, iso,
 // lps, normal, triangle, depth_mm, alpha, share, hu, voxel), view and

@@ -232,6 +232,27 @@ std::array<int, 2> native_size(const SlicePlane& p) {
     return {side(p.fov_mm.x), side(p.fov_mm.y)};
 }
 
+void pan_pixels(SlicePlane& p, const glm::dvec2& delta) {
+    if (!finite(glm::dvec3(delta, 0.0))) return;
+    // The grid's corner moves by -(delta.x * dx + delta.y * dy), dx = pixel_mm * right, dy = -pixel_mm * up.
+    p.center -= p.pixel_mm * (delta.x * p.right - delta.y * p.up);
+}
+
+void zoom_about(SlicePlane& p, int width, int height, const glm::dvec2& fixed, double factor) {
+    if (!(factor > 0) || !std::isfinite(factor) || !(p.pixel_mm > 0) || !finite(glm::dvec3(fixed, 0.0))) return;
+    constexpr double kMinPixelMm = 1e-4, kMaxPixelMm = 1e4;
+    const double s = p.pixel_mm, s2 = std::clamp(s / factor, kMinPixelMm, kMaxPixelMm);
+    // The point under `fixed` is centre + (fixed - half) . (s * right, -s * up); keep it at s2.
+    const glm::dvec2 off = fixed - 0.5 * glm::dvec2(double(width), double(height));
+    p.center += (s - s2) * (off.x * p.right - off.y * p.up);
+    p.pixel_mm = s2;
+}
+
+double drag_zoom_factor(double dy_up, int height) {
+    if (height < 1 || !std::isfinite(dy_up)) return 1.0;
+    return std::exp2(dy_up / (0.5 * double(height)));
+}
+
 // ---- Pixels <-> LPS --------------------------------------------------------------
 
 SliceGrid slice_grid(const SlicePlane& p, int width, int height) {
@@ -349,6 +370,14 @@ WindowLevel default_window(std::string_view modality, const ValueRange& range) {
 WindowLevel default_window(const Volume& v) {
     if (v.meta.modality == "CT") return default_window("CT", ValueRange{});
     return default_window(v.meta.modality, v.value_range());
+}
+
+WindowLevel drag_window(const WindowLevel& start, const glm::dvec2& drag, const ValueRange& range) {
+    // vtkSliceViewInteractorStyle (3D Slicer): gain = (range high - low) / 500 per pixel.
+    const double span = range.max - range.min;
+    const double gain = (span > 0 && std::isfinite(span) ? span : 1.0) / 500.0;
+    if (!std::isfinite(drag.x) || !std::isfinite(drag.y)) return start;
+    return {start.center + gain * drag.y, std::max(0.0, start.width + gain * drag.x)};
 }
 
 std::uint8_t window_grey(double value, const WindowLevel& w) {

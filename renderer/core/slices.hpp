@@ -91,6 +91,23 @@ void zoom_to_fit(SlicePlane& p, int width, int height);
 // The image size that shows fov_mm at pixel_mm: ceil(fov / pixel), at least 1.
 std::array<int, 2> native_size(const SlicePlane& p);
 
+// A view's pan and zoom (3D Slicer's middle and right drags). Both change
+// only the framing (centre, pixel_mm), never the crosshair or the slice, so
+// the grid slice_grid makes afterwards maps pixels to LPS as drawn.
+// Pans by a drag of `delta` image pixels (x right, y down): the content
+// follows the pointer, i.e. the LPS point under pixel q is afterwards under
+// q + delta.
+void pan_pixels(SlicePlane& p, const glm::dvec2& delta);
+// Zooms a width x height image by `factor` (> 1 magnifies: pixel_mm /=
+// factor) about the continuous pixel `fixed`: the LPS point under it stays
+// under it. pixel_mm is kept within [1e-4, 1e4] mm; a factor that is not a
+// positive finite number changes nothing.
+void zoom_about(SlicePlane& p, int width, int height, const glm::dvec2& fixed, double factor);
+// The zoom factor of a right drag of `dy_up` pixels (positive: up,
+// magnifies) in a view `height` pixels tall: 2^(dy_up / (height / 2)), so a
+// drag over half the view doubles or halves the scale whatever its size.
+double drag_zoom_factor(double dy_up, int height);
+
 // ---- Pixels <-> LPS --------------------------------------------------------------
 
 // A width x height image of a plane: continuous pixel coordinates (x, y)
@@ -174,6 +191,12 @@ std::optional<WindowLevel> ct_window_preset(std::string_view name);
 // otherwise the value range's (min..max; a width of 1 when the range is flat).
 WindowLevel default_window(const Volume& v);
 WindowLevel default_window(std::string_view modality, const ValueRange& range);
+
+// Slicer's window/level drag (vtkSliceViewInteractorStyle, left button):
+// from the window at the press, a drag of (dx right, dy_up) pixels adds
+// gain * dx to the width (not below 0) and gain * dy_up to the level, with
+// gain = (range.max - range.min) / 500 per pixel (1/500 for a flat range).
+WindowLevel drag_window(const WindowLevel& start, const glm::dvec2& drag_right_up, const ValueRange& range);
 
 // One value -> grey (NaN -> 0).
 std::uint8_t window_grey(double value, const WindowLevel& w);

@@ -123,7 +123,7 @@ RenderResult Renderer::render(const Camera& camera, const RenderOptions& opt, co
     for (std::size_t i = 0; i < im.meshes.size(); ++i) {
         const auto& m = im.meshes[i];
         if (!m.object.visible || m.count == 0) continue;
-        draws.push_back({m.vao.id(), m.count, std::uint32_t(i + 1), m.object.color, std::clamp(m.object.opacity, 0.0f, 1.0f), m.bounds});
+        draws.push_back({m.vao.id(), m.count, std::uint32_t(i + 1), m.object.color, opt.transparency ? std::clamp(m.object.opacity, 0.0f, 1.0f) : 1.0f, m.bounds});
     }
     const Bounds b = bounds();
     // The VOIT pool: sized from the last frame's fragment count; a frame that

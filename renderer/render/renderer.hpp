@@ -78,6 +78,9 @@ struct RenderOptions {
     // Flat shading: every surface is its albedo (no lighting, no AO), so
     // transparency compositing can be checked exactly.
     bool flat_shading = false;
+    // Off: every object is drawn opaque whatever its opacity (the desktop
+    // app's transparency toggle); the VOIT passes then have nothing to do.
+    bool transparency = true;
     // VOIT (order-independent transparency through per-pixel fragment
     // lists) for objects with opacity < 1: stop compositing a pixel once the
     // remaining transmittance is below oit_epsilon; the node pool grows up

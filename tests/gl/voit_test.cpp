@@ -286,3 +286,30 @@ TEST_F(Voit, TranslucentFragmentsGetTheirOwnAo) {
     EXPECT_LE(hi[1] - lo[1], 2) << "without AO the face is evenly lit";
     EXPECT_GE(hi[0] - lo[0], 8) << "the ball occludes the slab around it (AO 1 to 0 spans 14 levels here)";
 }
+
+// RenderOptions::transparency off (the desktop app's toggle): a translucent
+// plate in front of an opaque one is drawn as if it were opaque, byte for
+// byte, with no list passes; the object's opacity is left as it was.
+TEST_F(Voit, TransparencyOffDrawsEveryObjectOpaque) {
+    auto render = [&](float front_opacity, bool transparency) {
+        Renderer ren;
+        SceneObject front;
+        front.color = {0.8f, 0.3f, 0.2f};
+        front.opacity = front_opacity;
+        ren.add(plate(0, 10), front);
+        ren.add(plate(5, 20), {});
+        RenderOptions o;
+        o.width = o.height = 48;
+        o.transparency = transparency;
+        auto r = ren.render(anterior(box(20)), o);
+        EXPECT_EQ(ren.object(1).opacity, front_opacity);
+        return r;
+    };
+    const auto translucent = render(0.3f, true), forced = render(0.3f, false), opaque = render(1.0f, true);
+    EXPECT_GT(translucent.oit.fragments, 100u);
+    EXPECT_EQ(forced.oit.fragments, 0u);
+    for (const auto& p : forced.stats.passes) EXPECT_TRUE(p.name.rfind("oit_", 0) != 0) << p.name;
+    ASSERT_FALSE(forced.image.bytes.empty());
+    EXPECT_EQ(forced.image.bytes, opaque.image.bytes);
+    EXPECT_NE(forced.image.bytes, translucent.image.bytes);
+}

@@ -32,81 +32,21 @@
 
 #include "io/error.hpp"
 #include "io/volume_io.hpp"
+#include "dicom_fixtures.hpp"
 #include "test_util.hpp"
 
 using namespace iso;
 using iso::test::TempDir;
+using iso::test::pattern;
+using iso::test::rot_x;
+using iso::test::rot_z;
+using iso::test::SeriesSpec;
+using iso::test::write_series;
 namespace fs = std::filesystem;
 
 namespace {
 
 constexpr double kMm = 1e-4;
-
-int pattern(int i, int j, int k) { return i + 10 * j + 100 * k; }
-
-glm::dmat3 rot_x(double deg) {
-    const double a = deg * M_PI / 180, c = std::cos(a), s = std::sin(a);
-    return glm::dmat3(glm::dvec3(1, 0, 0), glm::dvec3(0, c, s), glm::dvec3(0, -s, c));
-}
-glm::dmat3 rot_z(double deg) {
-    const double a = deg * M_PI / 180, c = std::cos(a), s = std::sin(a);
-    return glm::dmat3(glm::dvec3(c, s, 0), glm::dvec3(-s, c, 0), glm::dvec3(0, 0, 1));
-}
-
-struct SeriesSpec {
-    int nx = 16, ny = 12, nz = 8;
-    glm::dvec3 spacing{0.7, 0.8, 2.5};
-    glm::dmat3 rot{1.0};           // columns: row direction, column direction, slice normal
-    glm::dvec3 origin{-10, 20, 30}; // IPP of slice k = 0
-    bool ct = true;                 // CT generator with rescale; else MR (no rescale)
-    double slope = 1, intercept = -1024;
-    std::string description = "test series";
-    std::string image_type;      // e.g. "ORIGINAL/PRIMARY/LOCALIZER"
-    std::string pattern = "%s/IM-%04d.dcm";
-    int series_number = 0;
-};
-
-// Writes one series, one file per slice; stored value = pattern(i, j, k).
-void write_series(const std::string& dir, const SeriesSpec& s) {
-    fs::create_directories(dir);
-    vtkNew<vtkImageData> img;
-    img->SetDimensions(s.nx, s.ny, s.nz);
-    img->SetSpacing(s.spacing.x, s.spacing.y, s.spacing.z);
-    img->SetOrigin(0, 0, 0);
-    img->AllocateScalars(VTK_SHORT, 1);
-    auto* p = static_cast<short*>(img->GetScalarPointer());
-    for (int k = 0; k < s.nz; ++k)
-        for (int j = 0; j < s.ny; ++j)
-            for (int i = 0; i < s.nx; ++i) *p++ = short(pattern(i, j, k));
-    vtkNew<vtkMatrix4x4> m;
-    for (int r = 0; r < 3; ++r) {
-        for (int c = 0; c < 3; ++c) m->SetElement(r, c, s.rot[c][r]);
-        m->SetElement(r, 3, s.origin[r]);
-    }
-    vtkNew<vtkDICOMWriter> w;
-    vtkNew<vtkDICOMCTGenerator> ct;
-    vtkNew<vtkDICOMMRGenerator> mr;
-    if (s.ct) w->SetGenerator(ct);
-    else w->SetGenerator(mr);
-    if (s.series_number) {
-        vtkNew<vtkDICOMMetaData> md;
-        md->Set(DC::SeriesNumber, s.series_number);
-        w->SetMetaData(md);
-    }
-    w->SetInputData(img);
-    w->SetMemoryRowOrderToFileNative(); // VTK row j = file row j
-    w->SetPatientMatrix(m);
-    w->SetFilePrefix(dir.c_str());
-    w->SetFilePattern(s.pattern.c_str());
-    w->SetSeriesDescription(s.description.c_str());
-    if (!s.image_type.empty()) w->SetImageType(s.image_type.c_str());
-    if (s.ct) {
-        w->SetRescaleSlope(s.slope);
-        w->SetRescaleIntercept(s.intercept);
-    }
-    w->Write();
-    ASSERT_EQ(w->GetErrorCode(), 0u);
-}
 
 struct Header {
     std::string file;
@@ -217,6 +157,13 @@ void set_ds(vtkDICOMMetaData* md, vtkDICOMTag tag, std::vector<double> v) {
 
 bool any_warning(const Volume& v, const std::string& needle) {
     return std::any_of(v.meta.warnings.begin(), v.meta.warnings.end(),
+                       [&](const std::string& w) { return w.find(needle) != std::string::npos; });
+}
+
+// The series chooser's warnings (SeriesInfo::warnings): from the headers
+// alone, the same as loading gives.
+bool any_listed_warning(const SeriesInfo& si, const std::string& needle) {
+    return std::any_of(si.warnings.begin(), si.warnings.end(),
                        [&](const std::string& w) { return w.find(needle) != std::string::npos; });
 }
 
@@ -389,6 +336,13 @@ TEST(Dicom, MissingSliceIsReportedAndInterpolated) {
     for (int j = 0; j < 12; ++j)
         for (int i = 0; i < 16; ++i) ASSERT_EQ(v.value(i, j, 3), pattern(i, j, 3) - 1024);
     EXPECT_EQ(v.value(4, 5, 4), pattern(4, 5, 4) - 1024);
+    // Listed before loading: the same warnings, and the depth the load gives.
+    const auto list = list_dicom_series({tmp / "gap"});
+    ASSERT_EQ(list.size(), 1u);
+    EXPECT_EQ(list[0].files, 7u);
+    EXPECT_EQ(list[0].dims[2], 8);
+    EXPECT_EQ(list[0].warnings, v.meta.warnings);
+    EXPECT_TRUE(any_listed_warning(list[0], "missing slice"));
 }
 
 TEST(Dicom, NonUniformSpacingWarns) {
@@ -404,6 +358,10 @@ TEST(Dicom, NonUniformSpacingWarns) {
     EXPECT_EQ(v.dims[2], 8);
     EXPECT_TRUE(any_warning(v, "not uniform")) << all_warnings(v);
     EXPECT_TRUE(any_warning(v, "3.5")) << all_warnings(v);
+    const auto list = list_dicom_series({tmp / "w"});
+    ASSERT_EQ(list.size(), 1u);
+    EXPECT_EQ(list[0].warnings, v.meta.warnings);
+    EXPECT_TRUE(any_listed_warning(list[0], "not uniform"));
 }
 
 TEST(Dicom, GantryTiltIsDetectedAndAffineIsSheared) {
@@ -432,6 +390,10 @@ TEST(Dicom, GantryTiltIsDetectedAndAffineIsSheared) {
         EXPECT_NEAR(std::stod(w.substr(p + 15)), tilt, 0.05) << w;
     }
     EXPECT_TRUE(found) << all_warnings(v);
+    const auto list = list_dicom_series({tmp / "tilt"});
+    ASSERT_EQ(list.size(), 1u);
+    EXPECT_EQ(list[0].warnings, v.meta.warnings);
+    EXPECT_TRUE(any_listed_warning(list[0], "gantry tilt of 15"));
     // Each slice origin maps to its IPP.
     for (int k = 0; k < 8; ++k) {
         const glm::dvec3 w = v.index_to_world({0, 0, double(k)});
@@ -468,6 +430,8 @@ TEST(Dicom, TwoSeriesAreListedAndChosen) {
     EXPECT_EQ(list[size_t(ia)].files, 8u);
     EXPECT_EQ(list[size_t(ib)].dims[2], 5);
     EXPECT_NE(list[0].uid, list[1].uid);
+    EXPECT_TRUE(list[0].warnings.empty());
+    EXPECT_TRUE(list[1].warnings.empty());
 
     const std::string msg = error_of([&] { load_volume(dir); });
     EXPECT_NE(msg.find("2 series"), std::string::npos) << msg;
@@ -704,6 +668,9 @@ TEST(Dicom, MultiFrameFileIsListedAndRefusedClearly) {
     const auto list = list_dicom_series({file});
     ASSERT_EQ(list.size(), 1u);
     EXPECT_EQ(list[0].dims[2], 4);
+    // The chooser says so before a load is tried.
+    EXPECT_TRUE(any_listed_warning(list[0], "cannot be loaded")) << list[0].warnings.size();
+    EXPECT_TRUE(any_listed_warning(list[0], "multi-frame"));
     const std::string e = error_of([&] { load_dicom_files({file}); });
     EXPECT_NE(e.find("multi-frame"), std::string::npos) << e;
 }

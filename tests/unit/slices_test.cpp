@@ -279,6 +279,77 @@ TEST(SlicePlanes, ZoomAndNativeSize) {
     EXPECT_THROW(slice_grid(bad, 10, 10), Error);
 }
 
+// Panning and zooming change the framing only: what the new grid maps a
+// pixel to is checked against the old grid's LPS points (the drag's
+// invariant: the content follows the pointer; a zoom keeps the point under
+// the pointer), for each orientation of the oblique volume.
+TEST(SlicePlanes, PanMovesTheContentWithThePointer) {
+    const Volume v = oblique_linear();
+    for (auto p : default_planes(v)) {
+        zoom_to_fit(p, 300, 200);
+        const double offset = p.offset_mm();
+        const glm::dvec3 origin = p.origin;
+        const SliceGrid before = slice_grid(p, 300, 200);
+        const glm::dvec2 delta(17.25, -9.5); // right and up
+        pan_pixels(p, delta);
+        const SliceGrid after = slice_grid(p, 300, 200);
+        for (const glm::dvec2 q : {glm::dvec2(0.5, 0.5), glm::dvec2(150, 100), glm::dvec2(299.5, 12.25)}) {
+            // What was under q is now under q + delta.
+            EXPECT_NEAR(glm::length(pixel_to_lps(after, q + delta) - pixel_to_lps(before, q)), 0.0, 1e-9)
+                << slice_orientation_name(p.orientation);
+        }
+        // The slice and the crosshair stay.
+        EXPECT_NEAR(p.offset_mm(), offset, 1e-12);
+        EXPECT_EQ(p.origin, origin);
+        EXPECT_EQ(p.pixel_mm, before.pixel_mm);
+        // The crosshair's pixel moved by delta too.
+        const auto c0 = lps_to_pixel(before, origin).pixel, c1 = lps_to_pixel(after, origin).pixel;
+        EXPECT_NEAR(c1.x - c0.x, delta.x, 1e-9);
+        EXPECT_NEAR(c1.y - c0.y, delta.y, 1e-9);
+        // Nothing for a non-finite drag.
+        const glm::dvec3 centre = p.center;
+        pan_pixels(p, {NAN, 1.0});
+        EXPECT_EQ(p.center, centre);
+    }
+}
+
+TEST(SlicePlanes, ZoomKeepsThePointUnderThePointer) {
+    const Volume v = oblique_linear();
+    for (auto p : default_planes(v)) {
+        const int w = 321, h = 240;
+        zoom_to_fit(p, w, h);
+        const double s = p.pixel_mm;
+        const SliceGrid before = slice_grid(p, w, h);
+        const glm::dvec2 fixed(40.5, 200.25);
+        zoom_about(p, w, h, fixed, 2.5);
+        EXPECT_NEAR(p.pixel_mm, s / 2.5, 1e-12);
+        const SliceGrid after = slice_grid(p, w, h);
+        EXPECT_NEAR(glm::length(pixel_to_lps(after, fixed) - pixel_to_lps(before, fixed)), 0.0, 1e-9);
+        // Another pixel: 2.5 times closer to the fixed one (in before's pixels).
+        const glm::dvec2 q(300, 10);
+        const glm::dvec2 back = lps_to_pixel(before, pixel_to_lps(after, q)).pixel;
+        EXPECT_NEAR(glm::length(back - (fixed + (q - fixed) / 2.5)), 0.0, 1e-9);
+        EXPECT_NEAR(after.offset_mm, before.offset_mm, 1e-12);
+        // Zooming out again restores the framing.
+        zoom_about(p, w, h, fixed, 1 / 2.5);
+        const SliceGrid again = slice_grid(p, w, h);
+        EXPECT_NEAR(glm::length(again.corner - before.corner), 0.0, 1e-9);
+        EXPECT_NEAR(again.pixel_mm, before.pixel_mm, 1e-12);
+        // Clamped and refused factors.
+        zoom_about(p, w, h, fixed, 1e12);
+        EXPECT_EQ(p.pixel_mm, 1e-4);
+        const double kept = p.pixel_mm;
+        for (double bad : {0.0, -2.0, double(NAN), double(INFINITY)}) {
+            zoom_about(p, w, h, fixed, bad);
+            EXPECT_EQ(p.pixel_mm, kept);
+        }
+    }
+    EXPECT_NEAR(drag_zoom_factor(100, 200), 2.0, 1e-12); // half the height up: twice as large
+    EXPECT_NEAR(drag_zoom_factor(-100, 200), 0.5, 1e-12);
+    EXPECT_EQ(drag_zoom_factor(0, 200), 1.0);
+    EXPECT_EQ(drag_zoom_factor(10, 0), 1.0);
+}
+
 // ---- pixels <-> LPS ------------------------------------------------------------
 
 TEST(SlicePixels, PixelsFollowTheRadiologicalConventionAndRoundTrip) {
@@ -641,6 +712,26 @@ TEST(SliceWindow, PresetsAndDefaults) {
     w = default_window("MR", ValueRange{5, 5});
     EXPECT_EQ(w.center, 5);
     EXPECT_EQ(w.width, 1);
+}
+
+// Slicer's window/level drag: (range high - low) / 500 per pixel, right
+// widens the window, up raises the level; the width never goes negative.
+TEST(SliceWindow, DragChangesWidthHorizontallyAndLevelVertically) {
+    const ValueRange r{-1000, 1500}; // 5 per pixel
+    const WindowLevel start{40, 400};
+    WindowLevel w = drag_window(start, {10, 0}, r);
+    EXPECT_DOUBLE_EQ(w.width, 450);
+    EXPECT_DOUBLE_EQ(w.center, 40);
+    w = drag_window(start, {0, -4}, r);
+    EXPECT_DOUBLE_EQ(w.width, 400);
+    EXPECT_DOUBLE_EQ(w.center, 20);
+    w = drag_window(start, {-200, 3}, r);
+    EXPECT_EQ(w.width, 0);
+    EXPECT_DOUBLE_EQ(w.center, 55);
+    w = drag_window(start, {500, 0}, ValueRange{7, 7}); // flat: 1/500 per pixel
+    EXPECT_DOUBLE_EQ(w.width, 401);
+    w = drag_window(start, {NAN, 0}, r);
+    EXPECT_EQ(w.width, start.width);
 }
 
 // ---- outlines -------------------------------------------------------------------------------

@@ -1,0 +1,318 @@
+#include "app/gui/measure_tools.hpp"
+
+#include <QAction>
+#include <QActionGroup>
+#include <QKeySequence>
+#include <QPainter>
+#include <QShortcut>
+#include <QStatusBar>
+#include <QTimer>
+#include <QToolBar>
+
+#include <algorithm>
+#include <cmath>
+
+#include "app/gui/main_window.hpp"
+#include "app/gui/slice_view.hpp"
+#include "app/gui/viewer.hpp"
+#include "renderer/core/pick.hpp"
+#include "renderer/core/scene.hpp"
+#include "renderer/core/slices.hpp"
+#include "renderer/render/overlay.hpp"
+
+namespace iso::gui {
+
+namespace {
+
+constexpr int kHoverMinMs = 80;
+
+QString lps_text(const glm::dvec3& p) {
+    return QString("LPS (%1, %2, %3) mm").arg(p.x, 0, 'f', 2).arg(p.y, 0, 'f', 2).arg(p.z, 0, 'f', 2);
+}
+
+std::size_t points_needed(MeasureTools::Tool t) { return t == MeasureTools::Tool::Ruler ? 2 : 3; }
+
+QString tool_name(MeasureTools::Tool t) { return t == MeasureTools::Tool::Ruler ? "Ruler" : "Angle"; }
+
+// markup_color gives sRGB components in [0, 1], as Slicer stores them.
+QColor srgb(const glm::vec3& c) { return QColor::fromRgbF(c.r, c.g, c.b); }
+
+void draw_cross(QPainter& p, QPointF at, const QColor& c) {
+    constexpr double r = 6;
+    for (const auto& [pen, width] : {std::pair{QColor(0, 0, 0, 200), 3.5}, std::pair{c, 1.5}}) {
+        p.setPen(QPen(pen, width));
+        p.drawLine(at - QPointF(r, 0), at + QPointF(r, 0));
+        p.drawLine(at - QPointF(0, r), at + QPointF(0, r));
+    }
+}
+
+void draw_segment(QPainter& p, QPointF a, QPointF b, const QColor& c) {
+    p.setPen(QPen(QColor(0, 0, 0, 200), 4.0));
+    p.drawLine(a, b);
+    p.setPen(QPen(c, 2.0));
+    p.drawLine(a, b);
+}
+
+void draw_text(QPainter& p, QPointF at, const QString& text, const QColor& c) {
+    p.setPen(QColor(0, 0, 0, 220));
+    p.drawText(at + QPointF(1, 1), text);
+    p.setPen(c);
+    p.drawText(at, text);
+}
+
+} // namespace
+
+MeasureTools::MeasureTools(MainWindow& window) : QObject(&window), window_(window) {
+    auto* bar = window.addToolBar("Measure");
+    bar->setObjectName("measure");
+    auto* group = new QActionGroup(this);
+    group->setExclusionPolicy(QActionGroup::ExclusionPolicy::ExclusiveOptional);
+    ruler_ = bar->addAction("Ruler");
+    ruler_->setObjectName("ruler");
+    ruler_->setToolTip("Measure a distance: click two points in the 3D view (on the visible surface) or on a slice");
+    angle_ = bar->addAction("Angle");
+    angle_->setObjectName("angle");
+    angle_->setToolTip("Measure an angle: click three points (arm, vertex, arm) in the 3D view or on a slice");
+    for (auto* a : {ruler_, angle_}) {
+        a->setCheckable(true);
+        group->addAction(a);
+    }
+    connect(group, &QActionGroup::triggered, this, [this](QAction*) {
+        set_tool(ruler_->isChecked() ? Tool::Ruler : angle_->isChecked() ? Tool::Angle : Tool::None);
+    });
+    // Escape drops the points placed so far (the tool stays on).
+    escape_ = new QShortcut(QKeySequence(Qt::Key_Escape), &window);
+    escape_->setEnabled(false);
+    connect(escape_, &QShortcut::activated, this, [this] {
+        if (pending_.empty()) return;
+        pending_.clear();
+        redraw();
+        window_.statusBar()->showMessage(tool_name(tool_) + ": points dropped");
+    });
+    hover_timer_ = new QTimer(this);
+    hover_timer_->setSingleShot(true);
+    connect(hover_timer_, &QTimer::timeout, this, [this] { hover_pick(); });
+}
+
+void MeasureTools::set_tool(Tool t) {
+    tool_ = t;
+    ruler_->setChecked(t == Tool::Ruler);
+    angle_->setChecked(t == Tool::Angle);
+    pending_.clear();
+    redraw();
+    if (t == Tool::None)
+        window_.statusBar()->showMessage("Measuring off: a click shows what is there and moves the crosshair");
+    else
+        window_.statusBar()->showMessage(QString("%1: click %2 points in the 3D view (on the visible surface) or on a slice%3")
+                                             .arg(tool_name(t))
+                                             .arg(points_needed(t))
+                                             .arg(t == Tool::Angle ? " (arm, vertex, arm)" : ""));
+}
+
+void MeasureTools::attach(Viewer& viewer) {
+    viewer_ = &viewer;
+    viewer.on_click = [this](Viewer& v, QPointF p) { viewer_click(v, p); };
+    viewer.on_hover = [this](Viewer& v, QPointF p) { viewer_hover(v, p); };
+}
+
+void MeasureTools::reset() {
+    hover_timer_->stop();
+    hover_at_.reset();
+    viewer_ = nullptr;
+    pending_.clear();
+    escape_->setEnabled(false);
+}
+
+int MeasureTools::hover_interval_ms() const { return std::max(kHoverMinMs, int(std::ceil(2.0 * last_pick_ms_))); }
+
+// ---- the 3D view -------------------------------------------------------------------
+
+QString MeasureTools::readout(const core::PickResult& r) const {
+    if (!r.visible) return "background";
+    const core::PickLayer& l = r.layers[*r.visible];
+    QString s = lps_text(l.lps);
+    if (l.hu) {
+        const bool ct = window_.scene().has_volume() && window_.scene().volume().meta.modality == "CT";
+        s += QString(", %1 %2").arg(ct ? "HU" : "value").arg(*l.hu, 0, 'f', 2);
+    }
+    return s + ", surface " + QString::fromStdString(l.name);
+}
+
+std::optional<glm::dvec3> MeasureTools::pick_and_show(Viewer& v, QPointF pixel, bool hover) {
+    core::PickResult r;
+    try {
+        r = v.pick_at(pixel);
+    } catch (const std::exception& e) {
+        // A pointer at the very edge, a view that cannot draw: say so, nothing else.
+        if (!hover) window_.statusBar()->showMessage(QString("3D pick: ") + e.what());
+        return std::nullopt;
+    }
+    last_pick_ms_ = r.frame_ms;
+    window_.statusBar()->showMessage(readout(r));
+    if (!r.visible) return std::nullopt;
+    return r.layers[*r.visible].lps;
+}
+
+void MeasureTools::viewer_click(Viewer& v, QPointF pixel) {
+    if (window_.busy()) return; // a worker is changing the scene
+    hover_timer_->stop();        // the click's readout is the newer one
+    hover_at_.reset();
+    const auto lps = pick_and_show(v, pixel, false);
+    if (tool_ == Tool::None) {
+        if (lps) window_.set_crosshair(*lps);
+        return;
+    }
+    if (!lps) {
+        window_.statusBar()->showMessage(window_.statusBar()->currentMessage() + ": " + tool_name(tool_) +
+                                         " needs a point on a visible surface");
+        return;
+    }
+    add_point(*lps);
+}
+
+void MeasureTools::viewer_hover(Viewer&, QPointF pixel) {
+    hover_at_ = pixel;
+    if (hover_timer_->isActive()) return; // the latest position wins when it fires
+    const qint64 since = since_hover_.isValid() ? since_hover_.elapsed() : hover_interval_ms();
+    hover_timer_->start(int(std::max<qint64>(0, hover_interval_ms() - since)));
+}
+
+void MeasureTools::hover_pick() {
+    if (!hover_at_ || !viewer_ || window_.busy() || viewer_ != window_.viewer() || !viewer_->isVisible()) return;
+    const QPointF at = *hover_at_;
+    hover_at_.reset();
+    ++hover_picks_;
+    pick_and_show(*viewer_, at, true);
+    since_hover_.restart(); // the interval counts from the pick's end: the view keeps the time between
+}
+
+// ---- slice views --------------------------------------------------------------------
+
+bool MeasureTools::slice_click(SliceView& view, QPointF pixel) {
+    if (tool_ == Tool::None || !window_.scene().has_volume() || !view.has_image()) return false;
+    add_point(core::pixel_to_lps(view.grid(), {pixel.x(), pixel.y()}));
+    return true;
+}
+
+void MeasureTools::paint_slice(SliceView& view, QPainter& p) const {
+    if (!window_.scene().has_volume() || !view.has_image()) return;
+    const core::SliceGrid& g = view.grid();
+    // Within half a slice of the plane: on the slice the view shows.
+    const double half = 0.5 * core::slice_step_mm(window_.scene().volume(), g.normal);
+    const auto project = [&](const glm::dvec3& lps) {
+        const core::SlicePoint s = core::lps_to_pixel(g, lps);
+        return std::pair{QPointF(s.pixel.x, s.pixel.y), std::abs(s.distance_mm) <= half};
+    };
+    p.setRenderHint(QPainter::Antialiasing);
+    for (const Markup& m : window_.markups()) {
+        std::vector<std::pair<QPointF, bool>> pts; // only Defined points have a position
+        bool all_defined = true;
+        for (const auto& cp : m.points) {
+            if (cp.status != PositionStatus::Defined) {
+                all_defined = false;
+                continue;
+            }
+            pts.push_back(project(cp.position));
+        }
+        const QColor c = srgb(markup_color(m));
+        const bool joined = m.type != MarkupType::Fiducial;
+        if (joined && all_defined) {
+            for (std::size_t i = 0; i + 1 < pts.size(); ++i)
+                if (pts[i].second && pts[i + 1].second) draw_segment(p, pts[i].first, pts[i + 1].first, c);
+            if (m.type == MarkupType::ClosedCurve && pts.size() > 2 && pts.back().second && pts.front().second)
+                draw_segment(p, pts.back().first, pts.front().first, c);
+        }
+        std::size_t k = 0;
+        bool all_near = !pts.empty();
+        for (std::size_t i = 0; i < m.points.size(); ++i) {
+            if (m.points[i].status != PositionStatus::Defined) continue;
+            const auto& [at, near] = pts[k++];
+            all_near &= near;
+            if (!near || !m.points[i].visible) continue;
+            const QColor pc = srgb(markup_color(m, int(i)));
+            draw_cross(p, at, pc);
+            if (m.type == MarkupType::Fiducial && !m.points[i].label.empty())
+                draw_text(p, at + QPointF(9, 4), QString::fromStdString(m.points[i].label), pc);
+        }
+        // The value where the whole measurement lies on this slice.
+        const std::string value = markup_measurement_text(m);
+        if (all_near && all_defined && !value.empty()) {
+            const QPointF at = m.type == MarkupType::Line ? (pts[0].first + pts[1].first) / 2.0 : pts[1].first;
+            draw_text(p, at + QPointF(8, -8), QString::fromStdString(value), c);
+        }
+    }
+    // The measurement being placed.
+    const QColor placing(255, 230, 80);
+    std::vector<std::pair<QPointF, bool>> pts;
+    for (const auto& q : pending_) pts.push_back(project(q));
+    for (std::size_t i = 0; i + 1 < pts.size(); ++i)
+        if (pts[i].second && pts[i + 1].second) draw_segment(p, pts[i].first, pts[i + 1].first, placing);
+    for (const auto& [at, near] : pts)
+        if (near) draw_cross(p, at, placing);
+}
+
+// ---- placing points ---------------------------------------------------------------------
+
+QString MeasureTools::next_name(MarkupType type) const {
+    const QString base = type == MarkupType::Line ? "Line" : "Angle";
+    const auto& all = window_.markups();
+    int n = 1 + int(std::count_if(all.begin(), all.end(), [&](const Markup& m) { return m.type == type; }));
+    const auto taken = [&](const QString& name) {
+        return std::any_of(all.begin(), all.end(), [&](const Markup& m) { return QString::fromStdString(m.name) == name; });
+    };
+    while (taken(QString("%1 %2").arg(base).arg(n))) ++n;
+    return QString("%1 %2").arg(base).arg(n);
+}
+
+void MeasureTools::add_point(const glm::dvec3& lps) {
+    pending_.push_back(lps);
+    const std::size_t need = points_needed(tool_);
+    if (pending_.size() < need) {
+        redraw();
+        window_.statusBar()->showMessage(
+            QString("%1: point %2 of %3 at %4").arg(tool_name(tool_)).arg(pending_.size()).arg(need).arg(lps_text(lps)));
+        return;
+    }
+    Markup m;
+    m.type = tool_ == Tool::Ruler ? MarkupType::Line : MarkupType::Angle;
+    m.name = next_name(m.type).toStdString();
+    for (std::size_t i = 0; i < pending_.size(); ++i) {
+        MarkupControlPoint cp;
+        cp.id = std::to_string(i + 1);
+        cp.position = pending_[i];
+        m.points.push_back(std::move(cp));
+    }
+    pending_.clear();
+    std::vector<Markup> all = window_.markups();
+    all.push_back(m);
+    window_.set_markups(std::move(all)); // the views and the panel follow
+    const std::string value = markup_measurement_text(m);
+    window_.statusBar()->showMessage(QString::fromStdString(m.name) + ": " +
+                                     (value.empty() ? QString("no value (an arm has no length)") : QString::fromStdString(value)));
+}
+
+void MeasureTools::redraw() {
+    escape_->setEnabled(!pending_.empty());
+    // The 3D view draws the placed points as a point list next to the markups.
+    if (auto* v = window_.viewer()) {
+        std::vector<Markup> drawn = window_.markups();
+        if (!pending_.empty()) {
+            Markup placing;
+            placing.type = MarkupType::Fiducial;
+            placing.name = "placing";
+            for (std::size_t i = 0; i < pending_.size(); ++i) {
+                MarkupControlPoint cp;
+                cp.label = std::to_string(i + 1);
+                cp.position = pending_[i];
+                placing.points.push_back(std::move(cp));
+            }
+            placing.selected_color = glm::dvec3(1.0, 0.9, 0.3);
+            drawn.push_back(std::move(placing));
+        }
+        v->set_markups(std::move(drawn));
+    }
+    for (auto o : {core::SliceOrientation::Axial, core::SliceOrientation::Coronal, core::SliceOrientation::Sagittal})
+        window_.slice_view(o)->update();
+}
+
+} // namespace iso::gui

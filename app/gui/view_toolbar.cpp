@@ -1,0 +1,71 @@
+#include "app/gui/view_toolbar.hpp"
+
+#include <QAction>
+
+namespace iso::gui {
+
+ViewToolBar::ViewToolBar(std::function<Viewer*()> viewer, QWidget* parent)
+    : QToolBar("3D view", parent), viewer_(std::move(viewer)) {
+    setObjectName("view_toolbar");
+    struct Button {
+        PatientView view;
+        const char* label;
+        const char* tip;
+    };
+    // The letters of `isoscope render --view` and Slicer's 3D view buttons.
+    static const Button buttons[] = {
+        {PatientView::Anterior, "A", "View from the front (anterior)"},
+        {PatientView::Posterior, "P", "View from the back (posterior)"},
+        {PatientView::Left, "L", "View from the patient's left"},
+        {PatientView::Right, "R", "View from the patient's right"},
+        {PatientView::Superior, "S", "View from above (superior)"},
+        {PatientView::Inferior, "I", "View from below (inferior)"},
+    };
+    for (const auto& b : buttons) {
+        QAction* a = addAction(b.label);
+        a->setToolTip(b.tip);
+        a->setObjectName(QString("view_") + patient_view_name(b.view));
+        const PatientView v = b.view;
+        connect(a, &QAction::triggered, this, [this, v] {
+            if (Viewer* w = viewer_()) w->set_view(v);
+        });
+        views_[int(v)] = a;
+    }
+    reset_ = addAction("Reset view");
+    reset_->setObjectName("reset_view");
+    reset_->setToolTip("Back to the anterior view, fitted to the visible surfaces");
+    connect(reset_, &QAction::triggered, this, [this] {
+        if (Viewer* w = viewer_()) w->set_view(PatientView::Anterior);
+    });
+    addSeparator();
+    ao_ = addAction("AO");
+    ao_->setObjectName("ambient_occlusion");
+    ao_->setToolTip("Ambient occlusion (cone traced)");
+    ao_->setCheckable(true);
+    ao_->setChecked(ViewerOptions{}.ao);
+    transparency_ = addAction("Transparency");
+    transparency_->setObjectName("transparency");
+    transparency_->setToolTip("Draw surfaces with their opacity; off: every surface opaque");
+    transparency_->setCheckable(true);
+    transparency_->setChecked(ViewerOptions{}.transparency);
+    connect(ao_, &QAction::toggled, this, [this] { apply_toggles(); });
+    connect(transparency_, &QAction::toggled, this, [this] { apply_toggles(); });
+}
+
+bool ViewToolBar::ao() const { return ao_->isChecked(); }
+bool ViewToolBar::transparency() const { return transparency_->isChecked(); }
+
+void ViewToolBar::attach(Viewer& v) const {
+    ViewerOptions o = v.options();
+    o.ao = ao();
+    o.transparency = transparency();
+    v.set_options(o);
+    // The O key in the view: the button follows (and, through toggled, sets the same again).
+    v.on_options_changed = [this](Viewer& w) { ao_->setChecked(w.options().ao); };
+}
+
+void ViewToolBar::apply_toggles() {
+    if (Viewer* w = viewer_()) attach(*w);
+}
+
+} // namespace iso::gui

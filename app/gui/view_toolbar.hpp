@@ -1,0 +1,43 @@
+// The 3D view's tool bar (issue 14, docs/gui.md): patient-view buttons
+// (A, P, L, R, S, I: Viewer::set_view, as `isoscope render --view`), "Reset
+// view" (the anterior view the window opens with, fitted again), an ambient
+// occlusion toggle (ViewerOptions::ao) and a transparency toggle
+// (ViewerOptions::transparency: off draws every surface opaque without
+// touching the surfaces' opacities). The main window recreates its viewer
+// with each scene; the bar keeps the toggles and applies them to each new one.
+#pragma once
+
+#include <functional>
+
+#include <QToolBar>
+
+#include "app/gui/viewer.hpp"
+
+class QAction;
+
+namespace iso::gui {
+
+class ViewToolBar : public QToolBar {
+public:
+    // `viewer` returns the window's current 3D view (null while there is none).
+    explicit ViewToolBar(std::function<Viewer*()> viewer, QWidget* parent = nullptr);
+
+    // Gives a newly made viewer the bar's toggles.
+    void attach(Viewer& v) const;
+    bool ao() const;
+    bool transparency() const;
+    QAction* view_action(PatientView v) const { return views_[int(v)]; }
+    QAction* reset_action() const { return reset_; }
+    QAction* ao_action() const { return ao_; }
+    QAction* transparency_action() const { return transparency_; }
+
+private:
+    void apply_toggles();
+    std::function<Viewer*()> viewer_;
+    QAction* views_[6] = {};
+    QAction* reset_ = nullptr;
+    QAction* ao_ = nullptr;
+    QAction* transparency_ = nullptr;
+};
+
+} // namespace iso::gui

@@ -1,0 +1,211 @@
+// Frame times of the desktop app's 3D view while rotating (issue 14's
+// "Interaction stays responsive", docs/gui.md): the main window opens
+// datasets/headsq.nhdr, adds the skin (iso 500) and the bone (1150), and the
+// 3D view turns about its target in N steps; each frame is timed from the
+// camera change (Viewer::set_camera, which calls update()) to the widget's
+// frameSwapped signal, i.e. what a user dragging the mouse waits for. Four
+// cases: ambient occlusion on/off x skin translucent (opacity 0.3) or opaque,
+// at the view's size in the window. Each rotation frame is the first frame
+// of a new camera (AO accumulation restarts on every change: still_frames is
+// 1 here so no extra still frame slips between two steps). The cases take
+// turns in three blocks each, so a shared machine's changing load reaches
+// them alike.
+//
+//   xvfb-run -a -s '-screen 0 1600x1200x24' build/tests/bench/gui_frame_bench [--steps 90] [--csv docs/gui_frames.csv]
+//
+// Prints a markdown table; writes the CSV (one row per case).
+#include <QApplication>
+#include <QEventLoop>
+#include <QOpenGLContext>
+#include <QOpenGLFunctions>
+#include <QSurfaceFormat>
+#include <QTimer>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <fstream>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "app/gui/main_window.hpp"
+#include "app/gui/viewer.hpp"
+#include "io/atomic_file.hpp"
+#include "io/error.hpp"
+#include "renderer/core/scene.hpp"
+
+using namespace iso;
+
+namespace {
+
+double now_ms() {
+    using namespace std::chrono;
+    return duration<double, std::milli>(steady_clock::now().time_since_epoch()).count();
+}
+
+// Runs the event loop until `ready` or `timeout_ms`.
+bool wait_until(const std::function<bool()>& ready, int timeout_ms) {
+    const double t0 = now_ms();
+    while (!ready()) {
+        if (now_ms() - t0 > timeout_ms) return false;
+        QEventLoop loop;
+        QTimer::singleShot(10, &loop, &QEventLoop::quit);
+        loop.exec();
+    }
+    return true;
+}
+
+// One frame: the camera turned by `degrees`, timed to the swap. Negative: timed out.
+double timed_frame(gui::Viewer& v, double degrees) {
+    QEventLoop loop;
+    bool swapped = false;
+    const auto c = QObject::connect(&v, &QOpenGLWidget::frameSwapped, &loop, [&] {
+        swapped = true;
+        loop.quit();
+    });
+    QTimer::singleShot(30000, &loop, &QEventLoop::quit);
+    Camera cam = v.camera();
+    cam.orbit(degrees, 0.0);
+    const double t0 = now_ms();
+    v.set_camera(cam);
+    loop.exec();
+    const double t1 = now_ms();
+    QObject::disconnect(c);
+    return swapped ? t1 - t0 : -1.0;
+}
+
+double quantile(std::vector<double> v, double q) {
+    // Nearest rank: the smallest sample with at least q of them at or below it.
+    std::sort(v.begin(), v.end());
+    const std::size_t k = std::size_t(std::ceil(q * double(v.size())));
+    return v[std::min(v.size() - 1, k == 0 ? 0 : k - 1)];
+}
+
+double median(std::vector<double> v) {
+    std::sort(v.begin(), v.end());
+    const std::size_t n = v.size();
+    return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
+}
+
+int fail(const std::string& why) {
+    std::fprintf(stderr, "gui_frame_bench: %s\n", why.c_str());
+    return 1;
+}
+
+} // namespace
+
+int main(int argc, char** argv) {
+    int steps = 90;
+    std::string csv = std::string(ISOSCOPE_SOURCE_DIR) + "/docs/gui_frames.csv";
+    std::string input = std::string(ISOSCOPE_DATA_DIR) + "/headsq.nhdr";
+    for (int i = 1; i < argc; ++i) {
+        const std::string a = argv[i];
+        if (a == "--steps" && i + 1 < argc) steps = std::max(8, std::atoi(argv[++i]));
+        else if (a == "--csv" && i + 1 < argc) csv = argv[++i];
+        else if (a == "--input" && i + 1 < argc) input = argv[++i];
+        else {
+            std::printf("usage: gui_frame_bench [--steps N] [--csv FILE] [--input VOLUME]  (under xvfb-run or a display)\n");
+            return a == "--help" ? 0 : 2;
+        }
+    }
+    QSurfaceFormat fmt;
+    fmt.setVersion(4, 5);
+    fmt.setProfile(QSurfaceFormat::CoreProfile);
+    fmt.setDepthBufferSize(24);
+    QSurfaceFormat::setDefaultFormat(fmt);
+    int qargc = 1;
+    char* qargv[] = {argv[0], nullptr};
+    QApplication app(qargc, qargv);
+    QApplication::setOrganizationName("isoscope-bench");
+    QApplication::setApplicationName("gui_frame_bench");
+
+    gui::MainWindow w; // its default size, as a user first sees it
+    w.show();
+    if (!wait_until([&] { return w.isVisible(); }, 10000)) return fail("the window did not show");
+    w.open_path(QString::fromStdString(input));
+    if (!wait_until([&] { return !w.busy(); }, 120000) || !w.scene().has_volume()) return fail("cannot open " + input);
+    for (double iso : {500.0, 1150.0}) {
+        w.add_surface(iso);
+        if (!wait_until([&] { return !w.busy(); }, 300000)) return fail("the extraction did not finish");
+    }
+    const auto ids = w.scene().surfaces();
+    if (ids.size() != 2) return fail("expected the skin and the bone surfaces");
+    gui::Viewer* v = w.viewer();
+    if (!v || !wait_until([&] { return v->frames() > 0 || !v->error().empty(); }, 60000)) return fail("no 3D frame");
+    if (!v->error().empty()) return fail(v->error());
+    std::string renderer = "?";
+    {
+        v->makeCurrent();
+        const auto* s = reinterpret_cast<const char*>(QOpenGLContext::currentContext()->functions()->glGetString(GL_RENDERER));
+        if (s) renderer = s;
+        v->doneCurrent();
+    }
+    std::size_t triangles = 0;
+    for (auto id : ids) triangles += w.scene().mesh(id).triangles.size();
+    const QSize size = v->image_size();
+    std::printf("gui_frame_bench: %s, skin 500 + bone 1150 (%zu triangles), 3D view %d x %d, %d steps of %.1f degrees, GL: %s\n\n",
+                input.c_str(), triangles, size.width(), size.height(), steps, 360.0 / steps, renderer.c_str());
+
+    struct Case {
+        bool ao, translucent;
+        std::vector<double> ms;
+    };
+    std::vector<Case> cases = {{false, false, {}}, {false, true, {}}, {true, false, {}}, {true, true, {}}};
+    // The cases take turns in blocks (rounds), so a change in the machine's
+    // load (a shared machine) reaches every case alike.
+    const int rounds = 3;
+    for (int round = 0; round < rounds; ++round)
+        for (auto& c : cases) {
+            gui::ViewerOptions o = v->options();
+            o.ao = c.ao;
+            o.still_frames = 1; // every rotation frame is a first frame; no extra still frames in between
+            o.transparency = true;
+            v->set_options(o);
+            w.scene().info(ids[0]).opacity = c.translucent ? 0.3f : 1.0f;
+            if (round == 0) v->set_view(PatientView::Anterior);
+            for (int i = 0; i < 3; ++i) timed_frame(*v, 360.0 / steps); // warm-up after the switch (pool sizes)
+            const int n = steps / rounds + (round < steps % rounds ? 1 : 0);
+            for (int i = 0; i < n; ++i) {
+                const double ms = timed_frame(*v, 360.0 / steps);
+                if (ms < 0) return fail("a frame did not arrive within 30 s");
+                c.ms.push_back(ms);
+            }
+            if (!v->error().empty()) return fail(v->error());
+        }
+    struct Row {
+        bool ao, translucent;
+        double median, p95, min, max;
+    };
+    std::vector<Row> rows;
+    for (const auto& c : cases)
+        rows.push_back({c.ao, c.translucent, median(c.ms), quantile(c.ms, 0.95), *std::min_element(c.ms.begin(), c.ms.end()),
+                        *std::max_element(c.ms.begin(), c.ms.end())});
+
+    std::printf("| AO | skin | frames | median ms | p95 ms | min ms | max ms | median fps |\n");
+    std::printf("|---|---|---:|---:|---:|---:|---:|---:|\n");
+    for (const auto& r : rows)
+        std::printf("| %s | %s | %d | %.1f | %.1f | %.1f | %.1f | %.1f |\n", r.ao ? "on" : "off", r.translucent ? "0.3" : "opaque", steps,
+                    r.median, r.p95, r.min, r.max, 1000.0 / r.median);
+
+    std::string out = "ao,skin_opacity,width,height,triangles,frames,median_ms,p95_ms,min_ms,max_ms,gl_renderer\n";
+    for (const auto& r : rows) {
+        char line[512];
+        std::snprintf(line, sizeof line, "%d,%.1f,%d,%d,%zu,%d,%.3f,%.3f,%.3f,%.3f,\"%s\"\n", r.ao ? 1 : 0, r.translucent ? 0.3 : 1.0,
+                      size.width(), size.height(), triangles, steps, r.median, r.p95, r.min, r.max, renderer.c_str());
+        out += line;
+    }
+    try {
+        write_atomically(csv, [&](const std::string& tmp) {
+            std::ofstream f(tmp);
+            f << out;
+            if (!f.flush()) throw Error(csv, "cannot write");
+        });
+    } catch (const std::exception& e) {
+        return fail(e.what());
+    }
+    std::printf("\nwrote %s\n", csv.c_str());
+    return 0;
+}
