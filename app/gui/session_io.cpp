@@ -12,6 +12,7 @@
 
 #include "app/gui/export_dialog.hpp"
 #include "app/gui/main_window.hpp"
+#include "app/gui/view_toolbar.hpp"
 #include "app/gui/viewer.hpp"
 #include "io/atomic_file.hpp"
 #include "io/error.hpp"
@@ -56,8 +57,10 @@ core::Session MainWindow::current_session() const {
     }
     std::optional<core::WindowLevel> window;
     if (scene_->has_volume()) window = window_;
-    return core::capture_session(*scene_, path_.toStdString(), series_.toStdString(), camera, window, viewer_ ? viewer_->options().ao : true,
-                                 markups_);
+    // The 3D view's toggles (the view bar keeps them across scenes).
+    const bool ao = viewer_ ? viewer_->options().ao : view_bar_->ao();
+    const bool transparency = viewer_ ? viewer_->options().transparency : view_bar_->transparency();
+    return core::capture_session(*scene_, path_.toStdString(), series_.toStdString(), camera, window, ao, markups_, {}, transparency);
 }
 
 void MainWindow::add_session_actions(QMenu* file) {
@@ -83,8 +86,7 @@ void MainWindow::add_session_actions(QMenu* file) {
         const QString note = write ? "The state is also saved as a session next to the image (IMAGE.session.json); the image's "
                                      "metadata names it, so `isoscope render --session` can make it again."
                                    : "The image's metadata names the current session, " + named + " (unchanged since saved).";
-        auto* d = new ExportDialog(viewer_ ? viewer_->image_size() : QSize(1024, 1024), viewer_ ? viewer_->options().ao : true, image, note,
-                                   this);
+        auto* d = new ExportDialog(viewer_ ? viewer_->image_size() : QSize(1024, 1024), current_session().ao, image, note, this);
         d->setAttribute(Qt::WA_DeleteOnClose);
         connect(d, &QDialog::accepted, this, [this, d] { export_image(d->path(), d->options()); });
         d->open();
@@ -146,10 +148,11 @@ void MainWindow::open_session(const QString& path) {
                 remember_folder("session_folder", path);
                 if (s.window) set_window_level(*s.window);
                 set_markups(s.markups);
+                // Through the view bar, which keeps its toggles for later views and gives them to this one.
+                view_bar_->ao_action()->setChecked(s.ao);
+                view_bar_->transparency_action()->setChecked(s.transparency);
                 if (viewer_) {
-                    auto o = viewer_->options();
-                    o.ao = s.ao;
-                    viewer_->set_options(o);
+                    view_bar_->attach(*viewer_);
                     if (s.camera) viewer_->set_camera(*s.camera);
                 }
                 QString msg = "Opened the session " + path;

@@ -142,6 +142,7 @@ RenderOptions render_options(const RenderRequest& req) {
     ro.scale = req.scale;
     ro.background = glm::vec4(req.background, req.transparent ? 0.0f : 1.0f);
     ro.flat_shading = req.flat_shading;
+    ro.transparency = req.transparency;
     ro.oit_epsilon = req.oit_epsilon;
     if (!(req.oit_memory_mib >= 1.0 && req.oit_memory_mib <= 65536.0))
         throw Error("transparency memory", "expected 1..65536 MiB, got " + std::to_string(req.oit_memory_mib));
@@ -315,6 +316,7 @@ RenderOutput render_image(Scene& scene, const RenderRequest& req) {
     }
     t["isoscope:surfaces"] = surfaces;
     t["isoscope:shading"] = req.flat_shading ? "flat (albedo only)" : "lit";
+    if (!req.transparency) t["isoscope:transparency"] = "off: every surface drawn opaque, whatever its opacity";
     if (r.oit.fragments > 0) {
         t["isoscope:transparency"] = "VOIT per-pixel fragment lists, front to back, epsilon " + std::to_string(req.oit_epsilon) + "; " +
                                      std::to_string(r.oit.fragments) + " fragments" +

@@ -49,6 +49,7 @@ struct RenderRequest {
     std::vector<Markup> markups;
     std::vector<std::string> markups_files;
     bool transparent = false;        // transparent background (colour images)
+    bool transparency = true;        // off: every surface drawn opaque (RenderOptions::transparency)
     glm::vec3 background{0.08f, 0.09f, 0.11f}; // linear RGB
     bool flat_shading = false;       // each surface its albedo: no lighting, no AO
     float oit_epsilon = 1.0f / 512.0f;  // translucent surfaces: stop below this transmittance

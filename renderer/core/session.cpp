@@ -82,6 +82,7 @@ public:
         if (const json* v = member(root, "view"); v && !v->is_null()) {
             if (!v->is_object()) fail("view", "must be an object");
             s.ao = boolean(*v, "ao", "view.ao", true);
+            s.transparency = boolean(*v, "transparency", "view.transparency", true);
         }
         if (const json* m = member(root, "markups"); m && !m->is_null()) {
             try {
@@ -226,7 +227,7 @@ std::string slurp(const std::string& path) {
 
 Session capture_session(const Scene& scene, const std::string& input, const std::string& series, const std::optional<Camera>& camera,
                         const std::optional<WindowLevel>& window, bool ao, std::vector<Markup> markups,
-                        const std::function<PostProcessOptions(SurfaceId)>& post) {
+                        const std::function<PostProcessOptions(SurfaceId)>& post, bool transparency) {
     Session s;
     s.input = input.empty() ? std::string() : normal_absolute(input).string();
     s.series = series;
@@ -246,6 +247,7 @@ Session capture_session(const Scene& scene, const std::string& input, const std:
     s.camera = camera;
     s.window = window;
     s.ao = ao;
+    s.transparency = transparency;
     s.markups = std::move(markups);
     return s;
 }
@@ -283,7 +285,7 @@ ordered_json session_json(const Session& s, const std::string& session_path) {
         j["window_level"] = {{"center", s.window->center}, {"width", s.window->width}};
     else
         j["window_level"] = nullptr;
-    j["view"] = {{"ao", s.ao}};
+    j["view"] = {{"ao", s.ao}, {"transparency", s.transparency}};
     if (s.markups.empty()) {
         j["markups"] = nullptr;
     } else {
@@ -405,6 +407,7 @@ RenderRequest session_request(const Session& s, const std::string& session_file,
     if (o.markups) req.markups = s.markups;
     req.camera = s.camera;
     req.ao = o.ao.empty() ? (s.ao ? "cone" : "off") : o.ao;
+    req.transparency = s.transparency;
     req.session_file = session_file;
     return req;
 }

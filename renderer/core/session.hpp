@@ -52,6 +52,7 @@ struct Session {
     std::optional<Camera> camera;
     std::optional<WindowLevel> window; // the slice views' window/level
     bool ao = true;                    // the 3D view's ambient occlusion (cone) on
+    bool transparency = true;          // the 3D view's transparency on (off: every surface opaque)
     std::vector<Markup> markups;       // LPS mm
     // Found while loading, not stored: e.g. the input changed since saving.
     std::vector<std::string> warnings;
@@ -62,7 +63,7 @@ struct Session {
 // (null: none).
 Session capture_session(const Scene& scene, const std::string& input, const std::string& series, const std::optional<Camera>& camera,
                         const std::optional<WindowLevel>& window, bool ao, std::vector<Markup> markups,
-                        const std::function<PostProcessOptions(SurfaceId)>& post = {});
+                        const std::function<PostProcessOptions(SurfaceId)>& post = {}, bool transparency = true);
 
 // The JSON of a session stored at `session_path` (paths below its folder
 // relative) and back. from_json checks every field and throws iso::Error
@@ -109,7 +110,7 @@ struct SessionRenderOptions {
 };
 
 // The render request for the session's state: its camera (else the
-// anterior view), markups, AO; `session_file` (may be empty) is recorded
+// anterior view), markups, AO, transparency; `session_file` (may be empty) is recorded
 // in the image's metadata with its SHA-256.
 RenderRequest session_request(const Session& s, const std::string& session_file, const SessionRenderOptions& o);
 

@@ -25,6 +25,7 @@
 
 #include "app/gui/export_dialog.hpp"
 #include "app/gui/main_window.hpp"
+#include "app/gui/view_toolbar.hpp"
 #include "app/gui/viewer.hpp"
 #include "gui_test_util.hpp"
 #include "io/image.hpp"
@@ -172,7 +173,10 @@ TEST(GuiExportInXvfb, ExportSaveOpenSessionAndSurfaces) {
     EXPECT_EQ(cli_meta.text["isoscope:session_sha256"], meta.text["isoscope:session_sha256"]);
     EXPECT_EQ(cli_meta.text["isoscope:camera"], meta.text["isoscope:camera"]);
 
-    // ---- File > Save session; an unchanged state's export names it
+    // ---- File > Save session (with the view bar's transparency off); an unchanged state's export names it
+    ASSERT_NE(w.view_toolbar(), nullptr);
+    w.view_toolbar()->transparency_action()->trigger();
+    ASSERT_FALSE(w.viewer()->options().transparency);
     const std::string session = dir / "study.isoscope.json";
     w.save_session(QString::fromStdString(session));
     ASSERT_TRUE(wait_until([&] { return !w.busy(); }, 60000));
@@ -239,6 +243,8 @@ TEST(GuiExportInXvfb, ExportSaveOpenSessionAndSurfaces) {
     }
     EXPECT_NEAR(c2.fov_y_degrees, orbited.fov_y_degrees, 1e-9);
     EXPECT_EQ(w2.viewer()->options().ao, w.viewer()->options().ao);
+    EXPECT_FALSE(w2.viewer()->options().transparency);
+    EXPECT_FALSE(w2.view_toolbar()->transparency());
     EXPECT_EQ(w2.window_level().center, w.window_level().center);
     EXPECT_EQ(w2.window_level().width, w.window_level().width);
     ASSERT_EQ(w2.markups().size(), 1u);

@@ -97,6 +97,20 @@ TEST(SessionRender, EqualsRenderImageOfTheSameStateAndTheCli) {
     anterior.camera.reset();
     EXPECT_GT(differing(core::render_image(scene, anterior).image, b.image), 1000u);
 
+    // The 3D view's transparency off: every surface opaque, as the hand-built request asks.
+    {
+        core::Session opaque = s;
+        opaque.transparency = false;
+        core::save_session(opaque, dir / "opaque.json");
+        auto o2 = core::open_session(dir / "opaque.json");
+        const auto c = core::render_image(*o2.scene, core::session_request(o2.session, dir / "opaque.json", o));
+        core::RenderRequest hand_opaque = hand;
+        hand_opaque.transparency = false;
+        EXPECT_EQ(differing(c.image, core::render_image(scene, hand_opaque).image), 0u);
+        EXPECT_GT(differing(c.image, a.image), 1000u); // the skin hides the bone now
+        EXPECT_EQ(c.meta.text.count("isoscope:transparency"), 1u);
+    }
+
     // The CLI, as a process, writes the same pixels and names the session.
     const std::string out = dir / "cli.png";
     const auto r = test::run_command(test::cli() + " render --session " + file + " --size 320x240 -o " + out, true);

@@ -60,6 +60,7 @@ core::Session example(const std::string& input) {
     s.camera = c;
     s.window = core::WindowLevel{1963.5, 3926.25};
     s.ao = false;
+    s.transparency = false;
     s.markups = {line({1.5, 2.25, -3.0}, {40.0, 50.0 / 3.0, -60.0}, "ruler")};
     return s;
 }
@@ -132,6 +133,7 @@ TEST(Session, SavedAndLoadedBackExactly) {
     EXPECT_EQ(r.window->center, 1963.5);
     EXPECT_EQ(r.window->width, 3926.25);
     EXPECT_FALSE(r.ao);
+    EXPECT_FALSE(r.transparency);
     ASSERT_EQ(r.markups.size(), 1u);
     EXPECT_EQ(r.markups[0].name, "ruler");
     EXPECT_EQ(r.markups[0].points[1].position, s.markups[0].points[1].position);
@@ -204,6 +206,7 @@ TEST(Session, RefusalsNameTheFileAndTheField) {
         {edited([](auto& j) { j["camera"]["up"] = j["camera"]["target"]; j["camera"]["eye"] = {0, 0, 0}; }), "camera.up: is zero or along"},
         {edited([](auto& j) { j["window_level"]["width"] = 0; }), "window_level.width: must be positive"},
         {edited([](auto& j) { j["view"]["ao"] = "yes"; }), "view.ao: must be true or false"},
+        {edited([](auto& j) { j["view"]["transparency"] = 0; }), "view.transparency: must be true or false"},
         {edited([](auto& j) { j["markups"]["markups"][0]["controlPoints"].erase(1); }), "markups: markup 1 (Line 'ruler'): a Line needs 2"},
     };
     for (const auto& c : cases) {
@@ -276,7 +279,8 @@ TEST(Session, OpensItsSceneAndCapturesItBack) {
     }
     // What the scene shows, captured again, is the same state.
     const auto back = core::capture_session(scene, opened.session.input, opened.session.series, opened.session.camera,
-                                            opened.session.window, opened.session.ao, opened.session.markups);
+                                            opened.session.window, opened.session.ao, opened.session.markups, {},
+                                            opened.session.transparency);
     EXPECT_TRUE(core::same_state(back, s));
 
     // Cancelled through the progress function.
@@ -309,7 +313,8 @@ TEST(Session, RenderRequest) {
     ASSERT_TRUE(r.camera.has_value());
     EXPECT_EQ(r.camera->eye, s.camera->eye);
     EXPECT_EQ(r.markups.size(), 1u);
-    EXPECT_EQ(r.ao, "off"); // the session's view option
+    EXPECT_EQ(r.ao, "off"); // the session's view options
+    EXPECT_FALSE(r.transparency);
     EXPECT_EQ(r.session_file, "x.json");
     o.markups = false;
     o.ao = "cone";
