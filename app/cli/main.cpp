@@ -419,9 +419,8 @@ int run_render(const RenderArgs& a) {
         req = frame_request(a.frame);
     } else {
         iso::check_writable_destination(a.out);
-        auto s = iso::core::load_session(a.session);
-        for (const auto& w : s.warnings) std::cerr << "warning: " << a.session << ": " << w << "\n";
-        opened = iso::core::open_session(s, progress_bar());
+        opened = iso::core::open_session(a.session, progress_bar());
+        for (const auto& w : opened->session.warnings) std::cerr << "warning: " << a.session << ": " << w << "\n";
         req = session_render_request(a, *opened);
     }
     req.scale = a.scale;

@@ -366,7 +366,7 @@ OpenedSession open_session(const Session& s, const ProgressFn& progress) {
     std::size_t next_mesh = 0;
     for (std::size_t i = 0; i < n; ++i) {
         const auto& ss = s.surfaces[i];
-        const auto where = "surface " + std::to_string(i + 1) + " ('" + ss.name + "')";
+        const auto where = "surface " + std::to_string(i + 1) + (ss.name.empty() ? std::string() : " ('" + ss.name + "')");
         const ProgressFn p = part(0.3 + 0.7 * double(i) / double(n), 0.3 + 0.7 * double(i + 1) / double(n));
         std::vector<SurfaceId> ids;
         if (ss.kind == SurfaceInfo::Kind::Mesh) {
@@ -394,7 +394,14 @@ OpenedSession open_session(const Session& s, const ProgressFn& progress) {
 
 OpenedSession open_session(const std::string& path, const ProgressFn& progress) {
     Session s = load_session(path);
-    return open_session(s, progress);
+    try {
+        return open_session(s, progress);
+    } catch (const Cancelled&) {
+        throw;
+    } catch (const Error& e) {
+        // The input's own error (a damaged file, a surface it cannot have), under the session's name.
+        throw Error(path, e.what());
+    }
 }
 
 RenderRequest session_request(const Session& s, const std::string& session_file, const SessionRenderOptions& o) {

@@ -96,6 +96,7 @@ struct OpenedSession {
 // session's order), applies names, colours, opacities and visibility.
 // Throws iso::Error (iso::Cancelled when `progress` returns false).
 OpenedSession open_session(const Session& s, const ProgressFn& progress = {});
+// load_session and open_session; the input's errors come prefixed with the session's path.
 OpenedSession open_session(const std::string& path, const ProgressFn& progress = {});
 
 // How to render a session: `isoscope render --session` and the desktop

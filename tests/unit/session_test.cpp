@@ -286,13 +286,15 @@ TEST(Session, OpensItsSceneAndCapturesItBack) {
     // Cancelled through the progress function.
     EXPECT_THROW(core::open_session(dir / "s.json", [](double, std::string_view) { return false; }), Cancelled);
 
-    // A mesh surface on a volume input is refused, naming the surface.
+    // A mesh surface on a volume input is refused, naming the session, the input and the surface.
     s.surfaces[0].kind = core::SurfaceInfo::Kind::Mesh;
+    core::save_session(s, dir / "mesh.json");
     try {
-        core::open_session(s);
+        core::open_session(dir / "mesh.json");
         ADD_FAILURE() << "no error";
     } catch (const Error& e) {
-        EXPECT_NE(std::string(e.what()).find("surface 1 ('skin'): a mesh surface"), std::string::npos) << e.what();
+        EXPECT_EQ(e.where(), dir / "mesh.json");
+        EXPECT_NE(std::string(e.what()).find(s.input + ": surface 1 ('skin'): a mesh surface"), std::string::npos) << e.what();
     }
 }
 
