@@ -453,7 +453,11 @@ void MainWindow::dropEvent(QDropEvent* e) {
     e->acceptProposedAction();
     // Queued: the drag source is not kept waiting for the load to start.
     const QString path = urls.front().toLocalFile();
-    QTimer::singleShot(0, this, [this, path] { open_path(path); });
+    QTimer::singleShot(0, this, [this, path] {
+        // A session (.json; Slicer's .mrk.json are markups, not sessions) restores what it saved.
+        const bool session = path.endsWith(".json", Qt::CaseInsensitive) && !path.endsWith(".mrk.json", Qt::CaseInsensitive);
+        session ? open_session(path) : open_path(path);
+    });
 }
 
 // ---- surfaces --------------------------------------------------------------------------

@@ -14,6 +14,7 @@
 #include <QMenu>
 #include <QMenuBar>
 #include <QMessageBox>
+#include <QMimeData>
 #include <QPushButton>
 #include <QSpinBox>
 #include <QStatusBar>
@@ -279,4 +280,20 @@ TEST(GuiExportInXvfb, ExportSaveOpenSessionAndSurfaces) {
     EXPECT_EQ(w2.scene().surfaces().size(), 2u);
     EXPECT_EQ(w2.session_path().toStdString(), session);
     step(clock, "broken session refused");
+
+    // ---- a session dropped on the window opens as a session
+    {
+        QMimeData mime;
+        mime.setUrls({QUrl::fromLocalFile(QString::fromStdString(session))});
+        QDragEnterEvent enter(QPoint(200, 200), Qt::CopyAction, &mime, Qt::LeftButton, Qt::NoModifier);
+        static_cast<QObject&>(w2).event(&enter);
+        QDropEvent drop(QPointF(200, 200), Qt::CopyAction, &mime, Qt::LeftButton, Qt::NoModifier);
+        static_cast<QObject&>(w2).event(&drop);
+        ASSERT_TRUE(wait_until([&] { return &w2.scene() != shown && !w2.busy(); }, 60000))
+            << w2.statusBar()->currentMessage().toStdString();
+        EXPECT_EQ(w2.scene().surfaces().size(), 2u);
+        EXPECT_EQ(w2.markups().size(), 1u);
+        EXPECT_EQ(w2.session_path().toStdString(), session);
+    }
+    step(clock, "dropped session opened");
 }
