@@ -194,6 +194,18 @@ TEST(GuiExportInXvfb, ExportSaveOpenSessionAndSurfaces) {
     EXPECT_EQ(again.text["isoscope:session"], session);
     EXPECT_FALSE(fs::exists(dir / "again.png.session.json"));
     step(clock, "saved the session, exported the unchanged state");
+    // An export into a folder that does not exist: a dialog names the file, nothing is written.
+    {
+        const std::string nowhere = dir / "no/such/folder/x.png";
+        w.export_image(QString::fromStdString(nowhere), small);
+        ASSERT_TRUE(wait_until([&] { return !w.busy(); }, 60000));
+        QMessageBox* box = nullptr;
+        ASSERT_TRUE(wait_until([&] { return (box = w.findChild<QMessageBox*>("error")) && box->isVisible(); }, 10000));
+        EXPECT_TRUE(box->text().contains(QString::fromStdString(nowhere))) << box->text().toStdString();
+        box->close();
+        QTest::qWait(50);
+        EXPECT_FALSE(fs::exists(dir / "no"));
+    }
 
     // ---- File > Save surfaces: the bone as PLY, read back by the core
     QAction* surfaces_action = file_action(w, "Save s&urfaces...");
