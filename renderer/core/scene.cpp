@@ -35,11 +35,19 @@ struct Scene::Impl {
                                 (id != 0 && id <= surfaces.size() ? " (it was removed)" : ""));
         return surfaces[id - 1];
     }
-    // The cached range index when it fits `opt`, else a fresh one (kept for next time).
+    // The cached range index when it fits `opt`, else a fresh one (kept for
+    // next time). Made outside the lock: other threads asking meanwhile wait for nothing.
     Extractor extractor(const Volume& v, const ExtractOptions& opt) const {
-        std::lock_guard lock(cache_mutex);
-        Extractor x(v, opt, index);
-        if (x.shared_index() != index) index = x.shared_index();
+        std::shared_ptr<const ChunkIndex> cached;
+        {
+            std::lock_guard lock(cache_mutex);
+            cached = index;
+        }
+        Extractor x(v, opt, cached);
+        if (x.shared_index() != cached) {
+            std::lock_guard lock(cache_mutex);
+            index = x.shared_index();
+        }
         return x;
     }
 };
@@ -157,9 +165,14 @@ Mesh Scene::extract_isosurface(double iso, const ExtractOptions& extract, const 
 
 ValueRange Scene::value_range() const {
     const Volume& v = volume();
+    {
+        std::lock_guard lock(impl_->cache_mutex);
+        if (impl_->range) return *impl_->range;
+    }
+    const ValueRange r = v.value_range(); // outside the lock: an index being made elsewhere does not wait
     std::lock_guard lock(impl_->cache_mutex);
-    if (!impl_->range) impl_->range = v.value_range();
-    return *impl_->range;
+    impl_->range = r;
+    return r;
 }
 
 namespace {
