@@ -193,6 +193,21 @@ TEST(GuiSurfacesInXvfb, AddOpacitySliderLargestRemoveAndCancel) {
     EXPECT_TRUE(w.grab().toImage().save(QString::fromStdString((out / "bone_removed.png").string())));
     std::printf("screenshots: %s\n", out.c_str());
 
+    // ---- a new file while a re-extraction runs: the worker stops before the
+    // old scene goes, its result is dropped, the new scene starts without rows
+    {
+        const core::Scene* old_scene = &w.scene();
+        slider->setValue(at500 + 300);
+        ASSERT_TRUE(panel->reextracting(skin));
+        w.open_path(QString::fromStdString(headsq));
+        ASSERT_TRUE(wait_until([&] { return &w.scene() != old_scene && !w.busy(); }, 60000)) << "the load did not finish";
+        EXPECT_FALSE(panel->reextracting());
+        EXPECT_EQ(panel->row(skin), nullptr);
+        EXPECT_TRUE(w.scene().surfaces().empty());
+        QTest::qWait(100); // a late result of the old scene's worker would arrive here
+        EXPECT_TRUE(w.scene().surfaces().empty());
+    }
+
     // ---- cancel a long extraction: no surface, no error dialog, the window usable
     const std::string big = big_volume(dir.path());
     w.open_path(QString::fromStdString(big));
