@@ -61,13 +61,16 @@ void expect_new_frame(gui::MainWindow& w, int frames_before) {
 // press Cancel (the range index alone reads all 200 MB).
 std::string big_volume(const std::filesystem::path& dir) {
     auto v = Volume::dense({512, 512, 400}, VoxelType::I16, make_affine({0.7, 0.7, 1.0}, {0, 0, 0}));
-    auto s = v.as<std::int16_t>();
-    for (std::int64_t k = 0; k < 400; ++k)
-        for (std::int64_t j = 0; j < 512; ++j)
-            for (std::int64_t i = 0; i < 512; ++i) {
-                const double r = std::sqrt((i - 256.0) * (i - 256.0) + (j - 256.0) * (j - 256.0) + (k - 200.0) * (k - 200.0) * 2.0);
-                s[v.linear_index(i, j, k)] = std::int16_t(std::clamp((180.0 - r) * 50.0, 0.0, 1000.0));
+    std::int16_t* s = v.as<std::int16_t>().data(); // zero-filled; only the ball's box is written
+    for (std::int64_t k = 73; k < 328; ++k)
+        for (std::int64_t j = 75; j < 437; ++j) {
+            std::int16_t* row = s + v.linear_index(0, j, k);
+            const double jk = (j - 256.0) * (j - 256.0) + (k - 200.0) * (k - 200.0) * 2.0;
+            for (std::int64_t i = 75; i < 437; ++i) {
+                const double r = std::sqrt((i - 256.0) * (i - 256.0) + jk);
+                row[i] = std::int16_t(std::clamp((180.0 - r) * 50.0, 0.0, 1000.0));
             }
+        }
     const std::string path = (dir / "big.nrrd").string();
     save_volume(v, path, /*compress=*/false);
     return path;
