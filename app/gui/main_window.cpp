@@ -33,6 +33,7 @@
 #include "app/gui/series_dialog.hpp"
 #include "app/gui/slice_view.hpp"
 #include "app/gui/view_toolbar.hpp"
+#include "app/gui/surfaces_panel.hpp"
 #include "app/gui/viewer.hpp"
 #include "io/error.hpp"
 #include "renderer/core/api.hpp"
@@ -42,19 +43,6 @@ namespace iso::gui {
 
 namespace {
 constexpr int kRecentMax = 8;
-
-// Iso values the Surfaces dock offers. The bundled head CT (datasets/headsq,
-// VTK's "headsq") is not in HU: its skin is at ~500 and its bone at ~1150
-// (the README's command). The HU values are common rules of thumb for
-// calibrated CT (air/skin boundary, cortical bone, contrast-filled vessels),
-// not tuned on a dataset here; the spin box edits any of them.
-struct IsoPreset {
-    const char* name;
-    double value;
-};
-constexpr IsoPreset kIsoPresets[] = {
-    {"skin (headsq)", 500}, {"bone (headsq)", 1150}, {"skin (CT, HU)", -500}, {"bone (CT, HU)", 300}, {"vessels with contrast (CT, HU)", 200},
-};
 } // namespace
 
 struct MainWindow::Job {
@@ -170,30 +158,17 @@ MainWindow::MainWindow(QWidget* parent) : QMainWindow(parent), scene_(std::make_
     // ---- Surfaces dock
     auto* dock = new QDockWidget("Surfaces", this);
     dock->setObjectName("surfaces");
-    auto* panel = new QWidget(dock);
-    auto* col = new QVBoxLayout(panel);
-    iso_preset_ = new QComboBox(panel);
-    iso_preset_->setObjectName("iso_preset");
-    for (const auto& p : kIsoPresets) iso_preset_->addItem(QString("%1: %2").arg(p.name).arg(p.value));
-    col->addWidget(iso_preset_);
-    auto* add_row = new QHBoxLayout;
-    add_row->addWidget(new QLabel("Iso value"));
-    iso_ = new QDoubleSpinBox(panel);
-    iso_->setObjectName("iso_value");
-    iso_->setRange(-1e6, 1e6);
-    iso_->setDecimals(1);
-    iso_->setValue(kIsoPresets[0].value);
-    add_row->addWidget(iso_);
-    auto* add = new QPushButton("Add surface", panel);
-    add->setObjectName("add_surface");
-    add_row->addWidget(add);
-    col->addLayout(add_row);
-    connect(iso_preset_, &QComboBox::activated, this, [this](int i) { iso_->setValue(kIsoPresets[i].value); });
-    connect(add, &QPushButton::clicked, this, [this] { add_surface(iso_->value()); });
-    surface_rows_ = new QVBoxLayout;
-    col->addLayout(surface_rows_);
-    col->addStretch(1);
-    dock->setWidget(panel);
+    surfaces_ = new SurfacesPanel(dock);
+    surfaces_->run_job = [this](const QString& title, auto work, auto done) { run_job(title, false, std::move(work), std::move(done)); };
+    surfaces_->busy = [this] { return busy(); };
+    surfaces_->message = [this](const QString& m) { statusBar()->showMessage(m); };
+    surfaces_->error = [this](const QString& title, const QString& what, std::exception_ptr e) { show_error(title, what, e); };
+    surfaces_->changed = [this](bool outlines) {
+        update_3d();
+        if (outlines) refresh_slices();
+    };
+    surfaces_->set_scene(scene_.get());
+    dock->setWidget(surfaces_);
     addDockWidget(Qt::RightDockWidgetArea, dock);
     measurements_ = new MeasurementsPanel(*this);
     addDockWidget(Qt::RightDockWidgetArea, measurements_);
@@ -203,6 +178,7 @@ MainWindow::MainWindow(QWidget* parent) : QMainWindow(parent), scene_(std::make_
 }
 
 MainWindow::~MainWindow() {
+    surfaces_->set_scene(nullptr); // its re-extractions read the scene: they stop first
     // Workers still running (an abandoned load, an extraction) finish before
     // the scene they may use goes; extractions stop at their next progress call.
     for (auto& j : running_) {
@@ -383,7 +359,7 @@ void MainWindow::set_scene(std::unique_ptr<core::Scene> scene, const QString& pa
         viewer_ = nullptr;
     }
     view3d_->setCurrentWidget(placeholder_);
-    clear_surface_rows();
+    surfaces_->set_scene(nullptr); // stops re-extractions reading the old scene
     scene_ = std::move(scene);
     path_ = path;
     series_ = series;
@@ -400,7 +376,7 @@ void MainWindow::set_scene(std::unique_ptr<core::Scene> scene, const QString& pa
         set_window_level(core::default_window(scene_->volume()));
     }
     for (std::size_t i = 0; i < 3; ++i) views_[i]->set_content(scene_.get(), &planes_[i]);
-    add_surface_rows(scene_->surfaces());
+    surfaces_->set_scene(scene_.get());
     update_3d();
     setWindowTitle("isoscope - " + QFileInfo(path).fileName());
     remember_recent(path);
@@ -462,93 +438,7 @@ void MainWindow::dropEvent(QDropEvent* e) {
 
 // ---- surfaces --------------------------------------------------------------------------
 
-void MainWindow::add_surface(double iso) {
-    if (busy()) {
-        statusBar()->showMessage("Busy: wait for the current task or cancel it");
-        return;
-    }
-    if (!scene_->has_volume()) {
-        statusBar()->showMessage("Open a volume first");
-        return;
-    }
-    // The worker adds to the scene the views draw: they do not read its
-    // surfaces until it is done (the progress dialog is window-modal, so
-    // nothing else edits them).
-    if (viewer_) viewer_->setUpdatesEnabled(false);
-    for (auto* v : views_) v->set_outlines_enabled(false);
-    auto ids = std::make_shared<std::vector<core::SurfaceId>>();
-    core::Scene* s = scene_.get();
-    const std::size_t existing = s->surfaces().size();
-    run_job(QString("Extracting the isosurface at %1").arg(iso), false,
-            [s, iso, ids](const ProgressFn& progress) { *ids = s->add_isosurfaces({iso}, {}, {}, progress); },
-            [this, ids, iso, existing](std::exception_ptr e) {
-                if (viewer_) viewer_->setUpdatesEnabled(true);
-                for (auto* v : views_) v->set_outlines_enabled(true);
-                if (e) {
-                    show_error("Surface extraction failed", QString("Cannot extract the isosurface at %1").arg(iso), e);
-                } else {
-                    // Later surfaces further along the skin-to-bone palette.
-                    for (auto id : *ids) scene_->info(id).color = core::surface_color(existing, existing + 1);
-                    add_surface_rows(*ids);
-                    std::size_t triangles = 0;
-                    for (auto id : *ids) triangles += scene_->mesh(id).triangles.size();
-                    statusBar()->showMessage(QString("Added the isosurface at %1: %2 triangles").arg(iso).arg(triangles));
-                }
-                update_3d();
-                refresh_slices();
-            });
-}
-
-void MainWindow::clear_surface_rows() {
-    while (auto* item = surface_rows_->takeAt(0)) {
-        delete item->widget();
-        delete item;
-    }
-}
-
-void MainWindow::add_surface_rows(const std::vector<std::uint32_t>& ids) {
-    for (auto id : ids) {
-        auto& info = scene_->info(id);
-        auto* row = new QWidget;
-        row->setObjectName(QString("surface_%1").arg(id));
-        auto* h = new QHBoxLayout(row);
-        h->setContentsMargins(0, 0, 0, 0);
-        auto* visible = new QCheckBox(QString::fromStdString(info.name), row);
-        visible->setObjectName("visible");
-        visible->setChecked(info.visible);
-        auto* color = new QPushButton(row);
-        color->setObjectName("color");
-        color->setFixedSize(24, 20);
-        const auto paint_button = [color](const QColor& c) { color->setStyleSheet("background-color: " + c.name()); };
-        paint_button(to_qcolor(info.color));
-        auto* opacity = new QSlider(Qt::Horizontal, row);
-        opacity->setObjectName("opacity");
-        opacity->setRange(0, 100);
-        opacity->setValue(int(std::lround(info.opacity * 100)));
-        opacity->setToolTip("Opacity");
-        h->addWidget(visible);
-        h->addWidget(color);
-        h->addWidget(opacity, 1);
-        connect(visible, &QCheckBox::toggled, this, [this, id](bool on) {
-            scene_->info(id).visible = on;
-            update_3d();
-            refresh_slices();
-        });
-        connect(opacity, &QSlider::valueChanged, this, [this, id](int v) {
-            scene_->info(id).opacity = float(v) / 100.0f;
-            update_3d();
-        });
-        connect(color, &QPushButton::clicked, this, [this, id, paint_button] {
-            const QColor c = QColorDialog::getColor(to_qcolor(scene_->info(id).color), this, "Surface colour");
-            if (!c.isValid()) return;
-            scene_->info(id).color = from_qcolor(c);
-            paint_button(c);
-            update_3d();
-            refresh_slices();
-        });
-        surface_rows_->addWidget(row);
-    }
-}
+void MainWindow::add_surface(double iso) { surfaces_->add_surface(iso); }
 
 // ---- views -----------------------------------------------------------------------------
 

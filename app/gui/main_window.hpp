@@ -40,6 +40,7 @@ namespace iso::gui {
 class MeasureTools;
 class MeasurementsPanel;
 class SliceView;
+class SurfacesPanel;
 class Viewer;
 class ViewToolBar;
 
@@ -61,8 +62,9 @@ public:
     const QString& path() const { return path_; }
     const QString& series() const { return series_; }
     // The Surfaces dock's "Add surface": extracts an isosurface of the
-    // volume in the background.
+    // volume in the background (SurfacesPanel::add_surface).
     void add_surface(double iso);
+    SurfacesPanel* surfaces_panel() const { return surfaces_; }
     // A background job (load or extraction) is running.
     bool busy() const { return job_ != nullptr; }
 
@@ -121,8 +123,6 @@ private:
     void show_error(const QString& title, const QString& what, std::exception_ptr e);
     void refresh_slices();
     void update_3d();
-    void add_surface_rows(const std::vector<std::uint32_t>& ids);
-    void clear_surface_rows();
     void slice_clicked(SliceView& view, QPointF pixel);
     void slice_scrolled(SliceView& view, double steps);
     void remember_recent(const QString& path);
@@ -142,9 +142,7 @@ private:
     QComboBox* window_preset_ = nullptr;
     QDoubleSpinBox* center_ = nullptr;
     QDoubleSpinBox* width_ = nullptr;
-    QDoubleSpinBox* iso_ = nullptr;
-    QComboBox* iso_preset_ = nullptr;
-    QVBoxLayout* surface_rows_ = nullptr;
+    SurfacesPanel* surfaces_ = nullptr;
     QMenu* recent_menu_ = nullptr;
     QString path_, series_;
     std::vector<Markup> markups_;

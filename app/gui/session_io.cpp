@@ -60,7 +60,7 @@ core::Session MainWindow::current_session() const {
     // The 3D view's toggles (the view bar keeps them across scenes).
     const bool ao = viewer_ ? viewer_->options().ao : view_bar_->ao();
     const bool transparency = viewer_ ? viewer_->options().transparency : view_bar_->transparency();
-    return core::capture_session(*scene_, path_.toStdString(), series_.toStdString(), camera, window, ao, markups_, {}, transparency);
+    return core::capture_session(*scene_, path_.toStdString(), series_.toStdString(), camera, window, ao, markups_, transparency);
 }
 
 void MainWindow::add_session_actions(QMenu* file) {

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cstdio>
 #include <filesystem>
+#include <mutex>
 #include <optional>
 
 #include "io/error.hpp"
@@ -15,16 +16,39 @@ struct Scene::Impl {
         Mesh mesh;
         Bounds bounds;
         std::uint32_t gpu_id = 0; // the renderer's object id once uploaded (0: not yet)
+        bool gpu_stale = false;   // the mesh changed (or was removed) since it was uploaded
+        bool removed = false;     // the id stays taken: ids equal the renderer's object ids
     };
     std::vector<Entry> surfaces;
     std::optional<Volume> volume;
     std::string volume_source;
     std::vector<std::string> sources;
     std::unique_ptr<Renderer> renderer;
+    // Computed once per volume, read by extractions on worker threads.
+    mutable std::mutex cache_mutex;
+    mutable std::shared_ptr<const ChunkIndex> index;
+    mutable std::optional<ValueRange> range;
 
     Entry& at(SurfaceId id, const char* op) {
-        if (id == 0 || id > surfaces.size()) throw Error(op, "no surface with id " + std::to_string(id));
+        if (id == 0 || id > surfaces.size() || surfaces[id - 1].removed)
+            throw Error(op, "no surface with id " + std::to_string(id) +
+                                (id != 0 && id <= surfaces.size() ? " (it was removed)" : ""));
         return surfaces[id - 1];
+    }
+    // The cached range index when it fits `opt`, else a fresh one (kept for
+    // next time). Made outside the lock: other threads asking meanwhile wait for nothing.
+    Extractor extractor(const Volume& v, const ExtractOptions& opt) const {
+        std::shared_ptr<const ChunkIndex> cached;
+        {
+            std::lock_guard lock(cache_mutex);
+            cached = index;
+        }
+        Extractor x(v, opt, cached);
+        if (x.shared_index() != cached) {
+            std::lock_guard lock(cache_mutex);
+            index = x.shared_index();
+        }
+        return x;
     }
 };
 
@@ -41,10 +65,19 @@ SurfaceId Scene::open(const std::string& path, const LoadOptions& opt) {
         impl_->sources.push_back(path);
         return id;
     }
-    impl_->volume = load_volume(path, opt);
-    impl_->volume_source = path;
-    impl_->sources.push_back(path);
+    set_volume(load_volume(path, opt), path);
     return 0;
+}
+
+void Scene::set_volume(Volume v, const std::string& source) {
+    {
+        std::lock_guard lock(impl_->cache_mutex);
+        impl_->index.reset();
+        impl_->range.reset();
+    }
+    impl_->volume = std::move(v);
+    impl_->volume_source = source;
+    impl_->sources.push_back(source);
 }
 
 bool Scene::has_volume() const { return impl_->volume.has_value(); }
@@ -71,6 +104,15 @@ void postprocess_all(std::vector<Mesh>& meshes, const PostProcessOptions& post, 
     }
 }
 
+void warn_outside_range(Mesh& m, double iso, const ValueRange& range) {
+    if (iso > range.max || iso <= range.min) {
+        char w[160];
+        std::snprintf(w, sizeof w, "iso value %g is outside the volume's value range [%g, %g]: the surface is empty", iso,
+                      range.min, range.max);
+        m.warnings.push_back(w);
+    }
+}
+
 ExtractOptions with_share(ExtractOptions eo, const ProgressFn& progress, double share) {
     if (progress) eo.progress = [progress, share](double f, std::string_view stage) { return progress(f * share, stage); };
     return eo;
@@ -85,19 +127,95 @@ std::vector<SurfaceId> Scene::add_isosurfaces(std::vector<double> isos, const Ex
     std::sort(isos.begin(), isos.end());
     const bool pp = needs_postprocess(post);
     const double share = pp ? 0.6 : 1.0;
-    auto meshes = extract_isosurfaces(v, isos, with_share(extract, progress, share));
-    const auto range = v.value_range();
-    for (std::size_t i = 0; i < meshes.size(); ++i)
-        if (isos[i] > range.max || isos[i] <= range.min) {
-            char w[160];
-            std::snprintf(w, sizeof w, "iso value %g is outside the volume's value range [%g, %g]: the surface is empty", isos[i],
-                          range.min, range.max);
-            meshes[i].warnings.push_back(w);
+    std::vector<Mesh> meshes;
+    {
+        const Extractor x = impl_->extractor(v, with_share(extract, progress, share));
+        auto chunked = x.extract(isos);
+        for (auto& c : chunked) {
+            meshes.push_back(weld(c, x.options().threads));
+            c = ChunkedSurface{}; // free the chunks as soon as they are welded
         }
+    }
+    const auto range = value_range();
+    for (std::size_t i = 0; i < meshes.size(); ++i) warn_outside_range(meshes[i], isos[i], range);
     if (pp) postprocess_all(meshes, post, progress, share);
     report(progress, 1.0, "done", "isosurface extraction");
-    return add_extracted(std::move(meshes), SurfaceInfo::Kind::Iso, isos);
+    return add_extracted(std::move(meshes), SurfaceInfo::Kind::Iso, isos, post);
 }
+
+Mesh Scene::extract_isosurface(double iso, const ExtractOptions& extract, const PostProcessOptions& post, ProgressFn progress) const {
+    const Volume& v = volume();
+    const bool pp = needs_postprocess(post);
+    const double share = pp ? 0.6 : 1.0;
+    Mesh m;
+    {
+        const Extractor x = impl_->extractor(v, with_share(extract, progress, share));
+        m = weld(x.extract(iso), x.options().threads);
+    }
+    warn_outside_range(m, iso, value_range());
+    if (pp) {
+        std::vector<Mesh> one;
+        one.push_back(std::move(m));
+        postprocess_all(one, post, progress, share);
+        m = std::move(one[0]);
+    }
+    report(progress, 1.0, "done", "isosurface extraction");
+    return m;
+}
+
+ValueRange Scene::value_range() const {
+    const Volume& v = volume();
+    {
+        std::lock_guard lock(impl_->cache_mutex);
+        if (impl_->range) return *impl_->range;
+    }
+    const ValueRange r = v.value_range(); // outside the lock: an index being made elsewhere does not wait
+    std::lock_guard lock(impl_->cache_mutex);
+    impl_->range = r;
+    return r;
+}
+
+namespace {
+std::string iso_name(double value) {
+    char name[64];
+    std::snprintf(name, sizeof name, "iso %g", value);
+    return name;
+}
+} // namespace
+
+SurfaceId Scene::add_isosurface(Mesh m, double iso, const PostProcessOptions& post, std::optional<glm::vec3> color) {
+    SurfaceInfo info;
+    info.name = iso_name(iso);
+    info.kind = SurfaceInfo::Kind::Iso;
+    info.value = iso;
+    info.source = impl_->volume_source;
+    info.post = post;
+    // The first skin-toned, the next bone white, then distinct hues.
+    const std::size_t n = surfaces().size();
+    info.color = color ? *color : surface_color(n, std::max<std::size_t>(n + 1, 2));
+    return add_mesh(std::move(m), info);
+}
+
+void Scene::replace_surface(SurfaceId id, Mesh m, double value, const PostProcessOptions& post) {
+    auto& e = impl_->at(id, "Scene::replace_surface");
+    if (e.info.kind == SurfaceInfo::Kind::Iso && e.info.name == iso_name(e.info.value)) e.info.name = iso_name(value);
+    e.info.value = value;
+    e.info.post = post;
+    e.bounds = Bounds{};
+    for (const auto& p : m.positions) e.bounds.add(glm::dvec3(p));
+    e.mesh = std::move(m);
+    e.gpu_stale = true;
+}
+
+void Scene::remove_surface(SurfaceId id) {
+    auto& e = impl_->at(id, "Scene::remove_surface");
+    e.removed = true;
+    e.mesh = Mesh{};
+    e.bounds = Bounds{};
+    e.gpu_stale = true;
+}
+
+bool Scene::has_surface(SurfaceId id) const { return id != 0 && id <= impl_->surfaces.size() && !impl_->surfaces[id - 1].removed; }
 
 std::vector<SurfaceId> Scene::add_label_surfaces(const std::vector<double>& labels, const ExtractOptions& extract,
                                                  const PostProcessOptions& post, ProgressFn progress) {
@@ -111,10 +229,11 @@ std::vector<SurfaceId> Scene::add_label_surfaces(const std::vector<double>& labe
     report(progress, 1.0, "done", "label surface extraction");
     std::vector<double> values;
     for (const auto& ls : found) values.push_back(ls.label);
-    return add_extracted(std::move(meshes), SurfaceInfo::Kind::Label, values);
+    return add_extracted(std::move(meshes), SurfaceInfo::Kind::Label, values, post);
 }
 
-std::vector<SurfaceId> Scene::add_extracted(std::vector<Mesh> meshes, SurfaceInfo::Kind kind, const std::vector<double>& values) {
+std::vector<SurfaceId> Scene::add_extracted(std::vector<Mesh> meshes, SurfaceInfo::Kind kind, const std::vector<double>& values,
+                                            const PostProcessOptions& post) {
     std::vector<SurfaceId> ids;
     const bool iso = kind == SurfaceInfo::Kind::Iso;
     for (std::size_t i = 0; i < meshes.size(); ++i) {
@@ -124,6 +243,7 @@ std::vector<SurfaceId> Scene::add_extracted(std::vector<Mesh> meshes, SurfaceInf
         info.name = name;
         info.kind = kind;
         info.value = values[i];
+        info.post = post;
         info.source = impl_->volume_source;
         // Isosurfaces skin to bone; labels from the palette's distinct hues.
         info.color = iso ? surface_color(i, meshes.size()) : surface_color(i + 2, meshes.size() + 2);
@@ -137,13 +257,15 @@ SurfaceId Scene::add_mesh(Mesh m, SurfaceInfo info) {
         throw Error("Scene::add_mesh", "opacity of '" + info.name + "' must be between 0 and 1");
     Bounds b;
     for (const auto& p : m.positions) b.add(glm::dvec3(p));
-    impl_->surfaces.push_back({std::move(info), std::move(m), b, 0});
+    impl_->surfaces.push_back({std::move(info), std::move(m), b, 0, false, false});
     return SurfaceId(impl_->surfaces.size());
 }
 
 std::vector<SurfaceId> Scene::surfaces() const {
-    std::vector<SurfaceId> ids(impl_->surfaces.size());
-    for (std::size_t i = 0; i < ids.size(); ++i) ids[i] = SurfaceId(i + 1);
+    std::vector<SurfaceId> ids;
+    ids.reserve(impl_->surfaces.size());
+    for (std::size_t i = 0; i < impl_->surfaces.size(); ++i)
+        if (!impl_->surfaces[i].removed) ids.push_back(SurfaceId(i + 1));
     return ids;
 }
 
@@ -154,7 +276,7 @@ const Mesh& Scene::mesh(SurfaceId id) const { return impl_->at(id, "Scene::mesh"
 Bounds Scene::bounds() const {
     Bounds b;
     for (const auto& e : impl_->surfaces)
-        if (e.info.visible && !e.bounds.empty()) {
+        if (!e.removed && e.info.visible && !e.bounds.empty()) {
             b.add(e.bounds.min);
             b.add(e.bounds.max);
         }
@@ -178,25 +300,36 @@ Renderer& Scene::renderer() {
 
 RenderResult Scene::render(const Camera& camera, const RenderOptions& opt) {
     Renderer& ren = renderer();
-    // Upload what is new; carry the properties a front end may have edited.
+    // Upload what is new or changed, drop what was removed; carry the
+    // properties a front end may have edited. Every entry keeps its slot, so
+    // the renderer's object ids (id AOV, picking) equal the surface ids.
     for (auto& e : impl_->surfaces) {
         SceneObject o;
         o.name = e.info.name;
         o.color = e.info.color;
         o.opacity = e.info.opacity;
-        o.visible = e.info.visible;
-        o.pickable = e.info.pickable;
-        if (e.gpu_id == 0)
+        o.visible = e.info.visible && !e.removed;
+        o.pickable = e.info.pickable && !e.removed;
+        if (e.gpu_id == 0) {
             e.gpu_id = ren.add(e.mesh, o);
-        else
-            ren.object(e.gpu_id) = o;
+        } else if (e.gpu_stale) {
+            if (e.removed)
+                ren.remove(e.gpu_id);
+            else
+                ren.replace(e.gpu_id, e.mesh);
+        }
+        e.gpu_stale = false;
+        ren.object(e.gpu_id) = o;
     }
     return ren.render(camera, opt);
 }
 
 void Scene::release_gpu() {
     impl_->renderer.reset();
-    for (auto& e : impl_->surfaces) e.gpu_id = 0;
+    for (auto& e : impl_->surfaces) {
+        e.gpu_id = 0;
+        e.gpu_stale = false;
+    }
 }
 
 void Scene::export_mesh(SurfaceId id, const std::string& path) const { save_mesh(mesh(id), path); }

@@ -10,6 +10,7 @@
 
 #include <cstdint>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -39,6 +40,10 @@ struct SurfaceInfo {
     glm::vec3 color{0.9f}; // linear RGB albedo
     float opacity = 1.0f;  // 0..1
     bool visible = true, pickable = true;
+    // How an Iso or Label surface was made from the volume (smoothing,
+    // decimation, keep-largest): a session restores the surface by
+    // extracting `value` again with these.
+    PostProcessOptions post;
 };
 
 class Scene {
@@ -53,6 +58,9 @@ public:
     // surface and its id is returned; anything else is loaded as the scene's
     // volume (replacing an earlier one) and 0 is returned. Throws iso::Error.
     SurfaceId open(const std::string& path, const LoadOptions& opt = {});
+    // Makes `v` the scene's volume (replacing an earlier one), as open()
+    // does for a volume file; `source` names it (metadata, errors).
+    void set_volume(Volume v, const std::string& source);
     bool has_volume() const;
     const Volume& volume() const;           // throws without one
     const std::string& volume_source() const;
@@ -65,7 +73,37 @@ public:
                                               const PostProcessOptions& post = {}, ProgressFn progress = {});
     SurfaceId add_mesh(Mesh m, SurfaceInfo info);
 
-    std::vector<SurfaceId> surfaces() const; // in the order added
+    // ---- surfaces made off the GUI thread ----------------------------------
+    // The isosurface of the volume at `iso`, post-processed, as a mesh; the
+    // scene is not changed (with an empty-surface warning outside the value
+    // range). Safe on a worker thread while another thread renders or edits
+    // the scene's surfaces: it reads only the volume, which must stay (no
+    // open() meanwhile). The volume's range index (per-chunk min/max) is made
+    // on the first call and reused by later ones with the same chunk size, so
+    // a moved iso value visits only the chunks whose min/max contain it.
+    // Throws iso::Cancelled when `progress` returns false.
+    Mesh extract_isosurface(double iso, const ExtractOptions& extract = {}, const PostProcessOptions& post = {},
+                            ProgressFn progress = {}) const;
+    // The volume's value range (finite samples), computed once; throws without a volume.
+    ValueRange value_range() const;
+    // Adds a mesh extract_isosurface made: kind Iso, name "iso <value>",
+    // `post` recorded, the volume as its source. Colour: the given one, else
+    // the next along the skin-to-bone palette for the n surfaces already
+    // there (surface_color(n, max(n + 1, 2)): skin, bone, then other hues).
+    SurfaceId add_isosurface(Mesh m, double iso, const PostProcessOptions& post = {},
+                             std::optional<glm::vec3> color = std::nullopt);
+    // Replaces a surface's mesh (a moved iso slider, other post-processing);
+    // colour, opacity and visibility stay. An Iso surface whose name was the
+    // automatic "iso <old>" is renamed "iso <value>". The renderer uploads
+    // the new mesh on the next render, into the same object id.
+    void replace_surface(SurfaceId id, Mesh m, double value, const PostProcessOptions& post);
+    // Removes a surface: its id is never reused (the others keep theirs),
+    // surfaces() no longer lists it, info() and mesh() throw for it, and the
+    // renderer drops its GPU copy on the next render.
+    void remove_surface(SurfaceId id);
+    bool has_surface(SurfaceId id) const; // added and not removed
+
+    std::vector<SurfaceId> surfaces() const; // in the order added (removed ones left out)
     SurfaceInfo& info(SurfaceId id);         // edit freely; the next render shows it
     const SurfaceInfo& info(SurfaceId id) const;
     const Mesh& mesh(SurfaceId id) const;
@@ -87,7 +125,8 @@ public:
     void export_mesh(SurfaceId id, const std::string& path) const;
 
 private:
-    std::vector<SurfaceId> add_extracted(std::vector<Mesh> meshes, SurfaceInfo::Kind kind, const std::vector<double>& values);
+    std::vector<SurfaceId> add_extracted(std::vector<Mesh> meshes, SurfaceInfo::Kind kind, const std::vector<double>& values,
+                                         const PostProcessOptions& post);
     struct Impl;
     std::unique_ptr<Impl> impl_;
 };

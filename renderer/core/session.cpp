@@ -227,7 +227,7 @@ std::string slurp(const std::string& path) {
 
 Session capture_session(const Scene& scene, const std::string& input, const std::string& series, const std::optional<Camera>& camera,
                         const std::optional<WindowLevel>& window, bool ao, std::vector<Markup> markups,
-                        const std::function<PostProcessOptions(SurfaceId)>& post, bool transparency) {
+                        bool transparency) {
     Session s;
     s.input = input.empty() ? std::string() : normal_absolute(input).string();
     s.series = series;
@@ -241,7 +241,7 @@ Session capture_session(const Scene& scene, const std::string& input, const std:
         ss.color = hex_from_linear(info.color);
         ss.opacity = info.opacity;
         ss.visible = info.visible;
-        if (post) ss.post = post(id);
+        ss.post = info.post;
         s.surfaces.push_back(std::move(ss));
     }
     s.camera = camera;
@@ -375,7 +375,7 @@ OpenedSession open_session(const Session& s, const ProgressFn& progress) {
         } else if (!scene.has_volume()) {
             throw Error(s.input, where + ": an " + std::string(kind_name(ss.kind)) + " surface, but the input is not a volume");
         } else if (ss.kind == SurfaceInfo::Kind::Iso) {
-            ids = scene.add_isosurfaces({ss.value}, {}, ss.post, p);
+            ids = {scene.add_isosurface(scene.extract_isosurface(ss.value, {}, ss.post, p), ss.value, ss.post)};
         } else {
             ids = scene.add_label_surfaces({ss.value}, {}, ss.post, p);
             if (ids.empty()) throw Error(s.input, where + ": the volume has no label " + std::to_string(ss.value));

@@ -59,11 +59,9 @@ struct Session {
 };
 
 // What the window shows, as a session (no file access: the SHA-256 is left
-// empty). `post(id)` gives the post-processing a surface was made with
-// (null: none).
+// empty); each surface's post-processing is its SurfaceInfo::post.
 Session capture_session(const Scene& scene, const std::string& input, const std::string& series, const std::optional<Camera>& camera,
-                        const std::optional<WindowLevel>& window, bool ao, std::vector<Markup> markups,
-                        const std::function<PostProcessOptions(SurfaceId)>& post = {}, bool transparency = true);
+                        const std::optional<WindowLevel>& window, bool ao, std::vector<Markup> markups, bool transparency = true);
 
 // The JSON of a session stored at `session_path` (paths below its folder
 // relative) and back. from_json checks every field and throws iso::Error
@@ -93,7 +91,9 @@ struct OpenedSession {
 
 // Builds the session's scene: opens the input with the series, extracts
 // the iso and label surfaces (each with its post-processing, in the
-// session's order), applies names, colours, opacities and visibility.
+// session's order; iso surfaces as the Surfaces panel makes them,
+// Scene::extract_isosurface and add_isosurface), applies names, colours,
+// opacities and visibility.
 // Throws iso::Error (iso::Cancelled when `progress` returns false).
 OpenedSession open_session(const Session& s, const ProgressFn& progress = {});
 // load_session and open_session; the input's errors come prefixed with the session's path.

@@ -462,7 +462,10 @@ std::size_t scratch_estimate(int C, std::size_t sample_bytes) {
 }
 } // namespace
 
-Extractor::Extractor(const Volume& volume, ExtractOptions opt) : volume_(&volume), opt_(std::move(opt)) {
+Extractor::Extractor(const Volume& volume, ExtractOptions opt) : Extractor(volume, std::move(opt), nullptr) {}
+
+Extractor::Extractor(const Volume& volume, ExtractOptions opt, std::shared_ptr<const ChunkIndex> index)
+    : volume_(&volume), opt_(std::move(opt)) {
     if (opt_.chunk_size < 2) throw Error("extract", "chunk size must be at least 2 cells");
     const std::size_t sample = volume.is_sparse() ? sizeof(float) : voxel_size(volume.type);
     // Fit the per-thread scratch into the budget: fewer threads first, then smaller chunks.
@@ -470,7 +473,10 @@ Extractor::Extractor(const Volume& volume, ExtractOptions opt) : volume_(&volume
     while (threads > 1 && std::size_t(threads) * scratch_estimate(opt_.chunk_size, sample) > opt_.memory_budget) --threads;
     while (opt_.chunk_size > 4 && scratch_estimate(opt_.chunk_size, sample) > opt_.memory_budget) opt_.chunk_size /= 2;
     opt_.threads = threads;
-    index_ = ChunkIndex(volume, opt_.chunk_size, opt_.threads);
+    if (index && index->chunk_size() == opt_.chunk_size && index->dims() == volume.dims)
+        index_ = std::move(index);
+    else
+        index_ = std::make_shared<const ChunkIndex>(volume, opt_.chunk_size, opt_.threads);
 }
 
 namespace {
@@ -541,15 +547,16 @@ std::vector<ChunkedSurface> Extractor::extract(std::span<const double> isos, Ext
     for (std::size_t i = 0; i < isos.size(); ++i) {
         if (!std::isfinite(isos[i])) throw Error("extract", "iso value is not a finite number");
         out[i].iso = isos[i];
-        out[i].chunks.resize(index_.chunk_count());
     }
+    const ChunkIndex& idx = *index_;
+    for (auto& s : out) s.chunks.resize(idx.chunk_count());
     std::vector<std::size_t> ids;
-    ids.reserve(index_.chunk_count());
-    for (std::size_t id = 0; id < index_.chunk_count(); ++id)
+    ids.reserve(idx.chunk_count());
+    for (std::size_t id = 0; id < idx.chunk_count(); ++id)
         for (double iso : isos)
-            if (index_.active(id, iso)) { ids.push_back(id); break; }
-    run_chunks(*volume_, index_, opt_, ids, out, stats);
-    if (stats) stats->chunks_total = index_.chunk_count();
+            if (idx.active(id, iso)) { ids.push_back(id); break; }
+    run_chunks(*volume_, idx, opt_, ids, out, stats);
+    if (stats) stats->chunks_total = idx.chunk_count();
     return out;
 }
 
@@ -559,11 +566,14 @@ ChunkedSurface Extractor::extract(double iso, ExtractStats* stats) const {
 }
 
 std::vector<std::size_t> Extractor::update(const IndexBox& box, std::span<ChunkedSurface> surfaces, ExtractStats* stats) {
-    auto ids = index_.chunks_touching(box);
-    index_.refresh(*volume_, ids);
+    auto ids = index_->chunks_touching(box);
+    // Copy on write: extractors sharing the old index keep it as it was.
+    auto fresh = std::make_shared<ChunkIndex>(*index_);
+    fresh->refresh(*volume_, ids);
+    index_ = std::move(fresh);
     for (auto& s : surfaces)
-        if (s.chunks.size() != index_.chunk_count()) throw Error("extract", "surface does not belong to this extractor");
-    run_chunks(*volume_, index_, opt_, ids, surfaces, stats);
+        if (s.chunks.size() != index_->chunk_count()) throw Error("extract", "surface does not belong to this extractor");
+    run_chunks(*volume_, *index_, opt_, ids, surfaces, stats);
     return ids;
 }
 

@@ -63,6 +63,7 @@ public:
     ChunkIndex(const Volume& v, int chunk_size, int threads = 0);
 
     int chunk_size() const { return chunk_size_; }
+    std::array<std::int64_t, 3> dims() const { return dims_; }
     std::array<int, 3> counts() const { return counts_; }
     std::size_t chunk_count() const { return min_.size(); }
     std::array<int, 3> coords(std::size_t id) const {
@@ -70,6 +71,9 @@ public:
     }
     // Can chunk `id` hold a surface at `iso`?  (Some sample >= iso and some < iso.)
     bool active(std::size_t id, double iso) const { return max_[id] >= iso && min_[id] < iso; }
+    // The chunk's smallest and largest sample (NaN substituted, Inf clamped).
+    double min(std::size_t id) const { return min_[id]; }
+    double max(std::size_t id) const { return max_[id]; }
     // Chunks whose samples or gradient stencils include any sample of `box`.
     std::vector<std::size_t> chunks_touching(const IndexBox& box) const;
     // Recomputes the summary of the given chunks after an edit.
@@ -121,8 +125,18 @@ class Extractor {
 public:
     // Keeps a reference to `volume`: it must outlive the extractor.
     Extractor(const Volume& volume, ExtractOptions opt = {});
+    // Reuses `index`, the range index (per-chunk min/max) of this same volume
+    // that an earlier extractor made (its shared_index()), instead of
+    // summarizing every sample again: a slider moving the iso value then pays
+    // only for the chunks that can hold the new value. An index made for
+    // other dimensions or another chunk size than these options come to
+    // (after the memory budget), or none, is not used: a fresh one is made.
+    // The caller vouches that the samples did not change since it was made.
+    Extractor(const Volume& volume, ExtractOptions opt, std::shared_ptr<const ChunkIndex> index);
 
-    const ChunkIndex& index() const { return index_; }
+    const ChunkIndex& index() const { return *index_; }
+    // The index to hand to a later extractor of the same volume (shared, immutable).
+    std::shared_ptr<const ChunkIndex> shared_index() const { return index_; }
     const ExtractOptions& options() const { return opt_; }
 
     // Extracts every iso value in one pass over the chunks.
@@ -137,7 +151,7 @@ public:
 private:
     const Volume* volume_;
     ExtractOptions opt_;
-    ChunkIndex index_;
+    std::shared_ptr<const ChunkIndex> index_; // copied on write by update()
 };
 
 // Welds a chunked surface into one indexed mesh: border vertices merged by

@@ -67,7 +67,8 @@ struct Renderer::Impl {
 Renderer::Renderer() : impl_(std::make_unique<Impl>()) {}
 Renderer::~Renderer() = default;
 
-std::uint32_t Renderer::add(const Mesh& m, const SceneObject& o) {
+namespace {
+GpuMesh upload(const Mesh& m, const SceneObject& o) {
     GpuMesh g;
     g.object = o;
     const auto normals = m.normals.size() == m.positions.size() ? m.normals : vertex_normals(m);
@@ -91,9 +92,29 @@ std::uint32_t Renderer::add(const Mesh& m, const SceneObject& o) {
         glVertexArrayAttribFormat(vao, a, 3, GL_FLOAT, GL_FALSE, a * 3 * sizeof(float));
         glVertexArrayAttribBinding(vao, a, 0);
     }
-    impl_->meshes.push_back(std::move(g));
+    return g;
+}
+} // namespace
+
+std::uint32_t Renderer::add(const Mesh& m, const SceneObject& o) {
+    impl_->meshes.push_back(upload(m, o));
     ++impl_->geometry_version;
     return std::uint32_t(impl_->meshes.size());
+}
+
+void Renderer::replace(std::uint32_t id, const Mesh& m) {
+    auto& slot = impl_->meshes.at(id - 1);
+    slot = upload(m, slot.object);
+    ++impl_->geometry_version;
+}
+
+void Renderer::remove(std::uint32_t id) {
+    auto& slot = impl_->meshes.at(id - 1);
+    SceneObject o = slot.object;
+    o.visible = false;
+    slot = GpuMesh{};
+    slot.object = o;
+    ++impl_->geometry_version;
 }
 
 std::size_t Renderer::object_count() const { return impl_->meshes.size(); }

@@ -156,6 +156,11 @@ public:
     // Uploads a mesh (positions LPS mm, normals optional: computed if absent).
     // Returns the object's id (1-based; 0 is the background in the id AOV).
     std::uint32_t add(const Mesh& m, const SceneObject& o);
+    // Uploads a new mesh for object `id` in place (its properties and id stay).
+    void replace(std::uint32_t id, const Mesh& m);
+    // Frees object `id`'s GPU buffers; the id stays taken (later objects keep
+    // theirs) and draws nothing from now on.
+    void remove(std::uint32_t id);
     std::size_t object_count() const;
     Bounds bounds() const;
     SceneObject& object(std::uint32_t id);

@@ -26,6 +26,7 @@
 
 #include "app/gui/export_dialog.hpp"
 #include "app/gui/main_window.hpp"
+#include "app/gui/surfaces_panel.hpp"
 #include "app/gui/view_toolbar.hpp"
 #include "app/gui/viewer.hpp"
 #include "gui_test_util.hpp"
@@ -95,6 +96,11 @@ TEST(GuiExportInXvfb, ExportSaveOpenSessionAndSurfaces) {
     }
     const auto ids = w.scene().surfaces();
     ASSERT_EQ(ids.size(), 2u);
+    // The bone kept largest (the Surfaces panel's re-extraction): sessions carry it.
+    PostProcessOptions largest;
+    largest.keep_largest = true;
+    w.surfaces_panel()->set_post(ids[1], largest);
+    ASSERT_TRUE(wait_until([&] { return !w.surfaces_panel()->reextracting() && w.scene().info(ids[1]).post.keep_largest; }, 60000));
     step(clock, "opened headsq, added skin and bone");
     // Skin at 0.3 through the core (the Surfaces panel is another part's).
     w.scene().info(ids[0]).opacity = 0.3f;
@@ -244,6 +250,7 @@ TEST(GuiExportInXvfb, ExportSaveOpenSessionAndSurfaces) {
         EXPECT_NEAR(b.color.r, a.color.r, 0.01f);
         EXPECT_EQ(b.opacity, a.opacity);
         EXPECT_EQ(b.visible, a.visible);
+        EXPECT_EQ(b.post.keep_largest, a.post.keep_largest);
         EXPECT_EQ(w2.scene().mesh(w2.scene().surfaces()[i]).triangles.size(), w.scene().mesh(ids[i]).triangles.size());
     }
     ASSERT_NE(w2.viewer(), nullptr);

@@ -252,8 +252,7 @@ TEST(Session, HexColoursRoundTrip) {
 
 TEST(Session, OpensItsSceneAndCapturesItBack) {
     TempDir dir;
-    core::Session s = example(test::data("headsq.nhdr"));
-    s.surfaces[1].post = {}; // plain extraction (quick)
+    core::Session s = example(test::data("headsq.nhdr")); // the bone smoothed (0.25) and kept largest
     core::save_session(s, dir / "s.json");
     double last = -1;
     bool monotonic = true;
@@ -275,11 +274,16 @@ TEST(Session, OpensItsSceneAndCapturesItBack) {
         EXPECT_EQ(info.color, core::linear_from_hex(s.surfaces[i].color));
         EXPECT_EQ(info.opacity, s.surfaces[i].opacity);
         EXPECT_EQ(info.visible, s.surfaces[i].visible);
-        EXPECT_GT(scene.mesh(opened.surfaces[i]).triangles.size(), 10000u);
+        EXPECT_EQ(info.post.smooth, s.surfaces[i].post.smooth);
+        EXPECT_EQ(info.post.keep_largest, s.surfaces[i].post.keep_largest);
+        // As the Surfaces panel extracts it.
+        const Mesh expected = scene.extract_isosurface(s.surfaces[i].value, {}, s.surfaces[i].post);
+        EXPECT_EQ(scene.mesh(opened.surfaces[i]).triangles.size(), expected.triangles.size());
+        EXPECT_GT(expected.triangles.size(), 10000u);
     }
     // What the scene shows, captured again, is the same state.
     const auto back = core::capture_session(scene, opened.session.input, opened.session.series, opened.session.camera,
-                                            opened.session.window, opened.session.ao, opened.session.markups, {},
+                                            opened.session.window, opened.session.ao, opened.session.markups,
                                             opened.session.transparency);
     EXPECT_TRUE(core::same_state(back, s));
 

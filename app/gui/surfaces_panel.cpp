@@ -1,0 +1,499 @@
+#include "app/gui/surfaces_panel.hpp"
+
+#include <QCheckBox>
+#include <QColorDialog>
+#include <QComboBox>
+#include <QDoubleSpinBox>
+#include <QFrame>
+#include <QGridLayout>
+#include <QHBoxLayout>
+#include <QLabel>
+#include <QPushButton>
+#include <QSlider>
+#include <QThread>
+#include <QVBoxLayout>
+
+#include <atomic>
+#include <cmath>
+
+#include "app/gui/slice_view.hpp"
+#include "io/error.hpp"
+#include "renderer/core/scene.hpp"
+
+namespace iso::gui {
+
+namespace {
+
+// Iso values the panel offers. The bundled head CT (datasets/headsq, VTK's
+// "headsq") is not in HU: its skin is at ~500 and its bone at ~1150 (the
+// README's command). The HU values are common rules of thumb for calibrated
+// CT, not tuned on a dataset here (docs/gui.md); the number edits any of them.
+struct IsoPreset {
+    const char* name;
+    double value;
+    bool hu;
+};
+constexpr IsoPreset kIsoPresets[] = {
+    {"skin (headsq)", 500, false},
+    {"bone (headsq)", 1150, false},
+    {"skin", -500, true},
+    {"soft tissue", 20, true},
+    {"bone", 300, true},
+    {"contrast-filled vessels", 200, true},
+};
+
+bool same_post(const PostProcessOptions& a, const PostProcessOptions& b) {
+    return a.smooth == b.smooth && a.decimate == b.decimate && a.keep_largest == b.keep_largest;
+}
+
+} // namespace
+
+// One re-extraction on its own thread.
+struct SurfacesPanel::Worker {
+    QThread* thread = nullptr;
+    double iso = 0;
+    PostProcessOptions post;
+    unsigned generation = 0;
+    std::atomic<bool> cancel{false};
+    Mesh mesh;
+    std::exception_ptr error;
+};
+
+struct SurfacesPanel::Row {
+    std::uint32_t id = 0;
+    QFrame* widget = nullptr;
+    QSlider* slider = nullptr;
+    QDoubleSpinBox* value = nullptr;
+    QDoubleSpinBox* smooth = nullptr;
+    QCheckBox* largest = nullptr;
+    QLabel* busy = nullptr;
+    // The slider maps [lo, lo + steps * step] to 0..steps.
+    double lo = 0, step = 1;
+    int steps = 0;
+    bool syncing = false;
+    // What the user asked for last, and the re-extraction under way (null: none).
+    double wanted = 0;
+    PostProcessOptions wanted_post;
+    std::shared_ptr<Worker> worker;
+    int to_slider(double v) const { return int(std::clamp(std::lround((v - lo) / step), 0L, long(steps))); }
+    double from_slider(int s) const { return lo + double(s) * step; }
+};
+
+SurfacesPanel::SurfacesPanel(QWidget* parent) : QWidget(parent) {
+    auto* col = new QVBoxLayout(this);
+    preset_ = new QComboBox(this);
+    preset_->setObjectName("iso_preset");
+    col->addWidget(preset_);
+    auto* add_row = new QHBoxLayout;
+    add_row->addWidget(new QLabel("Iso value"));
+    iso_ = new QDoubleSpinBox(this);
+    iso_->setObjectName("add_iso_value");
+    iso_->setRange(-1e6, 1e6);
+    iso_->setDecimals(1);
+    iso_->setValue(kIsoPresets[0].value);
+    add_row->addWidget(iso_, 1);
+    auto* add = new QPushButton("Add surface", this);
+    add->setObjectName("add_surface");
+    add_row->addWidget(add);
+    col->addLayout(add_row);
+    auto* options = new QHBoxLayout;
+    options->addWidget(new QLabel("Smoothing"));
+    smooth_ = new QDoubleSpinBox(this);
+    smooth_->setObjectName("add_smoothing");
+    smooth_->setRange(0, 1);
+    smooth_->setSingleStep(0.1);
+    smooth_->setDecimals(2);
+    smooth_->setToolTip("Windowed-sinc smoothing factor, 0 (off) to 1 (strong), as 3D Slicer's");
+    options->addWidget(smooth_);
+    largest_ = new QCheckBox("Keep largest", this);
+    largest_->setObjectName("add_keep_largest");
+    largest_->setToolTip("Keep only the largest connected piece of the surface");
+    options->addWidget(largest_);
+    options->addStretch(1);
+    col->addLayout(options);
+    range_ = new QLabel(this);
+    range_->setObjectName("value_range");
+    col->addWidget(range_);
+    connect(preset_, &QComboBox::activated, this, [this](int i) {
+        const int p = preset_->itemData(i).toInt();
+        iso_->setValue(kIsoPresets[p].value);
+    });
+    connect(add, &QPushButton::clicked, this, [this] {
+        PostProcessOptions post;
+        post.smooth = smooth_->value();
+        post.keep_largest = largest_->isChecked();
+        add_surface(iso_->value(), post);
+    });
+    rows_layout_ = new QVBoxLayout;
+    col->addLayout(rows_layout_);
+    col->addStretch(1);
+    update_presets();
+}
+
+SurfacesPanel::~SurfacesPanel() { stop_workers(); }
+
+void SurfacesPanel::notify(bool outlines) {
+    if (changed) changed(outlines);
+}
+
+// ---- the scene ------------------------------------------------------------------------
+
+void SurfacesPanel::stop_workers() {
+    // The workers read the scene's volume: they end before it may go. Each
+    // stops at its next progress call.
+    for (auto& w : workers_) w->cancel = true;
+    for (auto& w : workers_) {
+        QObject::disconnect(w->thread, nullptr, this, nullptr);
+        w->thread->wait();
+        delete w->thread;
+        w->thread = nullptr;
+    }
+    workers_.clear();
+}
+
+void SurfacesPanel::set_scene(core::Scene* scene) {
+    stop_workers();
+    ++generation_;
+    for (auto& r : rows_) delete r->widget;
+    rows_.clear();
+    scene_ = scene;
+    update_presets();
+    if (scene_)
+        for (auto id : scene_->surfaces()) add_row(id);
+}
+
+void SurfacesPanel::update_presets() {
+    // CT in Hounsfield units: the HU presets first and the numbers marked HU.
+    const bool hu = scene_ && scene_->has_volume() && scene_->volume().meta.modality == "CT";
+    preset_->clear();
+    for (int pass = 0; pass < 2; ++pass)
+        for (int i = 0; i < int(std::size(kIsoPresets)); ++i) {
+            const auto& p = kIsoPresets[i];
+            if ((pass == 0) != (p.hu == hu)) continue;
+            preset_->addItem(QString("%1: %2%3").arg(p.name).arg(p.value).arg(p.hu ? " HU" : ""), i);
+        }
+    iso_->setSuffix(hu ? " HU" : "");
+    iso_->setValue(kIsoPresets[preset_->itemData(0).toInt()].value);
+    if (scene_ && scene_->has_volume()) {
+        const auto r = scene_->value_range();
+        range_->setText(QString("Values %1 to %2%3").arg(r.min).arg(r.max).arg(hu ? " HU" : ""));
+    } else {
+        range_->setText("Open a volume to add surfaces");
+    }
+}
+
+// ---- adding ----------------------------------------------------------------------------
+
+void SurfacesPanel::add_surface(double iso, const PostProcessOptions& post) {
+    if (busy && busy()) {
+        if (message) message("Busy: wait for the current task or cancel it");
+        return;
+    }
+    if (!scene_ || !scene_->has_volume()) {
+        if (message) message("Open a volume first");
+        return;
+    }
+    // The worker only reads the volume; the mesh joins the scene on the GUI thread.
+    auto mesh = std::make_shared<Mesh>();
+    core::Scene* s = scene_;
+    const unsigned generation = generation_;
+    run_job(QString("Extracting the isosurface at %1").arg(iso),
+            [s, iso, post, mesh](const ProgressFn& progress) { *mesh = s->extract_isosurface(iso, {}, post, progress); },
+            [this, s, iso, post, mesh, generation](std::exception_ptr e) {
+                if (e) {
+                    if (error) error("Surface extraction failed", QString("Cannot extract the isosurface at %1").arg(iso), e);
+                    return;
+                }
+                if (s != scene_ || generation != generation_) return; // another scene meanwhile
+                const std::size_t triangles = mesh->triangles.size();
+                const auto id = scene_->add_isosurface(std::move(*mesh), iso, post);
+                add_row(id);
+                notify(true);
+                if (message) message(QString("Added the isosurface at %1: %2 triangles").arg(iso).arg(triangles));
+            });
+}
+
+// ---- rows ------------------------------------------------------------------------------
+
+SurfacesPanel::Row* SurfacesPanel::find(std::uint32_t id) const {
+    for (const auto& r : rows_)
+        if (r->id == id) return r.get();
+    return nullptr;
+}
+
+QWidget* SurfacesPanel::row(std::uint32_t id) const {
+    const Row* r = find(id);
+    return r ? r->widget : nullptr;
+}
+
+void SurfacesPanel::add_row(std::uint32_t id) {
+    const auto& info = scene_->info(id);
+    auto row = std::make_unique<Row>();
+    Row* r = row.get();
+    r->id = id;
+    r->wanted = info.value;
+    r->wanted_post = info.post;
+    r->widget = new QFrame(this);
+    r->widget->setObjectName(QString("surface_%1").arg(id));
+    r->widget->setFrameShape(QFrame::StyledPanel);
+    auto* grid = new QGridLayout(r->widget);
+    grid->setContentsMargins(4, 4, 4, 4);
+
+    // Line 1: visibility and name, colour, Remove.
+    auto* visible = new QCheckBox(QString::fromStdString(info.name), r->widget);
+    visible->setObjectName("visible");
+    visible->setChecked(info.visible);
+    auto* color = new QPushButton(r->widget);
+    color->setObjectName("color");
+    color->setFixedSize(24, 20);
+    color->setToolTip("Colour");
+    const auto paint_button = [color](const QColor& c) { color->setStyleSheet("background-color: " + c.name()); };
+    paint_button(to_qcolor(info.color));
+    auto* remove = new QPushButton("Remove", r->widget);
+    remove->setObjectName("remove");
+    auto* line1 = new QHBoxLayout;
+    line1->addWidget(visible, 1);
+    line1->addWidget(color);
+    line1->addWidget(remove);
+    grid->addLayout(line1, 0, 0, 1, 3);
+
+    // Line 2: opacity, 0..100 %.
+    grid->addWidget(new QLabel("Opacity"), 1, 0);
+    auto* opacity = new QSlider(Qt::Horizontal, r->widget);
+    opacity->setObjectName("opacity");
+    opacity->setRange(0, 100);
+    opacity->setValue(int(std::lround(info.opacity * 100)));
+    auto* percent = new QLabel(QString("%1 %").arg(opacity->value()), r->widget);
+    percent->setMinimumWidth(40);
+    grid->addWidget(opacity, 1, 1);
+    grid->addWidget(percent, 1, 2);
+
+    connect(visible, &QCheckBox::toggled, this, [this, id](bool on) {
+        scene_->info(id).visible = on;
+        notify(true);
+    });
+    connect(opacity, &QSlider::valueChanged, this, [this, id, percent](int v) {
+        scene_->info(id).opacity = float(v) / 100.0f;
+        percent->setText(QString("%1 %").arg(v));
+        notify(false);
+    });
+    connect(color, &QPushButton::clicked, this, [this, id, paint_button] {
+        const QColor c = QColorDialog::getColor(to_qcolor(scene_->info(id).color), this, "Surface colour");
+        if (!c.isValid()) return;
+        scene_->info(id).color = from_qcolor(c);
+        paint_button(c);
+        notify(true);
+    });
+    connect(remove, &QPushButton::clicked, this, [this, id] {
+        const QString name = QString::fromStdString(scene_->info(id).name);
+        remove_row(id);
+        scene_->remove_surface(id);
+        notify(true);
+        if (message) message("Removed " + name);
+    });
+
+    // Lines 3 and 4, isosurfaces only: the iso slider and number (range: the
+    // volume's values), smoothing and keep-largest.
+    if (info.kind == core::SurfaceInfo::Kind::Iso && scene_->has_volume()) {
+        const auto range = scene_->value_range();
+        const auto type = scene_->volume().type;
+        const bool integral = type != VoxelType::F32 && type != VoxelType::F64 && !scene_->volume().is_sparse();
+        const double span = std::max(range.max - range.min, 1e-9);
+        r->lo = range.min;
+        r->steps = integral && span <= 100000 ? int(std::lround(span)) : 1000;
+        r->step = span / r->steps;
+        const bool hu = scene_->volume().meta.modality == "CT";
+        grid->addWidget(new QLabel("Iso"), 2, 0);
+        r->slider = new QSlider(Qt::Horizontal, r->widget);
+        r->slider->setObjectName("iso_slider");
+        r->slider->setRange(0, r->steps);
+        r->slider->setValue(r->to_slider(info.value));
+        r->slider->setToolTip(QString("Iso value, %1 to %2%3").arg(range.min).arg(range.max).arg(hu ? " HU" : ""));
+        r->value = new QDoubleSpinBox(r->widget);
+        r->value->setObjectName("iso_value");
+        r->value->setRange(range.min, range.max);
+        r->value->setDecimals(integral ? 0 : 3);
+        r->value->setKeyboardTracking(false); // on Enter, arrows or leaving the box
+        r->value->setSuffix(hu ? " HU" : "");
+        r->value->setValue(info.value);
+        r->busy = new QLabel("extracting...", r->widget);
+        r->busy->setObjectName("busy");
+        r->busy->setVisible(false);
+        auto* line2 = new QHBoxLayout;
+        line2->addWidget(r->slider, 1);
+        line2->addWidget(r->value);
+        grid->addLayout(line2, 2, 1, 1, 2);
+        grid->addWidget(r->busy, 3, 1, 1, 2);
+
+        grid->addWidget(new QLabel("Smoothing"), 4, 0);
+        r->smooth = new QDoubleSpinBox(r->widget);
+        r->smooth->setObjectName("smoothing");
+        r->smooth->setRange(0, 1);
+        r->smooth->setSingleStep(0.1);
+        r->smooth->setDecimals(2);
+        r->smooth->setKeyboardTracking(false);
+        r->smooth->setValue(info.post.smooth);
+        r->smooth->setToolTip("Windowed-sinc smoothing factor, 0 (off) to 1 (strong), as 3D Slicer's");
+        r->largest = new QCheckBox("Keep largest", r->widget);
+        r->largest->setObjectName("keep_largest");
+        r->largest->setChecked(info.post.keep_largest);
+        auto* line4 = new QHBoxLayout;
+        line4->addWidget(r->smooth);
+        line4->addWidget(r->largest);
+        line4->addStretch(1);
+        grid->addLayout(line4, 4, 1, 1, 2);
+
+        connect(r->slider, &QSlider::valueChanged, this, [this, id](int s) {
+            Row* row = find(id);
+            if (!row || row->syncing) return;
+            row->syncing = true;
+            row->value->setValue(row->from_slider(s));
+            row->syncing = false;
+            set_iso(id, row->value->value());
+        });
+        connect(r->value, &QDoubleSpinBox::valueChanged, this, [this, id](double v) {
+            Row* row = find(id);
+            if (!row || row->syncing) return;
+            row->syncing = true;
+            row->slider->setValue(row->to_slider(v));
+            row->syncing = false;
+            set_iso(id, v);
+        });
+        const auto post_changed = [this, id] {
+            Row* row = find(id);
+            if (!row || row->syncing) return;
+            PostProcessOptions p = row->wanted_post;
+            p.smooth = row->smooth->value();
+            p.keep_largest = row->largest->isChecked();
+            set_post(id, p);
+        };
+        connect(r->smooth, &QDoubleSpinBox::valueChanged, this, post_changed);
+        connect(r->largest, &QCheckBox::toggled, this, post_changed);
+    }
+    rows_layout_->addWidget(r->widget);
+    rows_.push_back(std::move(row));
+}
+
+void SurfacesPanel::remove_row(std::uint32_t id) {
+    for (auto it = rows_.begin(); it != rows_.end(); ++it)
+        if ((*it)->id == id) {
+            // A re-extraction still running for it stops; its result is dropped.
+            if ((*it)->worker) (*it)->worker->cancel = true;
+            (*it)->widget->deleteLater();
+            rows_.erase(it);
+            return;
+        }
+}
+
+// ---- re-extraction ---------------------------------------------------------------------
+
+void SurfacesPanel::set_iso(std::uint32_t id, double value) {
+    Row* r = find(id);
+    if (!r || !r->slider) return;
+    if (r->value->value() != value) {
+        // Called directly (not from the row's controls): show the value.
+        r->syncing = true;
+        r->value->setValue(value);
+        r->slider->setValue(r->to_slider(value));
+        r->syncing = false;
+    }
+    r->wanted = value;
+    request(*r);
+}
+
+void SurfacesPanel::set_post(std::uint32_t id, const PostProcessOptions& post) {
+    Row* r = find(id);
+    if (!r || !r->slider) return;
+    r->syncing = true;
+    r->smooth->setValue(post.smooth);
+    r->largest->setChecked(post.keep_largest);
+    r->syncing = false;
+    r->wanted_post = post;
+    request(*r);
+}
+
+bool SurfacesPanel::reextracting(std::uint32_t id) const {
+    for (const auto& r : rows_)
+        if ((id == 0 || r->id == id) && r->worker) return true;
+    return false;
+}
+
+void SurfacesPanel::request(Row& r) {
+    if (r.worker) {
+        // The latest value wins: stop the running one (its ProgressFn says
+        // no); when it has ended, finished() starts the wanted value.
+        if (r.worker->iso != r.wanted || !same_post(r.worker->post, r.wanted_post)) r.worker->cancel = true;
+        return;
+    }
+    const auto& info = scene_->info(r.id);
+    if (info.value == r.wanted && same_post(info.post, r.wanted_post)) return; // already shown
+    start(r);
+}
+
+void SurfacesPanel::start(Row& r) {
+    auto w = std::make_shared<Worker>();
+    w->iso = r.wanted;
+    w->post = r.wanted_post;
+    w->generation = generation_;
+    Worker* raw = w.get();
+    const core::Scene* s = scene_;
+    // Reads only the volume and its cached range index (core::Scene::extract_isosurface):
+    // the views keep drawing the scene meanwhile.
+    w->thread = QThread::create([raw, s] {
+        try {
+            raw->mesh = s->extract_isosurface(raw->iso, {}, raw->post,
+                                              [raw](double, std::string_view) { return !raw->cancel.load(); });
+        } catch (...) {
+            raw->error = std::current_exception();
+        }
+    });
+    const std::uint32_t id = r.id;
+    connect(w->thread, &QThread::finished, this, [this, id, w] { finished(id, w); });
+    r.worker = w;
+    workers_.push_back(w);
+    r.busy->setVisible(true);
+    w->thread->start();
+}
+
+void SurfacesPanel::finished(std::uint32_t id, const std::shared_ptr<Worker>& w) {
+    if (!w->thread) return; // stop_workers() already waited for it and deleted its thread
+    std::erase(workers_, w);
+    w->thread->deleteLater();
+    w->thread = nullptr;
+    if (w->generation != generation_) return;
+    Row* r = find(id);
+    if (!r || r->worker != w) return; // removed meanwhile
+    r->worker.reset();
+    const bool current = w->iso == r->wanted && same_post(w->post, r->wanted_post);
+    if (w->error) {
+        bool cancelled = false;
+        try {
+            std::rethrow_exception(w->error);
+        } catch (const Cancelled&) {
+            cancelled = true;
+        } catch (...) {
+        }
+        if (!cancelled && current && error)
+            error("Surface extraction failed", QString("Cannot extract the isosurface at %1").arg(w->iso), w->error);
+    } else if (current) {
+        // Swap the new mesh in on the GUI thread; the next frame uploads it.
+        scene_->replace_surface(id, std::move(w->mesh), w->iso, w->post);
+        ++swaps_;
+        if (auto* visible = r->widget->findChild<QCheckBox*>("visible"))
+            visible->setText(QString::fromStdString(scene_->info(id).name));
+        notify(true);
+        if (message)
+            message(QString("%1: %2 triangles").arg(QString::fromStdString(scene_->info(id).name)).arg(scene_->mesh(id).triangles.size()));
+    }
+    // A newer value came in meanwhile: extract it now (unless it is what is shown).
+    if (!current) {
+        const auto& info = scene_->info(id);
+        if (info.value != r->wanted || !same_post(info.post, r->wanted_post)) {
+            start(*r);
+            return;
+        }
+    }
+    r->busy->setVisible(false);
+}
+
+} // namespace iso::gui

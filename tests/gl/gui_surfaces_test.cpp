@@ -1,0 +1,238 @@
+// The Surfaces panel (issue 14, docs/gui.md "Surfaces panel") driven
+// in-process through QTest in a real X server: GuiSurfaces.UnderXvfb starts
+// this program again under xvfb-run, which runs GuiSurfacesInXvfb (skipped
+// when started any other way). Expected values come from the core API
+// (extract_isosurface, postprocess, measure_surface), not from the panel.
+#include <QApplication>
+#include <QCheckBox>
+#include <QDoubleSpinBox>
+#include <QMessageBox>
+#include <QProgressDialog>
+#include <QPushButton>
+#include <QSlider>
+#include <QStatusBar>
+#include <QTest>
+
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+
+#include "app/gui/main_window.hpp"
+#include "app/gui/slice_view.hpp"
+#include "app/gui/surfaces_panel.hpp"
+#include "app/gui/viewer.hpp"
+#include "io/volume_io.hpp"
+#include "renderer/core/scene.hpp"
+#include "renderer/iso/extract.hpp"
+#include "renderer/iso/measure.hpp"
+#include "renderer/iso/postprocess.hpp"
+#include "gui_test_util.hpp"
+
+using namespace iso;
+
+namespace {
+constexpr const char* kInner = "ISOSCOPE_GUI_SURFACES_TEST_IN_XVFB";
+using test::wait_until;
+
+template <class T> T* child(QWidget* row, const char* name) {
+    return row ? row->findChild<T*>(name) : nullptr;
+}
+
+void add_through_panel(gui::MainWindow& w, double iso) {
+    auto* panel = w.surfaces_panel();
+    auto* value = panel->findChild<QDoubleSpinBox*>("add_iso_value");
+    auto* add = panel->findChild<QPushButton*>("add_surface");
+    ASSERT_NE(value, nullptr);
+    ASSERT_NE(add, nullptr);
+    value->setValue(iso);
+    QTest::mouseClick(add, Qt::LeftButton);
+    ASSERT_TRUE(wait_until([&] { return !w.busy(); }, 60000)) << "the extraction did not finish";
+}
+
+// A frame drawn after now, without error.
+void expect_new_frame(gui::MainWindow& w, int frames_before) {
+    ASSERT_NE(w.viewer(), nullptr);
+    ASSERT_TRUE(wait_until([&] { return w.viewer()->frames() > frames_before || !w.viewer()->error().empty(); }, 60000));
+    EXPECT_TRUE(w.viewer()->error().empty()) << w.viewer()->error();
+}
+
+// A 512 x 512 x 400 int16 CT-sized volume (a ball of 1000 in 0, a linear
+// ramp across its surface), written raw: extracting it takes long enough to
+// press Cancel (the range index alone reads all 200 MB).
+std::string big_volume(const std::filesystem::path& dir) {
+    auto v = Volume::dense({512, 512, 400}, VoxelType::I16, make_affine({0.7, 0.7, 1.0}, {0, 0, 0}));
+    std::int16_t* s = v.as<std::int16_t>().data(); // zero-filled; only the ball's box is written
+    for (std::int64_t k = 73; k < 328; ++k)
+        for (std::int64_t j = 75; j < 437; ++j) {
+            std::int16_t* row = s + v.linear_index(0, j, k);
+            const double jk = (j - 256.0) * (j - 256.0) + (k - 200.0) * (k - 200.0) * 2.0;
+            for (std::int64_t i = 75; i < 437; ++i) {
+                const double r = std::sqrt((i - 256.0) * (i - 256.0) + jk);
+                row[i] = std::int16_t(std::clamp((180.0 - r) * 50.0, 0.0, 1000.0));
+            }
+        }
+    const std::string path = (dir / "big.nrrd").string();
+    save_volume(v, path, /*compress=*/false);
+    return path;
+}
+} // namespace
+
+TEST(GuiSurfaces, UnderXvfb) { test::run_inner_under_xvfb(kInner, "GuiSurfacesInXvfb.*"); }
+
+TEST(GuiSurfacesInXvfb, AddOpacitySliderLargestRemoveAndCancel) {
+    if (!std::getenv(kInner)) GTEST_SKIP() << "runs inside xvfb-run, started by GuiSurfaces.UnderXvfb";
+    test::TempDir dir;
+    const auto app = test::make_app("gui_surfaces_test", dir / "config");
+    const auto out = test::output_dir("gui_surfaces");
+
+    gui::MainWindow w;
+    w.resize(1500, 1000);
+    w.show();
+    ASSERT_TRUE(QTest::qWaitForWindowExposed(&w));
+    auto* panel = w.surfaces_panel();
+    ASSERT_NE(panel, nullptr);
+
+    const std::string headsq = test::data("headsq.nhdr");
+    w.open_path(QString::fromStdString(headsq));
+    ASSERT_TRUE(wait_until([&] { return !w.busy(); }, 60000)) << "the load did not finish";
+    ASSERT_TRUE(w.scene().has_volume());
+    const Volume& v = w.scene().volume();
+
+    // ---- add skin (500) and bone (1150) through the panel's Add button
+    add_through_panel(w, 500);
+    add_through_panel(w, 1150);
+    const auto ids = w.scene().surfaces();
+    ASSERT_EQ(ids.size(), 2u) << w.statusBar()->currentMessage().toStdString();
+    const auto skin = ids[0], bone = ids[1];
+    EXPECT_EQ(w.scene().info(skin).value, 500.0);
+    EXPECT_EQ(w.scene().info(bone).value, 1150.0);
+    EXPECT_EQ(w.scene().info(skin).kind, core::SurfaceInfo::Kind::Iso);
+    EXPECT_EQ(w.scene().mesh(skin).triangles.size(), extract_isosurface(v, 500).triangles.size());
+    EXPECT_EQ(w.scene().mesh(bone).triangles.size(), extract_isosurface(v, 1150).triangles.size());
+    ASSERT_NE(panel->row(skin), nullptr);
+    ASSERT_NE(panel->row(bone), nullptr);
+    expect_new_frame(w, 0);
+
+    // ---- skin opacity 0.3 through its row's slider
+    auto* opacity = child<QSlider>(panel->row(skin), "opacity");
+    ASSERT_NE(opacity, nullptr);
+    opacity->setValue(30);
+    EXPECT_FLOAT_EQ(w.scene().info(skin).opacity, 0.3f);
+    EXPECT_FLOAT_EQ(w.scene().info(bone).opacity, 1.0f);
+    expect_new_frame(w, w.viewer()->frames());
+    QTest::qWait(100);
+    EXPECT_TRUE(w.grab().toImage().save(QString::fromStdString((out / "skin_0.3_bone.png").string())));
+
+    // ---- move skin's iso slider: 550, 580, 600 in quick succession (a drag)
+    auto* slider = child<QSlider>(panel->row(skin), "iso_slider");
+    auto* number = child<QDoubleSpinBox>(panel->row(skin), "iso_value");
+    ASSERT_NE(slider, nullptr);
+    ASSERT_NE(number, nullptr);
+    // The slider spans the volume's values.
+    const auto range = v.value_range();
+    EXPECT_EQ(number->minimum(), range.min);
+    EXPECT_EQ(number->maximum(), range.max);
+    EXPECT_EQ(number->value(), 500.0);
+    const std::size_t skin_tris_500 = w.scene().mesh(skin).triangles.size();
+    const int swaps = panel->swaps();
+    const int at500 = slider->value(); // integer CT: one slider step per value
+    for (int d : {50, 80, 100}) slider->setValue(at500 + d);
+    EXPECT_EQ(number->value(), 600.0) << "the number follows the slider";
+    // Not done on the GUI thread: the old surface is still the scene's until the swap.
+    EXPECT_TRUE(panel->reextracting(skin));
+    EXPECT_EQ(w.scene().info(skin).value, 500.0);
+    EXPECT_EQ(w.scene().mesh(skin).triangles.size(), skin_tris_500);
+    int frames = w.viewer()->frames();
+    ASSERT_TRUE(wait_until([&] { return !panel->reextracting(); }, 60000)) << "the re-extraction did not end";
+    EXPECT_EQ(panel->swaps(), swaps + 1) << "only the latest value is swapped in";
+    EXPECT_EQ(w.scene().info(skin).value, 600.0);
+    EXPECT_EQ(w.scene().info(skin).name, "iso 600");
+    EXPECT_FLOAT_EQ(w.scene().info(skin).opacity, 0.3f) << "the row's settings stay";
+    {
+        const Mesh fresh = extract_isosurface(v, 600);
+        const Mesh& shown = w.scene().mesh(skin);
+        EXPECT_EQ(shown.triangles.size(), fresh.triangles.size());
+        EXPECT_NEAR(measure_surface(shown).area_mm2, measure_surface(fresh).area_mm2, 1e-6 * measure_surface(fresh).area_mm2);
+    }
+    expect_new_frame(w, frames);
+
+    // ---- the number box moves the slider and re-extracts too
+    number->setValue(650);
+    EXPECT_EQ(slider->value(), at500 + 150);
+    ASSERT_TRUE(wait_until([&] { return !panel->reextracting(); }, 60000));
+    EXPECT_EQ(w.scene().info(skin).value, 650.0);
+    EXPECT_EQ(w.scene().mesh(skin).triangles.size(), extract_isosurface(v, 650).triangles.size());
+
+    // ---- keep-largest on the bone: one component, as the core's post-processing gives
+    {
+        const Mesh raw = extract_isosurface(v, 1150);
+        ASSERT_GT(measure_surface(raw).components.size(), 1u) << "headsq's bone has islands";
+        PostProcessOptions largest;
+        largest.keep_largest = true;
+        const Mesh expected = postprocess(raw, largest);
+        auto* keep = child<QCheckBox>(panel->row(bone), "keep_largest");
+        ASSERT_NE(keep, nullptr);
+        frames = w.viewer()->frames();
+        keep->setChecked(true);
+        ASSERT_TRUE(wait_until([&] { return !panel->reextracting(); }, 60000));
+        EXPECT_TRUE(w.scene().info(bone).post.keep_largest);
+        EXPECT_EQ(measure_surface(w.scene().mesh(bone)).components.size(), 1u);
+        EXPECT_EQ(w.scene().mesh(bone).triangles.size(), expected.triangles.size());
+        expect_new_frame(w, frames);
+    }
+    QTest::qWait(100);
+    EXPECT_TRUE(w.grab().toImage().save(QString::fromStdString((out / "skin_650_bone_largest.png").string())));
+
+    // ---- remove the bone: gone from the scene and the panel; the skin keeps its id
+    frames = w.viewer()->frames();
+    auto* remove = child<QPushButton>(panel->row(bone), "remove");
+    ASSERT_NE(remove, nullptr);
+    QTest::mouseClick(remove, Qt::LeftButton);
+    EXPECT_EQ(w.scene().surfaces(), (std::vector<core::SurfaceId>{skin}));
+    EXPECT_FALSE(w.scene().has_surface(bone));
+    EXPECT_EQ(panel->row(bone), nullptr);
+    expect_new_frame(w, frames);
+    QTest::qWait(100);
+    EXPECT_TRUE(w.grab().toImage().save(QString::fromStdString((out / "bone_removed.png").string())));
+    std::printf("screenshots: %s\n", out.c_str());
+
+    // ---- a new file while a re-extraction runs: the worker stops before the
+    // old scene goes, its result is dropped, the new scene starts without rows
+    {
+        const core::Scene* old_scene = &w.scene();
+        slider->setValue(at500 + 300);
+        ASSERT_TRUE(panel->reextracting(skin));
+        w.open_path(QString::fromStdString(headsq));
+        ASSERT_TRUE(wait_until([&] { return &w.scene() != old_scene && !w.busy(); }, 60000)) << "the load did not finish";
+        EXPECT_FALSE(panel->reextracting());
+        EXPECT_EQ(panel->row(skin), nullptr);
+        EXPECT_TRUE(w.scene().surfaces().empty());
+        QTest::qWait(100); // a late result of the old scene's worker would arrive here
+        EXPECT_TRUE(w.scene().surfaces().empty());
+    }
+
+    // ---- cancel a long extraction: no surface, no error dialog, the window usable
+    const std::string big = big_volume(dir.path());
+    w.open_path(QString::fromStdString(big));
+    ASSERT_TRUE(wait_until([&] { return !w.busy(); }, 60000)) << "the load did not finish";
+    ASSERT_EQ(w.scene().volume().dims, (std::array<std::int64_t, 3>{512, 512, 400}));
+    EXPECT_TRUE(w.scene().surfaces().empty());
+    w.add_surface(500);
+    ASSERT_TRUE(w.busy());
+    QProgressDialog* progress = nullptr;
+    for (auto* d : w.findChildren<QProgressDialog*>("progress"))
+        if (d->labelText().contains("Extracting")) progress = d;
+    ASSERT_NE(progress, nullptr);
+    auto* cancel = progress->findChild<QPushButton*>();
+    ASSERT_NE(cancel, nullptr);
+    cancel->click(); // the dialog's Cancel button
+    ASSERT_TRUE(wait_until([&] { return !w.busy(); }, 30000)) << "the cancelled extraction did not stop";
+    EXPECT_TRUE(w.scene().surfaces().empty()) << "a cancelled extraction added a surface";
+    EXPECT_TRUE(w.statusBar()->currentMessage().contains("cancelled")) << w.statusBar()->currentMessage().toStdString();
+    QTest::qWait(100);
+    EXPECT_EQ(w.findChild<QMessageBox*>("error"), nullptr) << "an error dialog for a cancel";
+    // Usable: a click in a slice view answers.
+    auto* axial = w.slice_view(core::SliceOrientation::Axial);
+    QTest::mouseClick(axial, Qt::LeftButton, {}, QPoint(axial->width() / 2, axial->height() / 2));
+    EXPECT_EQ(w.statusBar()->currentMessage().left(5), "LPS (");
+}
