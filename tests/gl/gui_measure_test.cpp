@@ -20,6 +20,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <thread>
 
 #include <nlohmann/json.hpp>
 
@@ -174,6 +175,64 @@ TEST(GuiMeasureInXvfb, PickReadoutRulerAngleMarkupsSaveAndLoad) {
         std::printf("hover: %d picks in %.2f s of moving, interval now %d ms\n", picks, seconds, tools->hover_interval_ms());
         EXPECT_GE(picks, 2) << "the readout does not follow a moving pointer";
         EXPECT_LE(picks, int(seconds * 1000 / 80) + 1) << "hover picks are not throttled";
+    }
+
+    // ---- rotate with the mouse (left drag), then click: the readout is
+    // core::pick's with the view's camera (a fresh scene of the same state,
+    // on a worker thread: render_image has its own EGL context)
+    {
+        const Camera before = viewer->camera();
+        const QPoint from(size.width() / 2, size.height() / 2), to = from + QPoint(70, -25);
+        // Events straight to the view (QTest::mouseMove moves the X pointer, whose events arrive later).
+        const auto send = [&](QEvent::Type type, QPoint at, Qt::MouseButtons held) {
+            const Qt::MouseButton button = type == QEvent::MouseMove ? Qt::NoButton : Qt::LeftButton;
+            QMouseEvent e(type, QPointF(at), viewer->mapToGlobal(QPointF(at)), button, held, Qt::NoModifier);
+            QCoreApplication::sendEvent(viewer, &e);
+        };
+        send(QEvent::MouseButtonPress, from, Qt::LeftButton);
+        for (int k = 1; k <= 5; ++k) send(QEvent::MouseMove, from + (to - from) * k / 5, Qt::LeftButton);
+        send(QEvent::MouseButtonRelease, to, Qt::NoButton);
+        const Camera turned = viewer->camera();
+        ASSERT_GT(glm::length(turned.eye - before.eye), 1.0) << "the left drag did not rotate the view";
+        const int drawn = viewer->frames();
+        ASSERT_TRUE(wait_until([&] { return viewer->frames() > drawn; }, 30000));
+        const QPoint px(size.width() / 2 - 14, int(size.height() * 0.47));
+        QTest::mouseClick(viewer, Qt::LeftButton, {}, px);
+        const std::string turned_msg = w.statusBar()->currentMessage().toStdString();
+        std::printf("3D click after rotating, at %d,%d: %s\n", px.x(), px.y(), turned_msg.c_str());
+        const auto got = parse_readout(turned_msg);
+        ASSERT_TRUE(got) << turned_msg;
+        core::PickResult ref;
+        std::string error;
+        std::thread worker([&] {
+            try {
+                core::Scene s;
+                s.open(headsq);
+                const auto ids = s.add_isosurfaces({500, 1150});
+                s.info(ids[0]).opacity = 0.3f;
+                core::RenderRequest req;
+                req.width = size.width();
+                req.height = size.height();
+                req.camera = turned;
+                core::PickRequest at_px;
+                at_px.x = px.x();
+                at_px.y = px.y();
+                ref = core::pick(s, req, at_px);
+            } catch (const std::exception& e) {
+                error = e.what();
+            }
+        });
+        worker.join();
+        ASSERT_TRUE(error.empty()) << error;
+        ASSERT_TRUE(ref.visible.has_value()) << "the pixel should see the head after the turn";
+        const auto& l = ref.layers[*ref.visible];
+        EXPECT_NEAR(got->lps.x, l.lps.x, kPrinted);
+        EXPECT_NEAR(got->lps.y, l.lps.y, kPrinted);
+        EXPECT_NEAR(got->lps.z, l.lps.z, kPrinted);
+        ASSERT_TRUE(l.hu.has_value());
+        EXPECT_NEAR(got->value, *l.hu, kPrinted);
+        EXPECT_EQ(got->surface, l.name);
+        viewer->set_camera(w.scene().camera(PatientView::Anterior, double(size.width()) / double(size.height())));
     }
 
     // What a pick costs in the view (docs/gui.md): the frame it rides on, presented, and the resolve.
