@@ -281,7 +281,7 @@ TEST(DiskGeometry, DegenerateTriangles) {
     const V mid = 0.5 * (a + b);
     const std::array<std::array<V, 3>, 5> tris = {{
         {a, b, mid},                           // collinear, crossing the plane
-        {a, mid, f.at(1.0, 0.55, 0.1)},        // nearly collinear, above
+        {a, mid, f.at(0.75, 0.395, 0.45)},     // a sliver (2 % as wide as long), above
         {a, a, b},                             // repeated vertex
         {a, a, a},                             // a point
         {f.at(0.5, 0.2, 0.8), f.at(0.7, 0.2, 0.8), f.at(0.9, 0.2, 0.8)},  // collinear, above
@@ -293,8 +293,12 @@ TEST(DiskGeometry, DegenerateTriangles) {
             {height(f, t[0]), height(f, t[1]), height(f, t[2])}), 1e-6);
         const double ff = clipped_triangle_form_factor(f.p, f.n, t[0], t[1], t[2]);
         EXPECT_TRUE(std::isfinite(ff));
-        if (tri_area(t[0], t[1], t[2]) == 0.0) {
-            EXPECT_NEAR(ff, 0.0, 1e-15);
+        // Zero area in exact arithmetic (all but the sliver):
+        // no form factor, up to rounding.
+        if (&t != &tris[1]) {
+            EXPECT_NEAR(ff, 0.0, 1e-14);
+        } else {
+            EXPECT_GT(std::abs(ff), 1e-5);
         }
     }
     // Points at the receiver: every edge is degenerate.
@@ -469,7 +473,7 @@ TEST(DiskGeometry, DiskFormFactor) {
         const double exact = polygon_ff(f.p, f.n, q);
         const double approx = disk_form_factor(f.p, f.n, c, m, area);
         const double err = std::abs(approx / exact - 1);
-        EXPECT_LT(err, 3 * (R / d) * (R / d)) << d;
+        EXPECT_LT(err, 1.5 * (R / d) * (R / d)) << d;  // measured 0.88 (R/d)^2
         EXPECT_LT(err, last) << d;
         last = err;
     }
