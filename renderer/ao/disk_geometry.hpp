@@ -106,7 +106,7 @@ T snapped_plane_distance(const glm::vec<3, T>& p, const glm::vec<3, T>& n, const
 // gives 1. The formula counts parts below the tangent plane negatively:
 // clip first (clipped_triangle_form_factor).
 // Degenerate edges contribute 0: zero length, an endpoint at p, or an edge
-// whose line passes through p (|c| <= tiny * |r_i| |r_{i+1}|); so do repeated
+// whose line passes through p (sine of the angle at p <= 1e-12); so do repeated
 // points (the chapter's triangle-as-quad). No input gives NaN or Inf.
 // A polygon whose plane contains p (seen edge-on, zero solid angle) gives 0
 // up to rounding when p is outside it; with p inside it or at a vertex the
