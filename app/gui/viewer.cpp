@@ -74,7 +74,10 @@ RenderOptions Viewer::frame_options() const {
     opt.annotations = annotations_.get();
     opt.present = true;
     opt.target_framebuffer = defaultFramebufferObject();
-    opt.ao = options_.ao;
+    // While a drag turns, pans or zooms the view, frames go without AO (on
+    // software GL it costs 2-3x a frame, docs/gui.md); the still frames after
+    // the release bring it back and accumulate it.
+    opt.ao = options_.ao && !(dragging_ && !options_.ao_while_dragging);
     opt.ao_settings = options_.cone;
     opt.background = glm::vec4(options_.background, 1.0f);
     opt.flat_shading = options_.flat_shading;
@@ -91,11 +94,11 @@ void Viewer::draw() {
     const std::size_t objects = scene_.renderer().gl_objects_created();
     if (frames_ == 1) objects_after_first_frame_ = objects;
     objects_since_first_frame_ = objects - objects_after_first_frame_;
-    ao_frames_ = options_.ao ? r.ao_frames : 0;
+    ao_frames_ = opt.ao ? r.ao_frames : 0;
     // Progressive AO: while the camera and the scene stay still, keep
     // drawing so new jitter sets accumulate and the noise averages out; any
     // interaction restarts the accumulation (the renderer sees the change).
-    if (options_.ao && ao_frames_ < options_.still_frames) QTimer::singleShot(0, this, [this] { update(); });
+    if (opt.ao && ao_frames_ < options_.still_frames) QTimer::singleShot(0, this, [this] { update(); });
 }
 
 void Viewer::set_camera(const Camera& c) {
@@ -153,6 +156,10 @@ void Viewer::mousePressEvent(QMouseEvent* e) {
 
 void Viewer::mouseReleaseEvent(QMouseEvent* e) {
     if (e->button() == Qt::LeftButton && !dragged_ && on_click) on_click(*this, to_image(e->position()));
+    if (dragging_ && e->buttons() == Qt::NoButton) {
+        dragging_ = false;
+        update(); // the still frames, with AO again
+    }
 }
 
 void Viewer::mouseMoveEvent(QMouseEvent* e) {
@@ -162,6 +169,7 @@ void Viewer::mouseMoveEvent(QMouseEvent* e) {
     }
     if ((e->pos() - press_).manhattanLength() > 3) dragged_ = true;
     if (!dragged_) return;
+    dragging_ = true;
     const QPoint d = e->pos() - last_;
     last_ = e->pos();
     // 3D Slicer's mouse: left rotates, middle pans, right drags zoom (up: closer).

@@ -36,6 +36,9 @@ struct ViewerOptions {
     bool flat_shading = false;
     // Off: every surface is drawn opaque whatever its opacity (RenderOptions::transparency).
     bool transparency = true;
+    // AO in the frames drawn while a mouse drag moves the camera (off: those
+    // frames go without it and the still frames after the release bring it back).
+    bool ao_while_dragging = false;
 };
 
 class Viewer : public QOpenGLWidget {
@@ -48,6 +51,8 @@ public:
     // all accumulated.
     bool converged() const { return frames_ > 0 && (!options_.ao || ao_frames_ >= options_.still_frames); }
     int ao_frames() const { return ao_frames_; }
+    // A mouse drag is moving the camera now.
+    bool dragging() const { return dragging_; }
     // GL objects the renderer made after the first frame (0 in a steady
     // view: resources live across frames).
     std::size_t gl_objects_since_first_frame() const { return objects_since_first_frame_; }
@@ -105,6 +110,7 @@ private:
     bool camera_set_ = false;
     QPoint last_, press_;
     bool dragged_ = false;
+    bool dragging_ = false; // a drag is moving the camera (AO may wait, ViewerOptions::ao_while_dragging)
     QPointF to_image(QPointF widget) const;
     double aspect() const;
     int frames_ = 0;

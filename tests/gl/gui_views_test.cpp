@@ -300,7 +300,7 @@ TEST(GuiViewsInXvfb, ObliqueVolumeSliceClicksPanZoomAndWindow) {
         const core::SliceGrid g1 = view->grid();
         EXPECT_NEAR(g1.offset_mm, g0.offset_mm, 1e-9);
         EXPECT_EQ(g1.pixel_mm, g0.pixel_mm);
-        for (const glm::dvec2 q : {glm::dvec2(10.5, 20.5), glm::dvec2(mid.x(), mid.y())})
+        for (const glm::dvec2& q : {glm::dvec2(10.5, 20.5), glm::dvec2(mid.x(), mid.y())})
             EXPECT_NEAR(glm::length(core::pixel_to_lps(g1, q + glm::dvec2(delta.x(), delta.y())) - core::pixel_to_lps(g0, q)), 0.0,
                         1e-9);
         check_drawn(w, view, "panned");
@@ -439,6 +439,31 @@ TEST(GuiViewsInXvfb, ThreeDViewMouseAndToolBar) {
     QCoreApplication::sendEvent(viewer, &wheel);
     EXPECT_LT(glm::length(viewer->camera().eye - viewer->camera().target), glm::length(c0.eye - c0.target));
     EXPECT_EQ(clicks, 1);
+
+    // ---- AO waits while a drag moves the camera, and comes back when it stops
+    bar->ao_action()->trigger();
+    ASSERT_TRUE(viewer->options().ao);
+    ASSERT_TRUE(wait_until([&] { return viewer->converged(); }, 60000)) << "the AO did not converge";
+    {
+        auto send = [&](QEvent::Type type, QPointF at, Qt::MouseButton button, Qt::MouseButtons held) {
+            QMouseEvent e(type, at, viewer->mapToGlobal(at), button, held, Qt::NoModifier);
+            QCoreApplication::sendEvent(viewer, &e);
+        };
+        send(QEvent::MouseButtonPress, mid, Qt::LeftButton, Qt::LeftButton);
+        send(QEvent::MouseMove, mid + QPointF(30, 0), Qt::NoButton, Qt::LeftButton);
+        EXPECT_TRUE(viewer->dragging());
+        const int drawn = viewer->frames();
+        ASSERT_TRUE(wait_until([&] { return viewer->frames() > drawn; }, 30000));
+        EXPECT_EQ(viewer->ao_frames(), 0) << "a frame drawn during the drag traced AO";
+        EXPECT_FALSE(viewer->converged());
+        send(QEvent::MouseButtonRelease, mid + QPointF(30, 0), Qt::LeftButton, Qt::NoButton);
+        EXPECT_FALSE(viewer->dragging());
+        ASSERT_TRUE(wait_until([&] { return viewer->converged(); }, 60000)) << "the AO did not come back after the drag";
+        EXPECT_EQ(viewer->ao_frames(), viewer->options().still_frames);
+        EXPECT_EQ(clicks, 1);
+    }
+    bar->ao_action()->trigger();
+    ASSERT_FALSE(viewer->options().ao);
 
     // ---- transparency off: the translucent skin is drawn as if opaque
     // (the frames compared pixel for pixel; AO is off, so each frame is final)
