@@ -68,6 +68,7 @@ void print_info(const nlohmann::json& j, std::ostream& os) {
                << s["modality"].get<std::string>() << " #" << s["number"] << " " << s["dims"][0] << "x"
                << s["dims"][1] << "x" << s["dims"][2] << " (" << s["files"] << " files) "
                << s["description"].get<std::string>() << "  " << s["uid"].get<std::string>() << "\n";
+            for (const auto& w : s["warnings"]) os << "       warning: " << w.get<std::string>() << "\n";
             ++i;
         }
     }

@@ -55,7 +55,8 @@ nlohmann::json describe(const Volume& v) {
         json s = json::array();
         for (const auto& si : v.meta.series)
             s.push_back({{"uid", si.uid}, {"description", si.description}, {"modality", si.modality},
-                         {"number", si.number}, {"dims", si.dims}, {"files", si.files}});
+                         {"number", si.number}, {"dims", si.dims}, {"files", si.files},
+                         {"warnings", si.warnings}});
         j["series"] = s;
         j["selected_series"] = v.meta.selected_series;
     }

@@ -748,4 +748,9 @@ TEST(Dicom, CliInfoJsonAndSeriesChoice) {
     EXPECT_EQ(desc, j1["series"][1]["description"].get<std::string>());
     const int nz = desc == "axial" ? 5 : 8;
     EXPECT_EQ(j1["dims"][2], nz);
+    // Each listed series carries the warnings the listing found (the series chooser's column).
+    const auto listed = list_dicom_series({dir + "/one"});
+    ASSERT_EQ(listed.size(), 2u);
+    for (std::size_t i = 0; i < 2; ++i)
+        EXPECT_EQ(j1["series"][i]["warnings"].get<std::vector<std::string>>(), listed[i].warnings) << i;
 }
