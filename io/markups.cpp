@@ -30,6 +30,7 @@
 
 #include "io/atomic_file.hpp"
 #include "io/error.hpp"
+#include "io/read_file.hpp"
 
 namespace iso {
 namespace fs = std::filesystem;
@@ -309,16 +310,6 @@ private:
     const std::string& path_;
 };
 
-std::string slurp(const std::string& path) {
-    std::error_code ec;
-    if (!fs::is_regular_file(path, ec)) throw Error(path, fs::exists(path, ec) ? "not a regular file" : "no such file");
-    std::ifstream f(path, std::ios::binary);
-    if (!f) throw Error(path, "cannot open");
-    std::string s((std::istreambuf_iterator<char>(f)), {});
-    if (f.bad()) throw Error(path, "read failed");
-    return s;
-}
-
 // Slicer's layout: objects one member per line, arrays of numbers on one line.
 void write_value(std::string& out, const ordered_json& v, int indent) {
     const std::string pad(std::size_t(indent + 4), ' ');
@@ -475,7 +466,7 @@ std::optional<MarkupMeasurement> computed_measurement(const Markup& m) {
 
 MarkupsFile load_markups(const std::string& path) {
     try {
-        const std::string text = slurp(path);
+        const std::string text = read_file(path);
         if (text.empty()) throw Error(path, "file is empty");
         json root;
         try {

@@ -8,6 +8,7 @@
 
 #include "io/atomic_file.hpp"
 #include "io/error.hpp"
+#include "io/read_file.hpp"
 #include "io/image.hpp"
 
 namespace iso::core {
@@ -213,16 +214,6 @@ private:
     const std::string& path_;
 };
 
-std::string slurp(const std::string& path) {
-    std::error_code ec;
-    if (!fs::is_regular_file(path, ec)) throw Error(path, fs::exists(path, ec) ? "not a regular file" : "no such file");
-    std::ifstream f(path, std::ios::binary);
-    if (!f) throw Error(path, "cannot open");
-    std::string s((std::istreambuf_iterator<char>(f)), {});
-    if (f.bad()) throw Error(path, "read failed");
-    return s;
-}
-
 } // namespace
 
 Session capture_session(const Scene& scene, const std::string& input, const std::string& series, const std::optional<Camera>& camera,
@@ -319,7 +310,7 @@ void save_session(const Session& s, const std::string& path) {
 }
 
 Session read_session(const std::string& path) {
-    const std::string text = slurp(path);
+    const std::string text = read_file(path);
     if (text.empty()) throw Error(path, "file is empty");
     json root;
     try {
