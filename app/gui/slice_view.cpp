@@ -47,11 +47,6 @@ void SliceView::set_window(const core::WindowLevel& w) {
     update();
 }
 
-void SliceView::set_outlines_enabled(bool on) {
-    outlines_enabled_ = on;
-    if (!on) outlines_.clear();
-}
-
 std::size_t SliceView::outline_segments() const {
     std::size_t n = 0;
     for (const auto& o : outlines_) n += o.segments.size();
@@ -74,12 +69,11 @@ void SliceView::refresh() {
         core::reslice(scene_->volume(), grid_, core::Interp::Linear, values_);
         grey_ = core::apply_window(values_, window_, core::PixelFormat::Grey8);
         image_ = QImage(grey_.data(), values_.width, values_.height, values_.width, QImage::Format_Grayscale8).copy();
-        if (outlines_enabled_)
-            for (auto id : scene_->surfaces()) {
-                const auto& info = scene_->info(id);
-                if (!info.visible) continue;
-                outlines_.push_back({core::mesh_outline(scene_->mesh(id), grid_), to_qcolor(info.color)});
-            }
+        for (auto id : scene_->surfaces()) {
+            const auto& info = scene_->info(id);
+            if (!info.visible) continue;
+            outlines_.push_back({core::mesh_outline(scene_->mesh(id), grid_), to_qcolor(info.color)});
+        }
     } catch (const std::exception& e) {
         // Nothing escapes into Qt's event loop.
         std::cerr << "isoscope gui: " << core::slice_orientation_name(orientation_) << " view: " << e.what() << "\n";
@@ -113,24 +107,21 @@ void SliceView::resizeEvent(QResizeEvent*) {
 }
 
 void SliceView::mousePressEvent(QMouseEvent* e) {
-    press_ = last_ = e->position();
-    dragged_ = false;
+    drag_.start(e->position());
     window_at_press_ = window_;
 }
 
 void SliceView::mouseReleaseEvent(QMouseEvent* e) {
-    if (e->button() == Qt::LeftButton && !dragged_ && on_click && !image_.isNull()) on_click(*this, e->position());
+    if (e->button() == Qt::LeftButton && !drag_.dragged && on_click && !image_.isNull()) on_click(*this, e->position());
 }
 
 void SliceView::mouseMoveEvent(QMouseEvent* e) {
     if (e->buttons() == Qt::NoButton || image_.isNull() || !plane_) return;
-    if ((e->position() - press_).manhattanLength() > 3) dragged_ = true;
-    if (!dragged_) return;
-    const QPointF d = e->position() - last_;
-    last_ = e->position();
+    if (!drag_.follow(e->position())) return;
+    const QPointF d = drag_.step(e->position());
     if (e->buttons() & Qt::LeftButton) {
         if (!range_) range_ = scene_->volume().value_range();
-        const QPointF total = e->position() - press_;
+        const QPointF total = e->position() - drag_.press;
         const auto w = core::drag_window(window_at_press_, {total.x(), -total.y()}, *range_);
         set_window(w);
         if (on_window) on_window(*this, w);
@@ -138,7 +129,7 @@ void SliceView::mouseMoveEvent(QMouseEvent* e) {
         core::pan_pixels(*plane_, {d.x(), d.y()});
         refresh();
     } else if (e->buttons() & Qt::RightButton) {
-        core::zoom_about(*plane_, width(), height(), {press_.x(), press_.y()}, core::drag_zoom_factor(-d.y(), height()));
+        core::zoom_about(*plane_, width(), height(), {drag_.press.x(), drag_.press.y()}, core::drag_zoom_factor(-d.y(), height()));
         refresh();
     }
 }

@@ -15,6 +15,7 @@
 #include <QPainter>
 #include <QWidget>
 
+#include "app/gui/pointer_drag.hpp"
 #include "renderer/core/slices.hpp"
 
 namespace iso {
@@ -34,9 +35,6 @@ public:
     // and this view's plane (owned by the main window, outliving the view).
     void set_content(const core::Scene* scene, core::SlicePlane* plane);
     void set_window(const core::WindowLevel& w);
-    // While a background job changes the scene's surfaces, outlines are not
-    // read (the image, from the unchanged volume, still is).
-    void set_outlines_enabled(bool on);
     // Recomputes the image and outlines from the plane (call after it changed).
     void refresh();
 
@@ -78,7 +76,6 @@ private:
     const core::Scene* scene_ = nullptr;
     core::SlicePlane* plane_ = nullptr;
     core::WindowLevel window_;
-    bool outlines_enabled_ = true;
     bool fitted_ = false;
     core::SliceGrid grid_;
     core::SliceImage values_;
@@ -88,8 +85,7 @@ private:
     double wheel_ = 0; // accumulated angle delta (touchpads send fractions of a notch)
     // A drag (3D Slicer's slice view): left window/level, middle pan, right
     // zoom (core::pan_pixels, core::zoom_about on the plane's framing).
-    QPointF press_, last_;
-    bool dragged_ = false;
+    PointerDrag drag_;
     core::WindowLevel window_at_press_;
     std::optional<ValueRange> range_; // the volume's, for the window drag's gain (computed once per content)
 };

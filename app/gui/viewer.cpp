@@ -150,12 +150,11 @@ void Viewer::set_markups(std::vector<Markup> markups) {
 QPointF Viewer::to_image(QPointF widget) const { return widget * devicePixelRatioF(); }
 
 void Viewer::mousePressEvent(QMouseEvent* e) {
-    last_ = press_ = e->pos();
-    dragged_ = false;
+    drag_.start(e->position());
 }
 
 void Viewer::mouseReleaseEvent(QMouseEvent* e) {
-    if (e->button() == Qt::LeftButton && !dragged_ && on_click) on_click(*this, to_image(e->position()));
+    if (e->button() == Qt::LeftButton && !drag_.dragged && on_click) on_click(*this, to_image(e->position()));
     if (dragging_ && e->buttons() == Qt::NoButton) {
         dragging_ = false;
         update(); // the still frames, with AO again
@@ -167,11 +166,9 @@ void Viewer::mouseMoveEvent(QMouseEvent* e) {
         if (on_hover) on_hover(*this, to_image(e->position()));
         return;
     }
-    if ((e->pos() - press_).manhattanLength() > 3) dragged_ = true;
-    if (!dragged_) return;
+    if (!drag_.follow(e->position())) return;
     dragging_ = true;
-    const QPoint d = e->pos() - last_;
-    last_ = e->pos();
+    const QPointF d = drag_.step(e->position());
     // 3D Slicer's mouse: left rotates, middle pans, right drags zoom (up: closer).
     if (e->buttons() & Qt::LeftButton)
         camera_.orbit(-0.4 * d.x(), -0.4 * d.y());

@@ -14,6 +14,7 @@
 #include <glm/vec3.hpp>
 
 #include "io/markups.hpp"
+#include "app/gui/pointer_drag.hpp"
 #include "renderer/render/cone_ao.hpp"
 #include "renderer/scene/camera.hpp"
 
@@ -108,8 +109,7 @@ private:
     std::unique_ptr<Annotations> annotations_;
     Camera camera_;
     bool camera_set_ = false;
-    QPoint last_, press_;
-    bool dragged_ = false;
+    PointerDrag drag_;
     bool dragging_ = false; // a drag is moving the camera (AO may wait, ViewerOptions::ao_while_dragging)
     QPointF to_image(QPointF widget) const;
     double aspect() const;
