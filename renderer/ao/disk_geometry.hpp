@@ -33,23 +33,26 @@ struct DiskAoSettings {
     // visibleQuad's snap: a vertex whose signed distance to the tangent plane
     // is within this (scene units, mm here) is taken as on the plane (chapter:
     // `const float epsilon = 1e-6`).
-    static constexpr double clip_epsilon = 1e-6;
+    double clip_epsilon = 1e-6;
     // Traversal depth: descend into an element's children while
     // d^2 < traversal_epsilon * area (chapter: "epsilon = 8 in all
     // experiments"). Used by the hierarchy, not by these kernels.
-    static constexpr double traversal_epsilon = 8.0;
+    double traversal_epsilon = 8.0;
     // contribution /= 1 + distance_attenuation * d^2 (chapter, listing 4).
     // 0 = no attenuation (Bunnell).
-    static constexpr double distance_attenuation = 0.0;
+    double distance_attenuation = 0.0;
     // contribution *= pow(element term, triangle_attenuation) (chapter,
     // listing 5). 1 = Bunnell's plain modulation by the emitter's term.
-    static constexpr double triangle_attenuation = 1.0;
+    double triangle_attenuation = 1.0;
     // Convergence: occlusion = min_scale * min(o0, o1) + max_scale * max(o0, o1)
     // over the last two iterations (chapter, listing 3, "a weighted minimum").
     // The chapter gives no numbers; 0.7 / 0.3 (weights adding up to 1, the
     // minimum dominating) is the usual choice of its implementations.
-    static constexpr double min_scale = 0.7;
-    static constexpr double max_scale = 0.3;
+    double min_scale = 0.7;
+    double max_scale = 0.3;
+    // Element passes (per-disk occlusion, each modulated by the previous
+    // pass's terms) before the final gather; the blend uses the last two.
+    int passes = 2;
 };
 
 // The visible part of a triangle above a tangent plane (the chapter's
@@ -84,7 +87,7 @@ struct ClippedQuad {
 template <typename T>
 ClippedQuad<T> clip_to_tangent_plane(const glm::vec<3, T>& p, const glm::vec<3, T>& n, const glm::vec<3, T>& v0,
                                      const glm::vec<3, T>& v1, const glm::vec<3, T>& v2,
-                                     T epsilon = T(DiskAoSettings::clip_epsilon));
+                                     T epsilon = T(DiskAoSettings{}.clip_epsilon));
 
 // Signed distance used by the clipping, dot(n, v - p) (subtracting first is
 // better conditioned than dot(n, v) - dot(n, p) far from the origin), snapped
@@ -121,7 +124,7 @@ T polygon_form_factor(const glm::vec<3, T>& p, const glm::vec<3, T>& n, const gl
 template <typename T>
 T clipped_triangle_form_factor(const glm::vec<3, T>& p, const glm::vec<3, T>& n, const glm::vec<3, T>& v0,
                                const glm::vec<3, T>& v1, const glm::vec<3, T>& v2,
-                               T epsilon = T(DiskAoSettings::clip_epsilon));
+                               T epsilon = T(DiskAoSettings{}.clip_epsilon));
 
 // Bunnell's disk approximation (GPU Gems 2 ch. 14) of the form factor from
 // the receiver (p, n) to an emitter disk of area A at c with unit normal m:
@@ -140,7 +143,7 @@ T disk_form_factor(const glm::vec<3, T>& p, const glm::vec<3, T>& n, const glm::
 // Distance attenuation (chapter, listing 4): the factor 1 / (1 + k d^2) that
 // multiplies an element's contribution; d2 = squared distance to it, k >= 0.
 template <typename T>
-T distance_attenuation(T d2, T k = T(DiskAoSettings::distance_attenuation));
+T distance_attenuation(T d2, T k = T(DiskAoSettings{}.distance_attenuation));
 
 // Triangle attenuation (chapter, listing 5): the factor pow(e, t) that
 // multiplies a triangle's form factor, e = the element's term from the
@@ -149,13 +152,13 @@ T distance_attenuation(T d2, T k = T(DiskAoSettings::distance_attenuation));
 // out for e = 0 (pow(0, t) is undefined in GLSL for t <= 0): 0 for t > 0, 1
 // for t == 0.
 template <typename T>
-T triangle_attenuation(T element_term, T t = T(DiskAoSettings::triangle_attenuation));
+T triangle_attenuation(T element_term, T t = T(DiskAoSettings{}.triangle_attenuation));
 
 // Convergence (chapter, listing 3): the weighted blend of the last two
 // iterations' values o0, o1 of one element, min_scale * min + max_scale * max.
 // Symmetric in o0, o1, so an iteration that alternates between two solutions
 // gives the same value whichever of them came last.
 template <typename T>
-T converge_blend(T o0, T o1, T min_scale = T(DiskAoSettings::min_scale), T max_scale = T(DiskAoSettings::max_scale));
+T converge_blend(T o0, T o1, T min_scale = T(DiskAoSettings{}.min_scale), T max_scale = T(DiskAoSettings{}.max_scale));
 
 } // namespace iso

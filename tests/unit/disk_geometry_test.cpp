@@ -259,7 +259,7 @@ TEST(DiskGeometry, EpsilonSnapRemovesSlivers) {
     EXPECT_EQ(snapped.q[0], v0);
     EXPECT_EQ(snapped.q[1], v1);
     EXPECT_NEAR(glm::distance(snapped.q[2], V(1.0, 1.0, 0)), 0.0, 1e-15);
-    EXPECT_EQ(snapped_plane_distance(p, n, v0, DiskAoSettings::clip_epsilon), 0.0);
+    EXPECT_EQ(snapped_plane_distance(p, n, v0, DiskAoSettings{}.clip_epsilon), 0.0);
     EXPECT_NEAR(clipped_triangle_form_factor(p, n, v0, v1, v2), polygon_form_factor(p, n, raw.q, 4), 1e-12);
 
     // One vertex 1e-12 above, the others below: a sliver triangle of area
@@ -498,9 +498,9 @@ TEST(DiskGeometry, Attenuations) {
     EXPECT_EQ(triangle_attenuation(1.5, 2.0), 1.0);  // clamped to [0, 1]
     EXPECT_EQ(triangle_attenuation(-0.5, 2.0), 0.0);
 
-    EXPECT_EQ(DiskAoSettings::clip_epsilon, 1e-6);
-    EXPECT_EQ(DiskAoSettings::traversal_epsilon, 8.0);
-    EXPECT_EQ(DiskAoSettings::min_scale + DiskAoSettings::max_scale, 1.0);
+    EXPECT_EQ(DiskAoSettings{}.clip_epsilon, 1e-6);
+    EXPECT_EQ(DiskAoSettings{}.traversal_epsilon, 8.0);
+    EXPECT_EQ(DiskAoSettings{}.min_scale + DiskAoSettings{}.max_scale, 1.0);
 }
 
 // Two elements that fill each other's hemisphere (F = 1): Bunnell's iteration
