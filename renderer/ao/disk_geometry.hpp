@@ -53,6 +53,13 @@ struct DiskAoSettings {
     // Element passes (per-disk occlusion, each modulated by the previous
     // pass's terms) before the final gather; the blend uses the last two.
     int passes = 2;
+    // Self-occlusion: the receiver is moved to p + receiver_offset * R * n
+    // before the gather (R = the AO radius), so that its own disk (then
+    // straight below it) and its own triangles (below or seen edge-on) add
+    // nothing, without needing the receiver's triangle id (a pixel has
+    // none). Relative to R so that it scales with the scene (docs/ao.md,
+    // "Disk AO: hierarchy and CPU evaluation").
+    double receiver_offset = 1e-3;
 };
 
 // The visible part of a triangle above a tangent plane (the chapter's

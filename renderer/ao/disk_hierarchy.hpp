@@ -29,13 +29,18 @@ struct DiskNode {
     // mean of its triangles' normals; a parent: the normalized area-weighted
     // mean of its leaves' normals, zero when they cancel), w: radius of a
     // sphere about the centre holding every leaf disk below (disk radius
-    // sqrt(area / pi) included).
+    // sqrt(area / pi) included) and every triangle those leaves own (a
+    // leaf: max(sqrt(area / pi), farthest corner of its triangles)).
     glm::vec4 normal_bound{0.0f};
     // x: skip, the next node in depth-first pre-order after this subtree
     //    (nodes.size() after the last): stackless traversal;
     // y: first child (always this index + 1), -1 for a leaf;
     // z, w: a leaf's triangles, triangles[z .. z + w) (each triangle belongs
-    //    to exactly one leaf); 0, 0 for a parent.
+    //    to exactly one leaf: the leaf of its first corner); 0, 0 for a
+    //    parent.
+    // The trees of a concatenation follow one another in `nodes`, and a
+    // root's skip is the next tree's root, so one traversal from node 0 to
+    // nodes.size() visits every tree.
     glm::ivec4 links{0};
 };
 static_assert(sizeof(DiskNode) == 48, "DiskNode must match the std430 layout");
@@ -73,5 +78,15 @@ double disk_occlusion(const DiskHierarchy& h, const glm::dvec3& p, const glm::dv
 // two combined by converge_blend; parents get the area-weighted mean of
 // their leaves. Returns one accessibility per node.
 std::vector<float> disk_element_terms(const DiskHierarchy& h, const DiskAoSettings& s, double radius);
+
+// The same passes; also appends each pass's terms (before the blend) to
+// `per_pass` when not null (tests and the benchmark: convergence).
+std::vector<float> disk_element_passes(const DiskHierarchy& h, const DiskAoSettings& s, double radius,
+                                       std::vector<std::vector<float>>* per_pass);
+
+// disk_occlusion computes in float, as the shader does; this is the same
+// code in double, for the float-against-double test.
+double disk_occlusion_double(const DiskHierarchy& h, const glm::dvec3& p, const glm::dvec3& n,
+                             const std::vector<float>& node_term, const DiskAoSettings& s, double radius);
 
 } // namespace iso
