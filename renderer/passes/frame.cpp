@@ -5,6 +5,7 @@
 
 #include "renderer/passes/frame.hpp"
 #include "renderer/passes/gbuffer_layout.hpp"
+#include "renderer/render/disk_ao.hpp"
 
 namespace iso::passes {
 
@@ -63,13 +64,19 @@ FrameContext make_context(const Camera& camera, const RenderOptions& opt, std::v
 void build_frame(graph::FrameGraph& fg, const FrameContext& ctx) {
     const RenderOptions& opt = ctx.opt;
     const bool ao_wanted = opt.ao || opt.aov == Aov::Ao;
+    const bool disk = opt.ao_method == AoMethod::Disk;
     if (ao_wanted) validate(opt.ao_settings);
+    if (ao_wanted && disk) validate(opt.disk_settings);
     const GBuffer gb = gbuffer(fg, ctx);
     // Declared always: culled by the graph when neither lighting nor the read-back reads it.
     const AmbientOcclusion ao = ambient_occlusion(fg, ctx, gb);
-    graph::TextureHandle color = lighting(fg, ctx, gb, opt.ao ? ao.ao : graph::TextureHandle{});
+    // Disk AO replaces the cone chain's image (the cone chain is then culled).
+    const graph::TextureHandle ao_image = disk ? disk_ambient_occlusion(fg, ctx, gb) : ao.ao;
+    graph::TextureHandle color = lighting(fg, ctx, gb, opt.ao ? ao_image : graph::TextureHandle{});
     // Scene content, not an output request, decides this one: no translucent
-    // object, no list passes. Lit translucent fragments get their own AO.
+    // object, no list passes. Lit translucent fragments get their own AO
+    // (traced through the cone chain: the disk hierarchy holds the opaque
+    // surfaces only).
     PickBuffers picked;
     if (!ctx.translucent.empty()) color = voit(fg, ctx, gb, color, opt.ao && !opt.flat_shading ? &ao : nullptr, picked);
     if (ctx.pick) pick(fg, ctx, gb, picked);
@@ -78,7 +85,7 @@ void build_frame(graph::FrameGraph& fg, const FrameContext& ctx) {
     // The colour image, or the AOV: depth, AO, or the G-buffer channel the layout table names.
     graph::TextureHandle source = color;
     if (opt.aov == Aov::Depth) source = gb.depth;
-    if (opt.aov == Aov::Ao) source = ao.ao;
+    if (opt.aov == Aov::Ao) source = ao_image;
     for (const auto& c : kGBufferLayout)
         if (opt.aov != Aov::None && c.aov == opt.aov) source = gb.*c.handle;
     readback(fg, ctx, source);

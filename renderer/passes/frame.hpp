@@ -27,9 +27,14 @@ namespace iso::gl {
 class Program;
 }
 
+namespace iso {
+struct DiskHierarchy;
+}
+
 namespace iso::passes {
 
 class GlResources;
+struct DiskState;
 
 // A VOIT list node (OitNode in shaders/render/oit_common.glsl): five 32-bit
 // words, the link to the next node last.
@@ -50,6 +55,16 @@ struct AoHistory {
     std::vector<double> view_key;   // what the slicemap was built for
     ConeAoSettings settings;        // what the accumulated AO was traced with
     int frames = 0;                 // still frames accumulated so far
+};
+
+// A visible opaque surface as disk AO sees it: the renderer's CPU copy of
+// its mesh and the slot where its hierarchy is cached (built on first use,
+// dropped when the mesh is replaced).
+struct DiskSurface {
+    std::uint32_t id = 0;
+    std::uint64_t version = 0;  // changes when the object's mesh changes
+    std::shared_ptr<const Mesh> mesh;
+    std::shared_ptr<const DiskHierarchy>* cache = nullptr;
 };
 
 struct FrameContext {
@@ -73,6 +88,8 @@ struct FrameContext {
     std::uint64_t geometry_version = 0; // changes when meshes are added
     std::vector<OverlayVertex> overlay; // annotation triangles (empty: none)
     AoHistory* ao = nullptr;            // required when the AO passes run
+    std::vector<DiskSurface> disk_surfaces; // the opaque draws' meshes, for disk AO
+    DiskState* disk = nullptr;          // required when the disk AO passes run
     RenderResult* result = nullptr;     // what passes report back (image, AO state, slicemap)
 };
 
@@ -180,6 +197,16 @@ struct AmbientOcclusion {
 // Declares the AO chain (zrange, voxelize when stale, cone_ao, ao_upsample
 // when coarser).
 AmbientOcclusion ambient_occlusion(graph::FrameGraph& fg, const FrameContext& ctx, const GBuffer& gb);
+
+// Disk AO (disk_ao.cpp; docs/ao.md, "Disk AO on the GPU"): disk_build
+// (when the visible surfaces changed: CPU builds of the new ones, the
+// concatenation and its upload), disk_elements (when the hierarchy, the
+// settings or R changed: the element passes and the blend), disk_gather
+// (every frame: per pixel from the G-buffer) into the AO image. The
+// hierarchy and the terms live in DiskState across frames; the graph sees
+// them through two tiny history buffers that order the passes and let it
+// cull the chain when nothing reads the AO image.
+graph::TextureHandle disk_ambient_occlusion(graph::FrameGraph& fg, const FrameContext& ctx, const GBuffer& gb);
 
 // Deferred lighting; `ao` invalid: no AO.
 graph::TextureHandle lighting(graph::FrameGraph& fg, const FrameContext& ctx, const GBuffer& gb, graph::TextureHandle ao);

@@ -64,6 +64,7 @@ namespace iso::passes {
 #include "shaders/ao/voxelize_params.glsl"
 #include "shaders/ao/cone_params.glsl"
 #include "shaders/ao/upsample_params.glsl"
+#include "shaders/ao/disk_params.glsl"
 #include "shaders/render/oit_params.glsl"
 #undef ISO_BLOCK_BEGIN
 #undef ISO_MEMBER
@@ -86,6 +87,7 @@ namespace iso::passes {
 #include "shaders/ao/voxelize_params.glsl"
 #include "shaders/ao/cone_params.glsl"
 #include "shaders/ao/upsample_params.glsl"
+#include "shaders/ao/disk_params.glsl"
 #include "shaders/render/oit_params.glsl"
 #undef ISO_BLOCK_BEGIN
 #undef ISO_MEMBER

@@ -12,6 +12,8 @@
 
 #include "io/error.hpp"
 #include "renderer/gl/objects.hpp"
+#include "renderer/ao/disk_hierarchy.hpp"
+#include "renderer/passes/disk_state.hpp"
 #include "renderer/passes/frame.hpp"
 #include "renderer/passes/gl_resources.hpp"
 
@@ -36,6 +38,11 @@ struct GpuMesh {
     GLsizei count = 0;
     SceneObject object;
     Bounds bounds;
+    // Disk AO builds its hierarchy from the CPU mesh, once, on first use
+    // (renderer/passes/disk_ao.cpp); a new mesh gets a new version.
+    std::shared_ptr<const Mesh> cpu;
+    std::shared_ptr<const DiskHierarchy> disk;
+    std::uint64_t version = 0;
 };
 
 std::vector<glm::vec3> vertex_normals(const Mesh& m) {
@@ -60,6 +67,8 @@ struct Renderer::Impl {
     graph::ResourcePool pool{gl};
     std::uint64_t geometry_version = 0;
     passes::AoHistory ao;
+    passes::DiskState disk;
+    std::uint64_t mesh_versions = 0;
     std::size_t oit_next_capacity = 0; // VOIT pool nodes for the next frame (0: none drawn yet)
     bool oit_cut = false;              // the last frame at the VOIT cap needed the depth cut: start with it
 };
@@ -83,6 +92,7 @@ GpuMesh upload(const Mesh& m, const SceneObject& o) {
     g.vertices = gl::Buffer::from<float>(interleaved, 0);
     g.indices = gl::Buffer(m.triangles.size() * 12, m.triangles.data(), 0);
     g.count = GLsizei(m.triangles.size() * 3);
+    g.cpu = std::make_shared<const Mesh>(m);
     g.vao = gl::VertexArray::create();
     const GLuint vao = g.vao.id();
     glVertexArrayVertexBuffer(vao, 0, g.vertices.id(), 0, 6 * sizeof(float));
@@ -98,6 +108,7 @@ GpuMesh upload(const Mesh& m, const SceneObject& o) {
 
 std::uint32_t Renderer::add(const Mesh& m, const SceneObject& o) {
     impl_->meshes.push_back(upload(m, o));
+    impl_->meshes.back().version = ++impl_->mesh_versions;
     ++impl_->geometry_version;
     return std::uint32_t(impl_->meshes.size());
 }
@@ -105,6 +116,7 @@ std::uint32_t Renderer::add(const Mesh& m, const SceneObject& o) {
 void Renderer::replace(std::uint32_t id, const Mesh& m) {
     auto& slot = impl_->meshes.at(id - 1);
     slot = upload(m, slot.object);
+    slot.version = ++impl_->mesh_versions;
     ++impl_->geometry_version;
 }
 
@@ -159,6 +171,11 @@ RenderResult Renderer::render(const Camera& camera, const RenderOptions& opt, co
     ctx.pool = &im.pool;
     ctx.geometry_version = im.geometry_version;
     ctx.ao = &im.ao;
+    ctx.disk = &im.disk;
+    for (const auto& d : ctx.draws) {
+        auto& m = im.meshes[d.id - 1];
+        ctx.disk_surfaces.push_back({d.id, m.version, m.cpu, &m.disk});
+    }
     for (int redraws = 0;; ++redraws) {
         RenderResult result;
         result.gl_renderer = reinterpret_cast<const char*>(glGetString(GL_RENDERER));

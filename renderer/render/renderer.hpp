@@ -21,6 +21,7 @@
 #include "io/mesh.hpp"
 #include "renderer/graph/frame_graph.hpp"
 #include "renderer/graph/resource_pool.hpp"
+#include "renderer/ao/disk_geometry.hpp"
 #include "renderer/render/cone_ao.hpp"
 #include "renderer/scene/camera.hpp"
 
@@ -35,6 +36,10 @@ struct SceneObject {
 
 
 enum class Aov { None, Depth, Normal, Id, Ao };
+
+// How the AO image is computed (docs/ao.md): cone tracing in a slicemap
+// (interactive), or the disk hierarchy of GPU Gems 3 ch. 12 (still pictures).
+enum class AoMethod { Cone, Disk };
 Aov aov_from_name(const std::string& name); // "depth", "normal", "id", "ao"; throws iso::Error
 
 // A pick region in image pixels, from the image's top-left corner.
@@ -87,10 +92,14 @@ struct RenderOptions {
     // to oit_memory_bytes.
     float oit_epsilon = 1.0f / 512.0f;
     std::size_t oit_memory_bytes = std::size_t(256) << 20;
-    // Cone-traced ambient occlusion (modulates the ambient term; Aov::Ao
-    // reads it raw). Off: its passes are culled.
+    // Ambient occlusion (modulates the ambient term; Aov::Ao reads it raw).
+    // Off: its passes are culled. ao_settings.radius_mm is R for both
+    // methods; the other members of ao_settings are the cone tracer's,
+    // disk_settings the disk method's (docs/ao.md, "Disk AO on the GPU").
     bool ao = false;
+    AoMethod ao_method = AoMethod::Cone;
     ConeAoSettings ao_settings;
+    DiskAoSettings disk_settings;
     // A pick riding on this frame (docs/picking.md): image pixels from the
     // top-left; clipped to the image. Fragments inside are listed by the
     // frame's own geometry passes; RenderResult::pick holds the lists.
@@ -107,6 +116,11 @@ struct RenderHooks {
     // Read the VOIT lists back: each pixel's list length into
     // RenderResult::oit_lists (rows top to bottom; tests).
     bool read_oit_lists = false;
+    // Disk AO: read the element terms (one accessibility per node of the
+    // concatenated hierarchy) into RenderResult::disk_terms, and each
+    // gathered pixel's receiver (world point, w = its AO; world normal) into
+    // RenderResult::disk_receivers (rows bottom-up as GL stores them; tests).
+    bool read_disk = false;
 };
 
 // What the VOIT passes did this frame (all zero without translucent objects).
@@ -144,6 +158,14 @@ struct RenderResult {
     OitStats oit;
     std::vector<std::uint32_t> oit_lists; // with RenderHooks::read_oit_lists
     PickList pick;                        // with RenderOptions::pick
+    // Disk AO: the hierarchy was built (some surface's on the CPU) and
+    // uploaded this frame, the element passes ran (else both were kept from
+    // an earlier frame); its size; with RenderHooks::read_disk, what it read.
+    bool disk_built = false, disk_elements = false;
+    std::size_t disk_nodes = 0, disk_triangles = 0;
+    double disk_build_ms = 0;             // CPU time of the hierarchy builds this frame
+    std::vector<float> disk_terms;
+    std::vector<glm::vec4> disk_receivers; // 2 per pixel: (point, AO), (normal, 0)
 };
 
 class Renderer {

@@ -52,6 +52,8 @@ TEST_F(UniformBlocks, CppStructsMatchTheLinkedPrograms) {
     expect_block_matches<OverlayParams>(gl::Program::from_files({"render/overlay.vert", "render/overlay.frag"}), "overlay");
     expect_block_matches<ZRangeParams>(gl::Program::from_files({"ao/zrange.comp"}), "zrange");
     expect_block_matches<UpsampleParams>(gl::Program::from_files({"ao/ao_upsample.comp"}), "ao_upsample");
+    for (const char* disk : {"ao/disk_gather.comp", "ao/disk_element.comp", "ao/disk_parent.comp", "ao/disk_blend.comp"})
+        expect_block_matches<DiskParams>(gl::Program::from_files({disk}), disk);
     for (int layers : {1, 8}) {
         const std::string d = "#define LAYERS " + std::to_string(layers) + "\n";
         expect_block_matches<VoxelizeParams>(gl::Program::from_files({"ao/slicemap.vert", "ao/slicemap.frag"}, d), "voxelize " + d);
