@@ -105,6 +105,19 @@ std::string cli_message(const iso::Error& e) {
         {"decimation fraction", "--decimate"},
     };
     std::string where = e.where();
+    // renderer/render/disk_ao.cpp names its settings "disk AO <setting>".
+    static const std::pair<std::string, std::string> disk_flags[] = {
+        {"disk AO passes", "--ao-disk-passes"},
+        {"disk AO traversal epsilon", "--ao-disk-epsilon"},
+        {"disk AO clip epsilon", "--ao-disk-clip-epsilon"},
+        {"disk AO distance attenuation", "--ao-disk-distance-k"},
+        {"disk AO triangle attenuation", "--ao-disk-triangle-t"},
+        {"disk AO blend minimum weight", "--ao-disk-blend"},
+        {"disk AO blend maximum weight", "--ao-disk-blend"},
+        {"disk AO receiver offset", "--ao-disk-offset"},
+    };
+    for (const auto& [core, flag] : disk_flags)
+        if (where == core) where = flag;
     const std::string cone = "cone AO setting ";
     if (where.rfind(cone, 0) == 0) where = "--ao-" + where.substr(cone.size());
     for (const auto& [core, flag] : flags)
@@ -187,6 +200,40 @@ void add_cone_options(CLI::App* cmd, iso::ConeAoSettings& c) {
     cmd->add_option("--ao-guard", c.guard,
                     "Largest guard band around the view, fraction of the viewport per side, for occluders just off screen; 0 none (cone AO)")
         ->check(CLI::Range(0.0, 0.5));
+}
+
+// Disk-AO tunables (docs/ao.md, "Disk AO on the GPU"), defaults the
+// chapter's (DiskAoSettings). --ao-disk-blend takes "MIN,MAX" (the weights
+// of the convergence blend), parsed by disk_request().
+void add_disk_options(CLI::App* cmd, iso::DiskAoSettings& d, std::string& blend) {
+    cmd->add_option("--ao-disk-passes", d.passes, "Element passes before the gather, 1..16 (disk AO; default 2)")->check(CLI::Range(1, 16));
+    cmd->add_option("--ao-disk-epsilon", d.traversal_epsilon,
+                    "Traversal: open an element while distance^2 < epsilon x area, 0..10000 (disk AO; default 8)")
+        ->check(CLI::Range(0.0, 1e4));
+    cmd->add_option("--ao-disk-clip-epsilon", d.clip_epsilon, "Tangent-plane snap in mm, 0..0.1 (disk AO; default 1e-6)")
+        ->check(CLI::Range(0.0, 0.1));
+    cmd->add_option("--ao-disk-distance-k", d.distance_attenuation, "Distance attenuation 1/(1 + k d^2), k 0..100 (disk AO; default 0)")
+        ->check(CLI::Range(0.0, 100.0));
+    cmd->add_option("--ao-disk-triangle-t", d.triangle_attenuation,
+                    "Triangle attenuation: emitter term^t, t 0..16 (disk AO; default 1)")
+        ->check(CLI::Range(0.0, 16.0));
+    cmd->add_option("--ao-disk-offset", d.receiver_offset,
+                    "Receiver raised along its normal by this x R against self-occlusion, 0..0.1 (disk AO; default 0.001)")
+        ->check(CLI::Range(0.0, 0.1));
+    cmd->add_option("--ao-disk-blend", blend, "Convergence blend weights MIN,MAX of the last two passes (disk AO; default 0.7,0.3)");
+}
+
+// "MIN,MAX" of --ao-disk-blend into the settings (empty: unchanged).
+void parse_disk_blend(const std::string& text, iso::DiskAoSettings& d) {
+    if (text.empty()) return;
+    double lo = 0, hi = 0;
+    char tail = 0;
+    if (std::sscanf(text.c_str(), "%lf,%lf%c", &lo, &hi, &tail) != 2)
+        throw iso::Error("--ao-disk-blend", "expected MIN,MAX weights, e.g. 0.7,0.3, got '" + text + "'");
+    if (!(lo >= 0 && lo <= 1 && hi >= 0 && hi <= 1))
+        throw iso::Error("--ao-disk-blend", "weights must be in 0..1, got '" + text + "'");
+    d.min_scale = lo;
+    d.max_scale = hi;
 }
 
 // ---- isoscope info ---------------------------------------------------------
@@ -289,6 +336,8 @@ struct FrameArgs {
     double ao_radius = 10.0;
     int ao_frames = 1;
     iso::ConeAoSettings cone;
+    iso::DiskAoSettings disk;
+    std::string disk_blend;
     Look look;
     float oit_epsilon = 1.0f / 512.0f;
     double oit_memory = 256;
@@ -300,9 +349,12 @@ void add_frame_options(CLI::App* c, FrameArgs& a, bool input_required = true) {
     c->add_option("--iso", a.isos, "Iso value (repeatable) for volume inputs")->allow_extra_args(false);
     c->add_option("--view", a.view, "anterior, posterior, left, right, superior or inferior");
     c->add_option("--size", a.size, "Image size WxH (default 1024x1024)");
-    c->add_option("--ao", a.ao, "Ambient occlusion: off, cone (cone tracing), or reference (Embree ray tracing; with --aov ao)");
+    c->add_option("--ao", a.ao,
+                  "Ambient occlusion: off, cone (cone tracing), disk (disk hierarchy, high quality for stills), or reference (Embree ray "
+                  "tracing; with --aov ao)");
     c->add_option("--ao-radius", a.ao_radius, "AO radius R_max in mm")->check(CLI::PositiveNumber);
     add_cone_options(c, a.cone);
+    add_disk_options(c, a.disk, a.disk_blend);
     c->add_option("--ao-frames", a.ao_frames, "Still frames accumulated with new jitter sets (cone AO)")->check(CLI::Range(1, 4096));
     c->add_option("--series", a.series, "DICOM series to load: index or SeriesInstanceUID");
     add_look_options(c, a.look);
@@ -319,6 +371,8 @@ iso::core::RenderRequest frame_request(const FrameArgs& a) {
     req.ao = a.ao;
     req.ao_radius_mm = a.ao_radius;
     req.cone = a.cone;
+    req.disk = a.disk;
+    parse_disk_blend(a.disk_blend, req.disk);
     req.ao_frames = a.ao_frames;
     req.progress = progress_bar();
     if (!a.look.background.empty()) req.background = hex_option("--background", a.look.background);
@@ -406,6 +460,7 @@ iso::core::RenderRequest session_render_request(const RenderArgs& a, iso::core::
     req.oit_memory_mib = frame.oit_memory_mib;
     req.ao_radius_mm = frame.ao_radius_mm;
     req.cone = frame.cone;
+    req.disk = frame.disk;
     req.ao_frames = frame.ao_frames;
     req.progress = frame.progress;
     return req;

@@ -11,6 +11,7 @@
 #include <epoxy/egl.h>
 
 #include "renderer/ao/reference.hpp"
+#include "renderer/render/disk_ao.hpp"
 #include "renderer/gl/context.hpp"
 
 namespace iso::core {
@@ -150,11 +151,11 @@ RenderOptions render_options(const RenderRequest& req) {
     ro.oit_memory_bytes = std::size_t(req.oit_memory_mib * 1048576.0);
     ro.time_passes = req.time_passes;
     ro.pick = req.pick;
-    if (req.ao != "off" && req.ao != "cone" && req.ao != "reference")
-        throw Error("ambient occlusion", "method must be off, cone or reference, got '" + req.ao + "'");
+    if (req.ao != "off" && req.ao != "cone" && req.ao != "disk" && req.ao != "reference")
+        throw Error("ambient occlusion", "method must be off, cone, disk or reference, got '" + req.ao + "'");
     if (req.ao == "reference" && !req.aov_ao)
         throw Error("ambient occlusion reference", "the ray-traced reference is written only as the raw AO term (the ao AOV)");
-    if (req.aov_ao && req.ao == "off") throw Error("ao AOV", "needs cone or reference ambient occlusion");
+    if (req.aov_ao && req.ao == "off") throw Error("ao AOV", "needs cone, disk or reference ambient occlusion");
     if (req.ao_frames < 1 || req.ao_frames > 4096)
         throw Error("ambient occlusion frames", "expected 1..4096, got " + std::to_string(req.ao_frames));
     if (req.ao == "cone") {
@@ -162,6 +163,16 @@ RenderOptions render_options(const RenderRequest& req) {
         ro.ao_settings = req.cone;
         ro.ao_settings.radius_mm = req.ao_radius_mm;
         validate(ro.ao_settings);
+        if (req.aov_ao) ro.aov = Aov::Ao;
+    }
+    if (req.ao == "disk") {
+        // R lives in ao_settings for both methods (RenderOptions).
+        ro.ao = !req.aov_ao;
+        ro.ao_method = AoMethod::Disk;
+        ro.ao_settings.radius_mm = req.ao_radius_mm;
+        validate(ro.ao_settings);
+        ro.disk_settings = req.disk;
+        validate(ro.disk_settings);
         if (req.aov_ao) ro.aov = Aov::Ao;
     }
     return ro;
@@ -343,6 +354,14 @@ RenderOutput render_image(Scene& scene, const RenderRequest& req) {
                                       num(c.grid_scale) + "; jitter_sets " + std::to_string(c.jitter_sets) + "; ray_weight " + num(c.ray_weight) + "; persistence " +
                                       num(c.persistence) + "; attenuation " + num(c.attenuation) + "; bias " + num(c.bias) +
                                       "; resolution " + num(c.resolution) + "; guard " + num(c.guard) + "; frames " + std::to_string(req.ao_frames);
+    }
+    if (req.ao == "disk") {
+        const auto& d = ro.disk_settings;
+        t["isoscope:ao"] = "disk (disk hierarchy with exact near triangles, GPU Gems 3 ch. 12)";
+        t["isoscope:ao_parameters"] = "passes " + std::to_string(d.passes) + "; traversal_epsilon " + num(d.traversal_epsilon) +
+                                      "; clip_epsilon " + num(d.clip_epsilon) + "; distance_attenuation " + num(d.distance_attenuation) +
+                                      "; triangle_attenuation " + num(d.triangle_attenuation) + "; blend_min " + num(d.min_scale) +
+                                      "; blend_max " + num(d.max_scale) + "; receiver_offset " + num(d.receiver_offset);
     }
     if (req.aov_ao) {
         t["isoscope:aov"] = "ao (1 = unoccluded; cosine-weighted visibility within the radius; NaN = background)";

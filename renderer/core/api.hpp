@@ -56,12 +56,15 @@ struct RenderRequest {
     double oit_memory_mib = 256;     // translucent surfaces: fragment pool cap
     bool time_passes = false;        // real per-pass GPU times (glFinish after each pass)
     // Ambient occlusion: "off", "cone" (cone tracing in the slicemap; in the
-    // colour image it darkens the ambient light) or "reference" (Embree ray
-    // tracing; only as --aov ao). --aov ao writes the raw term (1 = unoccluded).
+    // colour image it darkens the ambient light), "disk" (the disk hierarchy
+    // of GPU Gems 3 ch. 12, for still pictures; likewise) or "reference"
+    // (Embree ray tracing; only as --aov ao). --aov ao writes the raw term
+    // (1 = unoccluded).
     bool aov_ao = false;
     std::string ao = "off";
-    double ao_radius_mm = 10.0;      // R_max, for both methods
+    double ao_radius_mm = 10.0;      // R_max, for every method
     ConeAoSettings cone;             // tunables of "cone" (its radius_mm is set from ao_radius_mm)
+    DiskAoSettings disk;             // tunables of "disk"
     int ao_frames = 1;               // still frames accumulated (new jitter sets each) for "cone"
     int ao_rays = 1024;              // rays per pixel for "reference"
     // Reference results are cached by a hash of everything they depend on

@@ -212,3 +212,50 @@ TEST(RenderCli, ConeAoAsAnAovAndInTheColourImage) {
         EXPECT_FALSE(std::filesystem::exists(dir / "x.exr")) << bad;
     }
 }
+
+// --ao disk (docs/ao.md, "Disk AO on the GPU"): the same one-channel float
+// EXR as cone AO, with the method, R and every tunable in the metadata;
+// finite values in [0, 1] on the surface, NaN on the background; AO darkens
+// the colour image; bad tunables are refused naming the flag.
+TEST(RenderCli, DiskAoAsAnAovAndInTheColourImage) {
+    TempDir dir;
+    render(test::data("headsq.nhdr") + " --iso 500 --size 96x80 --view left --aov ao --ao disk --ao-radius 8 --ao-disk-passes 3 " +
+           "--ao-disk-epsilon 6 --ao-disk-distance-k 0.01 --ao-disk-triangle-t 1.5 --ao-disk-blend 0.6,0.4 -o " + (dir / "ao.exr"));
+    ImageMetadata meta;
+    const Image ao = load_image(dir / "ao.exr", &meta);
+    ASSERT_TRUE(ao.is_float);
+    ASSERT_EQ(ao.channels, 1);
+    EXPECT_EQ(meta.text["isoscope:ao_radius_mm"], "8");
+    EXPECT_NE(meta.text["isoscope:ao"].find("disk"), std::string::npos);
+    const std::string params = meta.text["isoscope:ao_parameters"];
+    for (const char* p : {"passes 3", "traversal_epsilon 6", "clip_epsilon 1e-06", "distance_attenuation 0.01", "triangle_attenuation 1.5",
+                          "blend_min 0.6", "blend_max 0.4"})
+        EXPECT_NE(params.find(p), std::string::npos) << p << " in " << params;
+    std::size_t fg = 0, occluded = 0;
+    for (float v : ao.floats) {
+        if (std::isnan(v)) continue;
+        ++fg;
+        ASSERT_TRUE(std::isfinite(v));
+        ASSERT_GE(v, 0.0f);
+        ASSERT_LE(v, 1.0f);
+        occluded += v < 0.9f;
+    }
+    EXPECT_GT(fg, 500u);
+    EXPECT_GT(occluded, 10u);
+    EXPECT_TRUE(std::isnan(ao.floats[0])) << "the corner is background";
+    render(test::data("headsq.nhdr") + " --iso 500 --size 96x80 --view left --no-annotations --ao disk -o " + (dir / "on.png"));
+    render(test::data("headsq.nhdr") + " --iso 500 --size 96x80 --view left --no-annotations -o " + (dir / "off.png"));
+    const Image on = load_image(dir / "on.png"), off = load_image(dir / "off.png");
+    ASSERT_EQ(on.bytes.size(), off.bytes.size());
+    EXPECT_NE(on.bytes, off.bytes);
+    for (const std::string bad : {" --ao disks", " --ao disk --ao-disk-passes 0", " --ao disk --ao-disk-passes 17",
+                                  " --ao disk --ao-disk-epsilon -1", " --ao disk --ao-disk-triangle-t 20", " --ao disk --ao-disk-blend 0.7",
+                                  " --ao disk --ao-disk-blend 2,0.3", " --ao disk --ao-disk-distance-k -0.5"}) {
+        const auto r = test::run_command(test::cli() + " render " + test::data("headsq.nhdr") + " --iso 500 --size 32x32" + bad + " -o " +
+                                             (dir / "x.exr"),
+                                         true);
+        EXPECT_NE(r.exit_code, 0) << bad;
+        EXPECT_NE(r.out.find("--ao"), std::string::npos) << bad << ": " << r.out;
+        EXPECT_FALSE(std::filesystem::exists(dir / "x.exr")) << bad;
+    }
+}
