@@ -95,6 +95,8 @@ ExportDialog::ExportDialog(QSize size, bool ao, const QString& file, const QStri
     ao_->setObjectName("ao");
     ao_->addItem("off", "off");
     ao_->addItem("cone traced", "cone");
+    // The disk hierarchy (docs/ao.md, "Disk AO on the GPU"): slower, closer to ray tracing; for stills.
+    ao_->addItem("high quality (disk)", "disk");
     ao_->setCurrentIndex(ao ? 1 : 0);
     form->addRow("Ambient occlusion:", ao_);
     file_ = file_row(this, form, file, "PNG (*.png);;TIFF (*.tif *.tiff);;OpenEXR (*.exr)");

@@ -131,6 +131,8 @@ TEST(GuiExportInXvfb, ExportSaveOpenSessionAndSurfaces) {
     // Defaults: the 3D view's size and AO.
     EXPECT_EQ(dialog->findChild<QSpinBox*>("width")->value(), w.viewer()->image_size().width());
     EXPECT_EQ(dialog->findChild<QComboBox*>("ao")->currentData().toString(), "cone");
+    // The high-quality still method is offered (disk AO, docs/ao.md).
+    EXPECT_GE(dialog->findChild<QComboBox*>("ao")->findData("disk"), 0);
     screenshot(*dialog, "export_dialog.png");
     const std::string image = dir / "export.png";
     dialog->findChild<QSpinBox*>("width")->setValue(360);
