@@ -69,6 +69,33 @@ TEST(Frame, AoOnRunsTheConeChainBeforeLighting) {
     EXPECT_EQ(compile(o, {.read_slicemap = true}).running, (Passes{"gbuffer", "zrange", "voxelize", "cone_ao", "read_slicemap", "lighting", "readback"}));
 }
 
+// Disk AO (docs/ao.md, "Disk AO on the GPU"): its chain replaces the cone
+// chain; a first frame builds the hierarchy and runs the element passes;
+// with AO off or a depth AOV nothing of it runs; bad disk settings are
+// refused only when AO is asked for.
+TEST(Frame, DiskAoRunsItsOwnChainInsteadOfTheCones) {
+    RenderOptions o = options();
+    o.ao_method = AoMethod::Disk;
+    EXPECT_EQ(compile(o).running, (Passes{"gbuffer", "lighting", "readback"}));
+    o.ao = true;
+    EXPECT_EQ(compile(o).running, (Passes{"gbuffer", "disk_build", "disk_elements", "disk_gather", "lighting", "readback"}));
+    o.aov = Aov::Depth;
+    EXPECT_EQ(compile(o).running, (Passes{"gbuffer", "readback"}));
+    o.ao = false;
+    o.aov = Aov::Ao;
+    EXPECT_EQ(compile(o).running, (Passes{"gbuffer", "disk_build", "disk_elements", "disk_gather", "readback"}));
+    o.aov = Aov::None;
+    o.disk_settings.passes = 0;
+    EXPECT_EQ(compile(o).running, (Passes{"gbuffer", "lighting", "readback"})) << "AO off: not checked";
+    o.ao = true;
+    try {
+        compile(o);
+        ADD_FAILURE() << "passes = 0 was accepted";
+    } catch (const Error& e) {
+        EXPECT_NE(std::string(e.what()).find("passes"), std::string::npos) << e.what();
+    }
+}
+
 TEST(Frame, AnAovRunsOnlyItsProducers) {
     RenderOptions o = options();
     o.ao = true; // on, but a depth AOV does not read it
