@@ -383,7 +383,10 @@ std::vector<float> disk_element_passes(const DiskHierarchy& h, const DiskAoSetti
     for (std::size_t i = 0; i < n; ++i)
         if (h.nodes[i].links.y < 0) leaves.push_back(static_cast<std::int32_t>(i));
     std::vector<double> weight(n), count(n);
-    const int passes = std::max(1, s.passes);
+    // No element passes: every term 1, the gather is the plain (clamped) sum
+    // of form factors.
+    if (s.passes <= 0) return std::vector<float>(n, 1.0f);
+    const int passes = s.passes;
 
     // Leaf occlusion of the last two passes (pass 1 unmodulated).
     std::vector<float> previous_occ(n, 0.0f), occ(n, 0.0f);

@@ -76,7 +76,9 @@ double disk_occlusion(const DiskHierarchy& h, const glm::dvec3& p, const glm::dv
 // The element passes: every leaf's accessibility (1 - occlusion at its
 // disk) for `s.passes` passes, each modulated by the previous one, the last
 // two combined by converge_blend; parents get the area-weighted mean of
-// their leaves. Returns one accessibility per node.
+// their leaves. Returns one accessibility per node. s.passes <= 0: no
+// element passes, every term 1 (the gather then sums unmodulated form
+// factors).
 std::vector<float> disk_element_terms(const DiskHierarchy& h, const DiskAoSettings& s, double radius);
 
 // The same passes; also appends each pass's terms (before the blend) to
