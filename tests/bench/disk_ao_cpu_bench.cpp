@@ -10,6 +10,8 @@
 //   disk_ao_cpu_bench [--scenes ct-skin,ct-bone,bunny] [--samples 2000] [--rays 1024]
 //                     [--configs "passes=2,t=1,k=0,min=0.7;..."] [--radius-scale F] [--verbose]
 // R: 10 mm on the CT, a tenth of the bunny's size (as ao_bench), times F.
+// --surface-points: receivers at uniform random points of the surface with
+// the interpolated vertex normal (a pixel's receiver) instead of vertices.
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -45,9 +47,11 @@ std::vector<std::string> split(const std::string& s, char sep) {
 struct Config {
     std::string text;
     DiskAoSettings s;
+    bool sided = false;  // disk_occlusion_sided with the receiver's geometric normal
 };
 
-// "passes=2,t=1,k=0,min=0.7,eps=8": k relative to 1 / R^2 (k=1: halved at d = R).
+// "passes=2,t=1,k=0,min=0.7,eps=8,off=0.001,sided=1": k relative to 1 / R^2
+// (k=1: halved at d = R); sided=1: disk_occlusion_sided.
 Config parse(const std::string& text, double R) {
     Config c{text, {}};
     for (const auto& kv : split(text, ',')) {
@@ -63,6 +67,7 @@ Config parse(const std::string& text, double R) {
             c.s.max_scale = 1.0 - v;
         } else if (k == "eps") c.s.traversal_epsilon = v;
         else if (k == "off") c.s.receiver_offset = v;
+        else if (k == "sided") c.sided = v != 0;
         else throw Error("disk_ao_cpu_bench", "unknown setting '" + k + "'");
     }
     return c;
@@ -75,6 +80,7 @@ int main(int argc, char** argv) try {
     int samples = 2000, rays = 1024;
     bool verbose = false;
     double radius_scale = 1.0;
+    bool surface_points = false;
     std::string configs =
         "passes=1;passes=2;passes=3;passes=4;passes=2,t=0.5;passes=2,t=2;passes=2,k=1;passes=2,k=4;passes=2,min=1;passes=2,min=0.5";
     for (int i = 1; i < argc; ++i) {
@@ -89,6 +95,7 @@ int main(int argc, char** argv) try {
         else if (a == "--configs") configs = next();
         else if (a == "--verbose") verbose = true;
         else if (a == "--radius-scale") radius_scale = std::stod(next());
+        else if (a == "--surface-points") surface_points = true;
         else throw Error("disk_ao_cpu_bench", "unknown option '" + a + "'");
     }
     const std::string data = ISOSCOPE_DATA_DIR;
@@ -142,6 +149,7 @@ int main(int argc, char** argv) try {
         // Sample of vertices (all meshes' vertices in concatenation order).
         std::vector<glm::dvec3> ps, ns;
         std::vector<char> consistent;  // vertex normal on the side of its triangles' winding
+        std::vector<glm::dvec3> fns;   // the receiver's geometric normal (triangle / area-weighted triangles)
         std::vector<glm::dvec3> face_sum;
         for (const auto& m : meshes) {
             const std::size_t base = face_sum.size();
@@ -155,6 +163,52 @@ int main(int argc, char** argv) try {
         std::uniform_int_distribution<std::size_t> pick(0, verts - 1);
         std::vector<glm::vec3> all_pos;
         for (const auto& m : meshes) all_pos.insert(all_pos.end(), m.positions.begin(), m.positions.end());
+        if (surface_points) {
+            // Uniform points on the surface (triangles by area, uniform
+            // barycentrics) with the interpolated vertex normal: what a
+            // pixel's receiver is.
+            struct Tri {
+                glm::dvec3 a, b, c, na, nb, nc;
+                std::size_t v0;
+            };
+            std::vector<Tri> tris_all;
+            std::vector<double> cdf;
+            double total = 0;
+            std::size_t base = 0;
+            for (const auto& m : meshes) {
+                for (const auto& t : m.triangles) {
+                    Tri q{glm::dvec3(m.positions[t[0]]), glm::dvec3(m.positions[t[1]]), glm::dvec3(m.positions[t[2]]), {}, {}, {}, base + t[0]};
+                    const auto nrm = [&](std::uint32_t v) {
+                        const std::int32_t leaf = h.vertex_node[base + v];
+                        return glm::dvec3(glm::vec3(h.nodes[static_cast<std::size_t>(leaf)].normal_bound));
+                    };
+                    q.na = nrm(t[0]);
+                    q.nb = nrm(t[1]);
+                    q.nc = nrm(t[2]);
+                    total += 0.5 * glm::length(glm::cross(q.b - q.a, q.c - q.a));
+                    cdf.push_back(total);
+                    tris_all.push_back(q);
+                }
+                base += m.positions.size();
+            }
+            std::uniform_real_distribution<double> u01(0.0, 1.0);
+            while (static_cast<int>(ps.size()) < samples) {
+                const auto k = static_cast<std::size_t>(std::lower_bound(cdf.begin(), cdf.end(), u01(rng) * total) - cdf.begin());
+                const Tri& q = tris_all[std::min(k, tris_all.size() - 1)];
+                double r1 = u01(rng), r2 = u01(rng);
+                if (r1 + r2 > 1) {
+                    r1 = 1 - r1;
+                    r2 = 1 - r2;
+                }
+                const glm::dvec3 nn = (1 - r1 - r2) * q.na + r1 * q.nb + r2 * q.nc;
+                if (glm::length(nn) < 1e-6) continue;
+                const glm::dvec3 n = glm::normalize(nn);
+                ps.push_back((1 - r1 - r2) * q.a + r1 * q.b + r2 * q.c);
+                ns.push_back(n);
+                consistent.push_back(glm::dot(glm::cross(q.b - q.a, q.c - q.a), n) > 0.0);
+                fns.push_back(glm::cross(q.b - q.a, q.c - q.a));
+            }
+        }
         while (static_cast<int>(ps.size()) < samples) {
             const std::size_t v = pick(rng);
             const std::int32_t leaf = h.vertex_node[v];
@@ -164,6 +218,7 @@ int main(int argc, char** argv) try {
             ps.emplace_back(all_pos[v]);
             ns.push_back(n);
             consistent.push_back(glm::dot(face_sum[v], n) > 0.0);
+            fns.push_back(face_sum[v]);
         }
         std::vector<const Mesh*> mp;
         for (const auto& m : meshes) mp.push_back(&m);
@@ -184,7 +239,9 @@ int main(int argc, char** argv) try {
             const double pass_s = bench::now_s() - t0;
             std::vector<double> ao(ps.size());
             t0 = bench::now_s();
-            for (std::size_t i = 0; i < ps.size(); ++i) ao[i] = 1.0 - disk_occlusion(h, ps[i], ns[i], terms, c.s, R);
+            for (std::size_t i = 0; i < ps.size(); ++i)
+                ao[i] = 1.0 - (c.sided ? disk_occlusion_sided(h, ps[i], ns[i], fns[i], terms, c.s, R)
+                                       : disk_occlusion(h, ps[i], ns[i], terms, c.s, R));
             const double gather_us = 1e6 * (bench::now_s() - t0) / static_cast<double>(ps.size());
             double se = 0, bias = 0, worst = 0, se_c = 0;
             std::size_t worst_i = 0, n_c = 0;
