@@ -17,6 +17,7 @@
 #include "io/error.hpp"
 #include "io/mesh.hpp"
 #include "renderer/ao/reference.hpp"
+#include "renderer/core/scene.hpp"
 
 using namespace iso;
 
@@ -236,6 +237,21 @@ TEST(DiskHierarchyBuild, BunnyInvariants) {
     const DiskHierarchy h = build_disk_hierarchy(m);
     check_structure(h, {&m});
     // Median splits into up to 4: depth near log4 of the leaf count, at most log2.
+    EXPECT_LE(h.levels, 2 + static_cast<int>(std::ceil(std::log2(static_cast<double>(m.positions.size())))));
+}
+
+// The bundled CT's bone surface (iso 1150, 78k triangles), as ao_bench
+// loads it: every invariant on a real marching-cubes surface.
+TEST(DiskHierarchyBuild, CtBoneInvariants) {
+    core::Scene scene;
+    scene.open(std::string(ISOSCOPE_DATA_DIR) + "/headsq.nhdr");
+    const auto ids = scene.add_isosurfaces({1150.0});
+    ASSERT_EQ(ids.size(), 1u);
+    const Mesh& m = scene.mesh(ids[0]);
+    ASSERT_GT(m.triangles.size(), 50000u);
+    const DiskHierarchy h = build_disk_hierarchy(m);
+    check_structure(h, {&m});
+    std::printf("ct bone: %zu triangles, %zu nodes, %d levels\n", m.triangles.size(), h.nodes.size(), h.levels);
     EXPECT_LE(h.levels, 2 + static_cast<int>(std::ceil(std::log2(static_cast<double>(m.positions.size())))));
 }
 
