@@ -86,9 +86,11 @@ struct Builder {
 
 // The traversal for one receiver, in T (float: the shader; double: the test
 // reference). Each line maps onto the GLSL of the gather shader.
+// side: +1 front faces occlude (a receiver outside the solid), -1 back faces
+// (a receiver whose normal points into the solid; disk_occlusion_sided).
 template <typename T>
 T disk_occlusion_t(const DiskHierarchy& h, const glm::vec<3, T>& p_in, const glm::vec<3, T>& n,
-                   const std::vector<float>& node_term, const DiskAoSettings& s, T radius) {
+                   const std::vector<float>& node_term, const DiskAoSettings& s, T radius, T side = T(1)) {
     using V = glm::vec<3, T>;
     const T R = std::max(radius, T(0));
     const T R2 = R * R;
@@ -129,7 +131,7 @@ T disk_occlusion_t(const DiskHierarchy& h, const glm::vec<3, T>& p_in, const glm
                 i = child;
                 continue;
             }
-            occlusion += disk_form_factor(p, n, c, m, area) * modulation * distance_attenuation(d2, k);
+            occlusion += disk_form_factor(p, n, c, side * m, area) * modulation * distance_attenuation(d2, k);
             i = skip;
             continue;
         }
@@ -147,11 +149,11 @@ T disk_occlusion_t(const DiskHierarchy& h, const glm::vec<3, T>& p_in, const glm
                 const V g = (v0 + v1 + v2) * (T(1) / T(3)) - p;
                 const T g2 = glm::dot(g, g);
                 if (g2 > R2) continue;
-                const T ff = std::max(clipped_triangle_form_factor(p, n, v0, v1, v2, clip_eps), T(0));
+                const T ff = std::max(side * clipped_triangle_form_factor(p, n, v0, v1, v2, clip_eps), T(0));
                 occlusion += ff * modulation * distance_attenuation(g2, k);
             }
         } else if (d2 <= R2) {
-            occlusion += disk_form_factor(p, n, c, m, area) * modulation * distance_attenuation(d2, k);
+            occlusion += disk_form_factor(p, n, c, side * m, area) * modulation * distance_attenuation(d2, k);
         }
         i = skip;
     }
@@ -371,6 +373,13 @@ double disk_occlusion(const DiskHierarchy& h, const glm::dvec3& p, const glm::dv
         disk_occlusion_t<float>(h, glm::vec3(p), glm::vec3(n), node_term, s, static_cast<float>(radius)));
 }
 
+double disk_occlusion_sided(const DiskHierarchy& h, const glm::dvec3& p, const glm::dvec3& n, const glm::dvec3& face_normal,
+                            const std::vector<float>& node_term, const DiskAoSettings& s, double radius) {
+    const float side = glm::dot(glm::vec3(n), glm::vec3(face_normal)) < 0.0f ? -1.0f : 1.0f;
+    return static_cast<double>(
+        disk_occlusion_t<float>(h, glm::vec3(p), glm::vec3(n), node_term, s, static_cast<float>(radius), side));
+}
+
 double disk_occlusion_double(const DiskHierarchy& h, const glm::dvec3& p, const glm::dvec3& n,
                              const std::vector<float>& node_term, const DiskAoSettings& s, double radius) {
     return disk_occlusion_t<double>(h, p, n, node_term, s, radius);
@@ -383,7 +392,10 @@ std::vector<float> disk_element_passes(const DiskHierarchy& h, const DiskAoSetti
     for (std::size_t i = 0; i < n; ++i)
         if (h.nodes[i].links.y < 0) leaves.push_back(static_cast<std::int32_t>(i));
     std::vector<double> weight(n), count(n);
-    const int passes = std::max(1, s.passes);
+    // No element passes: every term 1, the gather is the plain (clamped) sum
+    // of form factors.
+    if (s.passes <= 0) return std::vector<float>(n, 1.0f);
+    const int passes = s.passes;
 
     // Leaf occlusion of the last two passes (pass 1 unmodulated).
     std::vector<float> previous_occ(n, 0.0f), occ(n, 0.0f);

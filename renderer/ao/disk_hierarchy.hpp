@@ -76,8 +76,22 @@ double disk_occlusion(const DiskHierarchy& h, const glm::dvec3& p, const glm::dv
 // The element passes: every leaf's accessibility (1 - occlusion at its
 // disk) for `s.passes` passes, each modulated by the previous one, the last
 // two combined by converge_blend; parents get the area-weighted mean of
-// their leaves. Returns one accessibility per node.
+// their leaves. Returns one accessibility per node. s.passes <= 0: no
+// element passes, every term 1 (the gather then sums unmodulated form
+// factors).
 std::vector<float> disk_element_terms(const DiskHierarchy& h, const DiskAoSettings& s, double radius);
+
+// disk_occlusion for a receiver that may lie on the inside of the surface:
+// when its normal n points against `face_normal` (its surface's geometric
+// normal: a pixel's triangle's, a vertex's area-weighted triangles') its
+// hemisphere looks into the solid, where the surface's back faces are what
+// it sees (as the ray-traced reference does); then back faces occlude
+// instead of front faces (disks with their normals flipped, triangles with
+// the form factor's sign flipped). Otherwise the same as disk_occlusion.
+// Interpolated normals of marching-cubes surfaces do this at thin
+// structures (docs/ao.md, "Disk AO: hierarchy and CPU evaluation", limits).
+double disk_occlusion_sided(const DiskHierarchy& h, const glm::dvec3& p, const glm::dvec3& n, const glm::dvec3& face_normal,
+                            const std::vector<float>& node_term, const DiskAoSettings& s, double radius);
 
 // The same passes; also appends each pass's terms (before the blend) to
 // `per_pass` when not null (tests and the benchmark: convergence).
