@@ -139,8 +139,11 @@ graph::TextureHandle disk_ambient_occlusion(graph::FrameGraph& fg, const FrameCo
     const DiskState* S = ctx.disk;
     const auto key = surfaces_key(ctx);
     const bool rebuild = !S || S->key != key;
-    const bool elements = rebuild || !S->terms_valid || !same_settings(S->settings, ctx.opt.disk_settings) ||
-                          S->radius != ctx.opt.ao_settings.radius_mm;
+    // No element passes (passes = 0, the default): every term is 1 and the
+    // gather sums unmodulated form factors.
+    const bool modulated = ctx.opt.disk_settings.passes > 0;
+    const bool elements = modulated && (rebuild || !S->terms_valid || !same_settings(S->settings, ctx.opt.disk_settings) ||
+                                        S->radius != ctx.opt.ao_settings.radius_mm);
 
     graph::BufferHandle hierarchy = fg.history("disk_hierarchy", kTokenDesc);
     if (rebuild) {
@@ -173,7 +176,7 @@ graph::TextureHandle disk_ambient_occlusion(graph::FrameGraph& fg, const FrameCo
                           // As disk_element_passes: pass k reads the terms of
                           // pass k - 1 (none for the first) and writes its own
                           // terms and leaf occlusion; parents follow each pass.
-                          const int passes = std::max(1, st.passes);
+                          const int passes = st.passes; // >= 1: the pass is declared only then
                           for (int pass = 0; pass < passes; ++pass) {
                               const int out = pass % 2, in = 1 - out;
                               auto& prog = gl.program({"ao/disk_element.comp"});
@@ -237,7 +240,8 @@ graph::TextureHandle disk_ambient_occlusion(graph::FrameGraph& fg, const FrameCo
                      glBindTextureUnit(1, gl.texture(r, d.normal));
                      glBindImageTexture(0, gl.texture(r, d.ao), 0, GL_FALSE, 0, GL_WRITE_ONLY, GL_R32F);
                      DiskParams p = base_params(ctx);
-                     p.use_terms = 1;
+                     const bool modulated = ctx.opt.disk_settings.passes > 0;
+                     p.use_terms = modulated ? 1 : 0;
                      bind_params(gl, r, d.params, p);
                      gl::Buffer receivers;
                      const std::size_t pixels = std::size_t(ctx.width) * std::size_t(ctx.height);
@@ -252,8 +256,8 @@ graph::TextureHandle disk_ambient_occlusion(graph::FrameGraph& fg, const FrameCo
                      ctx.result->disk_triangles = S.triangles;
                      if (read) {
                          ctx.result->disk_receivers = receivers.read_all<glm::vec4>();
-                         ctx.result->disk_terms.resize(S.nodes);
-                         if (S.nodes)
+                         ctx.result->disk_terms.assign(S.nodes, 1.0f);
+                         if (S.nodes && modulated)
                              glGetNamedBufferSubData(S.terms[S.final_terms].id(), 0, GLsizeiptr(S.nodes * sizeof(float)), ctx.result->disk_terms.data());
                      }
                  })

@@ -30,7 +30,7 @@ void validate(const DiskAoSettings& s) {
     check_range("triangle attenuation", s.triangle_attenuation, 0.0, 16.0);
     check_range("blend minimum weight", s.min_scale, 0.0, 1.0);
     check_range("blend maximum weight", s.max_scale, 0.0, 1.0);
-    check_range("passes", s.passes, 1, 16);
+    check_range("passes", s.passes, 0, 16); // 0: none, the default
     // Receiver raised by offset x R: 0 lets a receiver see its own disk;
     // beyond a tenth of R it floats visibly off the surface.
     check_range("receiver offset", s.receiver_offset, 0.0, 0.1);

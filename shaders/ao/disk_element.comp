@@ -20,7 +20,7 @@ void main() {
     if (i >= node_count) return;
     DiskNode e = disk_nodes[i];
     if (e.links.y >= 0) return; // a parent
-    float o = disk_occlusion(e.centre_area.xyz, e.normal_bound.xyz);
+    float o = disk_occlusion(e.centre_area.xyz, e.normal_bound.xyz, 1.0);
     disk_occlusion_out[i] = o;
     disk_terms_out[i] = 1.0 - o;
 }

@@ -17,8 +17,10 @@ layout(std430, binding = 1) readonly buffer DiskTriangles { vec4 disk_triangles[
 layout(std430, binding = 3) readonly buffer DiskTermsIn { float disk_terms_in[]; };  // accessibility per node
 
 // Occlusion (0 open .. 1) at the receiver (p_in, n) within R. One stackless
-// walk over every tree (a root's skip is the next tree's root).
-float disk_occlusion(vec3 p_in, vec3 n) {
+// walk over every tree (a root's skip is the next tree's root). side: +1
+// front faces occlude (disk_occlusion), -1 back faces (a receiver whose
+// normal points into the solid: disk_occlusion_sided).
+float disk_occlusion(vec3 p_in, vec3 n, float side) {
     float R = max(radius, 0.0);
     float R2 = R * R;
     float eps = traversal_epsilon;
@@ -57,7 +59,7 @@ float disk_occlusion(vec3 p_in, vec3 n) {
                 i = child;
                 continue;
             }
-            occlusion += disk_form_factor(p, n, c, m, area) * modulation * disk_distance_attenuation(d2, k);
+            occlusion += disk_form_factor(p, n, c, side * m, area) * modulation * disk_distance_attenuation(d2, k);
             i = skip;
             continue;
         }
@@ -73,11 +75,11 @@ float disk_occlusion(vec3 p_in, vec3 n) {
                 vec3 g = (v0 + v1 + v2) * (1.0 / 3.0) - p;
                 float g2 = dot(g, g);
                 if (g2 > R2) continue;
-                float ff = max(disk_clipped_triangle_form_factor(p, n, v0, v1, v2, clip_eps), 0.0);
+                float ff = max(side * disk_clipped_triangle_form_factor(p, n, v0, v1, v2, clip_eps), 0.0);
                 occlusion += ff * modulation * disk_distance_attenuation(g2, k);
             }
         } else if (d2 <= R2) {
-            occlusion += disk_form_factor(p, n, c, m, area) * modulation * disk_distance_attenuation(d2, k);
+            occlusion += disk_form_factor(p, n, c, side * m, area) * modulation * disk_distance_attenuation(d2, k);
         }
         i = skip;
     }

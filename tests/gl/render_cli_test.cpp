@@ -248,7 +248,7 @@ TEST(RenderCli, DiskAoAsAnAovAndInTheColourImage) {
     const Image on = load_image(dir / "on.png"), off = load_image(dir / "off.png");
     ASSERT_EQ(on.bytes.size(), off.bytes.size());
     EXPECT_NE(on.bytes, off.bytes);
-    for (const std::string bad : {" --ao disks", " --ao disk --ao-disk-passes 0", " --ao disk --ao-disk-passes 17",
+    for (const std::string bad : {" --ao disks", " --ao disk --ao-disk-passes -1", " --ao disk --ao-disk-passes 17",
                                   " --ao disk --ao-disk-epsilon -1", " --ao disk --ao-disk-triangle-t 20", " --ao disk --ao-disk-blend 0.7",
                                   " --ao disk --ao-disk-blend 2,0.3", " --ao disk --ao-disk-distance-k -0.5"}) {
         const auto r = test::run_command(test::cli() + " render " + test::data("headsq.nhdr") + " --iso 500 --size 32x32" + bad + " -o " +

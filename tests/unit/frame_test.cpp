@@ -78,6 +78,9 @@ TEST(Frame, DiskAoRunsItsOwnChainInsteadOfTheCones) {
     o.ao_method = AoMethod::Disk;
     EXPECT_EQ(compile(o).running, (Passes{"gbuffer", "lighting", "readback"}));
     o.ao = true;
+    // Default: no element passes (passes = 0).
+    EXPECT_EQ(compile(o).running, (Passes{"gbuffer", "disk_build", "disk_gather", "lighting", "readback"}));
+    o.disk_settings.passes = 2;
     EXPECT_EQ(compile(o).running, (Passes{"gbuffer", "disk_build", "disk_elements", "disk_gather", "lighting", "readback"}));
     o.aov = Aov::Depth;
     EXPECT_EQ(compile(o).running, (Passes{"gbuffer", "readback"}));
@@ -85,12 +88,12 @@ TEST(Frame, DiskAoRunsItsOwnChainInsteadOfTheCones) {
     o.aov = Aov::Ao;
     EXPECT_EQ(compile(o).running, (Passes{"gbuffer", "disk_build", "disk_elements", "disk_gather", "readback"}));
     o.aov = Aov::None;
-    o.disk_settings.passes = 0;
+    o.disk_settings.passes = -1;
     EXPECT_EQ(compile(o).running, (Passes{"gbuffer", "lighting", "readback"})) << "AO off: not checked";
     o.ao = true;
     try {
         compile(o);
-        ADD_FAILURE() << "passes = 0 was accepted";
+        ADD_FAILURE() << "passes = -1 was accepted";
     } catch (const Error& e) {
         EXPECT_NE(std::string(e.what()).find("passes"), std::string::npos) << e.what();
     }
