@@ -272,9 +272,9 @@ int main(int argc, char** argv) try {
                              disk_occlusion(h, ps[worst_i], ns[worst_i], {}, tri, R), disk_occlusion(h, ps[worst_i], ns[worst_i], {}, c.s, R));
             }
             if (verbose)
-                std::fprintf(stderr, "[disk_ao_cpu_bench]   worst at (%g %g %g) n (%.3f %.3f %.3f): disk %.3f, Embree %.3f\n",
-                             ps[worst_i].x, ps[worst_i].y, ps[worst_i].z, ns[worst_i].x, ns[worst_i].y, ns[worst_i].z,
-                             1.0 - disk_occlusion(h, ps[worst_i], ns[worst_i], terms, c.s, R), ref[worst_i]);
+                std::fprintf(stderr, "[disk_ao_cpu_bench]   worst at (%g %g %g) n (%.3f %.3f %.3f), geometric normal with it: %d: disk %.3f, Embree %.3f\n",
+                             ps[worst_i].x, ps[worst_i].y, ps[worst_i].z, ns[worst_i].x, ns[worst_i].y, ns[worst_i].z, int(consistent[worst_i]),
+                             ao[worst_i], ref[worst_i]);
             std::printf("| %s | %s | %.4f | %.4f | %+.4f | %.3f | %.2f | %.0f |\n", name.c_str(), text.c_str(),
                         std::sqrt(se / ps.size()), std::sqrt(se_c / std::max<std::size_t>(n_c, 1)), bias / ps.size(), worst,
                         pass_s, gather_us);
