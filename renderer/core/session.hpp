@@ -107,7 +107,7 @@ struct SessionRenderOptions {
     bool annotations = true;  // scale bar and orientation letters
     bool markups = true;      // the session's markups
     bool transparent = false; // transparent background
-    std::string ao;           // "off", "cone"; empty: the session's view option
+    std::string ao;           // "off", "cone", "disk" (export only); empty: the session's view option
 };
 
 // The render request for the session's state: its camera (else the
