@@ -44,7 +44,7 @@ void build_and_upload(const FrameContext& ctx) {
     const auto t0 = std::chrono::steady_clock::now();
     std::vector<const DiskHierarchy*> parts;
     for (const auto& s : ctx.disk_surfaces) {
-        if (!*s.cache) *s.cache = std::make_shared<const DiskHierarchy>(build_disk_hierarchy(*s.mesh));
+        if (!*s.cache) *s.cache = std::make_shared<const DiskHierarchy>(build_disk_hierarchy(s.mesh()));
         parts.push_back(s.cache->get());
     }
     DiskHierarchy joined;

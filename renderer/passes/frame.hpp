@@ -9,6 +9,7 @@
 #pragma once
 
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <optional>
 #include <string>
@@ -57,13 +58,14 @@ struct AoHistory {
     int frames = 0;                 // still frames accumulated so far
 };
 
-// A visible opaque surface as disk AO sees it: the renderer's CPU copy of
-// its mesh and the slot where its hierarchy is cached (built on first use,
-// dropped when the mesh is replaced).
+// A visible opaque surface as disk AO sees it: how to get its mesh (read
+// back from the renderer's GPU buffers, called only when the hierarchy is not
+// cached; the GL context is current) and the slot where its hierarchy is
+// cached (built on first use, dropped when the mesh is replaced).
 struct DiskSurface {
     std::uint32_t id = 0;
     std::uint64_t version = 0;  // changes when the object's mesh changes
-    std::shared_ptr<const Mesh> mesh;
+    std::function<Mesh()> mesh;
     std::shared_ptr<const DiskHierarchy>* cache = nullptr;
 };
 

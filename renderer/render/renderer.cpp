@@ -38,9 +38,9 @@ struct GpuMesh {
     GLsizei count = 0;
     SceneObject object;
     Bounds bounds;
-    // Disk AO builds its hierarchy from the CPU mesh, once, on first use
-    // (renderer/passes/disk_ao.cpp); a new mesh gets a new version.
-    std::shared_ptr<const Mesh> cpu;
+    // Disk AO builds its hierarchy once, on first use, from the mesh read
+    // back from these buffers (renderer/passes/disk_ao.cpp); a new mesh gets
+    // a new version.
     std::shared_ptr<const DiskHierarchy> disk;
     std::uint64_t version = 0;
 };
@@ -92,7 +92,6 @@ GpuMesh upload(const Mesh& m, const SceneObject& o) {
     g.vertices = gl::Buffer::from<float>(interleaved, 0);
     g.indices = gl::Buffer(m.triangles.size() * 12, m.triangles.data(), 0);
     g.count = GLsizei(m.triangles.size() * 3);
-    g.cpu = std::make_shared<const Mesh>(m);
     g.vao = gl::VertexArray::create();
     const GLuint vao = g.vao.id();
     glVertexArrayVertexBuffer(vao, 0, g.vertices.id(), 0, 6 * sizeof(float));
@@ -103,6 +102,23 @@ GpuMesh upload(const Mesh& m, const SceneObject& o) {
         glVertexArrayAttribBinding(vao, a, 0);
     }
     return g;
+}
+// The mesh as drawn (positions, the normals the G-buffer uses, triangles),
+// read back from the GPU buffers. Disk AO needs it once per surface; reading
+// it back then, instead of keeping a CPU copy of every surface in case a
+// still picture asks for disk AO, keeps the renderer's memory at the GPU's.
+Mesh read_back(const GpuMesh& g) {
+    Mesh m;
+    const auto v = g.vertices.read_all<float>();
+    m.positions.resize(v.size() / 6);
+    m.normals.resize(v.size() / 6);
+    for (std::size_t i = 0; i < m.positions.size(); ++i) {
+        m.positions[i] = {v[6 * i], v[6 * i + 1], v[6 * i + 2]};
+        m.normals[i] = {v[6 * i + 3], v[6 * i + 4], v[6 * i + 5]};
+    }
+    m.triangles.resize(std::size_t(g.count) / 3);
+    g.indices.read(0, m.triangles.size() * 12, m.triangles.data());
+    return m;
 }
 } // namespace
 
@@ -174,7 +190,7 @@ RenderResult Renderer::render(const Camera& camera, const RenderOptions& opt, co
     ctx.disk = &im.disk;
     for (const auto& d : ctx.draws) {
         auto& m = im.meshes[d.id - 1];
-        ctx.disk_surfaces.push_back({d.id, m.version, m.cpu, &m.disk});
+        ctx.disk_surfaces.push_back({d.id, m.version, [&m] { return read_back(m); }, &m.disk});
     }
     for (int redraws = 0;; ++redraws) {
         RenderResult result;
