@@ -37,6 +37,12 @@ struct ConeAoSettings {
     double persistence = 1.0;
     double attenuation = 0.0;  // o_i /= 1 + attenuation * (t_i / R)^2
     double bias = 1.0;         // tangent-plane offset, in voxel/texel footprints
+    // Surface voxels: after the solid (voxel centre inside) voxelization, a
+    // second, OR-blended draw sets the voxels next to every surface on its
+    // solid's side, so walls thinner than a voxel in z still occlude. Off by
+    // default: on llvmpipe it costs 1.2-6x the voxelization and did not lower
+    // the error of the scenes measured (docs/ao.md, "Thin structures").
+    bool surface_voxels = false;
     // Cone-pass pixels per frame pixel along each axis (0.25..1). Below 1 the
     // cones are traced on a coarser image and brought back to full size by a
     // joint bilateral (depth-plane and normal aware) upsampling pass.
