@@ -39,9 +39,9 @@ struct ThinPhantomOptions {
     glm::dvec3 spacing{0.7, 0.7, 1.0};
     unsigned seed = 15;
     double root_radius = 3.5;  // mm (an internal carotid / a large cerebral artery)
-    double min_radius = 0.45;  // mm: branches stop below this (sub-voxel: the iso-150 tube is ~1.1 mm wide)
+    double min_radius = 0.35;  // mm: branches stop below this (sub-voxel: the iso-150 tube is ~0.9 mm wide)
     double ramp = 0.85;        // mm: partial-volume edge width (about one voxel)
-    bool bone = true;          // the thin shells and plate behind the tree
+    bool bone = true;          // the thin shells, plate and air cells behind and beside the tree
 };
 
 // One straight piece of a vessel: a capsule whose radius goes linearly from r0 to r1.
@@ -108,10 +108,13 @@ inline std::vector<VesselSegment> thin_phantom_vessels(const ThinPhantomOptions&
     std::mt19937 g(o.seed);
     std::vector<VesselSegment> v;
     // The root enters near the top (high k: superior in LPS) and runs down
-    // (towards low k), one trunk plus a second one from the side.
-    thin_detail::grow(v, g, {ext.x * 0.45, ext.y * 0.45, ext.z * 0.95}, glm::normalize(glm::dvec3(0.1, 0.05, -1.0)), o.root_radius, o,
+    // (towards low k) close in front of the bone shells, plus two trunks from
+    // the sides.
+    thin_detail::grow(v, g, {ext.x * 0.45, ext.y * 0.55, ext.z * 0.95}, glm::normalize(glm::dvec3(0.1, 0.05, -1.0)), o.root_radius, o,
                       ext, 0);
-    thin_detail::grow(v, g, {ext.x * 0.8, ext.y * 0.5, ext.z * 0.7}, glm::normalize(glm::dvec3(-1.0, 0.1, -0.3)), o.root_radius * 0.7,
+    thin_detail::grow(v, g, {ext.x * 0.8, ext.y * 0.6, ext.z * 0.7}, glm::normalize(glm::dvec3(-1.0, 0.1, -0.3)), o.root_radius * 0.7,
+                      o, ext, 1);
+    thin_detail::grow(v, g, {ext.x * 0.15, ext.y * 0.6, ext.z * 0.55}, glm::normalize(glm::dvec3(1.0, 0.2, 0.2)), o.root_radius * 0.6,
                       o, ext, 1);
     return v;
 }
@@ -182,6 +185,18 @@ inline Volume thin_phantom(const ThinPhantomOptions& o = {}) {
             const double d = std::abs(glm::dot(p - p0, n)) - 0.5;
             const glm::dvec2 q = (glm::dvec2(p.x, p.y) - glm::dvec2(c.x, c.y)) / semi;
             return std::pair<double, double>{800.0, glm::length(q) < 0.8 ? pv(d) : 0.0};
+        });
+        // Air cells (ethmoid-like): a block of 5 mm cells with 0.8 mm walls,
+        // open to the front (no wall at the anterior face), 14 mm deep: narrow
+        // cavities with sub-voxel walls.
+        const glm::dvec3 lo(c.x - 32.0, c.y - 2.0, ext.z * 0.3), hi(c.x - 7.0, c.y + 12.0, ext.z * 0.3 + 20.0);
+        stamp(lo - 1.0, hi + 1.0, [&](const glm::dvec3& p) {
+            const glm::dvec3 q = p - lo;
+            auto wall = [](double x) { return std::abs(x - 5.0 * std::round(x / 5.0)); }; // distance to the nearest cell wall plane
+            double d = std::min({wall(q.x), wall(q.z), hi.y - p.y}) - 0.4;        // walls along x and z, and the back wall
+            const double outside = std::max({lo.x - p.x, p.x - hi.x, lo.y - p.y, p.y - hi.y, lo.z - p.z, p.z - hi.z});
+            d = std::max(d, outside);
+            return std::pair<double, double>{750.0, pv(d)};
         });
     }
     for (const auto& s : thin_phantom_vessels(o)) {
