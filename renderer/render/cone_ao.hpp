@@ -40,7 +40,7 @@ struct ConeAoSettings {
     // Surface voxels: after the solid (voxel centre inside) voxelization, a
     // second, OR-blended draw sets the voxels next to every surface on its
     // solid's side, so walls thinner than a voxel in z still occlude. Off by
-    // default: on llvmpipe it costs 1.2-6x the voxelization and did not lower
+    // default: on llvmpipe it costs 1.7-5x the voxelization and did not lower
     // the error of the scenes measured (docs/ao.md, "Thin structures").
     bool surface_voxels = false;
     // Cone-pass pixels per frame pixel along each axis (0.25..1). Below 1 the
