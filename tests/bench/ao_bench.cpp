@@ -192,6 +192,7 @@ struct ConeConfig {
     double strength = 1.0;
     double ray_weight = 0.5;
     int surface = -1; // ConeAoSettings::surface_voxels: 0 off, 1 on, -1 the renderer's default
+    double axis = 0;  // ConeAoSettings::axis_weight
 };
 
 std::string describe(const ConeConfig& c) {
@@ -204,6 +205,7 @@ std::string describe(const ConeConfig& c) {
     if (c.frames != 1) s << " x" << c.frames << " frames";
     if (c.surface == 0) s << " solid only";
     if (c.surface == 1) s << " surface voxels";
+    if (c.axis > 0) s << " axis " << c.axis;
     return s.str();
 }
 
@@ -364,7 +366,7 @@ int main(int argc, char** argv) {
         else if (s == "--data") a.data = next();
         else if (s == "--voxel-ref") a.voxel_ref_each = true;
         else if (s == "--replot") a.replot = next();
-        else if (s == "--config") a.configs.push_back(next()); // cones,spheres,samples,grid,layers,persistence[,bias[,frames[,resolution[,strength[,ray_weight[,surface_voxels]]]]]]
+        else if (s == "--config") a.configs.push_back(next()); // cones,spheres,samples,grid,layers,persistence[,bias[,frames[,resolution[,strength[,ray_weight[,surface_voxels[,axis_weight]]]]]]]
         else {
             std::cerr << "usage: ao_bench [--quick] [--out DIR] [--sizes 512,1024] [--scenes ct-skin,ct-bone,bunny,thin] [--radii 10,20] [--rays N] "
                          "[--reps N] [--ssao PATH|none] [--config C ...] [--voxel-ref] [--replot CSV]\n";
@@ -424,12 +426,13 @@ int main(int argc, char** argv) {
                 k.strength = 1.0;
                 k.ray_weight = 0.5;
                 k.surface = -1;
-                const int got = std::sscanf(c.c_str(), "%d,%d,%d,%lf,%d,%lf,%lf,%d,%lf,%lf,%lf,%d", &k.cones, &k.spheres, &k.samples, &k.grid,
+                k.axis = 0;
+                const int got = std::sscanf(c.c_str(), "%d,%d,%d,%lf,%d,%lf,%lf,%d,%lf,%lf,%lf,%d,%lf", &k.cones, &k.spheres, &k.samples, &k.grid,
                                             &k.layers, &k.persistence, &k.bias, &k.frames, &k.resolution, &k.strength, &k.ray_weight,
-                                            &k.surface);
+                                            &k.surface, &k.axis);
                 if (got < 6 || k.frames < 1)
                     throw Error("--config",
-                                "expected cones,spheres,samples,grid,layers,persistence[,bias[,frames[,resolution[,strength[,ray_weight[,surface_voxels]]]]]], got '" + c + "'");
+                                "expected cones,spheres,samples,grid,layers,persistence[,bias[,frames[,resolution[,strength[,ray_weight[,surface_voxels[,axis_weight]]]]]]], got '" + c + "'");
                 configs.push_back(k);
             }
         }
@@ -489,6 +492,7 @@ int main(int argc, char** argv) {
                     ro.ao_settings.strength = c.strength;
                     ro.ao_settings.ray_weight = c.ray_weight;
                     if (c.surface >= 0) ro.ao_settings.surface_voxels = c.surface != 0;
+                    ro.ao_settings.axis_weight = c.axis;
                     ro.ao_settings.temporal = c.frames > 1;
                     ro.time_passes = true;
                     Image img;

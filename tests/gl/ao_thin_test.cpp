@@ -250,7 +250,11 @@ TEST_F(ConeAoThin, ThinStructurePhantomAgainstTheEmbreeReference) {
     rq.cone.surface_voxels = false;
     rq.cone.ray_weight = 1;
     const auto rw1 = core::render_input(file, rq);
+    rq.cone.ray_weight = 0.5;
+    rq.cone.axis_weight = 1;
+    const auto axis = core::render_input(file, rq);
     std::filesystem::remove(file);
+    const auto e_axis = ao_error(axis.image, ref.image, rq.ao_rays);
     const auto e = ao_error(cone.image, ref.image, rq.ao_rays), e_surface = ao_error(surface.image, ref.image, rq.ao_rays),
                e_rw1 = ao_error(rw1.image, ref.image, rq.ao_rays);
     Image ones = ref.image;
@@ -258,12 +262,13 @@ TEST_F(ConeAoThin, ThinStructurePhantomAgainstTheEmbreeReference) {
         if (std::isfinite(v)) v = 1;
     const auto e_none = ao_error(ones, ref.image);
     std::printf("thin phantom 256x256: cone default RMSE %.4f bias %+.4f p95 %.4f; surface voxels RMSE %.4f bias %+.4f; ray weight 1 "
-                "RMSE %.4f bias %+.4f; no AO %.4f\n",
-                e.rmse, e.bias, e.p95, e_surface.rmse, e_surface.bias, e_rw1.rmse, e_rw1.bias, e_none.rmse);
+                "RMSE %.4f bias %+.4f; axis probes RMSE %.4f bias %+.4f; no AO %.4f\n",
+                e.rmse, e.bias, e.p95, e_surface.rmse, e_surface.bias, e_rw1.rmse, e_rw1.bias, e_axis.rmse, e_axis.bias, e_none.rmse);
     EXPECT_GT(e.pixels, 3000u);
     // Bounds: measured 0.082 (bias +0.035) with the defaults, 0.081 with surface voxels, 0.073 (bias
     // +0.011) with ray weight 1, no AO 0.193 (this machine's llvmpipe; the renders are deterministic, the
     // margin of ~0.013 is for other rasterizers and the reference's own noise, ~0.01 RMS at 512 rays).
+    // Axis probes (axis weight 1): measured 0.078, bias +0.002 (at 512x512 0.065 against 0.077).
     // The target is 0.06 at 512x512: missed, see docs/ao.md "Thin structures".
     EXPECT_LE(e.rmse, 0.095) << "bias " << e.bias << " MAE " << e.mae << " p95 " << e.p95;
     EXPECT_GT(e.bias, 0.0) << "the cone tracer is too light on thin structures (the known limit)";
@@ -273,6 +278,9 @@ TEST_F(ConeAoThin, ThinStructurePhantomAgainstTheEmbreeReference) {
     EXPECT_LE(e_rw1.rmse, 0.085) << "ray weight 1: bias " << e_rw1.bias;
     EXPECT_LT(e_rw1.rmse, e.rmse) << "ray weight 1 is the better setting for thin structures (docs/ao.md)";
     EXPECT_LT(std::abs(e_rw1.bias), std::abs(e.bias));
+    EXPECT_LE(e_axis.rmse, 0.09) << "axis probes: bias " << e_axis.bias;
+    EXPECT_LT(e_axis.rmse, e.rmse) << "axis probes darken what the spheres under-count";
+    EXPECT_NE(axis.meta.text.at("isoscope:ao_parameters").find("axis_weight 1"), std::string::npos);
     EXPECT_NE(cone.meta.text.at("isoscope:ao_parameters").find("surface_voxels off"), std::string::npos);
     EXPECT_NE(surface.meta.text.at("isoscope:ao_parameters").find("surface_voxels on"), std::string::npos);
 }
