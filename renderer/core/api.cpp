@@ -351,8 +351,8 @@ RenderOutput render_image(Scene& scene, const RenderRequest& req) {
         t["isoscope:ao_parameters"] = "cones " + std::to_string(c.cones) + "; spheres " + std::to_string(c.spheres) + "; samples " +
                                       std::to_string(c.samples) + "; strength " + num(c.strength) + "; layers " +
                                       std::to_string(c.layers) + " (" + std::to_string(128 * c.layers) + " z-voxels); grid " +
-                                      num(c.grid_scale) + "; jitter_sets " + std::to_string(c.jitter_sets) + "; ray_weight " + num(c.ray_weight) + "; persistence " +
-                                      num(c.persistence) + "; attenuation " + num(c.attenuation) + "; bias " + num(c.bias) +
+                                      num(c.grid_scale) + "; jitter_sets " + std::to_string(c.jitter_sets) + "; ray_weight " + num(c.ray_weight) + "; axis_weight " + num(c.axis_weight) + "; persistence " +
+                                      num(c.persistence) + "; attenuation " + num(c.attenuation) + "; bias " + num(c.bias) + "; surface_voxels " + (c.surface_voxels ? "on" : "off") +
                                       "; resolution " + num(c.resolution) + "; guard " + num(c.guard) + "; frames " + std::to_string(req.ao_frames);
     }
     if (req.ao == "disk") {

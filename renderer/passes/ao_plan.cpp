@@ -87,7 +87,7 @@ AoPlan plan_ao(const FrameContext& ctx) {
     for (int c = 0; c < 4; ++c)
         for (int r = 0; r < 4; ++r) p.key.push_back(double(ctx.view_projection[c][r]));
     p.key.insert(p.key.end(), {double(W), double(H), double(p.grid_w), double(p.grid_h), p.guard, double(st.layers), st.radius_mm,
-                               double(ctx.geometry_version)});
+                               double(ctx.geometry_version), double(st.surface_voxels)});
     for (const auto& d : ctx.draws) p.key.push_back(double(d.id)); // which objects are visible
     p.slicemap_desc = graph::TextureDesc{p.grid_w, p.grid_h, graph::Format::RGBA32UI, st.layers, 1, true};
     const bool kept = ctx.pool && ctx.ao && ctx.pool->has_history("slicemap", p.slicemap_desc) &&

@@ -66,6 +66,7 @@ ConeTrace cone_ao(graph::FrameGraph& fg, const FrameContext& ctx, const AoPlanRe
                      p.attenuation = float(st.attenuation);
                      p.bias = float(st.bias);
                      p.ray_weight = float(st.ray_weight);
+                     p.axis_weight = float(st.axis_weight);
                      p.history_weight = history_weight;
                      p.cones = st.cones;
                      p.spheres = st.spheres;

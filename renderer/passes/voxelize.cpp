@@ -1,5 +1,7 @@
 // Voxelize: the screen-aligned solid slicemap (XOR logic op over 128-bit
-// columns per layer, local z range), rebuilt only when stale (ao_plan.cpp).
+// columns per layer, local z range), then, with surface_voxels, the voxels
+// next to every surface OR-ed in (thin walls); rebuilt only when stale
+// (ao_plan.cpp).
 #include "renderer/passes/frame.hpp"
 #include "renderer/passes/gl_resources.hpp"
 #include "renderer/passes/std140.hpp"
@@ -44,6 +46,16 @@ graph::TextureHandle voxelize(graph::FrameGraph& fg, const FrameContext& ctx, co
                      for (const auto& m : ctx.draws) {
                          glBindVertexArray(m.vao);
                          glDrawElements(GL_TRIANGLES, m.count, GL_UNSIGNED_INT, nullptr);
+                     }
+                     if (plan->settings.surface_voxels) {
+                         // OR in the voxels next to every surface, on its solid's side
+                         // (slicemap_surface.frag): walls thinner than a voxel in z stay.
+                         glLogicOp(GL_OR);
+                         gl.program({"ao/slicemap.vert", "ao/slicemap_surface.frag"}, "#define LAYERS " + std::to_string(layers) + "\n").use();
+                         for (const auto& m : ctx.draws) {
+                             glBindVertexArray(m.vao);
+                             glDrawElements(GL_TRIANGLES, m.count, GL_UNSIGNED_INT, nullptr);
+                         }
                      }
                      glBindVertexArray(0);
                      glClipControl(GL_LOWER_LEFT, GL_NEGATIVE_ONE_TO_ONE);

@@ -31,6 +31,7 @@ void validate(const ConeAoSettings& s) {
     check_range("jitter", s.jitter_sets, 1, 64);
     check_range("persistence", s.persistence, 0, 1);
     check_range("ray-weight", s.ray_weight, 0, 1);
+    check_range("axis-weight", s.axis_weight, 0, 1);
     check_range("attenuation", s.attenuation, 0, 100);
     check_range("bias", s.bias, 0, 16);
     check_range("resolution", s.resolution, 0.25, 1);

@@ -16,6 +16,7 @@ ISO_MEMBER(float, persistence)
 ISO_MEMBER(float, attenuation)
 ISO_MEMBER(float, bias)
 ISO_MEMBER(float, ray_weight)
+ISO_MEMBER(float, axis_weight)    // 0: no axis probes (docs/ao.md, "Thin structures")
 ISO_MEMBER(float, history_weight) // 0: overwrite; k/(k+1) for the (k+1)-th still frame
 ISO_MEMBER(int, cones)
 ISO_MEMBER(int, spheres)

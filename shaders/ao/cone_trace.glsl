@@ -73,7 +73,7 @@ float cone_ao(vec3 p, vec3 n, ivec2 pix) {
         float s = cone.w;
         float t_max = radius / (1.0 + s);                  // the last sphere reaches R
         float t_min = min(t_max, max(r_min / max(s, 0.05), 2.0 * r_min));
-        float blocked = 0.0;
+        float blocked = 0.0, axis_hit = 0.0;
         for (int i = 0; i < spheres; ++i) {
             float u = spheres == 1 ? 1.0 : clamp((float(i) + 0.5 + js.z) / float(spheres), 0.0, 1.0);
             float ti = t_min * pow(t_max / t_min, u);       // geometric: spheres grow with the cone
@@ -107,7 +107,22 @@ float cone_ao(vec3 p, vec3 n, ivec2 pix) {
             float x = ti / radius;
             o /= 1.0 + attenuation * x * x;
             blocked = mix(1.0 - (1.0 - blocked) * (1.0 - o), max(blocked, o), persistence);
+            // The cone's axis as a ray (axis_weight > 0): five voxel probes
+            // per sphere along it, 0.4 r apart, above the raised tangent
+            // plane. Spheres see a thin wall or a narrow cavity's sides as a
+            // little volume; a ray along the axis that meets any set voxel
+            // is blocked, and the cone counts as at least axis_weight blocked.
+            for (int a = -2; a <= 2 && axis_weight > 0.0; ++a) {
+                vec3 q = p + ti * (1.0 + 0.4 * float(a) * s) * dir;
+                if (dot(n, q) <= np) continue;
+                float Dq = -q.z;
+                vec2 g = (sm_proj_scale * q.xy / max(Dq, 1e-6)) * 0.5 + 0.5;
+                ivec2 texel = ivec2(floor(g * vec2(grid)));
+                int kb = int(floor((Dq - range.x) / dz));
+                if (kb >= 0 && kb < BITS && count_bits(texel, kb, kb + 1) > 0) axis_hit = 1.0;
+            }
         }
+        blocked = max(blocked, axis_weight * axis_hit);
         blocked_sum += blocked;
     }
     return clamp(1.0 - strength * blocked_sum / float(cones), 0.0, 1.0);
