@@ -196,7 +196,7 @@ void add_cone_options(CLI::App* cmd, iso::ConeAoSettings& c) {
                     "Sphere occlusion: 0 occupied volume fraction, 1 blocked-ray fraction of a cutting plane (cone AO)")
         ->check(CLI::Range(0.0, 1.0));
     cmd->add_option("--ao-axis-weight", c.axis_weight,
-                    "Also march each cone's axis as a ray; a cone whose axis is blocked counts as at least this blocked, 0 off (cone AO)")
+                    "Also march each cone's axis as a ray; a cone whose axis is blocked counts as at least this blocked, 0 off, default 1 (cone AO)")
         ->check(CLI::Range(0.0, 1.0));
     cmd->add_option("--ao-surface-voxels", c.surface_voxels,
                     "Also set the voxels next to every surface, so walls thinner than a voxel occlude; slower voxelization (cone AO)");

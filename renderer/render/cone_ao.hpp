@@ -32,10 +32,12 @@ struct ConeAoSettings {
     double ray_weight = 0.5;
     // Axis probes: the cone's axis is also marched as a ray (five voxel
     // probes per sphere) and a cone whose axis meets a set voxel counts as at
-    // least this much blocked. 0 (default): off. 1 brings CT bone from 0.095
-    // to 0.080 RMSE and the thin phantom from 0.077 to 0.065, but the bulky
-    // bunny from 0.023 to 0.037 (docs/ao.md, "Thin structures").
-    double axis_weight = 0.0;
+    // least this much blocked; 0: off. The default 1 brings CT bone from
+    // 0.095 to 0.080 RMSE and the thin phantom from 0.077 to 0.065 (skin
+    // 0.037 -> 0.036) at 1.1-1.3x the AO passes' time, at the bulky bunny's
+    // expense (0.023 -> 0.037): our users' surfaces are CT (docs/ao.md,
+    // "Thin structures").
+    double axis_weight = 1.0;
     // How sphere occlusions along a cone combine, front to back: 0 = as
     // independent absorbers (unoccluded *= 1 - o_i), 1 = as one persistent
     // solid (blocked = max o_i). Solids (bone, skin) occlude the same rays in

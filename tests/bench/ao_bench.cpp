@@ -196,7 +196,7 @@ struct ConeConfig {
     double strength = 1.0;
     double ray_weight = 0.5;
     int surface = -1; // ConeAoSettings::surface_voxels: 0 off, 1 on, -1 the renderer's default
-    double axis = 0;  // ConeAoSettings::axis_weight
+    double axis = ConeAoSettings{}.axis_weight; // axis probes (default on since issue 15)
 };
 
 std::string describe(const ConeConfig& c) {
@@ -209,7 +209,7 @@ std::string describe(const ConeConfig& c) {
     if (c.frames != 1) s << " x" << c.frames << " frames";
     if (c.surface == 0) s << " solid only";
     if (c.surface == 1) s << " surface voxels";
-    if (c.axis > 0) s << " axis " << c.axis;
+    s << " axis " << c.axis;
     return s.str();
 }
 
@@ -415,10 +415,13 @@ int main(int argc, char** argv) {
             {3, 1, 4, 0.25, 1, 1.0, 1, 1, 0.5, 1, 1.0},
             {4, 2, 4, 0.25, 1, 1.0, 1, 1, 0.35, 1, 1.0},
             {4, 3, 4, 0.5, 1, 1.0, 1, 1, 0.5, 1, 1.0},
-            // thin structures (issue 15; docs/ao.md "Thin structures"): surface voxels, axis probes
-            {8, 5, 8, 1.0, 2, 1.0, 1, 1, 0.5, 1, 0.5, 1, 0.0},
-            {8, 5, 8, 1.0, 2, 1.0, 1, 1, 0.5, 1, 0.5, -1, 1.0},
-            {4, 3, 4, 0.5, 1, 1.0, 1, 1, 0.5, 1, 0.5, -1, 1.0},
+            // thin structures (issue 15; docs/ao.md "Thin structures"): every
+            // row above has the default axis probes; here surface voxels, and
+            // the defaults and a cheap setting without the probes (as before
+            // issue 15)
+            {8, 5, 8, 1.0, 2, 1.0, 1, 1, 0.5, 1, 0.5, 1},
+            {8, 5, 8, 1.0, 2, 1.0, 1, 1, 0.5, 1, 0.5, -1, 0.0},
+            {4, 3, 4, 0.5, 1, 1.0, 1, 1, 0.5, 1, 0.5, -1, 0.0},
         };
         std::vector<int> kernels = {8, 16, 32, 64, 128};
         if (a.quick) {
@@ -435,7 +438,7 @@ int main(int argc, char** argv) {
                 k.strength = 1.0;
                 k.ray_weight = 0.5;
                 k.surface = -1;
-                k.axis = 0;
+                k.axis = ConeAoSettings{}.axis_weight;
                 const int got = std::sscanf(c.c_str(), "%d,%d,%d,%lf,%d,%lf,%lf,%d,%lf,%lf,%lf,%d,%lf", &k.cones, &k.spheres, &k.samples, &k.grid,
                                             &k.layers, &k.persistence, &k.bias, &k.frames, &k.resolution, &k.strength, &k.ray_weight,
                                             &k.surface, &k.axis);

@@ -244,14 +244,16 @@ TEST_F(ConeAoThin, ThinStructurePhantomAgainstTheEmbreeReference) {
     rq.cache_dir = "-";
     const auto ref = core::render_input(file, rq);
     rq.ao = "cone";
-    const auto cone = core::render_input(file, rq); // the defaults
+    rq.cone.axis_weight = 0; // the estimator before issue 15: spheres only
+    const auto cone = core::render_input(file, rq);
     rq.cone.surface_voxels = true;
     const auto surface = core::render_input(file, rq);
     rq.cone.surface_voxels = false;
     rq.cone.ray_weight = 1;
     const auto rw1 = core::render_input(file, rq);
     rq.cone.ray_weight = 0.5;
-    rq.cone.axis_weight = 1;
+    rq.cone = {}; // the defaults: axis probes on
+    EXPECT_EQ(rq.cone.axis_weight, 1.0);
     const auto axis = core::render_input(file, rq);
     std::filesystem::remove(file);
     const auto e_axis = ao_error(axis.image, ref.image, rq.ao_rays);
@@ -261,14 +263,14 @@ TEST_F(ConeAoThin, ThinStructurePhantomAgainstTheEmbreeReference) {
     for (auto& v : ones.floats)
         if (std::isfinite(v)) v = 1;
     const auto e_none = ao_error(ones, ref.image);
-    std::printf("thin phantom 256x256: cone default RMSE %.4f bias %+.4f p95 %.4f; surface voxels RMSE %.4f bias %+.4f; ray weight 1 "
+    std::printf("thin phantom 256x256: cone without axis probes RMSE %.4f bias %+.4f p95 %.4f; surface voxels RMSE %.4f bias %+.4f; ray weight 1 "
                 "RMSE %.4f bias %+.4f; axis probes RMSE %.4f bias %+.4f; no AO %.4f\n",
                 e.rmse, e.bias, e.p95, e_surface.rmse, e_surface.bias, e_rw1.rmse, e_rw1.bias, e_axis.rmse, e_axis.bias, e_none.rmse);
     EXPECT_GT(e.pixels, 3000u);
-    // Bounds: measured 0.082 (bias +0.035) with the defaults, 0.081 with surface voxels, 0.073 (bias
+    // Bounds: measured 0.082 (bias +0.035) without axis probes, 0.081 with surface voxels, 0.073 (bias
     // +0.011) with ray weight 1, no AO 0.193 (this machine's llvmpipe; the renders are deterministic, the
     // margin of ~0.013 is for other rasterizers and the reference's own noise, ~0.01 RMS at 512 rays).
-    // Axis probes (axis weight 1): measured 0.078, bias +0.002 (at 512x512 0.065 against 0.077).
+    // Axis probes (axis weight 1, the default): measured 0.078, bias +0.002 (at 512x512 0.065 against 0.077).
     // The issue's target is 0.06 at 512x512: missed, see docs/ao.md "Thin structures".
     EXPECT_LE(e.rmse, 0.095) << "bias " << e.bias << " MAE " << e.mae << " p95 " << e.p95;
     EXPECT_GT(e.bias, 0.0) << "the cone tracer is too light on thin structures (the known limit)";
