@@ -17,6 +17,7 @@
 #include "renderer/core/api.hpp"
 #include "renderer/iso/extract.hpp"
 #include "renderer/render/renderer.hpp"
+#include "test_meshes.hpp"
 #include "test_util.hpp"
 
 using namespace iso;
@@ -25,24 +26,7 @@ using ConeAoStress = test::GlTest;
 
 namespace {
 
-// A closed axis-aligned box, outward winding, flat normals (each face has
-// its own vertices: shared corners would get averaged, tilted normals).
-Mesh box(glm::vec3 lo, glm::vec3 hi) {
-    Mesh m;
-    auto corner = [&](int i) { return glm::vec3((i & 1) ? hi.x : lo.x, (i & 2) ? hi.y : lo.y, (i & 4) ? hi.z : lo.z); };
-    const int q[6][4] = {{0, 2, 3, 1}, {4, 5, 7, 6}, {0, 1, 5, 4}, {2, 6, 7, 3}, {0, 4, 6, 2}, {1, 3, 7, 5}};
-    const glm::vec3 normals[6] = {{0, 0, -1}, {0, 0, 1}, {0, -1, 0}, {0, 1, 0}, {-1, 0, 0}, {1, 0, 0}};
-    for (int f = 0; f < 6; ++f) {
-        const auto b = std::uint32_t(m.positions.size());
-        for (int k = 0; k < 4; ++k) {
-            m.positions.push_back(corner(q[f][k]));
-            m.normals.push_back(normals[f]);
-        }
-        m.triangles.push_back({b, b + 1, b + 2});
-        m.triangles.push_back({b, b + 2, b + 3});
-    }
-    return m;
-}
+Mesh box(glm::vec3 lo, glm::vec3 hi) { return test::flat_box_mesh(lo, hi); }
 
 Mesh sphere_mesh(glm::dvec3 c, double r, double voxel) {
     const int n = int(std::ceil(2.4 * r / voxel)) + 1;

@@ -30,6 +30,7 @@
 #include "renderer/ao/disk_hierarchy.hpp"
 #include "renderer/core/api.hpp"
 #include "renderer/render/renderer.hpp"
+#include "test_meshes.hpp"
 #include "test_util.hpp"
 
 using namespace iso;
@@ -250,23 +251,7 @@ TEST_F(DiskAo, GlslKernelsMatchTheCppFloatTemplates) {
 
 namespace {
 
-// A closed axis-aligned box, outward winding, flat normals.
-Mesh box(glm::vec3 lo, glm::vec3 hi) {
-    Mesh m;
-    auto corner = [&](int i) { return glm::vec3((i & 1) ? hi.x : lo.x, (i & 2) ? hi.y : lo.y, (i & 4) ? hi.z : lo.z); };
-    const int q[6][4] = {{0, 2, 3, 1}, {4, 5, 7, 6}, {0, 1, 5, 4}, {2, 6, 7, 3}, {0, 4, 6, 2}, {1, 3, 7, 5}};
-    const glm::vec3 normals[6] = {{0, 0, -1}, {0, 0, 1}, {0, -1, 0}, {0, 1, 0}, {-1, 0, 0}, {1, 0, 0}};
-    for (int f = 0; f < 6; ++f) {
-        const auto b = std::uint32_t(m.positions.size());
-        for (int k = 0; k < 4; ++k) {
-            m.positions.push_back(corner(q[f][k]));
-            m.normals.push_back(normals[f]);
-        }
-        m.triangles.push_back({b, b + 1, b + 2});
-        m.triangles.push_back({b, b + 2, b + 3});
-    }
-    return m;
-}
+Mesh box(glm::vec3 lo, glm::vec3 hi) { return test::flat_box_mesh(lo, hi); }
 
 Camera looking(glm::dvec3 eye, glm::dvec3 target, glm::dvec3 up) {
     Camera c;

@@ -29,6 +29,7 @@
 #include "measure_phantoms.hpp"
 #include "renderer/core/measure.hpp"
 #include "renderer/core/scene.hpp"
+#include "test_meshes.hpp"
 #include "test_util.hpp"
 
 using namespace iso;
@@ -120,16 +121,7 @@ Mesh uv_sphere(const glm::dvec3& c, double r, int stacks, int slices) {
 }
 
 // An axis-aligned box [lo, hi] as 8 vertices and 12 outward triangles.
-Mesh box(glm::dvec3 lo, glm::dvec3 hi) {
-    Mesh m;
-    for (int k = 0; k < 8; ++k) m.positions.emplace_back(k & 1 ? hi.x : lo.x, k & 2 ? hi.y : lo.y, k & 4 ? hi.z : lo.z);
-    const int quads[6][4] = {{0, 2, 3, 1}, {4, 5, 7, 6}, {0, 1, 5, 4}, {2, 6, 7, 3}, {0, 4, 6, 2}, {1, 3, 7, 5}};
-    for (const auto& q : quads) {
-        m.triangles.push_back({std::uint32_t(q[0]), std::uint32_t(q[1]), std::uint32_t(q[2])});
-        m.triangles.push_back({std::uint32_t(q[0]), std::uint32_t(q[2]), std::uint32_t(q[3])});
-    }
-    return m;
-}
+Mesh box(glm::dvec3 lo, glm::dvec3 hi) { return test::box_mesh(lo, hi); }
 
 // Follows b -> next a by exact equality; returns the loops' lengths (empty
 // and `ok` false when an endpoint does not chain exactly once).
