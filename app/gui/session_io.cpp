@@ -183,6 +183,7 @@ void MainWindow::export_image(const QString& path, const core::SessionRenderOpti
                 if (write) core::save_session(*now, session_file);
                 const auto opened = core::open_session(session_file, progress);
                 core::RenderRequest req = core::session_request(opened.session, session_file, options);
+                req.progress = progress; // disk AO's gather reports and can be cancelled
                 const auto out = core::render_image(*opened.scene, req);
                 core::export_image(out.image, out.meta, image);
             },

@@ -174,6 +174,7 @@ RenderOptions render_options(const RenderRequest& req) {
         ro.disk_settings = req.disk;
         validate(ro.disk_settings);
         if (req.aov_ao) ro.aov = Aov::Ao;
+        ro.progress = req.progress; // the gather takes seconds: progress and cancel
     }
     return ro;
 }
@@ -264,6 +265,7 @@ RenderOutput render_image(Scene& scene, const RenderRequest& req) {
         Scene& s;
         ~Release() { s.release_gpu(); }
     } release{scene};
+    if (r.cancelled) throw Cancelled("disk AO");
     out.image = std::move(r.image);
     out.stats = std::move(r.stats);
     out.oit = r.oit;

@@ -242,14 +242,28 @@ graph::TextureHandle disk_ambient_occlusion(graph::FrameGraph& fg, const FrameCo
                      DiskParams p = base_params(ctx);
                      const bool modulated = ctx.opt.disk_settings.passes > 0;
                      p.use_terms = modulated ? 1 : 0;
-                     bind_params(gl, r, d.params, p);
                      gl::Buffer receivers;
                      const std::size_t pixels = std::size_t(ctx.width) * std::size_t(ctx.height);
                      if (read) {
                          receivers = gl::Buffer(pixels * 2 * sizeof(glm::vec4), nullptr, 0);
                          receivers.bind_base(GL_SHADER_STORAGE_BUFFER, 6);
                      }
-                     glDispatchCompute(GLuint((ctx.width + 7) / 8), GLuint((ctx.height + 7) / 8), 1);
+                     // With a progress callback, bands of 64 rows, each finished
+                     // before it is reported (about 8 on a 512-row image; the
+                     // glFinish costs nothing next to a band's traversals).
+                     const int band = ctx.opt.progress ? 64 : ctx.height;
+                     for (int y0 = 0; y0 < ctx.height; y0 += band) {
+                         const int rows = std::min(band, ctx.height - y0);
+                         p.row_offset = y0;
+                         bind_params(gl, r, d.params, p);
+                         glDispatchCompute(GLuint((ctx.width + 7) / 8), GLuint((rows + 7) / 8), 1);
+                         if (!ctx.opt.progress) continue;
+                         glFinish();
+                         if (!ctx.opt.progress(double(y0 + rows) / double(ctx.height), "disk AO")) {
+                             ctx.result->cancelled = true;
+                             break;
+                         }
+                     }
                      glMemoryBarrier(GL_TEXTURE_FETCH_BARRIER_BIT | GL_SHADER_IMAGE_ACCESS_BARRIER_BIT | GL_TEXTURE_UPDATE_BARRIER_BIT |
                                      GL_SHADER_STORAGE_BARRIER_BIT);
                      ctx.result->disk_nodes = S.nodes;

@@ -19,6 +19,7 @@
 
 #include "io/image.hpp"
 #include "io/mesh.hpp"
+#include "io/progress.hpp"
 #include "renderer/graph/frame_graph.hpp"
 #include "renderer/graph/resource_pool.hpp"
 #include "renderer/ao/disk_geometry.hpp"
@@ -100,6 +101,11 @@ struct RenderOptions {
     AoMethod ao_method = AoMethod::Cone;
     ConeAoSettings ao_settings;
     DiskAoSettings disk_settings;
+    // Long passes (disk AO's gather: seconds per frame on llvmpipe) run in
+    // bands and report after each (stage "disk AO"); returning false stops
+    // them: the frame is finished without the rest and RenderResult::cancelled
+    // is set (the caller throws; nothing throws through the frame graph).
+    ProgressFn progress;
     // A pick riding on this frame (docs/picking.md): image pixels from the
     // top-left; clipped to the image. Fragments inside are listed by the
     // frame's own geometry passes; RenderResult::pick holds the lists.
@@ -164,6 +170,7 @@ struct RenderResult {
     bool disk_built = false, disk_elements = false;
     std::size_t disk_nodes = 0, disk_triangles = 0;
     double disk_build_ms = 0;             // CPU time of the hierarchy builds this frame
+    bool cancelled = false;               // RenderOptions::progress asked to stop: the image is incomplete
     std::vector<float> disk_terms;
     std::vector<glm::vec4> disk_receivers; // 2 per pixel: (point, AO), (normal, 0)
 };

@@ -43,7 +43,7 @@ vec3 surface_step(vec3 e, ivec2 pix, ivec2 axis) {
 }
 
 void main() {
-    ivec2 pix = ivec2(gl_GlobalInvocationID.xy);
+    ivec2 pix = ivec2(gl_GlobalInvocationID.xy) + ivec2(0, row_offset);
     if (any(greaterThanEqual(pix, size))) return;
     vec4 e = eye_point(pix);
     if (e.w == 0.0) {

@@ -18,4 +18,5 @@ ISO_MEMBER(int, node_count)
 ISO_MEMBER(int, use_terms)           // 0: every emitter's term is 1 (the first pass)
 ISO_MEMBER(int, first)               // disk_parent: this level's range in the level list
 ISO_MEMBER(int, count)
+ISO_MEMBER(int, row_offset)          // disk_gather: first image row of this dispatch (bands, for progress)
 ISO_BLOCK_END(DiskParams)
