@@ -240,8 +240,19 @@ TEST_F(ConeAoThin, ThinStructurePhantomAgainstTheEmbreeReference) {
     rq.cone = {}; // the defaults: axis probes on
     EXPECT_EQ(rq.cone.axis_weight, 1.0);
     const auto axis = core::render_input(file, rq);
+    rq.ao = "disk"; // the other mode, its defaults
+    const auto disk = core::render_input(file, rq);
     std::filesystem::remove(file);
     const auto e_axis = ao_error(axis.image, ref.image, rq.ao_rays);
+    const auto e_disk = ao_error(disk.image, ref.image, rq.ao_rays);
+    std::printf("thin phantom 256x256: disk RMSE %.4f bias %+.4f p95 %.4f\n", e_disk.rmse, e_disk.bias, e_disk.p95);
+    // Disk AO: measured 0.029 (bias -0.006) here, 0.031 at 512x512 against a 1024-ray
+    // reference (docs/ao.md); the bound leaves room for this 512-ray
+    // reference's noise (~0.01 RMS) and other rasterizers. It must beat the
+    // cone tracer here (the accurate mode).
+    EXPECT_LE(e_disk.rmse, 0.045) << "disk: bias " << e_disk.bias << " p95 " << e_disk.p95;
+    EXPECT_LE(std::abs(e_disk.bias), 0.02);
+    EXPECT_LT(e_disk.rmse, e_axis.rmse);
     const auto e = ao_error(cone.image, ref.image, rq.ao_rays), e_surface = ao_error(surface.image, ref.image, rq.ao_rays),
                e_rw1 = ao_error(rw1.image, ref.image, rq.ao_rays);
     Image ones = ref.image;
