@@ -4,6 +4,20 @@
 #endif
 #define BITS (128 * LAYERS)
 
+// Linear depth (mm along the view axis) of a reversed-Z depth value d > 0,
+// between the near plane zn and the far plane zf.
+float linear_depth(float d, float zn, float zf) {
+    return zn * zf / (d * (zf - zn) + zn);
+}
+
+// Eye-space point (the camera looks down -z) at linear depth D on the ray
+// through the centre of pixel pix of an image of `image_size` pixels, with
+// the projection's scale (projection[0][0], projection[1][1]).
+vec3 eye_point_at_depth(ivec2 pix, ivec2 image_size, vec2 scale, float D) {
+    vec2 ndc = (vec2(pix) + 0.5) / vec2(image_size) * 2.0 - 1.0;
+    return vec3(ndc * D / scale, -D);
+}
+
 // Bits k and above of a 32-bit word (k <= 0: all, k >= 32: none). Bit
 // arithmetic instead of the thesis's 128-entry LUT: the same masks, no fetch.
 uint mask_from(int k) {

@@ -19,12 +19,9 @@ layout(binding = 2) uniform sampler2D ao_low;      // coarse: AO, linear depth, 
 layout(binding = 0, r32f) writeonly uniform image2D ao_image;
 
 
-vec3 eye_point_at(ivec2 pix, float D) {
-    vec2 ndc = (vec2(pix) + 0.5) / vec2(size) * 2.0 - 1.0;
-    return vec3(ndc * D / proj_scale, -D);
-}
+vec3 eye_point_at(ivec2 pix, float D) { return eye_point_at_depth(pix, size, proj_scale, D); }
 vec3 eye_point(ivec2 pix, float d) { // d: reversed-Z depth
-    return eye_point_at(pix, near_plane * far_plane / (d * (far_plane - near_plane) + near_plane));
+    return eye_point_at(pix, linear_depth(d, near_plane, far_plane));
 }
 
 void main() {

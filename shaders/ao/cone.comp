@@ -38,9 +38,8 @@ void main() {
         return;
     }
     // Eye-space point (camera looks down -z) and normal.
-    float D = near_plane * far_plane / (d * (far_plane - near_plane) + near_plane);
-    vec2 ndc = (vec2(pix) + 0.5) / vec2(size) * 2.0 - 1.0;
-    vec3 p = vec3(ndc * D / proj_scale, -D);
+    float D = linear_depth(d, near_plane, far_plane);
+    vec3 p = eye_point_at_depth(pix, size, proj_scale, D);
     vec3 n = normalize(world_to_view * texelFetch(normal_tex, pix, 0).xyz);
 
     float ao = cone_ao(p, n, pix);

@@ -7,6 +7,7 @@
 // against the surface's geometric normal (reconstructed here from the depth
 // of the neighbouring pixels), back faces occlude instead of front faces.
 // Output like cone AO: R32F, 1 = unoccluded, NaN = background.
+#include "ao_common.glsl"
 #include "std140.glsl"
 #include "disk_params.glsl"
 #include "disk_geometry.glsl"
@@ -27,9 +28,7 @@ vec4 eye_point(ivec2 pix) {
     if (any(lessThan(pix, ivec2(0))) || any(greaterThanEqual(pix, size))) return vec4(0.0);
     float d = texelFetch(depth_tex, pix, 0).r;
     if (d <= 0.0) return vec4(0.0);
-    float D = near_plane * far_plane / (d * (far_plane - near_plane) + near_plane);
-    vec2 ndc = (vec2(pix) + 0.5) / vec2(size) * 2.0 - 1.0;
-    return vec4(ndc * D / proj_scale, -D, 1.0);
+    return vec4(eye_point_at_depth(pix, size, proj_scale, linear_depth(d, near_plane, far_plane)), 1.0);
 }
 
 // The step to the neighbour along one axis on the same surface: the one of

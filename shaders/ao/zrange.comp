@@ -2,6 +2,7 @@
 #extension GL_GOOGLE_include_directive : require
 // Nearest and farthest visible linear depth of the frame (the local
 // slicemap's range), by a workgroup reduction and two global atomics.
+#include "ao_common.glsl"
 #include "std140.glsl"
 #include "zrange_params.glsl"
 layout(local_size_x = 16, local_size_y = 16) in;
@@ -22,7 +23,7 @@ void main() {
     if (all(lessThan(p, size))) {
         float d = texelFetch(depth_tex, p, 0).r;
         if (d > 0.0) {
-            float z = near_plane * far_plane / (d * (far_plane - near_plane) + near_plane);
+            float z = linear_depth(d, near_plane, far_plane);
             atomicMin(s_min, floatBitsToUint(z));
             atomicMax(s_max, floatBitsToUint(z));
         }

@@ -30,8 +30,7 @@ void main() {
     // The fragment's eye-space point, from its reversed-Z depth, as cone.comp
     // recovers a G-buffer pixel's.
     float d = oit_nodes[i].depth;
-    float D = near_plane * far_plane / (d * (far_plane - near_plane) + near_plane);
-    vec2 ndc = (vec2(p) + 0.5) / vec2(image_size) * 2.0 - 1.0;
+    vec3 q = eye_point_at_depth(p, image_size, proj_scale, linear_depth(d, near_plane, far_plane));
     vec3 n = normalize(view_rotation * unpack_normal(oit_nodes[i].normal));
-    oit_ao[i] = cone_ao(vec3(ndc * D / proj_scale, -D), n, p);
+    oit_ao[i] = cone_ao(q, n, p);
 }
