@@ -43,12 +43,4 @@ bool same_settings(const DiskAoSettings& a, const DiskAoSettings& b) {
            a.receiver_offset == b.receiver_offset;
 }
 
-std::string describe(const DiskAoSettings& s) {
-    std::ostringstream o;
-    o << "passes " << s.passes << "; traversal epsilon " << s.traversal_epsilon << "; clip epsilon " << s.clip_epsilon
-      << "; distance attenuation " << s.distance_attenuation << "; triangle attenuation " << s.triangle_attenuation
-      << "; blend " << s.min_scale << "," << s.max_scale << "; receiver offset " << s.receiver_offset;
-    return o.str();
-}
-
 } // namespace iso

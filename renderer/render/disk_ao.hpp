@@ -1,11 +1,9 @@
 // Disk-based ambient occlusion on the GPU (docs/ao.md, "Disk AO on the
-// GPU"): the settings' checks and their one-line description for metadata.
+// GPU"): the settings' checks and comparison.
 // The hierarchy and the CPU evaluation are renderer/ao/disk_hierarchy.hpp,
 // the kernels renderer/ao/disk_geometry.hpp, the passes
 // renderer/passes/disk_*.cpp with shaders/ao/disk_*.
 #pragma once
-
-#include <string>
 
 #include "renderer/ao/disk_geometry.hpp"
 
@@ -16,8 +14,5 @@ void validate(const DiskAoSettings& s);
 
 // Every member equal (the element terms depend on all of them).
 bool same_settings(const DiskAoSettings& a, const DiskAoSettings& b);
-
-// "passes 2; traversal epsilon 8; ..." for metadata and benchmark rows.
-std::string describe(const DiskAoSettings& s);
 
 } // namespace iso
