@@ -42,7 +42,7 @@ namespace iso::bench {
 
 struct ProcPeak {
     int pid = 0;
-    std::string comm;        // process name (/proc/PID/comm, 15 characters at most)
+    std::string comm;        // process name (/proc/PID/comm, 15 characters at most), as last seen
     std::uint64_t hwm = 0;   // bytes, VmHWM
 };
 
@@ -148,6 +148,9 @@ inline void monitor_tree(int pid, MeasuredRun& r, int poll_ms, double timeout_s,
                 it = index.emplace(p, r.procs.size()).first;
                 r.procs.push_back({p, detail::read_comm(p), 0});
             }
+            // The name is read again each time: a process first seen between
+            // fork and exec still has its parent's name (mpirun's, ours).
+            r.procs[it->second].comm = detail::read_comm(p);
             r.procs[it->second].hwm = std::max(r.procs[it->second].hwm, hwm);
             sum_rss += rss;
         }

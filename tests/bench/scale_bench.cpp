@@ -263,20 +263,33 @@ struct Row {
     double vps() const { return walls.empty() ? 0 : double(voxels) / wall(); }
 };
 
+// Shortest exact-enough text of a number for a command line (300.5, not 300.500000).
+std::string num(double v) {
+    std::ostringstream s;
+    s << std::setprecision(10) << v;
+    return s.str();
+}
+
 std::string fmt(double v, int prec) {
     std::ostringstream s;
     s << std::fixed << std::setprecision(prec) << v;
     return s.str();
 }
 
-std::string last_line(const std::string& text) {
-    std::string t = text;
-    while (!t.empty() && std::isspace(static_cast<unsigned char>(t.back()))) t.pop_back();
-    const auto nl = t.find_last_of("\r\n");
-    std::string l = nl == std::string::npos ? t : t.substr(nl + 1);
-    for (auto& c : l)
-        if (c == '|' || c == ',') c = ';'; // keep the table and CSV intact
-    return l.size() > 160 ? l.substr(0, 160) + "..." : l;
+// The first line of a failed run's output that says something: CLI11 puts
+// the reason first ("The following arguments were not expected: ..."), and
+// OpenMPI frames its reports in lines of dashes, after the rank's own message.
+std::string first_message(const std::string& text) {
+    std::istringstream is(text);
+    std::string line;
+    while (std::getline(is, line)) {
+        while (!line.empty() && std::isspace(static_cast<unsigned char>(line.back()))) line.pop_back();
+        if (line.find_first_not_of(" -*=\t") == std::string::npos) continue;
+        for (auto& c : line)
+            if (c == '|' || c == ',') c = ';'; // keep the table and the CSV intact
+        return line.size() > 200 ? line.substr(0, 200) + "..." : line;
+    }
+    return "(no output)";
 }
 
 class Bench {
@@ -342,10 +355,10 @@ private:
         std::vector<std::string> argv;
         try {
             const std::map<std::string, std::string> vars = {
-                {"isoscope", a_.isoscope}, {"in", in}, {"iso", fmt(a_.iso, 6)}, {"memory", std::to_string(a_.memory)},
+                {"isoscope", a_.isoscope}, {"in", in}, {"iso", num(a_.iso)}, {"memory", std::to_string(a_.memory)},
                 {"threads", std::to_string(r.threads)}, {"ranks", std::to_string(ranks)}, {"out", (dir / "out").string()}};
             if (config == "vtkFlyingEdges3D") {
-                argv = {fs::canonical("/proc/self/exe").string(), "--one", "fe", "--in", in, "--iso", fmt(a_.iso, 6),
+                argv = {fs::canonical("/proc/self/exe").string(), "--one", "fe", "--in", in, "--iso", num(a_.iso),
                         "--threads", std::to_string(r.threads)};
             } else {
                 argv = expand(a_.isoscope_args, vars);
@@ -379,7 +392,7 @@ private:
                 r.status = !m.started ? "failed to start: " + m.error
                            : m.timed_out ? "timed out after " + fmt(a_.timeout, 0) + " s"
                            : m.cancelled ? "cancelled"
-                                         : "failed (exit " + std::to_string(m.exit_code) + "): " + last_line(err.empty() ? out : err);
+                                         : "failed (exit " + std::to_string(m.exit_code) + "): " + first_message(err.empty() ? out : err);
                 std::cerr << r.status << "\n";
                 r.walls.clear();
                 break;
@@ -429,7 +442,7 @@ private:
         std::ostringstream md;
         utsname u{};
         ::uname(&u);
-        md << "# scale_bench: out-of-core and MPI extraction\n\n";
+        md << "# Out-of-core and MPI extraction (scale_bench)\n\n";
         md << "- machine: " << std::thread::hardware_concurrency() << " cores, " << mem_total_gib() << " GiB RAM, " << u.sysname
            << " " << u.release << "\n";
         md << "- iso " << a_.iso << " HU (cancellous and cortical bone, vessels, bright objects; half-integer so that no int16 sample ties it)\n";
@@ -465,7 +478,7 @@ private:
                << " | " << (ok ? fmt(r.peak_rank, 0) + (r.rank_peaks.size() > 1 ? " (" + each + ")" : "") : "-") << " | "
                << (ok ? fmt(r.total, 0) : "-") << " | " << (ok && r.budget ? fmt(over, 0) : "-") << " | "
                << (ok ? fmt(r.vps() / 1e6, 1) : "-") << " | " << (ok ? std::to_string(r.tris) : "-") << " | "
-               << (ok ? fmt(double(r.out_bytes) / (1 << 20), 1) : "-") << " | "
+               << (ok && r.config != "vtkFlyingEdges3D" ? fmt(double(r.out_bytes) / (1 << 20), 1) : "-") << " | "
                << (r.cached >= 0 ? fmt(100 * r.cached, 0) + "%" : "-") << " | " << check(r) << " | " << r.status << " |\n";
             csv << r.config << "," << r.volume << "," << r.voxels << "," << r.ranks << "," << r.threads << "," << r.budget << ","
                 << r.reps << "," << (ok ? fmt(r.wall(), 3) : "") << ","
@@ -475,6 +488,25 @@ private:
                 << (ok && r.budget ? fmt(over, 1) : "") << "," << (ok ? fmt(r.vps(), 0) : "") << "," << (ok ? std::to_string(r.tris) : "")
                 << "," << (ok ? std::to_string(r.out_bytes) : "") << "," << (r.cached >= 0 ? fmt(r.cached, 3) : "") << ","
                 << check(r) << "," << r.status << ",\"" << r.command << "\"\n";
+        }
+        // Same volume, same iso, no sample tying it: every extraction must give
+        // Flying Edges' triangle count (docs/isosurface.md), streamed, split
+        // over ranks or not. A difference is a finding, not a measurement.
+        md << "\n";
+        for (const auto& fe : rows_) {
+            if (fe.config != "vtkFlyingEdges3D" || fe.walls.empty()) continue;
+            std::string differ;
+            int same = 0;
+            for (const auto& r : rows_)
+                if (r.volume == fe.volume && &r != &fe && !r.walls.empty()) {
+                    if (r.tris == fe.tris) ++same;
+                    else differ += " " + r.config + " np " + std::to_string(r.ranks) + " (" + std::to_string(r.tris) + ")";
+                }
+            if (differ.empty())
+                md << "Triangles on " << fe.volume << ": all " << same << " isoscope runs give " << fe.tris
+                   << ", the same as vtkFlyingEdges3D.\n";
+            else
+                md << "Triangles on " << fe.volume << ": DIFFERENT from vtkFlyingEdges3D (" << fe.tris << "):" << differ << ".\n";
         }
         md << "\nCommands as run:\n\n";
         for (const auto& r : rows_)

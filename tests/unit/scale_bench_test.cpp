@@ -333,4 +333,6 @@ TEST(ProcMonitor, FailuresAreRecordedNotFatal) {
     EXPECT_EQ(r.exit_code, 128 + SIGTERM);
     EXPECT_LT(now_s() - t0, 10.0);
     EXPECT_GE(r.procs.size(), 2u); // the shell and its sleep were both seen
+    // by their names after exec (a process first seen between fork and exec has the shell's name)
+    EXPECT_TRUE(std::any_of(r.procs.begin(), r.procs.end(), [](const ProcPeak& p) { return p.comm == "sleep"; }));
 }
