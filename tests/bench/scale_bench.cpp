@@ -6,8 +6,9 @@
 // peak resident memory per rank and in total, throughput, triangles, bytes.
 //
 //   scale_bench [--quick] [--out DIR] [--data DIR] [--sizes 1024,2048x2048x1024]
-//               [--ranks 1,2,4] [--reps N] [--reps-large N] [--iso V] [--memory MiB] [--slack MiB]
+//               [--ranks 1,2,4] [--reps N] [--reps-large N] [--warmup N] [--iso V] [--memory MiB] [--slack MiB]
 //               [--threads N] [--isoscope PATH] [--mpirun PATH] [--isoscope-args T] [--mpirun-args T]
+//               [--isoscope-mpi-args T]
 //               [--no-single] [--no-mpi] [--no-fe] [--fe-max-gib G] [--cache warm|cold]
 //               [--timeout S] [--keep-output] [--generate-only]
 //
@@ -79,7 +80,7 @@ struct Args {
     std::string out = "bench-results/scale", data = "/tmp/isoscope-scale";
     std::vector<std::array<std::int64_t, 3>> sizes;
     std::vector<int> ranks;
-    int reps = -1, reps_large = 1;
+    int reps = -1, reps_large = 1, warmup = 1;
     double iso = 300.5;
     int memory = 1024, slack = 256;
     int threads = int(std::max(1u, std::thread::hardware_concurrency()));
@@ -88,6 +89,7 @@ struct Args {
     double timeout = 3600;
     std::string isoscope = ISOSCOPE_CLI, mpirun = "mpirun";
     std::string isoscope_args = kDefaultIsoscopeArgs, mpirun_args = default_mpirun_args();
+    std::optional<std::string> isoscope_mpi_args; // isoscope's arguments under mpirun; default: isoscope_args
     // child mode (Flying Edges)
     std::string one, in;
 };
@@ -95,8 +97,8 @@ struct Args {
 [[noreturn]] void usage(const std::string& why) {
     std::cerr << "scale_bench: " << why << "\n"
               << "usage: scale_bench [--quick] [--out DIR] [--data DIR] [--sizes N|WxHxD,...] [--ranks 1,2,4] [--reps N]\n"
-                 "                   [--reps-large N] [--iso V] [--memory MiB] [--slack MiB] [--threads N]\n"
-                 "                   [--isoscope PATH] [--mpirun PATH] [--isoscope-args T] [--mpirun-args T]\n"
+                 "                   [--reps-large N] [--warmup N] [--iso V] [--memory MiB] [--slack MiB] [--threads N]\n"
+                 "                   [--isoscope PATH] [--mpirun PATH] [--isoscope-args T] [--mpirun-args T] [--isoscope-mpi-args T]\n"
                  "                   [--no-single] [--no-mpi] [--no-fe] [--fe-max-gib G] [--cache warm|cold]\n"
                  "                   [--timeout S] [--keep-output] [--generate-only]\n";
     std::exit(2);
@@ -350,7 +352,8 @@ private:
         r.ranks = ranks;
         r.threads = config == "vtkFlyingEdges3D" ? a_.threads : std::max(1, a_.threads / ranks);
         const bool ours = config != "vtkFlyingEdges3D";
-        r.budget = ours && a_.isoscope_args.find("{memory}") != std::string::npos ? a_.memory : 0;
+        const std::string& tmpl = config == "isoscope-mpi" ? mpi_args() : a_.isoscope_args;
+        r.budget = ours && tmpl.find("{memory}") != std::string::npos ? a_.memory : 0;
         const fs::path dir = out_ / "runs" / (config + "-" + p.name() + "-np" + std::to_string(ranks));
         std::vector<std::string> argv;
         try {
@@ -361,7 +364,7 @@ private:
                 argv = {fs::canonical("/proc/self/exe").string(), "--one", "fe", "--in", in, "--iso", num(a_.iso),
                         "--threads", std::to_string(r.threads)};
             } else {
-                argv = expand(a_.isoscope_args, vars);
+                argv = expand(tmpl, vars);
                 argv.insert(argv.begin(), a_.isoscope);
                 if (config == "isoscope-mpi") {
                     auto m = expand(a_.mpirun_args, vars);
@@ -377,13 +380,13 @@ private:
         r.command = join(argv);
         // The ranks are the processes running the measured program (not mpirun/orted).
         const std::string rank_comm = fs::path(config == "vtkFlyingEdges3D" ? argv[0] : a_.isoscope).filename().string().substr(0, 15);
-        for (int rep = 0; rep <= reps && !g_stop; ++rep) { // rep 0 = warm-up, not counted
+        for (int rep = 1 - a_.warmup; rep <= reps && !g_stop; ++rep) { // rep <= 0: warm-up, not counted
             std::error_code ec;
             fs::remove_all(dir, ec);
             fs::create_directories(dir / "out");
             if (a_.cache == "cold") evict_file(in);
             const double cached = cached_fraction(in);
-            std::cerr << config << " " << p.name() << " np " << ranks << (rep == 0 ? " warm-up" : " rep " + std::to_string(rep))
+            std::cerr << config << " " << p.name() << " np " << ranks << (rep <= 0 ? " warm-up" : " rep " + std::to_string(rep))
                       << " ... " << std::flush;
             const MeasuredRun m = run_measured(argv, (dir / "stdout.txt").string(), (dir / "stderr.txt").string(), 20,
                                                a_.timeout, &g_stop);
@@ -403,7 +406,7 @@ private:
             std::smatch sm;
             if (std::regex_search(out, sm, std::regex(R"(tris=([0-9]+))")) || std::regex_search(out, sm, std::regex(R"(([0-9]+) triangles)")))
                 tris = std::stoull(sm[1]);
-            if (rep == 0) {
+            if (rep <= 0) {
                 r.tris = tris;
                 continue;
             }
@@ -432,6 +435,8 @@ private:
         rows_.push_back(r);
     }
 
+    const std::string& mpi_args() const { return a_.isoscope_mpi_args ? *a_.isoscope_mpi_args : a_.isoscope_args; }
+
     std::string check(const Row& r) const {
         if (r.walls.empty()) return "-";
         if (r.budget == 0) return "n/a";
@@ -448,15 +453,15 @@ private:
         md << "- iso " << a_.iso << " HU (cancellous and cortical bone, vessels, bright objects; half-integer so that no int16 sample ties it)\n";
         md << "- memory budget " << a_.memory << " MiB per process; check: peak RSS of every rank <= budget + " << a_.slack
            << " MiB (the stated constant)\n";
-        md << "- each configuration: 1 warm-up run (not counted) + " << a_.reps << " measured run(s), " << a_.reps_large
+        md << "- each configuration: " << a_.warmup << " warm-up run(s) (not counted) + " << a_.reps << " measured run(s), " << a_.reps_large
            << " for volumes over 4 GiB; wall = median; peaks = worst measured run\n";
         md << "- page cache: " << (a_.cache == "cold" ? "cold (input file evicted with posix_fadvise DONTNEED before every run)"
                                                       : "warm (no eviction: after the warm-up the input is in the page cache when it fits; 'cached' column)")
            << "\n";
         md << "- memory polled from /proc/PID/status every 20 ms over the child and its descendants: per rank = VmHWM of each "
               "rank process, total = largest sum of VmRSS at one poll (mpirun/orted included)\n";
-        md << "- isoscope command: `" << a_.isoscope << " " << a_.isoscope_args << "`; MPI prefix: `" << a_.mpirun << " "
-           << a_.mpirun_args << "`\n";
+        md << "- isoscope command: `" << a_.isoscope << " " << a_.isoscope_args << "`; under MPI: `" << a_.mpirun << " "
+           << a_.mpirun_args << " " << a_.isoscope << " " << mpi_args() << "`\n";
         for (const auto& g : gen_notes_) md << "- input " << g << "\n";
         md << "\n| config | volume | ranks | threads/rank | budget MiB | wall s (min-max) | peak RSS/rank MiB (each) | "
               "total MiB | peak - budget MiB | Mvoxel/s | triangles | output MiB | cached | check | status |\n"
@@ -557,8 +562,11 @@ private:
         std::ofstream gp(out_ / "scale_bench.gp");
         gp << "set terminal pngcairo size 1200,500 noenhanced\nset key outside bottom center horizontal font ',9'\n"
            << "set grid\nset xlabel 'ranks (mpirun -np; single process at 1)'\nset xtics 1\nset xrange [0.5:*]\n";
+        const bool budget = a_.isoscope_args.find("{memory}") != std::string::npos;
+        const std::string budget_note = budget ? "" : " (not passed: in-memory command)";
         gp << "set output '" << (out_ / "scale_time.png").string() << "'\nset multiplot layout 1,2 title 'isoscope mesh: "
-           << "out of core (budget " << a_.memory << " MiB) and MPI, iso " << a_.iso << "; vtkFlyingEdges3D holds the whole volume'\n";
+           << (budget ? "out of core (budget " + std::to_string(a_.memory) + " MiB)" : "in memory") << " and MPI, iso " << a_.iso
+           << "; vtkFlyingEdges3D holds the whole volume'\n";
         gp << "set title 'wall time (lower is better)'\nset ylabel 's'\nset yrange [0:*]\nplot ";
         for (std::size_t i = 0; i < files.size(); ++i)
             gp << (i ? ", " : "") << "'" << files[i].second << "' using 1:2 " << style(files[i].first) << " title '" << files[i].first << "'";
@@ -568,7 +576,7 @@ private:
         gp << "\nunset multiplot\n";
         gp << "set output '" << (out_ / "scale_memory.png").string() << "'\nset terminal pngcairo size 900,550 noenhanced\n"
            << "set title 'peak resident memory per rank (solid) and total (dashed) vs the budget'\nset ylabel 'MiB'\n"
-           << "set yrange [0:*]\nplot " << a_.memory << " with lines lc 'black' lw 2 title 'budget " << a_.memory << " MiB', "
+           << "set yrange [0:*]\nplot " << a_.memory << " with lines lc 'black' lw 2 title 'budget " << a_.memory << " MiB" << budget_note << "', "
            << a_.memory + a_.slack << " with lines lc 'black' dt 2 title 'budget + " << a_.slack << " MiB'";
         for (std::size_t i = 0; i < files.size(); ++i)
             gp << ", '" << files[i].second << "' using 1:4 " << style(files[i].first) << " lc " << i + 1 << " title '"
@@ -612,6 +620,7 @@ int main(int argc, char** argv) {
         else if (s == "--ranks") for (const auto& w : split(next(), ',')) a.ranks.push_back(int(number(w)));
         else if (s == "--reps") a.reps = int(number(next()));
         else if (s == "--reps-large") a.reps_large = int(number(next()));
+        else if (s == "--warmup") a.warmup = int(number(next()));
         else if (s == "--iso") a.iso = number(next());
         else if (s == "--memory") a.memory = int(number(next()));
         else if (s == "--slack") a.slack = int(number(next()));
@@ -620,6 +629,7 @@ int main(int argc, char** argv) {
         else if (s == "--mpirun") a.mpirun = next();
         else if (s == "--isoscope-args") a.isoscope_args = next();
         else if (s == "--mpirun-args") a.mpirun_args = next();
+        else if (s == "--isoscope-mpi-args") a.isoscope_mpi_args = next();
         else if (s == "--no-single") a.single = false;
         else if (s == "--no-mpi") a.mpi = false;
         else if (s == "--no-fe") a.fe = false;
@@ -633,7 +643,8 @@ int main(int argc, char** argv) {
         else usage("unknown option " + s);
     }
     if (a.cache != "warm" && a.cache != "cold") usage("--cache must be warm or cold");
-    if (a.threads < 1 || a.memory < 1 || a.slack < 0) usage("--threads and --memory must be >= 1, --slack >= 0");
+    if (a.threads < 1 || a.memory < 1 || a.slack < 0 || a.warmup < 0 || a.reps_large < 1)
+        usage("--threads, --memory and --reps-large must be >= 1, --slack and --warmup >= 0");
     for (int n : a.ranks)
         if (n < 1) usage("--ranks must be >= 1");
     try {
@@ -644,6 +655,7 @@ int main(int argc, char** argv) {
                                                : std::vector<std::array<std::int64_t, 3>>{{1024, 1024, 1024}, {2048, 2048, 1024}};
         if (a.ranks.empty()) a.ranks = a.quick ? std::vector<int>{1, 2} : std::vector<int>{1, 2, 4};
         if (a.reps < 0) a.reps = a.quick ? 1 : 3;
+        if (a.reps < 1) usage("--reps must be >= 1");
         struct sigaction sa{};
         sa.sa_handler = on_sigint;
         ::sigaction(SIGINT, &sa, nullptr);
