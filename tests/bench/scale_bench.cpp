@@ -507,7 +507,9 @@ private:
                     if (r.tris == fe.tris) ++same;
                     else differ += " " + r.config + " np " + std::to_string(r.ranks) + " (" + std::to_string(r.tris) + ")";
                 }
-            if (differ.empty())
+            if (differ.empty() && same == 0)
+                md << "Triangles on " << fe.volume << ": no isoscope run to compare with vtkFlyingEdges3D's " << fe.tris << ".\n";
+            else if (differ.empty())
                 md << "Triangles on " << fe.volume << ": all " << same << " isoscope runs give " << fe.tris
                    << ", the same as vtkFlyingEdges3D.\n";
             else
