@@ -451,8 +451,10 @@ private:
         md << "- machine: " << std::thread::hardware_concurrency() << " cores, " << mem_total_gib() << " GiB RAM, " << u.sysname
            << " " << u.release << "\n";
         md << "- iso " << a_.iso << " HU (cancellous and cortical bone, vessels, bright objects; half-integer so that no int16 sample ties it)\n";
-        md << "- memory budget " << a_.memory << " MiB per process; check: peak RSS of every rank <= budget + " << a_.slack
-           << " MiB (the stated constant)\n";
+        md << "- memory budget " << a_.memory << " MiB per process (`--memory`, where the command has {memory}); check: peak "
+           << "RSS of every rank <= budget + " << a_.slack << " MiB (the stated constant)\n";
+        md << "- vtkFlyingEdges3D reads the volume (vtkNIFTIImageReader) and extracts with normals, but writes nothing; "
+              "isoscope's wall time includes writing its surface\n";
         md << "- each configuration: " << a_.warmup << " warm-up run(s) (not counted) + " << a_.reps << " measured run(s), " << a_.reps_large
            << " for volumes over 4 GiB; wall = median; peaks = worst measured run\n";
         md << "- page cache: " << (a_.cache == "cold" ? "cold (input file evicted with posix_fadvise DONTNEED before every run)"
