@@ -42,22 +42,22 @@ namespace iso::bench {
 
 struct ProcPeak {
     int pid = 0;
-    std::string comm;        // process name (/proc/PID/comm, 15 characters at most), as last seen
-    std::uint64_t hwm = 0;   // bytes, VmHWM
+    std::string comm;      // process name (/proc/PID/comm, 15 characters at most), as last seen
+    std::uint64_t hwm = 0; // bytes, VmHWM
 };
 
 struct MeasuredRun {
-    bool started = false;      // the program could be spawned
-    int exit_code = -1;        // exit status, or 128 + signal
+    bool started = false; // the program could be spawned
+    int exit_code = -1;   // exit status, or 128 + signal
     bool timed_out = false;
     bool cancelled = false;
     double wall_s = 0;
-    std::uint64_t total_peak = 0;    // largest sum of VmRSS over the tree at one poll
-    std::uint64_t sum_of_peaks = 0;  // sum of every process's VmHWM
-    std::uint64_t child_maxrss = 0;  // wait4's ru_maxrss of the direct child
-    std::vector<ProcPeak> procs;     // every process seen, in order of first sight
+    std::uint64_t total_peak = 0;   // largest sum of VmRSS over the tree at one poll
+    std::uint64_t sum_of_peaks = 0; // sum of every process's VmHWM
+    std::uint64_t child_maxrss = 0; // wait4's ru_maxrss of the direct child
+    std::vector<ProcPeak> procs;    // every process seen, in order of first sight
     int polls = 0;
-    std::string error;               // why it could not be started
+    std::string error; // why it could not be started
 };
 
 namespace detail {
@@ -68,8 +68,10 @@ inline void read_status(int pid, std::uint64_t& rss, std::uint64_t& hwm) {
     std::ifstream f("/proc/" + std::to_string(pid) + "/status");
     std::string line;
     while (std::getline(f, line)) {
-        if (line.rfind("VmRSS:", 0) == 0) rss = std::stoull(line.substr(6)) * 1024;
-        else if (line.rfind("VmHWM:", 0) == 0) hwm = std::stoull(line.substr(6)) * 1024;
+        if (line.rfind("VmRSS:", 0) == 0)
+            rss = std::stoull(line.substr(6)) * 1024;
+        else if (line.rfind("VmHWM:", 0) == 0)
+            hwm = std::stoull(line.substr(6)) * 1024;
     }
 }
 
@@ -180,7 +182,8 @@ inline void monitor_tree(int pid, MeasuredRun& r, int poll_ms, double timeout_s,
     }
     if (kill_sent >= 0) ::kill(-pid, SIGKILL); // leftovers of the group (orphaned ranks)
     r.child_maxrss = std::uint64_t(ru.ru_maxrss) * 1024;
-    if (!r.procs.empty() && r.procs.front().pid == pid) r.procs.front().hwm = std::max(r.procs.front().hwm, r.child_maxrss);
+    if (!r.procs.empty() && r.procs.front().pid == pid)
+        r.procs.front().hwm = std::max(r.procs.front().hwm, r.child_maxrss);
     r.sum_of_peaks = 0;
     for (const auto& p : r.procs) r.sum_of_peaks += p.hwm;
     r.total_peak = std::max(r.total_peak, r.procs.empty() ? 0 : r.procs.front().hwm);

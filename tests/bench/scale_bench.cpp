@@ -61,7 +61,9 @@ void set_vtk_threads(int n); // vtk_threads.cpp
 namespace {
 
 std::atomic<bool> g_stop{false};
-extern "C" void on_sigint(int) { g_stop = true; }
+extern "C" void on_sigint(int) {
+    g_stop = true;
+}
 
 constexpr const char* kDefaultIsoscopeArgs =
     "mesh {in} --iso {iso} --memory {memory} --stream --threads {threads} -o {out}/surface.pvtp";
@@ -95,12 +97,14 @@ struct Args {
 };
 
 [[noreturn]] void usage(const std::string& why) {
-    std::cerr << "scale_bench: " << why << "\n"
-              << "usage: scale_bench [--quick] [--out DIR] [--data DIR] [--sizes N|WxHxD,...] [--ranks 1,2,4] [--reps N]\n"
-                 "                   [--reps-large N] [--warmup N] [--iso V] [--memory MiB] [--slack MiB] [--threads N]\n"
-                 "                   [--isoscope PATH] [--mpirun PATH] [--isoscope-args T] [--mpirun-args T] [--isoscope-mpi-args T]\n"
-                 "                   [--no-single] [--no-mpi] [--no-fe] [--fe-max-gib G] [--cache warm|cold]\n"
-                 "                   [--timeout S] [--keep-output] [--generate-only]\n";
+    std::cerr
+        << "scale_bench: " << why << "\n"
+        << "usage: scale_bench [--quick] [--out DIR] [--data DIR] [--sizes N|WxHxD,...] [--ranks 1,2,4] [--reps N]\n"
+           "                   [--reps-large N] [--warmup N] [--iso V] [--memory MiB] [--slack MiB] [--threads N]\n"
+           "                   [--isoscope PATH] [--mpirun PATH] [--isoscope-args T] [--mpirun-args T] "
+           "[--isoscope-mpi-args T]\n"
+           "                   [--no-single] [--no-mpi] [--no-fe] [--fe-max-gib G] [--cache warm|cold]\n"
+           "                   [--timeout S] [--keep-output] [--generate-only]\n";
     std::exit(2);
 }
 
@@ -131,8 +135,10 @@ std::vector<std::string> expand(const std::string& tmpl, const std::map<std::str
     char quote = 0;
     for (char c : tmpl) {
         if (quote) {
-            if (c == quote) quote = 0;
-            else cur += c;
+            if (c == quote)
+                quote = 0;
+            else
+                cur += c;
         } else if (c == '\'' || c == '"') {
             quote = c;
             have = true;
@@ -153,7 +159,8 @@ std::vector<std::string> expand(const std::string& tmpl, const std::map<std::str
                 const auto close = w.find('}', i);
                 if (close != std::string::npos) {
                     const auto it = vars.find(w.substr(i + 1, close - i - 1));
-                    if (it == vars.end()) throw Error("command template", "unknown placeholder " + w.substr(i, close - i + 1));
+                    if (it == vars.end())
+                        throw Error("command template", "unknown placeholder " + w.substr(i, close - i + 1));
                     r += it->second;
                     i = close;
                     continue;
@@ -185,7 +192,8 @@ std::string slurp(const std::string& path) {
 std::uint64_t tree_bytes(const fs::path& dir) {
     std::uint64_t n = 0;
     std::error_code ec;
-    for (auto it = fs::recursive_directory_iterator(dir, ec); !ec && it != fs::recursive_directory_iterator(); it.increment(ec))
+    for (auto it = fs::recursive_directory_iterator(dir, ec); !ec && it != fs::recursive_directory_iterator();
+         it.increment(ec))
         if (it->is_regular_file(ec)) n += it->file_size(ec);
     return n;
 }
@@ -244,7 +252,8 @@ int run_fe(const Args& a) {
     fe->Update();
     const double t2 = now_s();
     std::cout << std::setprecision(6) << "RESULT read_s=" << t1 - t0 << " fe_s=" << t2 - t1
-              << " tris=" << fe->GetOutput()->GetNumberOfCells() << " verts=" << fe->GetOutput()->GetNumberOfPoints() << "\n";
+              << " tris=" << fe->GetOutput()->GetNumberOfCells() << " verts=" << fe->GetOutput()->GetNumberOfPoints()
+              << "\n";
     return 0;
 }
 
@@ -258,7 +267,7 @@ struct Row {
     std::vector<double> walls;
     double peak_rank = 0, total = 0, sum_peaks = 0; // MiB, worst over the measured runs
     std::vector<double> rank_peaks;                 // MiB, per rank, of the worst run
-    double cached = -1;                              // page-cache fraction of the input before the first measured run
+    double cached = -1;                             // page-cache fraction of the input before the first measured run
     std::uint64_t tris = 0, out_bytes = 0;
     std::string status = "ok", command;
     double wall() const { return median(walls); }
@@ -311,8 +320,9 @@ public:
             const double dt = now_s() - t0;
             std::cerr << "\n";
             gen_notes_.push_back(p.name() + ".nii (" + fmt(double(p.voxels() * 2) / (1 << 30), 2) + " GiB): " +
-                                 (reused ? "reused (sidecar matches)" : "generated in " + fmt(dt, 1) + " s (" +
-                                  fmt(double(p.voxels()) / dt / 1e6, 1) + " Mvoxel/s)"));
+                                 (reused ? "reused (sidecar matches)"
+                                         : "generated in " + fmt(dt, 1) + " s (" +
+                                               fmt(double(p.voxels()) / dt / 1e6, 1) + " Mvoxel/s)"));
             std::cout << gen_notes_.back() << "\n";
             volumes.emplace_back(p, path);
             if (g_stop) break;
@@ -325,7 +335,8 @@ public:
             if (a_.single) measure("isoscope", p, path, 1, reps);
             if (a_.mpi)
                 for (int n : a_.ranks) measure("isoscope-mpi", p, path, n, reps);
-            if (a_.fe && double(p.voxels() * 2) <= a_.fe_max_gib * double(1 << 30) + 1) measure("vtkFlyingEdges3D", p, path, 1, reps);
+            if (a_.fe && double(p.voxels() * 2) <= a_.fe_max_gib * double(1 << 30) + 1)
+                measure("vtkFlyingEdges3D", p, path, 1, reps);
             if (g_stop) break;
         }
         write_outputs();
@@ -357,12 +368,23 @@ private:
         const fs::path dir = out_ / "runs" / (config + "-" + p.name() + "-np" + std::to_string(ranks));
         std::vector<std::string> argv;
         try {
-            const std::map<std::string, std::string> vars = {
-                {"isoscope", a_.isoscope}, {"in", in}, {"iso", num(a_.iso)}, {"memory", std::to_string(a_.memory)},
-                {"threads", std::to_string(r.threads)}, {"ranks", std::to_string(ranks)}, {"out", (dir / "out").string()}};
+            const std::map<std::string, std::string> vars = {{"isoscope", a_.isoscope},
+                                                             {"in", in},
+                                                             {"iso", num(a_.iso)},
+                                                             {"memory", std::to_string(a_.memory)},
+                                                             {"threads", std::to_string(r.threads)},
+                                                             {"ranks", std::to_string(ranks)},
+                                                             {"out", (dir / "out").string()}};
             if (config == "vtkFlyingEdges3D") {
-                argv = {fs::canonical("/proc/self/exe").string(), "--one", "fe", "--in", in, "--iso", num(a_.iso),
-                        "--threads", std::to_string(r.threads)};
+                argv = {fs::canonical("/proc/self/exe").string(),
+                        "--one",
+                        "fe",
+                        "--in",
+                        in,
+                        "--iso",
+                        num(a_.iso),
+                        "--threads",
+                        std::to_string(r.threads)};
             } else {
                 argv = expand(tmpl, vars);
                 argv.insert(argv.begin(), a_.isoscope);
@@ -379,23 +401,25 @@ private:
         }
         r.command = join(argv);
         // The ranks are the processes running the measured program (not mpirun/orted).
-        const std::string rank_comm = fs::path(config == "vtkFlyingEdges3D" ? argv[0] : a_.isoscope).filename().string().substr(0, 15);
+        const std::string rank_comm =
+            fs::path(config == "vtkFlyingEdges3D" ? argv[0] : a_.isoscope).filename().string().substr(0, 15);
         for (int rep = 1 - a_.warmup; rep <= reps && !g_stop; ++rep) { // rep <= 0: warm-up, not counted
             std::error_code ec;
             fs::remove_all(dir, ec);
             fs::create_directories(dir / "out");
             if (a_.cache == "cold") evict_file(in);
             const double cached = cached_fraction(in);
-            std::cerr << config << " " << p.name() << " np " << ranks << (rep <= 0 ? " warm-up" : " rep " + std::to_string(rep))
-                      << " ... " << std::flush;
+            std::cerr << config << " " << p.name() << " np " << ranks
+                      << (rep <= 0 ? " warm-up" : " rep " + std::to_string(rep)) << " ... " << std::flush;
             const MeasuredRun m = run_measured(argv, (dir / "stdout.txt").string(), (dir / "stderr.txt").string(), 20,
                                                a_.timeout, &g_stop);
             const std::string out = slurp((dir / "stdout.txt").string()), err = slurp((dir / "stderr.txt").string());
             if (!m.started || m.exit_code != 0 || m.timed_out || m.cancelled) {
-                r.status = !m.started ? "failed to start: " + m.error
+                r.status = !m.started    ? "failed to start: " + m.error
                            : m.timed_out ? "timed out after " + fmt(a_.timeout, 0) + " s"
                            : m.cancelled ? "cancelled"
-                                         : "failed (exit " + std::to_string(m.exit_code) + "): " + first_message(err.empty() ? out : err);
+                                         : "failed (exit " + std::to_string(m.exit_code) +
+                                               "): " + first_message(err.empty() ? out : err);
                 std::cerr << r.status << "\n";
                 r.walls.clear();
                 break;
@@ -404,7 +428,8 @@ private:
             // Triangles: the CLI's summary line ("NAME: N triangles, ..."), or the FE child's RESULT.
             std::uint64_t tris = 0;
             std::smatch sm;
-            if (std::regex_search(out, sm, std::regex(R"(tris=([0-9]+))")) || std::regex_search(out, sm, std::regex(R"(([0-9]+) triangles)")))
+            if (std::regex_search(out, sm, std::regex(R"(tris=([0-9]+))")) ||
+                std::regex_search(out, sm, std::regex(R"(([0-9]+) triangles)")))
                 tris = std::stoull(sm[1]);
             if (rep <= 0) {
                 r.tris = tris;
@@ -425,7 +450,8 @@ private:
             r.total = std::max(r.total, double(m.total_peak) / (1 << 20));
             r.sum_peaks = std::max(r.sum_peaks, double(m.sum_of_peaks) / (1 << 20));
             if (ranks_mib.size() != std::size_t(ranks))
-                r.status = "ok; saw " + std::to_string(ranks_mib.size()) + " '" + rank_comm + "' processes, expected " + std::to_string(ranks);
+                r.status = "ok; saw " + std::to_string(ranks_mib.size()) + " '" + rank_comm + "' processes, expected " +
+                           std::to_string(ranks);
         }
         r.reps = int(r.walls.size());
         if (!a_.keep_output) {
@@ -448,19 +474,27 @@ private:
         utsname u{};
         ::uname(&u);
         md << "# Out-of-core and MPI extraction (scale_bench)\n\n";
-        md << "- machine: " << std::thread::hardware_concurrency() << " cores, " << mem_total_gib() << " GiB RAM, " << u.sysname
-           << " " << u.release << "\n";
-        md << "- iso " << a_.iso << " HU (cancellous and cortical bone, vessels, bright objects; half-integer so that no int16 sample ties it)\n";
-        md << "- memory budget " << a_.memory << " MiB per process (`--memory`, where the command has {memory}); check: peak "
+        md << "- machine: " << std::thread::hardware_concurrency() << " cores, " << mem_total_gib() << " GiB RAM, "
+           << u.sysname << " " << u.release << "\n";
+        md << "- iso " << a_.iso
+           << " HU (cancellous and cortical bone, vessels, bright objects; half-integer so that no int16 sample ties "
+              "it)\n";
+        md << "- memory budget " << a_.memory
+           << " MiB per process (`--memory`, where the command has {memory}); check: peak "
            << "RSS of every rank <= budget + " << a_.slack << " MiB (the stated constant)\n";
-        md << "- vtkFlyingEdges3D reads the volume (vtkNIFTIImageReader) and extracts with normals, but writes nothing; "
+        md << "- vtkFlyingEdges3D reads the volume (vtkNIFTIImageReader) and extracts with normals, but writes "
+              "nothing; "
               "isoscope's wall time includes writing its surface\n";
-        md << "- each configuration: " << a_.warmup << " warm-up run(s) (not counted) + " << a_.reps << " measured run(s), " << a_.reps_large
+        md << "- each configuration: " << a_.warmup << " warm-up run(s) (not counted) + " << a_.reps
+           << " measured run(s), " << a_.reps_large
            << " for volumes over 4 GiB; wall = median; peaks = worst measured run\n";
-        md << "- page cache: " << (a_.cache == "cold" ? "cold (input file evicted with posix_fadvise DONTNEED before every run)"
-                                                      : "warm (no eviction: after the warm-up the input is in the page cache when it fits; 'cached' column)")
+        md << "- page cache: "
+           << (a_.cache == "cold" ? "cold (input file evicted with posix_fadvise DONTNEED before every run)"
+                                  : "warm (no eviction: after the warm-up the input is in the page cache when it fits; "
+                                    "'cached' column)")
            << "\n";
-        md << "- memory polled from /proc/PID/status every 20 ms over the child and its descendants: per rank = VmHWM of each "
+        md << "- memory polled from /proc/PID/status every 20 ms over the child and its descendants: per rank = VmHWM "
+              "of each "
               "rank process, total = largest sum of VmRSS at one poll (mpirun/orted included)\n";
         md << "- isoscope command: `" << a_.isoscope << " " << a_.isoscope_args << "`; under MPI: `" << a_.mpirun << " "
            << a_.mpirun_args << " " << a_.isoscope << " " << mpi_args() << "`\n";
@@ -470,7 +504,8 @@ private:
            << "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n";
         std::ofstream csv(out_ / "scale_bench.csv");
         csv << "config,volume,voxels,ranks,threads_per_rank,budget_mib,reps,wall_s,wall_min_s,wall_max_s,peak_rank_mib,"
-               "total_mib,sum_of_peaks_mib,peak_minus_budget_mib,voxels_per_s,triangles,output_bytes,cached_fraction,check,"
+               "total_mib,sum_of_peaks_mib,peak_minus_budget_mib,voxels_per_s,triangles,output_bytes,cached_fraction,"
+               "check,"
                "status,command\n";
         for (const auto& r : rows_) {
             const bool ok = !r.walls.empty();
@@ -482,18 +517,20 @@ private:
                << (ok ? fmt(r.wall(), 2) + " (" + fmt(*std::min_element(r.walls.begin(), r.walls.end()), 2) + "-" +
                             fmt(*std::max_element(r.walls.begin(), r.walls.end()), 2) + ")"
                       : "-")
-               << " | " << (ok ? fmt(r.peak_rank, 0) + (r.rank_peaks.size() > 1 ? " (" + each + ")" : "") : "-") << " | "
-               << (ok ? fmt(r.total, 0) : "-") << " | " << (ok && r.budget ? fmt(over, 0) : "-") << " | "
+               << " | " << (ok ? fmt(r.peak_rank, 0) + (r.rank_peaks.size() > 1 ? " (" + each + ")" : "") : "-")
+               << " | " << (ok ? fmt(r.total, 0) : "-") << " | " << (ok && r.budget ? fmt(over, 0) : "-") << " | "
                << (ok ? fmt(r.vps() / 1e6, 1) : "-") << " | " << (ok ? std::to_string(r.tris) : "-") << " | "
                << (ok && r.config != "vtkFlyingEdges3D" ? fmt(double(r.out_bytes) / (1 << 20), 1) : "-") << " | "
-               << (r.cached >= 0 ? fmt(100 * r.cached, 0) + "%" : "-") << " | " << check(r) << " | " << r.status << " |\n";
-            csv << r.config << "," << r.volume << "," << r.voxels << "," << r.ranks << "," << r.threads << "," << r.budget << ","
-                << r.reps << "," << (ok ? fmt(r.wall(), 3) : "") << ","
+               << (r.cached >= 0 ? fmt(100 * r.cached, 0) + "%" : "-") << " | " << check(r) << " | " << r.status
+               << " |\n";
+            csv << r.config << "," << r.volume << "," << r.voxels << "," << r.ranks << "," << r.threads << ","
+                << r.budget << "," << r.reps << "," << (ok ? fmt(r.wall(), 3) : "") << ","
                 << (ok ? fmt(*std::min_element(r.walls.begin(), r.walls.end()), 3) : "") << ","
-                << (ok ? fmt(*std::max_element(r.walls.begin(), r.walls.end()), 3) : "") << "," << (ok ? fmt(r.peak_rank, 1) : "")
-                << "," << (ok ? fmt(r.total, 1) : "") << "," << (ok ? fmt(r.sum_peaks, 1) : "") << ","
-                << (ok && r.budget ? fmt(over, 1) : "") << "," << (ok ? fmt(r.vps(), 0) : "") << "," << (ok ? std::to_string(r.tris) : "")
-                << "," << (ok ? std::to_string(r.out_bytes) : "") << "," << (r.cached >= 0 ? fmt(r.cached, 3) : "") << ","
+                << (ok ? fmt(*std::max_element(r.walls.begin(), r.walls.end()), 3) : "") << ","
+                << (ok ? fmt(r.peak_rank, 1) : "") << "," << (ok ? fmt(r.total, 1) : "") << ","
+                << (ok ? fmt(r.sum_peaks, 1) : "") << "," << (ok && r.budget ? fmt(over, 1) : "") << ","
+                << (ok ? fmt(r.vps(), 0) : "") << "," << (ok ? std::to_string(r.tris) : "") << ","
+                << (ok ? std::to_string(r.out_bytes) : "") << "," << (r.cached >= 0 ? fmt(r.cached, 3) : "") << ","
                 << check(r) << "," << r.status << ",\"" << r.command << "\"\n";
         }
         // Same volume, same iso, no sample tying it: every extraction must give
@@ -506,20 +543,26 @@ private:
             int same = 0;
             for (const auto& r : rows_)
                 if (r.volume == fe.volume && &r != &fe && !r.walls.empty()) {
-                    if (r.tris == fe.tris) ++same;
-                    else differ += " " + r.config + " np " + std::to_string(r.ranks) + " (" + std::to_string(r.tris) + ")";
+                    if (r.tris == fe.tris)
+                        ++same;
+                    else
+                        differ +=
+                            " " + r.config + " np " + std::to_string(r.ranks) + " (" + std::to_string(r.tris) + ")";
                 }
             if (differ.empty() && same == 0)
-                md << "Triangles on " << fe.volume << ": no isoscope run to compare with vtkFlyingEdges3D's " << fe.tris << ".\n";
+                md << "Triangles on " << fe.volume << ": no isoscope run to compare with vtkFlyingEdges3D's " << fe.tris
+                   << ".\n";
             else if (differ.empty())
                 md << "Triangles on " << fe.volume << ": all " << same << " isoscope runs give " << fe.tris
                    << ", the same as vtkFlyingEdges3D.\n";
             else
-                md << "Triangles on " << fe.volume << ": DIFFERENT from vtkFlyingEdges3D (" << fe.tris << "):" << differ << ".\n";
+                md << "Triangles on " << fe.volume << ": DIFFERENT from vtkFlyingEdges3D (" << fe.tris << "):" << differ
+                   << ".\n";
         }
         md << "\nCommands as run:\n\n";
         for (const auto& r : rows_)
-            if (!r.command.empty()) md << "- " << r.config << " " << r.volume << " np " << r.ranks << ": `" << r.command << "`\n";
+            if (!r.command.empty())
+                md << "- " << r.config << " " << r.volume << " np " << r.ranks << ": `" << r.command << "`\n";
         const std::string text = md.str();
         std::ofstream(out_ / "scale_bench.md") << text;
         std::cout << "\n" << text;
@@ -555,7 +598,8 @@ private:
             const std::string dat = (out_ / ("scale_series" + std::to_string(n++) + ".dat")).string();
             std::ofstream f(dat);
             for (const Row* r : rs)
-                f << r->ranks << " " << r->wall() << " " << r->vps() / 1e6 << " " << r->peak_rank << " " << r->total << "\n";
+                f << r->ranks << " " << r->wall() << " " << r->vps() / 1e6 << " " << r->peak_rank << " " << r->total
+                  << "\n";
             files.emplace_back(name, dat);
         }
         auto style = [](const std::string& title) {
@@ -568,27 +612,34 @@ private:
            << "set grid\nset xlabel 'ranks (mpirun -np; single process at 1)'\nset xtics 1\nset xrange [0.5:*]\n";
         const bool budget = a_.isoscope_args.find("{memory}") != std::string::npos;
         const std::string budget_note = budget ? "" : " (not passed: in-memory command)";
-        gp << "set output '" << (out_ / "scale_time.png").string() << "'\nset multiplot layout 1,2 title 'isoscope mesh: "
-           << (budget ? "out of core (budget " + std::to_string(a_.memory) + " MiB)" : "in memory") << " and MPI, iso " << a_.iso
-           << "; vtkFlyingEdges3D holds the whole volume'\n";
+        gp << "set output '" << (out_ / "scale_time.png").string()
+           << "'\nset multiplot layout 1,2 title 'isoscope mesh: "
+           << (budget ? "out of core (budget " + std::to_string(a_.memory) + " MiB)" : "in memory") << " and MPI, iso "
+           << a_.iso << "; vtkFlyingEdges3D holds the whole volume'\n";
         gp << "set title 'wall time (lower is better)'\nset ylabel 's'\nset yrange [0:*]\nplot ";
         for (std::size_t i = 0; i < files.size(); ++i)
-            gp << (i ? ", " : "") << "'" << files[i].second << "' using 1:2 " << style(files[i].first) << " title '" << files[i].first << "'";
+            gp << (i ? ", " : "") << "'" << files[i].second << "' using 1:2 " << style(files[i].first) << " title '"
+               << files[i].first << "'";
         gp << "\nset title 'throughput (higher is better)'\nset ylabel 'Mvoxel/s'\nplot ";
         for (std::size_t i = 0; i < files.size(); ++i)
-            gp << (i ? ", " : "") << "'" << files[i].second << "' using 1:3 " << style(files[i].first) << " title '" << files[i].first << "'";
+            gp << (i ? ", " : "") << "'" << files[i].second << "' using 1:3 " << style(files[i].first) << " title '"
+               << files[i].first << "'";
         gp << "\nunset multiplot\n";
-        gp << "set output '" << (out_ / "scale_memory.png").string() << "'\nset terminal pngcairo size 900,550 noenhanced\n"
+        gp << "set output '" << (out_ / "scale_memory.png").string()
+           << "'\nset terminal pngcairo size 900,550 noenhanced\n"
            << "set title 'peak resident memory per rank (solid) and total (dashed) vs the budget'\nset ylabel 'MiB'\n"
-           << "set yrange [0:*]\nplot " << a_.memory << " with lines lc 'black' lw 2 title 'budget " << a_.memory << " MiB" << budget_note << "', "
-           << a_.memory + a_.slack << " with lines lc 'black' dt 2 title 'budget + " << a_.slack << " MiB'";
+           << "set yrange [0:*]\nplot " << a_.memory << " with lines lc 'black' lw 2 title 'budget " << a_.memory
+           << " MiB" << budget_note << "', " << a_.memory + a_.slack << " with lines lc 'black' dt 2 title 'budget + "
+           << a_.slack << " MiB'";
         for (std::size_t i = 0; i < files.size(); ++i)
             gp << ", '" << files[i].second << "' using 1:4 " << style(files[i].first) << " lc " << i + 1 << " title '"
                << files[i].first << " per rank', '' using 1:5 with linespoints dt 2 lc " << i + 1 << " title 'total'";
         gp << "\n";
         gp.close();
-        if (std::system(("gnuplot '" + (out_ / "scale_bench.gp").string() + "'").c_str()) != 0) std::cerr << "gnuplot failed\n";
-        else std::cout << "wrote " << (out_ / "scale_time.png").string() << " and scale_memory.png\n";
+        if (std::system(("gnuplot '" + (out_ / "scale_bench.gp").string() + "'").c_str()) != 0)
+            std::cerr << "gnuplot failed\n";
+        else
+            std::cout << "wrote " << (out_ / "scale_time.png").string() << " and scale_memory.png\n";
     }
 
     Args a_;
@@ -617,34 +668,62 @@ int main(int argc, char** argv) {
                 usage(s + ": '" + v + "' is not a number");
             }
         };
-        if (s == "--quick") a.quick = true;
-        else if (s == "--out") a.out = next();
-        else if (s == "--data") a.data = next();
-        else if (s == "--sizes") for (const auto& w : split(next(), ',')) a.sizes.push_back(parse_size(w));
-        else if (s == "--ranks") for (const auto& w : split(next(), ',')) a.ranks.push_back(int(number(w)));
-        else if (s == "--reps") a.reps = int(number(next()));
-        else if (s == "--reps-large") a.reps_large = int(number(next()));
-        else if (s == "--warmup") a.warmup = int(number(next()));
-        else if (s == "--iso") a.iso = number(next());
-        else if (s == "--memory") a.memory = int(number(next()));
-        else if (s == "--slack") a.slack = int(number(next()));
-        else if (s == "--threads") a.threads = int(number(next()));
-        else if (s == "--isoscope") a.isoscope = next();
-        else if (s == "--mpirun") a.mpirun = next();
-        else if (s == "--isoscope-args") a.isoscope_args = next();
-        else if (s == "--mpirun-args") a.mpirun_args = next();
-        else if (s == "--isoscope-mpi-args") a.isoscope_mpi_args = next();
-        else if (s == "--no-single") a.single = false;
-        else if (s == "--no-mpi") a.mpi = false;
-        else if (s == "--no-fe") a.fe = false;
-        else if (s == "--fe-max-gib") a.fe_max_gib = number(next());
-        else if (s == "--cache") a.cache = next();
-        else if (s == "--timeout") a.timeout = number(next());
-        else if (s == "--keep-output") a.keep_output = true;
-        else if (s == "--generate-only") a.generate_only = true;
-        else if (s == "--one") a.one = next();
-        else if (s == "--in") a.in = next();
-        else usage("unknown option " + s);
+        if (s == "--quick")
+            a.quick = true;
+        else if (s == "--out")
+            a.out = next();
+        else if (s == "--data")
+            a.data = next();
+        else if (s == "--sizes")
+            for (const auto& w : split(next(), ',')) a.sizes.push_back(parse_size(w));
+        else if (s == "--ranks")
+            for (const auto& w : split(next(), ',')) a.ranks.push_back(int(number(w)));
+        else if (s == "--reps")
+            a.reps = int(number(next()));
+        else if (s == "--reps-large")
+            a.reps_large = int(number(next()));
+        else if (s == "--warmup")
+            a.warmup = int(number(next()));
+        else if (s == "--iso")
+            a.iso = number(next());
+        else if (s == "--memory")
+            a.memory = int(number(next()));
+        else if (s == "--slack")
+            a.slack = int(number(next()));
+        else if (s == "--threads")
+            a.threads = int(number(next()));
+        else if (s == "--isoscope")
+            a.isoscope = next();
+        else if (s == "--mpirun")
+            a.mpirun = next();
+        else if (s == "--isoscope-args")
+            a.isoscope_args = next();
+        else if (s == "--mpirun-args")
+            a.mpirun_args = next();
+        else if (s == "--isoscope-mpi-args")
+            a.isoscope_mpi_args = next();
+        else if (s == "--no-single")
+            a.single = false;
+        else if (s == "--no-mpi")
+            a.mpi = false;
+        else if (s == "--no-fe")
+            a.fe = false;
+        else if (s == "--fe-max-gib")
+            a.fe_max_gib = number(next());
+        else if (s == "--cache")
+            a.cache = next();
+        else if (s == "--timeout")
+            a.timeout = number(next());
+        else if (s == "--keep-output")
+            a.keep_output = true;
+        else if (s == "--generate-only")
+            a.generate_only = true;
+        else if (s == "--one")
+            a.one = next();
+        else if (s == "--in")
+            a.in = next();
+        else
+            usage("unknown option " + s);
     }
     if (a.cache != "warm" && a.cache != "cold") usage("--cache must be warm or cold");
     if (a.threads < 1 || a.memory < 1 || a.slack < 0 || a.warmup < 0 || a.reps_large < 1)
@@ -655,12 +734,13 @@ int main(int argc, char** argv) {
         if (a.one == "fe") return run_fe(a);
         if (!a.one.empty()) usage("unknown child mode " + a.one);
         // Quick: 256^3 (32 MiB), 1 and 2 ranks, one measured run: checks the harness in under a minute.
-        if (a.sizes.empty()) a.sizes = a.quick ? std::vector<std::array<std::int64_t, 3>>{{256, 256, 256}}
-                                               : std::vector<std::array<std::int64_t, 3>>{{1024, 1024, 1024}, {2048, 2048, 1024}};
+        if (a.sizes.empty())
+            a.sizes = a.quick ? std::vector<std::array<std::int64_t, 3>>{{256, 256, 256}}
+                              : std::vector<std::array<std::int64_t, 3>>{{1024, 1024, 1024}, {2048, 2048, 1024}};
         if (a.ranks.empty()) a.ranks = a.quick ? std::vector<int>{1, 2} : std::vector<int>{1, 2, 4};
         if (a.reps < 0) a.reps = a.quick ? 1 : 3;
         if (a.reps < 1) usage("--reps must be >= 1");
-        struct sigaction sa{};
+        struct sigaction sa {};
         sa.sa_handler = on_sigint;
         ::sigaction(SIGINT, &sa, nullptr);
         ::sigaction(SIGTERM, &sa, nullptr);

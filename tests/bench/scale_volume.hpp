@@ -55,9 +55,12 @@ struct ScaleVolumeParams {
     static constexpr int kVersion = 1;
 
     nlohmann::json to_json() const {
-        return {{"generator", "isoscope scale_volume"}, {"version", kVersion},
-                {"dims", {dims[0], dims[1], dims[2]}}, {"spacing_mm", spacing_mm},
-                {"seed", seed}, {"trabecular_period", trabecular_period}};
+        return {{"generator", "isoscope scale_volume"},
+                {"version", kVersion},
+                {"dims", {dims[0], dims[1], dims[2]}},
+                {"spacing_mm", spacing_mm},
+                {"seed", seed},
+                {"trabecular_period", trabecular_period}};
     }
     std::uint64_t voxels() const { return std::uint64_t(dims[0]) * std::uint64_t(dims[1]) * std::uint64_t(dims[2]); }
     std::string name() const {
@@ -69,7 +72,8 @@ struct ScaleVolumeParams {
 // affine is its RAS counterpart, written as both sform and qform).
 inline glm::dmat4 scale_volume_affine(const ScaleVolumeParams& p) {
     const glm::dvec3 sp(p.spacing_mm);
-    const glm::dvec3 origin = -0.5 * glm::dvec3(double(p.dims[0] - 1), double(p.dims[1] - 1), double(p.dims[2] - 1)) * sp;
+    const glm::dvec3 origin =
+        -0.5 * glm::dvec3(double(p.dims[0] - 1), double(p.dims[1] - 1), double(p.dims[2] - 1)) * sp;
     return make_affine(sp, origin);
 }
 
@@ -92,14 +96,18 @@ inline double hash_normal(std::uint64_t key) {
 // u, v, w in [-0.5, 0.5] (voxel centres).
 struct Anatomy {
     double ax = 0.44, ay = 0.38, az = 0.40; // body semi-axes
-    struct Tube { double u0, v0, au, av, fu, fv, r; };
-    struct Ball { double u, v, w, r; };
+    struct Tube {
+        double u0, v0, au, av, fu, fv, r;
+    };
+    struct Ball {
+        double u, v, w, r;
+    };
     std::vector<Tube> tubes;
     std::vector<Ball> balls;
     explicit Anatomy(unsigned seed) {
         std::mt19937 rng(seed);
         auto uni = [&] { return double(rng()) / 4294967296.0; }; // portable, unlike uniform_real_distribution
-        for (int i = 0; i < 8; ++i) // vessels: inside the inner region (rho < 0.55)
+        for (int i = 0; i < 8; ++i)                              // vessels: inside the inner region (rho < 0.55)
             tubes.push_back({(uni() - 0.5) * 0.30, (uni() - 0.5) * 0.25, 0.02 + 0.04 * uni(), 0.02 + 0.04 * uni(),
                              6.0 + 10.0 * uni(), 6.0 + 10.0 * uni(), 0.008 + 0.012 * uni()});
         for (int i = 0; i < 6; ++i)
@@ -115,17 +123,21 @@ inline void fill_slice(const ScaleVolumeParams& p, const Anatomy& a, std::int64_
     const double w = (double(k) + 0.5) / double(nz) - 0.5;
     const double qz = w / a.az;
     const double two_pi = 6.283185307179586;
-    const double sz = std::sin(two_pi * double(k) / p.trabecular_period), cz = std::cos(two_pi * double(k) / p.trabecular_period);
-    const double r_out = 0.80 + 0.02 * std::sin(9.0 * w); // cortical outer surface (normalized radius)
+    const double sz = std::sin(two_pi * double(k) / p.trabecular_period),
+                 cz = std::cos(two_pi * double(k) / p.trabecular_period);
+    const double r_out = 0.80 + 0.02 * std::sin(9.0 * w);   // cortical outer surface (normalized radius)
     const double r_mid = r_out - 0.06, r_in = r_out - 0.20; // cortical / cancellous / inner boundaries
     // Tube centres and the balls that cut this slice.
-    struct Disc { double u, v, r, value; };
+    struct Disc {
+        double u, v, r, value;
+    };
     std::vector<Disc> discs;
     for (const auto& t : a.tubes)
         discs.push_back({t.u0 + t.au * std::sin(t.fu * w), t.v0 + t.av * std::cos(t.fv * w), t.r, 450.0});
     for (const auto& b : a.balls)
         if (std::abs(w - b.w) < b.r) discs.push_back({b.u, b.v, std::sqrt(b.r * b.r - (w - b.w) * (w - b.w)), 2500.0});
-    const std::uint64_t slice_key = (std::uint64_t(p.seed) << 48) ^ (std::uint64_t(k) * std::uint64_t(ny) * std::uint64_t(nx));
+    const std::uint64_t slice_key =
+        (std::uint64_t(p.seed) << 48) ^ (std::uint64_t(k) * std::uint64_t(ny) * std::uint64_t(nx));
     tbb::parallel_for(std::int64_t(0), ny, [&](std::int64_t j) {
         std::int16_t* row = out + j * nx;
         const std::uint64_t row_key = slice_key + std::uint64_t(j) * std::uint64_t(nx);
@@ -150,7 +162,8 @@ inline void fill_slice(const ScaleVolumeParams& p, const Anatomy& a, std::int64_
                 if (rho2 >= r_mid * r_mid && rho2 < r_out * r_out) {
                     hu = 1200.0 + 30.0 * n;
                 } else if (rho2 >= r_in * r_in && rho2 < r_mid * r_mid) {
-                    const double g = sx[std::size_t(i)] * cy[std::size_t(j)] + sy[std::size_t(j)] * cz + sz * cx[std::size_t(i)];
+                    const double g =
+                        sx[std::size_t(i)] * cy[std::size_t(j)] + sy[std::size_t(j)] * cz + sz * cx[std::size_t(i)];
                     hu = 300.0 + 400.0 * g + 30.0 * n;
                 } else {
                     hu = 40.0 + 15.0 * n;
@@ -180,7 +193,8 @@ constexpr std::size_t kNiftiVoxOffset = 352; // NIfTI-1 single file: 348-byte he
 
 // Writes the volume to `path` (.nii), atomically (a temporary renamed into
 // place). Returns the CRC-32 of the data. Progress per slice; cancellable.
-inline std::uint32_t write_scale_volume(const ScaleVolumeParams& p, const std::string& path, const ProgressFn& progress = {}) {
+inline std::uint32_t write_scale_volume(const ScaleVolumeParams& p, const std::string& path,
+                                        const ProgressFn& progress = {}) {
     for (auto d : p.dims)
         if (d < 2 || d > 32767) throw Error(path, "scale volume dimensions must be 2..32767 (NIfTI-1)");
     if (p.trabecular_period < 2) throw Error(path, "trabecular period must be >= 2 voxels");
@@ -202,7 +216,10 @@ inline std::uint32_t write_scale_volume(const ScaleVolumeParams& p, const std::s
         const int dims[8] = {3, int(nx), int(ny), int(nz), 1, 1, 1, 1};
         nifti_image* nim = nifti_make_new_nim(dims, DT_INT16, 0); // header only: no data buffer
         if (!nim) throw Error(path, "cannot create a NIfTI header");
-        struct Free { nifti_image* n; ~Free() { nifti_image_free(n); } } free_nim{nim};
+        struct Free {
+            nifti_image* n;
+            ~Free() { nifti_image_free(n); }
+        } free_nim{nim};
         const glm::dmat4 ras = ras_to_lps(scale_volume_affine(p)); // the flip is its own inverse
         nim->dx = nim->pixdim[1] = float(p.spacing_mm);
         nim->dy = nim->pixdim[2] = float(p.spacing_mm);
@@ -222,7 +239,12 @@ inline std::uint32_t write_scale_volume(const ScaleVolumeParams& p, const std::s
         // Header only, file left open (write_opts 2: no data, leave open).
         znzFile fp = nifti_image_write_hdr_img2(nim, 2, "wb", nullptr, nullptr);
         if (znz_isnull(fp)) throw Error(path, "cannot write the NIfTI header");
-        struct Close { znzFile f; ~Close() { if (!znz_isnull(f)) znzclose(f); } } close_fp{fp};
+        struct Close {
+            znzFile f;
+            ~Close() {
+                if (!znz_isnull(f)) znzclose(f);
+            }
+        } close_fp{fp};
         if (znzseek(fp, long(nim->iname_offset), SEEK_SET) != 0 || nim->iname_offset != int(detail::kNiftiVoxOffset))
             throw Error(path, "unexpected NIfTI data offset " + std::to_string(nim->iname_offset));
         std::vector<std::int16_t> slice(std::size_t(nx * ny));
@@ -262,7 +284,8 @@ inline std::string ensure_scale_volume(const ScaleVolumeParams& p, const std::st
         try {
             nlohmann::json j;
             std::ifstream(side) >> j;
-            if (j.at("params") == p.to_json() && j.at("bytes").get<std::uint64_t>() == size && fs::file_size(path) == size &&
+            if (j.at("params") == p.to_json() && j.at("bytes").get<std::uint64_t>() == size &&
+                fs::file_size(path) == size &&
                 j.at("header_crc32").get<std::uint32_t>() == detail::crc_of_prefix(path, detail::kNiftiVoxOffset)) {
                 reused = true;
                 return path;
@@ -274,7 +297,8 @@ inline std::string ensure_scale_volume(const ScaleVolumeParams& p, const std::st
     if (fs::exists(path, ec)) {
         // Only a file that a sidecar of ours names is replaced (a different
         // generator version or parameters); anything else is the user's.
-        if (!fs::exists(side, ec)) throw Error(path, "exists and was not written by scale_bench (no sidecar): not overwritten");
+        if (!fs::exists(side, ec))
+            throw Error(path, "exists and was not written by scale_bench (no sidecar): not overwritten");
         fs::remove(side, ec);
     }
     const auto space = fs::space(dir, ec);

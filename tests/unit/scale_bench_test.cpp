@@ -226,7 +226,8 @@ TEST(ScaleVolume, MemoryIsOneSliceNotTheVolume) {
     reset_peak_rss();
     write_scale_volume(p, (dir / "ct.nii").string());
     const std::size_t peak = peak_rss();
-    EXPECT_LT(peak > base ? peak - base : 0, 8 * kMiB) << "base " << base / kMiB << " MiB, peak " << peak / kMiB << " MiB";
+    EXPECT_LT(peak > base ? peak - base : 0, 8 * kMiB)
+        << "base " << base / kMiB << " MiB, peak " << peak / kMiB << " MiB";
     EXPECT_EQ(fs::file_size(dir / "ct.nii"), 352u + p.voxels() * 2);
 }
 
