@@ -559,6 +559,15 @@ private:
                 md << "Triangles on " << fe.volume << ": DIFFERENT from vtkFlyingEdges3D (" << fe.tris << "):" << differ
                    << ".\n";
         }
+        int pass = 0, fail = 0, failed_runs = 0;
+        for (const auto& r : rows_) {
+            pass += check(r) == "PASS";
+            fail += check(r) == "FAIL";
+            failed_runs += r.walls.empty();
+        }
+        md << "\nMemory check (peak RSS of every rank <= " << a_.memory << " + " << a_.slack << " MiB): " << pass
+           << " PASS, " << fail << " FAIL" << (pass + fail == 0 ? " (no run carried a budget)" : "") << "; "
+           << failed_runs << " configuration(s) did not run to the end.\n";
         md << "\nCommands as run:\n\n";
         for (const auto& r : rows_)
             if (!r.command.empty())
