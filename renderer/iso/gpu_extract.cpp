@@ -68,6 +68,7 @@ ChunkedSurface GpuExtractor::extract(double iso, GpuExtractStats* stats) {
         glProgramUniformMatrix4dv(p.id(), p.uniform("index_to_lps"), 1, GL_FALSE, &v.index_to_lps[0][0]);
         glProgramUniformMatrix3dv(p.id(), p.uniform("normal_matrix"), 1, GL_FALSE, &nm[0][0]);
         glProgramUniform1d(p.id(), p.uniform("iso"), iso);
+        glProgramUniform1d(p.id(), p.uniform("edge_margin"), kEdgeMargin); // the CPU's clamp of t (extract.hpp)
         glProgramUniform3i(p.id(), p.uniform("dims"), int(v.dims[0]), int(v.dims[1]), int(v.dims[2]));
         glProgramUniform1i(p.id(), p.uniform("chunk_size"), C);
         glProgramUniform1i(p.id(), p.uniform("flip"), glm::determinant(lin) < 0 ? 1 : 0);
