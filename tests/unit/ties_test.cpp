@@ -41,6 +41,7 @@
 
 #include "io/volume_io.hpp"
 #include "measure_phantoms.hpp"
+#include "renderer/iso/measure.hpp"
 #include "test_util.hpp"
 
 using namespace iso;
@@ -434,6 +435,12 @@ TEST(Ties, BundledCtAt500And1150) {
         EXPECT_EQ(m.triangles.size(), fe_tris) << "the same triangles as Flying Edges, none dropped";
         EXPECT_EQ(m.positions.size(), fe_points) << "one vertex per cut edge, as Flying Edges";
         EXPECT_LE(worst, kMargin + 1e-5) << "no vertex moves by more than the margin (1e-5: float rounding)";
+        // Components, and the tiny ones (an isolated tied sample gives an
+        // octahedron 1/128 voxel across: area ~1e-3 mm² here).
+        const auto meas = measure_surface(m);
+        std::size_t tiny = 0;
+        for (const auto& part : meas.components) tiny += part.area_mm2 < 0.01;
+        std::printf("headsq iso %g: %zu components (%zu with area < 0.01 mm2)\n", iso, meas.components.size(), tiny);
         std::printf("headsq iso %g: %zu triangles, %zu vertices, area %.2f mm2, volume %.1f mm3, %zu ties, "
                     "edges used > 2 times %zu, interior edges not 2 %zu, non-manifold vertices %zu, zero-area %zu, "
                     "extract %.1f ms (median of 5); Flying Edges %zu triangles; %zu vertices on samples; margin moved %zu of %zu vertices (%zu on tie edges), "
