@@ -97,7 +97,7 @@ ChunkedSurface GpuExtractor::extract(double iso, GpuExtractStats* stats) {
             ci.offs[0] = std::uint32_t(samples.size());
             ci.offs[1] = slot_total;
             const std::uint32_t np = std::uint32_t(ci.np[0] * ci.np[1] * ci.np[2]);
-            slot_total += 4 * np;
+            slot_total += 3 * np; // one slot per edge along x/y/z
             max_pts = std::max(max_pts, np);
             max_cells = std::max(max_cells, std::uint32_t((ci.np[0] - 1) * (ci.np[1] - 1) * (ci.np[2] - 1)));
             // The halo block, NaN/Inf substituted as on the CPU.
@@ -140,8 +140,8 @@ ChunkedSurface GpuExtractor::extract(double iso, GpuExtractStats* stats) {
             return std::make_pair(base, n);
         };
         counts.clear_u32(0);
-        run(0, 4 * max_pts);
-        run(1, 4 * max_pts);
+        run(0, 3 * max_pts);
+        run(1, 3 * max_pts);
         std::uint32_t nverts = 0;
         auto [vbase, vcount] = bases(&nverts);
         for (std::size_t b = 0; b < nb; ++b) info[b].offs[2] = vbase[b];
@@ -153,7 +153,7 @@ ChunkedSurface GpuExtractor::extract(double iso, GpuExtractStats* stats) {
         keys.bind_base(GL_SHADER_STORAGE_BUFFER, 6);
         border.bind_base(GL_SHADER_STORAGE_BUFFER, 7);
         counts.clear_u32(0);
-        run(2, 4 * max_pts);
+        run(2, 3 * max_pts);
         counts.clear_u32(0);
         run(3, max_cells);
         std::uint32_t ntris = 0;

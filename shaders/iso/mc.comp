@@ -53,7 +53,7 @@ float S(ivec3 g) {
     return samples[ch.offs.x + uint(b.x + ch.bn.x * (b.y + ch.bn.y * b.z))];
 }
 bool inside(ivec3 g) { return double(S(g)) >= iso; }
-uint slot_index(ivec3 l, int k) { return ch.offs.y + uint(4 * (l.x + ch.np.x * (l.y + ch.np.y * l.z)) + k); }
+uint slot_index(ivec3 l, int k) { return ch.offs.y + uint(3 * (l.x + ch.np.x * (l.y + ch.np.y * l.z)) + k); }
 
 dvec3 gradient(ivec3 g) {
     dvec3 r;
@@ -70,7 +70,7 @@ dvec3 gradient(ivec3 g) {
 }
 
 // The slot whose vertex lies on edge (l, axis) of the chunk lattice: every
-// cut edge has its own (slot 3 of a sample is unused since issue 16).
+// cut edge has its own (issue 16: no slot for a vertex on a sample).
 uint vertex_slot(ivec3 l, int axis) { return slot_index(l, axis); }
 
 bool on_border(int p, int a) { return p % chunk_size == 0 && p > 0 && p < dims[a] - 1; }
@@ -82,13 +82,12 @@ void main() {
     const uint npts = uint(ch.np.x * ch.np.y * ch.np.z);
 
 #if PASS == 1 || PASS == 2 || PASS == 3
-    // Items are (sample, k): k 0..2 edge along x/y/z, 3 unused.
-    if (item >= npts * 4u) return;
-    const int k = int(item % 4u);
-    const uint p = item / 4u;
+    // Items are (sample, k): k 0..2 the edge along x/y/z.
+    if (item >= npts * 3u) return;
+    const int k = int(item % 3u);
+    const uint p = item / 3u;
     const ivec3 l = ivec3(int(p % uint(ch.np.x)), int((p / uint(ch.np.x)) % uint(ch.np.y)), int(p / uint(ch.np.x * ch.np.y)));
 #if PASS == 1
-    if (k == 3) return;
     ivec3 e = ivec3(0); e[k] = 1;
     if (l[k] + 1 >= ch.np[k]) return;
     const ivec3 g = ch.p0.xyz + l;
