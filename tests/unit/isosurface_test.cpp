@@ -118,7 +118,8 @@ std::vector<Tri> canonical(const Mesh& m) {
     return out;
 }
 
-// Edges used by other than exactly two triangles in opposite directions.
+// Edges used by other than exactly two triangles in opposite directions
+// (an edge used twice in each direction, a pinch, counts too: issue 16).
 std::size_t bad_edges(const Mesh& m) {
     std::map<std::pair<std::uint32_t, std::uint32_t>, int> directed;
     for (const auto& t : m.triangles)
@@ -127,7 +128,7 @@ std::size_t bad_edges(const Mesh& m) {
     for (const auto& [e, n] : directed) {
         auto it = directed.find({e.second, e.first});
         const int back = it == directed.end() ? 0 : it->second;
-        if (n != back) ++bad;
+        if (n != 1 || back != 1) ++bad;
     }
     return bad;
 }
