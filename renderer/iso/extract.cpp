@@ -73,7 +73,7 @@ struct Scratch {
     std::vector<std::byte> block;     // samples of the chunk plus a one-sample halo
     std::vector<std::uint8_t> inside; // per chunk sample
     std::vector<std::uint8_t> cols;   // column codes of one cell row
-    std::vector<std::uint32_t> slots; // per chunk sample x 4: vertex on the +x/+y/+z edge, or at the sample
+    std::vector<std::uint32_t> slots; // per chunk sample x 3: vertex on the +x/+y/+z edge
     std::vector<std::uint32_t> touched; // slots written for the current chunk (reset afterwards)
     ChunkMesh staging;                  // grows once per thread; chunks get exact-size copies
     std::size_t bytes() const {
@@ -215,64 +215,36 @@ void run_chunk(const Block<T>& b, const ChunkGeom& g, const Frame& f, const Cls&
             for (std::int64_t x = 0; x < nx; ++x) in[x] = cls.inside(double(row[x])) ? 1 : 0;
         }
     // Slots stay kNone between chunks: only the ones written are reset.
-    if (s.slots.size() < npts * 4) s.slots.assign(npts * 4, kNone);
+    if (s.slots.size() < npts * 3) s.slots.assign(npts * 3, kNone);
     s.touched.clear();
     s.cols.resize(std::size_t(nx));
 
     auto lin = [&](std::int64_t x, std::int64_t y, std::int64_t z) { return std::size_t(x + nx * (y + ny * z)); };
 
+    // One vertex per cut edge (issue 16: also where the edge ends on a tied
+    // sample), at t clamped to [kEdgeMargin, 1 - kEdgeMargin] (extract.hpp).
     auto make_vertex = [&](std::int64_t lx, std::int64_t ly, std::int64_t lz, int axis) -> std::uint32_t {
         const std::size_t sp = lin(lx, ly, lz);
-        std::uint32_t& slot = s.slots[sp * 4 + axis];
+        std::uint32_t& slot = s.slots[sp * 3 + std::size_t(axis)];
         if (slot != kNone) return slot;
-        s.touched.push_back(std::uint32_t(sp * 4 + axis));
-        std::int64_t ex = lx + (axis == 0), ey = ly + (axis == 1), ez = lz + (axis == 2);
+        s.touched.push_back(std::uint32_t(sp * 3 + std::size_t(axis)));
         const std::int64_t gx = g.p0[0] + lx, gy = g.p0[1] + ly, gz = g.p0[2] + lz;
         const double s0 = double(b.at(gx, gy, gz));
         const double s1 = double(b.at(gx + (axis == 0), gy + (axis == 1), gz + (axis == 2)));
-        const double t = cls.t(s0, s1);
-        // A tie puts the vertex on a sample: one vertex per sample, shared by every cut edge ending there.
-        int point_axis = -1;
-        std::size_t point_lin = 0;
-        std::int64_t px = gx, py = gy, pz = gz;
-        if (t <= 0.0) {
-            point_axis = 3;
-            point_lin = sp;
-        } else if (t >= 1.0) {
-            point_axis = 3;
-            point_lin = lin(ex, ey, ez);
-            px = gx + (axis == 0);
-            py = gy + (axis == 1);
-            pz = gz + (axis == 2);
-        }
-        if (point_axis == 3) {
-            std::uint32_t& pslot = s.slots[point_lin * 4 + 3];
-            if (pslot != kNone) return slot = pslot;
-        }
+        // The edge is cut, so s0 != s1 and t is finite; it is 0 or 1 at a tie.
+        const double t = std::clamp(cls.t(s0, s1), kEdgeMargin, 1.0 - kEdgeMargin);
         const std::uint32_t id = std::uint32_t(out.positions.size());
-        glm::dvec3 ip, n(0.0);
-        std::uint64_t key;
-        bool border;
-        if (point_axis == 3) {
-            ip = glm::dvec3(px, py, pz);
-            key = 4 * std::uint64_t(px + f.dims[0] * (py + f.dims[1] * pz)) + 3;
-            border = on_border(f, px, 0) || on_border(f, py, 1) || on_border(f, pz, 2);
-            if (f.normals) n = gradient(b, f, cls, px, py, pz);
-            s.slots[point_lin * 4 + 3] = id;
-            s.touched.push_back(std::uint32_t(point_lin * 4 + 3));
-        } else {
-            ip = glm::dvec3(gx, gy, gz);
-            ip[axis] += t;
-            key = 4 * std::uint64_t(gx + f.dims[0] * (gy + f.dims[1] * gz)) + std::uint64_t(axis);
-            const std::int64_t gp[3] = {gx, gy, gz};
-            border = false;
-            for (int a = 0; a < 3; ++a)
-                if (a != axis && on_border(f, gp[a], a)) border = true;
-            if (f.normals) {
-                const glm::dvec3 g0 = gradient(b, f, cls, gx, gy, gz);
-                const glm::dvec3 g1 = gradient(b, f, cls, gx + (axis == 0), gy + (axis == 1), gz + (axis == 2));
-                n = g0 + t * (g1 - g0);
-            }
+        glm::dvec3 ip(gx, gy, gz), n(0.0);
+        ip[axis] += t;
+        const std::uint64_t key = 4 * std::uint64_t(gx + f.dims[0] * (gy + f.dims[1] * gz)) + std::uint64_t(axis);
+        const std::int64_t gp[3] = {gx, gy, gz};
+        bool border = false;
+        for (int a = 0; a < 3; ++a)
+            if (a != axis && on_border(f, gp[a], a)) border = true;
+        if (f.normals) {
+            const glm::dvec3 g0 = gradient(b, f, cls, gx, gy, gz);
+            const glm::dvec3 g1 = gradient(b, f, cls, gx + (axis == 0), gy + (axis == 1), gz + (axis == 2));
+            n = g0 + t * (g1 - g0);
         }
         const glm::dvec3 w = glm::dvec3(f.m * glm::dvec4(ip, 1.0));
         out.positions.emplace_back(w);
@@ -311,7 +283,6 @@ void run_chunk(const Block<T>& b, const ChunkGeom& g, const Frame& f, const Cls&
                         const auto& e = tab.edges[std::size_t(te[std::size_t(3 * t + k)])];
                         v[k] = make_vertex(x + e.dx, y + e.dy, z + e.dz, e.axis);
                     }
-                    if (v[0] == v[1] || v[1] == v[2] || v[0] == v[2]) continue; // collapsed by a tie
                     if (f.flip) std::swap(v[1], v[2]);
                     out.triangles.push_back({v[0], v[1], v[2]});
                 }

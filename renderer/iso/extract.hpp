@@ -16,11 +16,16 @@
 // negated world-space gradient (central differences, one-sided at the volume
 // border), transformed with the inverse transpose of the affine's linear part.
 //
-// Ties (sample == iso): the vertex of every cut edge that ends on such a
-// sample is that sample's position; these are merged into one vertex per
-// sample and triangles that collapse are dropped, so ties produce neither
-// duplicate vertices nor zero-area triangles. NaN samples are outside;
-// +/-Inf are clamped to the finite range.
+// Ties (sample == iso; issue 16): a tied sample is inside, like any sample
+// >= iso, and every cut edge has its own vertex, also an edge that ends on a
+// tied sample. The surface is then the marching-cubes surface of a field in
+// which the tied samples are raised by an infinitesimal amount: its topology
+// is that of a generic field, a 2-manifold (open only at the volume border),
+// with no pinches. Every vertex is kept strictly inside its edge: t is
+// clamped to [kEdgeMargin, 1 - kEdgeMargin] on every edge (ties and near
+// ties alike), so no two vertices coincide and no triangle is degenerate,
+// also after the positions are rounded to float (see kEdgeMargin for the
+// cost). NaN samples are outside; +/-Inf are clamped to the finite range.
 #pragma once
 
 #include <array>
@@ -36,6 +41,23 @@
 #include "io/volume.hpp"
 
 namespace iso {
+
+// Every vertex lies at t in [kEdgeMargin, 1 - kEdgeMargin] along its edge, in
+// units of that edge (one voxel along the edge's axis). Without it a tie
+// (t = 0 or 1) would put the vertices of all the cut edges that meet at the
+// tied sample onto the sample: duplicate vertices and zero-area triangles, or,
+// merged, pinches (edges shared by four triangles). Three points strictly
+// inside three distinct edges of a cube are never collinear, so with the
+// margin no triangle is degenerate. 1/128 (exact in binary, so CPU and GPU
+// agree bit for bit) keeps vertices apart after the float rounding of the
+// stored LPS positions: 1/128 of a 0.05 mm voxel is 3.9e-4 mm, 13 float steps
+// at 300 mm from the origin (where floats are 3.05e-5 mm apart).
+// Cost: a vertex whose exact t is below the margin (or above 1 - margin) moves
+// along its edge by at most 1/128 voxel. On the bundled CT (headsq, 3.2 x 3.2
+// x 1.5 mm) it moves 1.2% of the vertices at iso 500 and 1.7% at 1150, by at
+// most 0.025 mm (docs/isosurface.md, "Ties"; tests/unit/ties_test.cpp).
+// Label surfaces (t = 0.5) are unaffected.
+inline constexpr double kEdgeMargin = 1.0 / 128.0;
 
 struct ExtractOptions {
     int chunk_size = 32;   // cells per chunk side; see docs/isosurface.md for the sweep behind it
@@ -102,7 +124,9 @@ struct ChunkMesh {
     // Vertices that lie on a face shared with another chunk: (global key, local index).
     std::vector<std::pair<std::uint64_t, std::uint32_t>> border;
     // With ExtractOptions::keep_keys: every vertex's key, 4 * (linear index of
-    // its edge's first sample) + axis (0..2), or + 3 for a vertex on a sample.
+    // its edge's first sample) + axis (0..2). Every vertex lies on exactly one
+    // edge, strictly inside it; since issue 16 there is no axis 3 (a vertex on
+    // a sample, shared by the edges tied there).
     std::vector<std::uint64_t> keys;
 };
 
@@ -155,8 +179,9 @@ private:
 };
 
 // Welds a chunked surface into one indexed mesh: border vertices merged by
-// key, collapsed triangles dropped, zero-gradient normals replaced by the
-// area-weighted face normal.
+// key, zero-gradient normals replaced by the area-weighted face normal. (A
+// triangle that collapses is dropped, which no longer happens: every cut edge
+// has its own vertex.)
 Mesh weld(const ChunkedSurface& s, int threads = 0);
 
 // Label maps: one surface per label, all in one pass over the chunks. Each

@@ -68,6 +68,7 @@ ChunkedSurface GpuExtractor::extract(double iso, GpuExtractStats* stats) {
         glProgramUniformMatrix4dv(p.id(), p.uniform("index_to_lps"), 1, GL_FALSE, &v.index_to_lps[0][0]);
         glProgramUniformMatrix3dv(p.id(), p.uniform("normal_matrix"), 1, GL_FALSE, &nm[0][0]);
         glProgramUniform1d(p.id(), p.uniform("iso"), iso);
+        glProgramUniform1d(p.id(), p.uniform("edge_margin"), kEdgeMargin); // the CPU's clamp of t (extract.hpp)
         glProgramUniform3i(p.id(), p.uniform("dims"), int(v.dims[0]), int(v.dims[1]), int(v.dims[2]));
         glProgramUniform1i(p.id(), p.uniform("chunk_size"), C);
         glProgramUniform1i(p.id(), p.uniform("flip"), glm::determinant(lin) < 0 ? 1 : 0);
@@ -96,7 +97,7 @@ ChunkedSurface GpuExtractor::extract(double iso, GpuExtractStats* stats) {
             ci.offs[0] = std::uint32_t(samples.size());
             ci.offs[1] = slot_total;
             const std::uint32_t np = std::uint32_t(ci.np[0] * ci.np[1] * ci.np[2]);
-            slot_total += 4 * np;
+            slot_total += 3 * np; // one slot per edge along x/y/z
             max_pts = std::max(max_pts, np);
             max_cells = std::max(max_cells, std::uint32_t((ci.np[0] - 1) * (ci.np[1] - 1) * (ci.np[2] - 1)));
             // The halo block, NaN/Inf substituted as on the CPU.
@@ -139,8 +140,8 @@ ChunkedSurface GpuExtractor::extract(double iso, GpuExtractStats* stats) {
             return std::make_pair(base, n);
         };
         counts.clear_u32(0);
-        run(0, 4 * max_pts);
-        run(1, 4 * max_pts);
+        run(0, 3 * max_pts);
+        run(1, 3 * max_pts);
         std::uint32_t nverts = 0;
         auto [vbase, vcount] = bases(&nverts);
         for (std::size_t b = 0; b < nb; ++b) info[b].offs[2] = vbase[b];
@@ -152,7 +153,7 @@ ChunkedSurface GpuExtractor::extract(double iso, GpuExtractStats* stats) {
         keys.bind_base(GL_SHADER_STORAGE_BUFFER, 6);
         border.bind_base(GL_SHADER_STORAGE_BUFFER, 7);
         counts.clear_u32(0);
-        run(2, 4 * max_pts);
+        run(2, 3 * max_pts);
         counts.clear_u32(0);
         run(3, max_cells);
         std::uint32_t ntris = 0;

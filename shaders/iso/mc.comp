@@ -2,9 +2,10 @@
 // GPU marching cubes over a batch of chunks (renderer/iso/gpu_extract.cpp).
 // Same conventions as the CPU path (renderer/iso/extract.hpp): a sample >= iso
 // is inside, t = (iso - s0) / (s1 - s0) in double precision from the edge's
-// lower-index end, a tie (t <= 0 or t >= 1) puts the vertex on the sample and
-// shares it, VTK's MC table, world = index_to_lps * index, normals = -world
-// gradient. One source, five passes selected by PASS:
+// lower-index end, clamped to [edge_margin, 1 - edge_margin] on every edge (a
+// tie gets its own vertex per cut edge, just inside the edge: issue 16,
+// extract.hpp kEdgeMargin), VTK's MC table, world = index_to_lps * index,
+// normals = -world gradient. One source, five passes selected by PASS:
 //   1 MARK         per chunk sample and axis: mark the vertex slot a cut edge needs
 //   2 COUNT_VERTS  per slot: count marked slots per chunk
 //   3 WRITE_VERTS  per slot: number the vertex and write it
@@ -39,6 +40,7 @@ layout(std430, binding = 10) readonly buffer EdgeTable { ivec4 edges[12]; }; // 
 uniform dmat4 index_to_lps;
 uniform dmat3 normal_matrix;
 uniform double iso;
+uniform double edge_margin; // kEdgeMargin (1/128, exact in double)
 uniform ivec3 dims;
 uniform int chunk_size;
 uniform int flip;
@@ -51,7 +53,7 @@ float S(ivec3 g) {
     return samples[ch.offs.x + uint(b.x + ch.bn.x * (b.y + ch.bn.y * b.z))];
 }
 bool inside(ivec3 g) { return double(S(g)) >= iso; }
-uint slot_index(ivec3 l, int k) { return ch.offs.y + uint(4 * (l.x + ch.np.x * (l.y + ch.np.y * l.z)) + k); }
+uint slot_index(ivec3 l, int k) { return ch.offs.y + uint(3 * (l.x + ch.np.x * (l.y + ch.np.y * l.z)) + k); }
 
 dvec3 gradient(ivec3 g) {
     dvec3 r;
@@ -67,16 +69,9 @@ dvec3 gradient(ivec3 g) {
     return r;
 }
 
-// The slot whose vertex lies on edge (l, axis) of the chunk lattice.
-uint vertex_slot(ivec3 l, int axis) {
-    ivec3 g = ch.p0.xyz + l;
-    ivec3 e = ivec3(0); e[axis] = 1;
-    precise double s0 = double(S(g)), s1 = double(S(g + e));
-    precise double t = (iso - s0) / (s1 - s0);
-    if (t <= 0.0) return slot_index(l, 3);
-    if (t >= 1.0) return slot_index(l + e, 3);
-    return slot_index(l, axis);
-}
+// The slot whose vertex lies on edge (l, axis) of the chunk lattice: every
+// cut edge has its own (issue 16: no slot for a vertex on a sample).
+uint vertex_slot(ivec3 l, int axis) { return slot_index(l, axis); }
 
 bool on_border(int p, int a) { return p % chunk_size == 0 && p > 0 && p < dims[a] - 1; }
 
@@ -87,13 +82,12 @@ void main() {
     const uint npts = uint(ch.np.x * ch.np.y * ch.np.z);
 
 #if PASS == 1 || PASS == 2 || PASS == 3
-    // Items are (sample, k): k 0..2 edge along x/y/z, 3 the sample itself.
-    if (item >= npts * 4u) return;
-    const int k = int(item % 4u);
-    const uint p = item / 4u;
+    // Items are (sample, k): k 0..2 the edge along x/y/z.
+    if (item >= npts * 3u) return;
+    const int k = int(item % 3u);
+    const uint p = item / 3u;
     const ivec3 l = ivec3(int(p % uint(ch.np.x)), int((p / uint(ch.np.x)) % uint(ch.np.y)), int(p / uint(ch.np.x * ch.np.y)));
 #if PASS == 1
-    if (k == 3) return;
     ivec3 e = ivec3(0); e[k] = 1;
     if (l[k] + 1 >= ch.np[k]) return;
     const ivec3 g = ch.p0.xyz + l;
@@ -110,13 +104,10 @@ void main() {
     dvec3 ip = dvec3(g);
     dvec3 n = dvec3(0.0);
     bool b = false;
-    if (k == 3) {
-        if (want_normals != 0) n = gradient(g);
-        b = on_border(g.x, 0) || on_border(g.y, 1) || on_border(g.z, 2);
-    } else {
+    {
         ivec3 e = ivec3(0); e[k] = 1;
         precise double s0 = double(S(g)), s1 = double(S(g + e));
-        precise double t = (iso - s0) / (s1 - s0);
+        precise double t = clamp((iso - s0) / (s1 - s0), edge_margin, 1.0 - edge_margin);
         ip[k] += t;
         if (want_normals != 0) {
             dvec3 g0 = gradient(g), g1 = gradient(g + e);
@@ -169,7 +160,6 @@ void main() {
             ivec4 e = edges[tri_edges[cs * 16 + 3 * t + j]];
             vid[j] = slots[vertex_slot(c + e.xyz, e.w)] - 2u;
         }
-        if (vid[0] == vid[1] || vid[1] == vid[2] || vid[0] == vid[2]) continue;
 #if PASS == 4
         atomicAdd(counts[chunk], 1u);
 #else
