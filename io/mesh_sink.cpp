@@ -27,6 +27,7 @@
 #include <vtkPolyData.h>
 #include <vtkStringArray.h>
 #include <vtkXMLPPolyDataWriter.h>
+#include <vtkXMLPolyDataWriter.h>
 
 #include "io/atomic_file.hpp"
 #include "io/vtk_util.hpp"
@@ -170,6 +171,13 @@ vtkSmartPointer<vtkPolyData> piece_polydata(const Mesh& m, bool normals) {
     return pd;
 }
 
+// Pieces are written as they come with vtkXMLPolyDataWriter under the names
+// vtkXMLPPolyDataWriter gives them (NAME_<i>.vtp beside NAME.pvtp); at the end
+// vtkXMLPPolyDataWriter writes the summary. In one process it lists only the
+// non-empty pieces its own Write() wrote, so it is run on a one-point
+// stand-in with the pieces' arrays in a scratch folder, and only its summary
+// is kept. (With an MPI controller each rank's writer writes its own pieces
+// and rank 0 the summary: the MPI path uses that directly.)
 class PvtpSink final : public SinkBase {
 public:
     using SinkBase::SinkBase;
@@ -186,89 +194,73 @@ public:
             fs::create_directory(dir);
             dirs_.push_back(dir);
         }
-        held_.assign(paths_.size(), MeshPiece{});
-        have_.assign(paths_.size(), false);
+        written_.assign(paths_.size(), 0);
     }
     void piece(MeshPiece&& p) override {
         if (dirs_.empty()) throw Error("streaming", "piece before begin");
         auto& st = state(p);
         std::vector<std::uint8_t> is_new;
         st.map(p, is_new);
-        // The last piece is held back: it is written with the summary.
-        const std::size_t s = p.surface;
-        if (have_[s]) write(s, held_[s], false);
-        held_[s] = std::move(p);
-        held_[s].lower.clear();
-        held_[s].upper.clear();
-        have_[s] = true;
+        write(p.surface, p.index, p.mesh);
     }
     void finish() override {
         for (std::size_t s = 0; s < paths_.size(); ++s) {
-            // Pieces with no piece() call (skipped slabs) are written empty;
-            // the last piece carries the summary.
-            if (have_[s] && held_[s].index + 1 < pieces_) {
-                write(s, held_[s], false);
-                have_[s] = false;
-            }
-            if (!have_[s]) {
-                held_[s] = MeshPiece{};
-                held_[s].index = pieces_ - 1;
-            }
-            write(s, held_[s], true);
-            held_[s] = MeshPiece{};
-            // Pieces first, the summary last.
+            if (pieces_ > 0) write(s, pieces_ - 1, Mesh{}, written_[s] == pieces_); // trailing empty pieces
             const fs::path dest(paths_[s]);
             const std::string stem = dest.stem().string();
-            for (const auto& e : fs::directory_iterator(dirs_[s]))
-                if (e.path().extension() == ".vtp") fs::rename(e.path(), dest.parent_path() / e.path().filename());
-            fs::rename(dirs_[s] / (stem + ".pvtp"), dest);
+            // The summary, from a stand-in in a scratch folder inside ours.
+            const fs::path scratch = dirs_[s] / "summary";
+            fs::create_directory(scratch);
+            Mesh one;
+            one.positions = {glm::vec3(0.0f)};
+            if (normals_) one.normals = {glm::vec3(0.0f, 0.0f, 1.0f)};
+            auto pd = piece_polydata(one, normals_);
+            vtkNew<vtkXMLPPolyDataWriter> w;
+            vtkNew<VtkMessages> msgs;
+            msgs->watch(w);
+            const std::string file = (scratch / (stem + ".pvtp")).string();
+            w->SetInputData(pd);
+            w->SetFileName(file.c_str());
+            w->SetNumberOfPieces(int(pieces_));
+            w->SetStartPiece(0);
+            w->SetEndPiece(int(pieces_) - 1);
+            w->SetDataModeToAppended();
+            w->SetCompressorTypeToZLib();
+            if (!w->Write() || msgs->has_error()) throw Error(paths_[s], "cannot write the summary: " + msgs->first_error());
+            // Pieces first, the summary last.
+            for (std::size_t i = 0; i < pieces_; ++i) {
+                const std::string name = stem + "_" + std::to_string(i) + ".vtp";
+                fs::rename(dirs_[s] / name, dest.parent_path() / name);
+            }
+            fs::rename(file, dest);
             fs::remove_all(dirs_[s]);
         }
         dirs_.clear();
     }
-    std::size_t memory_bytes() const override {
-        std::size_t n = SinkBase::memory_bytes();
-        for (const auto& h : held_) n += h.memory_bytes();
-        return n;
-    }
 
 private:
-    std::size_t written_next(std::size_t s) {
-        if (written_.size() < paths_.size()) written_.assign(paths_.size(), 0);
-        return written_[s];
+    // Writes piece `index` (and empty pieces for the slabs skipped before it).
+    void write(std::size_t s, std::size_t index, const Mesh& m, bool skip_self = false) {
+        if (index >= pieces_) throw Error(paths_[s], "more pieces than planned");
+        for (std::size_t i = written_[s]; i < index; ++i) write_one(s, i, Mesh{});
+        if (!skip_self) write_one(s, index, m);
+        written_[s] = std::max(written_[s], index + 1);
     }
-    void write(std::size_t s, const MeshPiece& p, bool summary) {
-        const std::size_t from = written_next(s);
-        for (std::size_t i = from; i < p.index; ++i) { // empty pieces for skipped slabs
-            MeshPiece e;
-            e.index = i;
-            write_one(s, e, false);
-        }
-        write_one(s, p, summary);
-        written_[s] = p.index + 1;
-    }
-    void write_one(std::size_t s, const MeshPiece& p, bool summary) {
-        if (p.index >= pieces_) throw Error(paths_[s], "more pieces than planned");
+    void write_one(std::size_t s, std::size_t index, const Mesh& m) {
         const fs::path dest(paths_[s]);
-        const std::string file = (dirs_[s] / (dest.stem().string() + ".pvtp")).string();
-        vtkNew<vtkXMLPPolyDataWriter> w;
+        const std::string file = (dirs_[s] / (dest.stem().string() + "_" + std::to_string(index) + ".vtp")).string();
+        vtkNew<vtkXMLPolyDataWriter> w;
         vtkNew<VtkMessages> msgs;
         msgs->watch(w);
-        auto pd = piece_polydata(p.mesh, normals_);
+        auto pd = piece_polydata(m, normals_);
         w->SetInputData(pd);
         w->SetFileName(file.c_str());
-        w->SetNumberOfPieces(int(pieces_));
-        w->SetStartPiece(int(p.index));
-        w->SetEndPiece(int(p.index));
-        w->SetWriteSummaryFile(summary ? 1 : 0);
         w->SetDataModeToAppended();
         w->SetCompressorTypeToZLib();
-        if (!w->Write() || msgs->has_error()) throw Error(paths_[s], "cannot write piece " + std::to_string(p.index) + ": " + msgs->first_error());
+        if (!w->Write() || msgs->has_error()) throw Error(paths_[s], "cannot write piece " + std::to_string(index) + ": " + msgs->first_error());
     }
     std::size_t pieces_ = 1;
     std::vector<fs::path> dirs_;
-    std::vector<MeshPiece> held_;
-    std::vector<bool> have_;
     std::vector<std::size_t> written_;
     bool normals_ = false;
 };

@@ -127,6 +127,7 @@ VolumeHeader header_of(const std::string& path, const nifti_image* nim) {
     h.data_offset = std::uint64_t(std::max(nim->iname_offset, 0));
     h.encoding = ends_with(h.data_file, ".gz") ? DataEncoding::Gzip : DataEncoding::Raw;
     h.swap_bytes = nim->byteorder != nifti_short_order();
+    h.nonfinite_to_zero = h.stored == VoxelType::F32 || h.stored == VoxelType::F64;
     if (h.encoding == DataEncoding::Raw) {
         std::error_code ec;
         const auto isize = fs::file_size(h.data_file, ec);

@@ -58,6 +58,9 @@ struct VolumeHeader {
     std::uint64_t data_offset = 0;
     DataEncoding encoding = DataEncoding::Raw;
     bool swap_bytes = false;
+    // nifti_clib replaces NaN and +/-Inf float samples by 0 when it reads
+    // them (nifti_read_buffer); a reader of the raw bytes must do the same.
+    bool nonfinite_to_zero = false;
     std::uint64_t stored_bytes() const { return std::uint64_t(dims[0] * dims[1] * dims[2]) * voxel_size(stored); }
     std::uint64_t memory_bytes() const { return std::uint64_t(dims[0] * dims[1] * dims[2]) * voxel_size(type); }
 };

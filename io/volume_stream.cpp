@@ -1,6 +1,7 @@
 #include "io/volume_stream.hpp"
 
 #include <algorithm>
+#include <cmath>
 #include <cstring>
 #include <filesystem>
 #include <vector>
@@ -34,6 +35,16 @@ void convert(const VolumeHeader& h, std::byte* src, std::size_t count, std::byte
     const std::size_t ss = voxel_size(h.stored);
     if (h.swap_bytes && ss > 1)
         for (std::size_t i = 0; i < count; ++i) std::reverse(src + i * ss, src + (i + 1) * ss);
+    if (h.nonfinite_to_zero)
+        dispatch_voxel_type(h.stored, [&](auto tag) {
+            using S = decltype(tag);
+            if constexpr (std::is_floating_point_v<S>) {
+                S* p = reinterpret_cast<S*>(src);
+                for (std::size_t i = 0; i < count; ++i)
+                    if (!std::isfinite(p[i])) p[i] = S(0);
+            }
+            return 0;
+        });
     if (!h.rescale && h.type == h.stored) {
         if (src != dst) std::memcpy(dst, src, count * ss);
         return;
@@ -54,15 +65,15 @@ void convert(const VolumeHeader& h, std::byte* src, std::size_t count, std::byte
     });
 }
 
-// Slices of a slab, converted a few MiB at a time from a reader of stored bytes.
+// Slices of a slab, converted 1 MiB at a time (at least a slice) from a reader of stored bytes.
 template <class Read> Volume read_converted(const VolumeHeader& h, std::int64_t k0, std::int64_t k1, Read&& read) {
     check_range(h, k0, k1);
     Volume v = Volume::dense({h.dims[0], h.dims[1], k1 - k0 + 1}, h.type, slab_affine(h.index_to_lps, k0));
     v.meta = h.meta;
     const std::size_t slice = std::size_t(h.dims[0] * h.dims[1]);
     const std::size_t ss = voxel_size(h.stored), ds = voxel_size(h.type);
-    const bool direct = !h.rescale && h.type == h.stored;
-    const std::size_t per = std::max<std::size_t>(1, (std::size_t(8) << 20) / std::max<std::size_t>(1, slice * ss));
+    const bool direct = !h.rescale && h.type == h.stored; // converted in place
+    const std::size_t per = std::max<std::size_t>(1, (std::size_t(1) << 20) / std::max<std::size_t>(1, slice * ss));
     std::vector<std::byte> buf;
     for (std::int64_t k = k0; k <= k1; k += std::int64_t(per)) {
         const std::size_t n = std::size_t(std::min<std::int64_t>(std::int64_t(per), k1 - k + 1));

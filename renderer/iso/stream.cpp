@@ -15,8 +15,8 @@ using Clock = std::chrono::steady_clock;
 double seconds_since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
 
 constexpr std::size_t kMiB = std::size_t(1) << 20;
-// Conversion buffer of a slab read (volume_stream.cpp converts 8 MiB at a time) and slack.
-constexpr std::size_t kReadBuffer = 8 * kMiB;
+// Conversion buffer of a slab read (volume_stream.cpp converts 1 MiB at a time).
+constexpr std::size_t kReadBuffer = kMiB;
 
 std::size_t scratch_bytes(int C, std::size_t sample) {
     // As Extractor's scratch_estimate, plus the staging mesh of one chunk.
@@ -68,10 +68,16 @@ StreamPlan plan_stream(const VolumeHeader& h, const StreamOptions& opt, const Ch
     const std::size_t surfaces = surface_count(opt);
     int C = index ? index->chunk_size() : opt.extract.chunk_size;
     if (C < 2) throw Error("--chunk", "chunk size must be at least 2 cells");
-    // Without an index: the chunk size for which one layer's samples and the
-    // fixed costs take at most 3/4 of the budget (the rest for output).
+    // Without an index: halve the chunk size while one chunk layer's samples
+    // and the fixed costs do not fit and halving makes them smaller (more
+    // chunks cost more index and table entries).
     if (!index)
-        while (C > 4 && fixed_bytes(h.dims, C, sample, threads, surfaces) + slab_bytes(h, C, 1) > opt.memory_budget / 4 * 3) C /= 2;
+        while (C > 4) {
+            const std::size_t now = fixed_bytes(h.dims, C, sample, threads, surfaces) + slab_bytes(h, C, 1);
+            const std::size_t half = fixed_bytes(h.dims, C / 2, sample, threads, surfaces) + slab_bytes(h, C / 2, 1);
+            if (now <= opt.memory_budget || half >= now) break;
+            C /= 2;
+        }
     p.chunk_size = C;
     p.fixed_bytes = fixed_bytes(h.dims, C, sample, threads, surfaces);
     const auto counts = chunk_counts(h.dims, C);
@@ -182,6 +188,11 @@ StreamStats stream_extract(VolumeStream& src, const StreamOptions& opt_in, MeshS
     }
     const std::vector<double>& values = opt.labels ? opt.label_values : opt.isos;
     st.values = values;
+    // A volume loaded whole (formats that cannot stream) takes its share of the budget.
+    if (src.resident_bytes() >= opt.memory_budget)
+        throw Error("--memory", std::to_string(opt.memory_budget >> 20) + " MiB is less than the " +
+                                    std::to_string(src.resident_bytes() >> 20) + " MiB of the volume loaded whole");
+    opt.memory_budget -= src.resident_bytes();
     const StreamPlan plan = plan_stream(h, opt, index.get());
     st.plan = plan;
     const std::size_t nsurf = values.size();
