@@ -301,6 +301,8 @@ TEST(Stream, FloatWithNanObliqueMirroredGzipAndMetaImage) {
             EXPECT_GT(st.plan.slabs, 3u);
             EXPECT_TRUE(st.index_pass);
             expect_same_surface(ref, sink.meshes[0], std::string(name) + " iso " + std::to_string(iso));
+            if (std::string(name) == "f.nrrd") // gzip: one restart after the index pass; slab halos come from the kept slices
+                EXPECT_EQ(st.source_restarts, 1u);
         }
     }
 }
