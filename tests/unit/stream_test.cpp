@@ -301,8 +301,9 @@ TEST(Stream, FloatWithNanObliqueMirroredGzipAndMetaImage) {
             EXPECT_GT(st.plan.slabs, 3u);
             EXPECT_TRUE(st.index_pass);
             expect_same_surface(ref, sink.meshes[0], std::string(name) + " iso " + std::to_string(iso));
-            if (std::string(name) == "f.nrrd") // gzip: one restart after the index pass; slab halos come from the kept slices
+            if (std::string(name) == "f.nrrd") { // gzip: one restart after the index pass; slab halos come from the kept slices
                 EXPECT_EQ(st.source_restarts, 1u);
+            }
         }
     }
 }
@@ -508,7 +509,9 @@ TEST(Stream, TruncatedAndMalformedFilesAreErrorsAndNothingIsWritten) {
             ADD_FAILURE() << name << " opened";
         } catch (const Error& e) {
             EXPECT_NE(std::string(e.what()).find(name), std::string::npos) << e.what();
-            if (std::string(name).rfind("cut", 0) == 0) EXPECT_NE(std::string(e.what()).find("truncated"), std::string::npos) << e.what();
+            if (std::string(name).rfind("cut", 0) == 0) {
+                EXPECT_NE(std::string(e.what()).find("truncated"), std::string::npos) << e.what();
+            }
         }
     }
     // gzip is only found short while reading: the error comes before the output is moved into place.
@@ -572,27 +575,35 @@ std::size_t status_kib(const char* key) {
     return 0;
 }
 
-TEST(Stream, A128MiBVolumeStreamsWithin32MiB) {
-    TempDir dir;
-    // 512 x 512 x 256 int16 (128 MiB), written slice by slice (never held):
-    // a detached NRRD header and its raw data.
-    const int nx = 512, ny = 512, nz = 256;
+// A 512 x 512 x nz int16 ball written slice by slice (never held whole) as a
+// detached NRRD header and its raw data; `wobble` adds a ripple.
+std::string write_big_ball(const TempDir& dir, int nz, double dz, bool wobble) {
+    const int nx = 512, ny = 512;
     {
         std::ofstream h(dir / "big.nhdr");
-        h << "NRRD0004\ntype: short\ndimension: 3\nspace: left-posterior-superior\nsizes: 512 512 256\n"
-             "space directions: (0.5,0,0) (0,0.5,0) (0,0,0.8)\nkinds: domain domain domain\nendian: little\n"
+        h << "NRRD0004\ntype: short\ndimension: 3\nspace: left-posterior-superior\nsizes: 512 512 " << nz
+          << "\nspace directions: (0.5,0,0) (0,0.5,0) (0,0," << dz << ")\nkinds: domain domain domain\nendian: little\n"
              "encoding: raw\nspace origin: (0,0,0)\ndata file: big.raw\n";
-        std::ofstream d(dir / "big.raw", std::ios::binary);
-        std::vector<std::int16_t> slice(std::size_t(nx) * ny);
-        for (int k = 0; k < nz; ++k) {
-            for (int j = 0; j < ny; ++j)
-                for (int i = 0; i < nx; ++i) {
-                    const double x = i - 255.5, y = j - 255.5, z = (k - 127.5) * 1.6;
-                    slice[std::size_t(j) * nx + i] = std::int16_t(1000.0 - 4.0 * std::sqrt(x * x + y * y + z * z));
-                }
-            d.write(reinterpret_cast<const char*>(slice.data()), std::streamsize(slice.size() * 2));
-        }
     }
+    std::ofstream d(dir / "big.raw", std::ios::binary);
+    std::vector<std::int16_t> slice(std::size_t(nx) * ny);
+    for (int k = 0; k < nz; ++k) {
+        for (int j = 0; j < ny; ++j)
+            for (int i = 0; i < nx; ++i) {
+                const double x = i - 255.5, y = j - 255.5, z = (k - 0.5 * (nz - 1)) * dz / 0.5;
+                double f = 1000.0 - 4.0 * std::sqrt(x * x + y * y + z * z);
+                if (wobble) f += 30.0 * std::sin(0.05 * i) * std::cos(0.07 * j + 0.01 * k);
+                slice[std::size_t(j) * nx + i] = std::int16_t(f);
+            }
+        d.write(reinterpret_cast<const char*>(slice.data()), std::streamsize(slice.size() * 2));
+    }
+    return dir / "big.nhdr";
+}
+
+TEST(Stream, A128MiBVolumeStreamsWithin32MiB) {
+    TempDir dir;
+    // 512 x 512 x 256 int16 (128 MiB), never held whole.
+    write_big_ball(dir, 256, 0.8, false);
     const std::size_t budget = std::size_t(32) << 20;
     // Peak resident memory from here on: reset the high-water mark (Linux: clear_refs 5).
     { std::ofstream("/proc/self/clear_refs") << "5"; }
@@ -625,24 +636,7 @@ TEST(Stream, A128MiBVolumeStreamsWithin32MiB) {
 // VmHWM is not raised by it).
 TEST(Stream, DISABLED_Measure1GiB) {
     TempDir dir;
-    const int nx = 512, ny = 512, nz = 2048;
-    {
-        std::ofstream h(dir / "big.nhdr");
-        h << "NRRD0004\ntype: short\ndimension: 3\nspace: left-posterior-superior\nsizes: 512 512 2048\n"
-             "space directions: (0.5,0,0) (0,0.5,0) (0,0,0.25)\nkinds: domain domain domain\nendian: little\n"
-             "encoding: raw\nspace origin: (0,0,0)\ndata file: big.raw\n";
-        std::ofstream d(dir / "big.raw", std::ios::binary);
-        std::vector<std::int16_t> slice(std::size_t(nx) * ny);
-        for (int k = 0; k < nz; ++k) {
-            for (int j = 0; j < ny; ++j)
-                for (int i = 0; i < nx; ++i) {
-                    const double x = i - 255.5, y = j - 255.5, z = (k - 1023.5) * 0.5;
-                    const double r = std::sqrt(x * x + y * y + z * z);
-                    slice[std::size_t(j) * nx + i] = std::int16_t(1000.0 - 4.0 * r + 30.0 * std::sin(0.05 * i) * std::cos(0.07 * j + 0.01 * k));
-                }
-            d.write(reinterpret_cast<const char*>(slice.data()), std::streamsize(slice.size() * 2));
-        }
-    }
+    write_big_ball(dir, 2048, 0.25, true);
     const std::size_t budget = std::size_t(128) << 20;
     { std::ofstream("/proc/self/clear_refs") << "5"; }
     const std::size_t base_kib = status_kib("VmRSS:");
