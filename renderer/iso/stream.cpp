@@ -169,6 +169,11 @@ StreamStats stream_extract(VolumeStream& src, const StreamOptions& opt_in, MeshS
         std::sort(opt.label_values.begin(), opt.label_values.end());
         opt.label_values.erase(std::unique(opt.label_values.begin(), opt.label_values.end()), opt.label_values.end());
     }
+    // What the source holds (a volume loaded whole, a gzip stream's last slices) takes its share of the budget.
+    if (src.resident_bytes() >= opt.memory_budget)
+        throw Error("--memory", std::to_string(opt.memory_budget >> 20) + " MiB is less than the " +
+                                    std::to_string(src.resident_bytes() >> 20) + " MiB the volume's source holds");
+    opt.memory_budget -= src.resident_bytes();
     // 1. The index pass (its share of the progress: 30 %).
     const double index_share = index ? 0.0 : 0.3;
     auto sub = [&](double a, double b) -> ProgressFn {
@@ -188,11 +193,6 @@ StreamStats stream_extract(VolumeStream& src, const StreamOptions& opt_in, MeshS
     }
     const std::vector<double>& values = opt.labels ? opt.label_values : opt.isos;
     st.values = values;
-    // What the source holds (a volume loaded whole, a gzip stream's last slices) takes its share of the budget.
-    if (src.resident_bytes() >= opt.memory_budget)
-        throw Error("--memory", std::to_string(opt.memory_budget >> 20) + " MiB is less than the " +
-                                    std::to_string(src.resident_bytes() >> 20) + " MiB the volume's source holds");
-    opt.memory_budget -= src.resident_bytes();
     const StreamPlan plan = plan_stream(h, opt, index.get());
     st.plan = plan;
     const std::size_t nsurf = values.size();
