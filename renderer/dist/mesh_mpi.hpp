@@ -1,0 +1,51 @@
+// `mpirun -np N isoscope mesh IN --iso V -o OUT.pvtp` (docs/cluster.md): every
+// rank reads and extracts its own contiguous range of chunk ids, writes its
+// piece of a partitioned .pvtp through VTK's parallel XML writer, and the
+// statistics (triangles, welded vertices, area, signed volume, connected
+// components) are reduced on rank 0. Collective: every rank of the job calls
+// it with the same request.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "io/progress.hpp"
+#include "renderer/dist/mpi.hpp"
+#include "renderer/iso/components.hpp"
+#include "renderer/iso/extract.hpp"
+
+namespace iso::dist {
+
+struct DistMeshRequest {
+    std::string input, output;       // output: a .pvtp (several surfaces: OUT-iso<V>.pvtp / OUT-label<L>.pvtp)
+    std::string series;              // DICOM series (every rank loads the same)
+    std::vector<double> isos;        // iso values, or with `labels` the labels (empty: every label)
+    bool labels = false;
+    ExtractOptions extract;          // chunk size, threads, normals
+    ProgressFn progress;             // rank 0's progress (other ranks: none)
+};
+
+struct DistSurface {
+    std::string name;                // "iso 500", "label 3"
+    double value = 0;
+    std::string path;                // the .pvtp written
+    SurfaceSummary summary;          // reduced over every piece (valid on rank 0)
+    std::vector<std::size_t> rank_triangles; // per piece (rank 0)
+};
+
+struct DistMeshResult {
+    int ranks = 1;
+    std::vector<ChunkRange> plan;    // each rank's chunk ids
+    std::vector<std::size_t> rank_active; // active chunks per rank
+    std::vector<DistSurface> surfaces;
+    std::vector<std::string> warnings; // the volume's (rank 0)
+};
+
+// Throws iso::Error on every rank when any rank fails (Comm::agree).
+DistMeshResult mesh_distributed(const Comm& comm, const DistMeshRequest& req);
+
+// The file names the surfaces go to: `output` itself for one surface, else
+// OUT-iso<V>.pvtp / OUT-label<L>.pvtp (as `isoscope mesh` names them).
+std::string surface_output_path(const std::string& output, double value, bool labels, std::size_t surfaces);
+
+} // namespace iso::dist
