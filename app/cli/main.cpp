@@ -28,6 +28,9 @@
 #include "renderer/core/measure.hpp"
 #include "renderer/core/pick.hpp"
 #include "renderer/core/session.hpp"
+#ifdef ISOSCOPE_MPI
+#include "renderer/dist/mesh_mpi.hpp"
+#endif
 
 namespace {
 
@@ -295,9 +298,59 @@ CLI::App* add_mesh(CLI::App& app, MeshArgs& a) {
     return c;
 }
 
+#ifdef ISOSCOPE_MPI
+// `mpirun -np N isoscope mesh ... -o OUT.pvtp` (docs/cluster.md): every rank
+// runs this; rank 0 alone prints. An error agreed by all ranks is printed
+// once (by rank 0) and every rank exits 1; anything else (a bug outside an
+// agreement point) aborts the job rather than leave the others waiting.
+int run_mesh_mpi(const MeshArgs& a) {
+    if (a.post.smooth > 0 || a.post.decimate > 0 || a.post.keep_largest)
+        throw iso::Error("isoscope mesh", "--smooth, --decimate and --largest need the whole mesh in one process; "
+                                          "they are not available under mpirun");
+    iso::dist::Runtime runtime(nullptr, nullptr);
+    const iso::dist::Comm comm;
+    iso::dist::DistMeshRequest r;
+    r.input = a.in;
+    r.output = a.out;
+    r.series = a.series;
+    r.labels = a.labels;
+    r.isos = a.labels ? a.label_values : a.isos;
+    r.extract.threads = a.threads;
+    r.extract.chunk_size = a.chunk;
+    if (comm.root()) {
+        r.progress = progress_bar();
+        r.extract.progress = progress_bar();
+    }
+    try {
+        const auto res = iso::dist::mesh_distributed(comm, r);
+        if (!comm.root()) return 0;
+        for (const auto& w : res.warnings) std::cerr << "warning: " << w << "\n";
+        std::cout << res.ranks << " ranks, active chunks per rank:";
+        for (auto n : res.rank_active) std::cout << ' ' << n;
+        std::cout << "\n";
+        for (const auto& s : res.surfaces) {
+            const auto& m = s.summary;
+            std::cout << s.name << ": " << m.triangles << " triangles, " << m.vertices << " vertices, area " << m.area
+                      << " mm^2, volume " << m.volume << " mm^3, " << m.components << " components (largest: "
+                      << m.largest.triangles << " triangles, area " << m.largest.area << " mm^2, volume "
+                      << m.largest.volume << " mm^3) -> " << s.path << " (" << res.ranks << " pieces)\n";
+        }
+        return 0;
+    } catch (const iso::dist::AgreedError& e) {
+        if (comm.root()) std::cerr << "isoscope: error: " << e.what() << "\n";
+        return 1;
+    } catch (const std::exception& e) {
+        iso::dist::Runtime::abort_job(e.what());
+    }
+}
+#endif
+
 int run_mesh(const MeshArgs& a) {
     if (a.isos.empty() && !a.labels) throw iso::Error("isoscope mesh", "give --iso V (repeatable) or --labels");
     if (!a.isos.empty() && a.labels) throw iso::Error("isoscope mesh", "--iso and --labels exclude each other");
+#ifdef ISOSCOPE_MPI
+    if (iso::dist::launched_by_mpirun()) return run_mesh_mpi(a);
+#endif
     namespace fs = std::filesystem;
     const fs::path out(a.out);
     if (!iso::is_mesh_path(a.out)) throw iso::Error(a.out, "unsupported mesh format (write " + iso::mesh_extensions_text() + ")");
