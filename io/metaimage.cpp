@@ -8,6 +8,7 @@
 // the direction of index axis k as values 3k..3k+2; Offset (alias Position,
 // Origin) is the centre of voxel (0,0,0). AnatomicalOrientation is a label
 // that ITK does not apply to the geometry, and neither do we.
+#include <bit>
 #include <cmath>
 #include <cstring>
 #include <filesystem>
@@ -86,7 +87,7 @@ VoxelType element_type(const std::string& path, const std::string& t) {
 
 } // namespace
 
-Volume read_metaimage(const std::string& path) {
+VolumeHeader read_metaimage_header(const std::string& path) {
     quiet_vtk();
     std::error_code ec;
     if (!fs::is_regular_file(path, ec)) throw Error(path, "no such file");
@@ -141,6 +142,21 @@ Volume read_metaimage(const std::string& path) {
     check_affine(path, affine);
 
     // The data's size, before VTK allocates.
+    VolumeHeader out;
+    out.path = path;
+    out.format = VolumeFormat::MetaImage;
+    out.dims = dims;
+    out.stored = out.type = type;
+    out.index_to_lps = affine;
+    out.meta.source = path;
+    out.meta.format = "MetaImage";
+    if (const auto* m = get({"Modality"})) {
+        std::string mod = *m;
+        if (mod.rfind("MET_MOD_", 0) == 0) mod = mod.substr(8);
+        out.meta.modality = mod;
+    }
+    if (const auto* msb = get({"ElementByteOrderMSB", "BinaryDataByteOrderMSB"}))
+        out.swap_bytes = voxel_size(type) > 1 && (*msb == "True" || *msb == "true" || *msb == "TRUE") != (std::endian::native == std::endian::big);
     const std::string* data_file = get({"ElementDataFile"});
     const bool compressed = [&] {
         const auto* c = get({"CompressedData"});
@@ -153,6 +169,8 @@ Volume read_metaimage(const std::string& path) {
         if (!compressed && available < bytes)
             throw Error(path, "truncated: the header announces " + std::to_string(bytes) + " bytes of data, the file holds " +
                                   std::to_string(available));
+        out.data_file = path;
+        out.data_offset = h.header_bytes;
     } else if (*data_file != "LIST" && data_file->find('%') == std::string::npos) {
         const fs::path data = fs::path(path).parent_path() / *data_file;
         if (!fs::is_regular_file(data, ec)) throw Error(path, "its data file '" + data.string() + "' does not exist");
@@ -163,9 +181,23 @@ Volume read_metaimage(const std::string& path) {
             throw Error(path, "data file '" + data.string() + "' is truncated: " + std::to_string(bytes) +
                                   " bytes expected, it has " + std::to_string(dsize));
         if (compressed && dsize == 0) throw Error(path, "compressed data file '" + data.string() + "' is empty");
+        out.data_file = data.string();
+        out.data_offset = std::uint64_t(skip);
     } else {
         throw Error(path, "ElementDataFile = " + *data_file + ": file lists and patterns are not supported");
     }
+    // zlib-compressed MetaImage data is one deflate stream (not gzip): read by VTK only.
+    out.encoding = compressed ? DataEncoding::Other : DataEncoding::Raw;
+    return out;
+}
+
+Volume read_metaimage(const std::string& path) {
+    quiet_vtk();
+    const VolumeHeader hd = read_metaimage_header(path);
+    const auto dims = hd.dims;
+    const VoxelType type = hd.type;
+    const std::size_t bytes = std::size_t(hd.stored_bytes());
+    const glm::dmat4 affine = hd.index_to_lps;
 
     vtkNew<vtkMetaImageReader> r;
     vtkNew<VtkMessages> msgs;
@@ -183,13 +215,7 @@ Volume read_metaimage(const std::string& path) {
         throw Error(path, "the data read does not match the header (truncated or corrupt compressed data?)");
     Volume v = Volume::dense(dims, type, affine);
     std::memcpy(v.bytes().data(), arr->GetVoidPointer(0), bytes);
-    v.meta.source = path;
-    v.meta.format = "MetaImage";
-    if (const auto* m = get({"Modality"})) {
-        std::string mod = *m;
-        if (mod.rfind("MET_MOD_", 0) == 0) mod = mod.substr(8);
-        v.meta.modality = mod;
-    }
+    v.meta = hd.meta;
     warn_non_finite(v);
     return v;
 }

@@ -85,23 +85,30 @@ template <class T> void rescale_into(const T* src, Volume& dst, double slope, do
 
 } // namespace
 
-Volume read_nifti(const std::string& path) {
+namespace {
+NimPtr read_nim_header(const std::string& path) {
     std::error_code ec;
     if (!fs::is_regular_file(path, ec)) throw Error(path, "no such file");
     if (fs::file_size(path, ec) == 0) throw Error(path, "file is empty");
     nifti_set_debug_level(0);
     NimPtr nim(nifti_image_read(path.c_str(), 0)); // header only
     if (!nim) throw Error(path, "not a readable NIfTI-1 file (bad or truncated header)");
+    return nim;
+}
+
+VolumeHeader header_of(const std::string& path, const nifti_image* nim) {
     if (nim->dim[0] < 2 || nim->dim[0] > 7) throw Error(path, "dim[0] = " + std::to_string(nim->dim[0]) + " is invalid");
     for (int a = 4; a <= nim->dim[0]; ++a)
         if (nim->dim[a] > 1)
             throw Error(path, "has " + std::to_string(nim->dim[a]) + " samples along dimension " + std::to_string(a) +
                                   " (time/vector data): only 3D scalar volumes are supported");
-    const VoxelType stored = voxel_type(path, nim->datatype);
-    std::array<std::int64_t, 3> dims{nim->nx, nim->ny, std::max(nim->nz, 1)};
-    checked_byte_size(path, dims, stored);
+    VolumeHeader h;
+    h.path = path;
+    h.format = VolumeFormat::Nifti;
+    h.stored = voxel_type(path, nim->datatype);
+    h.dims = {nim->nx, nim->ny, std::max(nim->nz, 1)};
+    checked_byte_size(path, h.dims, h.stored);
 
-    std::vector<std::string> warnings;
     glm::dmat4 ras(1.0);
     if (nim->sform_code > 0) {
         ras = from_mat44(nim->sto_xyz);
@@ -109,20 +116,74 @@ Volume read_nifti(const std::string& path) {
         ras = from_mat44(nim->qto_xyz);
     } else {
         for (int a = 0; a < 3; ++a) ras[a][a] = nim->pixdim[a + 1] > 0 ? nim->pixdim[a + 1] : 1.0;
-        warnings.push_back("no sform or qform (both codes 0): orientation unknown, pixdim spacing on RAS axes assumed");
+        h.meta.warnings.push_back("no sform or qform (both codes 0): orientation unknown, pixdim spacing on RAS axes assumed");
     }
-    const glm::dmat4 lps = ras_to_lps(ras);
-    check_affine(path, lps);
+    h.index_to_lps = ras_to_lps(ras);
+    check_affine(path, h.index_to_lps);
 
     // Uncompressed: the data must be in the file before anything is read.
-    const std::size_t bytes = std::size_t(dims[0] * dims[1] * dims[2]) * voxel_size(stored);
-    if (nim->iname && !ends_with(nim->iname, ".gz")) {
-        const auto isize = fs::file_size(nim->iname, ec);
-        if (ec) throw Error(path, std::string("data file '") + nim->iname + "' does not exist");
+    const std::size_t bytes = std::size_t(h.stored_bytes());
+    h.data_file = nim->iname ? nim->iname : path;
+    h.data_offset = std::uint64_t(std::max(nim->iname_offset, 0));
+    h.encoding = ends_with(h.data_file, ".gz") ? DataEncoding::Gzip : DataEncoding::Raw;
+    h.swap_bytes = nim->byteorder != nifti_short_order();
+    h.nonfinite_to_zero = h.stored == VoxelType::F32 || h.stored == VoxelType::F64;
+    if (h.encoding == DataEncoding::Raw) {
+        std::error_code ec;
+        const auto isize = fs::file_size(h.data_file, ec);
+        if (ec) throw Error(path, "data file '" + h.data_file + "' does not exist");
         if (isize < std::uintmax_t(nim->iname_offset) + bytes)
             throw Error(path, "truncated: the header announces " + std::to_string(bytes) + " bytes of data after offset " +
                                   std::to_string(nim->iname_offset) + ", the file has " + std::to_string(isize) + " bytes");
     }
+
+    h.slope = nim->scl_slope;
+    h.inter = nim->scl_inter;
+    h.rescale = std::isfinite(h.slope) && h.slope != 0.0 && (h.slope != 1.0 || h.inter != 0.0);
+    h.type = h.stored;
+    if (h.rescale) {
+        const bool integral_params = h.slope == std::floor(h.slope) && h.inter == std::floor(h.inter);
+        const bool stored_int = h.stored != VoxelType::F32 && h.stored != VoxelType::F64;
+        if (!(integral_params && stored_int)) {
+            h.type = VoxelType::F32;
+        } else {
+            // Integral rescale of integers: read_nifti keeps the stored type
+            // when the rescaled samples fit it, which only the samples tell.
+            // From the header alone: the stored type if its whole range maps
+            // into it, else int32 if that holds it, else float64; the values
+            // (as doubles) are the same in every case.
+            dispatch_voxel_type(h.stored, [&](auto tag) {
+                using T = decltype(tag);
+                const double a = double(std::numeric_limits<T>::lowest()) * h.slope + h.inter;
+                const double b = double(std::numeric_limits<T>::max()) * h.slope + h.inter;
+                const double lo = std::min(a, b), hi = std::max(a, b);
+                auto fits = [&](double l, double u) { return lo >= l && hi <= u; };
+                if (fits(double(std::numeric_limits<T>::lowest()), double(std::numeric_limits<T>::max()))) h.type = h.stored;
+                else if (fits(double(std::numeric_limits<std::int32_t>::lowest()), double(std::numeric_limits<std::int32_t>::max())))
+                    h.type = VoxelType::I32;
+                else h.type = VoxelType::F64;
+                return 0;
+            });
+        }
+    }
+    h.meta.source = path;
+    h.meta.format = "NIfTI";
+    if (nim->descrip[0]) h.meta.series_description = std::string(nim->descrip, strnlen(nim->descrip, 80));
+    return h;
+}
+} // namespace
+
+VolumeHeader read_nifti_header(const std::string& path) {
+    NimPtr nim = read_nim_header(path);
+    return header_of(path, nim.get());
+}
+
+Volume read_nifti(const std::string& path) {
+    NimPtr nim = read_nim_header(path);
+    const VolumeHeader h = header_of(path, nim.get());
+    const auto dims = h.dims;
+    const VoxelType stored = h.stored;
+    const std::size_t bytes = std::size_t(h.stored_bytes());
     if (nim->iname && ends_with(nim->iname, ".gz")) {
         // nifti_clib does not notice a gzip stream that ends early: decompress
         // once through zlib, which checks the length and CRC at the end.
@@ -144,8 +205,8 @@ Volume read_nifti(const std::string& path) {
     if (nifti_image_load(nim.get()) != 0 || !nim->data)
         throw Error(path, "cannot read the data (truncated or corrupt file)");
 
-    double slope = nim->scl_slope, inter = nim->scl_inter;
-    const bool rescale = std::isfinite(slope) && slope != 0.0 && (slope != 1.0 || inter != 0.0);
+    const double slope = h.slope, inter = h.inter;
+    const bool rescale = h.rescale;
     VoxelType type = stored;
     if (rescale) {
         const bool integral_params = slope == std::floor(slope) && inter == std::floor(inter);
@@ -167,7 +228,7 @@ Volume read_nifti(const std::string& path) {
             });
         }
     }
-    Volume v = Volume::dense(dims, type, lps);
+    Volume v = Volume::dense(dims, type, h.index_to_lps);
     if (rescale) {
         dispatch_voxel_type(stored, [&](auto tag) {
             using T = decltype(tag);
@@ -177,10 +238,7 @@ Volume read_nifti(const std::string& path) {
     } else {
         std::memcpy(v.bytes().data(), nim->data, bytes);
     }
-    v.meta.source = path;
-    v.meta.format = "NIfTI";
-    v.meta.warnings = std::move(warnings);
-    if (nim->descrip[0]) v.meta.series_description = std::string(nim->descrip, strnlen(nim->descrip, 80));
+    v.meta = h.meta;
     warn_non_finite(v);
     return v;
 }

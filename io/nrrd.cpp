@@ -125,15 +125,24 @@ glm::dmat4 geometry(const std::string& path, const Nrrd* n, unsigned dim, std::v
 
 } // namespace
 
-Volume read_nrrd(const std::string& path) {
+VolumeHeader read_nrrd_header(const std::string& path) {
     if (!std::filesystem::is_regular_file(path)) throw Error(path, "no such file");
     if (std::filesystem::file_size(path) == 0) throw Error(path, "file is empty");
 
-    // Header first, so that dimensions are checked before teem allocates.
+    // Header only (teem opens, but does not read, a detached data file; it is
+    // kept open so that the position of attached data can be asked).
     NrrdPtr header(nrrdNew());
     NioPtr nio(nrrdIoStateNew());
     nrrdIoStateSet(nio.get(), nrrdIoStateSkipData, AIR_TRUE);
-    if (nrrdLoad(header.get(), path.c_str(), nio.get())) throw Error(path, "not a readable NRRD file: " + teem_error());
+    nrrdIoStateSet(nio.get(), nrrdIoStateKeepNrrdDataFileOpen, AIR_TRUE);
+    const int failed = nrrdLoad(header.get(), path.c_str(), nio.get());
+    long data_pos = -1;
+    if (nio->dataFile) {
+        data_pos = std::ftell(nio->dataFile);
+        if (nio->dataFile != stdin) std::fclose(nio->dataFile);
+        nio->dataFile = nullptr;
+    }
+    if (failed) throw Error(path, "not a readable NRRD file: " + teem_error());
     const unsigned dim = header->dim;
     if (dim < 2 || dim > 3) {
         std::string sizes;
@@ -146,23 +155,59 @@ Volume read_nrrd(const std::string& path) {
             header->axis[a].kind != nrrdKindSpace)
             throw Error(path, std::string("axis ") + std::to_string(a) + " is of kind '" +
                                   airEnumStr(nrrdKind, header->axis[a].kind) + "': only scalar volumes are supported");
-    const VoxelType type = voxel_type(path, header->type);
-    std::array<std::int64_t, 3> dims{1, 1, 1};
-    for (unsigned a = 0; a < dim; ++a) dims[a] = std::int64_t(header->axis[a].size);
-    checked_byte_size(path, dims, type);
-    std::vector<std::string> warnings;
-    const glm::dmat4 affine = geometry(path, header.get(), dim, warnings);
-    check_affine(path, affine);
+    VolumeHeader h;
+    h.path = path;
+    h.format = VolumeFormat::Nrrd;
+    h.stored = h.type = voxel_type(path, header->type);
+    h.dims = {1, 1, 1};
+    for (unsigned a = 0; a < dim; ++a) h.dims[a] = std::int64_t(header->axis[a].size);
+    checked_byte_size(path, h.dims, h.stored);
+    h.index_to_lps = geometry(path, header.get(), dim, h.meta.warnings);
+    check_affine(path, h.index_to_lps);
+    h.meta.source = path;
+    h.meta.format = "NRRD";
+    if (header->content) h.meta.series_description = header->content;
 
+    // Where the samples are, for streaming: one data file (or the header's
+    // own), raw or gzip, no line skips.
+    h.encoding = nio->encoding == nrrdEncodingRaw ? DataEncoding::Raw
+                 : nio->encoding == nrrdEncodingGzip ? DataEncoding::Gzip
+                                                       : DataEncoding::Other;
+    h.swap_bytes = voxel_size(h.stored) > 1 && nio->endian != airEndianUnknown && nio->endian != airMyEndian();
+    const unsigned files = nio->dataFNArr ? nio->dataFNArr->len : 0;
+    if (files > 1 || nio->lineSkip > 0 || (nio->dataFSkip != nullptr)) {
+        h.encoding = DataEncoding::Other; // several data files or skipped lines: read by teem only
+    } else if (files == 1) {
+        std::filesystem::path f(nio->dataFN[0]);
+        if (f.is_relative() && nio->path) f = std::filesystem::path(nio->path) / f;
+        h.data_file = f.string();
+        h.data_offset = std::uint64_t(std::max<long>(nio->byteSkip, 0));
+    } else {
+        h.data_file = path;
+        h.data_offset = std::uint64_t(std::max<long>(data_pos, 0)) + std::uint64_t(std::max<long>(nio->byteSkip, 0));
+    }
+    if (h.encoding == DataEncoding::Raw) {
+        std::error_code ec;
+        const auto size = std::filesystem::file_size(h.data_file, ec);
+        if (ec) throw Error(path, "data file '" + h.data_file + "' cannot be read: " + ec.message());
+        if (nio->byteSkip == -1) h.data_offset = size >= h.stored_bytes() ? size - h.stored_bytes() : 0; // "byte skip: -1": data at the end
+        if (size < h.data_offset + h.stored_bytes())
+            throw Error(path, "truncated: the header announces " + std::to_string(h.stored_bytes()) + " bytes of data" +
+                                  (h.data_file != path ? " in '" + h.data_file + "'" : "") + " after offset " +
+                                  std::to_string(h.data_offset) + ", the file has " + std::to_string(size) + " bytes");
+    }
+    return h;
+}
+
+Volume read_nrrd(const std::string& path) {
+    VolumeHeader h = read_nrrd_header(path);
     NrrdPtr full(nrrdNew());
     if (nrrdLoad(full.get(), path.c_str(), nullptr)) throw Error(path, "cannot read the data: " + teem_error());
-    Volume v = Volume::dense(dims, type, affine);
+    Volume v = Volume::dense(h.dims, h.type, h.index_to_lps);
     if (nrrdElementNumber(full.get()) * nrrdElementSize(full.get()) != v.bytes().size())
         throw Error(path, "data size does not match the header");
     std::memcpy(v.bytes().data(), full->data, v.bytes().size());
-    v.meta.source = path;
-    v.meta.format = "NRRD";
-    v.meta.warnings = std::move(warnings);
+    v.meta = std::move(h.meta);
     if (full->content) v.meta.series_description = full->content;
     warn_non_finite(v);
     return v;

@@ -75,6 +75,20 @@ Volume load_volume(const std::string& path, const LoadOptions& opt) {
     return v;
 }
 
+VolumeHeader read_volume_header(const std::string& path) {
+    std::error_code ec;
+    if (!fs::exists(path, ec)) throw Error(path, "no such file or folder");
+    const VolumeFormat f = volume_format_of(path);
+    switch (f) {
+    case VolumeFormat::Nifti: return read_nifti_header(path);
+    case VolumeFormat::Nrrd: return read_nrrd_header(path);
+    case VolumeFormat::MetaImage: return read_metaimage_header(path);
+    default: break;
+    }
+    throw Error(path, std::string("the header of a ") + volume_format_name(f) +
+                          " volume cannot be read without its samples (header-only reading: NIfTI, NRRD, MetaImage)");
+}
+
 Volume load_dicom_files(const std::vector<std::string>& files, const LoadOptions& opt) {
     if (files.empty()) throw Error("load_dicom_files", "no files given");
     return read_dicom(files, opt);

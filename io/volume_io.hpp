@@ -3,6 +3,8 @@
 // file and the reason: nothing half-loads.
 #pragma once
 
+#include <array>
+#include <cstdint>
 #include <string>
 #include <vector>
 
@@ -32,6 +34,44 @@ Volume load_dicom_files(const std::vector<std::string>& files, const LoadOptions
 // .nii/.nii.gz (NIfTI-1). Writes to a temporary file first and renames it, so
 // an existing file is never left half-written.
 void save_volume(const Volume& v, const std::string& path, bool compress = true);
+
+// What a volume file's header says, read without its samples: what `isoscope
+// info --header-only` shows and what io/volume_stream.hpp streams from. The
+// in-memory readers parse their headers through the same functions, so the
+// geometry, type and rescale are the same whichever way a file is read.
+enum class DataEncoding { Raw, Gzip, Other };
+struct VolumeHeader {
+    std::string path;
+    VolumeFormat format = VolumeFormat::Unknown;
+    std::array<std::int64_t, 3> dims{0, 0, 0};
+    VoxelType stored = VoxelType::U8; // as in the file
+    VoxelType type = VoxelType::U8;   // in memory, after rescale (see rescale)
+    glm::dmat4 index_to_lps{1.0};
+    Metadata meta;                    // source, format, description, warnings
+    // NIfTI scl_slope/scl_inter: samples are stored * slope + inter, converted to `type`.
+    bool rescale = false;
+    double slope = 1.0, inter = 0.0;
+    // Where the samples are: a file (the header's own for attached data), the
+    // byte offset of the first sample, the encoding, and whether the bytes
+    // are in the other byte order than this machine's.
+    std::string data_file;
+    std::uint64_t data_offset = 0;
+    DataEncoding encoding = DataEncoding::Raw;
+    bool swap_bytes = false;
+    // nifti_clib replaces NaN and +/-Inf float samples by 0 when it reads
+    // them (nifti_read_buffer); a reader of the raw bytes must do the same.
+    bool nonfinite_to_zero = false;
+    std::uint64_t stored_bytes() const { return std::uint64_t(dims[0] * dims[1] * dims[2]) * voxel_size(stored); }
+    std::uint64_t memory_bytes() const { return std::uint64_t(dims[0] * dims[1] * dims[2]) * voxel_size(type); }
+};
+
+// Dispatch on the file name. NIfTI, NRRD and MetaImage headers are parsed (and
+// raw data checked for truncation against the file size); other formats
+// (DICOM, VTI, OpenVDB) throw iso::Error saying their header cannot be read alone.
+VolumeHeader read_volume_header(const std::string& path);
+VolumeHeader read_nifti_header(const std::string& path);
+VolumeHeader read_nrrd_header(const std::string& path);
+VolumeHeader read_metaimage_header(const std::string& path);
 
 // ---- per-format entry points (io/<format>.cpp) ------------------------------
 std::vector<SeriesInfo> list_dicom_series(const std::vector<std::string>& files_or_folder);

@@ -114,10 +114,12 @@ template <class T> T substitute(T v, const ChunkIndex& idx) {
     return v;
 }
 
-// Copies the samples of [lo, lo+n) into scratch (dense or sparse source).
+// Copies the samples of [lo, lo+n) (whole-volume indices) into scratch
+// (dense or sparse source; the window's slab starts at k = w.k0).
 template <class T>
-Block<T> load_block(const Volume& v, const ChunkIndex& idx, const std::array<std::int64_t, 3>& lo,
+Block<T> load_block(const VolumeWindow& w, const ChunkIndex& idx, const std::array<std::int64_t, 3>& lo,
                     const std::array<std::int64_t, 3>& n, Scratch& s) {
+    const Volume& v = *w.slab;
     const std::size_t count = std::size_t(n[0] * n[1] * n[2]);
     s.block.resize(count * sizeof(T));
     T* out = reinterpret_cast<T*>(s.block.data());
@@ -129,7 +131,7 @@ Block<T> load_block(const Volume& v, const ChunkIndex& idx, const std::array<std
             for (std::int64_t y = 0; y < n[1]; ++y)
                 for (std::int64_t x = 0; x < n[0]; ++x) {
                     openvdb::Coord c(int(lo[0] + x) + g.offset.x(), int(lo[1] + y) + g.offset.y(),
-                                     int(lo[2] + z) + g.offset.z());
+                                     int(lo[2] + z - w.k0) + g.offset.z());
                     out[o++] = substitute(T(acc.getValue(c)), idx);
                 }
     } else {
@@ -137,7 +139,7 @@ Block<T> load_block(const Volume& v, const ChunkIndex& idx, const std::array<std
         std::size_t o = 0;
         for (std::int64_t z = 0; z < n[2]; ++z)
             for (std::int64_t y = 0; y < n[1]; ++y) {
-                const T* row = src + v.linear_index(lo[0], lo[1] + y, lo[2] + z);
+                const T* row = src + v.linear_index(lo[0], lo[1] + y, lo[2] + z - w.k0);
                 if constexpr (std::is_floating_point_v<T>) {
                     for (std::int64_t x = 0; x < n[0]; ++x) out[o++] = substitute(row[x], idx);
                 } else {
@@ -325,12 +327,12 @@ void run_chunk(const Block<T>& b, const ChunkGeom& g, const Frame& f, const Cls&
     result.keys.assign(out.keys.begin(), out.keys.end());
 }
 
-Frame make_frame(const Volume& v, int C, bool normals, bool keep_keys = false) {
+Frame make_frame(const VolumeWindow& w, int C, bool normals, bool keep_keys = false) {
     Frame f;
-    f.dims = v.dims;
+    f.dims = w.dims;
     f.C = C;
-    f.m = v.index_to_lps;
-    const glm::dmat3 lin(v.index_to_lps);
+    f.m = w.index_to_lps;
+    const glm::dmat3 lin(w.index_to_lps);
     f.normal_m = glm::transpose(glm::inverse(lin));
     f.flip = glm::determinant(lin) < 0.0;
     f.normals = normals;
@@ -437,6 +439,139 @@ void ChunkIndex::refresh(const Volume& v, std::span<const std::size_t> ids) {
     for (auto id : ids) summarize(v, id);
 }
 
+ChunkIndex::ChunkIndex(std::array<std::int64_t, 3> dims, int chunk_size, std::vector<double> min, std::vector<double> max,
+                       double lowest, double highest)
+    : chunk_size_(chunk_size), dims_(dims), min_(std::move(min)), max_(std::move(max)), lowest_(lowest), highest_(highest) {
+    if (chunk_size < 1) throw Error("ChunkIndex", "chunk size must be at least 1");
+    for (int a = 0; a < 3; ++a) {
+        if (dims[a] < 1) throw Error("ChunkIndex", "dimensions must be positive");
+        counts_[a] = int((std::max<std::int64_t>(dims[a] - 1, 0) + chunk_size - 1) / chunk_size);
+    }
+    const std::size_t n = std::size_t(counts_[0]) * counts_[1] * counts_[2];
+    if (min_.size() != n || max_.size() != n)
+        throw Error("ChunkIndex", "expected " + std::to_string(n) + " chunk minima and maxima, got " +
+                                      std::to_string(min_.size()) + " and " + std::to_string(max_.size()));
+    // As the in-memory constructor: the NaN substitute lies below every finite sample.
+    nan_value_ = lowest_ - std::max(1.0, std::abs(lowest_) * 1e-3);
+}
+
+// ---- ChunkSummaries (slab by slab) ---------------------------------------------
+
+ChunkSummaries::ChunkSummaries(std::array<std::int64_t, 3> d, int C, VoxelType t) : dims(d), chunk_size(C), type(t) {
+    if (C < 1) throw Error("ChunkIndex", "chunk size must be at least 1");
+    for (int a = 0; a < 3; ++a) counts[a] = int((std::max<std::int64_t>(d[a] - 1, 0) + C - 1) / C);
+    const std::size_t n = std::size_t(counts[0]) * counts[1] * counts[2];
+    finite_min.assign(n, std::numeric_limits<double>::max());
+    finite_max.assign(n, std::numeric_limits<double>::lowest());
+    flags.assign(n, 0);
+    lowest = std::numeric_limits<double>::max();
+    highest = std::numeric_limits<double>::lowest();
+}
+
+void ChunkSummaries::add(const VolumeWindow& w) {
+    if (w.dims != dims) throw Error("ChunkIndex", "slab of another volume");
+    const Volume& v = *w.slab;
+    const int C = chunk_size;
+    // Chunk c along an axis holds samples [c*C, c*C + C]: sample p is in chunks (p-1)/C .. p/C (clamped).
+    auto chunk_range = [&](std::int64_t p, int a) {
+        const int hi = int(std::min<std::int64_t>(p / C, counts[a] - 1));
+        const int lo = int(std::max<std::int64_t>(p - 1, 0) / C);
+        return std::array<int, 2>{std::min(lo, hi), hi};
+    };
+    const std::int64_t nx = dims[0];
+    std::vector<double> rmin(std::size_t(std::max(counts[0], 1))), rmax(rmin.size());
+    std::vector<std::uint8_t> rflag(rmin.size());
+    auto row_values = [&](auto get) {
+        // Min/max per chunk column along x of one row.
+        std::fill(rmin.begin(), rmin.end(), std::numeric_limits<double>::max());
+        std::fill(rmax.begin(), rmax.end(), std::numeric_limits<double>::lowest());
+        std::fill(rflag.begin(), rflag.end(), 0);
+        for (std::int64_t x = 0; x < nx; ++x) {
+            const double s = get(x);
+            const auto cr = chunk_range(x, 0);
+            std::uint8_t fl = 0;
+            if (std::isnan(s)) fl = kNaN;
+            else if (std::isinf(s)) fl = s > 0 ? kPosInf : kNegInf;
+            else {
+                lowest = std::min(lowest, s);
+                highest = std::max(highest, s);
+            }
+            for (int c = cr[0]; c <= cr[1]; ++c) {
+                if (fl) rflag[std::size_t(c)] |= fl;
+                else {
+                    rmin[std::size_t(c)] = std::min(rmin[std::size_t(c)], s);
+                    rmax[std::size_t(c)] = std::max(rmax[std::size_t(c)], s);
+                }
+            }
+        }
+    };
+    for (std::int64_t lz = 0; lz < v.dims[2]; ++lz) {
+        const std::int64_t z = w.k0 + lz;
+        const auto zr = chunk_range(z, 2);
+        for (std::int64_t y = 0; y < dims[1]; ++y) {
+            if (v.is_sparse()) {
+                row_values([&](std::int64_t x) { return v.value(x, y, lz); });
+            } else {
+                dispatch_voxel_type(v.type, [&](auto tag) {
+                    using T = decltype(tag);
+                    const T* row = v.as<T>().data() + v.linear_index(0, y, lz);
+                    row_values([&](std::int64_t x) { return double(row[x]); });
+                    return 0;
+                });
+            }
+            const auto yr = chunk_range(y, 1);
+            for (int cz = zr[0]; cz <= zr[1]; ++cz)
+                for (int cy = yr[0]; cy <= yr[1]; ++cy) {
+                    const std::size_t base = std::size_t(counts[0]) * (std::size_t(cy) + std::size_t(counts[1]) * std::size_t(cz));
+                    for (int cx = 0; cx < counts[0]; ++cx) {
+                        finite_min[base + cx] = std::min(finite_min[base + cx], rmin[std::size_t(cx)]);
+                        finite_max[base + cx] = std::max(finite_max[base + cx], rmax[std::size_t(cx)]);
+                        flags[base + cx] |= rflag[std::size_t(cx)];
+                    }
+                }
+        }
+    }
+}
+
+void ChunkSummaries::merge(const ChunkSummaries& o) {
+    if (o.dims != dims || o.chunk_size != chunk_size) throw Error("ChunkIndex", "summaries of another volume or chunk size");
+    for (std::size_t i = 0; i < flags.size(); ++i) {
+        finite_min[i] = std::min(finite_min[i], o.finite_min[i]);
+        finite_max[i] = std::max(finite_max[i], o.finite_max[i]);
+        flags[i] |= o.flags[i];
+    }
+    lowest = std::min(lowest, o.lowest);
+    highest = std::max(highest, o.highest);
+}
+
+ChunkIndex ChunkSummaries::finish() const {
+    // As ChunkIndex(const Volume&): integer data has no substitutes (range 0, 0);
+    // floating-point data's finite range gives the NaN substitute and the Inf clamps.
+    const bool floating = type == VoxelType::F32 || type == VoxelType::F64;
+    const bool any_finite = lowest <= highest;
+    const double lo = floating && any_finite ? lowest : 0.0, hi = floating && any_finite ? highest : 0.0;
+    const double nan_value = lo - std::max(1.0, std::abs(lo) * 1e-3);
+    std::vector<double> mn(flags.size()), mx(flags.size());
+    for (std::size_t i = 0; i < flags.size(); ++i) {
+        double a = finite_min[i], b = finite_max[i];
+        if (flags[i] & kNaN) { a = std::min(a, nan_value); b = std::max(b, nan_value); }
+        if (flags[i] & kNegInf) { a = std::min(a, lo); b = std::max(b, lo); }
+        if (flags[i] & kPosInf) { a = std::min(a, hi); b = std::max(b, hi); }
+        // The in-memory summary substitutes in the sample type: round as it does.
+        dispatch_voxel_type(type, [&](auto tag) {
+            using T = decltype(tag);
+            if constexpr (std::is_floating_point_v<T>) {
+                a = double(T(a));
+                b = double(T(b));
+            }
+            return 0;
+        });
+        mn[i] = a;
+        mx[i] = b;
+    }
+    return ChunkIndex(dims, chunk_size, std::move(mn), std::move(mx), lo, hi);
+}
+
 // ---- ChunkedSurface -----------------------------------------------------------
 
 std::size_t ChunkedSurface::triangle_count() const {
@@ -464,8 +599,22 @@ std::size_t scratch_estimate(int C, std::size_t sample_bytes) {
 
 Extractor::Extractor(const Volume& volume, ExtractOptions opt) : Extractor(volume, std::move(opt), nullptr) {}
 
+Extractor::Extractor(const VolumeWindow& w, ExtractOptions opt, std::shared_ptr<const ChunkIndex> index)
+    : volume_(w.slab), window_(w), opt_(std::move(opt)) {
+    if (!w.slab) throw Error("extract", "window without samples");
+    if (!index || index->dims() != w.dims) throw Error("extract", "a window needs the whole volume's chunk index");
+    if (w.slab->dims[0] != w.dims[0] || w.slab->dims[1] != w.dims[1] || w.k0 < 0 || w.k0 + w.slab->dims[2] > w.dims[2])
+        throw Error("extract", "the window's slab does not fit the volume's dimensions");
+    opt_.chunk_size = index->chunk_size();
+    const std::size_t sample = w.slab->is_sparse() ? sizeof(float) : voxel_size(w.slab->type);
+    int threads = effective_threads(opt_.threads);
+    while (threads > 1 && std::size_t(threads) * scratch_estimate(opt_.chunk_size, sample) > opt_.memory_budget) --threads;
+    opt_.threads = threads;
+    index_ = std::move(index);
+}
+
 Extractor::Extractor(const Volume& volume, ExtractOptions opt, std::shared_ptr<const ChunkIndex> index)
-    : volume_(&volume), opt_(std::move(opt)) {
+    : volume_(&volume), window_(VolumeWindow::whole(volume)), opt_(std::move(opt)) {
     if (opt_.chunk_size < 2) throw Error("extract", "chunk size must be at least 2 cells");
     const std::size_t sample = volume.is_sparse() ? sizeof(float) : voxel_size(volume.type);
     // Fit the per-thread scratch into the budget: fewer threads first, then smaller chunks.
@@ -482,9 +631,10 @@ Extractor::Extractor(const Volume& volume, ExtractOptions opt, std::shared_ptr<c
 namespace {
 
 // Extracts `ids` for every surface in `out` (one per iso).
-void run_chunks(const Volume& v, const ChunkIndex& idx, const ExtractOptions& opt, std::span<const std::size_t> ids,
+void run_chunks(const VolumeWindow& w, const ChunkIndex& idx, const ExtractOptions& opt, std::span<const std::size_t> ids,
                 std::span<ChunkedSurface> out, ExtractStats* stats) {
-    const Frame f = make_frame(v, idx.chunk_size(), opt.normals, opt.keep_keys);
+    const Volume& v = *w.slab;
+    const Frame f = make_frame(w, idx.chunk_size(), opt.normals, opt.keep_keys);
     tbb::enumerable_thread_specific<Scratch> scratch;
     std::atomic<std::size_t> done{0};
     std::atomic<bool> cancelled{false};
@@ -499,15 +649,15 @@ void run_chunks(const Volume& v, const ChunkIndex& idx, const ExtractOptions& op
             for (auto& s : out) any |= idx.active(id, s.iso);
             if (any) {
                 auto& sc = scratch.local();
-                const auto g = chunk_geom(v.dims, idx.chunk_size(), idx.coords(id));
+                const auto g = chunk_geom(w.dims, idx.chunk_size(), idx.coords(id));
                 std::array<std::int64_t, 3> lo, cnt;
                 for (int a = 0; a < 3; ++a) {
                     lo[a] = std::max<std::int64_t>(g.p0[a] - 1, 0);
-                    cnt[a] = std::min<std::int64_t>(g.p1[a] + 1, v.dims[a] - 1) - lo[a] + 1;
+                    cnt[a] = std::min<std::int64_t>(g.p1[a] + 1, w.dims[a] - 1) - lo[a] + 1;
                 }
                 dispatch_voxel_type(type, [&](auto tag) {
                     using T = decltype(tag);
-                    const Block<T> b = load_block<T>(v, idx, lo, cnt, sc);
+                    const Block<T> b = load_block<T>(w, idx, lo, cnt, sc);
                     for (auto& s : out) {
                         if (idx.active(id, s.iso))
                             run_chunk(b, g, f, IsoClassifier{s.iso}, sc, s.chunks[id]);
@@ -549,13 +699,56 @@ std::vector<ChunkedSurface> Extractor::extract(std::span<const double> isos, Ext
         out[i].iso = isos[i];
     }
     const ChunkIndex& idx = *index_;
+    if (window_.slab->dims[2] != window_.dims[2]) {
+        // A window: the chunk layers it holds whole, with their halo.
+        std::vector<std::size_t> ids;
+        for (int layer = 0; layer < idx.counts()[2]; ++layer) {
+            const auto ks = layer_samples(window_.dims, idx.chunk_size(), layer);
+            if (ks[0] < window_.k0 || ks[1] > window_.k0 + window_.slab->dims[2] - 1) continue;
+            for (std::size_t i = 0; i < idx.layer_size(); ++i) ids.push_back(std::size_t(layer) * idx.layer_size() + i);
+        }
+        return extract_chunks(isos, ids, stats);
+    }
     for (auto& s : out) s.chunks.resize(idx.chunk_count());
     std::vector<std::size_t> ids;
     ids.reserve(idx.chunk_count());
     for (std::size_t id = 0; id < idx.chunk_count(); ++id)
         for (double iso : isos)
             if (idx.active(id, iso)) { ids.push_back(id); break; }
-    run_chunks(*volume_, idx, opt_, ids, out, stats);
+    run_chunks(window_, idx, opt_, ids, out, stats);
+    if (stats) stats->chunks_total = idx.chunk_count();
+    return out;
+}
+
+std::array<std::int64_t, 2> Extractor::layer_samples(std::array<std::int64_t, 3> dims, int chunk_size, int layer) {
+    const std::int64_t p0 = std::int64_t(layer) * chunk_size;
+    const std::int64_t p1 = std::min<std::int64_t>(p0 + chunk_size, dims[2] - 1);
+    return {std::max<std::int64_t>(p0 - 1, 0), std::min<std::int64_t>(p1 + 1, dims[2] - 1)};
+}
+
+std::vector<ChunkedSurface> Extractor::extract_chunks(std::span<const double> isos, std::span<const std::size_t> ids,
+                                                      ExtractStats* stats) const {
+    std::vector<ChunkedSurface> out(isos.size());
+    for (std::size_t i = 0; i < isos.size(); ++i) {
+        if (!std::isfinite(isos[i])) throw Error("extract", "iso value is not a finite number");
+        out[i].iso = isos[i];
+    }
+    const ChunkIndex& idx = *index_;
+    for (auto& s : out) s.chunks.resize(idx.chunk_count());
+    const std::int64_t k_last = window_.k0 + window_.slab->dims[2] - 1;
+    std::vector<std::size_t> active;
+    active.reserve(ids.size());
+    for (auto id : ids) {
+        if (id >= idx.chunk_count()) throw Error("extract", "chunk id " + std::to_string(id) + " is outside the volume");
+        const auto ks = layer_samples(window_.dims, idx.chunk_size(), idx.coords(id)[2]);
+        if (ks[0] < window_.k0 || ks[1] > k_last)
+            throw Error("extract", "chunk " + std::to_string(id) + " needs slices " + std::to_string(ks[0]) + ".." +
+                                       std::to_string(ks[1]) + ", the window holds " + std::to_string(window_.k0) + ".." +
+                                       std::to_string(k_last));
+        for (double iso : isos)
+            if (idx.active(id, iso)) { active.push_back(id); break; }
+    }
+    run_chunks(window_, idx, opt_, active, out, stats);
     if (stats) stats->chunks_total = idx.chunk_count();
     return out;
 }
@@ -566,6 +759,7 @@ ChunkedSurface Extractor::extract(double iso, ExtractStats* stats) const {
 }
 
 std::vector<std::size_t> Extractor::update(const IndexBox& box, std::span<ChunkedSurface> surfaces, ExtractStats* stats) {
+    if (window_.slab->dims != window_.dims) throw Error("extract", "update() needs the whole volume, not a window");
     auto ids = index_->chunks_touching(box);
     // Copy on write: extractors sharing the old index keep it as it was.
     auto fresh = std::make_shared<ChunkIndex>(*index_);
@@ -573,13 +767,13 @@ std::vector<std::size_t> Extractor::update(const IndexBox& box, std::span<Chunke
     index_ = std::move(fresh);
     for (auto& s : surfaces)
         if (s.chunks.size() != index_->chunk_count()) throw Error("extract", "surface does not belong to this extractor");
-    run_chunks(*volume_, *index_, opt_, ids, surfaces, stats);
+    run_chunks(window_, *index_, opt_, ids, surfaces, stats);
     return ids;
 }
 
 // ---- weld ------------------------------------------------------------------------
 
-Mesh weld(const ChunkedSurface& s, int threads) {
+Mesh weld(const ChunkedSurface& s, int threads, WeldMap* map) {
     Mesh m;
     const std::size_t n = s.chunks.size();
     // 1. Border vertices, sorted by key: the first of each run is kept.
@@ -677,6 +871,7 @@ Mesh weld(const ChunkedSurface& s, int threads) {
             }
         }
     }
+    if (map) map->remap = std::move(remap);
     return m;
 }
 
@@ -713,15 +908,11 @@ std::vector<double> distinct_labels(const Volume& v, std::size_t limit) {
     return out;
 }
 
-std::vector<LabelSurface> extract_labels(const Volume& v, std::span<const double> wanted, const ExtractOptions& opt_in) {
-    std::vector<double> labels(wanted.begin(), wanted.end());
-    if (labels.empty()) labels = distinct_labels(v);
-    std::sort(labels.begin(), labels.end());
-    labels.erase(std::unique(labels.begin(), labels.end()), labels.end());
-    Extractor x(v, opt_in);
-    const auto& idx = x.index();
-    const auto& opt = x.options();
-    const Frame f = make_frame(v, idx.chunk_size(), opt.normals);
+namespace {
+std::vector<ChunkedSurface> label_chunks(const VolumeWindow& w, const ChunkIndex& idx, const ExtractOptions& opt,
+                                         std::span<const double> labels, std::span<const std::size_t> ids) {
+    const Volume& v = *w.slab;
+    const Frame f = make_frame(w, idx.chunk_size(), opt.normals);
     std::vector<ChunkedSurface> surfaces(labels.size());
     for (std::size_t l = 0; l < labels.size(); ++l) {
         surfaces[l].iso = labels[l];
@@ -730,8 +921,6 @@ std::vector<LabelSurface> extract_labels(const Volume& v, std::span<const double
     // A label's surface can only cross a chunk holding values on both sides of
     // it... or equal to it: the chunk's range must include the label and not
     // be that label alone.
-    std::vector<std::size_t> ids;
-    for (std::size_t id = 0; id < idx.chunk_count(); ++id) ids.push_back(id);
     tbb::enumerable_thread_specific<Scratch> scratch;
     std::atomic<std::size_t> done{0};
     std::atomic<bool> cancelled{false};
@@ -740,7 +929,7 @@ std::vector<LabelSurface> extract_labels(const Volume& v, std::span<const double
         tbb::parallel_for(std::size_t(0), ids.size(), [&](std::size_t n) {
             if (cancelled.load(std::memory_order_relaxed)) return;
             const std::size_t id = ids[n];
-            const auto g = chunk_geom(v.dims, idx.chunk_size(), idx.coords(id));
+            const auto g = chunk_geom(w.dims, idx.chunk_size(), idx.coords(id));
             // Labels whose range test passes (cheap), then the exact set present.
             std::vector<std::size_t> candidates;
             for (std::size_t l = 0; l < labels.size(); ++l)
@@ -751,11 +940,11 @@ std::vector<LabelSurface> extract_labels(const Volume& v, std::span<const double
                 std::array<std::int64_t, 3> lo, cnt;
                 for (int a = 0; a < 3; ++a) {
                     lo[a] = std::max<std::int64_t>(g.p0[a] - 1, 0);
-                    cnt[a] = std::min<std::int64_t>(g.p1[a] + 1, v.dims[a] - 1) - lo[a] + 1;
+                    cnt[a] = std::min<std::int64_t>(g.p1[a] + 1, w.dims[a] - 1) - lo[a] + 1;
                 }
                 dispatch_voxel_type(v.type, [&](auto tag) {
                     using T = decltype(tag);
-                    const Block<T> b = load_block<T>(v, idx, lo, cnt, sc);
+                    const Block<T> b = load_block<T>(w, idx, lo, cnt, sc);
                     std::set<double> present;
                     for (std::int64_t z = g.p0[2]; z <= g.p1[2]; ++z)
                         for (std::int64_t y = g.p0[1]; y <= g.p1[1]; ++y)
@@ -774,9 +963,31 @@ std::vector<LabelSurface> extract_labels(const Volume& v, std::span<const double
         });
     });
     if (cancelled) throw Cancelled("extract_labels");
+    return surfaces;
+}
+} // namespace
+
+std::vector<ChunkedSurface> extract_label_chunks(const VolumeWindow& w, const ChunkIndex& index,
+                                                 std::span<const double> labels, std::span<const std::size_t> ids,
+                                                 const ExtractOptions& opt) {
+    ExtractOptions o = opt;
+    o.threads = effective_threads(opt.threads);
+    return label_chunks(w, index, o, labels, ids);
+}
+
+std::vector<LabelSurface> extract_labels(const Volume& v, std::span<const double> wanted, const ExtractOptions& opt_in) {
+    std::vector<double> labels(wanted.begin(), wanted.end());
+    if (labels.empty()) labels = distinct_labels(v);
+    std::sort(labels.begin(), labels.end());
+    labels.erase(std::unique(labels.begin(), labels.end()), labels.end());
+    Extractor x(v, opt_in);
+    const auto& idx = x.index();
+    std::vector<std::size_t> ids;
+    for (std::size_t id = 0; id < idx.chunk_count(); ++id) ids.push_back(id);
+    auto surfaces = label_chunks(VolumeWindow::whole(v), idx, x.options(), labels, ids);
     std::vector<LabelSurface> out;
     for (std::size_t l = 0; l < labels.size(); ++l) {
-        out.push_back({labels[l], weld(surfaces[l], opt.threads)});
+        out.push_back({labels[l], weld(surfaces[l], x.options().threads)});
         surfaces[l] = ChunkedSurface{};
     }
     return out;

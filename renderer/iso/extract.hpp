@@ -29,6 +29,7 @@
 #include <span>
 #include <vector>
 
+#include <glm/mat4x4.hpp>
 #include <glm/vec3.hpp>
 
 #include "io/mesh.hpp"
@@ -56,11 +57,61 @@ struct IndexBox {
     bool empty() const { return hi[0] < lo[0] || hi[1] < lo[1] || hi[2] < lo[2]; }
 };
 
+// A window of a bigger volume (out-of-core streaming, MPI ranks): `slab`
+// holds the k-slices [k0, k0 + slab->dims[2] - 1] of a volume of `dims`
+// whose index->LPS affine is `index_to_lps`; slab->dims[0..1] == dims[0..1].
+// Chunk ids, vertex keys, chunk-border flags and the one-sided gradients at
+// the volume's border are those of the whole volume.
+struct VolumeWindow {
+    const Volume* slab = nullptr;
+    std::array<std::int64_t, 3> dims{0, 0, 0};
+    std::int64_t k0 = 0;
+    glm::dmat4 index_to_lps{1.0};
+    // The whole of `v` as a window of itself.
+    static VolumeWindow whole(const Volume& v) { return {&v, v.dims, 0, v.index_to_lps}; }
+};
+
+class ChunkIndex;
+
+// Per-chunk summaries gathered slab by slab (or rank by rank) before the
+// whole volume's value range is known: finite min/max and which non-finite
+// values each chunk holds. finish() makes the ChunkIndex the in-memory
+// constructor would make from the whole volume (same NaN substitute, same
+// Inf clamps, same per-chunk min/max). Plain arrays, so that MPI ranks can
+// reduce them (MPI_MIN on finite_min/lowest, MPI_MAX on finite_max/highest,
+// MPI_BOR on flags) before finish().
+struct ChunkSummaries {
+    enum Flag : std::uint8_t { kNaN = 1, kPosInf = 2, kNegInf = 4 };
+    ChunkSummaries() = default;
+    ChunkSummaries(std::array<std::int64_t, 3> dims, int chunk_size, VoxelType type);
+    std::array<std::int64_t, 3> dims{0, 0, 0};
+    int chunk_size = 0;
+    VoxelType type = VoxelType::F32;       // of the samples (F32 for sparse volumes)
+    std::array<int, 3> counts{0, 0, 0};
+    std::vector<double> finite_min, finite_max; // +max / lowest where a chunk has no finite sample yet
+    std::vector<std::uint8_t> flags;
+    double lowest = 0, highest = 0;        // finite range of every sample added (lowest > highest: none yet)
+    // Adds the samples of a slab (window.dims/chunk size must match).
+    void add(const VolumeWindow& w);
+    // Combines summaries of other samples of the same volume.
+    void merge(const ChunkSummaries& o);
+    ChunkIndex finish() const;
+};
+
 // Min/max of the samples of every chunk (including its shared upper border).
 class ChunkIndex {
 public:
     ChunkIndex() = default;
     ChunkIndex(const Volume& v, int chunk_size, int threads = 0);
+    // From plain arrays (one entry per chunk id, as min()/max() give them) and
+    // the whole volume's finite range (as Volume::value_range() gives it; 0, 0
+    // for integer data): MPI ranks gather these.
+    ChunkIndex(std::array<std::int64_t, 3> dims, int chunk_size, std::vector<double> min, std::vector<double> max,
+               double lowest, double highest);
+    const std::vector<double>& mins() const { return min_; }
+    const std::vector<double>& maxs() const { return max_; }
+    // Chunk ids of the chunk layer(s) [layer0, layer1] (k index of the chunk).
+    std::size_t layer_size() const { return std::size_t(counts_[0]) * std::size_t(counts_[1]); }
 
     int chunk_size() const { return chunk_size_; }
     std::array<std::int64_t, 3> dims() const { return dims_; }
@@ -133,6 +184,22 @@ public:
     // (after the memory budget), or none, is not used: a fresh one is made.
     // The caller vouches that the samples did not change since it was made.
     Extractor(const Volume& volume, ExtractOptions opt, std::shared_ptr<const ChunkIndex> index);
+    // An extractor of a window of a bigger volume, with that volume's index
+    // (required: its chunk size is used, opt.chunk_size is ignored). Only
+    // extract_chunks() and extract() (of the chunks inside the window) work
+    // on it; update() is refused.
+    Extractor(const VolumeWindow& window, ExtractOptions opt, std::shared_ptr<const ChunkIndex> index);
+
+    // The first and last sample k (inclusive) a chunk layer needs, its
+    // gradient halo included: a window must hold them to extract the layer.
+    static std::array<std::int64_t, 2> layer_samples(std::array<std::int64_t, 3> dims, int chunk_size, int layer);
+
+    // Extracts the chunks `ids` (global ids; each must lie with its halo inside
+    // the window, else iso::Error) for every iso value: the surfaces have one
+    // entry per chunk of the whole volume, empty outside `ids`. Bit-identical
+    // to what extract() of the whole volume gives for those chunks.
+    std::vector<ChunkedSurface> extract_chunks(std::span<const double> isos, std::span<const std::size_t> ids,
+                                               ExtractStats* stats = nullptr) const;
 
     const ChunkIndex& index() const { return *index_; }
     // The index to hand to a later extractor of the same volume (shared, immutable).
@@ -150,6 +217,7 @@ public:
 
 private:
     const Volume* volume_;
+    VolumeWindow window_;
     ExtractOptions opt_;
     std::shared_ptr<const ChunkIndex> index_; // copied on write by update()
 };
@@ -157,7 +225,12 @@ private:
 // Welds a chunked surface into one indexed mesh: border vertices merged by
 // key, collapsed triangles dropped, zero-gradient normals replaced by the
 // area-weighted face normal.
-Mesh weld(const ChunkedSurface& s, int threads = 0);
+// `map` (optional) receives, per chunk, every local vertex's index in the
+// welded mesh (streaming uses it to name the seam vertices of a piece).
+struct WeldMap {
+    std::vector<std::vector<std::uint32_t>> remap;
+};
+Mesh weld(const ChunkedSurface& s, int threads = 0, WeldMap* map = nullptr);
 
 // Label maps: one surface per label, all in one pass over the chunks. Each
 // surface bounds the samples equal to its label (vertices at edge midpoints,
@@ -169,6 +242,11 @@ struct LabelSurface {
 };
 std::vector<LabelSurface> extract_labels(const Volume& v, std::span<const double> labels = {},
                                          const ExtractOptions& opt = {});
+// The label surfaces' chunks `ids` of a window (streaming): one chunked
+// surface per label in `labels` (sorted, as given), to weld by the caller.
+std::vector<ChunkedSurface> extract_label_chunks(const VolumeWindow& w, const ChunkIndex& index,
+                                                 std::span<const double> labels, std::span<const std::size_t> ids,
+                                                 const ExtractOptions& opt = {});
 // The distinct non-zero values of a volume, sorted; throws when there are
 // more than `limit` (the volume is then not a label map).
 std::vector<double> distinct_labels(const Volume& v, std::size_t limit = 4096);

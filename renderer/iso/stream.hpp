@@ -1,0 +1,77 @@
+// Out-of-core isosurface extraction (docs/isosurface.md, "Out of core").
+//
+// The volume is read in slabs of whole chunk layers (plus the one-sample
+// gradient halo), each slab's chunks are extracted with the in-memory
+// extractor working on a window (extract.hpp, VolumeWindow), welded into one
+// piece, and handed to a MeshSink (io/mesh_sink.hpp) with the keys of its
+// seam vertices. At most `memory_budget` bytes of samples, scratch and output
+// are held (the engine's own accounting: StreamStats::peak_bytes).
+#pragma once
+
+#include <cstddef>
+#include <limits>
+#include <memory>
+#include <vector>
+
+#include "io/mesh_sink.hpp"
+#include "io/volume_stream.hpp"
+#include "renderer/iso/extract.hpp"
+
+namespace iso {
+
+struct StreamOptions {
+    std::vector<double> isos;            // one surface each ...
+    bool labels = false;                 // ... or label surfaces:
+    std::vector<double> label_values;    //   these labels (empty: every non-zero value, found in the index pass)
+    ExtractOptions extract;              // chunk size (shrunk to fit), normals, threads; its memory_budget is set from below
+    std::size_t memory_budget = std::size_t(256) << 20;
+    // The chunks to extract, [first_chunk, last_chunk) in global ids (MPI
+    // ranks pass their own range); the default is the whole volume.
+    std::size_t first_chunk = 0, last_chunk = std::numeric_limits<std::size_t>::max();
+    // The whole volume's index, when the caller has it (MPI: gathered across
+    // ranks); else it is made by a pass over the file (floating-point data,
+    // label discovery) or slab by slab while extracting (integer data).
+    std::shared_ptr<const ChunkIndex> index;
+    ProgressFn progress;
+};
+
+struct StreamPlan {
+    int chunk_size = 0;
+    int layers_per_slab = 0;              // chunk layers per slab
+    std::size_t slabs = 0;                // pieces per surface
+    int first_layer = 0, last_layer = -1; // chunk layers of [first_chunk, last_chunk)
+    std::size_t slab_bytes = 0;           // samples of one slab, halo included
+    std::size_t fixed_bytes = 0;          // index, scratch, per-chunk tables
+    std::size_t output_estimate = 0;      // per slab
+};
+
+struct StreamStats {
+    StreamPlan plan;
+    bool index_pass = false;
+    std::size_t slabs_read = 0, slabs_skipped = 0, chunks_visited = 0;
+    // The engine's own accounting of what it held at once: slab samples,
+    // extraction scratch and chunk meshes, the welded piece, the index and
+    // the sink's seam maps. Peak resident memory adds the program itself
+    // (code, libraries, allocator slack): docs/isosurface.md states the constant.
+    std::size_t peak_bytes = 0;
+    double read_seconds = 0, extract_seconds = 0, write_seconds = 0;
+    std::vector<double> values;            // the iso values or labels, one per surface
+};
+
+// Plans the slabs for a budget (the chunk size halves until one chunk layer
+// fits, down to 4; below that iso::Error names --memory and the size needed).
+StreamPlan plan_stream(const VolumeHeader& h, const StreamOptions& opt, const ChunkIndex* index = nullptr);
+
+// Builds the whole volume's chunk index in one sequential pass (slabs as
+// large as the budget allows). `labels_out` (optional): the distinct
+// non-zero values seen (at most 4096, else iso::Error: not a label map).
+std::shared_ptr<const ChunkIndex> build_chunk_index(VolumeStream& src, int chunk_size, std::size_t memory_budget,
+                                                    const ProgressFn& progress = {},
+                                                    std::vector<double>* labels_out = nullptr);
+
+// Streams the extraction into `sink` (begin, pieces, finish). Throws
+// iso::Error (bad input, budget too small) or iso::Cancelled; the sink's
+// outputs are then never moved into place.
+StreamStats stream_extract(VolumeStream& src, const StreamOptions& opt, MeshSink& sink);
+
+} // namespace iso
