@@ -280,6 +280,7 @@ struct MeshArgs {
     bool labels = false;
     iso::PostProcessOptions post;
     int threads = 0, chunk = 32;
+    double memory_mib = 0; // under mpirun: per rank (0: default_rank_budget())
 };
 
 CLI::App* add_mesh(CLI::App& app, MeshArgs& a) {
@@ -294,6 +295,10 @@ CLI::App* add_mesh(CLI::App& app, MeshArgs& a) {
     c->add_option("--series", a.series, "DICOM series to load: index or SeriesInstanceUID");
     c->add_option("--threads", a.threads, "Threads (default: all cores)")->check(CLI::NonNegativeNumber);
     c->add_option("--chunk", a.chunk, "Chunk size in cells per side")->check(CLI::Range(2, 1024));
+#ifdef ISOSCOPE_MPI
+    c->add_option("--memory", a.memory_mib, "Under mpirun: MiB of samples and slab output per rank (default: a quarter of "
+                                            "the node's memory shared by its ranks)")->check(CLI::PositiveNumber);
+#endif
     c->add_option("-o,--output", a.out, "Output " + iso::mesh_extensions_text() + " (several surfaces: NAME-iso<V>.ext)")->required();
     return c;
 }
@@ -317,6 +322,7 @@ int run_mesh_mpi(const MeshArgs& a) {
     r.isos = a.labels ? a.label_values : a.isos;
     r.extract.threads = a.threads;
     r.extract.chunk_size = a.chunk;
+    r.memory_budget = a.memory_mib > 0 ? std::size_t(a.memory_mib * 1048576.0) : iso::dist::default_rank_budget();
     if (comm.root()) {
         r.progress = progress_bar();
         r.extract.progress = progress_bar();

@@ -4,9 +4,12 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <filesystem>
 #include <regex>
+#include <set>
+#include <unordered_map>
 
 #include <unistd.h>
 
@@ -21,10 +24,13 @@
 #include <vtkXMLPPolyDataWriter.h>
 
 #include "io/atomic_file.hpp"
+#include "io/mesh_sink.hpp"
+#include "io/volume_stream.hpp"
 #include "io/volume_io.hpp"
 #include "io/vtk_mesh.hpp"
 #include "io/vtk_util.hpp"
 #include "renderer/iso/partition.hpp"
+#include "renderer/iso/stream.hpp"
 
 namespace iso::dist {
 
@@ -36,6 +42,14 @@ std::string surface_output_path(const std::string& output, double value, bool la
     char suffix[64];
     std::snprintf(suffix, sizeof suffix, labels ? "-label%g" : "-iso%g", value);
     return (out.parent_path() / (out.stem().string() + suffix + out.extension().string())).string();
+}
+
+std::size_t default_rank_budget() {
+    const long pages = ::sysconf(_SC_PHYS_PAGES), page = ::sysconf(_SC_PAGESIZE);
+    const std::size_t phys = pages > 0 && page > 0 ? std::size_t(pages) * std::size_t(page) : std::size_t(4) << 30;
+    int local = 1;
+    if (const char* e = std::getenv("OMPI_COMM_WORLD_LOCAL_SIZE")) local = std::max(1, std::atoi(e));
+    return std::max<std::size_t>(phys / 4 / std::size_t(local), std::size_t(64) << 20);
 }
 
 namespace {
@@ -64,19 +78,59 @@ std::vector<ChunkRange> decode_plan(const std::string& bytes) {
     return plan;
 }
 
-// The sample box whose chunks' extraction gives every chunk of `r` (the
-// chunk layers it spans).
-IndexBox range_box(const ChunkIndex& idx, ChunkRange r) {
-    IndexBox box;
-    if (r.empty()) return box;
-    const auto n = idx.counts();
-    const std::size_t layer = std::size_t(n[0]) * n[1];
-    const std::int64_t C = idx.chunk_size(), z0 = std::int64_t(r.first / layer), z1 = std::int64_t((r.last - 1) / layer);
-    const auto d = idx.dims();
-    box.lo = {0, 0, z0 * C};
-    box.hi = {d[0] - 1, d[1] - 1, std::min((z1 + 1) * C, d[2] - 1)};
-    return box;
-}
+// Joins the pieces the streaming driver makes of this rank's range (one per
+// slab) into one piece per surface: vertices on the seams between its own
+// slabs are merged by key; those whose chunks reach outside the rank's range
+// are its seam with the other ranks. The rank's output is held until it is
+// written (the input is streamed: docs/cluster.md, "Memory per rank").
+class RankSink final : public MeshSink {
+public:
+    RankSink(std::size_t surfaces, ChunkRange range, std::array<std::int64_t, 3> dims, int chunk_size)
+        : range_(range), dims_(dims), C_(chunk_size), out_(surfaces), keys_(surfaces) {}
+    void begin(std::size_t surfaces, std::size_t, bool normals) override {
+        if (surfaces != out_.size()) throw Error("isoscope mesh", "the streaming driver made another number of surfaces");
+        normals_ = normals;
+    }
+    void piece(MeshPiece&& p) override {
+        if (p.surface >= out_.size()) throw Error("isoscope mesh", "piece of an unknown surface");
+        Mesh& m = out_[p.surface].mesh;
+        auto& keys = keys_[p.surface];
+        constexpr std::uint32_t kNew = 0xFFFFFFFFu;
+        std::vector<std::uint32_t> remap(p.mesh.positions.size(), kNew);
+        for (const auto* list : {&p.lower, &p.upper})
+            for (const auto& [key, v] : *list)
+                if (auto it = keys.find(key); it != keys.end()) remap[v] = it->second;
+        for (std::size_t v = 0; v < remap.size(); ++v) {
+            if (remap[v] != kNew) continue;
+            remap[v] = std::uint32_t(m.positions.size());
+            m.positions.push_back(p.mesh.positions[v]);
+            if (normals_ && v < p.mesh.normals.size()) m.normals.push_back(p.mesh.normals[v]);
+        }
+        for (const auto* list : {&p.lower, &p.upper})
+            for (const auto& [key, v] : *list) keys.try_emplace(key, remap[v]);
+        m.triangles.reserve(m.triangles.size() + p.mesh.triangles.size());
+        for (const auto& t : p.mesh.triangles) m.triangles.push_back({remap[t[0]], remap[t[1]], remap[t[2]]});
+    }
+    void finish() override {}
+    std::vector<MeshStats> stats() const override { return {}; }
+    // Surface s's piece, with its seam (keys other ranks can hold), sorted.
+    SurfacePiece take(std::size_t s) {
+        SurfacePiece p = std::move(out_[s]);
+        for (const auto& [key, v] : keys_[s])
+            if (key_leaves_range(key, range_, dims_, C_)) p.seam.emplace_back(key, v);
+        std::sort(p.seam.begin(), p.seam.end());
+        keys_[s] = {};
+        return p;
+    }
+
+private:
+    ChunkRange range_;
+    std::array<std::int64_t, 3> dims_;
+    int C_;
+    bool normals_ = true;
+    std::vector<SurfacePiece> out_;
+    std::vector<std::unordered_map<std::uint64_t, std::uint32_t>> keys_;
+};
 
 // A piece as VTK's parallel writer wants it: every piece with the same
 // arrays, even an empty one (rank 0's piece, empty or not, describes the
@@ -187,33 +241,93 @@ DistMeshResult mesh_distributed(const Comm& comm, const DistMeshRequest& req) {
         if (root) check_writable_destination(req.output);
     });
 
-    // 2. The volume. Every rank reads the whole volume for now (in-memory
-    // readers); the chunk ranges below decide what each rank extracts.
-    Volume v;
+    // 2. The header (every rank; formats that cannot stream are loaded whole
+    // when they fit the budget, as in one process).
+    std::unique_ptr<VolumeStream> src;
     agreed(comm, [&] {
         LoadOptions lo;
         lo.series = req.series;
-        lo.progress = progress;
-        v = load_volume(req.input, lo);
+        src = open_volume_stream(req.input, req.memory_budget, lo);
     });
-    if (root) res.warnings = v.meta.warnings;
+    const VolumeHeader& h = src->header();
+    if (root) res.warnings = h.meta.warnings;
 
-    // 3. The surfaces' values and the index.
-    std::vector<double> values = req.isos;
-    std::unique_ptr<Extractor> x;
-    agreed(comm, [&] {
-        if (req.labels && values.empty()) values = distinct_labels(v);
+    // 3. The chunk size (rank 0's plan, broadcast: it depends on the thread
+    // count, which may differ between nodes) and the index, built in
+    // parallel: each rank summarizes an equal share of the chunk layers, then
+    // the per-chunk arrays are reduced (MIN, MAX, OR) on every rank.
+    StreamOptions so;
+    so.isos = req.labels ? std::vector<double>{} : req.isos;
+    so.labels = req.labels;
+    so.label_values = req.labels ? req.isos : std::vector<double>{};
+    so.extract = req.extract;
+    so.memory_budget = req.memory_budget;
+    int C = 0;
+    {
+        std::string mine;
+        agreed(comm, [&] {
+            if (root) mine = std::to_string(plan_stream(h, so, nullptr).chunk_size);
+        });
+        C = std::stoi(comm.broadcast(mine));
+    }
+    std::vector<double> values = req.labels ? so.label_values : so.isos;
+    std::shared_ptr<const ChunkIndex> index;
+    {
+        ChunkSummaries sum(h.dims, C, h.type);
+        const int layers = sum.counts[2];
+        const int L0 = int(std::int64_t(layers) * comm.rank() / comm.size());
+        const int L1 = int(std::int64_t(layers) * (comm.rank() + 1) / comm.size());
+        // Disjoint k-slices: chunk layer l starts at sample l*C; the last share
+        // runs to the last slice. (ChunkSummaries::add credits each sample to
+        // every chunk holding it, so no slice is read twice.)
+        const std::int64_t k_begin = std::int64_t(L0) * C;
+        const std::int64_t k_end = comm.rank() + 1 == comm.size() ? h.dims[2] : std::int64_t(L1) * C;
+        const std::size_t slice = std::size_t(h.dims[0] * h.dims[1]) * voxel_size(h.type);
+        const std::size_t fixed = 3 * sum.finite_min.size() * (2 * sizeof(double) + 1);
+        const std::int64_t per =
+            std::max<std::int64_t>(1, req.memory_budget > fixed ? std::int64_t((req.memory_budget - fixed) / slice) : 1);
+        const bool find_labels = req.labels && values.empty();
+        std::set<double> labels;
+        agreed(comm, [&] {
+            for (std::int64_t k0 = k_begin; k0 < k_end; k0 += per) {
+                const std::int64_t k1 = std::min(k0 + per - 1, k_end - 1);
+                report(progress, double(k0 - k_begin) / double(std::max<std::int64_t>(k_end - k_begin, 1)), "indexing volume",
+                       "isoscope mesh");
+                const Volume slab = src->read_slab(k0, k1);
+                sum.add({&slab, h.dims, k0, h.index_to_lps});
+                if (find_labels) {
+                    for (double v : distinct_labels(slab)) labels.insert(v);
+                    if (labels.size() > 4096)
+                        throw Error(h.path, "has more than 4096 distinct values: it does not look like a label map");
+                }
+            }
+        });
+        sum.finite_min = comm.allreduce_min(sum.finite_min);
+        sum.finite_max = comm.allreduce_max(sum.finite_max);
+        sum.flags = comm.allreduce_bor(sum.flags);
+        const double range[2] = {-sum.lowest, sum.highest}; // one MAX for both ends
+        const auto r = comm.allreduce_max(range);
+        sum.lowest = -r[0];
+        sum.highest = r[1];
+        if (find_labels) {
+            const std::vector<double> mine(labels.begin(), labels.end());
+            auto all = comm.allgatherv(mine);
+            std::sort(all.begin(), all.end());
+            all.erase(std::unique(all.begin(), all.end()), all.end());
+            values = all;
+            so.label_values = all;
+        }
+        agreed(comm, [&] {
+            if (values.size() > 4096) throw Error(h.path, "has more than 4096 distinct values: it does not look like a label map");
+            index = std::make_shared<const ChunkIndex>(sum.finish());
+        });
+    }
+    so.index = index;
+    const ChunkIndex& idx = *index;
+    if (req.labels) {
         std::sort(values.begin(), values.end());
         values.erase(std::unique(values.begin(), values.end()), values.end());
-        if (!req.labels) values = req.isos; // iso values keep the user's order, as the in-memory path does
-        if (req.labels) throw Error("isoscope mesh", "--labels under mpirun is not available yet");
-        for (double iso : values)
-            if (!std::isfinite(iso)) throw Error("extract", "iso value is not a finite number");
-        x = std::make_unique<Extractor>(v, req.extract);
-    });
-    // Held: update() below replaces the extractor's index with a refreshed copy.
-    const std::shared_ptr<const ChunkIndex> index = x->shared_index();
-    const ChunkIndex& idx = *index;
+    }
 
     // 4. The plan, made on rank 0 and broadcast so every rank holds the same.
     {
@@ -232,15 +346,16 @@ DistMeshResult mesh_distributed(const Comm& comm, const DistMeshRequest& req) {
     }
     const ChunkRange mine = res.plan[std::size_t(comm.rank())];
 
-    // 5. Extraction of this rank's chunks.
-    std::vector<ChunkedSurface> surfaces(values.size());
+    // 5. Streaming extraction of this rank's chunks (only the slabs its
+    // active chunks need are read), its slabs' pieces joined into one piece.
+    RankSink sink(values.size(), mine, idx.dims(), idx.chunk_size());
     agreed(comm, [&] {
-        for (std::size_t i = 0; i < values.size(); ++i) {
-            surfaces[i].iso = values[i];
-            surfaces[i].chunks.resize(idx.chunk_count());
-        }
-        if (!mine.empty()) x->update(range_box(idx, mine), surfaces);
+        so.first_chunk = mine.first;
+        so.last_chunk = mine.last;
+        so.progress = progress;
+        stream_extract(*src, so, sink);
     });
+    src.reset();
 
     // 6. Per surface: weld the piece, reduce the statistics, write.
     vtkNew<vtkMPIController> ctrl;
@@ -252,11 +367,7 @@ DistMeshResult mesh_distributed(const Comm& comm, const DistMeshRequest& req) {
         std::snprintf(name, sizeof name, req.labels ? "label %g" : "iso %g", values[i]);
         out.name = name;
         out.path = surface_output_path(req.output, values[i], req.labels, values.size());
-        SurfacePiece piece;
-        agreed(comm, [&] {
-            piece = weld_piece(surfaces[i], mine, idx.dims(), idx.chunk_size());
-            surfaces[i] = ChunkedSurface{};
-        });
+        SurfacePiece piece = sink.take(i);
         const auto [lo, hi] = piece_bounds(piece.mesh);
         const double lo3[3] = {lo.x, lo.y, lo.z}, hi3[3] = {hi.x, hi.y, hi.z};
         const auto glo = comm.allreduce_min(lo3), ghi = comm.allreduce_max(hi3);

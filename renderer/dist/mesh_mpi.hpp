@@ -22,6 +22,9 @@ struct DistMeshRequest {
     std::vector<double> isos;        // iso values, or with `labels` the labels (empty: every label)
     bool labels = false;
     ExtractOptions extract;          // chunk size, threads, normals
+    // Per rank: samples read at once, extraction scratch and the slab's
+    // output (the streaming driver's budget); the rank's whole output comes on top.
+    std::size_t memory_budget = std::size_t(1) << 30;
     ProgressFn progress;             // rank 0's progress (other ranks: none)
 };
 
@@ -43,6 +46,10 @@ struct DistMeshResult {
 
 // Throws iso::Error on every rank when any rank fails (Comm::agree).
 DistMeshResult mesh_distributed(const Comm& comm, const DistMeshRequest& req);
+
+// The default per-rank budget: a quarter of this node's physical memory
+// shared by the ranks on this node (OMPI_COMM_WORLD_LOCAL_SIZE), at least 64 MiB.
+std::size_t default_rank_budget();
 
 // The file names the surfaces go to: `output` itself for one surface, else
 // OUT-iso<V>.pvtp / OUT-label<L>.pvtp (as `isoscope mesh` names them).

@@ -101,6 +101,10 @@ std::vector<std::uint64_t> Comm::allreduce_sum(std::span<const std::uint64_t> x)
     return allreduce(x, MPI_UINT64_T, MPI_SUM);
 }
 
+std::vector<std::uint8_t> Comm::allreduce_bor(std::span<const std::uint8_t> x) const {
+    return allreduce(x, MPI_UINT8_T, MPI_BOR);
+}
+
 std::vector<double> Comm::allgatherv(std::span<const double> mine) const {
     // Counts are ints in MPI-3: 2^31 doubles per rank (16 GiB) is far beyond a
     // chunk index (2048^3 at 32 cells per chunk: 262144 chunks).

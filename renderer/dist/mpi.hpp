@@ -66,6 +66,7 @@ public:
     std::vector<double> allreduce_min(std::span<const double> x) const;
     std::vector<double> allreduce_max(std::span<const double> x) const;
     std::vector<std::uint64_t> allreduce_sum(std::span<const std::uint64_t> x) const;
+    std::vector<std::uint8_t> allreduce_bor(std::span<const std::uint8_t> x) const;
     // Every rank's `mine` concatenated in rank order, on every rank.
     std::vector<double> allgatherv(std::span<const double> mine) const;
     // Every rank's bytes, in rank order, on `root` (empty elsewhere).
