@@ -333,6 +333,10 @@ int run_mesh_mpi(const MeshArgs& a) {
         for (const auto& w : res.warnings) std::cerr << "warning: " << w << "\n";
         std::cout << res.ranks << " ranks, active chunks per rank:";
         for (auto n : res.rank_active) std::cout << ' ' << n;
+        std::cout << ", slabs read:";
+        for (auto n : res.rank_slabs) std::cout << ' ' << n;
+        std::cout << ", engine peak per rank:";
+        for (auto n : res.rank_peak_bytes) std::cout << ' ' << human_bytes(double(n));
         std::cout << "\n";
         for (const auto& s : res.surfaces) {
             const auto& m = s.summary;

@@ -349,13 +349,22 @@ DistMeshResult mesh_distributed(const Comm& comm, const DistMeshRequest& req) {
     // 5. Streaming extraction of this rank's chunks (only the slabs its
     // active chunks need are read), its slabs' pieces joined into one piece.
     RankSink sink(values.size(), mine, idx.dims(), idx.chunk_size());
+    StreamStats st;
     agreed(comm, [&] {
         so.first_chunk = mine.first;
         so.last_chunk = mine.last;
         so.progress = progress;
-        stream_extract(*src, so, sink);
+        st = stream_extract(*src, so, sink);
     });
     src.reset();
+    {
+        const double mine_stats[2] = {double(st.slabs_read), double(st.peak_bytes)};
+        const auto all = comm.allgatherv(mine_stats);
+        for (std::size_t r = 0; r + 1 < all.size(); r += 2) {
+            res.rank_slabs.push_back(std::size_t(all[r]));
+            res.rank_peak_bytes.push_back(std::size_t(all[r + 1]));
+        }
+    }
 
     // 6. Per surface: weld the piece, reduce the statistics, write.
     vtkNew<vtkMPIController> ctrl;

@@ -40,6 +40,8 @@ struct DistMeshResult {
     int ranks = 1;
     std::vector<ChunkRange> plan;    // each rank's chunk ids
     std::vector<std::size_t> rank_active; // active chunks per rank
+    std::vector<std::size_t> rank_slabs;  // slabs each rank read for extraction (the streaming driver's count)
+    std::vector<std::size_t> rank_peak_bytes; // the streaming engine's own peak accounting per rank
     std::vector<DistSurface> surfaces;
     std::vector<std::string> warnings; // the volume's (rank 0)
 };

@@ -164,12 +164,30 @@ TEST(MpiMesh, OneTwoAndFourRanksEqualTheSingleProcess) {
         EXPECT_TRUE(fs::exists(dir / ("n" + std::to_string(n)))) << "piece folder";
         expect_same_surface(out, ref, n, s[0]);
     }
+    // A budget of a few slabs per rank: each rank joins its slabs' pieces
+    // by seam key before writing its one piece.
+    {
+        // Wide slices (160 x 120) so that a 2.2 MiB budget (about 2 MiB of
+        // it fixed: scratch, tables) holds only a layer or two.
+        const std::string wide = dir / "wide.nrrd";
+        save_volume(phantom({160, 120, 40}), wide, false);
+        const Mesh wref = reference(wide, "--iso 500", dir / "wide.vtp");
+        const std::string out = dir / "small.pvtp";
+        const auto r = test::run_command(mpirun(2) + test::cli() + " mesh " + wide + " --iso 500 --chunk 8 --memory 2.2 -o " + out, true);
+        ASSERT_EQ(r.exit_code, 0) << r.out;
+        std::smatch m;
+        ASSERT_TRUE(std::regex_search(r.out, m, std::regex(R"(slabs read: (\d+) (\d+))"))) << r.out;
+        EXPECT_GT(std::stoi(m[1]) + std::stoi(m[2]), 2) << "several slabs on some rank: " << r.out;
+        const auto s = parse(r.out);
+        ASSERT_EQ(s.size(), 1u) << r.out;
+        expect_same_surface(out, wref, 2, s[0]);
+    }
     // Nothing left behind but the outputs: no staging folders.
     for (const auto& e : fs::directory_iterator(dir.path()))
         EXPECT_EQ(e.path().filename().string().find(".isoscope-partial"), std::string::npos) << e.path();
 }
 
-TEST(MpiMesh, RanksThatOwnOnlyEmptyChunksWriteEmptyPieces) {
+TEST(MpiMesh, RanksThatOwnOnlyEmptyChunksTakePartAndWriteNothing) {
     // One small ball inside one 8-cell chunk: one active chunk, so three of the
     // four ranks own only chunks no surface crosses.
     TempDir dir;
@@ -224,8 +242,8 @@ TEST(MpiMesh, FailuresAreErrorsNotHangs) {
     TempDir dir;
     const std::string in = dir / "phantom.nhdr";
     save_volume(phantom({40, 30, 36}), in, false);
-    // A raw file missing its last slices: every rank fails to read it; the
-    // job ends (timeout 60 would say 124) with one message naming the file.
+    // A raw file missing its last slices: every rank's header check finds it;
+    // the job ends (timeout 60 would say 124) with one message naming the file.
     {
         const fs::path raw = fs::path(dir / "phantom.raw");
         ASSERT_TRUE(fs::exists(raw));
@@ -236,6 +254,32 @@ TEST(MpiMesh, FailuresAreErrorsNotHangs) {
         EXPECT_NE(r.out.find("rank 0"), std::string::npos) << r.out;
         EXPECT_NE(r.out.find("phantom"), std::string::npos) << r.out;
         EXPECT_FALSE(fs::exists(dir / "t.pvtp"));
+    }
+    // A gzip NRRD whose compressed stream is damaged near its end: only the
+    // last of 4 ranks reads that far (the index pass gives each rank a quarter
+    // of the slices, the extraction only its own chunks' slabs); the others
+    // learn of it at the next agreement, and every rank exits non-zero.
+    {
+        const std::string gz = dir / "damaged.nrrd";
+        save_volume(phantom({40, 30, 48}), gz, true);
+        std::fstream f(gz, std::ios::in | std::ios::out | std::ios::binary);
+        f.seekg(0, std::ios::end);
+        const auto size = std::streamoff(f.tellg());
+        std::string tail(20, '\0');
+        f.seekg(size - 60);
+        f.read(tail.data(), 20);
+        for (auto& c : tail) c = char(c ^ 0x5a);
+        f.seekp(size - 60);
+        f.write(tail.data(), 20);
+        f.close();
+        const auto r = test::run_command(mpirun(4) + test::cli() + " mesh " + gz + " --iso 500 --chunk 8 -o " + (dir / "d.pvtp"), true);
+        EXPECT_NE(r.exit_code, 0) << r.out;
+        EXPECT_NE(r.exit_code, 124) << "the job hung: " << r.out;
+        EXPECT_NE(r.out.find("isoscope: error: rank 3: "), std::string::npos) << r.out;
+        EXPECT_EQ(r.out.find("other rank"), std::string::npos) << "only the last rank reads the damaged end: " << r.out;
+        EXPECT_NE(r.out.find("damaged.nrrd"), std::string::npos) << r.out;
+        EXPECT_FALSE(fs::exists(dir / "d.pvtp"));
+        EXPECT_FALSE(fs::exists(dir / "d"));
     }
     // A failure on rank 0 only (a folder of the user's where the pieces would
     // go): the other ranks learn of it at the next agreement and stop too; the
@@ -261,4 +305,43 @@ TEST(MpiMesh, FailuresAreErrorsNotHangs) {
     }
     for (const auto& e : fs::directory_iterator(dir.path()))
         EXPECT_EQ(e.path().filename().string().find(".isoscope-partial"), std::string::npos) << "staging left: " << e.path();
+}
+
+TEST(MpiMesh, LabelSurfacesEqualTheSingleProcess) {
+    // A uint8 label map: two nested labels and a separate one.
+    TempDir dir;
+    const std::string in = dir / "labels.nii";
+    const std::array<std::int64_t, 3> d{36, 30, 40};
+    Volume v = Volume::dense(d, VoxelType::U8, make_affine(glm::dvec3(0.9, 1.0, 1.2), glm::dvec3(3, -2, 1), glm::dmat3(1.0)));
+    auto s = v.as<std::uint8_t>();
+    for (std::int64_t k = 0; k < d[2]; ++k)
+        for (std::int64_t j = 0; j < d[1]; ++j)
+            for (std::int64_t i = 0; i < d[0]; ++i) {
+                const glm::dvec3 p(i, j, k);
+                std::uint8_t l = 0;
+                if (glm::length(p - glm::dvec3(14, 14, 16)) < 10) l = 1;
+                if (glm::length(p - glm::dvec3(14, 14, 16)) < 5) l = 2;
+                if (glm::length(p - glm::dvec3(28, 20, 32)) < 5) l = 7;
+                s[v.linear_index(i, j, k)] = l;
+            }
+    save_volume(v, in, false);
+    for (int n : {2, 4}) {
+        SCOPED_TRACE(n);
+        const std::string out = dir / ("l" + std::to_string(n) + ".pvtp");
+        const auto r = test::run_command(mpirun(n) + test::cli() + " mesh " + in + " --labels --chunk 8 -o " + out, true);
+        ASSERT_EQ(r.exit_code, 0) << r.out;
+        const auto sums = parse(r.out);
+        ASSERT_EQ(sums.size(), 3u) << "labels 1, 2 and 7 found across ranks: " << r.out;
+        int i = 0;
+        for (int label : {1, 2, 7}) {
+            SCOPED_TRACE(label);
+            const std::string tag = "-label" + std::to_string(label);
+            const Mesh ref = reference(in, "--labels --label " + std::to_string(label), dir / ("ref" + tag + ".vtp"));
+            ASSERT_GT(ref.triangles.size(), 50u);
+            const ReadBack got = read_pvtp(dir / ("l" + std::to_string(n) + tag + ".pvtp"));
+            expect_same_surface(dir / ("l" + std::to_string(n) + tag + ".pvtp"), ref, got.pieces, sums[std::size_t(i++)]);
+            EXPECT_GE(got.pieces, 1);
+            EXPECT_LE(got.pieces, n);
+        }
+    }
 }
