@@ -18,18 +18,17 @@
 #include <unordered_map>
 
 #include <glm/glm.hpp>
-#include <vtkCellArray.h>
 #include <vtkFieldData.h>
 #include <vtkFloatArray.h>
 #include <vtkNew.h>
 #include <vtkPointData.h>
-#include <vtkPoints.h>
 #include <vtkPolyData.h>
 #include <vtkStringArray.h>
 #include <vtkXMLPPolyDataWriter.h>
 #include <vtkXMLPolyDataWriter.h>
 
 #include "io/atomic_file.hpp"
+#include "io/vtk_mesh.hpp"
 #include "io/vtk_util.hpp"
 
 namespace iso {
@@ -142,26 +141,14 @@ protected:
 
 // ---- .pvtp: one .vtp per piece through VTK's parallel XML writer -----------
 
+// The piece as save_mesh() would give it to VTK (to_polydata), with an empty
+// "Normals" array on empty pieces so that every piece declares the same arrays.
 vtkSmartPointer<vtkPolyData> piece_polydata(const Mesh& m, bool normals) {
-    auto pd = vtkSmartPointer<vtkPolyData>::New();
-    vtkNew<vtkPoints> pts;
-    pts->SetDataTypeToFloat();
-    pts->SetNumberOfPoints(vtkIdType(m.positions.size()));
-    for (std::size_t i = 0; i < m.positions.size(); ++i) pts->SetPoint(vtkIdType(i), m.positions[i].x, m.positions[i].y, m.positions[i].z);
-    pd->SetPoints(pts);
-    vtkNew<vtkCellArray> polys;
-    polys->AllocateExact(vtkIdType(m.triangles.size()), vtkIdType(3 * m.triangles.size()));
-    for (const auto& t : m.triangles) {
-        const vtkIdType ids[3] = {t[0], t[1], t[2]};
-        polys->InsertNextCell(3, ids);
-    }
-    pd->SetPolys(polys);
-    if (normals) {
+    auto pd = to_polydata(m, false);
+    if (normals && !pd->GetPointData()->GetNormals()) {
         vtkNew<vtkFloatArray> n;
         n->SetName("Normals");
         n->SetNumberOfComponents(3);
-        n->SetNumberOfTuples(vtkIdType(m.normals.size()));
-        for (std::size_t i = 0; i < m.normals.size(); ++i) n->SetTypedTuple(vtkIdType(i), &m.normals[i].x);
         pd->GetPointData()->SetNormals(n);
     }
     vtkNew<vtkStringArray> space;

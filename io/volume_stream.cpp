@@ -144,9 +144,22 @@ public:
     bool sequential() const override { return true; }
     Volume read_slab(std::int64_t k0, std::int64_t k1) override {
         return read_converted(header_, k0, k1, [&](std::uint64_t at, std::byte* dst, std::size_t n) {
+            // Consecutive slabs overlap by their gradient halo (a few slices):
+            // those come from the copy of the last bytes read, not a restart.
+            if (at < pos_ && at >= pos_ - tail_.size()) {
+                const std::size_t from = tail_.size() - std::size_t(pos_ - at);
+                const std::size_t m = std::min<std::size_t>(n, std::size_t(pos_ - at));
+                std::memcpy(dst, tail_.data() + from, m);
+                at += m;
+                dst += m;
+                n -= m;
+                if (n == 0) return;
+            }
             if (at < pos_) {
                 if (gzrewind(gz_) != 0) throw Error(header_.path, "cannot restart the gzip stream");
                 pos_ = 0;
+                tail_.clear();
+                ++restarts_;
             }
             std::vector<std::byte> skip;
             while (pos_ < at) {
@@ -155,7 +168,19 @@ public:
             }
             get(dst, n, at);
             pos_ += n;
+            // Keep the last few slices read.
+            const std::size_t keep = std::size_t(kTailSlices * header_.dims[0] * header_.dims[1]) * voxel_size(header_.stored);
+            if (n >= keep) {
+                tail_.assign(dst + (n - keep), dst + n);
+            } else {
+                tail_.insert(tail_.end(), dst, dst + n);
+                if (tail_.size() > keep) tail_.erase(tail_.begin(), tail_.begin() + std::ptrdiff_t(tail_.size() - keep));
+            }
         });
+    }
+    std::size_t restarts() const override { return restarts_; }
+    std::size_t resident_bytes() const override {
+        return std::size_t(kTailSlices * header_.dims[0] * header_.dims[1]) * voxel_size(header_.stored);
     }
 
 private:
@@ -176,8 +201,11 @@ private:
         }
         return got;
     }
+    static constexpr std::int64_t kTailSlices = 4; // >= the overlap of consecutive slabs (3 slices)
     gzFile gz_ = nullptr;
     std::uint64_t pos_ = 0;
+    std::vector<std::byte> tail_; // the last bytes read (stored, unconverted)
+    std::size_t restarts_ = 0;
 };
 
 // A volume loaded whole (formats that cannot stream); slabs are copies, or

@@ -41,8 +41,11 @@ public:
     virtual Volume read_slab(std::int64_t k0, std::int64_t k1) = 0;
     // Only forward reading is cheap (gzip): slabs should come in increasing k.
     virtual bool sequential() const { return false; }
-    // Memory this source holds itself (a volume loaded whole; 0 when streaming).
+    // Memory this source holds itself (a volume loaded whole; the last slices
+    // read of a gzip stream, which the next slab's halo reuses).
     virtual std::size_t resident_bytes() const { return 0; }
+    // How often a gzip stream went back to its start (a slab before the last one's halo).
+    virtual std::size_t restarts() const { return 0; }
     // True when the samples are read from the file slab by slab.
     virtual bool streaming() const { return true; }
 

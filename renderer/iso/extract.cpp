@@ -692,12 +692,20 @@ void run_chunks(const VolumeWindow& w, const ChunkIndex& idx, const ExtractOptio
 
 } // namespace
 
-std::vector<ChunkedSurface> Extractor::extract(std::span<const double> isos, ExtractStats* stats) const {
+namespace {
+// One empty chunked surface per iso value; throws for a value that is not finite.
+std::vector<ChunkedSurface> empty_surfaces(std::span<const double> isos) {
     std::vector<ChunkedSurface> out(isos.size());
     for (std::size_t i = 0; i < isos.size(); ++i) {
         if (!std::isfinite(isos[i])) throw Error("extract", "iso value is not a finite number");
         out[i].iso = isos[i];
     }
+    return out;
+}
+} // namespace
+
+std::vector<ChunkedSurface> Extractor::extract(std::span<const double> isos, ExtractStats* stats) const {
+    std::vector<ChunkedSurface> out = empty_surfaces(isos);
     const ChunkIndex& idx = *index_;
     if (window_.slab->dims[2] != window_.dims[2]) {
         // A window: the chunk layers it holds whole, with their halo.
@@ -728,11 +736,7 @@ std::array<std::int64_t, 2> Extractor::layer_samples(std::array<std::int64_t, 3>
 
 std::vector<ChunkedSurface> Extractor::extract_chunks(std::span<const double> isos, std::span<const std::size_t> ids,
                                                       ExtractStats* stats) const {
-    std::vector<ChunkedSurface> out(isos.size());
-    for (std::size_t i = 0; i < isos.size(); ++i) {
-        if (!std::isfinite(isos[i])) throw Error("extract", "iso value is not a finite number");
-        out[i].iso = isos[i];
-    }
+    std::vector<ChunkedSurface> out = empty_surfaces(isos);
     const ChunkIndex& idx = *index_;
     for (auto& s : out) s.chunks.resize(idx.chunk_count());
     const std::int64_t k_last = window_.k0 + window_.slab->dims[2] - 1;

@@ -169,6 +169,11 @@ StreamStats stream_extract(VolumeStream& src, const StreamOptions& opt_in, MeshS
         std::sort(opt.label_values.begin(), opt.label_values.end());
         opt.label_values.erase(std::unique(opt.label_values.begin(), opt.label_values.end()), opt.label_values.end());
     }
+    // What the source holds (a volume loaded whole, a gzip stream's last slices) takes its share of the budget.
+    if (src.resident_bytes() >= opt.memory_budget)
+        throw Error("--memory", std::to_string(opt.memory_budget >> 20) + " MiB is less than the " +
+                                    std::to_string(src.resident_bytes() >> 20) + " MiB the volume's source holds");
+    opt.memory_budget -= src.resident_bytes();
     // 1. The index pass (its share of the progress: 30 %).
     const double index_share = index ? 0.0 : 0.3;
     auto sub = [&](double a, double b) -> ProgressFn {
@@ -188,11 +193,6 @@ StreamStats stream_extract(VolumeStream& src, const StreamOptions& opt_in, MeshS
     }
     const std::vector<double>& values = opt.labels ? opt.label_values : opt.isos;
     st.values = values;
-    // A volume loaded whole (formats that cannot stream) takes its share of the budget.
-    if (src.resident_bytes() >= opt.memory_budget)
-        throw Error("--memory", std::to_string(opt.memory_budget >> 20) + " MiB is less than the " +
-                                    std::to_string(src.resident_bytes() >> 20) + " MiB of the volume loaded whole");
-    opt.memory_budget -= src.resident_bytes();
     const StreamPlan plan = plan_stream(h, opt, index.get());
     st.plan = plan;
     const std::size_t nsurf = values.size();
@@ -302,6 +302,7 @@ StreamStats stream_extract(VolumeStream& src, const StreamOptions& opt_in, MeshS
             st.peak_bytes = std::max(st.peak_bytes, held + sink.memory_bytes());
         }
     }
+    st.source_restarts = src.restarts();
     report(opt.progress, 1.0, opt.labels ? "extracting label surfaces" : "extracting isosurface", "streaming");
     const auto t = Clock::now();
     sink.finish();

@@ -55,6 +55,7 @@ struct StreamStats {
     // (code, libraries, allocator slack): docs/isosurface.md states the constant.
     std::size_t peak_bytes = 0;
     double read_seconds = 0, extract_seconds = 0, write_seconds = 0;
+    std::size_t source_restarts = 0;       // gzip streams rewound (VolumeStream::restarts())
     std::vector<double> values;            // the iso values or labels, one per surface
 };
 
