@@ -345,3 +345,35 @@ TEST(MpiMesh, LabelSurfacesEqualTheSingleProcess) {
         }
     }
 }
+
+TEST(MpiMesh, FloatVolumeWithNaNAndInfEqualsTheSingleProcess) {
+    // Non-finite samples in the first slices only: one rank's share of the
+    // index sees them; the reduced index must still substitute NaN below the
+    // whole volume's finite range and clamp Inf to it, as one process does.
+    TempDir dir;
+    const std::string in = dir / "float.nrrd";
+    const std::array<std::int64_t, 3> d{30, 28, 40};
+    Volume v = Volume::dense(d, VoxelType::F32, make_affine(glm::dvec3(1.0, 0.9, 1.1), glm::dvec3(0.0), glm::dmat3(1.0)));
+    auto s = v.as<float>();
+    for (std::int64_t k = 0; k < d[2]; ++k)
+        for (std::int64_t j = 0; j < d[1]; ++j)
+            for (std::int64_t i = 0; i < d[0]; ++i) {
+                float x = float(8.0 - glm::length(glm::dvec3(i, j, k) - glm::dvec3(15, 14, 8)));
+                if (k < 3 && i < 10) x = std::nanf("");
+                if (k < 3 && i > 24) x = (j % 2) ? INFINITY : -INFINITY;
+                s[v.linear_index(i, j, k)] = x;
+            }
+    save_volume(v, in, false);
+    const Mesh ref = reference(in, "--iso 0.5", dir / "ref.vtp");
+    ASSERT_GT(ref.triangles.size(), 200u);
+    for (int n : {2, 4}) {
+        SCOPED_TRACE(n);
+        const std::string out = dir / ("f" + std::to_string(n) + ".pvtp");
+        const auto r = test::run_command(mpirun(n) + test::cli() + " mesh " + in + " --iso 0.5 --chunk 6 -o " + out, true);
+        ASSERT_EQ(r.exit_code, 0) << r.out;
+        const auto sums = parse(r.out);
+        ASSERT_EQ(sums.size(), 1u) << r.out;
+        const ReadBack got = read_pvtp(out);
+        expect_same_surface(out, ref, got.pieces, sums[0]);
+    }
+}
