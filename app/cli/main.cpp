@@ -343,7 +343,7 @@ int run_mesh_mpi(const MeshArgs& a) {
             std::cout << s.name << ": " << m.triangles << " triangles, " << m.vertices << " vertices, area " << m.area
                       << " mm^2, volume " << m.volume << " mm^3, " << m.components << " components (largest: "
                       << m.largest.triangles << " triangles, area " << m.largest.area << " mm^2, volume "
-                      << m.largest.volume << " mm^3) -> " << s.path << " (" << res.ranks << " pieces)\n";
+                      << m.largest.volume << " mm^3) -> " << s.path << " (" << s.pieces << " pieces from " << res.ranks << " ranks)\n";
         }
         return 0;
     } catch (const iso::dist::AgreedError& e) {

@@ -14,7 +14,6 @@
 #include <unistd.h>
 
 #include <vtkFloatArray.h>
-#include <vtkMPIController.h>
 #include <vtkNew.h>
 #include <vtkPointData.h>
 #include <vtkPolyData.h>
@@ -22,6 +21,7 @@
 #include <vtkStringArray.h>
 #include <vtkFieldData.h>
 #include <vtkXMLPPolyDataWriter.h>
+#include <vtkXMLPolyDataWriter.h>
 
 #include "io/atomic_file.hpp"
 #include "io/mesh_sink.hpp"
@@ -78,60 +78,6 @@ std::vector<ChunkRange> decode_plan(const std::string& bytes) {
     return plan;
 }
 
-// Joins the pieces the streaming driver makes of this rank's range (one per
-// slab) into one piece per surface: vertices on the seams between its own
-// slabs are merged by key; those whose chunks reach outside the rank's range
-// are its seam with the other ranks. The rank's output is held until it is
-// written (the input is streamed: docs/cluster.md, "Memory per rank").
-class RankSink final : public MeshSink {
-public:
-    RankSink(std::size_t surfaces, ChunkRange range, std::array<std::int64_t, 3> dims, int chunk_size)
-        : range_(range), dims_(dims), C_(chunk_size), out_(surfaces), keys_(surfaces) {}
-    void begin(std::size_t surfaces, std::size_t, bool normals) override {
-        if (surfaces != out_.size()) throw Error("isoscope mesh", "the streaming driver made another number of surfaces");
-        normals_ = normals;
-    }
-    void piece(MeshPiece&& p) override {
-        if (p.surface >= out_.size()) throw Error("isoscope mesh", "piece of an unknown surface");
-        Mesh& m = out_[p.surface].mesh;
-        auto& keys = keys_[p.surface];
-        constexpr std::uint32_t kNew = 0xFFFFFFFFu;
-        std::vector<std::uint32_t> remap(p.mesh.positions.size(), kNew);
-        for (const auto* list : {&p.lower, &p.upper})
-            for (const auto& [key, v] : *list)
-                if (auto it = keys.find(key); it != keys.end()) remap[v] = it->second;
-        for (std::size_t v = 0; v < remap.size(); ++v) {
-            if (remap[v] != kNew) continue;
-            remap[v] = std::uint32_t(m.positions.size());
-            m.positions.push_back(p.mesh.positions[v]);
-            if (normals_ && v < p.mesh.normals.size()) m.normals.push_back(p.mesh.normals[v]);
-        }
-        for (const auto* list : {&p.lower, &p.upper})
-            for (const auto& [key, v] : *list) keys.try_emplace(key, remap[v]);
-        m.triangles.reserve(m.triangles.size() + p.mesh.triangles.size());
-        for (const auto& t : p.mesh.triangles) m.triangles.push_back({remap[t[0]], remap[t[1]], remap[t[2]]});
-    }
-    void finish() override {}
-    std::vector<MeshStats> stats() const override { return {}; }
-    // Surface s's piece, with its seam (keys other ranks can hold), sorted.
-    SurfacePiece take(std::size_t s) {
-        SurfacePiece p = std::move(out_[s]);
-        for (const auto& [key, v] : keys_[s])
-            if (key_leaves_range(key, range_, dims_, C_)) p.seam.emplace_back(key, v);
-        std::sort(p.seam.begin(), p.seam.end());
-        keys_[s] = {};
-        return p;
-    }
-
-private:
-    ChunkRange range_;
-    std::array<std::int64_t, 3> dims_;
-    int C_;
-    bool normals_ = true;
-    std::vector<SurfacePiece> out_;
-    std::vector<std::unordered_map<std::uint64_t, std::uint32_t>> keys_;
-};
-
 // A piece as VTK's parallel writer wants it: every piece with the same
 // arrays, even an empty one (rank 0's piece, empty or not, describes the
 // arrays in the .pvtp summary).
@@ -162,65 +108,166 @@ bool replaceable_piece_dir(const fs::path& dir, const std::string& stem) {
     return !ec;
 }
 
-// Writes this rank's piece of `path` (collective). The job writes into a
-// staging folder next to the output; rank 0 moves the piece folder and the
-// summary into place once every rank has written its piece, so a failed job
-// leaves the previous output (or nothing) at `path`, never a mix.
-void write_pieces(const Comm& comm, vtkMPIController* ctrl, const Mesh& m, bool normals, const std::string& path) {
-    const fs::path out(path);
-    const fs::path dir = out.parent_path().empty() ? fs::path(".") : out.parent_path();
-    const std::string stem = out.stem().string();
-    const std::string tag = comm.broadcast(std::to_string(::getpid()));
-    const fs::path staging = dir / ("." + stem + ".isoscope-partial-" + tag);
+// Receives the pieces the streaming driver makes of this rank's range (one
+// per slab and surface) and writes each at once as a .vtp into the job's
+// staging folder under a rank-local name (renamed to its global piece
+// number once every rank's count is known), keeping only its summary: the
+// rank's output is never held whole, so a rank stays within --memory plus
+// one slab's piece (docs/cluster.md, "Memory per rank").
+class RankSink final : public MeshSink {
+public:
+    RankSink(std::vector<fs::path> piece_dirs, std::vector<std::string> stems, int rank, const glm::dvec3& origin)
+        : dirs_(std::move(piece_dirs)), stems_(std::move(stems)), rank_(rank), origin_(origin), sums_(dirs_.size()),
+          files_(dirs_.size()) {}
+    void begin(std::size_t surfaces, std::size_t, bool normals) override {
+        if (surfaces != dirs_.size()) throw Error("isoscope mesh", "the streaming driver made another number of surfaces");
+        normals_ = normals;
+    }
+    void piece(MeshPiece&& p) override {
+        if (p.surface >= dirs_.size()) throw Error("isoscope mesh", "piece of an unknown surface");
+        SurfacePiece sp;
+        sp.mesh = std::move(p.mesh);
+        // Its seam: every vertex another piece can hold (the driver's lower
+        // and upper lists; keys repeated in both are one vertex).
+        sp.seam = std::move(p.lower);
+        sp.seam.insert(sp.seam.end(), p.upper.begin(), p.upper.end());
+        std::sort(sp.seam.begin(), sp.seam.end());
+        sp.seam.erase(std::unique(sp.seam.begin(), sp.seam.end()), sp.seam.end());
+        sums_[p.surface].push_back(summarize_piece(sp, origin_));
+        if (sp.mesh.triangles.empty()) return; // nothing to read: not written, not listed
+        const std::string stem = stems_[p.surface];
+        const fs::path file =
+            dirs_[p.surface] / (stem + "_r" + std::to_string(rank_) + "_" + std::to_string(files_[p.surface].size()) + ".vtp");
+        vtkNew<VtkMessages> msgs;
+        vtkNew<vtkXMLPolyDataWriter> w;
+        msgs->watch(w);
+        const auto pd = piece_polydata(sp.mesh, normals_);
+        w->SetInputData(pd);
+        w->SetFileName(file.string().c_str());
+        w->SetDataModeToAppended();
+        w->SetCompressorTypeToZLib();
+        if (!w->Write() || msgs->has_error())
+            throw Error(file.string(), "cannot write the piece: " + (msgs->has_error() ? msgs->first_error() : "VTK writer failed"));
+        files_[p.surface].push_back(file);
+    }
+    void finish() override {}
+    std::vector<MeshStats> stats() const override { return {}; }
+    bool normals() const { return normals_; }
+    const std::vector<PieceSummary>& summaries(std::size_t s) const { return sums_[s]; }
+    const std::vector<fs::path>& files(std::size_t s) const { return files_[s]; }
+
+private:
+    std::vector<fs::path> dirs_;
+    std::vector<std::string> stems_;
+    int rank_;
+    glm::dvec3 origin_;
+    bool normals_ = true;
+    std::vector<std::vector<PieceSummary>> sums_;
+    std::vector<std::vector<fs::path>> files_;
+};
+
+// The job writes into a staging folder next to the output
+// (.<stem>.isoscope-partial-<rank 0's pid>/<stem_s>/ for each surface's
+// pieces); rank 0 moves each piece folder and then its summary into place
+// once every rank has written and agreed, so a failed job leaves the
+// previous output (or nothing) at the output paths, never a mix.
+struct Staging {
+    fs::path dir;                                 // the staging folder
+    std::vector<fs::path> dests, finals, pieces;  // per surface: the .pvtp, its piece folder, the staged piece folder
+    std::vector<std::string> stems;
+};
+
+Staging prepare_staging(const Comm& comm, const std::vector<std::string>& paths) {
+    Staging st;
+    const fs::path first(paths.front());
+    const fs::path dir = first.parent_path().empty() ? fs::path(".") : first.parent_path();
+    st.dir = dir / ("." + first.stem().string() + ".isoscope-partial-" + comm.broadcast(std::to_string(::getpid())));
+    for (const auto& p : paths) {
+        const fs::path out(p);
+        const fs::path d = out.parent_path().empty() ? fs::path(".") : out.parent_path();
+        st.dests.push_back(out);
+        st.stems.push_back(out.stem().string());
+        st.finals.push_back(d / st.stems.back());
+        st.pieces.push_back(st.dir / st.stems.back());
+    }
     agreed(comm, [&] {
         if (!comm.root()) return;
-        if (!replaceable_piece_dir(dir / stem, stem))
-            throw Error(path, "the piece folder " + (dir / stem).string() +
-                                  " exists and holds other files; it is not replaced (move it or choose another name)");
-        std::error_code ec;
-        fs::create_directories(staging / stem, ec);
-        if (ec) throw Error(path, "cannot create " + staging.string() + ": " + ec.message());
-    });
-    const auto cleanup = [&] {
-        if (!comm.root()) return;
-        std::error_code ec;
-        fs::remove_all(staging, ec);
-    };
-    try {
-        agreed(comm, [&] {
-            vtkNew<VtkMessages> msgs;
-            vtkNew<vtkXMLPPolyDataWriter> w;
-            msgs->watch(w);
-            const auto pd = piece_polydata(m, normals);
-            w->SetInputData(pd);
-            w->SetController(ctrl);
-            w->SetFileName((staging / (stem + ".pvtp")).string().c_str());
-            w->SetNumberOfPieces(comm.size());
-            w->SetStartPiece(comm.rank());
-            w->SetEndPiece(comm.rank());
-            w->SetUseSubdirectory(true); // pieces in <stem>/<stem>_<rank>.vtp
-            w->SetDataModeToAppended();
-            w->SetCompressorTypeToZLib();
-            const int ok = w->Write();
-            if (!ok || msgs->has_error() || w->GetErrorCode() != 0)
-                throw Error(path, "cannot write piece " + std::to_string(comm.rank()) + ": " +
-                                      (msgs->has_error() ? msgs->first_error() : std::string("VTK writer failed")));
-        });
-        agreed(comm, [&] {
-            if (!comm.root()) return;
+        for (std::size_t s = 0; s < paths.size(); ++s)
+            if (!replaceable_piece_dir(st.finals[s], st.stems[s]))
+                throw Error(paths[s], "the piece folder " + st.finals[s].string() +
+                                          " exists and holds other files; it is not replaced (move it or choose another name)");
+        for (const auto& d : st.pieces) {
             std::error_code ec;
-            if (!fs::exists(staging / (stem + ".pvtp"), ec)) throw Error(path, "the parallel writer wrote no summary file");
-            fs::remove_all(dir / stem, ec);
-            fs::rename(staging / stem, dir / stem, ec);
-            if (ec) throw Error(path, "cannot move the pieces into place: " + ec.message());
-            fs::rename(staging / (stem + ".pvtp"), out, ec);
-            if (ec) throw Error(path, "cannot move the summary into place: " + ec.message());
-        });
-    } catch (...) {
-        cleanup();
-        throw;
+            fs::create_directories(d, ec);
+            if (ec) throw Error(paths.front(), "cannot create " + d.string() + ": " + ec.message());
+        }
+    });
+    return st;
+}
+
+// Surface s: every rank's pieces get their global numbers (rank order, then
+// slab order), rank 0 writes the summary through vtkXMLPPolyDataWriter and
+// moves pieces and summary into place. Collective.
+std::size_t finish_surface(const Comm& comm, const Staging& st, const RankSink& sink, std::size_t s) {
+    const auto& mine = sink.files(s);
+    const double n = double(mine.size());
+    const auto counts = comm.allgatherv(std::span<const double>(&n, 1));
+    std::size_t offset = 0, total = 0;
+    for (int r = 0; r < comm.size(); ++r) {
+        if (r < comm.rank()) offset += std::size_t(counts[std::size_t(r)]);
+        total += std::size_t(counts[std::size_t(r)]);
     }
-    cleanup();
+    const std::string& stem = st.stems[s];
+    agreed(comm, [&] {
+        for (std::size_t j = 0; j < mine.size(); ++j) {
+            std::error_code ec;
+            fs::rename(mine[j], st.pieces[s] / (stem + "_" + std::to_string(offset + j) + ".vtp"), ec);
+            if (ec) throw Error(mine[j].string(), "cannot rename the piece: " + ec.message());
+        }
+    });
+    agreed(comm, [&] {
+        if (!comm.root()) return;
+        const bool normals = sink.normals();
+        // No triangle anywhere: one empty piece, so that the summary is a valid file.
+        if (total == 0) {
+            vtkNew<vtkXMLPolyDataWriter> w;
+            const auto pd = piece_polydata(Mesh{}, normals);
+            w->SetInputData(pd);
+            w->SetFileName((st.pieces[s] / (stem + "_0.vtp")).string().c_str());
+            if (!w->Write()) throw Error(st.dests[s].string(), "cannot write an empty piece");
+            total = 1;
+        }
+        // The summary (which lists pieces by number and declares the arrays)
+        // from vtkXMLPPolyDataWriter run on a one-point stand-in with the
+        // pieces' arrays, in a scratch folder: only its .pvtp is kept.
+        const fs::path scratch = st.dir / ("summary-" + std::to_string(s));
+        fs::create_directories(scratch);
+        Mesh one;
+        one.positions = {glm::vec3(0.0f)};
+        if (normals) one.normals = {glm::vec3(0.0f, 0.0f, 1.0f)};
+        const auto pd = piece_polydata(one, normals);
+        vtkNew<VtkMessages> msgs;
+        vtkNew<vtkXMLPPolyDataWriter> w;
+        msgs->watch(w);
+        w->SetInputData(pd);
+        const fs::path summary = scratch / (stem + ".pvtp");
+        w->SetFileName(summary.string().c_str());
+        w->SetNumberOfPieces(int(total));
+        w->SetStartPiece(0);
+        w->SetEndPiece(int(total) - 1);
+        w->SetUseSubdirectory(true); // pieces listed as <stem>/<stem>_<i>.vtp
+        w->SetDataModeToAppended();
+        w->SetCompressorTypeToZLib();
+        if (!w->Write() || msgs->has_error())
+            throw Error(st.dests[s].string(), "cannot write the summary: " + msgs->first_error());
+        std::error_code ec;
+        fs::remove_all(st.finals[s], ec);
+        fs::rename(st.pieces[s], st.finals[s], ec);
+        if (ec) throw Error(st.dests[s].string(), "cannot move the pieces into place: " + ec.message());
+        fs::rename(summary, st.dests[s], ec);
+        if (ec) throw Error(st.dests[s].string(), "cannot move the summary into place: " + ec.message());
+    });
+    return total;
 }
 
 } // namespace
@@ -347,8 +394,21 @@ DistMeshResult mesh_distributed(const Comm& comm, const DistMeshRequest& req) {
     const ChunkRange mine = res.plan[std::size_t(comm.rank())];
 
     // 5. Streaming extraction of this rank's chunks (only the slabs its
-    // active chunks need are read), its slabs' pieces joined into one piece.
-    RankSink sink(values.size(), mine, idx.dims(), idx.chunk_size());
+    // active chunks need are read); each slab's piece is summarized and
+    // written at once.
+    std::vector<std::string> paths;
+    for (double v : values) paths.push_back(surface_output_path(req.output, v, req.labels, values.size()));
+    const Staging staging = prepare_staging(comm, paths);
+    const auto remove_staging = [&] {
+        if (!root) return;
+        std::error_code ec;
+        fs::remove_all(staging.dir, ec);
+    };
+    try {
+    // Every piece's volume about one point near the data (the volume's
+    // centre); merge_summaries() moves them to the surface's bounds centre.
+    const glm::dvec3 centre = glm::dvec3(h.index_to_lps * glm::dvec4(0.5 * glm::dvec3(h.dims[0] - 1, h.dims[1] - 1, h.dims[2] - 1), 1.0));
+    RankSink sink(staging.pieces, staging.stems, comm.rank(), centre);
     StreamStats st;
     agreed(comm, [&] {
         so.first_chunk = mine.first;
@@ -366,36 +426,39 @@ DistMeshResult mesh_distributed(const Comm& comm, const DistMeshRequest& req) {
         }
     }
 
-    // 6. Per surface: weld the piece, reduce the statistics, write.
-    vtkNew<vtkMPIController> ctrl;
-    ctrl->Initialize(nullptr, nullptr, 1); // MPI is already initialised (Runtime)
+    // 6. Per surface: reduce the statistics on rank 0, then number the
+    // pieces, write the summary and move everything into place.
     for (std::size_t i = 0; i < values.size(); ++i) {
         DistSurface out;
         out.value = values[i];
         char name[64];
         std::snprintf(name, sizeof name, req.labels ? "label %g" : "iso %g", values[i]);
         out.name = name;
-        out.path = surface_output_path(req.output, values[i], req.labels, values.size());
-        SurfacePiece piece = sink.take(i);
-        const auto [lo, hi] = piece_bounds(piece.mesh);
-        const double lo3[3] = {lo.x, lo.y, lo.z}, hi3[3] = {hi.x, hi.y, hi.z};
-        const auto glo = comm.allreduce_min(lo3), ghi = comm.allreduce_max(hi3);
-        const glm::dvec3 origin = volume_origin({glo[0], glo[1], glo[2]}, {ghi[0], ghi[1], ghi[2]});
-        const auto gathered = comm.gather(serialize(summarize_piece(piece, origin)));
+        out.path = paths[i];
+        const auto gathered = comm.gather(serialize(std::span<const PieceSummary>(sink.summaries(i))));
         agreed(comm, [&] {
             if (!root) return;
             std::vector<PieceSummary> pieces;
             for (const auto& g : gathered) {
-                pieces.push_back(deserialize_piece_summary(g));
-                out.rank_triangles.push_back(pieces.back().triangles);
+                auto rank_pieces = deserialize_piece_summaries(g);
+                std::size_t t = 0;
+                for (auto& p : rank_pieces) {
+                    t += p.triangles;
+                    pieces.push_back(std::move(p));
+                }
+                out.rank_triangles.push_back(t);
             }
             out.summary = merge_summaries(pieces);
         });
         agreed(comm, [&] { report(progress, 1.0, "writing pieces", "isoscope mesh"); });
-        write_pieces(comm, ctrl, piece.mesh, req.extract.normals, out.path);
+        out.pieces = finish_surface(comm, staging, sink, i);
         res.surfaces.push_back(std::move(out));
     }
-    ctrl->Finalize(1);
+    } catch (...) {
+        remove_staging();
+        throw;
+    }
+    remove_staging();
     return res;
 }
 

@@ -32,6 +32,7 @@ struct DistSurface {
     std::string name;                // "iso 500", "label 3"
     double value = 0;
     std::string path;                // the .pvtp written
+    std::size_t pieces = 0;          // .vtp files it lists (non-empty slab pieces of every rank)
     SurfaceSummary summary;          // reduced over every piece (valid on rank 0)
     std::vector<std::size_t> rank_triangles; // per piece (rank 0)
 };

@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cstring>
 #include <numeric>
+#include <tuple>
 #include <unordered_map>
 
 #include <glm/glm.hpp>
@@ -39,11 +40,17 @@ std::array<int, 3> chunk_counts(const std::array<std::int64_t, 3>& dims, int C) 
     return n;
 }
 
-void add_triangle(const glm::dvec3& o, const glm::vec3& p0, const glm::vec3& p1, const glm::vec3& p2, double& area,
-                  double& volume) {
+void add_triangle(const glm::dvec3& o, const glm::vec3& p0, const glm::vec3& p1, const glm::vec3& p2, ComponentStats& c) {
     const glm::dvec3 a = glm::dvec3(p0) - o, b = glm::dvec3(p1) - o, d = glm::dvec3(p2) - o;
-    area += 0.5 * glm::length(glm::cross(b - a, d - a));
-    volume += glm::dot(a, glm::cross(b, d)) / 6.0;
+    c.area += 0.5 * glm::length(glm::cross(b - a, d - a));
+    const glm::dvec3 bd = glm::cross(b, d);
+    c.volume += glm::dot(a, bd) / 6.0;
+    c.moment += glm::cross(a, b) + bd + glm::cross(d, a);
+}
+
+// The signed volume of `c` (about `from`) about `to`.
+double volume_about(const ComponentStats& c, const glm::dvec3& from, const glm::dvec3& to) {
+    return c.volume - glm::dot(to - from, c.moment) / 6.0;
 }
 
 bool better(const ComponentStats& a, const ComponentStats& b) {
@@ -168,8 +175,10 @@ PieceSummary summarize_piece(const SurfacePiece& p, const glm::dvec3& origin) {
         }
         auto& c = s.components[comp[r]];
         ++c.triangles;
-        add_triangle(origin, m.positions[t[0]], m.positions[t[1]], m.positions[t[2]], c.area, c.volume);
+        add_triangle(origin, m.positions[t[0]], m.positions[t[1]], m.positions[t[2]], c);
     }
+    s.origin = origin;
+    std::tie(s.bounds_min, s.bounds_max) = piece_bounds(m);
     for (const auto& c : s.components) {
         s.area += c.area;
         s.volume += c.volume;
@@ -182,12 +191,18 @@ PieceSummary summarize_piece(const SurfacePiece& p, const glm::dvec3& origin) {
 SurfaceSummary merge_summaries(std::span<const PieceSummary> pieces) {
     SurfaceSummary out;
     std::vector<std::size_t> base(pieces.size() + 1, 0);
+    glm::dvec3 lo(INFINITY), hi(-INFINITY);
+    for (const auto& p : pieces) {
+        lo = glm::min(lo, p.bounds_min);
+        hi = glm::max(hi, p.bounds_max);
+    }
+    const glm::dvec3 origin = volume_origin(lo, hi);
     for (std::size_t i = 0; i < pieces.size(); ++i) {
         base[i + 1] = base[i] + pieces[i].components.size();
         out.triangles += pieces[i].triangles;
         out.vertices += pieces[i].vertices;
         out.area += pieces[i].area;
-        out.volume += pieces[i].volume;
+        for (const auto& c : pieces[i].components) out.volume += volume_about(c, pieces[i].origin, origin);
     }
     if (base.back() >= kNoComponent) throw Error("merge_summaries", "more than 4 billion components");
     // Every seam entry as (key, global component); runs of one key are one vertex.
@@ -214,7 +229,7 @@ SurfaceSummary merge_summaries(std::span<const PieceSummary> pieces) {
             const auto& pc = pieces[i].components[c];
             r.triangles += pc.triangles;
             r.area += pc.area;
-            r.volume += pc.volume;
+            r.volume += volume_about(pc, pieces[i].origin, origin);
         }
     for (std::uint32_t n = 0; n < merged.size(); ++n) {
         if (sets.find(n) != n) continue;
@@ -248,16 +263,18 @@ template <class T> T get(std::string_view& in) {
 
 std::string serialize(const PieceSummary& s) {
     std::string out;
-    out.reserve(64 + s.components.size() * 24 + s.seam.size() * 12);
+    out.reserve(136 + s.components.size() * 48 + s.seam.size() * 12);
     put<std::uint64_t>(out, s.triangles);
     put<std::uint64_t>(out, s.vertices);
     put(out, s.area);
     put(out, s.volume);
+    for (const auto& v : {s.origin, s.bounds_min, s.bounds_max}) put(out, v);
     put<std::uint64_t>(out, s.components.size());
     for (const auto& c : s.components) {
         put<std::uint64_t>(out, c.triangles);
         put(out, c.area);
         put(out, c.volume);
+        put(out, c.moment);
     }
     put<std::uint64_t>(out, s.seam.size());
     for (const auto& [k, c] : s.seam) {
@@ -273,13 +290,17 @@ PieceSummary deserialize_piece_summary(std::string_view in) {
     s.vertices = get<std::uint64_t>(in);
     s.area = get<double>(in);
     s.volume = get<double>(in);
+    s.origin = get<glm::dvec3>(in);
+    s.bounds_min = get<glm::dvec3>(in);
+    s.bounds_max = get<glm::dvec3>(in);
     const auto nc = get<std::uint64_t>(in);
-    if (nc > in.size() / 24) throw Error("deserialize_piece_summary", "truncated summary");
+    if (nc > in.size() / 48) throw Error("deserialize_piece_summary", "truncated summary");
     s.components.resize(nc);
     for (auto& c : s.components) {
         c.triangles = get<std::uint64_t>(in);
         c.area = get<double>(in);
         c.volume = get<double>(in);
+        c.moment = get<glm::dvec3>(in);
     }
     const auto ns = get<std::uint64_t>(in);
     if (ns > in.size() / 12) throw Error("deserialize_piece_summary", "truncated summary");
@@ -289,6 +310,31 @@ PieceSummary deserialize_piece_summary(std::string_view in) {
         c = get<std::uint32_t>(in);
     }
     return s;
+}
+
+std::string serialize(std::span<const PieceSummary> all) {
+    std::string out;
+    put<std::uint64_t>(out, all.size());
+    for (const auto& s : all) {
+        const std::string one = serialize(s);
+        put<std::uint64_t>(out, one.size());
+        out += one;
+    }
+    return out;
+}
+
+std::vector<PieceSummary> deserialize_piece_summaries(std::string_view in) {
+    const auto n = get<std::uint64_t>(in);
+    if (n > in.size() / 8) throw Error("deserialize_piece_summaries", "truncated summaries");
+    std::vector<PieceSummary> out;
+    out.reserve(n);
+    for (std::uint64_t i = 0; i < n; ++i) {
+        const auto len = get<std::uint64_t>(in);
+        if (len > in.size()) throw Error("deserialize_piece_summaries", "truncated summaries");
+        out.push_back(deserialize_piece_summary(in.substr(0, len)));
+        in.remove_prefix(len);
+    }
+    return out;
 }
 
 } // namespace iso

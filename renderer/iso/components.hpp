@@ -14,6 +14,7 @@
 // counts, from a few bytes per seam vertex).
 #pragma once
 
+#include <cmath>
 #include <cstdint>
 #include <span>
 #include <string>
@@ -58,13 +59,20 @@ bool key_leaves_range(std::uint64_t key, ChunkRange range, const std::array<std:
 struct ComponentStats {
     std::size_t triangles = 0;
     double area = 0;   // mm^2
-    double volume = 0; // signed, mm^3, about the summary's origin
+    double volume = 0; // signed, mm^3, about the piece's origin (merged: about the whole's, as mesh_stats)
+    // Sum over the triangles (a, b, c) of a x b + b x c + c x a, about the
+    // piece's origin (twice the vector area): the signed volume about
+    // another origin o' is volume - (o' - origin) . moment / 6, so pieces
+    // summarized before the whole surface's bounds are known still add up.
+    glm::dvec3 moment{0.0};
 };
 
 // A piece's summary: a few numbers per component, 12 bytes per seam vertex.
 struct PieceSummary {
     std::size_t triangles = 0, vertices = 0;
     double area = 0, volume = 0;
+    glm::dvec3 origin{0.0};                 // of `volume` and the components' volumes
+    glm::dvec3 bounds_min{INFINITY}, bounds_max{-INFINITY}; // of the piece's vertices
     std::vector<ComponentStats> components;
     // (global key, component index) of every seam vertex, sorted by key.
     std::vector<std::pair<std::uint64_t, std::uint32_t>> seam;
@@ -78,7 +86,9 @@ std::pair<glm::dvec3, glm::dvec3> piece_bounds(const Mesh& m);
 glm::dvec3 volume_origin(const glm::dvec3& bounds_min, const glm::dvec3& bounds_max);
 
 // Summarizes a piece: components by shared vertices (union-find over the
-// triangles), area and signed volume about `origin` in double precision.
+// triangles), area and signed volume about `origin` in double precision
+// (any origin near the data: merge_summaries() moves every volume to the
+// centre of the whole's bounds).
 PieceSummary summarize_piece(const SurfacePiece& p, const glm::dvec3& origin);
 
 struct SurfaceSummary {
@@ -89,7 +99,8 @@ struct SurfaceSummary {
 
 // Merges the summaries of all the pieces of one surface: vertices whose key
 // occurs in k pieces count once (k - 1 subtracted), components sharing a
-// seam key are one.
+// seam key are one; volumes are taken about the centre of the merged bounds
+// (volume_origin), as mesh_stats() takes the whole mesh's.
 SurfaceSummary merge_summaries(std::span<const PieceSummary> pieces);
 
 // The summary of a whole mesh (one piece, no seam): what merge_summaries()
@@ -99,5 +110,8 @@ SurfaceSummary summarize_mesh(const Mesh& m);
 // A byte string for sending a summary between processes, and back.
 std::string serialize(const PieceSummary& s);
 PieceSummary deserialize_piece_summary(std::string_view bytes);
+// Several summaries in one byte string (a rank's pieces, for one gather).
+std::string serialize(std::span<const PieceSummary> s);
+std::vector<PieceSummary> deserialize_piece_summaries(std::string_view bytes);
 
 } // namespace iso

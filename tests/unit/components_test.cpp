@@ -77,7 +77,9 @@ struct Split {
     SurfaceSummary merged;
 };
 
-Split split(const Extractor& x, const ChunkedSurface& s, int nranks) {
+// `far`: summarize every piece about a point far from the surface (as ranks
+// do before the whole's bounds are known) instead of the whole's centre.
+Split split(const Extractor& x, const ChunkedSurface& s, int nranks, bool far = false) {
     const auto& idx = x.index();
     const double isos[1] = {s.iso};
     const auto plan = partition_chunks(idx, isos, nranks);
@@ -91,8 +93,11 @@ Split split(const Extractor& x, const ChunkedSurface& s, int nranks) {
     }
     std::vector<PieceSummary> sums;
     // Through the byte form, as the ranks send them.
-    for (const auto& p : out.pieces) sums.push_back(deserialize_piece_summary(serialize(summarize_piece(p, volume_origin(lo, hi)))));
-    out.merged = merge_summaries(sums);
+    for (const auto& p : out.pieces)
+        sums.push_back(summarize_piece(p, far ? glm::dvec3(400.0, -250.0, 130.0) : volume_origin(lo, hi)));
+    // Through the byte form, as the ranks send them.
+    const auto sent = deserialize_piece_summaries(serialize(std::span<const PieceSummary>(sums)));
+    out.merged = merge_summaries(sent);
     return out;
 }
 
@@ -221,6 +226,12 @@ TEST(Components, TorusCutIntoPiecesIsOneComponentWithTheWholeStats) {
             most_pieces = std::max(most_pieces, most);
         }
         expect_consistent_seams(sp, whole);
+        // Pieces summarized about a far point: the moments move every volume
+        // to the whole's origin (1e-9: the far origin costs digits).
+        const Split far = split(x, s, n, true);
+        EXPECT_NEAR(far.merged.volume, ms.volume, 1e-9 * std::abs(ms.volume));
+        EXPECT_NEAR(far.merged.largest.volume, ms.volume, 1e-9 * std::abs(ms.volume));
+        EXPECT_EQ(far.merged.components, 1u);
     }
     EXPECT_GE(most_pieces, 2u) << "some piece holds separate arcs of the ring: the merge must join them";
 }
@@ -277,7 +288,10 @@ TEST(Components, SummaryBytesRoundTrip) {
     s.vertices = 9;
     s.area = 1.25;
     s.volume = -3.5;
-    s.components = {{3, 0.5, 1.0}, {4, 0.75, -4.5}};
+    s.components = {{3, 0.5, 1.0, glm::dvec3(1, 2, 3)}, {4, 0.75, -4.5, glm::dvec3(-1, 0, 0.5)}};
+    s.origin = glm::dvec3(7, 8, 9);
+    s.bounds_min = glm::dvec3(-1, -2, -3);
+    s.bounds_max = glm::dvec3(1, 2, 3);
     s.seam = {{17, 0}, {99, 1}, {1ull << 40, 0xFFFFFFFFu}};
     const auto t = deserialize_piece_summary(serialize(s));
     EXPECT_EQ(t.triangles, 7u);
@@ -287,6 +301,14 @@ TEST(Components, SummaryBytesRoundTrip) {
     ASSERT_EQ(t.components.size(), 2u);
     EXPECT_EQ(t.components[1].triangles, 4u);
     EXPECT_EQ(t.components[1].volume, -4.5);
+    EXPECT_EQ(t.components[0].moment, glm::dvec3(1, 2, 3));
+    EXPECT_EQ(t.origin, s.origin);
+    EXPECT_EQ(t.bounds_max, s.bounds_max);
+    const PieceSummary two[2] = {s, PieceSummary{}};
+    const auto back = deserialize_piece_summaries(serialize(std::span<const PieceSummary>(two)));
+    ASSERT_EQ(back.size(), 2u);
+    EXPECT_EQ(back[0].seam, s.seam);
+    EXPECT_TRUE(back[1].components.empty());
     EXPECT_EQ(t.seam, s.seam);
     const auto bytes = serialize(s);
     EXPECT_THROW(deserialize_piece_summary(std::string_view(bytes).substr(0, bytes.size() - 3)), Error);
