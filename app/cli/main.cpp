@@ -24,10 +24,12 @@
 #include "app/gui/main_window.hpp"
 #include "app/gui/viewer.hpp"
 #include "io/markups.hpp"
+#include "io/mesh_sink.hpp"
 #include "renderer/core/api.hpp"
 #include "renderer/core/measure.hpp"
 #include "renderer/core/pick.hpp"
 #include "renderer/core/session.hpp"
+#include "renderer/core/stream_mesh.hpp"
 #ifdef ISOSCOPE_MPI
 #include "renderer/dist/mesh_mpi.hpp"
 #endif
@@ -51,7 +53,10 @@ void print_info(const nlohmann::json& j, std::ostream& os) {
     os << std::setprecision(6);
     os << "spacing:   " << j["spacing"][0].get<double>() << " x " << j["spacing"][1].get<double>() << " x "
        << j["spacing"][2].get<double>() << " mm\n";
-    os << "range:     [" << j["range"][0].get<double>() << ", " << j["range"][1].get<double>() << "]\n";
+    if (j["range"].is_null())
+        os << "range:     not read (header only)\n";
+    else
+        os << "range:     [" << j["range"][0].get<double>() << ", " << j["range"][1].get<double>() << "]\n";
     os << "memory:    " << human_bytes(j["memory_bytes"].get<double>()) << "\n";
     os << "index -> LPS (mm):\n";
     for (const auto& row : j["index_to_lps"]) {
@@ -249,18 +254,35 @@ void parse_disk_blend(const std::string& text, iso::DiskAoSettings& d) {
 
 struct InfoArgs {
     std::string path, series;
-    bool json = false;
+    bool json = false, header_only = false;
+    double memory_mib = 0;
 };
+
+// --memory MiB -> bytes (0: the core's default, a quarter of physical memory).
+std::size_t memory_bytes_option(double mib) {
+    return mib > 0 ? std::size_t(mib * 1048576.0) : iso::core::default_memory_budget();
+}
 
 CLI::App* add_info(CLI::App& app, InfoArgs& a) {
     auto* c = app.add_subcommand("info", "Describe a volume: dimensions, type, spacing, range, index->LPS affine");
     c->add_option("path", a.path, "Volume file or DICOM folder")->required();
     c->add_option("--series", a.series, "DICOM series to load: index in the listing or SeriesInstanceUID");
     c->add_flag("--json", a.json, "Print one JSON object");
+    c->add_flag("--header-only", a.header_only, "Read only the header (NIfTI, NRRD, MetaImage): no value range");
+    c->add_option("--memory", a.memory_mib, "Volumes larger than this (MiB) are described from their header only "
+                                            "(default: a quarter of physical memory)")->check(CLI::PositiveNumber);
     return c;
 }
 
 int run_info(const InfoArgs& a) {
+    if (a.header_only || iso::core::exceeds_budget(a.path, memory_bytes_option(a.memory_mib))) {
+        const auto j = iso::core::describe_header(a.path);
+        if (a.json)
+            std::cout << j.dump(2) << "\n";
+        else
+            print_info(j, std::cout);
+        return 0;
+    }
     iso::LoadOptions opt;
     opt.series = a.series;
     opt.progress = progress_bar();
@@ -277,10 +299,10 @@ int run_info(const InfoArgs& a) {
 struct MeshArgs {
     std::string in, out, series;
     std::vector<double> isos, label_values;
-    bool labels = false;
+    bool labels = false, stream = false;
     iso::PostProcessOptions post;
     int threads = 0, chunk = 32;
-    double memory_mib = 0; // under mpirun: per rank (0: default_rank_budget())
+    double memory_mib = 0; // per rank under mpirun (0: default_rank_budget())
 };
 
 CLI::App* add_mesh(CLI::App& app, MeshArgs& a) {
@@ -295,12 +317,46 @@ CLI::App* add_mesh(CLI::App& app, MeshArgs& a) {
     c->add_option("--series", a.series, "DICOM series to load: index or SeriesInstanceUID");
     c->add_option("--threads", a.threads, "Threads (default: all cores)")->check(CLI::NonNegativeNumber);
     c->add_option("--chunk", a.chunk, "Chunk size in cells per side")->check(CLI::Range(2, 1024));
-#ifdef ISOSCOPE_MPI
-    c->add_option("--memory", a.memory_mib, "Under mpirun: MiB of samples and slab output per rank (default: a quarter of "
+    c->add_option("-o,--output", a.out, "Output " + iso::mesh_extensions_text() + ", or .pvtp when streaming (several surfaces: NAME-iso<V>.ext)")->required();
+    c->add_option("--memory", a.memory_mib, "Memory budget in MiB for samples and output; larger volumes are streamed "
+                                            "(default: a quarter of physical memory; under mpirun: per rank, a quarter of "
                                             "the node's memory shared by its ranks)")->check(CLI::PositiveNumber);
-#endif
-    c->add_option("-o,--output", a.out, "Output " + iso::mesh_extensions_text() + " (several surfaces: NAME-iso<V>.ext)")->required();
+    c->add_flag("--stream", a.stream, "Stream slabs of the volume from the file even if it fits the budget");
     return c;
+}
+
+// The summary line of one written surface (the same in memory and streaming).
+void print_surface_line(const std::string& name, const iso::MeshStats& st, const std::string& path) {
+    std::cout << name << ": " << st.triangles << " triangles, " << st.vertices << " vertices, area " << st.area << " mm^2, volume "
+              << st.volume << " mm^3 -> " << path << "\n";
+}
+
+// Out of core: slabs streamed from the file, the surface written as it goes.
+int run_mesh_streaming(const MeshArgs& a, std::size_t budget) {
+    if (a.post.smooth > 0) throw iso::Error("--smooth", "needs the whole mesh in memory: not available when streaming (--stream, or a volume larger than --memory)");
+    if (a.post.decimate > 0) throw iso::Error("--decimate", "needs the whole mesh in memory: not available when streaming (--stream, or a volume larger than --memory)");
+    if (a.post.keep_largest) throw iso::Error("--largest", "needs the whole mesh in memory: not available when streaming (--stream, or a volume larger than --memory)");
+    if (!a.series.empty()) throw iso::Error("--series", "DICOM series are not streamed");
+    iso::core::StreamMeshRequest req;
+    req.input = a.in;
+    req.output = a.out;
+    req.isos = a.isos;
+    req.labels = a.labels;
+    req.label_values = a.label_values;
+    req.extract.threads = a.threads;
+    req.extract.chunk_size = a.chunk;
+    req.memory_budget = budget;
+    req.progress = progress_bar();
+    const auto r = iso::core::stream_mesh(req);
+    for (const auto& w : r.warnings) std::cerr << "warning: " << w << "\n";
+    for (const auto& w : r.stream.warnings) std::cerr << "warning: " << w << "\n";
+    for (std::size_t i = 0; i < r.paths.size(); ++i) print_surface_line(r.names[i], r.stats[i], r.paths[i]);
+    const auto& s = r.stream;
+    std::cout << "streamed: " << s.plan.slabs << " slabs of " << s.plan.layers_per_slab << " chunk layers (chunk " << s.plan.chunk_size
+              << "), " << s.slabs_read << " read, " << s.slabs_skipped << " skipped" << (s.index_pass ? ", after an index pass" : "")
+              << "; peak memory " << human_bytes(double(s.peak_bytes)) << " (engine) of " << human_bytes(double(r.memory_budget))
+              << ", " << human_bytes(double(iso::core::peak_resident_bytes())) << " resident (VmHWM)\n";
+    return 0;
 }
 
 #ifdef ISOSCOPE_MPI
@@ -361,8 +417,9 @@ int run_mesh(const MeshArgs& a) {
 #ifdef ISOSCOPE_MPI
     if (iso::dist::launched_by_mpirun()) return run_mesh_mpi(a);
 #endif
-    namespace fs = std::filesystem;
-    const fs::path out(a.out);
+    const std::size_t budget = memory_bytes_option(a.memory_mib);
+    const bool pieces = iso::is_streamable_mesh_path(a.out) && !iso::is_mesh_path(a.out); // .pvtp: written by the streaming path
+    if (a.stream || pieces || iso::core::exceeds_budget(a.in, budget)) return run_mesh_streaming(a, budget);
     if (!iso::is_mesh_path(a.out)) throw iso::Error(a.out, "unsupported mesh format (write " + iso::mesh_extensions_text() + ")");
     iso::check_writable_destination(a.out); // fail before the long part
     iso::LoadOptions lo;
@@ -376,21 +433,13 @@ int run_mesh(const MeshArgs& a) {
     eo.chunk_size = a.chunk;
     const auto ids = a.labels ? scene.add_label_surfaces(a.label_values, eo, a.post, progress_bar())
                               : scene.add_isosurfaces(a.isos, eo, a.post, progress_bar());
-    const std::string ext = out.extension().string();
     for (const auto id : ids) {
         const auto& s = scene.info(id);
-        std::string path = a.out;
-        if (ids.size() > 1) {
-            char suffix[64];
-            std::snprintf(suffix, sizeof suffix, a.labels ? "-label%g" : "-iso%g", s.value);
-            path = (out.parent_path() / (out.stem().string() + suffix + ext)).string();
-        }
+        const std::string path = iso::core::surface_output_path(a.out, s.value, a.labels, ids.size());
         const auto& m = scene.mesh(id);
         for (const auto& w : m.warnings) std::cerr << "warning: " << s.name << ": " << w << "\n";
         scene.export_mesh(id, path);
-        const auto st = iso::mesh_stats(m);
-        std::cout << s.name << ": " << st.triangles << " triangles, " << st.vertices << " vertices, area " << st.area << " mm^2, volume "
-                  << st.volume << " mm^3 -> " << path << "\n";
+        print_surface_line(s.name, iso::mesh_stats(m), path);
     }
     return 0;
 }

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cstdio>
 #include <cmath>
 #include <set>
 
@@ -15,8 +16,19 @@ using Clock = std::chrono::steady_clock;
 double seconds_since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
 
 constexpr std::size_t kMiB = std::size_t(1) << 20;
-// Conversion buffer of a slab read (volume_stream.cpp converts 1 MiB at a time).
-constexpr std::size_t kReadBuffer = kMiB;
+// Conversion buffer of a slab read: volume_stream.cpp converts 1 MiB (at
+// least a slice) at a time when the stored type or values change; samples
+// read as they are stored go straight into the slab.
+std::size_t read_buffer(const VolumeHeader& h) {
+    if (!h.rescale && h.type == h.stored) return 0;
+    return std::max(kMiB, std::size_t(h.dims[0] * h.dims[1]) * voxel_size(h.stored));
+}
+
+std::string mib(std::size_t bytes) {
+    char s[32];
+    std::snprintf(s, sizeof s, "%.1f MiB", double(bytes) / double(kMiB));
+    return s;
+}
 
 std::size_t scratch_bytes(int C, std::size_t sample) {
     // As Extractor's scratch_estimate, plus the staging mesh of one chunk.
@@ -25,9 +37,10 @@ std::size_t scratch_bytes(int C, std::size_t sample) {
 }
 
 // Output of one active chunk: about 2 C^2 triangles and C^2 vertices for a
-// surface crossing it, held as chunk meshes and once welded, with margin
-// for oblique and folded surfaces (the measured peak is reported).
-std::size_t chunk_output_estimate(int C) { return std::size_t(C) * std::size_t(C) * 160; }
+// surface crossing it, held as chunk meshes (with their border lists and
+// vector slack) and once welded, with margin for oblique and folded surfaces,
+// plus the chunk's own vectors (the measured peak is reported).
+std::size_t chunk_output_estimate(int C) { return std::size_t(C) * std::size_t(C) * 256 + 2048; }
 
 std::size_t index_bytes(std::size_t chunks) { return chunks * (2 * sizeof(double) + 2 * sizeof(double) + 1); }
 
@@ -45,11 +58,11 @@ bool chunk_active(const ChunkIndex& idx, std::size_t id, const std::vector<doubl
     return false;
 }
 
-std::size_t fixed_bytes(const std::array<std::int64_t, 3>& dims, int C, std::size_t sample, int threads, std::size_t surfaces) {
-    const auto c = chunk_counts(dims, C);
+std::size_t fixed_bytes(const VolumeHeader& h, int C, std::size_t sample, int threads, std::size_t surfaces) {
+    const auto c = chunk_counts(h.dims, C);
     const std::size_t n = std::size_t(c[0]) * c[1] * c[2];
     // Index; per surface, the chunk table extract_chunks() returns; scratch.
-    return index_bytes(n) + surfaces * n * sizeof(ChunkMesh) + std::size_t(threads) * scratch_bytes(C, sample) + kReadBuffer;
+    return index_bytes(n) + surfaces * n * sizeof(ChunkMesh) + std::size_t(threads) * scratch_bytes(C, sample) + read_buffer(h);
 }
 
 std::size_t slab_bytes(const VolumeHeader& h, int C, int layers) {
@@ -73,13 +86,13 @@ StreamPlan plan_stream(const VolumeHeader& h, const StreamOptions& opt, const Ch
     // chunks cost more index and table entries).
     if (!index)
         while (C > 4) {
-            const std::size_t now = fixed_bytes(h.dims, C, sample, threads, surfaces) + slab_bytes(h, C, 1);
-            const std::size_t half = fixed_bytes(h.dims, C / 2, sample, threads, surfaces) + slab_bytes(h, C / 2, 1);
+            const std::size_t now = fixed_bytes(h, C, sample, threads, surfaces) + slab_bytes(h, C, 1);
+            const std::size_t half = fixed_bytes(h, C / 2, sample, threads, surfaces) + slab_bytes(h, C / 2, 1);
             if (now <= opt.memory_budget || half >= now) break;
             C /= 2;
         }
     p.chunk_size = C;
-    p.fixed_bytes = fixed_bytes(h.dims, C, sample, threads, surfaces);
+    p.fixed_bytes = fixed_bytes(h, C, sample, threads, surfaces);
     const auto counts = chunk_counts(h.dims, C);
     const std::size_t layer = std::size_t(counts[0]) * counts[1];
     const std::size_t total = layer * std::size_t(counts[2]);
@@ -92,11 +105,11 @@ StreamPlan plan_stream(const VolumeHeader& h, const StreamOptions& opt, const Ch
     p.last_layer = int((last - 1) / layer);
     const int layers = p.last_layer - p.first_layer + 1;
     if (p.fixed_bytes + slab_bytes(h, C, 1) > opt.memory_budget)
-        throw Error("--memory", std::to_string(opt.memory_budget / kMiB) + " MiB is too small for this volume: one slab of " +
+        throw Error("--memory", mib(opt.memory_budget) + " is too small for this volume: one slab of " +
                                     std::to_string(std::min<std::int64_t>(C + 3, h.dims[2])) + " slices (" +
                                     std::to_string(h.dims[0]) + " x " + std::to_string(h.dims[1]) + " " +
                                     voxel_type_name(h.type) + ") with chunk size " + std::to_string(C) + " needs " +
-                                    std::to_string((p.fixed_bytes + slab_bytes(h, C, 1) + kMiB - 1) / kMiB) + " MiB");
+                                    mib(p.fixed_bytes + slab_bytes(h, C, 1)));
     // Active chunks per layer (all chunks, without an index).
     std::vector<std::size_t> active(std::size_t(layers), layer);
     if (index) {
@@ -111,6 +124,7 @@ StreamPlan plan_stream(const VolumeHeader& h, const StreamOptions& opt, const Ch
     }
     const std::size_t per_chunk = chunk_output_estimate(C) * surfaces;
     int best = 1;
+    p.fits = false;
     for (int L = 1; L <= layers; ++L) {
         std::size_t worst = 0;
         for (int l = 0; l < layers; l += L) {
@@ -120,6 +134,7 @@ StreamPlan plan_stream(const VolumeHeader& h, const StreamOptions& opt, const Ch
         }
         if (p.fixed_bytes + slab_bytes(h, C, L) + worst * per_chunk > opt.memory_budget) break;
         best = L;
+        p.fits = true;
         p.output_estimate = worst * per_chunk;
     }
     p.layers_per_slab = best;
@@ -134,7 +149,7 @@ std::shared_ptr<const ChunkIndex> build_chunk_index(VolumeStream& src, int chunk
     const std::size_t slice = std::size_t(h.dims[0] * h.dims[1]) * voxel_size(h.type);
     const auto counts = chunk_counts(h.dims, chunk_size);
     const std::size_t n = std::size_t(counts[0]) * counts[1] * counts[2];
-    const std::size_t fixed = 2 * index_bytes(n) + kReadBuffer;
+    const std::size_t fixed = 2 * index_bytes(n) + read_buffer(h);
     const std::int64_t per = std::max<std::int64_t>(1, memory_budget > fixed ? std::int64_t((memory_budget - fixed) / slice) : 1);
     ChunkSummaries sum(h.dims, chunk_size, h.type);
     std::set<double> labels;
@@ -171,8 +186,8 @@ StreamStats stream_extract(VolumeStream& src, const StreamOptions& opt_in, MeshS
     }
     // What the source holds (a volume loaded whole, a gzip stream's last slices) takes its share of the budget.
     if (src.resident_bytes() >= opt.memory_budget)
-        throw Error("--memory", std::to_string(opt.memory_budget >> 20) + " MiB is less than the " +
-                                    std::to_string(src.resident_bytes() >> 20) + " MiB the volume's source holds");
+        throw Error("--memory", mib(opt.memory_budget) + " is less than the " + mib(src.resident_bytes()) +
+                                    " the volume's source holds");
     opt.memory_budget -= src.resident_bytes();
     // 1. The index pass (its share of the progress: 30 %).
     const double index_share = index ? 0.0 : 0.3;
@@ -188,13 +203,20 @@ StreamStats stream_extract(VolumeStream& src, const StreamOptions& opt_in, MeshS
         if (find_labels) opt.label_values = found;
         st.index_pass = true;
         st.read_seconds += seconds_since(t);
-        st.peak_bytes = std::max(st.peak_bytes, std::min(opt.memory_budget, 2 * index_bytes(index->chunk_count()) + kReadBuffer +
-                                                          src.resident_bytes()));
+        // The index pass held its index, a read buffer and slabs of as many slices as fit.
+        const std::size_t slice = std::size_t(h.dims[0] * h.dims[1]) * voxel_size(h.type);
+        const std::size_t idx_fixed = 2 * index_bytes(index->chunk_count()) + read_buffer(h);
+        const std::size_t slices = opt.memory_budget > idx_fixed ? std::max<std::size_t>(1, (opt.memory_budget - idx_fixed) / slice) : 1;
+        st.peak_bytes = std::max(st.peak_bytes, idx_fixed + src.resident_bytes() +
+                                                    std::min<std::size_t>(slices, std::size_t(h.dims[2])) * slice);
     }
     const std::vector<double>& values = opt.labels ? opt.label_values : opt.isos;
     st.values = values;
     const StreamPlan plan = plan_stream(h, opt, index.get());
     st.plan = plan;
+    if (!plan.fits)
+        st.warnings.push_back("the surface's estimated size in one chunk layer does not fit " + mib(opt.memory_budget) +
+                              " with the samples: slabs of one layer, the output may exceed the budget (give more --memory or a smaller --chunk)");
     const std::size_t nsurf = values.size();
     sink.begin(nsurf, plan.slabs, opt.extract.normals);
     if (nsurf == 0 || plan.slabs == 0) {

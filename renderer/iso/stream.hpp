@@ -43,6 +43,10 @@ struct StreamPlan {
     std::size_t slab_bytes = 0;           // samples of one slab, halo included
     std::size_t fixed_bytes = 0;          // index, scratch, per-chunk tables
     std::size_t output_estimate = 0;      // per slab
+    // False when even one chunk layer's estimated output does not fit: the
+    // slabs are then one layer each and the output may exceed the budget
+    // (StreamStats::warnings says so).
+    bool fits = true;
 };
 
 struct StreamStats {
@@ -57,6 +61,7 @@ struct StreamStats {
     double read_seconds = 0, extract_seconds = 0, write_seconds = 0;
     std::size_t source_restarts = 0;       // gzip streams rewound (VolumeStream::restarts())
     std::vector<double> values;            // the iso values or labels, one per surface
+    std::vector<std::string> warnings;
 };
 
 // Plans the slabs for a budget (the chunk size halves until one chunk layer

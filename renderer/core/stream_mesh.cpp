@@ -1,0 +1,129 @@
+#include "renderer/core/stream_mesh.hpp"
+
+#include <algorithm>
+#include <cstdio>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+
+#include <unistd.h>
+
+#include "io/atomic_file.hpp"
+#include "io/mesh_sink.hpp"
+#include "io/volume_io.hpp"
+#include "io/volume_stream.hpp"
+
+namespace iso::core {
+
+std::size_t default_memory_budget() {
+    const long pages = ::sysconf(_SC_PHYS_PAGES), page = ::sysconf(_SC_PAGESIZE);
+    if (pages <= 0 || page <= 0) return std::size_t(1) << 30;
+    return std::size_t(pages) * std::size_t(page) / 4;
+}
+
+std::size_t peak_resident_bytes() {
+    std::ifstream f("/proc/self/status");
+    std::string line;
+    while (std::getline(f, line))
+        if (line.rfind("VmHWM:", 0) == 0) return std::size_t(std::atoll(line.c_str() + 6)) * 1024;
+    return 0;
+}
+
+bool exceeds_budget(const std::string& path, std::size_t budget) {
+    const VolumeFormat f = volume_format_of(path);
+    if (f != VolumeFormat::Nifti && f != VolumeFormat::Nrrd && f != VolumeFormat::MetaImage) return false;
+    return read_volume_header(path).memory_bytes() > budget;
+}
+
+nlohmann::json describe_header(const std::string& path) {
+    using nlohmann::json;
+    const VolumeHeader h = read_volume_header(path);
+    json j;
+    j["source"] = h.meta.source;
+    j["format"] = h.meta.format;
+    j["dims"] = {h.dims[0], h.dims[1], h.dims[2]};
+    j["type"] = voxel_type_name(h.type);
+    const glm::dvec3 sp(glm::length(glm::dvec3(h.index_to_lps[0])), glm::length(glm::dvec3(h.index_to_lps[1])),
+                        glm::length(glm::dvec3(h.index_to_lps[2])));
+    j["spacing"] = {sp.x, sp.y, sp.z};
+    json m = json::array();
+    for (int r = 0; r < 4; ++r) m.push_back({h.index_to_lps[0][r], h.index_to_lps[1][r], h.index_to_lps[2][r], h.index_to_lps[3][r]});
+    j["index_to_lps"] = m;
+    j["range"] = nullptr;
+    j["range_read"] = false;
+    j["memory_bytes"] = h.memory_bytes();
+    j["storage"] = "dense";
+    j["data_file"] = h.data_file;
+    j["encoding"] = h.encoding == DataEncoding::Raw ? "raw" : h.encoding == DataEncoding::Gzip ? "gzip" : "other";
+    json meta;
+    meta["modality"] = h.meta.modality;
+    meta["patient_name"] = h.meta.patient_name;
+    meta["patient_id"] = h.meta.patient_id;
+    meta["study_uid"] = h.meta.study_uid;
+    meta["series_uid"] = h.meta.series_uid;
+    meta["series_description"] = h.meta.series_description;
+    j["metadata"] = meta;
+    j["warnings"] = h.meta.warnings;
+    return j;
+}
+
+std::string surface_output_path(const std::string& out, double value, bool label, std::size_t surfaces) {
+    if (surfaces <= 1) return out;
+    namespace fs = std::filesystem;
+    const fs::path p(out);
+    char suffix[64];
+    std::snprintf(suffix, sizeof suffix, label ? "-label%g" : "-iso%g", value);
+    return (p.parent_path() / (p.stem().string() + suffix + p.extension().string())).string();
+}
+
+StreamMeshResult stream_mesh(const StreamMeshRequest& req) {
+    StreamMeshResult r;
+    r.memory_budget = req.memory_budget ? req.memory_budget : default_memory_budget();
+    if (!is_streamable_mesh_path(req.output))
+        throw Error(req.output, "streamed output must be .pvtp (pieces), .ply or .stl (a single .vtp or .obj needs the whole mesh in memory)");
+    check_writable_destination(req.output); // before the long part
+    // A format that cannot stream is loaded whole if it takes at most half the budget.
+    auto src = open_volume_stream(req.input, r.memory_budget / 2);
+    r.warnings = src->header().meta.warnings;
+    StreamOptions so;
+    so.isos = req.isos;
+    so.labels = req.labels;
+    so.label_values = req.label_values;
+    so.extract = req.extract;
+    so.memory_budget = r.memory_budget;
+    so.progress = req.progress;
+    if (!req.labels) {
+        for (std::size_t i = 0; i < req.isos.size(); ++i) {
+            char name[64];
+            std::snprintf(name, sizeof name, "iso %g", req.isos[i]);
+            r.names.push_back(name);
+            r.paths.push_back(surface_output_path(req.output, req.isos[i], false, req.isos.size()));
+        }
+        auto sink = make_mesh_sink(r.paths);
+        r.stream = stream_extract(*src, so, *sink);
+        r.stats = sink->stats();
+        return r;
+    }
+    // Labels: the label list is known after the index pass when not given.
+    if (so.label_values.empty()) {
+        const StreamPlan pre = plan_stream(src->header(), so, nullptr);
+        std::vector<double> found;
+        so.index = build_chunk_index(*src, pre.chunk_size, r.memory_budget, {}, &found);
+        so.label_values = found;
+    }
+    std::sort(so.label_values.begin(), so.label_values.end());
+    so.label_values.erase(std::unique(so.label_values.begin(), so.label_values.end()), so.label_values.end());
+    for (double v : so.label_values) {
+        char name[64];
+        std::snprintf(name, sizeof name, "label %g", v);
+        r.names.push_back(name);
+        r.paths.push_back(surface_output_path(req.output, v, true, so.label_values.size()));
+    }
+    if (r.paths.empty()) throw Error(req.input, "has no non-zero label");
+    auto sink = make_mesh_sink(r.paths);
+    r.stream = stream_extract(*src, so, *sink);
+    r.stats = sink->stats();
+    return r;
+}
+
+} // namespace iso::core
