@@ -29,20 +29,13 @@
 #include "io/volume_io.hpp"
 #include "io/vtk_mesh.hpp"
 #include "io/vtk_util.hpp"
+#include "renderer/core/stream_mesh.hpp"
 #include "renderer/iso/partition.hpp"
 #include "renderer/iso/stream.hpp"
 
 namespace iso::dist {
 
 namespace fs = std::filesystem;
-
-std::string surface_output_path(const std::string& output, double value, bool labels, std::size_t surfaces) {
-    if (surfaces <= 1) return output;
-    const fs::path out(output);
-    char suffix[64];
-    std::snprintf(suffix, sizeof suffix, labels ? "-label%g" : "-iso%g", value);
-    return (out.parent_path() / (out.stem().string() + suffix + out.extension().string())).string();
-}
 
 std::size_t default_rank_budget() {
     const long pages = ::sysconf(_SC_PHYS_PAGES), page = ::sysconf(_SC_PAGESIZE);
@@ -397,7 +390,7 @@ DistMeshResult mesh_distributed(const Comm& comm, const DistMeshRequest& req) {
     // active chunks need are read); each slab's piece is summarized and
     // written at once.
     std::vector<std::string> paths;
-    for (double v : values) paths.push_back(surface_output_path(req.output, v, req.labels, values.size()));
+    for (double v : values) paths.push_back(core::surface_output_path(req.output, v, req.labels, values.size()));
     const Staging staging = prepare_staging(comm, paths);
     const auto remove_staging = [&] {
         if (!root) return;

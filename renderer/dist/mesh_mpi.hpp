@@ -17,7 +17,7 @@
 namespace iso::dist {
 
 struct DistMeshRequest {
-    std::string input, output;       // output: a .pvtp (several surfaces: OUT-iso<V>.pvtp / OUT-label<L>.pvtp)
+    std::string input, output;       // output: a .pvtp (several surfaces: core::surface_output_path)
     std::string series;              // DICOM series (every rank loads the same)
     std::vector<double> isos;        // iso values, or with `labels` the labels (empty: every label)
     bool labels = false;
@@ -53,9 +53,5 @@ DistMeshResult mesh_distributed(const Comm& comm, const DistMeshRequest& req);
 // The default per-rank budget: a quarter of this node's physical memory
 // shared by the ranks on this node (OMPI_COMM_WORLD_LOCAL_SIZE), at least 64 MiB.
 std::size_t default_rank_budget();
-
-// The file names the surfaces go to: `output` itself for one surface, else
-// OUT-iso<V>.pvtp / OUT-label<L>.pvtp (as `isoscope mesh` names them).
-std::string surface_output_path(const std::string& output, double value, bool labels, std::size_t surfaces);
 
 } // namespace iso::dist

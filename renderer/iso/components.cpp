@@ -255,7 +255,7 @@ template <class T> void put(std::string& out, const T& x) { out.append(reinterpr
 template <class T> T get(std::string_view& in) {
     if (in.size() < sizeof(T)) throw Error("deserialize_piece_summary", "truncated summary");
     T x;
-    std::memcpy(&x, in.data(), sizeof(T));
+    std::memcpy(static_cast<void*>(&x), in.data(), sizeof(T)); // T: trivially copyable numbers and glm vectors
     in.remove_prefix(sizeof(T));
     return x;
 }
