@@ -351,6 +351,11 @@ int run_mesh_streaming(const MeshArgs& a, std::size_t budget) {
     for (const auto& w : r.warnings) std::cerr << "warning: " << w << "\n";
     for (const auto& w : r.stream.warnings) std::cerr << "warning: " << w << "\n";
     for (std::size_t i = 0; i < r.paths.size(); ++i) print_surface_line(r.names[i], r.stats[i], r.paths[i]);
+    for (std::size_t i = 0; i < r.summaries.size() && i < r.names.size(); ++i) {
+        const auto& c = r.summaries[i];
+        std::cout << r.names[i] << ": " << c.components << " components (largest: " << c.largest.triangles << " triangles, area "
+                  << c.largest.area << " mm^2, volume " << c.largest.volume << " mm^3)\n";
+    }
     const auto& s = r.stream;
     std::cout << "streamed: " << s.plan.slabs << " slabs of " << s.plan.layers_per_slab << " chunk layers (chunk " << s.plan.chunk_size
               << "), " << s.slabs_read << " read, " << s.slabs_skipped << " skipped" << (s.index_pass ? ", after an index pass" : "")

@@ -247,6 +247,37 @@ SurfaceSummary summarize_mesh(const Mesh& m) {
     return merge_summaries(std::span<const PieceSummary>(&s, 1));
 }
 
+void SummarizingSink::begin(std::size_t surfaces, std::size_t pieces, bool normals) {
+    pieces_.assign(surfaces, {});
+    next_.begin(surfaces, pieces, normals);
+}
+
+void SummarizingSink::piece(MeshPiece&& p) {
+    if (p.surface >= pieces_.size()) throw Error("SummarizingSink", "piece of an unknown surface");
+    SurfacePiece sp;
+    sp.mesh = std::move(p.mesh);
+    sp.seam = p.lower;
+    sp.seam.insert(sp.seam.end(), p.upper.begin(), p.upper.end());
+    std::sort(sp.seam.begin(), sp.seam.end());
+    sp.seam.erase(std::unique(sp.seam.begin(), sp.seam.end()), sp.seam.end());
+    pieces_[p.surface].push_back(summarize_piece(sp, origin_));
+    p.mesh = std::move(sp.mesh);
+    next_.piece(std::move(p));
+}
+
+std::size_t SummarizingSink::memory_bytes() const {
+    std::size_t n = 0;
+    for (const auto& s : pieces_)
+        for (const auto& p : s) n += p.components.capacity() * sizeof(ComponentStats) + p.seam.capacity() * sizeof(p.seam[0]);
+    return n + next_.memory_bytes();
+}
+
+std::vector<SurfaceSummary> SummarizingSink::summaries() const {
+    std::vector<SurfaceSummary> out;
+    for (const auto& s : pieces_) out.push_back(merge_summaries(s));
+    return out;
+}
+
 // ---- serialization: plain little-endian-as-the-host bytes (ranks of one job
 // run the same binary on the same architecture) -----------------------------
 

@@ -24,6 +24,7 @@
 #include <glm/vec3.hpp>
 
 #include "io/mesh.hpp"
+#include "io/mesh_sink.hpp"
 #include "renderer/iso/extract.hpp"
 
 namespace iso {
@@ -106,6 +107,26 @@ SurfaceSummary merge_summaries(std::span<const PieceSummary> pieces);
 // The summary of a whole mesh (one piece, no seam): what merge_summaries()
 // must equal.
 SurfaceSummary summarize_mesh(const Mesh& m);
+
+// The single-process streaming path's statistics: summarizes every piece
+// (its seam: the driver's lower and upper key lists) about `origin` before
+// passing it on to `next`, and merges the summaries of each surface when asked.
+class SummarizingSink final : public MeshSink {
+public:
+    SummarizingSink(MeshSink& next, const glm::dvec3& origin) : next_(next), origin_(origin) {}
+    void begin(std::size_t surfaces, std::size_t pieces, bool normals) override;
+    void piece(MeshPiece&& p) override;
+    void finish() override { next_.finish(); }
+    std::size_t memory_bytes() const override;
+    std::vector<MeshStats> stats() const override { return next_.stats(); }
+    // Per surface: triangles, welded vertices, area, volume, components, the largest.
+    std::vector<SurfaceSummary> summaries() const;
+
+private:
+    MeshSink& next_;
+    glm::dvec3 origin_;
+    std::vector<std::vector<PieceSummary>> pieces_;
+};
 
 // A byte string for sending a summary between processes, and back.
 std::string serialize(const PieceSummary& s);
