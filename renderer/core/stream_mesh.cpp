@@ -14,6 +14,7 @@
 #include "io/mesh_sink.hpp"
 #include "io/volume_io.hpp"
 #include "io/volume_stream.hpp"
+#include "renderer/core/api.hpp"
 
 namespace iso::core {
 
@@ -38,34 +39,22 @@ bool exceeds_budget(const std::string& path, std::size_t budget) {
 }
 
 nlohmann::json describe_header(const std::string& path) {
-    using nlohmann::json;
     const VolumeHeader h = read_volume_header(path);
-    json j;
-    j["source"] = h.meta.source;
-    j["format"] = h.meta.format;
-    j["dims"] = {h.dims[0], h.dims[1], h.dims[2]};
-    j["type"] = voxel_type_name(h.type);
-    const glm::dvec3 sp(glm::length(glm::dvec3(h.index_to_lps[0])), glm::length(glm::dvec3(h.index_to_lps[1])),
-                        glm::length(glm::dvec3(h.index_to_lps[2])));
-    j["spacing"] = {sp.x, sp.y, sp.z};
-    json m = json::array();
-    for (int r = 0; r < 4; ++r) m.push_back({h.index_to_lps[0][r], h.index_to_lps[1][r], h.index_to_lps[2][r], h.index_to_lps[3][r]});
-    j["index_to_lps"] = m;
+    // describe() of a volume without samples: the geometry and metadata the
+    // same way, then what the samples would have told replaced.
+    Volume v;
+    v.dims = h.dims;
+    v.type = h.type;
+    v.index_to_lps = h.index_to_lps;
+    v.meta = h.meta;
+    nlohmann::json j = describe(v);
     j["range"] = nullptr;
     j["range_read"] = false;
+    j.erase("nan_count");
+    j.erase("inf_count");
     j["memory_bytes"] = h.memory_bytes();
-    j["storage"] = "dense";
     j["data_file"] = h.data_file;
     j["encoding"] = h.encoding == DataEncoding::Raw ? "raw" : h.encoding == DataEncoding::Gzip ? "gzip" : "other";
-    json meta;
-    meta["modality"] = h.meta.modality;
-    meta["patient_name"] = h.meta.patient_name;
-    meta["patient_id"] = h.meta.patient_id;
-    meta["study_uid"] = h.meta.study_uid;
-    meta["series_uid"] = h.meta.series_uid;
-    meta["series_description"] = h.meta.series_description;
-    j["metadata"] = meta;
-    j["warnings"] = h.meta.warnings;
     return j;
 }
 

@@ -201,6 +201,18 @@ TEST(Stream, SlabsHaveTheReadersSamplesAndGeometry) {
         }
         EXPECT_THROW(src->read_slab(5, 13), Error);
     }
+    // MetaImage with a detached raw data file (the bundled volumes).
+    for (const char* name : {"HeadMRVolume.mhd", "headsq.mhd"}) {
+        SCOPED_TRACE(name);
+        const Volume ref = load_volume(test::data(name));
+        auto src = open_volume_stream(test::data(name));
+        ASSERT_TRUE(src->streaming());
+        EXPECT_EQ(src->header().index_to_lps, ref.index_to_lps);
+        const std::int64_t k0 = ref.dims[2] / 3, k1 = ref.dims[2] - 2;
+        const Volume s = src->read_slab(k0, k1);
+        const std::size_t slice = std::size_t(ref.dims[0] * ref.dims[1]) * voxel_size(ref.type);
+        EXPECT_EQ(std::memcmp(s.bytes().data(), ref.bytes().data() + std::size_t(k0) * slice, s.bytes().size()), 0);
+    }
 }
 
 TEST(Stream, NiftiRescaleAndByteOrderMatchTheReader) {
