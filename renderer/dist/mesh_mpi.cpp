@@ -359,6 +359,7 @@ DistMeshResult mesh_distributed(const Comm& comm, const DistMeshRequest& req) {
         }
         agreed(comm, [&] {
             if (values.size() > 4096) throw Error(h.path, "has more than 4096 distinct values: it does not look like a label map");
+            if (values.empty()) throw Error(h.path, req.labels ? "has no non-zero label" : "no iso value given");
             index = std::make_shared<const ChunkIndex>(sum.finish());
         });
     }
