@@ -24,6 +24,8 @@ PACKAGES=(
   gnuplot-nox libstb-dev
   # NIfTI reference library, CLI parsing, JSON output, zlib
   libnifti2-dev libcli11-dev nlohmann-json3-dev zlib1g-dev libssl-dev
+  # MPI-distributed extraction (ISOSCOPE_MPI; VTK's MPI modules come with libvtk9-dev)
+  libopenmpi-dev openmpi-bin
 )
 
 missing=()

@@ -30,6 +30,9 @@
 #include "renderer/core/pick.hpp"
 #include "renderer/core/session.hpp"
 #include "renderer/core/stream_mesh.hpp"
+#ifdef ISOSCOPE_MPI
+#include "renderer/dist/mesh_mpi.hpp"
+#endif
 
 namespace {
 
@@ -299,7 +302,7 @@ struct MeshArgs {
     bool labels = false, stream = false;
     iso::PostProcessOptions post;
     int threads = 0, chunk = 32;
-    double memory_mib = 0;
+    double memory_mib = 0; // per rank under mpirun (0: default_rank_budget())
 };
 
 CLI::App* add_mesh(CLI::App& app, MeshArgs& a) {
@@ -316,7 +319,8 @@ CLI::App* add_mesh(CLI::App& app, MeshArgs& a) {
     c->add_option("--chunk", a.chunk, "Chunk size in cells per side")->check(CLI::Range(2, 1024));
     c->add_option("-o,--output", a.out, "Output " + iso::mesh_extensions_text() + ", or .pvtp when streaming (several surfaces: NAME-iso<V>.ext)")->required();
     c->add_option("--memory", a.memory_mib, "Memory budget in MiB for samples and output; larger volumes are streamed "
-                                            "(default: a quarter of physical memory)")->check(CLI::PositiveNumber);
+                                            "(default: a quarter of physical memory; under mpirun: per rank, a quarter of "
+                                            "the node's memory shared by its ranks)")->check(CLI::PositiveNumber);
     c->add_flag("--stream", a.stream, "Stream slabs of the volume from the file even if it fits the budget");
     return c;
 }
@@ -347,6 +351,11 @@ int run_mesh_streaming(const MeshArgs& a, std::size_t budget) {
     for (const auto& w : r.warnings) std::cerr << "warning: " << w << "\n";
     for (const auto& w : r.stream.warnings) std::cerr << "warning: " << w << "\n";
     for (std::size_t i = 0; i < r.paths.size(); ++i) print_surface_line(r.names[i], r.stats[i], r.paths[i]);
+    for (std::size_t i = 0; i < r.summaries.size() && i < r.names.size(); ++i) {
+        const auto& c = r.summaries[i];
+        std::cout << r.names[i] << ": " << c.components << " components (largest: " << c.largest.triangles << " triangles, area "
+                  << c.largest.area << " mm^2, volume " << c.largest.volume << " mm^3)\n";
+    }
     const auto& s = r.stream;
     std::cout << "streamed: " << s.plan.slabs << " slabs of " << s.plan.layers_per_slab << " chunk layers (chunk " << s.plan.chunk_size
               << "), " << s.slabs_read << " read, " << s.slabs_skipped << " skipped" << (s.index_pass ? ", after an index pass" : "")
@@ -355,9 +364,64 @@ int run_mesh_streaming(const MeshArgs& a, std::size_t budget) {
     return 0;
 }
 
+#ifdef ISOSCOPE_MPI
+// `mpirun -np N isoscope mesh ... -o OUT.pvtp` (docs/cluster.md): every rank
+// runs this; rank 0 alone prints. An error agreed by all ranks is printed
+// once (by rank 0) and every rank exits 1; anything else (a bug outside an
+// agreement point) aborts the job rather than leave the others waiting.
+int run_mesh_mpi(const MeshArgs& a) {
+    if (a.post.smooth > 0 || a.post.decimate > 0 || a.post.keep_largest)
+        throw iso::Error("isoscope mesh", "--smooth, --decimate and --largest need the whole mesh in one process; "
+                                          "they are not available under mpirun");
+    iso::dist::Runtime runtime(nullptr, nullptr);
+    const iso::dist::Comm comm;
+    iso::dist::DistMeshRequest r;
+    r.input = a.in;
+    r.output = a.out;
+    r.series = a.series;
+    r.labels = a.labels;
+    r.isos = a.labels ? a.label_values : a.isos;
+    r.extract.threads = a.threads;
+    r.extract.chunk_size = a.chunk;
+    r.memory_budget = a.memory_mib > 0 ? std::size_t(a.memory_mib * 1048576.0) : iso::dist::default_rank_budget();
+    if (comm.root()) {
+        r.progress = progress_bar();
+        r.extract.progress = progress_bar();
+    }
+    try {
+        const auto res = iso::dist::mesh_distributed(comm, r);
+        if (!comm.root()) return 0;
+        for (const auto& w : res.warnings) std::cerr << "warning: " << w << "\n";
+        std::cout << res.ranks << " ranks, active chunks per rank:";
+        for (auto n : res.rank_active) std::cout << ' ' << n;
+        std::cout << ", slabs read:";
+        for (auto n : res.rank_slabs) std::cout << ' ' << n;
+        std::cout << ", engine peak per rank:";
+        for (auto n : res.rank_peak_bytes) std::cout << ' ' << human_bytes(double(n));
+        std::cout << "\n";
+        for (const auto& s : res.surfaces) {
+            const auto& m = s.summary;
+            std::cout << s.name << ": " << m.triangles << " triangles, " << m.vertices << " vertices, area " << m.area
+                      << " mm^2, volume " << m.volume << " mm^3, " << m.components << " components (largest: "
+                      << m.largest.triangles << " triangles, area " << m.largest.area << " mm^2, volume "
+                      << m.largest.volume << " mm^3) -> " << s.path << " (" << s.pieces << " pieces from " << res.ranks << " ranks)\n";
+        }
+        return 0;
+    } catch (const iso::dist::AgreedError& e) {
+        if (comm.root()) std::cerr << "isoscope: error: " << e.what() << "\n";
+        return 1;
+    } catch (const std::exception& e) {
+        iso::dist::Runtime::abort_job(e.what());
+    }
+}
+#endif
+
 int run_mesh(const MeshArgs& a) {
     if (a.isos.empty() && !a.labels) throw iso::Error("isoscope mesh", "give --iso V (repeatable) or --labels");
     if (!a.isos.empty() && a.labels) throw iso::Error("isoscope mesh", "--iso and --labels exclude each other");
+#ifdef ISOSCOPE_MPI
+    if (iso::dist::launched_by_mpirun()) return run_mesh_mpi(a);
+#endif
     const std::size_t budget = memory_bytes_option(a.memory_mib);
     const bool pieces = iso::is_streamable_mesh_path(a.out) && !iso::is_mesh_path(a.out); // .pvtp: written by the streaming path
     if (a.stream || pieces || iso::core::exceeds_budget(a.in, budget)) return run_mesh_streaming(a, budget);

@@ -1,6 +1,8 @@
 #include "renderer/core/stream_mesh.hpp"
 
 #include <algorithm>
+
+#include <glm/glm.hpp>
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
@@ -65,6 +67,23 @@ std::string surface_output_path(const std::string& out, double value, bool label
     return (p.parent_path() / (p.stem().string() + suffix + p.extension().string())).string();
 }
 
+namespace {
+// Streams into the output sink through a SummarizingSink, so that the result
+// also carries the components (as the MPI path reports them). Volumes are
+// summarized about the volume's centre and merged about the surface's bounds
+// centre, as mesh_stats() takes them.
+StreamStats extract_summarized(VolumeStream& src, const StreamOptions& so, StreamMeshResult& r) {
+    auto sink = make_mesh_sink(r.paths);
+    const VolumeHeader& h = src.header();
+    const glm::dvec3 centre(h.index_to_lps * glm::dvec4(0.5 * glm::dvec3(h.dims[0] - 1, h.dims[1] - 1, h.dims[2] - 1), 1.0));
+    SummarizingSink summing(*sink, centre);
+    StreamStats st = stream_extract(src, so, summing);
+    r.stats = sink->stats();
+    r.summaries = summing.summaries();
+    return st;
+}
+} // namespace
+
 StreamMeshResult stream_mesh(const StreamMeshRequest& req) {
     StreamMeshResult r;
     r.memory_budget = req.memory_budget ? req.memory_budget : default_memory_budget();
@@ -88,9 +107,7 @@ StreamMeshResult stream_mesh(const StreamMeshRequest& req) {
             r.names.push_back(name);
             r.paths.push_back(surface_output_path(req.output, req.isos[i], false, req.isos.size()));
         }
-        auto sink = make_mesh_sink(r.paths);
-        r.stream = stream_extract(*src, so, *sink);
-        r.stats = sink->stats();
+        r.stream = extract_summarized(*src, so, r);
         return r;
     }
     // Labels: the label list is known after the index pass when not given.
@@ -109,9 +126,7 @@ StreamMeshResult stream_mesh(const StreamMeshRequest& req) {
         r.paths.push_back(surface_output_path(req.output, v, true, so.label_values.size()));
     }
     if (r.paths.empty()) throw Error(req.input, "has no non-zero label");
-    auto sink = make_mesh_sink(r.paths);
-    r.stream = stream_extract(*src, so, *sink);
-    r.stats = sink->stats();
+    r.stream = extract_summarized(*src, so, r);
     return r;
 }
 

@@ -11,6 +11,7 @@
 
 #include "io/mesh.hpp"
 #include "io/progress.hpp"
+#include "renderer/iso/components.hpp"
 #include "renderer/iso/stream.hpp"
 
 namespace iso::core {
@@ -49,6 +50,7 @@ struct StreamMeshRequest {
 struct StreamMeshResult {
     std::vector<std::string> names, paths; // per surface: "iso 500" / "label 3", file written
     std::vector<MeshStats> stats;
+    std::vector<SurfaceSummary> summaries; // per surface: connected components and the largest (renderer/iso/components.hpp)
     StreamStats stream;
     std::size_t memory_budget = 0;
     std::vector<std::string> warnings;     // of the volume's header
