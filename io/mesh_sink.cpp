@@ -15,11 +15,15 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <unordered_map>
 
 #include <glm/glm.hpp>
 #include <vtkFieldData.h>
+#include <vtkCellArray.h>
 #include <vtkFloatArray.h>
+#include <vtkPoints.h>
+#include <vtkTypeInt32Array.h>
 #include <vtkNew.h>
 #include <vtkPointData.h>
 #include <vtkPolyData.h>
@@ -141,14 +145,44 @@ protected:
 
 // ---- .pvtp: one .vtp per piece through VTK's parallel XML writer -----------
 
-// The piece as save_mesh() would give it to VTK (to_polydata), with an empty
-// "Normals" array on empty pieces so that every piece declares the same arrays.
-vtkSmartPointer<vtkPolyData> piece_polydata(const Mesh& m, bool normals) {
-    auto pd = to_polydata(m, false);
-    if (normals && !pd->GetPointData()->GetNormals()) {
+} // namespace
+
+// The piece as VTK sees it, without copying it: the points, the normals and
+// the triangles' connectivity are VTK arrays over the mesh's own buffers
+// (vtkAOSDataArrayTemplate::SetArray with save = 1: VTK never frees them),
+// the cells in 32-bit storage with one offsets array (4 bytes per triangle).
+// to_polydata() copies into vtkIdType cells instead: ~44 bytes per vertex
+// and triangle more, which for a slab of 8 million triangles was ~350 MiB
+// beyond the memory budget (docs/scaling.md). Every piece declares the same
+// arrays, an empty one too ("Normals" empty), and the SPACE=LPS field.
+// `m` must outlive the returned object's use.
+vtkSmartPointer<vtkPolyData> piece_polydata_view(const Mesh& m, bool normals) {
+    if (m.positions.size() > std::size_t(std::numeric_limits<std::int32_t>::max()) ||
+        m.triangles.size() > std::size_t(std::numeric_limits<std::int32_t>::max() / 3))
+        throw Error("streaming", "a piece with 2^31 vertices or more: lower --memory");
+    auto pd = vtkSmartPointer<vtkPolyData>::New();
+    vtkNew<vtkFloatArray> xyz;
+    xyz->SetNumberOfComponents(3);
+    if (!m.positions.empty())
+        xyz->SetArray(const_cast<float*>(&m.positions[0].x), vtkIdType(3 * m.positions.size()), 1);
+    vtkNew<vtkPoints> pts;
+    pts->SetData(xyz);
+    pd->SetPoints(pts);
+    vtkNew<vtkTypeInt32Array> conn, offsets;
+    if (!m.triangles.empty())
+        conn->SetArray(reinterpret_cast<std::int32_t*>(const_cast<std::uint32_t*>(m.triangles[0].data())),
+                       vtkIdType(3 * m.triangles.size()), 1);
+    offsets->SetNumberOfValues(vtkIdType(m.triangles.size() + 1));
+    for (std::size_t i = 0; i <= m.triangles.size(); ++i) offsets->SetValue(vtkIdType(i), std::int32_t(3 * i));
+    vtkNew<vtkCellArray> polys;
+    polys->SetData(offsets, conn);
+    pd->SetPolys(polys);
+    if (normals) {
         vtkNew<vtkFloatArray> n;
         n->SetName("Normals");
         n->SetNumberOfComponents(3);
+        if (m.normals.size() == m.positions.size() && !m.normals.empty())
+            n->SetArray(const_cast<float*>(&m.normals[0].x), vtkIdType(3 * m.normals.size()), 1);
         pd->GetPointData()->SetNormals(n);
     }
     vtkNew<vtkStringArray> space;
@@ -157,6 +191,51 @@ vtkSmartPointer<vtkPolyData> piece_polydata(const Mesh& m, bool normals) {
     pd->GetFieldData()->AddArray(space);
     return pd;
 }
+
+void write_vtp_piece(const Mesh& m, bool normals, const std::string& file, const std::string& what) {
+    vtkNew<vtkXMLPolyDataWriter> w;
+    vtkNew<VtkMessages> msgs;
+    msgs->watch(w);
+    const auto pd = piece_polydata_view(m, normals);
+    w->SetInputData(pd);
+    w->SetFileName(file.c_str());
+    w->SetDataModeToAppended();
+    // LZ4: ~4x faster than zlib here for ~1.3x the bytes; the writing of
+    // pieces was the serial part of a streamed extraction. VTK >= 8.1 and
+    // ParaView >= 5.5 read it.
+    w->SetCompressorTypeToLZ4();
+    if (!w->Write() || msgs->has_error())
+        throw Error(file, "cannot write " + what + ": " + (msgs->has_error() ? msgs->first_error() : "VTK writer failed"));
+}
+
+std::string write_pvtp_summary(const fs::path& scratch, const std::string& stem, std::size_t pieces, bool normals,
+                               bool subdirectory, const std::string& what) {
+    // vtkXMLPPolyDataWriter writes the summary (piece list, declared arrays)
+    // only together with pieces it makes itself; in one process it lists
+    // only those. So it is run on a one-point stand-in with the pieces'
+    // arrays in a scratch folder, and only its .pvtp is kept.
+    fs::create_directories(scratch);
+    Mesh one;
+    one.positions = {glm::vec3(0.0f)};
+    if (normals) one.normals = {glm::vec3(0.0f, 0.0f, 1.0f)};
+    const auto pd = piece_polydata_view(one, normals);
+    vtkNew<vtkXMLPPolyDataWriter> w;
+    vtkNew<VtkMessages> msgs;
+    msgs->watch(w);
+    const std::string file = (scratch / (stem + ".pvtp")).string();
+    w->SetInputData(pd);
+    w->SetFileName(file.c_str());
+    w->SetNumberOfPieces(int(pieces));
+    w->SetStartPiece(0);
+    w->SetEndPiece(int(pieces) - 1);
+    w->SetUseSubdirectory(subdirectory);
+    w->SetDataModeToAppended();
+    w->SetCompressorTypeToLZ4();
+    if (!w->Write() || msgs->has_error()) throw Error(what, "cannot write the summary: " + msgs->first_error());
+    return file;
+}
+
+namespace {
 
 // Pieces are written as they come with vtkXMLPolyDataWriter under the names
 // vtkXMLPPolyDataWriter gives them (NAME_<i>.vtp beside NAME.pvtp); at the end
@@ -195,25 +274,7 @@ public:
             if (pieces_ > 0) write(s, pieces_ - 1, Mesh{}, written_[s] == pieces_); // trailing empty pieces
             const fs::path dest(paths_[s]);
             const std::string stem = dest.stem().string();
-            // The summary, from a stand-in in a scratch folder inside ours.
-            const fs::path scratch = dirs_[s] / "summary";
-            fs::create_directory(scratch);
-            Mesh one;
-            one.positions = {glm::vec3(0.0f)};
-            if (normals_) one.normals = {glm::vec3(0.0f, 0.0f, 1.0f)};
-            auto pd = piece_polydata(one, normals_);
-            vtkNew<vtkXMLPPolyDataWriter> w;
-            vtkNew<VtkMessages> msgs;
-            msgs->watch(w);
-            const std::string file = (scratch / (stem + ".pvtp")).string();
-            w->SetInputData(pd);
-            w->SetFileName(file.c_str());
-            w->SetNumberOfPieces(int(pieces_));
-            w->SetStartPiece(0);
-            w->SetEndPiece(int(pieces_) - 1);
-            w->SetDataModeToAppended();
-            w->SetCompressorTypeToZLib();
-            if (!w->Write() || msgs->has_error()) throw Error(paths_[s], "cannot write the summary: " + msgs->first_error());
+            const std::string file = write_pvtp_summary(dirs_[s] / "summary", stem, pieces_, normals_, false, paths_[s]);
             // Pieces first, the summary last.
             for (std::size_t i = 0; i < pieces_; ++i) {
                 const std::string name = stem + "_" + std::to_string(i) + ".vtp";
@@ -236,15 +297,7 @@ private:
     void write_one(std::size_t s, std::size_t index, const Mesh& m) {
         const fs::path dest(paths_[s]);
         const std::string file = (dirs_[s] / (dest.stem().string() + "_" + std::to_string(index) + ".vtp")).string();
-        vtkNew<vtkXMLPolyDataWriter> w;
-        vtkNew<VtkMessages> msgs;
-        msgs->watch(w);
-        auto pd = piece_polydata(m, normals_);
-        w->SetInputData(pd);
-        w->SetFileName(file.c_str());
-        w->SetDataModeToAppended();
-        w->SetCompressorTypeToZLib();
-        if (!w->Write() || msgs->has_error()) throw Error(paths_[s], "cannot write piece " + std::to_string(index) + ": " + msgs->first_error());
+        write_vtp_piece(m, normals_, file, "piece " + std::to_string(index) + " of " + paths_[s]);
     }
     std::size_t pieces_ = 1;
     std::vector<fs::path> dirs_;

@@ -10,6 +10,7 @@
 #pragma once
 
 #include <cstdint>
+#include <filesystem>
 #include <memory>
 #include <string>
 #include <utility>
@@ -53,5 +54,17 @@ public:
 std::unique_ptr<MeshSink> make_mesh_sink(const std::vector<std::string>& paths);
 // Can make_mesh_sink() write this path? (".pvtp", ".ply", ".stl", ".vtp")
 bool is_streamable_mesh_path(const std::string& path);
+
+// Writes one piece of a .pvtp as a .vtp (appended, LZ4) straight from the
+// mesh's buffers (no copy into VTK's cell arrays), with the arrays every
+// piece declares (an empty "Normals" when `normals` and the piece is empty)
+// and SPACE=LPS. Throws iso::Error naming `file` and `what`.
+void write_vtp_piece(const Mesh& m, bool normals, const std::string& file, const std::string& what);
+// Writes the .pvtp summary of `pieces` pieces named <stem>_<i>.vtp (in a
+// <stem>/ folder beside it with `subdirectory`) into the folder `scratch`
+// (created; VTK writes stand-in pieces there too) and returns its path, to be
+// renamed into place by the caller. Errors name `what`.
+std::string write_pvtp_summary(const std::filesystem::path& scratch, const std::string& stem, std::size_t pieces, bool normals,
+                               bool subdirectory, const std::string& what);
 
 } // namespace iso

@@ -71,24 +71,6 @@ std::vector<ChunkRange> decode_plan(const std::string& bytes) {
     return plan;
 }
 
-// A piece as VTK's parallel writer wants it: every piece with the same
-// arrays, even an empty one (rank 0's piece, empty or not, describes the
-// arrays in the .pvtp summary).
-vtkSmartPointer<vtkPolyData> piece_polydata(const Mesh& m, bool normals) {
-    auto pd = to_polydata(m, false);
-    if (normals && !pd->GetPointData()->GetNormals()) {
-        vtkNew<vtkFloatArray> n;
-        n->SetName("Normals");
-        n->SetNumberOfComponents(3);
-        pd->GetPointData()->SetNormals(n);
-    }
-    vtkNew<vtkStringArray> space;
-    space->SetName("SPACE");
-    space->InsertNextValue("LPS");
-    pd->GetFieldData()->AddArray(space);
-    return pd;
-}
-
 // Is `dir` absent, or a piece folder an earlier run wrote (only
 // <stem>_<N>.vtp files)? Anything else is the user's and is not replaced.
 bool replaceable_piece_dir(const fs::path& dir, const std::string& stem) {
@@ -131,16 +113,7 @@ public:
         const std::string stem = stems_[p.surface];
         const fs::path file =
             dirs_[p.surface] / (stem + "_r" + std::to_string(rank_) + "_" + std::to_string(files_[p.surface].size()) + ".vtp");
-        vtkNew<VtkMessages> msgs;
-        vtkNew<vtkXMLPolyDataWriter> w;
-        msgs->watch(w);
-        const auto pd = piece_polydata(sp.mesh, normals_);
-        w->SetInputData(pd);
-        w->SetFileName(file.string().c_str());
-        w->SetDataModeToAppended();
-        w->SetCompressorTypeToZLib();
-        if (!w->Write() || msgs->has_error())
-            throw Error(file.string(), "cannot write the piece: " + (msgs->has_error() ? msgs->first_error() : "VTK writer failed"));
+        write_vtp_piece(sp.mesh, normals_, file.string(), "the piece");
         files_[p.surface].push_back(file);
     }
     void finish() override {}
@@ -223,36 +196,12 @@ std::size_t finish_surface(const Comm& comm, const Staging& st, const RankSink& 
         const bool normals = sink.normals();
         // No triangle anywhere: one empty piece, so that the summary is a valid file.
         if (total == 0) {
-            vtkNew<vtkXMLPolyDataWriter> w;
-            const auto pd = piece_polydata(Mesh{}, normals);
-            w->SetInputData(pd);
-            w->SetFileName((st.pieces[s] / (stem + "_0.vtp")).string().c_str());
-            if (!w->Write()) throw Error(st.dests[s].string(), "cannot write an empty piece");
+            write_vtp_piece(Mesh{}, normals, (st.pieces[s] / (stem + "_0.vtp")).string(), "an empty piece");
             total = 1;
         }
-        // The summary (which lists pieces by number and declares the arrays)
-        // from vtkXMLPPolyDataWriter run on a one-point stand-in with the
-        // pieces' arrays, in a scratch folder: only its .pvtp is kept.
-        const fs::path scratch = st.dir / ("summary-" + std::to_string(s));
-        fs::create_directories(scratch);
-        Mesh one;
-        one.positions = {glm::vec3(0.0f)};
-        if (normals) one.normals = {glm::vec3(0.0f, 0.0f, 1.0f)};
-        const auto pd = piece_polydata(one, normals);
-        vtkNew<VtkMessages> msgs;
-        vtkNew<vtkXMLPPolyDataWriter> w;
-        msgs->watch(w);
-        w->SetInputData(pd);
-        const fs::path summary = scratch / (stem + ".pvtp");
-        w->SetFileName(summary.string().c_str());
-        w->SetNumberOfPieces(int(total));
-        w->SetStartPiece(0);
-        w->SetEndPiece(int(total) - 1);
-        w->SetUseSubdirectory(true); // pieces listed as <stem>/<stem>_<i>.vtp
-        w->SetDataModeToAppended();
-        w->SetCompressorTypeToZLib();
-        if (!w->Write() || msgs->has_error())
-            throw Error(st.dests[s].string(), "cannot write the summary: " + msgs->first_error());
+        // Pieces listed as <stem>/<stem>_<i>.vtp.
+        const fs::path summary = write_pvtp_summary(st.dir / ("summary-" + std::to_string(s)), stem, total, normals, true,
+                                                    st.dests[s].string());
         std::error_code ec;
         fs::remove_all(st.finals[s], ec);
         fs::rename(st.pieces[s], st.finals[s], ec);
