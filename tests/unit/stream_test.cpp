@@ -30,6 +30,18 @@
 #include "renderer/iso/stream.hpp"
 #include "test_util.hpp"
 
+// Is this an AddressSanitizer build? (GCC defines __SANITIZE_ADDRESS__, Clang answers __has_feature.)
+#if defined(__SANITIZE_ADDRESS__)
+#define ISOSCOPE_TEST_ASAN 1
+#elif defined(__has_feature)
+#if __has_feature(address_sanitizer)
+#define ISOSCOPE_TEST_ASAN 1
+#endif
+#endif
+#ifndef ISOSCOPE_TEST_ASAN
+#define ISOSCOPE_TEST_ASAN 0
+#endif
+
 namespace iso {
 namespace {
 namespace fs = std::filesystem;
@@ -642,7 +654,14 @@ TEST(Stream, A128MiBVolumeStreamsWithin32MiB) {
                 "read %.2f s, extract %.2f s, write %.2f s, %zu triangles\n",
                 double(st.peak_bytes) / 1048576.0, grown_mib, double(base_kib) / 1024.0, st.plan.slabs, st.plan.layers_per_slab,
                 st.plan.chunk_size, st.read_seconds, st.extract_seconds, st.write_seconds, std::size_t(ms.triangles));
+    // Under AddressSanitizer freed memory sits in its quarantine (256 MiB by
+    // default) and every allocation has red zones: resident memory says
+    // nothing about the engine there, so only the engine's accounting is checked.
+#if ISOSCOPE_TEST_ASAN
+    std::printf("AddressSanitizer build: the resident-memory bound is not checked\n");
+#else
     EXPECT_LE(grown_mib, 32.0 + 24.0);
+#endif
 }
 
 // A measurement, not a check (run with --gtest_also_run_disabled_tests;
