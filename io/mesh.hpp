@@ -30,6 +30,21 @@ struct MeshStats {
 };
 MeshStats mesh_stats(const Mesh& m);
 
+// One triangle's terms of a surface's statistics, its corners taken relative
+// to `o` (a, b, c): area; det = a . (b x c), six times the signed volume of
+// the tetrahedron (o, p0, p1, p2); moment = a x b + b x c + c x a. Summed over
+// a closed surface, det / 6 is its volume; summed over pieces taken about
+// different origins, the volume about another point q is
+// volume - (q - o) . moment / 6 (volume_moved). mesh_stats, the streaming
+// sinks and the piece summaries (renderer/iso/components) all use it.
+struct TriangleTerms {
+    double area = 0, det = 0;
+    glm::dvec3 moment{0.0};
+};
+TriangleTerms triangle_terms(const glm::dvec3& o, const glm::vec3& p0, const glm::vec3& p1, const glm::vec3& p2);
+// The signed volume `volume` (with moment sum `moment`) taken about `from`, about `to`.
+double volume_moved(double volume, const glm::dvec3& moment, const glm::dvec3& from, const glm::dvec3& to);
+
 // The mesh file extensions isoscope reads and writes, lower case with the
 // dot: .stl (binary; ASCII read too), .ply, .obj, .vtp. The one list: the
 // readers, the writers and the front ends all ask it.

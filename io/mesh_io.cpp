@@ -58,12 +58,25 @@ MeshStats mesh_stats(const Mesh& m) {
     // digits to large coordinates.
     const glm::dvec3 c = 0.5 * (s.bounds_min + s.bounds_max);
     for (const auto& t : m.triangles) {
-        const glm::dvec3 a = glm::dvec3(m.positions[t[0]]) - c, b = glm::dvec3(m.positions[t[1]]) - c,
-                         d = glm::dvec3(m.positions[t[2]]) - c;
-        s.area += 0.5 * glm::length(glm::cross(b - a, d - a));
-        s.volume += glm::dot(a, glm::cross(b, d)) / 6.0;
+        const TriangleTerms tt = triangle_terms(c, m.positions[t[0]], m.positions[t[1]], m.positions[t[2]]);
+        s.area += tt.area;
+        s.volume += tt.det / 6.0;
     }
     return s;
+}
+
+TriangleTerms triangle_terms(const glm::dvec3& o, const glm::vec3& p0, const glm::vec3& p1, const glm::vec3& p2) {
+    const glm::dvec3 a = glm::dvec3(p0) - o, b = glm::dvec3(p1) - o, d = glm::dvec3(p2) - o;
+    const glm::dvec3 bd = glm::cross(b, d);
+    TriangleTerms t;
+    t.area = 0.5 * glm::length(glm::cross(b - a, d - a));
+    t.det = glm::dot(a, bd);
+    t.moment = glm::cross(a, b) + bd + glm::cross(d, a);
+    return t;
+}
+
+double volume_moved(double volume, const glm::dvec3& moment, const glm::dvec3& from, const glm::dvec3& to) {
+    return volume - glm::dot(to - from, moment) / 6.0;
 }
 
 namespace {

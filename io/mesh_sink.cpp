@@ -92,11 +92,10 @@ struct SurfaceState {
             have_c0 = true;
         }
         for (const auto& t : p.mesh.triangles) {
-            const glm::dvec3 a = glm::dvec3(p.mesh.positions[t[0]]) - c0, b = glm::dvec3(p.mesh.positions[t[1]]) - c0,
-                             d = glm::dvec3(p.mesh.positions[t[2]]) - c0;
-            area += 0.5 * glm::length(glm::cross(b - a, d - a));
-            det_sum += glm::dot(a, glm::cross(b, d));
-            w += glm::cross(b, d) + glm::cross(d, a) + glm::cross(a, b);
+            const TriangleTerms tt = triangle_terms(c0, p.mesh.positions[t[0]], p.mesh.positions[t[1]], p.mesh.positions[t[2]]);
+            area += tt.area;
+            det_sum += tt.det;
+            w += tt.moment;
         }
         triangles += p.mesh.triangles.size();
         return id;
@@ -108,8 +107,7 @@ struct SurfaceState {
         s.bounds_min = lo;
         s.bounds_max = hi;
         s.area = area;
-        const glm::dvec3 c = 0.5 * (lo + hi) - c0;
-        s.volume = (det_sum - glm::dot(c, w)) / 6.0;
+        s.volume = volume_moved(det_sum / 6.0, w, c0, 0.5 * (lo + hi));
         return s;
     }
     std::size_t bytes() const { return seam.size() * (sizeof(std::uint64_t) + sizeof(std::uint32_t) + 2 * sizeof(void*)); }

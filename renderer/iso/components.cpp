@@ -41,16 +41,15 @@ std::array<int, 3> chunk_counts(const std::array<std::int64_t, 3>& dims, int C) 
 }
 
 void add_triangle(const glm::dvec3& o, const glm::vec3& p0, const glm::vec3& p1, const glm::vec3& p2, ComponentStats& c) {
-    const glm::dvec3 a = glm::dvec3(p0) - o, b = glm::dvec3(p1) - o, d = glm::dvec3(p2) - o;
-    c.area += 0.5 * glm::length(glm::cross(b - a, d - a));
-    const glm::dvec3 bd = glm::cross(b, d);
-    c.volume += glm::dot(a, bd) / 6.0;
-    c.moment += glm::cross(a, b) + bd + glm::cross(d, a);
+    const TriangleTerms t = triangle_terms(o, p0, p1, p2);
+    c.area += t.area;
+    c.volume += t.det / 6.0;
+    c.moment += t.moment;
 }
 
 // The signed volume of `c` (about `from`) about `to`.
 double volume_about(const ComponentStats& c, const glm::dvec3& from, const glm::dvec3& to) {
-    return c.volume - glm::dot(to - from, c.moment) / 6.0;
+    return volume_moved(c.volume, c.moment, from, to);
 }
 
 bool better(const ComponentStats& a, const ComponentStats& b) {
