@@ -1,25 +1,67 @@
 // OpenVDB (.vdb): the first float grid, kept sparse. VDB has no patient
 // convention: its world space is taken as LPS millimetres (what we write).
 // Our index (0,0,0) is the corner of the grid's active bounding box.
+//
+// OpenVDB's reader is not hardened against malformed files (the fuzzer found
+// heap overflows inside it), and no other library reads VDB. So every read of
+// a user's file runs in a child process, which hands the grid back through a
+// pipe in OpenVDB's own stream format (written by OpenVDB's writer, so this
+// process only parses what OpenVDB itself produced): a crash, a hang or an
+// exception in the reader becomes an iso::Error naming the file instead of
+// taking the program down.
+//
+// The child is this same program started again (/proc/self/exe with
+// posix_spawn) and recognised before main() by its first argument
+// (kChildFlag; child_entry below is an ELF constructor). Not a bare fork():
+// a forked copy of a process whose worker threads (TBB's, Qt's) held a lock
+// at the fork can deadlock, which hung reads under parallel tests; an exec'd
+// program starts clean. Re-executing ourselves needs no helper executable to
+// install or find, and every program that links this reader (the CLI, the
+// GUI, tests, fuzzers) can read VDB.
+#include <algorithm>
 #include <cerrno>
 #include <cmath>
+#include <csignal>
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <functional>
+#include <istream>
 #include <mutex>
+#include <ostream>
+#include <sstream>
+#include <thread>
 
-#include <openvdb/openvdb.h>
-#include <openvdb/io/File.h>
-
-#include <csignal>
+#include <ext/stdio_filebuf.h> // std::iostreams over a pipe's file descriptor (libstdc++)
+#include <fcntl.h>
+#include <malloc.h>
+#include <spawn.h>
+#include <sys/resource.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
-#include "io/atomic_file.hpp"
+#include <openvdb/openvdb.h>
+#include <openvdb/io/File.h>
+#include <openvdb/io/Stream.h>
 
 #include "io/sparse.hpp"
 #include "io/volume_io.hpp"
+
+extern char** environ;
+
+// Is this an AddressSanitizer build? (GCC defines __SANITIZE_ADDRESS__, Clang answers __has_feature.)
+#if defined(__SANITIZE_ADDRESS__)
+#define ISOSCOPE_VDB_ASAN 1
+#elif defined(__has_feature)
+#if __has_feature(address_sanitizer)
+#define ISOSCOPE_VDB_ASAN 1
+#endif
+#endif
+#ifndef ISOSCOPE_VDB_ASAN
+#define ISOSCOPE_VDB_ASAN 0
+#endif
 
 namespace iso {
 
@@ -28,125 +70,414 @@ void init_openvdb() {
     static std::once_flag once;
     std::call_once(once, [] { openvdb::initialize(); });
 }
-// OpenVDB's reader is not hardened against malformed files (the fuzzer
-// found heap overflows inside it), and no other library reads VDB. So an
-// untrusted file is first read in a child process, which writes the grids
-// back out through OpenVDB's writer; the parent then reads that copy. A
-// crash or a hang in the child becomes an error instead of taking the
-// program down. Returns the path of the copy (the caller removes it).
-std::string sanitized_copy(const std::string& path) {
-    namespace fs = std::filesystem;
-    const std::string copy = (fs::temp_directory_path() / ("isoscope-vdb-" + std::to_string(::getpid()) + "-" +
-                                                           fs::path(temp_path_for(path)).filename().string()))
-                                 .string();
-    std::fflush(nullptr);
-    const pid_t pid = ::fork();
-    if (pid < 0) throw Error(path, "cannot start the VDB reader process");
-    if (pid == 0) {
-        // Default dispositions: a handler inherited from the host program
-        // (a crash reporter, a fuzzer's timer) must not keep the child alive.
-        for (int sig : {SIGALRM, SIGSEGV, SIGBUS, SIGABRT, SIGFPE, SIGILL}) std::signal(sig, SIG_DFL);
-        // A malformed file must not hang the reader forever.
-        unsigned limit = 120;
-        if (const char* e = std::getenv("ISOSCOPE_VDB_READ_TIMEOUT")) limit = unsigned(std::max(1, std::atoi(e)));
-        ::alarm(limit);
-        int rc = 1;
-        try {
+
+constexpr const char* kChildFlag = "--isoscope-openvdb-reader";
+// In the child: the product (a grid stream, or the header as text) and the
+// status (\"ok ...\" or the error message).
+constexpr int kOutFd = 3, kStatusFd = 4;
+// A grid stream written without compression: it only crosses a pipe.
+constexpr std::uint32_t kPipeCompression = openvdb::io::COMPRESS_NONE;
+
+// ---- in the child ------------------------------------------------------------
+
+void write_all(int fd, const std::string& s) {
+    std::size_t done = 0;
+    while (done < s.size()) {
+        const ssize_t n = ::write(fd, s.data() + done, s.size() - done);
+        if (n < 0 && errno == EINTR) continue;
+        if (n <= 0) return;
+        done += std::size_t(n);
+    }
+}
+
+// The first float grid's name; the others listed as "name (type), ...".
+std::string first_float_grid(openvdb::io::File& in, std::string& others) {
+    std::string found;
+    for (auto it = in.beginName(); it != in.endName(); ++it) {
+        const auto meta = in.readGridMetadata(it.gridName());
+        if (found.empty() && meta->valueType() == "float")
+            found = it.gridName();
+        else
+            others += (others.empty() ? "" : ", ") + it.gridName() + " (" + meta->valueType() + ")";
+    }
+    if (found.empty()) throw std::runtime_error("no float grid in the file" + (others.empty() ? std::string() : " (grids: " + others + ")"));
+    return found;
+}
+
+openvdb::FloatGrid::Ptr read_float_grid(openvdb::io::File& in, const std::string& name) {
+    auto grid = openvdb::gridPtrCast<openvdb::FloatGrid>(in.readGrid(name));
+    if (!grid) throw std::runtime_error("grid '" + name + "' is not a float grid");
+    if (!grid->transform().isLinear()) throw std::runtime_error("grid '" + name + "' has a non-linear transform (frustum): unsupported");
+    return grid;
+}
+
+void send_grid(const openvdb::FloatGrid::Ptr& grid) {
+    __gnu_cxx::stdio_filebuf<char> buf(kOutFd, std::ios::out, 1 << 16);
+    std::ostream os(&buf);
+    openvdb::io::Stream out(os);
+    out.setCompression(kPipeCompression);
+    out.write(openvdb::GridCPtrVec{grid});
+    os.flush();
+    if (!os) throw std::runtime_error("cannot hand the grid back to the reading program");
+}
+
+std::size_t own_status_bytes(const char* field) {
+    std::ifstream f("/proc/self/status");
+    std::string line;
+    while (std::getline(f, line))
+        if (line.rfind(field, 0) == 0) return std::size_t(std::atoll(line.c_str() + std::strlen(field))) * 1024;
+    return 0;
+}
+
+// The reader may add at most `cap` bytes to the address space it started
+// with: a malformed file can make OpenVDB allocate without end (a truncated
+// file had it build a string of gigabytes), which then ends as bad_alloc,
+// an error, instead of taking the machine's memory. Slack for the threads'
+// stacks and malloc's arenas (at most two). Not under AddressSanitizer,
+// whose shadow memory is terabytes of address space.
+void limit_memory(std::size_t cap) {
+#if !ISOSCOPE_VDB_ASAN
+    if (cap == 0) return;
+    mallopt(M_ARENA_MAX, 2);
+    const std::size_t threads = std::max(1u, std::thread::hardware_concurrency());
+    const std::size_t slack = (std::size_t(1) << 30) + threads * (std::size_t(16) << 20);
+    const rlim_t as = rlim_t(own_status_bytes("VmSize:") + slack + cap);
+    struct rlimit r;
+    if (::getrlimit(RLIMIT_AS, &r) == 0 && (r.rlim_max == RLIM_INFINITY || as < r.rlim_max)) {
+        r.rlim_cur = as;
+        ::setrlimit(RLIMIT_AS, &r);
+    }
+#else
+    (void)cap;
+#endif
+}
+
+// argv: flag, mode, path, memory cap in bytes, mode's arguments. Returns the
+// exit status: 0 done, 2 an error whose message went to kStatusFd.
+int child_main(int argc, char** argv) {
+    // Default dispositions: a handler inherited from the host program (a
+    // crash reporter, a fuzzer's timer) must not keep the child alive.
+    for (int sig : {SIGALRM, SIGSEGV, SIGBUS, SIGABRT, SIGFPE, SIGILL, SIGPIPE}) std::signal(sig, SIG_DFL);
+    // A malformed file must not hang the reader forever.
+    unsigned limit = 120;
+    if (const char* e = std::getenv("ISOSCOPE_VDB_READ_TIMEOUT")) limit = unsigned(std::max(1, std::atoi(e)));
+    ::alarm(limit);
+    const std::string mode = argv[2], path = argv[3];
+    limit_memory(std::size_t(std::strtoull(argv[4], nullptr, 10)));
+    argv += 1; // the mode's arguments as before the cap
+    argc -= 1;
+    try {
+        openvdb::initialize();
+        std::string others;
+        if (mode == "whole" && argc == 4) {
+            // The first float grid, read whole (no delayed loading: no mapping of the file).
             openvdb::io::File in(path);
             in.open(false);
-            openvdb::GridPtrVec grids;
-            for (auto it = in.beginName(); it != in.endName(); ++it) grids.push_back(in.readGrid(it.gridName()));
+            const std::string name = first_float_grid(in, others);
+            const auto grid = read_float_grid(in, name);
             in.close();
-            openvdb::io::File out(copy);
-            out.write(grids);
-            out.close();
-            rc = 0;
-        } catch (const std::exception& e) {
-            std::FILE* f = std::fopen((copy + ".error").c_str(), "w");
-            if (f) {
-                std::fputs(e.what(), f);
-                std::fclose(f);
-            }
-            rc = 2;
+            send_grid(grid);
+            write_all(kStatusFd, "ok\n" + others);
+            return 0;
         }
-        ::_exit(rc);
+        if (mode == "header" && argc == 4) {
+            // Topology only: with delayed loading the leaf values stay in the mapped file.
+            openvdb::io::File in(path);
+            in.open(true);
+            const std::string name = first_float_grid(in, others);
+            const auto grid = read_float_grid(in, name);
+            const std::uint64_t topology = grid->memUsage();
+            const std::uint64_t values = std::uint64_t(grid->tree().leafCount()) * openvdb::FloatTree::LeafNodeType::SIZE * sizeof(float);
+            const openvdb::CoordBBox box = grid->evalActiveVoxelBoundingBox();
+            const openvdb::Mat4d m = grid->transform().baseMap()->getAffineMap()->getMat4();
+            std::ostringstream o;
+            o.precision(17);
+            o << name << "\n" << others << "\n" << (box.empty() ? 0 : 1);
+            for (int a = 0; a < 3; ++a) o << " " << box.min()[a];
+            for (int a = 0; a < 3; ++a) o << " " << box.max()[a];
+            o << "\n";
+            for (int r = 0; r < 4; ++r)
+                for (int c = 0; c < 4; ++c) o << m(r, c) << (c == 3 ? "\n" : " ");
+            o << topology << " " << topology + values << "\n";
+            write_all(kOutFd, o.str());
+            write_all(kStatusFd, "ok\n");
+            return 0;
+        }
+        if (mode == "slab" && argc == 11) {
+            // The topology with delayed loading, clipped to the index box: the
+            // nodes outside are dropped unread, the leaves crossing the box's
+            // faces are read and cleared outside it, then writing the grid
+            // reads the values of the leaves left.
+            openvdb::Coord lo, hi;
+            for (int a = 0; a < 3; ++a) {
+                lo[a] = std::atoi(argv[5 + a]);
+                hi[a] = std::atoi(argv[8 + a]);
+            }
+            openvdb::io::File in(path);
+            in.open(true);
+            const auto grid = read_float_grid(in, argv[4]);
+            grid->clip(openvdb::CoordBBox(lo, hi));
+            send_grid(grid);
+            write_all(kStatusFd, "ok " + std::to_string(own_status_bytes("VmHWM:")) + "\n");
+            return 0;
+        }
+        write_all(kStatusFd, "the OpenVDB reader process was started with unknown arguments");
+        return 3;
+    } catch (const openvdb::Exception& e) {
+        write_all(kStatusFd, std::string("not a readable OpenVDB file: ") + e.what());
+        return 2;
+    } catch (const std::exception& e) {
+        write_all(kStatusFd, e.what());
+        return 2;
     }
-    int status = 0;
-    while (::waitpid(pid, &status, 0) < 0 && errno == EINTR) {
+}
+
+// Run before main() in every program that links this file; only a process
+// started by run_reader() (first argument kChildFlag) is taken over. glibc
+// passes argc and argv to ELF constructors.
+__attribute__((constructor)) void child_entry(int argc, char** argv, char**) {
+    if (argc >= 5 && argv && argv[1] && std::strcmp(argv[1], kChildFlag) == 0) {
+        // No exit handlers, no static destructors of a program that never started.
+        ::_exit(child_main(argc, argv));
     }
-    std::error_code ec;
-    if (WIFEXITED(status) && WEXITSTATUS(status) == 0) return copy;
-    fs::remove(copy, ec);
-    std::string why;
-    if (WIFEXITED(status) && WEXITSTATUS(status) == 2) {
-        std::ifstream f(copy + ".error");
-        std::getline(f, why);
-        fs::remove(copy + ".error", ec);
-        throw Error(path, "not a readable OpenVDB file: " + why);
+}
+
+// ---- in the reading program ------------------------------------------------------
+
+// A pipe whose ends are above the descriptors the child's are copied to
+// (kOutFd, kStatusFd), close-on-exec.
+void make_pipe(int fds[2], const std::string& path) {
+    int p[2];
+    if (::pipe2(p, O_CLOEXEC) != 0) throw Error(path, std::string("cannot start the VDB reader process: ") + std::strerror(errno));
+    for (int e = 0; e < 2; ++e) {
+        fds[e] = ::fcntl(p[e], F_DUPFD_CLOEXEC, 10);
+        ::close(p[e]);
     }
-    if (WIFSIGNALED(status) && WTERMSIG(status) == SIGALRM) throw Error(path, "OpenVDB did not finish reading the file in time (corrupt?)");
+    if (fds[0] < 0 || fds[1] < 0) {
+        for (int e = 0; e < 2; ++e)
+            if (fds[e] >= 0) ::close(fds[e]);
+        throw Error(path, "cannot start the VDB reader process: no file descriptors left");
+    }
+}
+
+std::string read_all(int fd) {
+    std::string s;
+    char b[4096];
+    for (;;) {
+        const ssize_t n = ::read(fd, b, sizeof b);
+        if (n < 0 && errno == EINTR) continue;
+        if (n <= 0) break;
+        s.append(b, std::size_t(n));
+    }
+    return s;
+}
+
+// What the reader may allocate (limit_memory) when the caller has no better
+// bound: ISOSCOPE_VDB_READ_MEMORY MiB, else half of physical memory (a grid
+// read whole is held twice for a moment: more would not fit anyway).
+std::size_t default_reader_cap() {
+    if (const char* e = std::getenv("ISOSCOPE_VDB_READ_MEMORY")) return std::size_t(std::max(1ll, std::atoll(e))) << 20;
+    const long pages = ::sysconf(_SC_PHYS_PAGES), page = ::sysconf(_SC_PAGESIZE);
+    return pages > 0 && page > 0 ? std::size_t(pages) * std::size_t(page) / 2 : std::size_t(8) << 30;
+}
+
+// Starts the child reader on `path` with `args` (mode first, then the path),
+// allowed to allocate `cap` bytes, hands `consume` an istream over the
+// child's product, and returns the child's status line after "ok". Every
+// failure is an iso::Error naming `path`.
+std::string run_reader(const std::string& path, std::vector<std::string> args, std::size_t cap,
+                       const std::function<void(std::istream&)>& consume) {
+    args.insert(args.begin() + 2, std::to_string(cap));
+    int out[2], status[2];
+    make_pipe(out, path);
+    try {
+        make_pipe(status, path);
+    } catch (...) {
+        ::close(out[0]);
+        ::close(out[1]);
+        throw;
+    }
+    std::vector<std::string> argv_s{"isoscope-openvdb-reader", kChildFlag};
+    argv_s.insert(argv_s.end(), args.begin(), args.end());
+    std::vector<char*> argv;
+    for (auto& a : argv_s) argv.push_back(a.data());
+    argv.push_back(nullptr);
+    posix_spawn_file_actions_t fa;
+    posix_spawn_file_actions_init(&fa);
+    posix_spawn_file_actions_adddup2(&fa, out[1], kOutFd);
+    posix_spawn_file_actions_adddup2(&fa, status[1], kStatusFd);
+    // The child prints nothing on our standard output (the CLI's JSON goes there).
+    posix_spawn_file_actions_addopen(&fa, STDOUT_FILENO, "/dev/null", O_WRONLY, 0);
+    pid_t pid = -1;
+    std::fflush(nullptr);
+    const int rc = ::posix_spawn(&pid, "/proc/self/exe", &fa, nullptr, argv.data(), environ);
+    posix_spawn_file_actions_destroy(&fa);
+    ::close(out[1]);
+    ::close(status[1]);
+    if (rc != 0) {
+        ::close(out[0]);
+        ::close(status[0]);
+        throw Error(path, std::string("cannot start the VDB reader process: ") + std::strerror(rc));
+    }
+    std::string consume_error;
+    {
+        // Owns out[0]: closed when the product is consumed or consuming failed
+        // (a child still writing then gets EPIPE and ends).
+        __gnu_cxx::stdio_filebuf<char> buf(out[0], std::ios::in, 1 << 16);
+        std::istream is(&buf);
+        try {
+            consume(is);
+        } catch (const std::exception& e) {
+            consume_error = e.what();
+        }
+    }
+    std::string msg = read_all(status[0]);
+    ::close(status[0]);
+    int st = 0;
+    while (::waitpid(pid, &st, 0) < 0 && errno == EINTR) {
+    }
+    if (WIFEXITED(st) && WEXITSTATUS(st) == 0 && consume_error.empty()) {
+        if (msg.rfind("ok", 0) != 0) throw Error(path, "the VDB reader process gave no result");
+        return msg.substr(std::min<std::size_t>(msg.size(), 3));
+    }
+    if (WIFEXITED(st) && (WEXITSTATUS(st) == 2 || WEXITSTATUS(st) == 3) && !msg.empty()) {
+        if (msg.find("bad_alloc") != std::string::npos)
+            throw Error(path, "OpenVDB's reader needed more than the " + std::to_string(cap >> 20) +
+                                  " MiB allowed to it (corrupt file? ISOSCOPE_VDB_READ_MEMORY sets the limit in MiB)");
+        throw Error(path, msg);
+    }
+    if (WIFSIGNALED(st) && WTERMSIG(st) == SIGALRM) throw Error(path, "OpenVDB did not finish reading the file in time (corrupt?)");
+    if (WIFEXITED(st) && WEXITSTATUS(st) == 0) throw Error(path, "cannot take the grid from the VDB reader process: " + consume_error);
     throw Error(path, "OpenVDB's reader failed on this file (corrupt or truncated?)");
+}
+
+openvdb::FloatGrid::Ptr receive_grid(std::istream& is) {
+    // No delayed loading: it would copy the stream into a temporary file.
+    openvdb::io::Stream in(is, /*delayLoad=*/false);
+    const auto grids = in.getGrids();
+    if (!grids || grids->size() != 1) throw std::runtime_error("expected one grid");
+    auto grid = openvdb::gridPtrCast<openvdb::FloatGrid>((*grids)[0]);
+    if (!grid) throw std::runtime_error("not a float grid");
+    return grid;
+}
+
+// OpenVDB multiplies row vectors (p' = p * M): our column-vector matrix is
+// its transpose. Index (0,0,0) moved to the grid index `offset`.
+glm::dmat4 to_lps(const openvdb::Mat4d& vm, const std::array<std::int64_t, 3>& offset) {
+    glm::dmat4 index_to_world(1.0);
+    for (int r = 0; r < 4; ++r)
+        for (int c = 0; c < 4; ++c) index_to_world[c][r] = vm(c, r);
+    return index_to_world * glm::dmat4(glm::dvec4(1, 0, 0, 0), glm::dvec4(0, 1, 0, 0), glm::dvec4(0, 0, 1, 0),
+                                       glm::dvec4(double(offset[0]), double(offset[1]), double(offset[2]), 1));
+}
+
+void check_file(const std::string& path) {
+    std::error_code ec;
+    if (!std::filesystem::is_regular_file(path, ec)) throw Error(path, "no such file");
+    if (std::filesystem::file_size(path, ec) == 0) throw Error(path, "file is empty");
 }
 
 } // namespace
 
 Volume read_vdb(const std::string& path) {
     init_openvdb();
-    std::error_code ec;
-    if (!std::filesystem::is_regular_file(path, ec)) throw Error(path, "no such file");
-    if (std::filesystem::file_size(path, ec) == 0) throw Error(path, "file is empty");
+    check_file(path);
     openvdb::FloatGrid::Ptr grid;
-    std::string others;
-    const std::string copy = sanitized_copy(path);
-    struct Remove {
-        std::string p;
-        ~Remove() { std::error_code e; std::filesystem::remove(p, e); }
-    } remove_copy{copy};
-    try {
-        openvdb::io::File file(copy);
-        file.open(/*delayLoad=*/false);
-        for (auto it = file.beginName(); it != file.endName(); ++it) {
-            auto meta = file.readGridMetadata(it.gridName());
-            if (!grid && meta->valueType() == "float") {
-                grid = openvdb::gridPtrCast<openvdb::FloatGrid>(file.readGrid(it.gridName()));
-            } else {
-                others += (others.empty() ? "" : ", ") + it.gridName() + " (" + meta->valueType() + ")";
-            }
-        }
-        file.close();
-    } catch (const openvdb::Exception& e) {
-        throw Error(path, std::string("not a readable OpenVDB file: ") + e.what());
-    } catch (const std::exception& e) {
-        throw Error(path, std::string("cannot read: ") + e.what());
-    }
-    if (!grid) throw Error(path, "no float grid in the file" + (others.empty() ? std::string() : " (grids: " + others + ")"));
-    const auto& xf = grid->transform();
-    if (!xf.isLinear()) throw Error(path, "grid '" + grid->getName() + "' has a non-linear transform (frustum): unsupported");
-    const openvdb::Mat4d vm = xf.baseMap()->getAffineMap()->getMat4();
-    // OpenVDB multiplies row vectors (p' = p * M): our column-vector matrix is its transpose.
-    glm::dmat4 index_to_world(1.0);
-    for (int r = 0; r < 4; ++r)
-        for (int c = 0; c < 4; ++c) index_to_world[c][r] = vm(c, r);
-    openvdb::CoordBBox bbox = grid->evalActiveVoxelBoundingBox();
-    std::array<std::int64_t, 3> dims{1, 1, 1};
-    openvdb::Coord offset(0);
+    const std::string others = run_reader(path, {"whole", path}, default_reader_cap(), [&](std::istream& is) { grid = receive_grid(is); });
+    const openvdb::CoordBBox bbox = grid->evalActiveVoxelBoundingBox();
+    std::array<std::int64_t, 3> dims{1, 1, 1}, offset{0, 0, 0};
     if (!bbox.empty()) {
-        offset = bbox.min();
         const auto d = bbox.dim();
         dims = {d.x(), d.y(), d.z()};
+        offset = {bbox.min().x(), bbox.min().y(), bbox.min().z()};
     }
-    const glm::dmat4 affine = index_to_world * glm::dmat4(glm::dvec4(1, 0, 0, 0), glm::dvec4(0, 1, 0, 0), glm::dvec4(0, 0, 1, 0),
-                                                           glm::dvec4(offset.x(), offset.y(), offset.z(), 1));
+    const glm::dmat4 affine = to_lps(grid->transform().baseMap()->getAffineMap()->getMat4(), offset);
     check_affine(path, affine);
     auto sg = std::make_shared<SparseGrid>();
     sg->grid = grid;
-    sg->offset = offset;
+    sg->offset = openvdb::Coord(int(offset[0]), int(offset[1]), int(offset[2]));
     Volume v = Volume::sparse(sg, dims, affine);
     v.meta.source = path;
     v.meta.format = "OpenVDB";
     v.meta.series_description = grid->getName();
     if (!others.empty()) v.meta.warnings.push_back("only the first float grid was loaded; also in the file: " + others);
     warn_non_finite(v);
+    return v;
+}
+
+VdbHeader read_vdb_header(const std::string& path) {
+    init_openvdb();
+    check_file(path);
+    std::string text;
+    run_reader(path, {"header", path}, default_reader_cap(), [&](std::istream& is) { text.assign(std::istreambuf_iterator<char>(is), {}); });
+    VdbHeader h;
+    std::istringstream in(text);
+    std::string others;
+    int nonempty = 0;
+    std::int64_t lo[3], hi[3];
+    openvdb::Mat4d vm;
+    std::getline(in, h.grid);
+    std::getline(in, others);
+    in >> nonempty >> lo[0] >> lo[1] >> lo[2] >> hi[0] >> hi[1] >> hi[2];
+    for (int r = 0; r < 4; ++r)
+        for (int c = 0; c < 4; ++c) in >> vm(r, c);
+    in >> h.topology_bytes >> h.grid_bytes;
+    if (!in) throw Error(path, "the VDB reader process gave no grid description");
+    VolumeHeader& vh = h.header;
+    vh.dims = {1, 1, 1};
+    if (nonempty) {
+        h.offset = {lo[0], lo[1], lo[2]};
+        vh.dims = {hi[0] - lo[0] + 1, hi[1] - lo[1] + 1, hi[2] - lo[2] + 1};
+    }
+    vh.path = vh.data_file = path;
+    vh.format = VolumeFormat::Vdb;
+    vh.stored = vh.type = VoxelType::F32;
+    vh.encoding = DataEncoding::Other;
+    vh.index_to_lps = to_lps(vm, h.offset);
+    check_affine(path, vh.index_to_lps);
+    // A slab costs its leaves twice (in the reading child, and sparse here):
+    // about 4.3 bytes a voxel each (values, masks, node overhead), over the
+    // leaves' reach beyond the slab: 8 more voxels along x and y on each side
+    // and 18 more slices (the box's border and the leaves around it).
+    const double reach = double(vh.dims[0] + 16) * double(vh.dims[1] + 16) / (double(vh.dims[0]) * double(vh.dims[1]));
+    vh.reader_bytes_per_voxel = 2 * 4.3 * reach - double(voxel_size(vh.type));
+    vh.reader_extra_slices = 18;
+    vh.meta.source = path;
+    vh.meta.format = "OpenVDB";
+    vh.meta.series_description = h.grid;
+    if (!others.empty()) vh.meta.warnings.push_back("only the first float grid is read; also in the file: " + others);
+    return h;
+}
+
+Volume read_vdb_slab(const VdbHeader& h, std::int64_t k0, std::int64_t k1, std::size_t* child_peak) {
+    const VolumeHeader& vh = h.header;
+    if (k0 < 0 || k1 < k0 || k1 >= vh.dims[2])
+        throw Error(vh.path, "slab [" + std::to_string(k0) + ", " + std::to_string(k1) + "] is outside the volume's " +
+                                 std::to_string(vh.dims[2]) + " slices");
+    init_openvdb();
+    // The slab's index box and a one-voxel border (as much of the grid as a
+    // window of the whole grid would let the extraction see around it).
+    const std::int64_t lo[3] = {h.offset[0] - 1, h.offset[1] - 1, h.offset[2] + k0 - 1};
+    const std::int64_t hi[3] = {h.offset[0] + vh.dims[0], h.offset[1] + vh.dims[1], h.offset[2] + k1 + 1};
+    std::vector<std::string> args{"slab", vh.path, h.grid};
+    for (std::int64_t c : lo) args.push_back(std::to_string(c));
+    for (std::int64_t c : hi) args.push_back(std::to_string(c));
+    openvdb::FloatGrid::Ptr grid;
+    // The child holds the topology (twice, for a moment, while clipping) and
+    // the leaves meeting the box (leaves are 8^3: up to 7 voxels beyond each
+    // face; values, masks and node overhead about 4.3 bytes a voxel), once
+    // more while it writes them out.
+    const double leaves = double(hi[0] - lo[0] + 16) * double(hi[1] - lo[1] + 16) * double(hi[2] - lo[2] + 16) * 4.3;
+    const std::size_t cap = std::size_t(2 * double(h.topology_bytes) + 2 * leaves) + (std::size_t(256) << 20);
+    const std::string status = run_reader(vh.path, args, cap, [&](std::istream& is) { grid = receive_grid(is); });
+    if (child_peak) *child_peak = std::size_t(std::strtoull(status.c_str(), nullptr, 10));
+    auto sg = std::make_shared<SparseGrid>();
+    sg->grid = grid;
+    sg->offset = openvdb::Coord(int(h.offset[0]), int(h.offset[1]), int(h.offset[2] + k0));
+    Volume v = Volume::sparse(std::move(sg), {vh.dims[0], vh.dims[1], k1 - k0 + 1},
+                              vh.index_to_lps * glm::dmat4(glm::dvec4(1, 0, 0, 0), glm::dvec4(0, 1, 0, 0), glm::dvec4(0, 0, 1, 0),
+                                                           glm::dvec4(0, 0, double(k0), 1)));
+    v.meta = vh.meta;
     return v;
 }
 

@@ -83,10 +83,11 @@ VolumeHeader read_volume_header(const std::string& path) {
     case VolumeFormat::Nifti: return read_nifti_header(path);
     case VolumeFormat::Nrrd: return read_nrrd_header(path);
     case VolumeFormat::MetaImage: return read_metaimage_header(path);
+    case VolumeFormat::Vdb: return read_vdb_header(path).header;
     default: break;
     }
     throw Error(path, std::string("the header of a ") + volume_format_name(f) +
-                          " volume cannot be read without its samples (header-only reading: NIfTI, NRRD, MetaImage)");
+                          " volume cannot be read without its samples (header-only reading: NIfTI, NRRD, MetaImage, OpenVDB)");
 }
 
 Volume load_dicom_files(const std::vector<std::string>& files, const LoadOptions& opt) {

@@ -4,6 +4,7 @@
 #pragma once
 
 #include <array>
+#include <cmath>
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -61,13 +62,28 @@ struct VolumeHeader {
     // nifti_clib replaces NaN and +/-Inf float samples by 0 when it reads
     // them (nifti_read_buffer); a reader of the raw bytes must do the same.
     bool nonfinite_to_zero = false;
+    // What else a slab costs while it is read and held, besides its samples
+    // (OpenVDB read slab by slab: the slab's leaf nodes in the reading child,
+    // and the sparse slab's node overhead; leaves reach up to 7 voxels beyond
+    // the slab): reader_bytes_per_voxel more per voxel, over
+    // reader_extra_slices more slices. Zero for the other readers.
+    double reader_bytes_per_voxel = 0.0;
+    std::int64_t reader_extra_slices = 0;
+    // Memory a slab of `slices` k-slices costs: its samples and the above.
+    std::uint64_t slab_memory_bytes(std::int64_t slices) const {
+        const std::uint64_t slice = std::uint64_t(dims[0] * dims[1]);
+        if (reader_bytes_per_voxel == 0.0 && reader_extra_slices == 0) return slice * std::uint64_t(slices) * voxel_size(type);
+        return std::uint64_t(std::ceil(double(slice) * double(slices + reader_extra_slices) *
+                                       (double(voxel_size(type)) + reader_bytes_per_voxel)));
+    }
     std::uint64_t stored_bytes() const { return std::uint64_t(dims[0] * dims[1] * dims[2]) * voxel_size(stored); }
     std::uint64_t memory_bytes() const { return std::uint64_t(dims[0] * dims[1] * dims[2]) * voxel_size(type); }
 };
 
 // Dispatch on the file name. NIfTI, NRRD and MetaImage headers are parsed (and
 // raw data checked for truncation against the file size); other formats
-// (DICOM, VTI, OpenVDB) throw iso::Error saying their header cannot be read alone.
+// (DICOM, VTI) throw iso::Error saying their header cannot be read alone;
+// OpenVDB's header is its grid's metadata and topology (read_vdb_header).
 VolumeHeader read_volume_header(const std::string& path);
 VolumeHeader read_nifti_header(const std::string& path);
 VolumeHeader read_nrrd_header(const std::string& path);
@@ -83,6 +99,27 @@ void write_nrrd(const Volume& v, const std::string& path, bool compress);
 Volume read_metaimage(const std::string& path);
 Volume read_vti(const std::string& path);
 Volume read_vdb(const std::string& path);
+// OpenVDB read slab by slab (io/volume_stream.cpp), for a VDB too large to
+// load whole. Every read runs OpenVDB's reader in the isolating child process
+// (as read_vdb does). The header: the first float grid's name, geometry (the
+// same index space and affine as read_vdb: our (0,0,0) is the corner of the
+// grid's active bounding box) and what reading costs, from the grid's
+// metadata and topology (no leaf values are read).
+struct VdbHeader {
+    VolumeHeader header;              // format Vdb, F32, encoding Other
+    std::string grid;                 // its name in the file
+    std::array<std::int64_t, 3> offset{0, 0, 0}; // the grid index of our (0,0,0)
+    std::uint64_t topology_bytes = 0; // the tree without leaf values: what the child holds to read any slab
+    std::uint64_t grid_bytes = 0;     // the grid loaded whole (topology and the values of every leaf)
+};
+VdbHeader read_vdb_header(const std::string& path);
+// k-slices [k0, k1] of the grid as a sparse volume (dims[0] x dims[1] x
+// (k1 - k0 + 1), the affine times translate(0, 0, k0)): in the child, the
+// tree's topology is read (delayed loading: leaf values stay in the mapped
+// file), clipped to the slab and a one-voxel border, and only the remaining
+// leaves' values are read and handed back through a pipe. `child_peak`, when
+// given, receives the child's peak resident memory (VmHWM).
+Volume read_vdb_slab(const VdbHeader& h, std::int64_t k0, std::int64_t k1, std::size_t* child_peak = nullptr);
 void write_vdb(const Volume& v, const std::string& path); // for tests and round trips
 
 } // namespace iso

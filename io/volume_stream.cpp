@@ -243,6 +243,28 @@ private:
     Volume v_;
 };
 
+// An OpenVDB grid too large to load whole: each slab is read by the
+// isolating child process (read_vdb_slab: the tree's topology, clipped to the
+// slab, and only the leaves left) and handed back sparse.
+class VdbStream final : public VolumeStream {
+public:
+    explicit VdbStream(VdbHeader h) : vdb_(std::move(h)) { header_ = vdb_.header; }
+    // While a slab is read, the child holds the grid's topology.
+    std::size_t resident_bytes() const override { return std::size_t(vdb_.topology_bytes); }
+    std::size_t reader_peak_bytes() const override { return reader_peak_; }
+    Volume read_slab(std::int64_t k0, std::int64_t k1) override {
+        check_range(header_, k0, k1);
+        std::size_t peak = 0;
+        Volume v = read_vdb_slab(vdb_, k0, k1, &peak);
+        reader_peak_ = std::max(reader_peak_, peak);
+        return v;
+    }
+
+private:
+    VdbHeader vdb_;
+    std::size_t reader_peak_ = 0;
+};
+
 std::uintmax_t size_on_disk(const std::string& path) {
     std::error_code ec;
     if (fs::is_regular_file(path, ec)) return fs::file_size(path, ec);
@@ -268,8 +290,13 @@ std::unique_ptr<VolumeStream> open_volume_stream(const std::string& path, std::s
               : f == VolumeFormat::MetaImage ? "zlib-compressed MetaImage is not streamed: write it uncompressed"
                                              : "NRRD with this encoding or several data files is not streamed";
         need = h.memory_bytes();
+    } else if (f == VolumeFormat::Vdb) {
+        // Loaded whole (and sliced sparse) when it fits: reading it whole holds
+        // the grid twice for a moment (in the reading child and here).
+        VdbHeader h = read_vdb_header(path);
+        if (in_memory_limit == 0 || 2 * h.grid_bytes > in_memory_limit) return std::make_unique<VdbStream>(std::move(h));
     } else {
-        why = std::string(volume_format_name(f)) + " volumes are not streamed (NIfTI, NRRD raw/gzip and MetaImage raw are)";
+        why = std::string(volume_format_name(f)) + " volumes are not streamed (NIfTI, NRRD raw/gzip, MetaImage raw and OpenVDB are)";
         need = size_on_disk(path);
     }
     if (in_memory_limit == 0 || need > in_memory_limit)

@@ -15,10 +15,15 @@
 //  - NRRD gzip: read forward with zlib; a request for slices before the
 //    current position restarts the stream from the file's start (costly:
 //    the streaming driver asks for slabs in increasing k);
+//  - OpenVDB: loaded whole when twice its grid's memory fits
+//    `in_memory_limit` (slabs are then windows of the sparse grid, no copy),
+//    else read slab by slab: each slab by the isolating child process, which
+//    reads the tree's topology with delayed loading, clips it to the slab and
+//    reads only the leaves left (read_vdb_slab); slabs come back sparse. The
+//    child holds the topology (resident_bytes()) and the slab's leaves;
 //  - everything else (DICOM folders, .nii.gz, VTI, zlib-compressed MetaImage,
-//    NRRD with several data files, OpenVDB) is loaded whole when its in-memory
+//    NRRD with several data files) is loaded whole when its in-memory
 //    size fits `in_memory_limit`, else iso::Error says it cannot be streamed.
-//    OpenVDB slabs are windows of the sparse grid (no copy).
 // Truncated raw data is an iso::Error naming the file with expected and
 // actual bytes, at open time (before any output is written).
 #pragma once
@@ -46,6 +51,9 @@ public:
     virtual std::size_t resident_bytes() const { return 0; }
     // How often a gzip stream went back to its start (a slab before the last one's halo).
     virtual std::size_t restarts() const { return 0; }
+    // The largest resident memory of a separate reading process (OpenVDB's
+    // isolating child), 0 when the source reads in this process.
+    virtual std::size_t reader_peak_bytes() const { return 0; }
     // True when the samples are read from the file slab by slab.
     virtual bool streaming() const { return true; }
 

@@ -268,7 +268,7 @@ CLI::App* add_info(CLI::App& app, InfoArgs& a) {
     c->add_option("path", a.path, "Volume file or DICOM folder")->required();
     c->add_option("--series", a.series, "DICOM series to load: index in the listing or SeriesInstanceUID");
     c->add_flag("--json", a.json, "Print one JSON object");
-    c->add_flag("--header-only", a.header_only, "Read only the header (NIfTI, NRRD, MetaImage): no value range");
+    c->add_flag("--header-only", a.header_only, "Read only the header (NIfTI, NRRD, MetaImage; OpenVDB: metadata and topology): no value range");
     c->add_option("--memory", a.memory_mib, "Volumes larger than this (MiB) are described from their header only "
                                             "(default: a quarter of physical memory)")->check(CLI::PositiveNumber);
     return c;
@@ -360,7 +360,9 @@ int run_mesh_streaming(const MeshArgs& a, std::size_t budget) {
     std::cout << "streamed: " << s.plan.slabs << " slabs of " << s.plan.layers_per_slab << " chunk layers (chunk " << s.plan.chunk_size
               << "), " << s.slabs_read << " read, " << s.slabs_skipped << " skipped" << (s.index_pass ? ", after an index pass" : "")
               << "; peak memory " << human_bytes(double(s.peak_bytes)) << " (engine) of " << human_bytes(double(r.memory_budget))
-              << ", " << human_bytes(double(iso::core::peak_resident_bytes())) << " resident (VmHWM)\n";
+              << ", " << human_bytes(double(iso::core::peak_resident_bytes())) << " resident (VmHWM)";
+    if (r.reader_peak_bytes) std::cout << "; OpenVDB reader process peak " << human_bytes(double(r.reader_peak_bytes));
+    std::cout << "\n";
     return 0;
 }
 

@@ -34,12 +34,16 @@ std::size_t peak_resident_bytes() {
 
 bool exceeds_budget(const std::string& path, std::size_t budget) {
     const VolumeFormat f = volume_format_of(path);
+    if (f == VolumeFormat::Vdb) return 2 * read_vdb_header(path).grid_bytes > budget;
     if (f != VolumeFormat::Nifti && f != VolumeFormat::Nrrd && f != VolumeFormat::MetaImage) return false;
     return read_volume_header(path).memory_bytes() > budget;
 }
 
 nlohmann::json describe_header(const std::string& path) {
-    const VolumeHeader h = read_volume_header(path);
+    const bool vdb = volume_format_of(path) == VolumeFormat::Vdb;
+    VdbHeader vh;
+    if (vdb) vh = read_vdb_header(path);
+    const VolumeHeader h = vdb ? vh.header : read_volume_header(path);
     // describe() of a volume without samples: the geometry and metadata the
     // same way, then what the samples would have told replaced.
     Volume v;
@@ -52,7 +56,12 @@ nlohmann::json describe_header(const std::string& path) {
     j["range_read"] = false;
     j.erase("nan_count");
     j.erase("inf_count");
-    j["memory_bytes"] = h.memory_bytes();
+    j["memory_bytes"] = vdb ? vh.grid_bytes : h.memory_bytes();
+    if (vdb) {
+        // Sparse: what the grid takes loaded whole, and its tree without leaf values.
+        j["grid"] = vh.grid;
+        j["topology_bytes"] = vh.topology_bytes;
+    }
     j["data_file"] = h.data_file;
     j["encoding"] = h.encoding == DataEncoding::Raw ? "raw" : h.encoding == DataEncoding::Gzip ? "gzip" : "other";
     return j;
@@ -108,6 +117,7 @@ StreamMeshResult stream_mesh(const StreamMeshRequest& req) {
             r.paths.push_back(surface_output_path(req.output, req.isos[i], false, req.isos.size()));
         }
         r.stream = extract_summarized(*src, so, r);
+        r.reader_peak_bytes = src->reader_peak_bytes();
         return r;
     }
     // Labels: the label list is known after the index pass when not given.
@@ -127,6 +137,7 @@ StreamMeshResult stream_mesh(const StreamMeshRequest& req) {
     }
     if (r.paths.empty()) throw Error(req.input, "has no non-zero label");
     r.stream = extract_summarized(*src, so, r);
+    r.reader_peak_bytes = src->reader_peak_bytes();
     return r;
 }
 

@@ -25,8 +25,9 @@ std::size_t default_memory_budget();
 std::size_t peak_resident_bytes();
 
 // Does the volume at `path` need more than `budget` bytes in memory? From its
-// header alone (NIfTI, NRRD, MetaImage); false for formats whose header cannot
-// be read alone (they are loaded whole).
+// header alone (NIfTI, NRRD, MetaImage; OpenVDB: twice its grid, which the
+// reading child and this process hold for a moment); false for formats whose
+// header cannot be read alone (they are loaded whole).
 bool exceeds_budget(const std::string& path, std::size_t budget);
 
 // `isoscope info` without reading the samples: what describe() gives, with
@@ -54,6 +55,7 @@ struct StreamMeshResult {
     StreamStats stream;
     std::size_t memory_budget = 0;
     std::vector<std::string> warnings;     // of the volume's header
+    std::size_t reader_peak_bytes = 0;     // OpenVDB read slab by slab: the reading child's peak resident memory
 };
 
 // Streams the extraction to the output file(s). Throws iso::Error (or Cancelled);

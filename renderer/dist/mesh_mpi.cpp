@@ -271,8 +271,8 @@ DistMeshResult mesh_distributed(const Comm& comm, const DistMeshRequest& req) {
         // every chunk holding it, so no slice is read twice.)
         const std::int64_t k_begin = std::int64_t(L0) * C;
         const std::int64_t k_end = comm.rank() + 1 == comm.size() ? h.dims[2] : std::int64_t(L1) * C;
-        const std::size_t slice = std::size_t(h.dims[0] * h.dims[1]) * voxel_size(h.type);
-        const std::size_t fixed = 3 * sum.finite_min.size() * (2 * sizeof(double) + 1);
+        const std::size_t slice = std::size_t(h.slab_memory_bytes(1) - h.slab_memory_bytes(0));
+        const std::size_t fixed = 3 * sum.finite_min.size() * (2 * sizeof(double) + 1) + std::size_t(h.slab_memory_bytes(0));
         const std::int64_t per =
             std::max<std::int64_t>(1, req.memory_budget > fixed ? std::int64_t((req.memory_budget - fixed) / slice) : 1);
         const bool find_labels = req.labels && values.empty();

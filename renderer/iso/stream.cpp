@@ -67,7 +67,7 @@ std::size_t fixed_bytes(const VolumeHeader& h, int C, std::size_t sample, int th
 
 std::size_t slab_bytes(const VolumeHeader& h, int C, int layers) {
     const std::int64_t slices = std::min<std::int64_t>(std::int64_t(layers) * C + 3, h.dims[2]);
-    return std::size_t(h.dims[0] * h.dims[1] * slices) * voxel_size(h.type);
+    return std::size_t(h.slab_memory_bytes(slices));
 }
 
 std::size_t surface_count(const StreamOptions& opt) { return std::max<std::size_t>(1, opt.labels ? opt.label_values.size() : opt.isos.size()); }
@@ -146,10 +146,11 @@ StreamPlan plan_stream(const VolumeHeader& h, const StreamOptions& opt, const Ch
 std::shared_ptr<const ChunkIndex> build_chunk_index(VolumeStream& src, int chunk_size, std::size_t memory_budget,
                                                     const ProgressFn& progress, std::vector<double>* labels_out) {
     const VolumeHeader& h = src.header();
-    const std::size_t slice = std::size_t(h.dims[0] * h.dims[1]) * voxel_size(h.type);
+    // A slice more costs `slice`; any slab costs the reader's extra slices (OpenVDB) once.
+    const std::size_t slice = std::size_t(h.slab_memory_bytes(1) - h.slab_memory_bytes(0));
     const auto counts = chunk_counts(h.dims, chunk_size);
     const std::size_t n = std::size_t(counts[0]) * counts[1] * counts[2];
-    const std::size_t fixed = 2 * index_bytes(n) + read_buffer(h);
+    const std::size_t fixed = 2 * index_bytes(n) + read_buffer(h) + std::size_t(h.slab_memory_bytes(0));
     const std::int64_t per = std::max<std::int64_t>(1, memory_budget > fixed ? std::int64_t((memory_budget - fixed) / slice) : 1);
     ChunkSummaries sum(h.dims, chunk_size, h.type);
     std::set<double> labels;
@@ -204,8 +205,8 @@ StreamStats stream_extract(VolumeStream& src, const StreamOptions& opt_in, MeshS
         st.index_pass = true;
         st.read_seconds += seconds_since(t);
         // The index pass held its index, a read buffer and slabs of as many slices as fit.
-        const std::size_t slice = std::size_t(h.dims[0] * h.dims[1]) * voxel_size(h.type);
-        const std::size_t idx_fixed = 2 * index_bytes(index->chunk_count()) + read_buffer(h);
+        const std::size_t slice = std::size_t(h.slab_memory_bytes(1) - h.slab_memory_bytes(0));
+        const std::size_t idx_fixed = 2 * index_bytes(index->chunk_count()) + read_buffer(h) + std::size_t(h.slab_memory_bytes(0));
         const std::size_t slices = opt.memory_budget > idx_fixed ? std::max<std::size_t>(1, (opt.memory_budget - idx_fixed) / slice) : 1;
         st.peak_bytes = std::max(st.peak_bytes, idx_fixed + src.resident_bytes() +
                                                     std::min<std::size_t>(slices, std::size_t(h.dims[2])) * slice);

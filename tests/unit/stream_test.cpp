@@ -14,10 +14,12 @@
 #include <filesystem>
 #include <fstream>
 #include <iomanip>
+#include <iostream>
 #include <map>
 #include <set>
 #include <unordered_map>
 
+#include <glm/gtc/matrix_transform.hpp>
 #include <gtest/gtest.h>
 #include <vtkNew.h>
 #include <vtkXMLPPolyDataReader.h>
@@ -342,7 +344,6 @@ TEST(Stream, VdbIsLoadedWholeAndSlicedSparse) {
     save_volume(v, dir / "v.vdb");
     const Mesh ref = in_memory(dir / "v.vdb", 800.0, 8);
     ASSERT_GT(ref.triangles.size(), 100u);
-    EXPECT_THROW(open_volume_stream(dir / "v.vdb", 0), Error); // cannot stream, no memory allowed for it
     auto src = open_volume_stream(dir / "v.vdb", std::size_t(64) << 20);
     EXPECT_FALSE(src->streaming());
     StreamOptions so;
@@ -353,6 +354,111 @@ TEST(Stream, VdbIsLoadedWholeAndSlicedSparse) {
     const auto st = stream_extract(*src, so, sink);
     EXPECT_GT(st.plan.slabs, 1u);
     expect_same_surface(ref, sink.meshes[0], "vdb");
+}
+
+// A VDB larger than the memory allowed for loading it whole (0 here) is read
+// slab by slab by the isolating child (topology clipped to the slab, only the
+// leaves left read): the header is read_vdb's geometry, the slabs carry
+// read_vdb's samples (inside and outside the active voxels) and affine, the
+// surface is the in-memory one, and a damaged file is an error naming it.
+TEST(Stream, VdbIsReadSlabBySlab) {
+    TempDir dir;
+    const Volume v = ball({24, 20, 40}, VoxelType::F32, oblique({0.5, 0.7, 0.6}, {1, 2, 3}, true));
+    save_volume(v, dir / "v.vdb");
+    const Volume whole = load_volume(dir / "v.vdb");
+    ASSERT_TRUE(whole.is_sparse());
+    // The header, also through read_volume_header (what `isoscope info --header-only` reads).
+    const VolumeHeader h = read_volume_header(dir / "v.vdb");
+    EXPECT_EQ(h.format, VolumeFormat::Vdb);
+    EXPECT_EQ(h.type, VoxelType::F32);
+    EXPECT_EQ(h.dims, whole.dims);
+    for (int c = 0; c < 4; ++c)
+        for (int r = 0; r < 4; ++r) EXPECT_DOUBLE_EQ(h.index_to_lps[c][r], whole.index_to_lps[c][r]);
+    auto src = open_volume_stream(dir / "v.vdb", 0);
+    EXPECT_TRUE(src->streaming());
+    ASSERT_EQ(src->header().dims, whole.dims);
+    EXPECT_GT(src->resident_bytes(), 0u); // the topology the child holds
+    for (auto [k0, k1] : {std::pair<std::int64_t, std::int64_t>{7, 19}, {0, 0}, {0, whole.dims[2] - 1}, {whole.dims[2] - 3, whole.dims[2] - 1}}) {
+        const Volume slab = src->read_slab(k0, k1);
+        ASSERT_EQ(slab.dims[2], k1 - k0 + 1);
+        EXPECT_TRUE(slab.is_sparse());
+        for (int c = 0; c < 4; ++c)
+            for (int r = 0; r < 4; ++r)
+                EXPECT_DOUBLE_EQ(slab.index_to_lps[c][r], (whole.index_to_lps * glm::translate(glm::dmat4(1.0), glm::dvec3(0, 0, double(k0))))[c][r]);
+        std::size_t differ = 0;
+        for (std::int64_t k = 0; k < slab.dims[2]; ++k)
+            for (std::int64_t j = 0; j < whole.dims[1]; ++j)
+                for (std::int64_t i = 0; i < whole.dims[0]; ++i) differ += slab.value(i, j, k) != whole.value(i, j, k + k0);
+        EXPECT_EQ(differ, 0u) << "slab " << k0 << ".." << k1;
+    }
+    EXPECT_THROW(src->read_slab(5, whole.dims[2]), Error);
+    EXPECT_GT(src->reader_peak_bytes(), 0u);
+    const Mesh ref = in_memory(dir / "v.vdb", 800.0, 8);
+    ASSERT_GT(ref.triangles.size(), 100u);
+    StreamOptions so;
+    so.isos = {800.0};
+    so.extract.chunk_size = 8;
+    // The engine's fixed costs, the child's topology and two layers of slab
+    // as this stream's header prices them (the leaves the reader holds).
+    so.memory_budget = std::size_t(1) << 40;
+    so.memory_budget = plan_stream(src->header(), so).fixed_bytes + src->resident_bytes() + std::size_t(src->header().slab_memory_bytes(19)) + (std::size_t(64) << 10);
+    CollectSink sink;
+    const auto st = stream_extract(*src, so, sink);
+    EXPECT_GT(st.plan.slabs, 1u);
+    EXPECT_LE(st.peak_bytes, so.memory_budget);
+    expect_same_surface(ref, sink.meshes[0], "vdb slabs");
+    // A damaged file is an error naming it, also when read slab by slab.
+    {
+        std::ofstream bad(dir / "bad.vdb", std::ios::binary);
+        bad << "not a vdb file at all, but long enough to be looked at";
+    }
+    for (std::size_t limit : {std::size_t(0), std::size_t(1) << 30}) {
+        try {
+            open_volume_stream(dir / "bad.vdb", limit);
+            ADD_FAILURE() << "a damaged VDB opened";
+        } catch (const Error& e) {
+            EXPECT_NE(std::string(e.what()).find("bad.vdb"), std::string::npos) << e.what();
+        }
+    }
+}
+
+// The child reads only the leaves meeting a slab: on a grid of 64 MiB of
+// leaf values, the reading child of a thin slab stays far below the child
+// that reads every leaf (delayed loading and clipping really skip the rest;
+// both include the same program and topology, so the difference is the
+// values). A file cut short is an error naming it when a slab is read, not a
+// crash; what the stream had read before stays valid.
+TEST(Stream, VdbSlabReadsOnlyItsLeaves) {
+    TempDir dir;
+    // Every voxel active (noise above the background): 2^24 float values.
+    Volume v = Volume::dense({256, 256, 256}, VoxelType::F32, glm::dmat4(1.0));
+    auto s = v.as<float>();
+    for (std::size_t n = 0; n < s.size(); ++n) s[n] = float(1 + (n * 2654435761u) % 1000);
+    s[0] = 0.0f; // the minimum stays inactive (the background)
+    save_volume(v, dir / "big.vdb");
+    const VdbHeader h = read_vdb_header(dir / "big.vdb");
+    EXPECT_GE(h.grid_bytes, std::uint64_t(64) << 20);
+    EXPECT_LT(h.topology_bytes, h.grid_bytes / 8);
+    std::size_t thin = 0, all = 0;
+    const Volume a = read_vdb_slab(h, 100, 107, &thin);
+    const Volume b = read_vdb_slab(h, 0, 255, &all);
+    EXPECT_EQ(a.value(3, 4, 5), v.value(3, 4, 105));
+    EXPECT_EQ(b.value(250, 251, 252), v.value(250, 251, 252));
+    ASSERT_GT(thin, 0u);
+    std::cout << "grid " << (h.grid_bytes >> 20) << " MiB, topology " << (h.topology_bytes >> 10) << " KiB; reading child peak: slab of 8 slices "
+              << (thin >> 20) << " MiB, every slice " << (all >> 20) << " MiB\n";
+    EXPECT_GT(all, thin + (std::size_t(40) << 20)) << "thin slab child " << (thin >> 20) << " MiB, whole grid child " << (all >> 20) << " MiB";
+    // Cut the file in half: the header may still be read (or not), a slab must not.
+    const auto size = fs::file_size(dir / "big.vdb");
+    fs::resize_file(dir / "big.vdb", size / 2);
+    try {
+        read_vdb_slab(h, 200, 230);
+        ADD_FAILURE() << "a slab of a truncated VDB was read";
+    } catch (const Error& e) {
+        EXPECT_NE(std::string(e.what()).find("big.vdb"), std::string::npos) << e.what();
+        std::cout << "truncated: " << e.what() << "\n";
+    }
+    EXPECT_EQ(a.value(3, 4, 5), v.value(3, 4, 105));
 }
 
 TEST(Stream, EmptySlabsAreSkippedAndRangesOfChunksWork) {
