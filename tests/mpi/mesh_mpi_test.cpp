@@ -379,3 +379,30 @@ TEST(MpiMesh, FloatVolumeWithNaNAndInfEqualsTheSingleProcess) {
         expect_same_surface(out, ref, got.pieces, sums[0]);
     }
 }
+
+// OpenVDB under mpirun: every rank reads its slabs through its own reading
+// child (the program exec'd again under the launcher's environment, where it
+// must not start MPI); the budget (below twice the grid) makes the ranks
+// stream. Same surface as the single process.
+TEST(MpiMesh, OpenVdbSlabsOnTwoRanksEqualTheSingleProcess) {
+    TempDir dir;
+    const std::string in = dir / "phantom.vdb";
+    // Every voxel active (VDB leaves samples equal to the minimum inactive):
+    // a dense grid of about 2 MiB, so that 3 MiB is below twice the grid.
+    Volume v = phantom({64, 48, 160});
+    auto s16 = v.as<std::int16_t>();
+    for (std::size_t n = 1; n < s16.size(); ++n) s16[n] = std::int16_t(std::max<int>(s16[n], 1));
+    save_volume(v, in);
+    const Mesh ref = reference(in, "--iso 500", dir / "ref.vtp");
+    ASSERT_GT(ref.triangles.size(), 2000u);
+    const std::string out = dir / "v.pvtp";
+    const auto r = test::run_command(mpirun(2) + test::cli() + " mesh " + in + " --iso 500 --chunk 8 --memory 3 -o " + out, true);
+    ASSERT_EQ(r.exit_code, 0) << r.out;
+    std::smatch m;
+    ASSERT_TRUE(std::regex_search(r.out, m, std::regex(R"(slabs read: (\d+) (\d+))"))) << r.out;
+    EXPECT_GT(std::stoi(m[1]) + std::stoi(m[2]), 2) << "several slabs: " << r.out;
+    const auto s = parse(r.out);
+    ASSERT_EQ(s.size(), 1u) << r.out;
+    const ReadBack got = read_pvtp(out);
+    expect_same_surface(out, ref, got.pieces, s[0]);
+}

@@ -11,6 +11,7 @@
 #include <nlohmann/json.hpp>
 
 #include "io/mesh.hpp"
+#include "io/volume_io.hpp"
 #include "test_util.hpp"
 
 using namespace iso;
@@ -120,4 +121,39 @@ TEST(StreamCli, InfoReadsOnlyTheHeader) {
     const auto h = test::run_command(test::cli() + " info " + (dir / "h.nhdr") + " --header-only");
     ASSERT_EQ(h.exit_code, 0) << h.out;
     EXPECT_NE(h.out.find("not read (header only)"), std::string::npos) << h.out;
+}
+
+// The bundled CT as OpenVDB: `info --header-only` reads its grid's metadata
+// and topology (the geometry of the whole read, no range), and a budget below
+// twice the grid streams it slab by slab through the reading child; the
+// surface is the in-memory one.
+TEST(StreamCli, OpenVdbHeaderAndSlabs) {
+    TempDir dir;
+    save_volume(load_volume(test::data("headsq.nhdr")), dir / "h.vdb");
+    const auto full = test::run_command(test::cli() + " info " + (dir / "h.vdb") + " --json");
+    ASSERT_EQ(full.exit_code, 0) << full.out;
+    const auto jf = nlohmann::json::parse(full.out);
+    const auto hr = test::run_command(test::cli() + " info " + (dir / "h.vdb") + " --header-only --json");
+    ASSERT_EQ(hr.exit_code, 0) << hr.out;
+    const auto jh = nlohmann::json::parse(hr.out);
+    EXPECT_TRUE(jh["range"].is_null());
+    EXPECT_EQ(jh["dims"], jf["dims"]);
+    EXPECT_EQ(jh["index_to_lps"], jf["index_to_lps"]);
+    EXPECT_EQ(jh["grid"], "density");
+    EXPECT_GT(jh["topology_bytes"].get<double>(), 0.0);
+    EXPECT_LT(jh["topology_bytes"].get<double>(), jh["memory_bytes"].get<double>());
+    const auto ref = test::run_command(test::cli() + " mesh " + (dir / "h.vdb") + " --iso 500 -o " + (dir / "ref.ply"), true);
+    ASSERT_EQ(ref.exit_code, 0) << ref.out;
+    EXPECT_EQ(ref.out.find("streamed:"), std::string::npos) << ref.out;
+    const auto r = test::run_command(test::cli() + " mesh " + (dir / "h.vdb") + " --iso 500 --memory 2.8 --chunk 8 -o " + (dir / "s.ply"), true);
+    ASSERT_EQ(r.exit_code, 0) << r.out;
+    EXPECT_NE(r.out.find("streamed:"), std::string::npos) << r.out;
+    EXPECT_NE(r.out.find("OpenVDB reader process peak"), std::string::npos) << r.out;
+    const Mesh a = load_mesh(dir / "ref.ply"), b = load_mesh(dir / "s.ply");
+    const auto sa = mesh_stats(a), sb = mesh_stats(b);
+    EXPECT_GT(sa.triangles, 10000u);
+    EXPECT_EQ(sb.triangles, sa.triangles);
+    EXPECT_EQ(sb.vertices, sa.vertices);
+    EXPECT_NEAR(sb.area, sa.area, 1e-9 * sa.area);
+    EXPECT_TRUE(sorted_positions(a) == sorted_positions(b));
 }
