@@ -14,10 +14,6 @@
 
 #include "renderer/iso/arena.hpp"
 
-#if defined(__linux__)
-#include <pthread.h>
-#endif
-
 namespace iso {
 
 namespace {
@@ -25,15 +21,6 @@ namespace {
 using Clock = std::chrono::steady_clock;
 double seconds_since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
 
-// Names the calling thread (seen in top -H and gdb; the tests check that none
-// is left running after an error or a cancel). Linux: at most 15 characters.
-void name_thread(const char* name) {
-#if defined(__linux__)
-    pthread_setname_np(pthread_self(), name);
-#else
-    (void)name;
-#endif
-}
 
 constexpr std::size_t kMiB = std::size_t(1) << 20;
 // Conversion buffer of a slab read: volume_stream.cpp converts 1 MiB (at
@@ -523,7 +510,6 @@ StreamStats stream_extract(VolumeStream& src, const StreamOptions& opt_in, MeshS
             }
         } threads_{pipe};
         threads_.reader = std::thread([&] {
-            name_thread("iso-read-slabs");
             try {
                 for (std::size_t n = 0; n < jobs.size(); ++n) {
                     {
@@ -548,7 +534,6 @@ StreamStats stream_extract(VolumeStream& src, const StreamOptions& opt_in, MeshS
             }
         });
         threads_.writer = std::thread([&] {
-            name_thread("iso-write-piece");
             try {
                 for (;;) {
                     std::optional<Output> out;
