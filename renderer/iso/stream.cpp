@@ -324,6 +324,7 @@ StreamStats stream_extract(VolumeStream& src, const StreamOptions& opt_in, MeshS
         void transient(std::size_t n) { add(n), sub(n); }
     } meter;
     meter.add(fixed);
+    for (const auto& j : jobs) meter.add(sizeof(SlabJob) + j.ids.capacity() * sizeof(std::size_t)); // the job list, held throughout
     std::size_t sink_bytes = sink.memory_bytes();
     meter.add(sink_bytes);
 
