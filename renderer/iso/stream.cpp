@@ -21,6 +21,12 @@ namespace {
 using Clock = std::chrono::steady_clock;
 double seconds_since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
 
+std::atomic<std::size_t> g_threads_running{0};
+// Counts a pipeline thread from its start to the end of its function.
+struct Running {
+    Running() { ++g_threads_running; }
+    ~Running() { --g_threads_running; }
+};
 
 constexpr std::size_t kMiB = std::size_t(1) << 20;
 // Conversion buffer of a slab read: volume_stream.cpp converts 1 MiB (at
@@ -510,6 +516,7 @@ StreamStats stream_extract(VolumeStream& src, const StreamOptions& opt_in, MeshS
             }
         } threads_{pipe};
         threads_.reader = std::thread([&] {
+            const Running running;
             try {
                 for (std::size_t n = 0; n < jobs.size(); ++n) {
                     {
@@ -534,6 +541,7 @@ StreamStats stream_extract(VolumeStream& src, const StreamOptions& opt_in, MeshS
             }
         });
         threads_.writer = std::thread([&] {
+            const Running running;
             try {
                 for (;;) {
                     std::optional<Output> out;
@@ -632,5 +640,7 @@ StreamStats stream_extract(VolumeStream& src, const StreamOptions& opt_in, MeshS
     st.write_seconds += seconds_since(t);
     return st;
 }
+
+std::size_t stream_threads_running() { return g_threads_running.load(); }
 
 } // namespace iso

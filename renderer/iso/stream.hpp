@@ -104,4 +104,9 @@ std::shared_ptr<const ChunkIndex> build_chunk_index(VolumeStream& src, int chunk
 // outputs are then never moved into place.
 StreamStats stream_extract(VolumeStream& src, const StreamOptions& opt, MeshSink& sink);
 
+// Reader and writer threads of stream_extract() running in this process now
+// (0 whenever no stream_extract() is running: every way out joins them; the
+// tests check it after errors and cancels).
+std::size_t stream_threads_running();
+
 } // namespace iso
