@@ -299,7 +299,7 @@ int run_info(const InfoArgs& a) {
 struct MeshArgs {
     std::string in, out, series;
     std::vector<double> isos, label_values;
-    bool labels = false, stream = false;
+    bool labels = false, stream = false, no_overlap = false;
     iso::PostProcessOptions post;
     int threads = 0, chunk = 32;
     double memory_mib = 0; // per rank under mpirun (0: default_rank_budget())
@@ -322,6 +322,8 @@ CLI::App* add_mesh(CLI::App& app, MeshArgs& a) {
                                             "(default: a quarter of physical memory; under mpirun: per rank, a quarter of "
                                             "the node's memory shared by its ranks)")->check(CLI::PositiveNumber);
     c->add_flag("--stream", a.stream, "Stream slabs of the volume from the file even if it fits the budget");
+    c->add_flag("--no-overlap", a.no_overlap, "When streaming: read, extract and write each slab one after another "
+                                              "(default: overlapped, with slabs sized so that two fit the budget)");
     return c;
 }
 
@@ -346,6 +348,7 @@ int run_mesh_streaming(const MeshArgs& a, std::size_t budget) {
     req.extract.threads = a.threads;
     req.extract.chunk_size = a.chunk;
     req.memory_budget = budget;
+    req.overlap = !a.no_overlap;
     req.progress = progress_bar();
     const auto r = iso::core::stream_mesh(req);
     for (const auto& w : r.warnings) std::cerr << "warning: " << w << "\n";
@@ -363,6 +366,10 @@ int run_mesh_streaming(const MeshArgs& a, std::size_t budget) {
               << ", " << human_bytes(double(iso::core::peak_resident_bytes())) << " resident (VmHWM)";
     if (r.reader_peak_bytes) std::cout << "; OpenVDB reader process peak " << human_bytes(double(r.reader_peak_bytes));
     std::cout << "\n";
+    char steps[256];
+    std::snprintf(steps, sizeof steps, "index %.2f, read %.2f, extract %.2f, weld %.2f, write %.2f, extraction waited %.2f",
+                  s.index_seconds, s.read_seconds - s.index_seconds, s.extract_seconds, s.weld_seconds, s.write_seconds, s.wait_seconds);
+    std::cout << "streaming steps (busy seconds" << (s.plan.overlap ? ", overlapped" : "") << "): " << steps << "\n";
     return 0;
 }
 
@@ -386,6 +393,7 @@ int run_mesh_mpi(const MeshArgs& a) {
     r.extract.threads = a.threads;
     r.extract.chunk_size = a.chunk;
     r.memory_budget = a.memory_mib > 0 ? std::size_t(a.memory_mib * 1048576.0) : iso::dist::default_rank_budget();
+    r.overlap = !a.no_overlap;
     if (comm.root()) {
         r.progress = progress_bar();
         r.extract.progress = progress_bar();

@@ -108,6 +108,7 @@ StreamMeshResult stream_mesh(const StreamMeshRequest& req) {
     so.label_values = req.label_values;
     so.extract = req.extract;
     so.memory_budget = r.memory_budget;
+    so.overlap = req.overlap;
     so.progress = req.progress;
     if (!req.labels) {
         for (std::size_t i = 0; i < req.isos.size(); ++i) {

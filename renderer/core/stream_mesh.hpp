@@ -45,6 +45,7 @@ struct StreamMeshRequest {
     std::vector<double> label_values;
     ExtractOptions extract;
     std::size_t memory_budget = 0;         // 0: default_memory_budget()
+    bool overlap = true;                   // StreamOptions::overlap
     ProgressFn progress;
 };
 

@@ -251,6 +251,7 @@ DistMeshResult mesh_distributed(const Comm& comm, const DistMeshRequest& req) {
     so.label_values = req.labels ? req.isos : std::vector<double>{};
     so.extract = req.extract;
     so.memory_budget = req.memory_budget;
+    so.overlap = req.overlap;
     int C = 0;
     {
         std::string mine;

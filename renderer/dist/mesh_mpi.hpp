@@ -25,6 +25,7 @@ struct DistMeshRequest {
     // Per rank: samples read at once, extraction scratch and the slab's
     // output (the streaming driver's budget); the rank's whole output comes on top.
     std::size_t memory_budget = std::size_t(1) << 30;
+    bool overlap = true;             // StreamOptions::overlap (each rank's reading, extraction and writing)
     ProgressFn progress;             // rank 0's progress (other ranks: none)
 };
 

@@ -1,10 +1,16 @@
 #include "renderer/iso/stream.hpp"
 
 #include <algorithm>
+#include <atomic>
 #include <chrono>
 #include <cstdio>
 #include <cmath>
+#include <condition_variable>
+#include <exception>
+#include <mutex>
+#include <optional>
 #include <set>
+#include <thread>
 
 #include "renderer/iso/arena.hpp"
 
@@ -14,6 +20,13 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 double seconds_since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
+
+std::atomic<std::size_t> g_threads_running{0};
+// Counts a pipeline thread from its start to the end of its function.
+struct Running {
+    Running() { ++g_threads_running; }
+    ~Running() { --g_threads_running; }
+};
 
 constexpr std::size_t kMiB = std::size_t(1) << 20;
 // Conversion buffer of a slab read: volume_stream.cpp converts 1 MiB (at
@@ -74,23 +87,16 @@ std::size_t surface_count(const StreamOptions& opt) { return std::max<std::size_
 
 } // namespace
 
-StreamPlan plan_stream(const VolumeHeader& h, const StreamOptions& opt, const ChunkIndex* index) {
+namespace {
+
+// The plan for chunk size C; with `overlap`, two slabs' samples and output
+// if they fit one chunk layer per slab (else StreamPlan::overlap is false and
+// the slabs are planned one at a time).
+StreamPlan plan_chunks(const VolumeHeader& h, const StreamOptions& opt, const ChunkIndex* index, int C, bool overlap) {
     StreamPlan p;
     const std::size_t sample = voxel_size(h.type);
     const int threads = effective_threads(opt.extract.threads);
     const std::size_t surfaces = surface_count(opt);
-    int C = index ? index->chunk_size() : opt.extract.chunk_size;
-    if (C < 2) throw Error("--chunk", "chunk size must be at least 2 cells");
-    // Without an index: halve the chunk size while one chunk layer's samples
-    // and the fixed costs do not fit and halving makes them smaller (more
-    // chunks cost more index and table entries).
-    if (!index)
-        while (C > 4) {
-            const std::size_t now = fixed_bytes(h, C, sample, threads, surfaces) + slab_bytes(h, C, 1);
-            const std::size_t half = fixed_bytes(h, C / 2, sample, threads, surfaces) + slab_bytes(h, C / 2, 1);
-            if (now <= opt.memory_budget || half >= now) break;
-            C /= 2;
-        }
     p.chunk_size = C;
     p.fixed_bytes = fixed_bytes(h, C, sample, threads, surfaces);
     const auto counts = chunk_counts(h.dims, C);
@@ -123,24 +129,76 @@ StreamPlan plan_stream(const VolumeHeader& h, const StreamOptions& opt, const Ch
         }
     }
     const std::size_t per_chunk = chunk_output_estimate(C) * surfaces;
-    int best = 1;
-    p.fits = false;
-    for (int L = 1; L <= layers; ++L) {
-        std::size_t worst = 0;
-        for (int l = 0; l < layers; l += L) {
-            std::size_t n = 0;
-            for (int j = l; j < std::min(l + L, layers); ++j) n += active[std::size_t(j)];
-            worst = std::max(worst, n);
+    const int max_layers = opt.max_layers_per_slab > 0 ? std::min(opt.max_layers_per_slab, layers) : layers;
+    // The tallest slabs whose samples and estimated output fit: with overlap,
+    // two slabs' samples (one extracted, the next read) and two slabs' output
+    // (one welded and written, the next extracted) are held at once.
+    auto choose = [&](std::size_t in_flight) {
+        int best = 1;
+        bool fits = false;
+        std::size_t estimate = 0;
+        for (int L = 1; L <= max_layers; ++L) {
+            std::size_t worst = 0;
+            for (int l = 0; l < layers; l += L) {
+                std::size_t n = 0;
+                for (int j = l; j < std::min(l + L, layers); ++j) n += active[std::size_t(j)];
+                worst = std::max(worst, n);
+            }
+            if (p.fixed_bytes + in_flight * (slab_bytes(h, C, L) + worst * per_chunk) > opt.memory_budget) break;
+            best = L;
+            fits = true;
+            estimate = worst * per_chunk;
         }
-        if (p.fixed_bytes + slab_bytes(h, C, L) + worst * per_chunk > opt.memory_budget) break;
-        best = L;
-        p.fits = true;
-        p.output_estimate = worst * per_chunk;
+        p.layers_per_slab = best;
+        p.fits = fits;
+        p.output_estimate = estimate;
+    };
+    p.overlap = false;
+    if (overlap) {
+        choose(2);
+        p.overlap = p.fits;
     }
-    p.layers_per_slab = best;
-    p.slabs = std::size_t((layers + best - 1) / best);
-    p.slab_bytes = slab_bytes(h, C, best);
+    if (!p.overlap) choose(1);
+    p.slabs = std::size_t((layers + p.layers_per_slab - 1) / p.layers_per_slab);
+    // One slab cannot overlap with anything.
+    if (p.slabs < 2) p.overlap = false;
+    p.slab_bytes = slab_bytes(h, C, p.layers_per_slab);
     return p;
+}
+
+} // namespace
+
+StreamPlan plan_stream(const VolumeHeader& h, const StreamOptions& opt, const ChunkIndex* index) {
+    if (index) return plan_chunks(h, opt, index, index->chunk_size(), opt.overlap);
+    if (opt.extract.chunk_size < 2) throw Error("--chunk", "chunk size must be at least 2 cells");
+    // Without an index: halve the chunk size while one chunk layer's samples
+    // (two with overlap: the one extracted and the next one read) and the
+    // fixed costs do not fit and halving makes them smaller (more chunks cost
+    // more index and table entries). If the overlapped plan does not fit at
+    // that size, the chunk size is chosen again for one slab at a time (a
+    // smaller chunk size would only cost).
+    const std::size_t sample = voxel_size(h.type);
+    const int threads = effective_threads(opt.extract.threads);
+    const std::size_t surfaces = surface_count(opt);
+    auto pick = [&](std::size_t in_flight) {
+        int c = opt.extract.chunk_size;
+        while (c > 4) {
+            const std::size_t now = fixed_bytes(h, c, sample, threads, surfaces) + in_flight * slab_bytes(h, c, 1);
+            const std::size_t half = fixed_bytes(h, c / 2, sample, threads, surfaces) + in_flight * slab_bytes(h, c / 2, 1);
+            if (now <= opt.memory_budget || half >= now) break;
+            c /= 2;
+        }
+        return c;
+    };
+    const int c1 = pick(1);
+    if (opt.overlap) {
+        const int c2 = pick(2);
+        if (fixed_bytes(h, c2, sample, threads, surfaces) + 2 * slab_bytes(h, c2, 1) <= opt.memory_budget) {
+            StreamPlan p = plan_chunks(h, opt, nullptr, c2, true);
+            if (p.overlap || c2 == c1) return p;
+        }
+    }
+    return plan_chunks(h, opt, nullptr, c1, false);
 }
 
 std::shared_ptr<const ChunkIndex> build_chunk_index(VolumeStream& src, int chunk_size, std::size_t memory_budget,
@@ -203,7 +261,8 @@ StreamStats stream_extract(VolumeStream& src, const StreamOptions& opt_in, MeshS
         index = build_chunk_index(src, pre.chunk_size, opt.memory_budget, sub(0.0, index_share), find_labels ? &found : nullptr);
         if (find_labels) opt.label_values = found;
         st.index_pass = true;
-        st.read_seconds += seconds_since(t);
+        st.index_seconds = seconds_since(t);
+        st.read_seconds += st.index_seconds;
         // The index pass held its index, a read buffer and slabs of as many slices as fit.
         const std::size_t slice = std::size_t(h.slab_memory_bytes(1) - h.slab_memory_bytes(0));
         const std::size_t idx_fixed = 2 * index_bytes(index->chunk_count()) + read_buffer(h) + std::size_t(h.slab_memory_bytes(0));
@@ -229,75 +288,148 @@ StreamStats stream_extract(VolumeStream& src, const StreamOptions& opt_in, MeshS
     const std::size_t layer = index->layer_size(), total = index->chunk_count();
     const std::size_t first = std::min(opt.first_chunk, total), last = std::min(opt.last_chunk, total);
     const std::size_t fixed = index_bytes(total) + src.resident_bytes();
+    const char* stage = opt.labels ? "extracting label surfaces" : "extracting isosurface";
 
-    ExtractOptions eo = opt.extract;
-    eo.chunk_size = index->chunk_size();
-    eo.memory_budget = opt.memory_budget;
-    eo.threads = threads;
-    eo.keep_keys = false;
+    // The slabs with active chunks, in order (the others are skipped unread).
+    struct SlabJob {
+        std::size_t piece = 0;                // piece number (slab of the plan)
+        std::size_t a = 0, b = 0;             // its chunk ids [a, b)
+        std::vector<std::size_t> ids;         // its active chunks
+        std::int64_t k0 = 0, k1 = 0;          // its samples, halo included
+        double f0 = 0, f1 = 0;                // its share of the progress
+    };
+    std::vector<SlabJob> jobs;
+    std::vector<std::size_t> job_of(plan.slabs, std::size_t(-1));
     for (std::size_t i = 0; i < plan.slabs; ++i) {
         const int l0 = plan.first_layer + int(i) * plan.layers_per_slab;
         const int l1 = std::min(l0 + plan.layers_per_slab - 1, plan.last_layer);
-        const std::size_t a = std::max(first, std::size_t(l0) * layer), b = std::min(last, std::size_t(l1 + 1) * layer);
-        const double f0 = index_share + (1.0 - index_share) * double(i) / double(plan.slabs);
-        const double f1 = index_share + (1.0 - index_share) * double(i + 1) / double(plan.slabs);
-        report(opt.progress, f0, opt.labels ? "extracting label surfaces" : "extracting isosurface", "streaming");
-        std::vector<std::size_t> ids;
-        for (std::size_t id = a; id < b; ++id)
-            if (chunk_active(*index, id, values, opt.labels)) ids.push_back(id);
-        if (ids.empty()) {
-            ++st.slabs_skipped;
-            continue;
+        SlabJob j;
+        j.piece = i;
+        j.a = std::max(first, std::size_t(l0) * layer);
+        j.b = std::min(last, std::size_t(l1 + 1) * layer);
+        j.f0 = index_share + (1.0 - index_share) * double(i) / double(plan.slabs);
+        j.f1 = index_share + (1.0 - index_share) * double(i + 1) / double(plan.slabs);
+        for (std::size_t id = j.a; id < j.b; ++id)
+            if (chunk_active(*index, id, values, opt.labels)) j.ids.push_back(id);
+        if (j.ids.empty()) continue;
+        j.k0 = Extractor::layer_samples(h.dims, index->chunk_size(), l0)[0];
+        j.k1 = Extractor::layer_samples(h.dims, index->chunk_size(), l1)[1];
+        job_of[i] = jobs.size();
+        jobs.push_back(std::move(j));
+    }
+
+    // What the steps hold, counted as they allocate and free (from three
+    // threads with overlap): its high-water mark is StreamStats::peak_bytes.
+    struct Meter {
+        std::atomic<std::size_t> now{0}, peak{0};
+        void add(std::size_t n) {
+            const std::size_t v = now.fetch_add(n) + n;
+            std::size_t p = peak.load();
+            while (v > p && !peak.compare_exchange_weak(p, v)) {}
         }
-        // 2. Read the slab: the layers' samples and their gradient halo.
-        const std::int64_t k0 = Extractor::layer_samples(h.dims, index->chunk_size(), l0)[0];
-        const std::int64_t k1 = Extractor::layer_samples(h.dims, index->chunk_size(), l1)[1];
-        auto t = Clock::now();
-        Volume slab = src.read_slab(k0, k1);
-        st.read_seconds += seconds_since(t);
-        ++st.slabs_read;
-        st.chunks_visited += ids.size();
-        // 3. Extract its chunks.
-        t = Clock::now();
-        const VolumeWindow w{&slab, h.dims, k0, h.index_to_lps};
-        eo.progress = sub(f0, f0 + 0.8 * (f1 - f0));
+        void sub(std::size_t n) { now.fetch_sub(n); }
+        void transient(std::size_t n) { add(n), sub(n); }
+    } meter;
+    meter.add(fixed);
+    for (const auto& j : jobs) meter.add(sizeof(SlabJob) + j.ids.capacity() * sizeof(std::size_t)); // the job list, held throughout
+    std::size_t sink_bytes = sink.memory_bytes();
+    meter.add(sink_bytes);
+
+    struct Slab {
+        Volume samples;
+        std::size_t bytes = 0; // as counted
+    };
+    struct Output {
+        const SlabJob* job = nullptr;
         std::vector<ChunkedSurface> surfaces;
+        std::size_t bytes = 0; // as counted
+    };
+    double read_s = 0, extract_s = 0, weld_s = 0, write_s = 0, wait_s = 0;
+
+    // 2. Read a slab: the layers' samples and their gradient halo (counted
+    //    before the read, which allocates them at once).
+    auto read = [&](const SlabJob& j) {
+        const auto t = Clock::now();
+        Slab s;
+        // (with what the reader holds meanwhile: OpenVDB's child and its leaves)
+        const std::size_t expected = src.streaming() ? std::size_t(h.slab_memory_bytes(j.k1 - j.k0 + 1)) : 0;
+        meter.add(expected);
+        try {
+            s.samples = src.read_slab(j.k0, j.k1);
+        } catch (...) {
+            meter.sub(expected);
+            throw;
+        }
+        s.bytes = s.samples.memory_bytes();
+        if (s.bytes > expected) meter.add(s.bytes - expected);
+        else meter.sub(expected - s.bytes);
+        read_s += seconds_since(t);
+        return s;
+    };
+    // 3. Extract its chunks; the samples are freed at once.
+    ExtractOptions eo = opt.extract;
+    eo.chunk_size = index->chunk_size();
+    eo.memory_budget = opt.memory_budget;
+    // Extraction and welding take the caller's thread count also when they
+    // overlap with each other and the reader: giving the writer a core of its
+    // own (the extraction one thread fewer) measured no different for .pvtp
+    // and makes the extraction the longer step for .ply (docs/isosurface.md).
+    eo.threads = threads;
+    eo.keep_keys = false;
+    std::atomic<bool> failed{false}; // the reader or the writer failed: the extraction stops
+    auto extract = [&](const SlabJob& j, Slab&& slab) {
+        const auto t = Clock::now();
+        const VolumeWindow w{&slab.samples, h.dims, j.k0, h.index_to_lps};
+        const ProgressFn part = sub(j.f0, j.f0 + 0.8 * (j.f1 - j.f0));
+        eo.progress = [&, part](double f, std::string_view what) {
+            return !failed.load(std::memory_order_relaxed) && (!part || part(f, what));
+        };
+        Output out;
+        out.job = &j;
         ExtractStats es;
         if (opt.labels) {
-            surfaces = extract_label_chunks(w, *index, values, ids, eo);
+            out.surfaces = extract_label_chunks(w, *index, values, j.ids, eo);
         } else {
             Extractor x(w, eo, index);
-            surfaces = x.extract_chunks(values, ids, &es);
+            out.surfaces = x.extract_chunks(values, j.ids, &es);
         }
-        std::size_t held = slab.memory_bytes() + es.peak_scratch_bytes + fixed + sink.memory_bytes();
-        for (const auto& s : surfaces) held += s.memory_bytes();
-        st.peak_bytes = std::max(st.peak_bytes, held);
-        held -= slab.memory_bytes();
-        slab = Volume{}; // the samples are no longer needed
-        st.extract_seconds += seconds_since(t);
-        // 4. Weld each surface's piece and name its seam vertices: the border
-        //    vertices of chunks with a neighbour outside [a, b).
+        for (const auto& s : out.surfaces) out.bytes += s.memory_bytes();
+        meter.add(out.bytes + es.peak_scratch_bytes);
+        meter.sub(es.peak_scratch_bytes);
+        slab.samples = Volume{}; // the samples are no longer needed
+        meter.sub(slab.bytes);
+        extract_s += seconds_since(t);
+        return out;
+    };
+    // 4. Weld each surface's piece, name its seam vertices (the border
+    //    vertices of chunks with a neighbour outside [a, b)) and hand it to
+    //    the sink. `stop`: give up between surfaces (another step failed).
+    auto write = [&](Output&& out, const std::atomic<bool>* stop) {
+        const SlabJob& j = *out.job;
         for (std::size_t s = 0; s < nsurf; ++s) {
-            t = Clock::now();
+            if (stop && stop->load()) return;
+            auto t = Clock::now();
             ChunkedSurface piece;
-            piece.iso = surfaces[s].iso;
+            piece.iso = out.surfaces[s].iso;
             std::vector<std::size_t> piece_ids;
-            const std::size_t surface_bytes = surfaces[s].memory_bytes();
-            for (auto id : ids)
-                if (!surfaces[s].chunks[id].positions.empty()) {
-                    piece.chunks.push_back(std::move(surfaces[s].chunks[id]));
+            const std::size_t surface_bytes = out.surfaces[s].memory_bytes();
+            for (auto id : j.ids)
+                if (!out.surfaces[s].chunks[id].positions.empty()) {
+                    piece.chunks.push_back(std::move(out.surfaces[s].chunks[id]));
                     piece_ids.push_back(id);
                 }
-            held -= surface_bytes;
-            surfaces[s] = ChunkedSurface{};
-            held += piece.memory_bytes();
+            const std::size_t piece_bytes = piece.memory_bytes();
+            meter.add(piece_bytes);
+            meter.sub(surface_bytes);
+            out.bytes -= surface_bytes;
+            out.surfaces[s] = ChunkedSurface{};
             WeldMap map;
             MeshPiece mp;
             mp.surface = s;
-            mp.index = i;
+            mp.index = j.piece;
             mp.mesh = weld(piece, threads, &map);
-            for (std::size_t j = 0; j < piece_ids.size(); ++j) {
-                const auto c = index->coords(piece_ids[j]);
+            for (std::size_t n = 0; n < piece_ids.size(); ++n) {
+                const auto c = index->coords(piece_ids[n]);
                 bool lower = false, upper = false;
                 for (int dz = -1; dz <= 1; ++dz)
                     for (int dy = -1; dy <= 1; ++dy)
@@ -305,32 +437,212 @@ StreamStats stream_extract(VolumeStream& src, const StreamOptions& opt_in, MeshS
                             const int x = c[0] + dx, y = c[1] + dy, z = c[2] + dz;
                             if (x < 0 || y < 0 || z < 0 || x >= counts[0] || y >= counts[1] || z >= counts[2]) continue;
                             const std::size_t nid = std::size_t(x) + std::size_t(counts[0]) * (std::size_t(y) + std::size_t(counts[1]) * std::size_t(z));
-                            lower |= nid < a;
-                            upper |= nid >= b;
+                            lower |= nid < j.a;
+                            upper |= nid >= j.b;
                         }
                 if (!lower && !upper) continue;
-                for (const auto& [key, local] : piece.chunks[j].border) {
-                    if (lower) mp.lower.emplace_back(key, map.remap[j][local]);
-                    if (upper) mp.upper.emplace_back(key, map.remap[j][local]);
+                for (const auto& [key, local] : piece.chunks[n].border) {
+                    if (lower) mp.lower.emplace_back(key, map.remap[n][local]);
+                    if (upper) mp.upper.emplace_back(key, map.remap[n][local]);
                 }
             }
-            st.peak_bytes = std::max(st.peak_bytes, held + mp.memory_bytes() + map.remap.size() * 24 +
-                                                        mp.mesh.positions.size() * sizeof(std::uint32_t));
-            held -= piece.memory_bytes();
+            meter.transient(mp.memory_bytes() + map.remap.size() * 24 + mp.mesh.positions.size() * sizeof(std::uint32_t));
             piece = ChunkedSurface{};
-            st.extract_seconds += seconds_since(t);
+            meter.sub(piece_bytes);
+            weld_s += seconds_since(t);
             t = Clock::now();
             sink.piece(std::move(mp));
-            st.write_seconds += seconds_since(t);
-            st.peak_bytes = std::max(st.peak_bytes, held + sink.memory_bytes());
+            write_s += seconds_since(t);
+            // The sink's seam maps (read here only: piece() and memory_bytes() stay on one thread).
+            const std::size_t now = sink.memory_bytes();
+            if (now > sink_bytes) meter.add(now - sink_bytes);
+            else meter.sub(sink_bytes - now);
+            sink_bytes = now;
+        }
+        meter.sub(out.bytes);
+    };
+
+    if (!plan.overlap) {
+        for (std::size_t i = 0; i < plan.slabs; ++i) {
+            report(opt.progress, index_share + (1.0 - index_share) * double(i) / double(plan.slabs), stage, "streaming");
+            if (job_of[i] == std::size_t(-1)) {
+                ++st.slabs_skipped;
+                continue;
+            }
+            const SlabJob& j = jobs[job_of[i]];
+            Slab slab = read(j);
+            ++st.slabs_read;
+            st.chunks_visited += j.ids.size();
+            write(extract(j, std::move(slab)), nullptr);
+        }
+    } else {
+        // The pipeline. Hand-overs hold one item each and a step waits for
+        // the next one to take it, so at most two slabs of samples (the one
+        // extracted, the next being read) and two slabs' output (one being
+        // welded and written, the next being extracted) exist at once, as the
+        // planner counted. std::thread and a condition variable rather than a
+        // TBB flow graph: the reader blocks in pread()/zlib and must not take
+        // one of the TBB threads that extraction and welding use.
+        struct Pipe {
+            std::mutex m;
+            std::condition_variable cv;
+            std::atomic<bool> stop{false};      // the caller is leaving (an error, a cancel)
+            std::size_t taken = 0;              // slabs the extraction has taken from the reader
+            std::optional<Slab> ready;          // the slab read and not yet taken
+            std::exception_ptr read_error;
+            std::optional<Output> handed;       // the output handed to the writer and not yet taken
+            bool writing = false, closed = false;
+            std::exception_ptr write_error;
+        } pipe;
+        auto fail = [&](std::exception_ptr& slot) {
+            {
+                std::lock_guard l(pipe.m);
+                slot = std::current_exception();
+            }
+            failed = true;
+            pipe.cv.notify_all();
+        };
+        // Any way out of here stops and joins both threads first (declared
+        // after everything they use, so destroyed before it).
+        struct Threads {
+            Pipe& pipe;
+            std::thread reader, writer;
+            ~Threads() {
+                {
+                    std::lock_guard l(pipe.m);
+                    pipe.stop = true;
+                }
+                pipe.cv.notify_all();
+                if (reader.joinable()) reader.join();
+                if (writer.joinable()) writer.join();
+            }
+        } threads_{pipe};
+        threads_.reader = std::thread([&] {
+            const Running running;
+            try {
+                for (std::size_t n = 0; n < jobs.size(); ++n) {
+                    {
+                        // Slab n is read once slab n-1 has been taken (the extraction holds it).
+                        std::unique_lock l(pipe.m);
+                        pipe.cv.wait(l, [&] { return pipe.stop || pipe.taken >= n; });
+                        if (pipe.stop) return;
+                    }
+                    Slab s = read(jobs[n]);
+                    {
+                        std::lock_guard l(pipe.m);
+                        if (pipe.stop) {
+                            meter.sub(s.bytes);
+                            return;
+                        }
+                        pipe.ready = std::move(s);
+                    }
+                    pipe.cv.notify_all();
+                }
+            } catch (...) {
+                fail(pipe.read_error);
+            }
+        });
+        threads_.writer = std::thread([&] {
+            const Running running;
+            try {
+                for (;;) {
+                    std::optional<Output> out;
+                    {
+                        std::unique_lock l(pipe.m);
+                        pipe.cv.wait(l, [&] { return pipe.stop || pipe.handed || pipe.closed; });
+                        if (pipe.stop || !pipe.handed) return;
+                        out = std::move(pipe.handed);
+                        pipe.handed.reset();
+                        pipe.writing = true;
+                    }
+                    write(std::move(*out), &pipe.stop);
+                    {
+                        std::lock_guard l(pipe.m);
+                        pipe.writing = false;
+                    }
+                    pipe.cv.notify_all();
+                }
+            } catch (...) {
+                fail(pipe.write_error);
+            }
+        });
+        // The writer's error, else the reader's, as it was thrown (iso::Error, Cancelled, bad_alloc ...).
+        auto rethrow_failure = [&] {
+            std::lock_guard l(pipe.m);
+            if (pipe.write_error) std::rethrow_exception(pipe.write_error);
+            if (pipe.read_error) std::rethrow_exception(pipe.read_error);
+        };
+        // Waits until the writer has written what it was handed.
+        auto drain = [&] {
+            const auto t = Clock::now();
+            std::unique_lock l(pipe.m);
+            pipe.cv.wait(l, [&] { return pipe.write_error || (!pipe.handed && !pipe.writing); });
+            wait_s += seconds_since(t);
+        };
+        try {
+            for (std::size_t i = 0; i < plan.slabs; ++i) {
+                report(opt.progress, index_share + (1.0 - index_share) * double(i) / double(plan.slabs), stage, "streaming");
+                if (job_of[i] == std::size_t(-1)) {
+                    ++st.slabs_skipped;
+                    continue;
+                }
+                const SlabJob& j = jobs[job_of[i]];
+                Slab slab;
+                {
+                    const auto t = Clock::now();
+                    std::unique_lock l(pipe.m);
+                    pipe.cv.wait(l, [&] { return pipe.ready || pipe.read_error || pipe.write_error; });
+                    wait_s += seconds_since(t);
+                    if (!pipe.ready) {
+                        l.unlock();
+                        rethrow_failure();
+                    }
+                    slab = std::move(*pipe.ready);
+                    pipe.ready.reset();
+                    ++pipe.taken;
+                }
+                pipe.cv.notify_all();
+                ++st.slabs_read;
+                st.chunks_visited += j.ids.size();
+                Output out = extract(j, std::move(slab));
+                drain();
+                rethrow_failure();
+                {
+                    std::lock_guard l(pipe.m);
+                    pipe.handed = std::move(out);
+                }
+                pipe.cv.notify_all();
+            }
+            drain();
+            rethrow_failure();
+            {
+                std::lock_guard l(pipe.m);
+                pipe.closed = true;
+            }
+            pipe.cv.notify_all();
+            threads_.writer.join();
+            threads_.reader.join();
+            rethrow_failure();
+        } catch (const Cancelled&) {
+            // The extraction stopped because the reader or the writer failed: their error, not a cancel.
+            rethrow_failure();
+            throw;
         }
     }
+    st.read_seconds += read_s;
+    st.extract_seconds = extract_s;
+    st.weld_seconds = weld_s;
+    st.write_seconds = write_s;
+    st.wait_seconds = wait_s;
+    st.peak_bytes = std::max(st.peak_bytes, meter.peak.load());
     st.source_restarts = src.restarts();
-    report(opt.progress, 1.0, opt.labels ? "extracting label surfaces" : "extracting isosurface", "streaming");
+    report(opt.progress, 1.0, stage, "streaming");
     const auto t = Clock::now();
     sink.finish();
     st.write_seconds += seconds_since(t);
     return st;
 }
+
+std::size_t stream_threads_running() { return g_threads_running.load(); }
 
 } // namespace iso

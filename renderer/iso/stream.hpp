@@ -6,6 +6,14 @@
 // piece, and handed to a MeshSink (io/mesh_sink.hpp) with the keys of its
 // seam vertices. At most `memory_budget` bytes of samples, scratch and output
 // are held (the engine's own accounting: StreamStats::peak_bytes).
+//
+// With StreamOptions::overlap (the default) the three steps run as a pipeline
+// of three threads: a reader reads slab i+1 while slab i is extracted and a
+// writer welds and hands slab i-1's pieces to the sink; the planner then
+// counts two slabs of samples and two slabs of output in flight. The sink
+// gets the same pieces in the same order as without overlap (for the same
+// plan); its calls all come from one thread at a time (begin() and finish()
+// from the caller's, piece() from the writer's).
 #pragma once
 
 #include <cstddef>
@@ -33,6 +41,13 @@ struct StreamOptions {
     // label discovery) or slab by slab while extracting (integer data).
     std::shared_ptr<const ChunkIndex> index;
     ProgressFn progress;
+    // Read the next slab and weld/write the last one while a slab is
+    // extracted (see above). Off: the steps run one after another, with
+    // slabs up to twice as high for the same budget.
+    bool overlap = true;
+    // At most this many chunk layers per slab (0: as many as the budget
+    // allows): more, smaller pieces; tests use it to give both modes one plan.
+    int max_layers_per_slab = 0;
 };
 
 struct StreamPlan {
@@ -47,6 +62,9 @@ struct StreamPlan {
     // slabs are then one layer each and the output may exceed the budget
     // (StreamStats::warnings says so).
     bool fits = true;
+    // Reading, extraction and writing overlap (StreamOptions::overlap, and
+    // two slabs and two slabs' output fit the budget with one chunk layer per slab).
+    bool overlap = false;
 };
 
 struct StreamStats {
@@ -58,7 +76,13 @@ struct StreamStats {
     // the sink's seam maps. Peak resident memory adds the program itself
     // (code, libraries, allocator slack): docs/isosurface.md states the constant.
     std::size_t peak_bytes = 0;
+    // Seconds each step was busy (read_seconds includes index_seconds, the
+    // index pass; extract_seconds excludes weld_seconds, the welding of the
+    // pieces). With overlap the steps run at once and add up to more than the
+    // wall time; wait_seconds is how long the extraction waited for the
+    // reader or the writer.
     double read_seconds = 0, extract_seconds = 0, write_seconds = 0;
+    double index_seconds = 0, weld_seconds = 0, wait_seconds = 0;
     std::size_t source_restarts = 0;       // gzip streams rewound (VolumeStream::restarts())
     std::vector<double> values;            // the iso values or labels, one per surface
     std::vector<std::string> warnings;
@@ -79,5 +103,10 @@ std::shared_ptr<const ChunkIndex> build_chunk_index(VolumeStream& src, int chunk
 // iso::Error (bad input, budget too small) or iso::Cancelled; the sink's
 // outputs are then never moved into place.
 StreamStats stream_extract(VolumeStream& src, const StreamOptions& opt, MeshSink& sink);
+
+// Reader and writer threads of stream_extract() running in this process now
+// (0 whenever no stream_extract() is running: every way out joins them; the
+// tests check it after errors and cancels).
+std::size_t stream_threads_running();
 
 } // namespace iso

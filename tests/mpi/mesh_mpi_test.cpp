@@ -189,6 +189,34 @@ TEST(MpiMesh, OneTwoAndFourRanksEqualTheSingleProcess) {
         EXPECT_EQ(e.path().filename().string().find(".isoscope-partial"), std::string::npos) << e.path();
 }
 
+// Each rank runs the streaming driver with its reading, extraction and
+// writing overlapped (the default) or not (--no-overlap): both give the
+// single-process surface. The budget is one at which the single process
+// overlaps on this volume (its `streaming steps` line says so).
+TEST(MpiMesh, OverlappedAndSerialRanksEqualTheSingleProcess) {
+    TempDir dir;
+    const std::string wide = dir / "wide.nrrd";
+    save_volume(phantom({160, 120, 40}), wide, false);
+    const Mesh wref = reference(wide, "--iso 500", dir / "wide.vtp");
+    const std::string budget = " --chunk 8 --memory 3";
+    {
+        const auto r = test::run_command(test::cli() + " mesh " + wide + " --iso 500 --stream" + budget + " -o " + (dir / "one.ply"), true);
+        ASSERT_EQ(r.exit_code, 0) << r.out;
+        EXPECT_NE(r.out.find("streaming steps (busy seconds, overlapped)"), std::string::npos) << r.out;
+    }
+    for (const char* mode : {"", " --no-overlap"}) {
+        SCOPED_TRACE(*mode ? "serial" : "overlapped");
+        const std::string out = dir / (*mode ? "off.pvtp" : "on.pvtp");
+        const auto r = test::run_command(mpirun(2) + test::cli() + " mesh " + wide + " --iso 500" + budget + mode + " -o " + out, true);
+        ASSERT_EQ(r.exit_code, 0) << r.out;
+        const auto s = parse(r.out);
+        ASSERT_EQ(s.size(), 1u) << r.out;
+        const ReadBack got = read_pvtp(out);
+        if (!*mode) EXPECT_GT(got.pieces, 2) << "several slabs, so that the steps overlap"; // serial: taller slabs, maybe one per rank
+        expect_same_surface(out, wref, got.pieces, s[0]);
+    }
+}
+
 TEST(MpiMesh, RanksThatOwnOnlyEmptyChunksTakePartAndWriteNothing) {
     // One small ball inside one 8-cell chunk: one active chunk, so three of the
     // four ranks own only chunks no surface crosses.

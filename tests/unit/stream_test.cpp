@@ -8,6 +8,7 @@
 // same arithmetic on the same samples. Area and volume to 1e-9 relative: the
 // sums run in another order (per piece) and the volume about another centre.
 #include <algorithm>
+#include <atomic>
 #include <chrono>
 #include <cmath>
 #include <cstring>
@@ -167,9 +168,10 @@ Mesh in_memory(const std::string& path, double iso, int chunk) {
     return extract_isosurface(load_volume(path), iso, eo);
 }
 
-StreamStats stream_to(const std::string& path, double iso, int chunk, std::size_t budget, CollectSink& sink) {
+StreamStats stream_to(const std::string& path, double iso, int chunk, std::size_t budget, CollectSink& sink, bool overlap = true) {
     auto src = open_volume_stream(path);
     StreamOptions so;
+    so.overlap = overlap;
     so.isos = {iso};
     so.extract.chunk_size = chunk;
     so.memory_budget = budget;
@@ -282,17 +284,19 @@ TEST(Stream, EqualsInMemoryForBudgetsAndChunkSizes) {
             // Budgets above the fixed costs for one, two, several chunk layers and the whole volume per slab.
             const std::vector<std::size_t> extras = chunk == 8 ? std::vector<std::size_t>{450 << 10, 700 << 10, 1500 << 10, 64 << 20}
                                                                : std::vector<std::size_t>{700 << 10, 1400 << 10, 2100 << 10, 64 << 20};
-            for (std::size_t extra : extras) {
-                const std::size_t budget = budget_over_fixed(dir / "v.nrrd", chunk, extra);
-                CollectSink sink;
-                const auto st = stream_to(dir / "v.nrrd", iso, chunk, budget, sink);
-                heights.insert(st.plan.layers_per_slab);
-                EXPECT_TRUE(st.plan.fits);
-                EXPECT_LE(st.peak_bytes, budget);
-                EXPECT_TRUE(sink.finished);
-                expect_same_surface(ref, sink.meshes[0], "chunk " + std::to_string(chunk) + " iso " + std::to_string(iso) +
-                                                             " layers/slab " + std::to_string(st.plan.layers_per_slab));
-            }
+            for (std::size_t extra : extras)
+                for (bool overlap : {false, true}) {
+                    const std::size_t budget = budget_over_fixed(dir / "v.nrrd", chunk, extra);
+                    CollectSink sink;
+                    const auto st = stream_to(dir / "v.nrrd", iso, chunk, budget, sink, overlap);
+                    if (!overlap) heights.insert(st.plan.layers_per_slab); // the serial planner's heights
+                    EXPECT_TRUE(st.plan.fits);
+                    EXPECT_LE(st.peak_bytes, budget);
+                    EXPECT_TRUE(sink.finished);
+                    expect_same_surface(ref, sink.meshes[0], "chunk " + std::to_string(chunk) + " iso " + std::to_string(iso) +
+                                                                 " layers/slab " + std::to_string(st.plan.layers_per_slab) +
+                                                                 (st.plan.overlap ? " overlapped" : ""));
+                }
             std::string hs;
             for (int hgt : heights) hs += " " + std::to_string(hgt);
             EXPECT_GE(heights.size(), chunk == 8 ? 3u : 2u) << "the budgets should give different slab heights:" << hs;
@@ -699,6 +703,336 @@ TEST(Stream, CancellingLeavesNoOutputAndKeepsTheUsersFile) {
     }
 }
 
+// ---- overlap: reader, extraction and writer as a pipeline (StreamOptions::overlap) ----------
+
+template <class V> bool same_bits(const V& a, const V& b) {
+    return a.size() == b.size() && (a.empty() || std::memcmp(a.data(), b.data(), a.size() * sizeof(a[0])) == 0);
+}
+
+// Every piece the same, in the same order, bit for bit (positions, normals,
+// triangles and both seam lists).
+void expect_same_pieces(const std::vector<MeshPiece>& a, const std::vector<MeshPiece>& b, const std::string& what) {
+    SCOPED_TRACE(what);
+    ASSERT_EQ(a.size(), b.size());
+    for (std::size_t i = 0; i < a.size(); ++i) {
+        SCOPED_TRACE("piece " + std::to_string(i));
+        EXPECT_EQ(a[i].surface, b[i].surface);
+        EXPECT_EQ(a[i].index, b[i].index);
+        EXPECT_TRUE(same_bits(a[i].mesh.positions, b[i].mesh.positions));
+        EXPECT_TRUE(same_bits(a[i].mesh.normals, b[i].mesh.normals));
+        EXPECT_TRUE(same_bits(a[i].mesh.triangles, b[i].mesh.triangles));
+        EXPECT_TRUE(a[i].lower == b[i].lower);
+        EXPECT_TRUE(a[i].upper == b[i].upper);
+    }
+}
+
+// Passes everything on to another sink and counts the pieces; throws an
+// iso::Error at piece `fail_at` (a failing writer).
+class ForwardSink : public MeshSink {
+public:
+    explicit ForwardSink(MeshSink& to, std::size_t fail_at = std::size_t(-1)) : to_(to), fail_at_(fail_at) {}
+    void begin(std::size_t s, std::size_t n, bool normals) override { to_.begin(s, n, normals); }
+    void piece(MeshPiece&& p) override {
+        if (pieces == fail_at_) throw Error("test sink", "disk full (made up)");
+        ++pieces;
+        to_.piece(std::move(p));
+    }
+    void finish() override { to_.finish(); }
+    std::size_t memory_bytes() const override { return to_.memory_bytes(); }
+    std::vector<MeshStats> stats() const override { return to_.stats(); }
+    std::size_t pieces = 0;
+
+private:
+    MeshSink& to_;
+    std::size_t fail_at_;
+};
+
+// A wobbly int16 tube along k: the surface at 700 crosses every slab (none is skipped).
+Volume tube(std::array<std::int64_t, 3> d) {
+    Volume v = Volume::dense(d, VoxelType::I16, glm::dmat4(1.0));
+    auto s = v.as<std::int16_t>();
+    for (std::int64_t k = 0; k < d[2]; ++k)
+        for (std::int64_t j = 0; j < d[1]; ++j)
+            for (std::int64_t i = 0; i < d[0]; ++i) {
+                const double x = i - 0.5 * double(d[0] - 1), y = j - 0.5 * double(d[1] - 1);
+                s[v.linear_index(i, j, k)] =
+                    std::int16_t(std::round(1000.0 - 40.0 * std::sqrt(x * x + y * y) + 40.0 * std::sin(0.5 * i) * std::cos(0.3 * j + 0.2 * k)));
+            }
+    return v;
+}
+
+std::vector<std::string> files_in(const fs::path& dir) {
+    std::vector<std::string> names;
+    for (const auto& e : fs::recursive_directory_iterator(dir)) names.push_back(fs::relative(e.path(), dir).string());
+    std::sort(names.begin(), names.end());
+    return names;
+}
+
+std::string file_bytes(const fs::path& p) {
+    std::ifstream in(p, std::ios::binary);
+    return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+}
+
+// Overlap on == off, bit for bit: the same pieces in the same order when both
+// run one plan (the overlapped plan's slab height given to the serial run),
+// and the same welded surface (vertex order included) when each runs its own
+// plan (overlap halves the slabs for the same budget). Raw and gzip NRRD,
+// float NIfTI with NaN, two iso values at once, a label map; budgets from
+// slabs of one chunk layer to a few.
+TEST(Stream, OverlapGivesTheSamePiecesAsSerial) {
+    TempDir dir;
+    const Volume v = ball({40, 36, 90}, VoxelType::I16, oblique({0.8, 0.7, 1.3}, {5, -7, 11}, false));
+    save_volume(v, dir / "v.nrrd", false);
+    save_volume(v, dir / "g.nrrd", true); // gzip, read forward only
+    Volume f = ball({30, 28, 70}, VoxelType::F32, oblique({0.6, 0.6, 1.1}, {100, 50, -20}, true), {0.5, 0.4, 0.6});
+    auto fs_ = f.as<float>();
+    for (std::size_t i = 0; i < fs_.size(); i += 97) fs_[i] = std::nanf("");
+    save_volume(f, dir / "f.nii");
+    Volume l = Volume::dense({26, 22, 64}, VoxelType::U8, glm::dmat4(1.0));
+    auto ls = l.as<std::uint8_t>();
+    for (std::int64_t k = 0; k < 64; ++k)
+        for (std::int64_t j = 0; j < 22; ++j)
+            for (std::int64_t i = 0; i < 26; ++i) {
+                const double r = std::sqrt((i - 12.5) * (i - 12.5) + (j - 10.5) * (j - 10.5) + (k - 30.0) * (k - 30.0) * 0.4);
+                ls[l.linear_index(i, j, k)] = r < 6 ? 2 : r < 10 ? 1 : (i > 18 && j < 6) ? 7 : 0;
+            }
+    save_volume(l, dir / "l.nii");
+
+    struct Case {
+        std::string name;
+        std::vector<double> isos;
+        bool labels;
+    };
+    const std::vector<Case> cases = {{"v.nrrd", {500.0}, false},        // ties with samples
+                                     {"g.nrrd", {700.5, 820.0}, false}, // two surfaces interleaved
+                                     {"f.nii", {620.25}, false},
+                                     {"l.nii", {}, true}};
+    std::size_t overlapped = 0, shrunk = 0;
+    for (const auto& c : cases) {
+        for (std::size_t extra : {std::size_t(800) << 10, std::size_t(1600) << 10, std::size_t(2400) << 10, std::size_t(3200) << 10}) {
+            const std::string what = c.name + " extra " + std::to_string(extra >> 10) + " KiB";
+            SCOPED_TRACE(what);
+            StreamOptions so;
+            so.isos = c.isos;
+            so.labels = c.labels;
+            so.extract.chunk_size = 8;
+            so.extract.threads = 2;
+            so.memory_budget = budget_over_fixed(dir / c.name, 8, extra);
+            auto run = [&](const StreamOptions& o, MeshSink& sink) {
+                auto src = open_volume_stream(dir / c.name);
+                return stream_extract(*src, o, sink);
+            };
+            KeepSink on;
+            const auto st_on = run(so, on);
+            EXPECT_LE(st_on.peak_bytes, so.memory_budget);
+            overlapped += st_on.plan.overlap;
+            if (st_on.plan.overlap) {
+                // The planner's own sum for two slabs and two outputs in flight.
+                EXPECT_LE(st_on.plan.fixed_bytes + 2 * (st_on.plan.slab_bytes + st_on.plan.output_estimate), so.memory_budget);
+            }
+            // Serial, same plan: the same pieces.
+            StreamOptions same = so;
+            same.overlap = false;
+            same.max_layers_per_slab = st_on.plan.layers_per_slab;
+            KeepSink off;
+            const auto st_off = run(same, off);
+            EXPECT_FALSE(st_off.plan.overlap);
+            ASSERT_EQ(st_off.plan.chunk_size, st_on.plan.chunk_size);
+            ASSERT_EQ(st_off.plan.layers_per_slab, st_on.plan.layers_per_slab);
+            ASSERT_EQ(st_off.plan.slabs, st_on.plan.slabs);
+            EXPECT_EQ(st_off.slabs_read, st_on.slabs_read);
+            EXPECT_GT(on.pieces.size(), 0u);
+            expect_same_pieces(off.pieces, on.pieces, "same plan");
+            // Serial, its own plan (taller slabs): the same welded surfaces, vertex for vertex.
+            StreamOptions own = so;
+            own.overlap = false;
+            CollectSink a, b;
+            run(so, a);
+            const auto st_own = run(own, b);
+            EXPECT_LE(st_own.peak_bytes, so.memory_budget);
+            shrunk += st_own.plan.layers_per_slab > st_on.plan.layers_per_slab;
+            ASSERT_EQ(a.meshes.size(), b.meshes.size());
+            for (std::size_t s = 0; s < a.meshes.size(); ++s) {
+                EXPECT_GT(a.meshes[s].triangles.size(), 100u);
+                EXPECT_TRUE(same_bits(a.meshes[s].positions, b.meshes[s].positions)) << "surface " << s;
+                EXPECT_TRUE(same_bits(a.meshes[s].triangles, b.meshes[s].triangles)) << "surface " << s;
+            }
+        }
+    }
+    // The budgets must exercise the pipeline, and the planner must give it lower slabs.
+    EXPECT_GE(overlapped, 12u);
+    EXPECT_GE(shrunk, 6u);
+}
+
+// The files written with overlap == without, byte for byte: .pvtp pieces and
+// summary on one plan, assembled .ply/.stl also each on its own plan.
+TEST(Stream, OverlapWritesTheSameFiles) {
+    TempDir dir;
+    const Volume v = ball({32, 30, 80}, VoxelType::I16, oblique({0.9, 0.8, 1.2}, {0, 0, 0}, true));
+    save_volume(v, dir / "v.nii");
+    for (const char* name : {"out.pvtp", "out.ply", "out.stl"}) {
+        SCOPED_TRACE(name);
+        for (bool same_plan : {true, false}) {
+            if (std::string(name) == "out.pvtp" && !same_plan) continue; // another plan: other pieces
+            std::vector<std::string> listing[2], bytes[2];
+            int layers = 0;
+            for (int overlap : {1, 0}) {
+                const fs::path out = dir / (overlap ? "on" : "off");
+                fs::create_directories(out);
+                auto src = open_volume_stream(dir / "v.nii");
+                StreamOptions so;
+                so.isos = {640.0};
+                so.extract.chunk_size = 8;
+                so.memory_budget = budget_over_fixed(dir / "v.nii", 8, std::size_t(1600) << 10);
+                so.overlap = overlap;
+                if (!overlap && same_plan) so.max_layers_per_slab = layers;
+                auto sink = make_mesh_sink({out / name});
+                const auto st = stream_extract(*src, so, *sink);
+                if (overlap) {
+                    EXPECT_TRUE(st.plan.overlap);
+                    EXPECT_GT(st.plan.slabs, 3u);
+                    layers = st.plan.layers_per_slab;
+                }
+                listing[overlap] = files_in(out);
+                for (const auto& f : listing[overlap]) bytes[overlap].push_back(file_bytes(out / f));
+            }
+            EXPECT_EQ(listing[0], listing[1]);
+            EXPECT_GT(listing[1].size(), 0u);
+            EXPECT_TRUE(bytes[0] == bytes[1]) << "same plan " << same_plan;
+            fs::remove_all(dir / "on");
+            fs::remove_all(dir / "off");
+        }
+    }
+}
+
+// A gzip NRRD cut short, found by the reader thread in the middle of the
+// slabs (the index is given, as MPI ranks give it, so that no index pass
+// finds it first): the same iso::Error as without overlap, after some pieces
+// were written; nothing at the output path, no temporaries, no thread left.
+// A sink that fails at its third piece: its error, from the writer thread.
+TEST(Stream, OverlapReaderAndWriterErrorsPropagate) {
+    TempDir dir;
+    const Volume v = tube({24, 24, 100});
+    save_volume(v, dir / "gz.nrrd", true);
+    fs::copy_file(dir / "gz.nrrd", dir / "cutgz.nrrd");
+    fs::resize_file(dir / "cutgz.nrrd", fs::file_size(dir / "gz.nrrd") * 6 / 10);
+    std::shared_ptr<const ChunkIndex> index;
+    {
+        auto full = open_volume_stream(dir / "gz.nrrd");
+        index = build_chunk_index(*full, 8, std::size_t(16) << 20);
+    }
+    StreamOptions so;
+    so.isos = {700};
+    so.extract.chunk_size = 8;
+    so.extract.threads = 2;
+    so.index = index;
+    so.memory_budget = budget_over_fixed(dir / "gz.nrrd", 8, std::size_t(500) << 10);
+    {
+        // The overlapped plan, also given to the serial run (which would make taller slabs).
+        auto src = open_volume_stream(dir / "gz.nrrd");
+        const StreamPlan plan = plan_stream(src->header(), so, index.get());
+        ASSERT_TRUE(plan.overlap);
+        ASSERT_GT(plan.slabs, 6u);
+        so.max_layers_per_slab = plan.layers_per_slab;
+    }
+    std::string message[2];
+    for (int overlap : {1, 0}) {
+        SCOPED_TRACE(overlap ? "overlap" : "serial");
+        so.overlap = overlap;
+        auto src = open_volume_stream(dir / "cutgz.nrrd");
+        std::size_t pieces = 0;
+        try {
+            auto sink = make_mesh_sink({dir / "out.ply"});
+            ForwardSink counting(*sink);
+            try {
+                const auto st = stream_extract(*src, so, counting);
+                ADD_FAILURE() << "a truncated gzip streamed, " << st.plan.slabs << " slabs";
+            } catch (...) {
+                pieces = counting.pieces;
+                throw;
+            }
+        } catch (const Cancelled&) {
+            ADD_FAILURE() << "a read error came out as a cancel";
+        } catch (const Error& e) {
+            message[overlap] = e.what();
+            EXPECT_NE(message[overlap].find("cutgz.nrrd"), std::string::npos) << e.what();
+        }
+        EXPECT_GT(pieces, 1u) << "the error should come in the middle of the slabs";
+        EXPECT_FALSE(fs::exists(dir / "out.ply"));
+        EXPECT_EQ(files_in(dir.path()), (std::vector<std::string>{"cutgz.nrrd", "gz.nrrd"}));
+        EXPECT_EQ(stream_threads_running(), 0u) << "a reader or writer thread is left running";
+    }
+    EXPECT_EQ(message[0], message[1]);
+
+    // The writer fails.
+    for (int overlap : {1, 0}) {
+        SCOPED_TRACE(overlap ? "overlap, writer" : "serial, writer");
+        so.overlap = overlap;
+        auto src = open_volume_stream(dir / "gz.nrrd");
+        auto sink = make_mesh_sink({dir / "out.stl"});
+        ForwardSink failing(*sink, 2);
+        try {
+            stream_extract(*src, so, failing);
+            ADD_FAILURE() << "the failing sink did not fail";
+        } catch (const Cancelled&) {
+            ADD_FAILURE() << "a write error came out as a cancel";
+        } catch (const Error& e) {
+            EXPECT_EQ(std::string(e.what()).find("test sink"), 0u) << e.what();
+            EXPECT_NE(std::string(e.what()).find("disk full"), std::string::npos) << e.what();
+        }
+        EXPECT_EQ(failing.pieces, 2u);
+        EXPECT_EQ(stream_threads_running(), 0u) << "a reader or writer thread is left running";
+    }
+}
+
+// Cancelling half-way with overlap: iso::Cancelled, the user's file kept, no
+// pieces or temporaries, and no reader or writer thread left (both were
+// running during the extraction); the extraction stops at
+// the first progress call that asks it to (no further progress calls).
+TEST(Stream, OverlapCancelStopsEveryStep) {
+    TempDir dir;
+    const Volume v = tube({24, 24, 120});
+    save_volume(v, dir / "v.nrrd", false);
+    for (const char* name : {"out.pvtp", "out.ply", "out.stl"}) {
+        SCOPED_TRACE(name);
+        { std::ofstream(dir / name) << "the user's file"; }
+        auto src = open_volume_stream(dir / "v.nrrd");
+        StreamOptions so;
+        so.isos = {700};
+        so.extract.chunk_size = 8;
+        so.extract.threads = 2;
+        so.memory_budget = budget_over_fixed(dir / "v.nrrd", 8, std::size_t(500) << 10);
+        {
+            const StreamPlan plan = plan_stream(src->header(), so);
+            ASSERT_TRUE(plan.overlap);
+            ASSERT_GT(plan.slabs, 8u);
+        }
+        std::atomic<int> calls_after{0};
+        std::atomic<bool> asked{false};
+        std::atomic<std::size_t> seen_running{0};
+        so.progress = [&](double f, std::string_view) {
+            seen_running = std::max(seen_running.load(), stream_threads_running());
+            if (asked) ++calls_after;
+            if (f > 0.6) asked = true;
+            return !asked;
+        };
+        std::size_t pieces = 0;
+        {
+            auto sink = make_mesh_sink({dir / name});
+            ForwardSink counting(*sink);
+            EXPECT_THROW(stream_extract(*src, so, counting), Cancelled);
+            pieces = counting.pieces;
+        }
+        EXPECT_GT(pieces, 1u) << "cancelled after some pieces were written";
+        EXPECT_EQ(calls_after.load(), 0);
+        EXPECT_EQ(seen_running.load(), 2u) << "the reader and the writer run while the extraction reports progress";
+        EXPECT_EQ(stream_threads_running(), 0u) << "a reader or writer thread is left running";
+        EXPECT_EQ(file_bytes(dir / name), "the user's file");
+        EXPECT_EQ(files_in(dir.path()), (std::vector<std::string>{name, "v.nrrd"}));
+        fs::remove(dir / name);
+    }
+}
+
 // ---- memory ------------------------------------------------------------------------------
 
 std::size_t status_kib(const char* key) {
@@ -734,11 +1068,12 @@ std::string write_big_ball(const TempDir& dir, int nz, double dz, bool wobble) {
     return dir / "big.nhdr";
 }
 
-TEST(Stream, A128MiBVolumeStreamsWithin32MiB) {
-    TempDir dir;
-    // 512 x 512 x 256 int16 (128 MiB), never held whole.
-    write_big_ball(dir, 256, 0.8, false);
-    const std::size_t budget = std::size_t(32) << 20;
+// Streams the 128 MiB volume in `budget_mib` and checks the engine's
+// accounting and the growth of resident memory against the budget plus the
+// stated constant; returns the plan. `index`: given (no index pass, whose
+// slabs as large as the budget would otherwise make the peak).
+StreamPlan check_memory_bound(const TempDir& dir, std::size_t budget_mib, std::shared_ptr<const ChunkIndex> index = {}) {
+    const std::size_t budget = budget_mib << 20;
     // Peak resident memory from here on: reset the high-water mark (Linux: clear_refs 5).
     { std::ofstream("/proc/self/clear_refs") << "5"; }
     const std::size_t base_kib = status_kib("VmRSS:");
@@ -747,27 +1082,52 @@ TEST(Stream, A128MiBVolumeStreamsWithin32MiB) {
     so.isos = {500.0};
     so.memory_budget = budget;
     so.extract.threads = 2;
+    so.index = index;
     auto sink = make_mesh_sink({dir / "big.ply"});
     const auto st = stream_extract(*src, so, *sink);
     const std::size_t hwm_kib = status_kib("VmHWM:");
+    EXPECT_EQ(st.index_pass, !index);
     const auto ms = sink->stats()[0];
     EXPECT_GT(ms.triangles, 100000u);
     EXPECT_LE(st.peak_bytes, budget);
     // The stated constant: 24 MiB beyond the budget for the program's own
-    // growth (allocator arenas of the TBB threads, VTK/zlib buffers, stdio buffers).
+    // growth (allocator arenas of the TBB threads and of the reader and
+    // writer threads, VTK/zlib buffers, stdio buffers).
     const double grown_mib = double(hwm_kib - std::min(hwm_kib, base_kib)) / 1024.0;
-    std::printf("128 MiB int16 volume, budget 32 MiB: engine peak %.1f MiB, VmHWM grew %.1f MiB over %.1f MiB; %zu slabs of %d layers, chunk %d, "
-                "read %.2f s, extract %.2f s, write %.2f s, %zu triangles\n",
-                double(st.peak_bytes) / 1048576.0, grown_mib, double(base_kib) / 1024.0, st.plan.slabs, st.plan.layers_per_slab,
-                st.plan.chunk_size, st.read_seconds, st.extract_seconds, st.write_seconds, std::size_t(ms.triangles));
+    std::printf("128 MiB int16 volume, budget %zu MiB: engine peak %.1f MiB, VmHWM grew %.1f MiB over %.1f MiB; %zu slabs of %d layers, chunk %d%s, "
+                "read %.2f s, extract %.2f s, weld %.2f s, write %.2f s, %zu triangles\n",
+                budget_mib, double(st.peak_bytes) / 1048576.0, grown_mib, double(base_kib) / 1024.0, st.plan.slabs, st.plan.layers_per_slab,
+                st.plan.chunk_size, st.plan.overlap ? ", overlapped" : "", st.read_seconds, st.extract_seconds, st.weld_seconds,
+                st.write_seconds, std::size_t(ms.triangles));
     // Under AddressSanitizer freed memory sits in its quarantine (256 MiB by
     // default) and every allocation has red zones: resident memory says
     // nothing about the engine there, so only the engine's accounting is checked.
 #if ISOSCOPE_TEST_ASAN
     std::printf("AddressSanitizer build: the resident-memory bound is not checked\n");
 #else
-    EXPECT_LE(grown_mib, 32.0 + 24.0);
+    EXPECT_LE(grown_mib, double(budget_mib) + 24.0);
 #endif
+    return st.plan;
+}
+
+TEST(Stream, A128MiBVolumeStreamsWithin32MiB) {
+    TempDir dir;
+    // 512 x 512 x 256 int16 (128 MiB), never held whole.
+    write_big_ball(dir, 256, 0.8, false);
+    // 32 MiB: two slabs and their output do not fit, the steps run one after another.
+    const StreamPlan serial = check_memory_bound(dir, 32);
+    EXPECT_FALSE(serial.overlap);
+    EXPECT_GT(serial.slabs, 4u);
+    // 96 MiB: overlapped (two slabs of samples and two of output in flight);
+    // the index is given so that the peak is the pipeline's.
+    std::shared_ptr<const ChunkIndex> index;
+    {
+        auto src = open_volume_stream(dir / "big.nhdr");
+        index = build_chunk_index(*src, 32, std::size_t(16) << 20);
+    }
+    const StreamPlan overlapped = check_memory_bound(dir, 96, index);
+    EXPECT_TRUE(overlapped.overlap);
+    EXPECT_GT(overlapped.slabs, 2u);
 }
 
 // A measurement, not a check (run with --gtest_also_run_disabled_tests;
