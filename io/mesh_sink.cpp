@@ -202,6 +202,9 @@ void write_vtp_piece(const Mesh& m, bool normals, const std::string& file, const
     // pieces was the serial part of a streamed extraction. VTK >= 8.1 and
     // ParaView >= 5.5 read it.
     w->SetCompressorTypeToLZ4();
+    // Raw appended bytes, not base64 (VTK's default): a third smaller and
+    // faster to write and read; what ParaView's own writers do.
+    w->EncodeAppendedDataOff();
     if (!w->Write() || msgs->has_error())
         throw Error(file, "cannot write " + what + ": " + (msgs->has_error() ? msgs->first_error() : "VTK writer failed"));
 }
@@ -229,6 +232,7 @@ std::string write_pvtp_summary(const fs::path& scratch, const std::string& stem,
     w->SetUseSubdirectory(subdirectory);
     w->SetDataModeToAppended();
     w->SetCompressorTypeToLZ4();
+    w->EncodeAppendedDataOff();
     if (!w->Write() || msgs->has_error()) throw Error(what, "cannot write the summary: " + msgs->first_error());
     return file;
 }

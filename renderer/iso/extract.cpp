@@ -450,49 +450,71 @@ void ChunkSummaries::add(const VolumeWindow& w) {
         return std::array<int, 2>{std::min(lo, hi), hi};
     };
     const std::int64_t nx = dims[0];
-    std::vector<double> rmin(std::size_t(std::max(counts[0], 1))), rmax(rmin.size());
-    std::vector<std::uint8_t> rflag(rmin.size());
-    auto row_values = [&](auto get) {
-        // Min/max per chunk column along x of one row.
-        std::fill(rmin.begin(), rmin.end(), std::numeric_limits<double>::max());
-        std::fill(rmax.begin(), rmax.end(), std::numeric_limits<double>::lowest());
-        std::fill(rflag.begin(), rflag.end(), 0);
-        for (std::int64_t x = 0; x < nx; ++x) {
-            const double s = get(x);
-            const auto cr = chunk_range(x, 0);
-            std::uint8_t fl = 0;
-            if (std::isnan(s)) fl = kNaN;
-            else if (std::isinf(s)) fl = s > 0 ? kPosInf : kNegInf;
-            else {
-                lowest = std::min(lowest, s);
-                highest = std::max(highest, s);
-            }
-            for (int c = cr[0]; c <= cr[1]; ++c) {
-                if (fl) rflag[std::size_t(c)] |= fl;
+    // In parallel over chunk rows (cy): the task of chunk row cy reads the
+    // rows of samples it holds (cy*C .. cy*C + C; the shared rows are read by
+    // both neighbours) and writes only its own entries, so no two tasks write
+    // the same chunk; min and max do not depend on the order.
+    std::mutex range_mutex;
+    if (counts[0] == 0 || counts[1] == 0 || counts[2] == 0) {
+        // No cells (a dimension of one sample): only the finite range.
+        for (std::int64_t k = 0; k < v.dims[2]; ++k)
+            for (std::int64_t j = 0; j < v.dims[1]; ++j)
+                for (std::int64_t i = 0; i < v.dims[0]; ++i) {
+                    const double s = v.value(i, j, k);
+                    if (std::isfinite(s)) {
+                        lowest = std::min(lowest, s);
+                        highest = std::max(highest, s);
+                    }
+                }
+        return;
+    }
+    tbb::parallel_for(0, counts[1], [&](int cy) {
+        std::vector<double> rmin(std::size_t(std::max(counts[0], 1))), rmax(rmin.size());
+        std::vector<std::uint8_t> rflag(rmin.size());
+        double lo = std::numeric_limits<double>::max(), hi = std::numeric_limits<double>::lowest();
+        auto row_values = [&](auto get) {
+            // Min/max per chunk column along x of one row.
+            std::fill(rmin.begin(), rmin.end(), std::numeric_limits<double>::max());
+            std::fill(rmax.begin(), rmax.end(), std::numeric_limits<double>::lowest());
+            std::fill(rflag.begin(), rflag.end(), 0);
+            for (std::int64_t x = 0; x < nx; ++x) {
+                const double s = get(x);
+                const auto cr = chunk_range(x, 0);
+                std::uint8_t fl = 0;
+                if (std::isnan(s)) fl = kNaN;
+                else if (std::isinf(s)) fl = s > 0 ? kPosInf : kNegInf;
                 else {
-                    rmin[std::size_t(c)] = std::min(rmin[std::size_t(c)], s);
-                    rmax[std::size_t(c)] = std::max(rmax[std::size_t(c)], s);
+                    lo = std::min(lo, s);
+                    hi = std::max(hi, s);
+                }
+                for (int c = cr[0]; c <= cr[1]; ++c) {
+                    if (fl) rflag[std::size_t(c)] |= fl;
+                    else {
+                        rmin[std::size_t(c)] = std::min(rmin[std::size_t(c)], s);
+                        rmax[std::size_t(c)] = std::max(rmax[std::size_t(c)], s);
+                    }
                 }
             }
-        }
-    };
-    for (std::int64_t lz = 0; lz < v.dims[2]; ++lz) {
-        const std::int64_t z = w.k0 + lz;
-        const auto zr = chunk_range(z, 2);
-        for (std::int64_t y = 0; y < dims[1]; ++y) {
-            if (v.is_sparse()) {
-                row_values([&](std::int64_t x) { return v.value(x, y, lz); });
-            } else {
-                dispatch_voxel_type(v.type, [&](auto tag) {
-                    using T = decltype(tag);
-                    const T* row = v.as<T>().data() + v.linear_index(0, y, lz);
-                    row_values([&](std::int64_t x) { return double(row[x]); });
-                    return 0;
-                });
-            }
-            const auto yr = chunk_range(y, 1);
-            for (int cz = zr[0]; cz <= zr[1]; ++cz)
-                for (int cy = yr[0]; cy <= yr[1]; ++cy) {
+        };
+        const std::int64_t y0 = std::int64_t(cy) * C, y1 = std::min<std::int64_t>(y0 + C, dims[1] - 1);
+        for (std::int64_t lz = 0; lz < v.dims[2]; ++lz) {
+            const std::int64_t z = w.k0 + lz;
+            const auto zr = chunk_range(z, 2);
+            for (std::int64_t y = y0; y <= y1; ++y) {
+                // Rows also held by the previous chunk row count there (and the last chunk row holds the rest).
+                const auto yr = chunk_range(y, 1);
+                if (cy < yr[0] || cy > yr[1]) continue;
+                if (v.is_sparse()) {
+                    row_values([&](std::int64_t x) { return v.value(x, y, lz); });
+                } else {
+                    dispatch_voxel_type(v.type, [&](auto tag) {
+                        using T = decltype(tag);
+                        const T* row = v.as<T>().data() + v.linear_index(0, y, lz);
+                        row_values([&](std::int64_t x) { return double(row[x]); });
+                        return 0;
+                    });
+                }
+                for (int cz = zr[0]; cz <= zr[1]; ++cz) {
                     const std::size_t base = std::size_t(counts[0]) * (std::size_t(cy) + std::size_t(counts[1]) * std::size_t(cz));
                     for (int cx = 0; cx < counts[0]; ++cx) {
                         finite_min[base + cx] = std::min(finite_min[base + cx], rmin[std::size_t(cx)]);
@@ -500,8 +522,12 @@ void ChunkSummaries::add(const VolumeWindow& w) {
                         flags[base + cx] |= rflag[std::size_t(cx)];
                     }
                 }
+            }
         }
-    }
+        std::lock_guard<std::mutex> lock(range_mutex);
+        lowest = std::min(lowest, lo);
+        highest = std::max(highest, hi);
+    });
 }
 
 void ChunkSummaries::merge(const ChunkSummaries& o) {

@@ -156,6 +156,7 @@ TEST(StreamCli, OpenVdbHeaderAndSlabs) {
     EXPECT_EQ(sb.vertices, sa.vertices);
     EXPECT_NEAR(sb.area, sa.area, 1e-9 * sa.area);
     EXPECT_TRUE(sorted_positions(a) == sorted_positions(b));
+}
 
 // `--no-overlap` runs the steps one after another (taller slabs for the same
 // budget): the same files, byte for byte, and the steps line says which ran.
