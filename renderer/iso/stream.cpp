@@ -462,14 +462,21 @@ StreamStats stream_extract(VolumeStream& src, const StreamOptions& opt_in, MeshS
         meter.sub(out.bytes);
     };
 
+    // The job of slab i after reporting progress, or null for a slab skipped unread.
+    auto job_for = [&](std::size_t i) -> const SlabJob* {
+        report(opt.progress, index_share + (1.0 - index_share) * double(i) / double(plan.slabs), stage, "streaming");
+        if (job_of[i] == std::size_t(-1)) {
+            ++st.slabs_skipped;
+            return nullptr;
+        }
+        return &jobs[job_of[i]];
+    };
+
     if (!plan.overlap) {
         for (std::size_t i = 0; i < plan.slabs; ++i) {
-            report(opt.progress, index_share + (1.0 - index_share) * double(i) / double(plan.slabs), stage, "streaming");
-            if (job_of[i] == std::size_t(-1)) {
-                ++st.slabs_skipped;
-                continue;
-            }
-            const SlabJob& j = jobs[job_of[i]];
+            const SlabJob* job = job_for(i);
+            if (!job) continue;
+            const SlabJob& j = *job;
             Slab slab = read(j);
             ++st.slabs_read;
             st.chunks_visited += j.ids.size();
@@ -581,12 +588,9 @@ StreamStats stream_extract(VolumeStream& src, const StreamOptions& opt_in, MeshS
         };
         try {
             for (std::size_t i = 0; i < plan.slabs; ++i) {
-                report(opt.progress, index_share + (1.0 - index_share) * double(i) / double(plan.slabs), stage, "streaming");
-                if (job_of[i] == std::size_t(-1)) {
-                    ++st.slabs_skipped;
-                    continue;
-                }
-                const SlabJob& j = jobs[job_of[i]];
+                const SlabJob* job = job_for(i);
+                if (!job) continue;
+                const SlabJob& j = *job;
                 Slab slab;
                 {
                     const auto t = Clock::now();
