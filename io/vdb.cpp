@@ -134,7 +134,8 @@ std::size_t own_status_bytes(const char* field) {
 // file had it build a string of gigabytes), which then ends as bad_alloc,
 // an error, instead of taking the machine's memory. Slack for the threads'
 // stacks and malloc's arenas (at most two). Not under AddressSanitizer,
-// whose shadow memory is terabytes of address space.
+// whose shadow memory is terabytes of address space: run_reader gives its
+// allocator the cap instead.
 void limit_memory(std::size_t cap) {
 #if !ISOSCOPE_VDB_ASAN
     if (cap == 0) return;
@@ -310,7 +311,26 @@ std::string run_reader(const std::string& path, std::vector<std::string> args, s
     posix_spawn_file_actions_addopen(&fa, STDOUT_FILENO, "/dev/null", O_WRONLY, 0);
     pid_t pid = -1;
     std::fflush(nullptr);
-    const int rc = ::posix_spawn(&pid, "/proc/self/exe", &fa, nullptr, argv.data(), environ);
+    // The environment as it is; under AddressSanitizer (no address-space cap
+    // there, limit_memory) the child's sanitizer gets the cap instead: single
+    // allocations above it fail (bad_alloc, an error), and a resident size
+    // above it plus the program ends the child.
+    std::vector<std::string> env_s;
+    for (char** e = environ; e && *e; ++e) env_s.emplace_back(*e);
+#if ISOSCOPE_VDB_ASAN
+    {
+        const std::string mib = std::to_string((cap >> 20) + 1);
+        const std::string add = "allocator_may_return_null=1:max_allocation_size_mb=" + mib +
+                                ":hard_rss_limit_mb=" + std::to_string((cap >> 20) + 2048);
+        auto it = std::find_if(env_s.begin(), env_s.end(), [](const std::string& e) { return e.rfind("ASAN_OPTIONS=", 0) == 0; });
+        if (it == env_s.end()) env_s.push_back("ASAN_OPTIONS=" + add);
+        else *it += (it->size() > 13 ? ":" : "") + add;
+    }
+#endif
+    std::vector<char*> envp;
+    for (auto& e : env_s) envp.push_back(e.data());
+    envp.push_back(nullptr);
+    const int rc = ::posix_spawn(&pid, "/proc/self/exe", &fa, nullptr, argv.data(), envp.data());
     posix_spawn_file_actions_destroy(&fa);
     ::close(out[1]);
     ::close(status[1]);
