@@ -42,10 +42,12 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <glm/gtc/matrix_transform.hpp>
 #include <openvdb/openvdb.h>
 #include <openvdb/io/File.h>
 #include <openvdb/io/Stream.h>
 
+#include "io/process.hpp"
 #include "io/sparse.hpp"
 #include "io/volume_io.hpp"
 
@@ -75,6 +77,10 @@ constexpr const char* kChildFlag = "--isoscope-openvdb-reader";
 // In the child: the product (a grid stream, or the header as text) and the
 // status (\"ok ...\" or the error message).
 constexpr int kOutFd = 3, kStatusFd = 4;
+// Memory of a float leaf node per voxel it covers: 512 values, the value and
+// child masks and node overhead, about 4.3 bytes (the slab planner's price
+// and the reading child's memory cap).
+constexpr double kLeafBytesPerVoxel = 4.3;
 // A grid stream written without compression: it only crosses a pipe.
 constexpr std::uint32_t kPipeCompression = openvdb::io::COMPRESS_NONE;
 
@@ -121,14 +127,6 @@ void send_grid(const openvdb::FloatGrid::Ptr& grid) {
     if (!os) throw std::runtime_error("cannot hand the grid back to the reading program");
 }
 
-std::size_t own_status_bytes(const char* field) {
-    std::ifstream f("/proc/self/status");
-    std::string line;
-    while (std::getline(f, line))
-        if (line.rfind(field, 0) == 0) return std::size_t(std::atoll(line.c_str() + std::strlen(field))) * 1024;
-    return 0;
-}
-
 // The reader may add at most `cap` bytes to the address space it started
 // with: a malformed file can make OpenVDB allocate without end (a truncated
 // file had it build a string of gigabytes), which then ends as bad_alloc,
@@ -142,7 +140,7 @@ void limit_memory(std::size_t cap) {
     mallopt(M_ARENA_MAX, 2);
     const std::size_t threads = std::max(1u, std::thread::hardware_concurrency());
     const std::size_t slack = (std::size_t(1) << 30) + threads * (std::size_t(16) << 20);
-    const rlim_t as = rlim_t(own_status_bytes("VmSize:") + slack + cap);
+    const rlim_t as = rlim_t(process_status_bytes("VmSize:") + slack + cap);
     struct rlimit r;
     if (::getrlimit(RLIMIT_AS, &r) == 0 && (r.rlim_max == RLIM_INFINITY || as < r.rlim_max)) {
         r.rlim_cur = as;
@@ -219,7 +217,7 @@ int child_main(int argc, char** argv) {
             const auto grid = read_float_grid(in, argv[4]);
             grid->clip(openvdb::CoordBBox(lo, hi));
             send_grid(grid);
-            write_all(kStatusFd, "ok " + std::to_string(own_status_bytes("VmHWM:")) + "\n");
+            write_all(kStatusFd, "ok " + std::to_string(process_status_bytes("VmHWM:")) + "\n");
             return 0;
         }
         write_all(kStatusFd, "the OpenVDB reader process was started with unknown arguments");
@@ -278,8 +276,8 @@ std::string read_all(int fd) {
 // read whole is held twice for a moment: more would not fit anyway).
 std::size_t default_reader_cap() {
     if (const char* e = std::getenv("ISOSCOPE_VDB_READ_MEMORY")) return std::size_t(std::max(1ll, std::atoll(e))) << 20;
-    const long pages = ::sysconf(_SC_PHYS_PAGES), page = ::sysconf(_SC_PAGESIZE);
-    return pages > 0 && page > 0 ? std::size_t(pages) * std::size_t(page) / 2 : std::size_t(8) << 30;
+    const std::size_t phys = physical_memory_bytes();
+    return phys ? phys / 2 : std::size_t(8) << 30;
 }
 
 // Starts the child reader on `path` with `args` (mode first, then the path),
@@ -387,8 +385,7 @@ glm::dmat4 to_lps(const openvdb::Mat4d& vm, const std::array<std::int64_t, 3>& o
     glm::dmat4 index_to_world(1.0);
     for (int r = 0; r < 4; ++r)
         for (int c = 0; c < 4; ++c) index_to_world[c][r] = vm(c, r);
-    return index_to_world * glm::dmat4(glm::dvec4(1, 0, 0, 0), glm::dvec4(0, 1, 0, 0), glm::dvec4(0, 0, 1, 0),
-                                       glm::dvec4(double(offset[0]), double(offset[1]), double(offset[2]), 1));
+    return glm::translate(index_to_world, glm::dvec3(double(offset[0]), double(offset[1]), double(offset[2])));
 }
 
 void check_file(const std::string& path) {
@@ -456,11 +453,11 @@ VdbHeader read_vdb_header(const std::string& path) {
     vh.index_to_lps = to_lps(vm, h.offset);
     check_affine(path, vh.index_to_lps);
     // A slab costs its leaves twice (in the reading child, and sparse here):
-    // about 4.3 bytes a voxel each (values, masks, node overhead), over the
+    // kLeafBytesPerVoxel each, over the
     // leaves' reach beyond the slab: 8 more voxels along x and y on each side
     // and 18 more slices (the box's border and the leaves around it).
     const double reach = double(vh.dims[0] + 16) * double(vh.dims[1] + 16) / (double(vh.dims[0]) * double(vh.dims[1]));
-    vh.reader_bytes_per_voxel = 2 * 4.3 * reach - double(voxel_size(vh.type));
+    vh.reader_bytes_per_voxel = 2 * kLeafBytesPerVoxel * reach - double(voxel_size(vh.type));
     vh.reader_extra_slices = 18;
     vh.meta.source = path;
     vh.meta.format = "OpenVDB";
@@ -485,9 +482,8 @@ Volume read_vdb_slab(const VdbHeader& h, std::int64_t k0, std::int64_t k1, std::
     openvdb::FloatGrid::Ptr grid;
     // The child holds the topology (twice, for a moment, while clipping) and
     // the leaves meeting the box (leaves are 8^3: up to 7 voxels beyond each
-    // face; values, masks and node overhead about 4.3 bytes a voxel), once
-    // more while it writes them out.
-    const double leaves = double(hi[0] - lo[0] + 16) * double(hi[1] - lo[1] + 16) * double(hi[2] - lo[2] + 16) * 4.3;
+    // face; kLeafBytesPerVoxel), once more while it writes them out.
+    const double leaves = double(hi[0] - lo[0] + 16) * double(hi[1] - lo[1] + 16) * double(hi[2] - lo[2] + 16) * kLeafBytesPerVoxel;
     const std::size_t cap = std::size_t(2 * double(h.topology_bytes) + 2 * leaves) + (std::size_t(256) << 20);
     const std::string status = run_reader(vh.path, args, cap, [&](std::istream& is) { grid = receive_grid(is); });
     if (child_peak) *child_peak = std::size_t(std::strtoull(status.c_str(), nullptr, 10));
@@ -495,8 +491,7 @@ Volume read_vdb_slab(const VdbHeader& h, std::int64_t k0, std::int64_t k1, std::
     sg->grid = grid;
     sg->offset = openvdb::Coord(int(h.offset[0]), int(h.offset[1]), int(h.offset[2] + k0));
     Volume v = Volume::sparse(std::move(sg), {vh.dims[0], vh.dims[1], k1 - k0 + 1},
-                              vh.index_to_lps * glm::dmat4(glm::dvec4(1, 0, 0, 0), glm::dvec4(0, 1, 0, 0), glm::dvec4(0, 0, 1, 0),
-                                                           glm::dvec4(0, 0, double(k0), 1)));
+                              glm::translate(vh.index_to_lps, glm::dvec3(0.0, 0.0, double(k0))));
     v.meta = vh.meta;
     return v;
 }

@@ -1,6 +1,7 @@
 #include "io/volume.hpp"
 
 #include "io/error.hpp"
+#include "io/process.hpp"
 #include "io/sparse.hpp"
 
 #include <cmath>
@@ -44,9 +45,8 @@ std::size_t max_volume_bytes() {
         unsigned long long v = std::strtoull(env, &end, 10);
         if (end != env && v > 0) return static_cast<std::size_t>(v);
     }
-    long pages = sysconf(_SC_PHYS_PAGES), page = sysconf(_SC_PAGE_SIZE);
-    if (pages > 0 && page > 0) return static_cast<std::size_t>(pages) * static_cast<std::size_t>(page);
-    return std::numeric_limits<std::size_t>::max();
+    const std::size_t phys = physical_memory_bytes();
+    return phys ? phys : std::numeric_limits<std::size_t>::max();
 }
 
 std::string human_bytes(double b) {

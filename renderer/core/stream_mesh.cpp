@@ -12,6 +12,7 @@
 
 #include "io/atomic_file.hpp"
 #include "io/mesh_sink.hpp"
+#include "io/process.hpp"
 #include "io/volume_io.hpp"
 #include "io/volume_stream.hpp"
 #include "renderer/core/api.hpp"
@@ -19,18 +20,11 @@
 namespace iso::core {
 
 std::size_t default_memory_budget() {
-    const long pages = ::sysconf(_SC_PHYS_PAGES), page = ::sysconf(_SC_PAGESIZE);
-    if (pages <= 0 || page <= 0) return std::size_t(1) << 30;
-    return std::size_t(pages) * std::size_t(page) / 4;
+    const std::size_t phys = physical_memory_bytes();
+    return phys ? phys / 4 : std::size_t(1) << 30;
 }
 
-std::size_t peak_resident_bytes() {
-    std::ifstream f("/proc/self/status");
-    std::string line;
-    while (std::getline(f, line))
-        if (line.rfind("VmHWM:", 0) == 0) return std::size_t(std::atoll(line.c_str() + 6)) * 1024;
-    return 0;
-}
+std::size_t peak_resident_bytes() { return process_status_bytes("VmHWM:"); }
 
 bool exceeds_budget(const std::string& path, std::size_t budget) {
     const VolumeFormat f = volume_format_of(path);

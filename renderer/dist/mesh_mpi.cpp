@@ -25,6 +25,7 @@
 
 #include "io/atomic_file.hpp"
 #include "io/mesh_sink.hpp"
+#include "io/process.hpp"
 #include "io/volume_stream.hpp"
 #include "io/volume_io.hpp"
 #include "io/vtk_mesh.hpp"
@@ -38,8 +39,8 @@ namespace iso::dist {
 namespace fs = std::filesystem;
 
 std::size_t default_rank_budget() {
-    const long pages = ::sysconf(_SC_PHYS_PAGES), page = ::sysconf(_SC_PAGESIZE);
-    const std::size_t phys = pages > 0 && page > 0 ? std::size_t(pages) * std::size_t(page) : std::size_t(4) << 30;
+    const std::size_t known = physical_memory_bytes();
+    const std::size_t phys = known ? known : std::size_t(4) << 30;
     int local = 1;
     if (const char* e = std::getenv("OMPI_COMM_WORLD_LOCAL_SIZE")) local = std::max(1, std::atoi(e));
     return std::max<std::size_t>(phys / 4 / std::size_t(local), std::size_t(64) << 20);
