@@ -500,10 +500,8 @@ void ChunkSummaries::add(const VolumeWindow& w) {
         for (std::int64_t lz = 0; lz < v.dims[2]; ++lz) {
             const std::int64_t z = w.k0 + lz;
             const auto zr = chunk_range(z, 2);
+            // Every row y0..y1 is in chunk row cy (chunk_range(y, 1) holds cy).
             for (std::int64_t y = y0; y <= y1; ++y) {
-                // Rows also held by the previous chunk row count there (and the last chunk row holds the rest).
-                const auto yr = chunk_range(y, 1);
-                if (cy < yr[0] || cy > yr[1]) continue;
                 if (v.is_sparse()) {
                     row_values([&](std::int64_t x) { return v.value(x, y, lz); });
                 } else {

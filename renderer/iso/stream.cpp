@@ -83,6 +83,21 @@ std::size_t slab_bytes(const VolumeHeader& h, int C, int layers) {
     return std::size_t(h.slab_memory_bytes(slices));
 }
 
+// The index pass's slabs: each slice costs `slice`, any slab the reader's
+// extra slices (OpenVDB) once, besides `fixed` (two copies of the index and a
+// read buffer); `per` slices a slab, as many as fit the budget (at least one).
+struct IndexPassSlabs {
+    std::size_t slice = 0, fixed = 0;
+    std::int64_t per = 1;
+};
+IndexPassSlabs index_pass_slabs(const VolumeHeader& h, std::size_t chunks, std::size_t memory_budget) {
+    IndexPassSlabs s;
+    s.slice = std::size_t(h.slab_memory_bytes(1) - h.slab_memory_bytes(0));
+    s.fixed = 2 * index_bytes(chunks) + read_buffer(h) + std::size_t(h.slab_memory_bytes(0));
+    s.per = std::max<std::int64_t>(1, memory_budget > s.fixed ? std::int64_t((memory_budget - s.fixed) / s.slice) : 1);
+    return s;
+}
+
 std::size_t surface_count(const StreamOptions& opt) { return std::max<std::size_t>(1, opt.labels ? opt.label_values.size() : opt.isos.size()); }
 
 } // namespace
@@ -204,12 +219,8 @@ StreamPlan plan_stream(const VolumeHeader& h, const StreamOptions& opt, const Ch
 std::shared_ptr<const ChunkIndex> build_chunk_index(VolumeStream& src, int chunk_size, std::size_t memory_budget,
                                                     const ProgressFn& progress, std::vector<double>* labels_out) {
     const VolumeHeader& h = src.header();
-    // A slice more costs `slice`; any slab costs the reader's extra slices (OpenVDB) once.
-    const std::size_t slice = std::size_t(h.slab_memory_bytes(1) - h.slab_memory_bytes(0));
     const auto counts = chunk_counts(h.dims, chunk_size);
-    const std::size_t n = std::size_t(counts[0]) * counts[1] * counts[2];
-    const std::size_t fixed = 2 * index_bytes(n) + read_buffer(h) + std::size_t(h.slab_memory_bytes(0));
-    const std::int64_t per = std::max<std::int64_t>(1, memory_budget > fixed ? std::int64_t((memory_budget - fixed) / slice) : 1);
+    const std::int64_t per = index_pass_slabs(h, std::size_t(counts[0]) * counts[1] * counts[2], memory_budget).per;
     ChunkSummaries sum(h.dims, chunk_size, h.type);
     std::set<double> labels;
     for (std::int64_t k0 = 0; k0 < h.dims[2]; k0 += per) {
@@ -264,11 +275,9 @@ StreamStats stream_extract(VolumeStream& src, const StreamOptions& opt_in, MeshS
         st.index_seconds = seconds_since(t);
         st.read_seconds += st.index_seconds;
         // The index pass held its index, a read buffer and slabs of as many slices as fit.
-        const std::size_t slice = std::size_t(h.slab_memory_bytes(1) - h.slab_memory_bytes(0));
-        const std::size_t idx_fixed = 2 * index_bytes(index->chunk_count()) + read_buffer(h) + std::size_t(h.slab_memory_bytes(0));
-        const std::size_t slices = opt.memory_budget > idx_fixed ? std::max<std::size_t>(1, (opt.memory_budget - idx_fixed) / slice) : 1;
-        st.peak_bytes = std::max(st.peak_bytes, idx_fixed + src.resident_bytes() +
-                                                    std::min<std::size_t>(slices, std::size_t(h.dims[2])) * slice);
+        const IndexPassSlabs ip = index_pass_slabs(h, index->chunk_count(), opt.memory_budget);
+        st.peak_bytes = std::max(st.peak_bytes, ip.fixed + src.resident_bytes() +
+                                                    std::min<std::size_t>(std::size_t(ip.per), std::size_t(h.dims[2])) * ip.slice);
     }
     const std::vector<double>& values = opt.labels ? opt.label_values : opt.isos;
     st.values = values;
