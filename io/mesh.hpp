@@ -36,7 +36,7 @@ MeshStats mesh_stats(const Mesh& m);
 // a closed surface, det / 6 is its volume; summed over pieces taken about
 // different origins, the volume about another point q is
 // volume - (q - o) . moment / 6 (volume_moved). mesh_stats, the streaming
-// sinks and the piece summaries (renderer/iso/components) all use it.
+// sinks and the piece summaries (renderer/surface/components) all use it.
 struct TriangleTerms {
     double area = 0, det = 0;
     glm::dvec3 moment{0.0};

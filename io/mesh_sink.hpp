@@ -1,5 +1,5 @@
 // Writing a surface piece by piece, as out-of-core extraction makes it
-// (renderer/iso/stream.hpp; docs/isosurface.md, "Out of core").
+// (renderer/surface/stream.hpp; docs/isosurface.md, "Out of core").
 //
 // A piece is one slab's share of one surface, welded: its vertices, its
 // triangles, and the global keys of its vertices that other pieces may hold

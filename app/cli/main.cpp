@@ -8,6 +8,8 @@
 #include <iostream>
 #include <sstream>
 #include <string>
+#include <type_traits>
+#include <variant>
 
 #include <unistd.h>
 
@@ -26,12 +28,13 @@
 #include "io/markups.hpp"
 #include "io/mesh_sink.hpp"
 #include "renderer/core/api.hpp"
+#include "renderer/frame/ao_settings.hpp"
 #include "renderer/core/measure.hpp"
 #include "renderer/core/pick.hpp"
 #include "renderer/core/session.hpp"
 #include "renderer/core/stream_mesh.hpp"
 #ifdef ISOSCOPE_MPI
-#include "renderer/dist/mesh_mpi.hpp"
+#include "renderer/cluster/mesh_mpi.hpp"
 #endif
 
 namespace {
@@ -113,21 +116,14 @@ std::string cli_message(const iso::Error& e) {
         {"decimation fraction", "--decimate"},
     };
     std::string where = e.where();
-    // renderer/render/disk_ao.cpp names its settings "disk AO <setting>".
-    static const std::pair<std::string, std::string> disk_flags[] = {
-        {"disk AO passes", "--ao-disk-passes"},
-        {"disk AO traversal epsilon", "--ao-disk-epsilon"},
-        {"disk AO clip epsilon", "--ao-disk-clip-epsilon"},
-        {"disk AO distance attenuation", "--ao-disk-distance-k"},
-        {"disk AO triangle attenuation", "--ao-disk-triangle-t"},
-        {"disk AO blend minimum weight", "--ao-disk-blend"},
-        {"disk AO blend maximum weight", "--ao-disk-blend"},
-        {"disk AO receiver offset", "--ao-disk-offset"},
+    // The AO settings' tables (renderer/frame/ao_settings.hpp) name each setting's option.
+    const auto map_table = [&where](const auto& table, const std::string& prefix) {
+        if (where.rfind(prefix, 0) != 0) return;
+        for (const auto& t : table)
+            if (where.substr(prefix.size()) == t.name && *t.option) where = std::string("--") + t.option;
     };
-    for (const auto& [core, flag] : disk_flags)
-        if (where == core) where = flag;
-    const std::string cone = "cone AO setting ";
-    if (where.rfind(cone, 0) == 0) where = "--ao-" + where.substr(cone.size());
+    map_table(iso::cone_ao_settings(), iso::kConeAoSettingPrefix);
+    map_table(iso::disk_ao_settings(), iso::kDiskAoSettingPrefix);
     for (const auto& [core, flag] : flags)
         if (where == core) where = flag;
     return where.empty() ? e.reason() : where + ": " + e.reason();
@@ -189,51 +185,29 @@ void open_input(iso::core::Scene& scene, const std::string& input, const std::st
     for (std::size_t i = 0; i < look.color.size(); ++i) scene.info(in_order[i]).color = hex_option("--color", look.color[i]);
 }
 
-// Cone-AO tunables, shared by `render` and `view`.
-void add_cone_options(CLI::App* cmd, iso::ConeAoSettings& c) {
-    cmd->add_option("--ao-cones", c.cones, "Cones over the hemisphere (cone AO)")->check(CLI::Range(1, 64));
-    cmd->add_option("--ao-spheres", c.spheres, "Spheres per cone (cone AO)")->check(CLI::Range(1, 32));
-    cmd->add_option("--ao-samples", c.samples, "Poisson-disk columns per sphere (cone AO)")->check(CLI::Range(1, 64));
-    cmd->add_option("--ao-strength", c.strength, "AO = 1 - strength * occlusion (cone AO)")->check(CLI::Range(0.0, 4.0));
-    cmd->add_option("--ao-layers", c.layers, "Slicemap depth: 128 z-voxels per layer, 1..8 (cone AO)")->check(CLI::Range(1, 8));
-    cmd->add_option("--ao-grid", c.grid_scale, "Slicemap texels per image pixel, 0.125..2 (cone AO)")->check(CLI::Range(0.125, 2.0));
-    cmd->add_option("--ao-jitter", c.jitter_sets, "Jitter distributions chosen per pixel by a screen hash (cone AO)")->check(CLI::Range(1, 64));
-    cmd->add_option("--ao-persistence", c.persistence, "Sphere combination along a cone: 0 independent absorbers, 1 one solid (cone AO)")
-        ->check(CLI::Range(0.0, 1.0));
-    cmd->add_option("--ao-ray-weight", c.ray_weight,
-                    "Sphere occlusion: 0 occupied volume fraction, 1 blocked-ray fraction of a cutting plane (cone AO)")
-        ->check(CLI::Range(0.0, 1.0));
-    cmd->add_option("--ao-axis-weight", c.axis_weight,
-                    "Also march each cone's axis as a ray; a cone whose axis is blocked counts as at least this blocked, 0 off, default 1 (cone AO)")
-        ->check(CLI::Range(0.0, 1.0));
-    cmd->add_option("--ao-surface-voxels", c.surface_voxels,
-                    "Also set the voxels next to every surface, so walls thinner than a voxel occlude; slower voxelization (cone AO)");
-    cmd->add_option("--ao-resolution", c.resolution, "Cone-pass pixels per image pixel, 0.25..1; below 1 a bilateral upsampling follows (cone AO)")
-        ->check(CLI::Range(0.25, 1.0));
-    cmd->add_option("--ao-guard", c.guard,
-                    "Largest guard band around the view, fraction of the viewport per side, for occluders just off screen; 0 none (cone AO)")
-        ->check(CLI::Range(0.0, 0.5));
+// The AO tunables of `render` and `view`, one option per setting of the
+// settings' tables (renderer/frame/ao_settings.hpp) that has one, with its
+// range and help.
+template <class S> void add_ao_options(CLI::App* cmd, S& s, const std::vector<iso::AoSetting<S>>& table) {
+    for (const auto& t : table) {
+        if (!*t.option) continue;
+        std::visit(
+            [&](auto member) {
+                auto* o = cmd->add_option(std::string("--") + t.option, s.*member, t.help);
+                if constexpr (!std::is_same_v<std::decay_t<decltype(s.*member)>, bool>) o->check(CLI::Range(t.lo, t.hi));
+            },
+            t.member);
+    }
 }
 
+void add_cone_options(CLI::App* cmd, iso::ConeAoSettings& c) { add_ao_options(cmd, c, iso::cone_ao_settings()); }
+
 // Disk-AO tunables (docs/ao.md, "Disk AO on the GPU"), defaults
-// DiskAoSettings' (measured against Embree by the CPU benchmark). --ao-disk-blend takes "MIN,MAX" (the weights
-// of the convergence blend), parsed by disk_request().
+// DiskAoSettings' (measured against Embree by the CPU benchmark), and
+// --ao-disk-blend MIN,MAX for both blend weights at once, parsed by
+// parse_disk_blend().
 void add_disk_options(CLI::App* cmd, iso::DiskAoSettings& d, std::string& blend) {
-    cmd->add_option("--ao-disk-passes", d.passes, "Element passes before the gather, 0..16; 0: none, unmodulated form factors (disk AO; default 0)")
-        ->check(CLI::Range(0, 16));
-    cmd->add_option("--ao-disk-epsilon", d.traversal_epsilon,
-                    "Traversal: open an element while distance^2 < epsilon x area, 0..10000 (disk AO; default 16)")
-        ->check(CLI::Range(0.0, 1e4));
-    cmd->add_option("--ao-disk-clip-epsilon", d.clip_epsilon, "Tangent-plane snap in mm, 0..0.1 (disk AO; default 1e-6)")
-        ->check(CLI::Range(0.0, 0.1));
-    cmd->add_option("--ao-disk-distance-k", d.distance_attenuation, "Distance attenuation 1/(1 + k d^2), k 0..100 (disk AO; default 0)")
-        ->check(CLI::Range(0.0, 100.0));
-    cmd->add_option("--ao-disk-triangle-t", d.triangle_attenuation,
-                    "Triangle attenuation: emitter term^t, t 0..16 (disk AO; default 1)")
-        ->check(CLI::Range(0.0, 16.0));
-    cmd->add_option("--ao-disk-offset", d.receiver_offset,
-                    "Receiver raised along its normal by this x R against self-occlusion, 0..0.1 (disk AO; default 0.001)")
-        ->check(CLI::Range(0.0, 0.1));
+    add_ao_options(cmd, d, iso::disk_ao_settings());
     cmd->add_option("--ao-disk-blend", blend, "Convergence blend weights MIN,MAX of the last two passes (disk AO; default 0.7,0.3)");
 }
 
@@ -382,9 +356,9 @@ int run_mesh_mpi(const MeshArgs& a) {
     if (a.post.smooth > 0 || a.post.decimate > 0 || a.post.keep_largest)
         throw iso::Error("isoscope mesh", "--smooth, --decimate and --largest need the whole mesh in one process; "
                                           "they are not available under mpirun");
-    iso::dist::Runtime runtime(nullptr, nullptr);
-    const iso::dist::Comm comm;
-    iso::dist::DistMeshRequest r;
+    iso::cluster::Runtime runtime(nullptr, nullptr);
+    const iso::cluster::Comm comm;
+    iso::cluster::DistMeshRequest r;
     r.input = a.in;
     r.output = a.out;
     r.series = a.series;
@@ -392,14 +366,14 @@ int run_mesh_mpi(const MeshArgs& a) {
     r.isos = a.labels ? a.label_values : a.isos;
     r.extract.threads = a.threads;
     r.extract.chunk_size = a.chunk;
-    r.memory_budget = a.memory_mib > 0 ? std::size_t(a.memory_mib * 1048576.0) : iso::dist::default_rank_budget();
+    r.memory_budget = a.memory_mib > 0 ? std::size_t(a.memory_mib * 1048576.0) : iso::cluster::default_rank_budget();
     r.overlap = !a.no_overlap;
     if (comm.root()) {
         r.progress = progress_bar();
         r.extract.progress = progress_bar();
     }
     try {
-        const auto res = iso::dist::mesh_distributed(comm, r);
+        const auto res = iso::cluster::mesh_distributed(comm, r);
         if (!comm.root()) return 0;
         for (const auto& w : res.warnings) std::cerr << "warning: " << w << "\n";
         std::cout << res.ranks << " ranks, active chunks per rank:";
@@ -417,11 +391,11 @@ int run_mesh_mpi(const MeshArgs& a) {
                       << m.largest.volume << " mm^3) -> " << s.path << " (" << s.pieces << " pieces from " << res.ranks << " ranks)\n";
         }
         return 0;
-    } catch (const iso::dist::AgreedError& e) {
+    } catch (const iso::cluster::AgreedError& e) {
         if (comm.root()) std::cerr << "isoscope: error: " << e.what() << "\n";
         return 1;
     } catch (const std::exception& e) {
-        iso::dist::Runtime::abort_job(e.what());
+        iso::cluster::Runtime::abort_job(e.what());
     }
 }
 #endif
@@ -430,7 +404,7 @@ int run_mesh(const MeshArgs& a) {
     if (a.isos.empty() && !a.labels) throw iso::Error("isoscope mesh", "give --iso V (repeatable) or --labels");
     if (!a.isos.empty() && a.labels) throw iso::Error("isoscope mesh", "--iso and --labels exclude each other");
 #ifdef ISOSCOPE_MPI
-    if (iso::dist::launched_by_mpirun()) return run_mesh_mpi(a);
+    if (iso::cluster::launched_by_mpirun()) return run_mesh_mpi(a);
 #endif
     const std::size_t budget = memory_bytes_option(a.memory_mib);
     const bool pieces = iso::is_streamable_mesh_path(a.out) && !iso::is_mesh_path(a.out); // .pvtp: written by the streaming path

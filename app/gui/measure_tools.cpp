@@ -18,7 +18,7 @@
 #include "renderer/core/pick.hpp"
 #include "renderer/core/scene.hpp"
 #include "renderer/core/slices.hpp"
-#include "renderer/render/overlay.hpp"
+#include "renderer/frame/annotations.hpp"
 
 namespace iso::gui {
 

@@ -19,7 +19,7 @@
 #include <QWidget>
 
 #include "io/progress.hpp"
-#include "renderer/iso/postprocess.hpp"
+#include "renderer/surface/postprocess.hpp"
 
 class QComboBox;
 class QDoubleSpinBox;

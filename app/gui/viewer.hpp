@@ -15,8 +15,8 @@
 
 #include "io/markups.hpp"
 #include "app/gui/pointer_drag.hpp"
-#include "renderer/render/cone_ao.hpp"
-#include "renderer/scene/camera.hpp"
+#include "renderer/frame/ao_settings.hpp"
+#include "renderer/frame/camera.hpp"
 
 namespace iso {
 struct Annotations;

@@ -1,4 +1,4 @@
-#include "renderer/render/cone_ao.hpp"
+#include "renderer/ao/cone_pattern.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -6,37 +6,11 @@
 
 #include <glm/glm.hpp>
 
-#include "io/error.hpp"
-
 namespace iso {
 
 namespace {
 constexpr double kPi = 3.14159265358979323846;
-
-void check_range(const std::string& name, double v, double lo, double hi) {
-    if (!(v >= lo && v <= hi)) // also rejects NaN
-        throw Error("cone AO setting " + name, "value " + std::to_string(v) + " is out of range [" + std::to_string(lo) + ", " +
-                                        std::to_string(hi) + "]");
-}
 } // namespace
-
-void validate(const ConeAoSettings& s) {
-    check_range("radius", s.radius_mm, 1e-6, 1e6);
-    check_range("cones", s.cones, 1, 64);
-    check_range("spheres", s.spheres, 1, 32);
-    check_range("samples", s.samples, 1, 64);
-    check_range("strength", s.strength, 0, 4);
-    check_range("layers", s.layers, 1, 8);
-    check_range("grid", s.grid_scale, 0.125, 2);
-    check_range("jitter", s.jitter_sets, 1, 64);
-    check_range("persistence", s.persistence, 0, 1);
-    check_range("ray-weight", s.ray_weight, 0, 1);
-    check_range("axis-weight", s.axis_weight, 0, 1);
-    check_range("attenuation", s.attenuation, 0, 100);
-    check_range("bias", s.bias, 0, 16);
-    check_range("resolution", s.resolution, 0.25, 1);
-    check_range("guard", s.guard, 0, 0.5);
-}
 
 std::vector<glm::vec4> cone_directions(int n) {
     std::vector<glm::vec4> out;

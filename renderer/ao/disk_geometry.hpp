@@ -24,53 +24,9 @@
 
 #include <glm/vec3.hpp>
 
-namespace iso {
+#include "renderer/frame/ao_settings.hpp"
 
-// The chapter's tunables. Only the two epsilons are given as numbers in the
-// chapter; the others are free parameters it demonstrates (its figure 10),
-// here at the values that leave Bunnell's method unchanged.
-struct DiskAoSettings {
-    // visibleQuad's snap: a vertex whose signed distance to the tangent plane
-    // is within this (scene units, mm here) is taken as on the plane (chapter:
-    // `const float epsilon = 1e-6`).
-    double clip_epsilon = 1e-6;
-    // Traversal depth: descend into an element's children while
-    // d^2 < traversal_epsilon * area (chapter: "epsilon = 8 in all
-    // experiments"). Used by the hierarchy, not by these kernels. 16:
-    // measured per vertex against Embree at R = 10 mm (disk_ao_cpu_bench,
-    // docs/ao.md): RMSE 0.0326 -> 0.0285 on the CT skin, 0.0405 -> 0.0301 on
-    // the bunny for ~20% more gather time; 32 and beyond gain < 0.002.
-    double traversal_epsilon = 16.0;
-    // contribution /= 1 + distance_attenuation * d^2 (chapter, listing 4).
-    // 0 = no attenuation (Bunnell).
-    double distance_attenuation = 0.0;
-    // contribution *= pow(element term, triangle_attenuation) (chapter,
-    // listing 5). 1 = Bunnell's plain modulation by the emitter's term.
-    double triangle_attenuation = 1.0;
-    // Convergence: occlusion = min_scale * min(o0, o1) + max_scale * max(o0, o1)
-    // over the last two iterations (chapter, listing 3, "a weighted minimum").
-    // The chapter gives no numbers; 0.7 / 0.3 (weights adding up to 1, the
-    // minimum dominating) is the usual choice of its implementations.
-    double min_scale = 0.7;
-    double max_scale = 0.3;
-    // Element passes (per-disk occlusion, each modulated by the previous
-    // pass's terms) before the final gather; the blend uses the last two.
-    // 0: none, the gather sums unmodulated form factors (clamped to 1). 0 is
-    // the default because it measured best at the AO radius R = 10 mm: the R
-    // limit leaves few overlapping occluders to correct for, and the
-    // modulation then removes more true occlusion than double counting adds
-    // (per-vertex RMSE against Embree, CT skin: 0.0285 with 0 passes, 0.118
-    // with 2 passes at the chapter's t = 1 and 0.7 / 0.3; the best with
-    // passes, t = 0.1 and min_scale 1, 0.0352; docs/ao.md).
-    int passes = 0;
-    // Self-occlusion: the receiver is moved to p + receiver_offset * R * n
-    // before the gather (R = the AO radius), so that its own disk (then
-    // straight below it) and its own triangles (below or seen edge-on) add
-    // nothing, without needing the receiver's triangle id (a pixel has
-    // none). Relative to R so that it scales with the scene (docs/ao.md,
-    // "Disk AO: hierarchy and CPU evaluation").
-    double receiver_offset = 1e-3;
-};
+namespace iso {
 
 // The visible part of a triangle above a tangent plane (the chapter's
 // visibleQuad).

@@ -16,8 +16,8 @@
 
 #include "io/image.hpp"
 #include "io/mesh.hpp"
-#include "renderer/render/cone_ao.hpp"
-#include "renderer/scene/camera.hpp"
+#include "renderer/frame/ao_settings.hpp"
+#include "renderer/frame/camera.hpp"
 
 namespace iso {
 

@@ -17,7 +17,7 @@
 
 #include "io/image.hpp"
 #include "io/mesh.hpp"
-#include "renderer/scene/camera.hpp"
+#include "renderer/frame/camera.hpp"
 
 namespace iso {
 

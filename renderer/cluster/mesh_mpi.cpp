@@ -1,5 +1,5 @@
 // The per-rank pipeline of a distributed `isoscope mesh` (mesh_mpi.hpp).
-#include "renderer/dist/mesh_mpi.hpp"
+#include "renderer/cluster/mesh_mpi.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -31,10 +31,10 @@
 #include "io/vtk_mesh.hpp"
 #include "io/vtk_util.hpp"
 #include "renderer/core/stream_mesh.hpp"
-#include "renderer/iso/partition.hpp"
-#include "renderer/iso/stream.hpp"
+#include "renderer/surface/partition.hpp"
+#include "renderer/surface/stream.hpp"
 
-namespace iso::dist {
+namespace iso::cluster {
 
 namespace fs = std::filesystem;
 
@@ -407,4 +407,4 @@ DistMeshResult mesh_distributed(const Comm& comm, const DistMeshRequest& req) {
     return res;
 }
 
-} // namespace iso::dist
+} // namespace iso::cluster

@@ -10,11 +10,11 @@
 #include <vector>
 
 #include "io/progress.hpp"
-#include "renderer/dist/mpi.hpp"
-#include "renderer/iso/components.hpp"
-#include "renderer/iso/extract.hpp"
+#include "renderer/cluster/mpi.hpp"
+#include "renderer/surface/components.hpp"
+#include "renderer/surface/extract.hpp"
 
-namespace iso::dist {
+namespace iso::cluster {
 
 struct DistMeshRequest {
     std::string input, output;       // output: a .pvtp (several surfaces: core::surface_output_path)
@@ -55,4 +55,4 @@ DistMeshResult mesh_distributed(const Comm& comm, const DistMeshRequest& req);
 // shared by the ranks on this node (OMPI_COMM_WORLD_LOCAL_SIZE), at least 64 MiB.
 std::size_t default_rank_budget();
 
-} // namespace iso::dist
+} // namespace iso::cluster

@@ -1,5 +1,5 @@
 // MPI runtime and communicator (mpi.hpp).
-#include "renderer/dist/mpi.hpp"
+#include "renderer/cluster/mpi.hpp"
 
 #include <cstdlib>
 #include <iostream>
@@ -8,7 +8,7 @@
 
 #include "io/error.hpp"
 
-namespace iso::dist {
+namespace iso::cluster {
 
 bool launched_by_mpirun() {
     // OpenMPI's mpirun sets OMPI_COMM_WORLD_SIZE; PMIx and PMI launchers
@@ -153,4 +153,4 @@ std::string Comm::broadcast(const std::string& bytes, int root) const {
 
 void Comm::barrier() const { check(MPI_Barrier(MPI_COMM_WORLD), "MPI_Barrier"); }
 
-} // namespace iso::dist
+} // namespace iso::cluster

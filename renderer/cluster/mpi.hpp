@@ -21,7 +21,7 @@
 
 #include "io/error.hpp"
 
-namespace iso::dist {
+namespace iso::cluster {
 
 // The error every rank throws when the job agreed that some rank failed
 // (Comm::agree): where() is "rank R", reason() that rank's message.
@@ -96,4 +96,4 @@ template <class F> void agreed(const Comm& comm, F&& step) {
     comm.agree(error);
 }
 
-} // namespace iso::dist
+} // namespace iso::cluster

@@ -8,10 +8,9 @@
 #include <filesystem>
 #include <sstream>
 
-#include <epoxy/egl.h>
-
 #include "renderer/ao/reference.hpp"
-#include "renderer/render/disk_ao.hpp"
+#include "renderer/frame/ao_settings.hpp"
+#include "renderer/core/image_metadata.hpp"
 #include "renderer/gl/context.hpp"
 
 namespace iso::core {
@@ -65,13 +64,6 @@ nlohmann::json describe(const Volume& v) {
 }
 
 namespace {
-std::vector<float> flat(const glm::dmat4& m) {
-    std::vector<float> v;
-    for (int c = 0; c < 4; ++c)
-        for (int r = 0; r < 4; ++r) v.push_back(float(m[c][r]));
-    return v;
-}
-
 // The cache folder for AO references (see RenderRequest::cache_dir); empty: none.
 std::filesystem::path cache_folder(const std::string& requested) {
     if (requested == "-") return {};
@@ -135,8 +127,9 @@ Image ao_reference_cached(Scene& scene, const Camera& cam, const RenderOptions& 
     return img;
 }
 
-// The render request's settings, checked; errors name the setting, not a flag.
-RenderOptions render_options(const RenderRequest& req) {
+} // namespace
+
+RenderOptions frame_options(const RenderRequest& req) {
     RenderOptions ro;
     ro.width = req.width;
     ro.height = req.height;
@@ -178,7 +171,6 @@ RenderOptions render_options(const RenderRequest& req) {
     }
     return ro;
 }
-} // namespace
 
 glm::vec3 linear_from_hex(const std::string& text) {
     unsigned r = 0, g = 0, b = 0;
@@ -217,47 +209,24 @@ RenderOutput render_input(const std::string& input, const RenderRequest& req) {
     return render_image(scene, req);
 }
 
+Camera frame_camera(const Scene& scene, const RenderRequest& req) {
+    if (!req.camera) return scene.camera(patient_view_from_name(req.view), double(req.width) / double(req.height));
+    Camera cam = *req.camera;
+    cam.fit_planes(scene.bounds());
+    return cam;
+}
+
 RenderOutput render_image(Scene& scene, const RenderRequest& req) {
-    // Whatever EGL context the caller had current is current again on
-    // return (none: none), so that the next call may come from another
-    // thread (the desktop app renders exports on worker threads) and a
-    // caller's own context is left as it was.
-    struct Restore {
-        EGLDisplay display = eglGetCurrentDisplay();
-        EGLSurface draw = eglGetCurrentSurface(EGL_DRAW), read = eglGetCurrentSurface(EGL_READ);
-        EGLContext context = eglGetCurrentContext();
-        ~Restore() {
-            if (context != EGL_NO_CONTEXT) eglMakeCurrent(display, draw, read, context);
-            else if (eglGetCurrentContext() != EGL_NO_CONTEXT)
-                eglMakeCurrent(eglGetCurrentDisplay(), EGL_NO_SURFACE, EGL_NO_SURFACE, EGL_NO_CONTEXT);
-        }
-    } restore;
-    static gl::HeadlessContext ctx; // one per process, made on first use
-    ctx.make_current();
-    RenderOutput out;
-    std::string isos_text;
-    for (const SurfaceId id : scene.surfaces())
-        if (scene.info(id).kind == SurfaceInfo::Kind::Iso) {
-            char b[32];
-            std::snprintf(b, sizeof b, "%s%g", isos_text.empty() ? "" : ",", scene.info(id).value);
-            isos_text += b;
-        }
-    RenderOptions ro = render_options(req);
+    const gl::ScopedCurrent context;
+    RenderOptions ro = frame_options(req);
     Annotations ann;
     ann.markups = req.markups;
     ann.scale_bar = ann.orientation = req.annotations;
     const bool colour_image = req.aov == Aov::None && !req.aov_ao; // annotations and markups go on it only
     if ((req.annotations || !ann.markups.empty()) && colour_image) ro.annotations = &ann;
-    Camera cam;
-    if (req.camera) {
-        cam = *req.camera;
-        cam.fit_planes(scene.bounds());
-    } else {
-        cam = scene.camera(patient_view_from_name(req.view), double(req.width) / double(req.height));
-    }
-    const bool cone = req.ao == "cone";
+    const Camera cam = frame_camera(scene, req);
     // Still frames: each adds new jitter sets to the running mean of the AO.
-    for (int f = 1; cone && f < req.ao_frames; ++f) scene.render(cam, ro);
+    for (int f = 1; req.ao == "cone" && f < req.ao_frames; ++f) scene.render(cam, ro);
     auto r = scene.render(cam, ro);
     // One GL context serves every scene of the process: free this one's GPU
     // resources while it is current.
@@ -266,115 +235,15 @@ RenderOutput render_image(Scene& scene, const RenderRequest& req) {
         ~Release() { s.release_gpu(); }
     } release{scene};
     if (r.cancelled) throw Cancelled("disk AO");
+    RenderOutput out;
+    out.meta = frame_metadata({scene, req, ro, cam, r, colour_image ? &ann : nullptr});
     out.image = std::move(r.image);
     out.stats = std::move(r.stats);
     out.oit = r.oit;
     out.pick = std::move(r.pick);
     out.gl_renderer = r.gl_renderer;
     out.camera = cam;
-    auto& t = out.meta.text;
-    t["isoscope:version"] = version();
-    // The inputs: one path (and its SHA-256) each, joined by newlines.
-    std::string inputs, hashes;
-    for (const auto& src : scene.sources()) {
-        inputs += (inputs.empty() ? "" : "\n") + std::filesystem::absolute(src).string();
-        hashes += (hashes.empty() ? "" : "\n") + sha256_of_path(src);
-    }
-    t["isoscope:input"] = inputs;
-    t["isoscope:input_sha256"] = hashes;
-    if (colour_image && !ann.markups.empty()) {
-        std::string files, sums;
-        for (const auto& f : req.markups_files) {
-            files += (files.empty() ? "" : "\n") + std::filesystem::absolute(f).string();
-            sums += (sums.empty() ? "" : "\n") + sha256_of_path(f);
-        }
-        if (!files.empty()) {
-            t["isoscope:markups"] = files;
-            t["isoscope:markups_sha256"] = sums;
-        }
-        // What was drawn, one markup a line: type, name, points, the value shown (ASCII: "deg" for the degree sign).
-        std::string drawn;
-        for (const auto& m : ann.markups) {
-            std::size_t defined = 0;
-            for (const auto& p : m.points) defined += p.status == PositionStatus::Defined;
-            std::string value = markup_measurement_text(m);
-            if (const auto deg = value.find("\xC2\xB0"); deg != std::string::npos) value.replace(deg, 2, " deg");
-            drawn += (drawn.empty() ? "" : "\n") + std::string(markup_type_name(m.type)) + (m.name.empty() ? "" : " '" + m.name + "'") + ": " +
-                     std::to_string(defined) + " defined point(s)" + (value.empty() ? "" : ", " + value);
-        }
-        t["isoscope:markups_drawn"] = drawn;
-    }
-    if (!isos_text.empty()) t["isoscope:iso"] = isos_text;
-    t["isoscope:view_name"] = req.camera ? "the request's camera" : req.view;
-    if (!req.session_file.empty()) {
-        t["isoscope:session"] = std::filesystem::absolute(req.session_file).lexically_normal().string();
-        t["isoscope:session_sha256"] = sha256_of_path(req.session_file);
-    }
-    std::ostringstream cs;
-    cs.precision(9);
-    cs << "eye " << cam.eye.x << ' ' << cam.eye.y << ' ' << cam.eye.z << "; target " << cam.target.x << ' ' << cam.target.y << ' '
-       << cam.target.z << "; up " << cam.up.x << ' ' << cam.up.y << ' ' << cam.up.z << "; fov_y_degrees " << cam.fov_y_degrees
-       << "; near " << cam.near_plane << "; far " << cam.far_plane << "; depth reversed-Z [0,1]";
-    t["isoscope:camera"] = cs.str();
-    t["isoscope:world"] = "LPS millimetres";
-    t["isoscope:renderer"] = out.gl_renderer;
-    // Each visible surface: name, linear albedo, opacity.
-    std::string surfaces;
-    for (const SurfaceId id : scene.surfaces()) {
-        const auto& si = scene.info(id);
-        if (!si.visible) continue;
-        char b[160];
-        std::snprintf(b, sizeof b, "%s%s: albedo %.6g %.6g %.6g, opacity %.6g", surfaces.empty() ? "" : "; ", si.name.c_str(), si.color.r,
-                      si.color.g, si.color.b, si.opacity);
-        surfaces += b;
-    }
-    t["isoscope:surfaces"] = surfaces;
-    t["isoscope:shading"] = req.flat_shading ? "flat (albedo only)" : "lit";
-    if (!req.transparency) t["isoscope:transparency"] = "off: every surface drawn opaque, whatever its opacity";
-    if (r.oit.fragments > 0) {
-        t["isoscope:transparency"] = "VOIT per-pixel fragment lists, front to back, epsilon " + std::to_string(req.oit_epsilon) + "; " +
-                                     std::to_string(r.oit.fragments) + " fragments" +
-                                     (r.oit.merged ? ", " + std::to_string(r.oit.merged) + " merged past the memory cap (error at most " +
-                                                         std::to_string(r.oit.merge_error_max) + " per channel)"
-                                                   : std::string());
-    }
-    if (req.aov != Aov::None && !req.aov_ao)
-        t["isoscope:aov"] = std::string(req.aov == Aov::Depth ? "depth (mm along the view axis)" : req.aov == Aov::Normal ? "normal (LPS)" : "id") +
-                            "; of the nearest opaque surface (translucent surfaces are not in the AOVs)";
-    auto num = [](double v) {
-        char b[64];
-        std::snprintf(b, sizeof b, "%.9g", v);
-        return std::string(b);
-    };
-    if (req.ao != "off") t["isoscope:ao_radius_mm"] = num(req.ao_radius_mm);
-    if (cone) {
-        const auto& c = ro.ao_settings;
-        t["isoscope:ao"] = "cone (cone tracing in a solid slicemap voxelization)";
-        t["isoscope:ao_parameters"] = "cones " + std::to_string(c.cones) + "; spheres " + std::to_string(c.spheres) + "; samples " +
-                                      std::to_string(c.samples) + "; strength " + num(c.strength) + "; layers " +
-                                      std::to_string(c.layers) + " (" + std::to_string(128 * c.layers) + " z-voxels); grid " +
-                                      num(c.grid_scale) + "; jitter_sets " + std::to_string(c.jitter_sets) + "; ray_weight " + num(c.ray_weight) + "; axis_weight " + num(c.axis_weight) + "; persistence " +
-                                      num(c.persistence) + "; attenuation " + num(c.attenuation) + "; bias " + num(c.bias) + "; surface_voxels " + (c.surface_voxels ? "on" : "off") +
-                                      "; resolution " + num(c.resolution) + "; guard " + num(c.guard) + "; frames " + std::to_string(req.ao_frames);
-    }
-    if (req.ao == "disk") {
-        const auto& d = ro.disk_settings;
-        t["isoscope:ao"] = "disk (disk hierarchy with exact near triangles, GPU Gems 3 ch. 12)";
-        t["isoscope:ao_parameters"] = "passes " + std::to_string(d.passes) + "; traversal_epsilon " + num(d.traversal_epsilon) +
-                                      "; clip_epsilon " + num(d.clip_epsilon) + "; distance_attenuation " + num(d.distance_attenuation) +
-                                      "; triangle_attenuation " + num(d.triangle_attenuation) + "; blend_min " + num(d.min_scale) +
-                                      "; blend_max " + num(d.max_scale) + "; receiver_offset " + num(d.receiver_offset);
-    }
-    if (req.aov_ao) {
-        t["isoscope:aov"] = "ao (1 = unoccluded; cosine-weighted visibility within the radius; NaN = background)";
-        if (req.ao == "reference") {
-            t["isoscope:ao"] = "reference (Embree ray tracing)";
-            t["isoscope:ao_rays"] = std::to_string(req.ao_rays);
-            out.image = ao_reference_cached(scene, cam, ro, t, req, out.ao_cache_hit);
-        }
-    }
-    out.meta.float_arrays["isoscope:view"] = flat(cam.view());
-    out.meta.float_arrays["isoscope:projection"] = flat(cam.projection(double(req.width) / double(req.height)));
+    if (req.aov_ao && req.ao == "reference") out.image = ao_reference_cached(scene, cam, ro, out.meta.text, req, out.ao_cache_hit);
     return out;
 }
 

@@ -10,8 +10,8 @@
 #include "io/markups.hpp"
 #include "io/mesh.hpp"
 #include "renderer/core/scene.hpp"
-#include "renderer/render/overlay.hpp"
-#include "renderer/render/renderer.hpp"
+#include "renderer/frame/annotations.hpp"
+#include "renderer/frame/frame.hpp"
 #include "io/volume.hpp"
 #include "io/volume_io.hpp"
 
@@ -83,6 +83,12 @@ struct RenderRequest {
     // and SHA-256 go into the metadata.
     std::string session_file;
 };
+
+// The frame a request asks for: its options, checked (errors name the
+// setting, never a flag), and its camera (the request's own, its planes
+// fitted to the visible surfaces as the 3D view does, or the patient view's).
+RenderOptions frame_options(const RenderRequest& req);
+Camera frame_camera(const Scene& scene, const RenderRequest& req);
 
 // "#rrggbb" (sRGB, as colour pickers and CSS give it) -> linear RGB.
 // Throws iso::Error("colour", ...) naming the text.

@@ -13,7 +13,7 @@
 
 #include "io/markups.hpp"
 #include "renderer/core/scene.hpp"
-#include "renderer/iso/measure.hpp"
+#include "renderer/surface/analysis.hpp"
 
 namespace iso::core {
 

@@ -8,7 +8,7 @@
 #include <glm/glm.hpp>
 
 #include "io/error.hpp"
-#include "renderer/iso/measure.hpp"
+#include "renderer/surface/analysis.hpp"
 
 namespace iso::core {
 

@@ -21,10 +21,10 @@
 #include "io/progress.hpp"
 #include "io/volume.hpp"
 #include "io/volume_io.hpp"
-#include "renderer/iso/extract.hpp"
-#include "renderer/iso/postprocess.hpp"
-#include "renderer/render/renderer.hpp"
-#include "renderer/scene/camera.hpp"
+#include "renderer/surface/extract.hpp"
+#include "renderer/surface/postprocess.hpp"
+#include "renderer/gpu/renderer.hpp"
+#include "renderer/frame/camera.hpp"
 
 namespace iso::core {
 

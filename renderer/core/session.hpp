@@ -22,8 +22,8 @@
 #include "renderer/core/api.hpp"
 #include "renderer/core/scene.hpp"
 #include "renderer/core/slices.hpp"
-#include "renderer/iso/postprocess.hpp"
-#include "renderer/scene/camera.hpp"
+#include "renderer/surface/postprocess.hpp"
+#include "renderer/frame/camera.hpp"
 
 namespace iso::core {
 

@@ -29,7 +29,7 @@ namespace {
 
 constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
 constexpr int kMaxImageSide = 16384;
-// Voxels: the rounding allowance of sample_volume (renderer/iso/measure.cpp)
+// Voxels: the rounding allowance of sample_volume (renderer/surface/analysis.cpp)
 // at the grid's outer faces and at voxel centres; kept equal to it.
 constexpr double kIndexEps = 1e-9;
 

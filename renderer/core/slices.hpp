@@ -27,7 +27,7 @@
 
 #include "io/mesh.hpp"
 #include "io/volume.hpp"
-#include "renderer/iso/measure.hpp"
+#include "renderer/surface/analysis.hpp"
 
 namespace iso::core {
 
@@ -135,7 +135,7 @@ struct SlicePoint {
 };
 SlicePoint lps_to_pixel(const SliceGrid& g, const glm::dvec3& lps);
 
-// The volume under a click: sample_volume (renderer/iso/measure.hpp, what
+// The volume under a click: sample_volume (renderer/surface/analysis.hpp, what
 // the core API's pick and value_at report) at pixel_to_lps(g, pixel): the
 // trilinear value (HU for CT), the continuous index, the nearest voxel, its
 // LPS centre and stored value. None outside the grid.

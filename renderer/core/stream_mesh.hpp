@@ -1,5 +1,5 @@
 // `isoscope mesh` and `isoscope info` on volumes larger than memory: the
-// out-of-core path of the core (renderer/iso/stream.hpp; docs/isosurface.md,
+// out-of-core path of the core (renderer/surface/stream.hpp; docs/isosurface.md,
 // "Out of core"). The CLI only parses flags and prints.
 #pragma once
 
@@ -11,8 +11,8 @@
 
 #include "io/mesh.hpp"
 #include "io/progress.hpp"
-#include "renderer/iso/components.hpp"
-#include "renderer/iso/stream.hpp"
+#include "renderer/surface/components.hpp"
+#include "renderer/surface/stream.hpp"
 
 namespace iso::core {
 
@@ -52,7 +52,7 @@ struct StreamMeshRequest {
 struct StreamMeshResult {
     std::vector<std::string> names, paths; // per surface: "iso 500" / "label 3", file written
     std::vector<MeshStats> stats;
-    std::vector<SurfaceSummary> summaries; // per surface: connected components and the largest (renderer/iso/components.hpp)
+    std::vector<SurfaceSummary> summaries; // per surface: connected components and the largest (renderer/surface/components.hpp)
     StreamStats stream;
     std::size_t memory_budget = 0;
     std::vector<std::string> warnings;     // of the volume's header

@@ -1,4 +1,4 @@
-#include "renderer/render/overlay.hpp"
+#include "renderer/frame/annotations.hpp"
 
 #include <algorithm>
 #include <cmath>

@@ -18,7 +18,7 @@
 #include <glm/vec4.hpp>
 
 #include "io/markups.hpp"
-#include "renderer/scene/camera.hpp"
+#include "renderer/frame/camera.hpp"
 
 namespace iso {
 

@@ -1,4 +1,4 @@
-#include "renderer/scene/camera.hpp"
+#include "renderer/frame/camera.hpp"
 
 #include <algorithm>
 #include <cmath>

@@ -134,6 +134,27 @@ void HeadlessContext::make_current() {
         throw Error("OpenGL", std::string("eglMakeCurrent failed: ") + egl_error_name(eglGetError()));
 }
 
+namespace {
+HeadlessContext& shared_context() {
+    static HeadlessContext shared; // one per process, made (and made current) on first use
+    return shared;
+}
+} // namespace
+
+// The caller's context is recorded before the shared one is made: making it
+// makes it current.
+ScopedCurrent::ScopedCurrent(HeadlessContext* ctx)
+    : display_(eglGetCurrentDisplay()), draw_(eglGetCurrentSurface(EGL_DRAW)), read_(eglGetCurrentSurface(EGL_READ)),
+      context_(eglGetCurrentContext()) {
+    (ctx ? *ctx : shared_context()).make_current();
+}
+
+ScopedCurrent::~ScopedCurrent() {
+    if (context_ != EGL_NO_CONTEXT) eglMakeCurrent(display_, draw_, read_, context_);
+    else if (eglGetCurrentContext() != EGL_NO_CONTEXT)
+        eglMakeCurrent(eglGetCurrentDisplay(), EGL_NO_SURFACE, EGL_NO_SURFACE, EGL_NO_CONTEXT);
+}
+
 std::size_t DebugLog::errors() const {
     std::lock_guard lock(mutex_);
     return errors_;

@@ -41,6 +41,26 @@ private:
     ContextInfo info_;
 };
 
+// Makes a headless context current for its lifetime and then makes current
+// again whatever EGL context the thread had before (none: none), so that
+// the next caller may be another thread (the desktop app renders exports on
+// worker threads) and a caller's own context is left as it was. Without an
+// argument it uses one context for the whole process, made on first use.
+class ScopedCurrent {
+public:
+    // null: the process's shared context.
+    explicit ScopedCurrent(HeadlessContext* ctx = nullptr);
+    ~ScopedCurrent();
+    ScopedCurrent(const ScopedCurrent&) = delete;
+    ScopedCurrent& operator=(const ScopedCurrent&) = delete;
+
+private:
+    void* display_;
+    void* draw_;
+    void* read_;
+    void* context_;
+};
+
 // What the GL_KHR_debug callback of a debug context saw, for the whole
 // process (all debug contexts report here). Tests read and reset it after
 // each test (tests/gl/gl_test.hpp); the CLI and the viewer keep today's

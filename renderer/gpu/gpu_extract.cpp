@@ -1,4 +1,4 @@
-#include "renderer/iso/gpu_extract.hpp"
+#include "renderer/gpu/gpu_extract.hpp"
 
 #include <algorithm>
 #include <cstring>
@@ -7,7 +7,7 @@
 
 #include "io/sparse.hpp"
 #include "renderer/gl/objects.hpp"
-#include "renderer/iso/mc_tables.hpp"
+#include "renderer/surface/mc_tables.hpp"
 
 namespace iso {
 

@@ -9,7 +9,7 @@
 
 #include <memory>
 
-#include "renderer/iso/extract.hpp"
+#include "renderer/surface/extract.hpp"
 
 namespace iso {
 

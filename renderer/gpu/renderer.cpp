@@ -1,4 +1,4 @@
-#include "renderer/render/renderer.hpp"
+#include "renderer/gpu/renderer.hpp"
 
 #include <algorithm>
 #include <bit>
@@ -14,7 +14,7 @@
 #include "renderer/gl/objects.hpp"
 #include "renderer/ao/disk_hierarchy.hpp"
 #include "renderer/passes/disk_state.hpp"
-#include "renderer/passes/frame.hpp"
+#include "renderer/passes/build_frame.hpp"
 #include "renderer/passes/gl_resources.hpp"
 
 namespace iso {

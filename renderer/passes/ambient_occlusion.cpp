@@ -5,7 +5,7 @@
 // reads the AO image.
 #include <memory>
 
-#include "renderer/passes/frame.hpp"
+#include "renderer/passes/build_frame.hpp"
 
 namespace iso::passes {
 

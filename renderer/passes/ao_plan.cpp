@@ -8,7 +8,8 @@
 #include <glm/gtc/matrix_transform.hpp>
 
 #include "io/error.hpp"
-#include "renderer/passes/frame.hpp"
+#include "renderer/ao/cone_pattern.hpp"
+#include "renderer/passes/build_frame.hpp"
 
 namespace iso::passes {
 

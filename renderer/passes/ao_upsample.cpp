@@ -1,6 +1,6 @@
 // AO upsampling: brings the coarse cone AO to full size with a joint
 // bilateral filter (depth plane and normal aware: no halo across silhouettes).
-#include "renderer/passes/frame.hpp"
+#include "renderer/passes/build_frame.hpp"
 #include "renderer/passes/gl_resources.hpp"
 #include "renderer/passes/std140.hpp"
 

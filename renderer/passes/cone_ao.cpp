@@ -1,7 +1,8 @@
 // Cone AO: traces equal-measure cones through the slicemap (compute), into a
 // history image that accumulates new jitter sets while nothing changes.
 #include "io/error.hpp"
-#include "renderer/passes/frame.hpp"
+#include "renderer/ao/cone_pattern.hpp"
+#include "renderer/passes/build_frame.hpp"
 #include "renderer/passes/gl_resources.hpp"
 #include "renderer/passes/std140.hpp"
 

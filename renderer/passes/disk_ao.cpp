@@ -14,10 +14,10 @@
 #include "io/error.hpp"
 #include "renderer/ao/disk_hierarchy.hpp"
 #include "renderer/passes/disk_state.hpp"
-#include "renderer/passes/frame.hpp"
+#include "renderer/passes/build_frame.hpp"
 #include "renderer/passes/gl_resources.hpp"
 #include "renderer/passes/std140.hpp"
-#include "renderer/render/disk_ao.hpp"
+#include "renderer/frame/ao_settings.hpp"
 
 namespace iso::passes {
 

@@ -7,7 +7,7 @@
 
 #include <string>
 
-#include "renderer/passes/frame.hpp"
+#include "renderer/passes/build_frame.hpp"
 
 namespace iso::passes {
 

@@ -1,6 +1,6 @@
 // Deferred lighting: key light and headlight, ambient modulated by AO when
 // given, tone mapping, sRGB; background where nothing was drawn.
-#include "renderer/passes/frame.hpp"
+#include "renderer/passes/build_frame.hpp"
 #include "renderer/passes/gl_resources.hpp"
 #include "renderer/passes/std140.hpp"
 

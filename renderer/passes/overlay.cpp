@@ -1,12 +1,12 @@
 // Overlay: annotation triangles (scale bar, orientation letters, labels,
-// markups; renderer/render/overlay.cpp builds them) blended over the colour
+// markups; renderer/frame/annotations.cpp builds them) blended over the colour
 // image. Markups are compared with the G-buffer's depth and dimmed where a
 // surface hides them.
 #include <algorithm>
 #include <bit>
 #include <cstddef>
 
-#include "renderer/passes/frame.hpp"
+#include "renderer/passes/build_frame.hpp"
 #include "renderer/passes/gl_resources.hpp"
 #include "renderer/passes/std140.hpp"
 

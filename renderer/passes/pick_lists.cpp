@@ -11,7 +11,7 @@
 #include <algorithm>
 #include <cstring>
 
-#include "renderer/passes/frame.hpp"
+#include "renderer/passes/build_frame.hpp"
 #include "renderer/passes/gl_resources.hpp"
 
 namespace iso::passes {

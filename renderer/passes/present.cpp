@@ -1,5 +1,5 @@
 // Present: copies the final image into the caller's framebuffer (a widget's).
-#include "renderer/passes/frame.hpp"
+#include "renderer/passes/build_frame.hpp"
 #include "renderer/passes/gl_resources.hpp"
 
 namespace iso::passes {

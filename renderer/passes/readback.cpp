@@ -3,7 +3,7 @@
 #include <algorithm>
 #include <limits>
 
-#include "renderer/passes/frame.hpp"
+#include "renderer/passes/build_frame.hpp"
 #include "renderer/passes/gl_resources.hpp"
 
 namespace iso::passes {

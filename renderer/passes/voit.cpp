@@ -8,7 +8,7 @@
 #include <algorithm>
 #include <cstring>
 
-#include "renderer/passes/frame.hpp"
+#include "renderer/passes/build_frame.hpp"
 #include "renderer/passes/gl_resources.hpp"
 #include "renderer/passes/std140.hpp"
 

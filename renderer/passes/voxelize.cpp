@@ -2,7 +2,7 @@
 // columns per layer, local z range), then, with surface_voxels, the voxels
 // next to every surface OR-ed in (thin walls); rebuilt only when stale
 // (ao_plan.cpp).
-#include "renderer/passes/frame.hpp"
+#include "renderer/passes/build_frame.hpp"
 #include "renderer/passes/gl_resources.hpp"
 #include "renderer/passes/std140.hpp"
 

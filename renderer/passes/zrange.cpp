@@ -1,6 +1,6 @@
 // Z range: the nearest and farthest visible linear depth (compute, atomics),
 // the slicemap's local range.
-#include "renderer/passes/frame.hpp"
+#include "renderer/passes/build_frame.hpp"
 #include "renderer/passes/gl_resources.hpp"
 #include "renderer/passes/std140.hpp"
 

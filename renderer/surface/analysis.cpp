@@ -6,8 +6,8 @@
 // open objects but neither caps them nor reports their boundaries; neither
 // welds STL triangle soups, runs in parallel or estimates an uncertainty.
 #include "io/markups.hpp"
-#include "renderer/iso/arena.hpp"
-#include "renderer/iso/measure.hpp"
+#include "renderer/surface/arena.hpp"
+#include "renderer/surface/analysis.hpp"
 
 #include <algorithm>
 #include <atomic>

@@ -21,7 +21,7 @@
 
 #include "io/mesh.hpp"
 #include "io/volume.hpp"
-#include "renderer/iso/extract.hpp"
+#include "renderer/surface/extract.hpp"
 
 namespace iso {
 

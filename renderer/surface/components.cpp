@@ -1,5 +1,5 @@
 // Piece summaries and their merge (components.hpp, docs/cluster.md).
-#include "renderer/iso/components.hpp"
+#include "renderer/surface/components.hpp"
 
 #include <algorithm>
 #include <cstring>

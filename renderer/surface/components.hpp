@@ -25,7 +25,7 @@
 
 #include "io/mesh.hpp"
 #include "io/mesh_sink.hpp"
-#include "renderer/iso/extract.hpp"
+#include "renderer/surface/extract.hpp"
 
 namespace iso {
 

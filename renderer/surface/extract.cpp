@@ -1,5 +1,5 @@
-#include "renderer/iso/arena.hpp"
-#include "renderer/iso/extract.hpp"
+#include "renderer/surface/arena.hpp"
+#include "renderer/surface/extract.hpp"
 
 #include <algorithm>
 #include <atomic>
@@ -17,7 +17,7 @@
 #include <tbb/task_arena.h>
 
 #include "io/sparse.hpp"
-#include "renderer/iso/mc_tables.hpp"
+#include "renderer/surface/mc_tables.hpp"
 
 namespace iso {
 

@@ -1,4 +1,4 @@
-#include "renderer/iso/mc_tables.hpp"
+#include "renderer/surface/mc_tables.hpp"
 
 #include <vtkMarchingCubesTriangleCases.h>
 

@@ -1,5 +1,5 @@
 // Contiguous, weight-balanced ranges of chunk ids (partition.hpp).
-#include "renderer/iso/partition.hpp"
+#include "renderer/surface/partition.hpp"
 
 #include <cmath>
 

@@ -10,8 +10,8 @@
 #include <span>
 #include <vector>
 
-#include "renderer/iso/components.hpp"
-#include "renderer/iso/extract.hpp"
+#include "renderer/surface/components.hpp"
+#include "renderer/surface/extract.hpp"
 
 namespace iso {
 

@@ -1,4 +1,4 @@
-#include "renderer/iso/postprocess.hpp"
+#include "renderer/surface/postprocess.hpp"
 
 #include "io/vtk_mesh.hpp"
 

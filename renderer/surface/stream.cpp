@@ -1,4 +1,4 @@
-#include "renderer/iso/stream.hpp"
+#include "renderer/surface/stream.hpp"
 
 #include <algorithm>
 #include <atomic>
@@ -12,7 +12,7 @@
 #include <set>
 #include <thread>
 
-#include "renderer/iso/arena.hpp"
+#include "renderer/surface/arena.hpp"
 
 namespace iso {
 

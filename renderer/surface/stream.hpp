@@ -23,7 +23,7 @@
 
 #include "io/mesh_sink.hpp"
 #include "io/volume_stream.hpp"
-#include "renderer/iso/extract.hpp"
+#include "renderer/surface/extract.hpp"
 
 namespace iso {
 

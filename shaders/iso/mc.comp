@@ -1,6 +1,6 @@
 #version 450
-// GPU marching cubes over a batch of chunks (renderer/iso/gpu_extract.cpp).
-// Same conventions as the CPU path (renderer/iso/extract.hpp): a sample >= iso
+// GPU marching cubes over a batch of chunks (renderer/gpu/gpu_extract.cpp).
+// Same conventions as the CPU path (renderer/surface/extract.hpp): a sample >= iso
 // is inside, t = (iso - s0) / (s1 - s0) in double precision from the edge's
 // lower-index end, clamped to [edge_margin, 1 - edge_margin] on every edge (a
 // tie gets its own vertex per cut edge, just inside the edge: issue 16,

@@ -2,7 +2,7 @@
 #extension GL_GOOGLE_include_directive : require
 // Overlay geometry in pixels (origin top left), coloured per vertex; markup
 // vertices carry what the fragment shader compares with the frame's depth
-// (OverlayVertex in renderer/render/overlay.hpp).
+// (OverlayVertex in renderer/frame/annotations.hpp).
 #include "std140.glsl"
 #include "overlay_params.glsl"
 layout(location = 0) in vec2 pixel;

@@ -30,7 +30,7 @@
 #include "renderer/ao/reference.hpp"
 #include "renderer/core/api.hpp"
 #include "renderer/core/scene.hpp"
-#include "renderer/scene/camera.hpp"
+#include "renderer/frame/camera.hpp"
 
 using namespace iso;
 

@@ -34,8 +34,8 @@
 #include "io/volume_io.hpp"
 #include "renderer/gl/context.hpp"
 #include "renderer/gl/objects.hpp"
-#include "renderer/iso/extract.hpp"
-#include "renderer/iso/gpu_extract.hpp"
+#include "renderer/surface/extract.hpp"
+#include "renderer/gpu/gpu_extract.hpp"
 
 using namespace iso;
 using namespace iso::bench;

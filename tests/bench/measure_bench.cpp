@@ -44,8 +44,8 @@
 #include "bench_util.hpp"
 #include "ct_phantom.hpp"
 #include "vtk_volume.hpp"
-#include "renderer/iso/extract.hpp"
-#include "renderer/iso/measure.hpp"
+#include "renderer/surface/extract.hpp"
+#include "renderer/surface/analysis.hpp"
 
 using namespace iso;
 using namespace iso::bench;

@@ -30,7 +30,7 @@
 #include "io/volume_io.hpp"
 #include "renderer/core/scene.hpp"
 #include "renderer/gl/context.hpp"
-#include "renderer/iso/extract.hpp"
+#include "renderer/surface/extract.hpp"
 
 using namespace iso;
 using namespace iso::bench;

@@ -30,7 +30,7 @@
 #include "renderer/core/scene.hpp"
 #include "renderer/gl/context.hpp"
 #include "renderer/gl/objects.hpp"
-#include "renderer/iso/extract.hpp"
+#include "renderer/surface/extract.hpp"
 
 using namespace iso;
 

@@ -15,8 +15,8 @@
 #include "gl_test.hpp"
 #include "renderer/ao/reference.hpp"
 #include "renderer/core/api.hpp"
-#include "renderer/iso/extract.hpp"
-#include "renderer/render/renderer.hpp"
+#include "renderer/surface/extract.hpp"
+#include "renderer/gpu/renderer.hpp"
 #include "test_meshes.hpp"
 #include "test_util.hpp"
 

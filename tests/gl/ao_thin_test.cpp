@@ -18,7 +18,7 @@
 #include "gl_test.hpp"
 #include "test_meshes.hpp"
 #include "renderer/core/api.hpp"
-#include "renderer/render/renderer.hpp"
+#include "renderer/gpu/renderer.hpp"
 
 using namespace iso;
 using ConeAoThin = test::GlTest;

@@ -29,7 +29,7 @@
 #include "renderer/ao/disk_geometry.hpp"
 #include "renderer/ao/disk_hierarchy.hpp"
 #include "renderer/core/api.hpp"
-#include "renderer/render/renderer.hpp"
+#include "renderer/gpu/renderer.hpp"
 #include "test_meshes.hpp"
 #include "test_util.hpp"
 

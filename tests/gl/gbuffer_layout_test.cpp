@@ -5,7 +5,7 @@
 
 #include "renderer/gl/context.hpp"
 #include "renderer/gl/objects.hpp"
-#include "renderer/iso/extract.hpp"
+#include "renderer/surface/extract.hpp"
 #include "gl_test.hpp"
 #include "test_util.hpp"
 

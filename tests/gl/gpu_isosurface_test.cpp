@@ -1,7 +1,7 @@
 // GPU marching cubes (compute shaders) against the CPU extractor, chunk by
 // chunk and vertex by vertex (matched by key), on a real GL 4.5 context
 // (EGL + llvmpipe in CI, the GPU where there is one).
-#include "renderer/iso/gpu_extract.hpp"
+#include "renderer/gpu/gpu_extract.hpp"
 
 #include <algorithm>
 #include <cmath>

@@ -33,8 +33,8 @@
 #include "renderer/core/pick.hpp"
 #include "renderer/core/scene.hpp"
 #include "renderer/core/slices.hpp"
-#include "renderer/iso/measure.hpp"
-#include "renderer/render/overlay.hpp"
+#include "renderer/surface/analysis.hpp"
+#include "renderer/frame/annotations.hpp"
 #include "gui_test_util.hpp"
 
 using namespace iso;

@@ -23,9 +23,9 @@
 #include "app/gui/viewer.hpp"
 #include "io/volume_io.hpp"
 #include "renderer/core/scene.hpp"
-#include "renderer/iso/extract.hpp"
-#include "renderer/iso/measure.hpp"
-#include "renderer/iso/postprocess.hpp"
+#include "renderer/surface/extract.hpp"
+#include "renderer/surface/analysis.hpp"
+#include "renderer/surface/postprocess.hpp"
 #include "gui_test_util.hpp"
 
 using namespace iso;

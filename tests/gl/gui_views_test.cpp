@@ -38,7 +38,7 @@
 #include "renderer/core/api.hpp"
 #include "renderer/core/scene.hpp"
 #include "renderer/core/slices.hpp"
-#include "renderer/iso/measure.hpp"
+#include "renderer/surface/analysis.hpp"
 
 using namespace iso;
 using test::wait_until;

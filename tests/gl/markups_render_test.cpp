@@ -12,8 +12,8 @@
 
 #include "gl_test.hpp"
 #include "io/image.hpp"
-#include "renderer/render/overlay.hpp"
-#include "renderer/render/renderer.hpp"
+#include "renderer/frame/annotations.hpp"
+#include "renderer/gpu/renderer.hpp"
 #include "test_util.hpp"
 
 using namespace iso;

@@ -7,8 +7,8 @@
 
 #include "renderer/gl/context.hpp"
 #include "renderer/gl/objects.hpp"
-#include "renderer/iso/extract.hpp"
-#include "renderer/render/renderer.hpp"
+#include "renderer/surface/extract.hpp"
+#include "renderer/gpu/renderer.hpp"
 #include "gl_test.hpp"
 #include "test_util.hpp"
 

@@ -12,7 +12,7 @@
 #include <glm/glm.hpp>
 
 #include "gl_test.hpp"
-#include "renderer/render/renderer.hpp"
+#include "renderer/gpu/renderer.hpp"
 #include "test_scenes.hpp"
 
 using namespace iso;

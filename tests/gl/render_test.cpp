@@ -1,7 +1,7 @@
 // The renderer on a real GL context: depth and normal AOVs against an
 // analytic sphere, id AOV, pass culling per requested output, patient views,
 // extreme scales, degenerate and empty scenes.
-#include "renderer/render/renderer.hpp"
+#include "renderer/gpu/renderer.hpp"
 
 #include <array>
 #include <cmath>
@@ -10,8 +10,8 @@
 
 #include "gl_test.hpp"
 #include "renderer/gl/objects.hpp"
-#include "renderer/render/overlay.hpp"
-#include "renderer/iso/extract.hpp"
+#include "renderer/frame/annotations.hpp"
+#include "renderer/surface/extract.hpp"
 #include "test_util.hpp"
 
 using namespace iso;

@@ -7,8 +7,8 @@
 
 #include "io/mesh.hpp"
 #include "io/volume.hpp"
-#include "renderer/iso/extract.hpp"
-#include "renderer/scene/camera.hpp"
+#include "renderer/surface/extract.hpp"
+#include "renderer/frame/camera.hpp"
 #include "test_util.hpp"
 
 namespace iso::test {

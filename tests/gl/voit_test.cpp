@@ -16,8 +16,8 @@
 
 #include "gl_test.hpp"
 #include "renderer/ao/transparency_reference.hpp"
-#include "renderer/iso/extract.hpp"
-#include "renderer/render/renderer.hpp"
+#include "renderer/surface/extract.hpp"
+#include "renderer/gpu/renderer.hpp"
 #include "test_scenes.hpp"
 #include "test_util.hpp"
 

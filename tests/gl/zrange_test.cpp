@@ -1,7 +1,7 @@
 // shaders/ao/zrange.comp read back exactly (pass_harness.hpp): the nearest
 // and farthest linear depth of a hand-made 5x3 reversed-Z depth image with
 // background texels, against values derived by hand from the camera's
-// projection (renderer/scene/camera.cpp), bit for bit.
+// projection (renderer/frame/camera.cpp), bit for bit.
 //
 // Planes n = 1, f = 17. The projection (glm::perspectiveRH_ZO with far and
 // near swapped) gives a point at linear depth z the depth
@@ -23,7 +23,7 @@
 #include "gl_test.hpp"
 #include "pass_harness.hpp"
 #include "renderer/passes/std140.hpp"
-#include "renderer/scene/camera.hpp"
+#include "renderer/frame/camera.hpp"
 
 using namespace iso;
 using ZRange = test::GlTest;

@@ -25,7 +25,7 @@
 #include "io/volume.hpp"
 #include "io/volume_io.hpp"
 #include "io/vtk_mesh.hpp"
-#include "renderer/iso/components.hpp"
+#include "renderer/surface/components.hpp"
 #include "test_util.hpp"
 
 using namespace iso;

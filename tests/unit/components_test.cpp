@@ -1,5 +1,5 @@
-// Piece summaries and their merge (renderer/iso/components.hpp) and the
-// chunk partition (renderer/iso/partition.hpp), without MPI: an in-memory
+// Piece summaries and their merge (renderer/surface/components.hpp) and the
+// chunk partition (renderer/surface/partition.hpp), without MPI: an in-memory
 // surface is cut into pieces by chunk-id ranges exactly as the ranks of a
 // distributed job cut it, and the merged statistics must equal those of the
 // whole welded mesh (mesh_stats, and an independent union-find count).
@@ -17,9 +17,9 @@
 #include "measure_phantoms.hpp"
 #include "test_util.hpp"
 #include "renderer/core/stream_mesh.hpp"
-#include "renderer/iso/components.hpp"
-#include "renderer/iso/extract.hpp"
-#include "renderer/iso/partition.hpp"
+#include "renderer/surface/components.hpp"
+#include "renderer/surface/extract.hpp"
+#include "renderer/surface/partition.hpp"
 
 using namespace iso;
 using iso::test::sample_field;

@@ -1,6 +1,6 @@
 // CPU side of cone-traced AO: cone directions, Poisson-disk columns, jitter
 // sets, settings validation.
-#include "renderer/render/cone_ao.hpp"
+#include "renderer/ao/cone_pattern.hpp"
 
 #include <cmath>
 

@@ -1,8 +1,8 @@
-// The renderer's real frame (build_frame() in renderer/passes/frame.hpp), compiled without a
+// The renderer's real frame (build_frame() in renderer/passes/build_frame.hpp), compiled without a
 // GPU for each configuration: which passes run is decided by the graph's
 // culling from what the frame reads, never by the caller. No GL context: the
 // passes' GL work would only run in execute().
-#include "renderer/passes/frame.hpp"
+#include "renderer/passes/build_frame.hpp"
 
 #include "io/error.hpp"
 #include "test_util.hpp"

@@ -1,6 +1,6 @@
 // Chunked marching cubes: agreement with vtkFlyingEdges3D, chunking
 // invariance, watertightness, ties, degenerate inputs, incremental updates.
-#include "renderer/iso/extract.hpp"
+#include "renderer/surface/extract.hpp"
 
 #include <algorithm>
 #include <array>
@@ -45,7 +45,7 @@ Volume sphere(std::array<std::int64_t, 3> dims, const glm::dmat4& affine, glm::d
 // spacing 1) and maps its points through the affine ourselves, so any affine
 // can be compared; mirrored affines reverse the winding as ours do.
 // With `margin`, each point is first moved along its edge as our extractor
-// moves its vertices (renderer/iso/extract.hpp, kEdgeMargin: t clamped to
+// moves its vertices (renderer/surface/extract.hpp, kEdgeMargin: t clamped to
 // [1/128, 1 - 1/128]); the edge's axis is the coordinate farthest from an
 // integer (a point exactly on a sample, a tie, has no edge and stays put).
 // `moved` counts the points moved.
@@ -458,7 +458,7 @@ TEST(Isosurface, LabelMapOneSurfacePerLabelInOnePass) {
     EXPECT_NEAR(plain_sums(surfaces[1].mesh).volume_mm3, 5.0 * 14.0 * 12.0 - 4.0 * (5 + 14 + 12) / 8.0 + 8.0 / 12.0, 1e-9);
 }
 
-#include "renderer/iso/postprocess.hpp"
+#include "renderer/surface/postprocess.hpp"
 
 TEST(Postprocess, SmoothDecimateKeepLargest) {
     // Two spheres of different sizes.

@@ -1,10 +1,10 @@
-// Measurements (renderer/iso/measure.hpp): points, values at points, and the
+// Measurements (renderer/surface/analysis.hpp): points, values at points, and the
 // area, volume, topology and components of surfaces. Expected answers are
 // analytic (balls, slabs, cubes, a tetrahedron, a linear field) or computed
 // here independently (trilinear weights written out, triangle sums in a
 // plain loop); the phantoms are sampled on an oblique, anisotropic grid
 // (tests/unit/measure_phantoms.hpp: 0.7 x 1.0 x 1.3 mm, rotated 25 degrees).
-#include "renderer/iso/measure.hpp"
+#include "renderer/surface/analysis.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -19,7 +19,7 @@
 #include "io/error.hpp"
 #include "io/sparse.hpp"
 #include "measure_phantoms.hpp"
-#include "renderer/iso/extract.hpp"
+#include "renderer/surface/extract.hpp"
 #include "test_meshes.hpp"
 #include "test_util.hpp"
 

@@ -2,7 +2,7 @@
 // shows (the file's value, else computed from the points), the colours,
 // which control points are drawn, what each vertex carries for the depth
 // comparison, labels that are not ASCII, and the scale.
-#include "renderer/render/overlay.hpp"
+#include "renderer/frame/annotations.hpp"
 
 #include <cmath>
 

@@ -1,4 +1,4 @@
-// Out-of-core extraction (renderer/iso/stream.hpp, io/volume_stream.hpp,
+// Out-of-core extraction (renderer/surface/stream.hpp, io/volume_stream.hpp,
 // io/mesh_sink.hpp): streaming equals the in-memory extraction, for every
 // streamed format, budgets (slab heights) and chunk sizes; the files it writes
 // read back (VTK's vtkXMLPPolyDataReader, our PLY/STL readers) as the
@@ -29,8 +29,8 @@
 #include "io/vtk_mesh.hpp"
 #include "io/volume_io.hpp"
 #include "io/volume_stream.hpp"
-#include "renderer/iso/extract.hpp"
-#include "renderer/iso/stream.hpp"
+#include "renderer/surface/extract.hpp"
+#include "renderer/surface/stream.hpp"
 #include "test_util.hpp"
 
 // Is this an AddressSanitizer build? (GCC defines __SANITIZE_ADDRESS__, Clang answers __has_feature.)

@@ -10,8 +10,8 @@
 #include <thread>
 
 #include "io/error.hpp"
-#include "renderer/iso/extract.hpp"
-#include "renderer/iso/measure.hpp"
+#include "renderer/surface/extract.hpp"
+#include "renderer/surface/analysis.hpp"
 #include "test_util.hpp"
 
 using namespace iso;

@@ -18,7 +18,7 @@
 //   - chunked == unchunked (chunk sizes 2..16 and 32) as triangle sets.
 // The GPU side (same vertices bit for bit, by key) is in
 // tests/gl/gpu_isosurface_test.cpp.
-#include "renderer/iso/extract.hpp"
+#include "renderer/surface/extract.hpp"
 
 #include <algorithm>
 #include <array>
@@ -41,7 +41,7 @@
 
 #include "io/volume_io.hpp"
 #include "measure_phantoms.hpp"
-#include "renderer/iso/measure.hpp"
+#include "renderer/surface/analysis.hpp"
 #include "test_util.hpp"
 
 using namespace iso;
@@ -49,7 +49,7 @@ using iso::test::plain_sums;
 
 namespace {
 
-// The extractor's edge margin (renderer/iso/extract.hpp): vertices lie in
+// The extractor's edge margin (renderer/surface/extract.hpp): vertices lie in
 // [kMargin, 1 - kMargin] of their lattice edge.
 constexpr double kMargin = kEdgeMargin;
 // A vertex is on a face plane within this many voxels. Well below kMargin

@@ -21,8 +21,9 @@
 
 #include "renderer/graph/frame_graph.hpp"
 #include "renderer/graph/resource_pool.hpp"
-#include "renderer/render/overlay.hpp"
-#include "renderer/render/renderer.hpp"
+#include "renderer/frame/annotations.hpp"
+#include "renderer/frame/camera.hpp"
+#include "renderer/frame/frame.hpp"
 
 namespace iso::gl {
 class Program;

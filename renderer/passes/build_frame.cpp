@@ -3,9 +3,9 @@
 
 #include <glm/glm.hpp>
 
-#include "renderer/passes/frame.hpp"
+#include "renderer/passes/build_frame.hpp"
 #include "renderer/passes/gbuffer_layout.hpp"
-#include "renderer/render/disk_ao.hpp"
+#include "renderer/frame/ao_settings.hpp"
 
 namespace iso::passes {
 

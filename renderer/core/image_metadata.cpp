@@ -1,0 +1,159 @@
+#include "renderer/core/image_metadata.hpp"
+
+#include <cstdio>
+#include <filesystem>
+#include <sstream>
+
+#include "io/markups.hpp"
+#include "renderer/frame/ao_settings.hpp"
+
+namespace iso::core {
+
+namespace {
+
+using Text = std::map<std::string, std::string>;
+
+std::vector<float> flat(const glm::dmat4& m) {
+    std::vector<float> v;
+    for (int c = 0; c < 4; ++c)
+        for (int r = 0; r < 4; ++r) v.push_back(float(m[c][r]));
+    return v;
+}
+
+std::string number_text(double v) {
+    char b[64];
+    std::snprintf(b, sizeof b, "%.9g", v);
+    return b;
+}
+
+// Files as absolute paths and their SHA-256, one a line each.
+void add_files(Text& t, const std::vector<std::string>& files, const char* key, const char* hash_key) {
+    std::string paths, sums;
+    for (const auto& f : files) {
+        paths += (paths.empty() ? "" : "\n") + std::filesystem::absolute(f).string();
+        sums += (sums.empty() ? "" : "\n") + sha256_of_path(f);
+    }
+    if (files.empty()) return;
+    t[key] = paths;
+    t[hash_key] = sums;
+}
+
+// The markup files, and what was drawn, one markup a line: type, name,
+// points, the value shown (ASCII: "deg" for the degree sign).
+void add_markups(Text& t, const FrameRecord& f) {
+    if (!f.annotations || f.annotations->markups.empty()) return;
+    add_files(t, f.req.markups_files, "isoscope:markups", "isoscope:markups_sha256");
+    std::string drawn;
+    for (const auto& m : f.annotations->markups) {
+        std::size_t defined = 0;
+        for (const auto& p : m.points) defined += p.status == PositionStatus::Defined;
+        std::string value = markup_measurement_text(m);
+        if (const auto deg = value.find("\xC2\xB0"); deg != std::string::npos) value.replace(deg, 2, " deg");
+        drawn += (drawn.empty() ? "" : "\n") + std::string(markup_type_name(m.type)) + (m.name.empty() ? "" : " '" + m.name + "'") +
+                 ": " + std::to_string(defined) + " defined point(s)" + (value.empty() ? "" : ", " + value);
+    }
+    t["isoscope:markups_drawn"] = drawn;
+}
+
+std::string iso_values_text(const Scene& scene) {
+    std::string isos;
+    for (const SurfaceId id : scene.surfaces())
+        if (scene.info(id).kind == SurfaceInfo::Kind::Iso) {
+            char b[32];
+            std::snprintf(b, sizeof b, "%s%g", isos.empty() ? "" : ",", scene.info(id).value);
+            isos += b;
+        }
+    return isos;
+}
+
+std::string camera_text(const Camera& cam) {
+    std::ostringstream cs;
+    cs.precision(9);
+    cs << "eye " << cam.eye.x << ' ' << cam.eye.y << ' ' << cam.eye.z << "; target " << cam.target.x << ' ' << cam.target.y << ' '
+       << cam.target.z << "; up " << cam.up.x << ' ' << cam.up.y << ' ' << cam.up.z << "; fov_y_degrees " << cam.fov_y_degrees
+       << "; near " << cam.near_plane << "; far " << cam.far_plane << "; depth reversed-Z [0,1]";
+    return cs.str();
+}
+
+// Each visible surface: name, linear albedo, opacity.
+std::string surfaces_text(const Scene& scene) {
+    std::string surfaces;
+    for (const SurfaceId id : scene.surfaces()) {
+        const auto& si = scene.info(id);
+        if (!si.visible) continue;
+        char b[160];
+        std::snprintf(b, sizeof b, "%s%s: albedo %.6g %.6g %.6g, opacity %.6g", surfaces.empty() ? "" : "; ", si.name.c_str(),
+                      si.color.r, si.color.g, si.color.b, si.opacity);
+        surfaces += b;
+    }
+    return surfaces;
+}
+
+void add_shading(Text& t, const FrameRecord& f) {
+    const auto& req = f.req;
+    t["isoscope:shading"] = req.flat_shading ? "flat (albedo only)" : "lit";
+    if (!req.transparency) t["isoscope:transparency"] = "off: every surface drawn opaque, whatever its opacity";
+    const auto& oit = f.result.oit;
+    if (oit.fragments > 0) {
+        t["isoscope:transparency"] = "VOIT per-pixel fragment lists, front to back, epsilon " + std::to_string(req.oit_epsilon) + "; " +
+                                     std::to_string(oit.fragments) + " fragments" +
+                                     (oit.merged ? ", " + std::to_string(oit.merged) + " merged past the memory cap (error at most " +
+                                                       std::to_string(oit.merge_error_max) + " per channel)"
+                                                 : std::string());
+    }
+    if (req.aov != Aov::None && !req.aov_ao)
+        t["isoscope:aov"] = std::string(req.aov == Aov::Depth    ? "depth (mm along the view axis)"
+                                        : req.aov == Aov::Normal ? "normal (LPS)"
+                                                                 : "id") +
+                            "; of the nearest opaque surface (translucent surfaces are not in the AOVs)";
+}
+
+// The AO method and every one of its settings (from the settings' tables).
+void add_ambient_occlusion(Text& t, const FrameRecord& f) {
+    const auto& req = f.req;
+    if (req.ao != "off") t["isoscope:ao_radius_mm"] = number_text(req.ao_radius_mm);
+    if (req.ao == "cone") {
+        t["isoscope:ao"] = "cone (cone tracing in a solid slicemap voxelization)";
+        t["isoscope:ao_parameters"] = settings_text(f.options.ao_settings) + "; frames " + std::to_string(req.ao_frames);
+    }
+    if (req.ao == "disk") {
+        t["isoscope:ao"] = "disk (disk hierarchy with exact near triangles, GPU Gems 3 ch. 12)";
+        t["isoscope:ao_parameters"] = settings_text(f.options.disk_settings);
+    }
+    if (req.aov_ao) {
+        t["isoscope:aov"] = "ao (1 = unoccluded; cosine-weighted visibility within the radius; NaN = background)";
+        if (req.ao == "reference") {
+            t["isoscope:ao"] = "reference (Embree ray tracing)";
+            t["isoscope:ao_rays"] = std::to_string(req.ao_rays);
+        }
+    }
+}
+
+} // namespace
+
+ImageMetadata frame_metadata(const FrameRecord& f) {
+    ImageMetadata meta;
+    auto& t = meta.text;
+    t["isoscope:version"] = version();
+    // The inputs: one path (and its SHA-256) each, joined by newlines (both keys even when there is none).
+    t["isoscope:input"] = t["isoscope:input_sha256"] = "";
+    add_files(t, f.scene.sources(), "isoscope:input", "isoscope:input_sha256");
+    add_markups(t, f);
+    if (const auto isos = iso_values_text(f.scene); !isos.empty()) t["isoscope:iso"] = isos;
+    t["isoscope:view_name"] = f.req.camera ? "the request's camera" : f.req.view;
+    if (!f.req.session_file.empty()) {
+        t["isoscope:session"] = std::filesystem::absolute(f.req.session_file).lexically_normal().string();
+        t["isoscope:session_sha256"] = sha256_of_path(f.req.session_file);
+    }
+    t["isoscope:camera"] = camera_text(f.camera);
+    t["isoscope:world"] = "LPS millimetres";
+    t["isoscope:renderer"] = f.result.gl_renderer;
+    t["isoscope:surfaces"] = surfaces_text(f.scene);
+    add_shading(t, f);
+    add_ambient_occlusion(t, f);
+    meta.float_arrays["isoscope:view"] = flat(f.camera.view());
+    meta.float_arrays["isoscope:projection"] = flat(f.camera.projection(double(f.req.width) / double(f.req.height)));
+    return meta;
+}
+
+} // namespace iso::core

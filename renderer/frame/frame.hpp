@@ -1,0 +1,175 @@
+// What a frame is, for everyone who asks for one or reads one: the objects'
+// properties, the options of a frame (size, background, AO and its settings,
+// transparency, annotations, a pick riding on it), the test hooks, and what
+// comes back (the image or an AOV, the pass statistics, the VOIT figures, the
+// pick lists, the AO state). A leaf: it includes no pass and no Renderer, so
+// the passes (renderer/passes) and the front ends share it without a cycle.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <glm/vec3.hpp>
+#include <glm/vec4.hpp>
+
+#include "io/image.hpp"
+#include "io/mesh.hpp"
+#include "io/progress.hpp"
+#include "renderer/frame/ao_settings.hpp"
+#include "renderer/graph/frame_graph.hpp"
+
+namespace iso {
+
+struct Annotations; // renderer/frame/annotations.hpp
+
+struct SceneObject {
+    std::string name;
+    glm::vec3 color{0.9f, 0.85f, 0.8f}; // linear RGB albedo
+    float opacity = 1.0f;
+    bool visible = true, pickable = true;
+};
+
+
+enum class Aov { None, Depth, Normal, Id, Ao };
+
+// How the AO image is computed (docs/ao.md): cone tracing in a slicemap
+// (interactive), or the disk hierarchy of GPU Gems 3 ch. 12 (still pictures).
+enum class AoMethod { Cone, Disk };
+Aov aov_from_name(const std::string& name); // "depth", "normal", "id", "ao"; throws iso::Error
+
+// A pick region in image pixels, from the image's top-left corner.
+struct PickRegion {
+    int x = 0, y = 0, width = 1, height = 1;
+};
+
+// One fragment of a picked pixel, as the frame rasterized it.
+struct PickFragment {
+    float depth = 0;              // reversed Z (larger is nearer)
+    std::uint32_t object = 0;     // 1-based object id
+    std::uint32_t primitive = 0;  // the triangle in the object's mesh
+    float alpha = 1;              // the object's opacity (1: opaque)
+    float transmittance = 1;      // of everything in front of it in this pixel
+};
+
+// What a pick found: per pixel of the region (clipped to the image; row by
+// row from its top-left), the fragments front to back (ties by object, then
+// triangle). Opaque surfaces list every layer along the pixel (hidden ones
+// too); translucent ones only in front of the nearest opaque.
+struct PickList {
+    PickRegion region{0, 0, 0, 0};
+    std::vector<std::vector<PickFragment>> pixels;
+    std::uint64_t offered = 0, capacity = 0; // entries offered and stored: offered > capacity lost some
+};
+
+struct RenderOptions {
+    int width = 512, height = 512;
+    glm::vec4 background{0.08f, 0.09f, 0.11f, 1.0f}; // linear; alpha 0 for a transparent background
+    Aov aov = Aov::None;
+    // Annotations drawn over the colour image (not over AOVs); null: none.
+    const struct Annotations* annotations = nullptr;
+    float scale = 1.0f; // text, line widths and glyphs scale with it
+    // Draw into this GL framebuffer (e.g. a Qt widget's) instead of reading
+    // the image back; 0 means read back into RenderResult::image.
+    unsigned target_framebuffer = 0;
+    bool present = false;
+    // Finish the GPU's work at the end of each pass so that per-pass times
+    // are real (costs some throughput; for --stats and benchmarks).
+    bool time_passes = false;
+    // Flat shading: every surface is its albedo (no lighting, no AO), so
+    // transparency compositing can be checked exactly.
+    bool flat_shading = false;
+    // Off: every object is drawn opaque whatever its opacity (the desktop
+    // app's transparency toggle); the VOIT passes then have nothing to do.
+    bool transparency = true;
+    // VOIT (order-independent transparency through per-pixel fragment
+    // lists) for objects with opacity < 1: stop compositing a pixel once the
+    // remaining transmittance is below oit_epsilon; the node pool grows up
+    // to oit_memory_bytes.
+    float oit_epsilon = 1.0f / 512.0f;
+    std::size_t oit_memory_bytes = std::size_t(256) << 20;
+    // Ambient occlusion (modulates the ambient term; Aov::Ao reads it raw).
+    // Off: its passes are culled. ao_settings.radius_mm is R for both
+    // methods; the other members of ao_settings are the cone tracer's,
+    // disk_settings the disk method's (docs/ao.md, "Disk AO on the GPU").
+    bool ao = false;
+    AoMethod ao_method = AoMethod::Cone;
+    ConeAoSettings ao_settings;
+    DiskAoSettings disk_settings;
+    // Long passes (disk AO's gather: seconds per frame on llvmpipe) run in
+    // bands and report after each (stage "disk AO"); returning false stops
+    // them: the frame is finished without the rest and RenderResult::cancelled
+    // is set (the caller throws; nothing throws through the frame graph).
+    ProgressFn progress;
+    // A pick riding on this frame (docs/picking.md): image pixels from the
+    // top-left; clipped to the image. Fragments inside are listed by the
+    // frame's own geometry passes; RenderResult::pick holds the lists.
+    std::optional<PickRegion> pick;
+};
+
+// Test and benchmark hooks, apart from what a user asks for.
+struct RenderHooks {
+    // Read the slicemap back into RenderResult::slicemap (tests, the
+    // voxel-grid reference).
+    bool read_slicemap = false;
+    // Rebuild the slicemap even if nothing changed (benchmarks time a new view).
+    bool ao_force_voxelize = false;
+    // Read the VOIT lists back: each pixel's list length into
+    // RenderResult::oit_lists (rows top to bottom; tests).
+    bool read_oit_lists = false;
+    // Disk AO: read the element terms (one accessibility per node of the
+    // concatenated hierarchy) into RenderResult::disk_terms, and each
+    // gathered pixel's receiver (world point, w = its AO; world normal) into
+    // RenderResult::disk_receivers (rows bottom-up as GL stores them; tests).
+    bool read_disk = false;
+};
+
+// What the VOIT passes did this frame (all zero without translucent objects).
+struct OitStats {
+    std::uint64_t fragments = 0;  // translucent fragments in front of the opaque surfaces
+    // Fragments that found the pool full at its cap. They are merged per
+    // pixel (order-independent: their opacity-weighted mean colour and their
+    // total coverage 1 - prod(1 - alpha)) and composited behind the pixel's
+    // sorted list. A frame that finds the cap too small is drawn again with a
+    // per-pixel depth cut (a depth histogram of each pixel's fragments): each
+    // pixel keeps its nearest fragments, up to a common level that fits the
+    // pool, and merges those beyond. Merged fragments then all lie behind
+    // the stored ones, and the pixel's error is at most the transmittance
+    // reaching them times their coverage (docs/voit.md): merge_error_max is
+    // the largest over the image, in [0, 1] per channel of linear colour.
+    std::uint64_t merged = 0;
+    std::uint64_t overflowed = 0; // of them, found the pool full (the depth cut did not make room: the looser bound)
+    std::uint64_t merged_pixels = 0;
+    double merge_error_max = 0;
+    std::uint64_t capacity = 0;   // nodes the pool held
+    std::uint32_t max_list = 0;   // longest pixel list
+    std::uint64_t shaded = 0;     // fragments shaded (the rest were behind an opaque-enough front)
+    std::uint64_t lists = 0;      // pixels with a list
+    int redraws = 0;              // frames redrawn with a larger pool
+};
+
+struct RenderResult {
+    Image image;                 // RGBA8 sRGB colour, or the AOV as floats
+    graph::FrameStats stats;
+    std::string gl_renderer;
+    SliceMap slicemap;           // with RenderHooks::read_slicemap
+    bool voxelized = false;      // the slicemap was rebuilt this frame (else reused)
+    int ao_frames = 0;           // still frames accumulated into the AO so far
+    double ao_guard = 0;         // guard band used by the slicemap, fraction of the viewport per side
+    OitStats oit;
+    std::vector<std::uint32_t> oit_lists; // with RenderHooks::read_oit_lists
+    PickList pick;                        // with RenderOptions::pick
+    // Disk AO: the hierarchy was built (some surface's on the CPU) and
+    // uploaded this frame, the element passes ran (else both were kept from
+    // an earlier frame); its size; with RenderHooks::read_disk, what it read.
+    bool disk_built = false, disk_elements = false;
+    std::size_t disk_nodes = 0, disk_triangles = 0;
+    double disk_build_ms = 0;             // CPU time of the hierarchy builds this frame
+    bool cancelled = false;               // RenderOptions::progress asked to stop: the image is incomplete
+    std::vector<float> disk_terms;
+    std::vector<glm::vec4> disk_receivers; // 2 per pixel: (point, AO), (normal, 0)
+};
+
+} // namespace iso
