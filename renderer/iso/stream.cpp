@@ -57,7 +57,7 @@ StreamOptions checked_options(const VolumeStream& src, const StreamOptions& in) 
         opt.label_values.erase(std::unique(opt.label_values.begin(), opt.label_values.end()), opt.label_values.end());
     }
     if (src.resident_bytes() >= opt.memory_budget)
-        throw Error("--memory", mib(opt.memory_budget) + " is less than the " + mib(src.resident_bytes()) +
+        throw Error("memory budget", mib(opt.memory_budget) + " is less than the " + mib(src.resident_bytes()) +
                                          " the volume's source holds");
     opt.memory_budget -= src.resident_bytes();
     return opt;
@@ -125,8 +125,8 @@ StreamStats stream_extract(VolumeStream& src, const StreamOptions& opt_in, MeshS
     st.plan = plan_stream(src.header(), opt, index.get());
     if (!st.plan.fits)
         st.warnings.push_back("the surface's estimated size in one chunk layer does not fit " + mib(opt.memory_budget) +
-                              " with the samples: slabs of one layer, the output may exceed the budget (give more "
-                              "--memory or a smaller --chunk)");
+                              " with the samples: slabs of one layer, the output may exceed the budget (raise the "
+                              "memory budget or lower the chunk size)");
     sink.begin(values.size(), st.plan.slabs, opt.extract.normals);
     if (values.empty() || st.plan.slabs == 0) {
         report(opt.progress, 1.0, "extracting isosurface", "streaming");

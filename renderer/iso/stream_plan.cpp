@@ -97,7 +97,7 @@ std::size_t slab_bytes(const VolumeHeader& h, int C, int layers) {
 
 // Not even one chunk layer's slab fits beside the fixed costs.
 Error budget_too_small(const VolumeHeader& h, const StreamOptions& opt, int C, std::size_t needed) {
-    return Error("--memory", mib(opt.memory_budget) + " is too small for this volume: one slab of " +
+    return Error("memory budget", mib(opt.memory_budget) + " is too small for this volume: one slab of " +
                                       std::to_string(std::min<std::int64_t>(C + 3, h.dims[2])) + " slices (" +
                                       std::to_string(h.dims[0]) + " x " + std::to_string(h.dims[1]) + " " +
                                       voxel_type_name(h.type) + ") with chunk size " + std::to_string(C) + " needs " +
@@ -209,7 +209,7 @@ int fitting_chunk_size(const VolumeHeader& h, const StreamOptions& opt, std::siz
 
 StreamPlan plan_stream(const VolumeHeader& h, const StreamOptions& opt, const ChunkIndex* index) {
     if (index) return plan_chunks(h, opt, index, index->chunk_size(), opt.overlap);
-    if (opt.extract.chunk_size < 2) throw Error("--chunk", "chunk size must be at least 2 cells");
+    if (opt.extract.chunk_size < 2) throw Error("chunk size", "must be at least 2 cells");
     // With overlap the chunk size is first chosen for two one-layer slabs
     // (the one extracted and the next one read). If the overlapped plan does
     // not fit at that size, it is chosen again for one slab at a time (a
