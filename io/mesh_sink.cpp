@@ -157,7 +157,7 @@ protected:
 vtkSmartPointer<vtkPolyData> piece_polydata_view(const Mesh& m, bool normals) {
     if (m.positions.size() > std::size_t(std::numeric_limits<std::int32_t>::max()) ||
         m.triangles.size() > std::size_t(std::numeric_limits<std::int32_t>::max() / 3))
-        throw Error("streaming", "a piece with 2^31 vertices or more: lower --memory");
+        throw Error("streaming", "a piece with 2^31 vertices or more: lower the memory budget");
     auto pd = vtkSmartPointer<vtkPolyData>::New();
     vtkNew<vtkFloatArray> xyz;
     xyz->SetNumberOfComponents(3);

@@ -88,8 +88,8 @@ bool replaceable_piece_dir(const fs::path& dir, const std::string& stem) {
 // per slab and surface) and writes each at once as a .vtp into the job's
 // staging folder under a rank-local name (renamed to its global piece
 // number once every rank's count is known), keeping only its summary: the
-// rank's output is never held whole, so a rank stays within --memory plus
-// one slab's piece (docs/cluster.md, "Memory per rank").
+// rank's output is never held whole, so a rank stays within its memory
+// budget plus one slab's piece (docs/cluster.md, "Memory per rank").
 class RankSink final : public MeshSink {
 public:
     RankSink(std::vector<fs::path> piece_dirs, std::vector<std::string> stems, int rank, const glm::dvec3& origin)
@@ -213,6 +213,182 @@ std::size_t finish_surface(const Comm& comm, const Staging& st, const RankSink& 
     return total;
 }
 
+// 1. The output: a partitioned .pvtp (other formats would need the whole
+// mesh on one rank).
+void check_output(const Comm& comm, const DistMeshRequest& req) {
+    agreed(comm, [&] {
+        if (lower(fs::path(req.output).extension().string()) != ".pvtp")
+            throw Error(req.output, "under mpirun the output must be a partitioned .pvtp (each rank writes its piece); "
+                                    "convert it afterwards, or run without mpirun for .stl/.ply/.obj/.vtp");
+        if (comm.root()) check_writable_destination(req.output);
+    });
+}
+
+// 2. The header (every rank; formats that cannot stream are loaded whole
+// when they fit the budget, as in one process).
+std::unique_ptr<VolumeStream> open_source(const Comm& comm, const DistMeshRequest& req) {
+    std::unique_ptr<VolumeStream> src;
+    agreed(comm, [&] {
+        LoadOptions lo;
+        lo.series = req.series;
+        src = open_volume_stream(req.input, req.memory_budget, lo);
+    });
+    return src;
+}
+
+StreamOptions stream_options(const DistMeshRequest& req) {
+    StreamOptions so;
+    so.isos = req.labels ? std::vector<double>{} : req.isos;
+    so.labels = req.labels;
+    so.label_values = req.labels ? req.isos : std::vector<double>{};
+    so.extract = req.extract;
+    so.memory_budget = req.memory_budget;
+    so.overlap = req.overlap;
+    return so;
+}
+
+// 3a. The chunk size: rank 0's plan, broadcast (it depends on the thread
+// count, which may differ between nodes).
+int agreed_chunk_size(const Comm& comm, const VolumeHeader& h, const StreamOptions& so) {
+    std::string mine;
+    agreed(comm, [&] {
+        if (comm.root()) mine = std::to_string(plan_stream(h, so, nullptr).chunk_size);
+    });
+    return std::stoi(comm.broadcast(mine));
+}
+
+// 3b. This rank's share of the index pass: an equal share of the chunk
+// layers, read in slabs as large as the budget allows. `labels` (optional):
+// the distinct non-zero values seen.
+void summarize_share(const Comm& comm, VolumeStream& src, ChunkSummaries& sum, std::size_t memory_budget,
+                     const ProgressFn& progress, std::set<double>* labels) {
+    const VolumeHeader& h = src.header();
+    const int C = sum.chunk_size;
+    const int layers = sum.counts[2];
+    const int L0 = int(std::int64_t(layers) * comm.rank() / comm.size());
+    const int L1 = int(std::int64_t(layers) * (comm.rank() + 1) / comm.size());
+    // Disjoint k-slices: chunk layer l starts at sample l*C; the last share
+    // runs to the last slice. (ChunkSummaries::add credits each sample to
+    // every chunk holding it, so no slice is read twice.)
+    const std::int64_t k_begin = std::int64_t(L0) * C;
+    const std::int64_t k_end = comm.rank() + 1 == comm.size() ? h.dims[2] : std::int64_t(L1) * C;
+    const std::size_t slice = std::size_t(h.slab_memory_bytes(1) - h.slab_memory_bytes(0));
+    const std::size_t fixed = 3 * sum.finite_min.size() * (2 * sizeof(double) + 1) + std::size_t(h.slab_memory_bytes(0));
+    const std::int64_t per =
+        std::max<std::int64_t>(1, memory_budget > fixed ? std::int64_t((memory_budget - fixed) / slice) : 1);
+    agreed(comm, [&] {
+        for (std::int64_t k0 = k_begin; k0 < k_end; k0 += per) {
+            const std::int64_t k1 = std::min(k0 + per - 1, k_end - 1);
+            report(progress, double(k0 - k_begin) / double(std::max<std::int64_t>(k_end - k_begin, 1)), "indexing volume",
+                   "isoscope mesh");
+            const Volume slab = src.read_slab(k0, k1);
+            sum.add({&slab, h.dims, k0, h.index_to_lps});
+            if (labels) {
+                for (double v : distinct_labels(slab)) labels->insert(v);
+                if (labels->size() > 4096)
+                    throw Error(h.path, "has more than 4096 distinct values: it does not look like a label map");
+            }
+        }
+    });
+}
+
+// 3c. The per-chunk arrays reduced on every rank (MIN, MAX, OR).
+void reduce_summaries(const Comm& comm, ChunkSummaries& sum) {
+    sum.finite_min = comm.allreduce_min(sum.finite_min);
+    sum.finite_max = comm.allreduce_max(sum.finite_max);
+    sum.flags = comm.allreduce_bor(sum.flags);
+    const double range[2] = {-sum.lowest, sum.highest}; // one MAX for both ends
+    const auto r = comm.allreduce_max(range);
+    sum.lowest = -r[0];
+    sum.highest = r[1];
+}
+
+// 3. The index, built in parallel with chunk size C. Labels: when none are
+// given, every rank's labels found, gathered into `values` and `so`.
+std::shared_ptr<const ChunkIndex> parallel_index(const Comm& comm, VolumeStream& src, int C, const DistMeshRequest& req,
+                                                 const ProgressFn& progress, StreamOptions& so, std::vector<double>& values) {
+    const VolumeHeader& h = src.header();
+    ChunkSummaries sum(h.dims, C, h.type);
+    const bool find_labels = req.labels && values.empty();
+    std::set<double> labels;
+    summarize_share(comm, src, sum, req.memory_budget, progress, find_labels ? &labels : nullptr);
+    reduce_summaries(comm, sum);
+    if (find_labels) {
+        const std::vector<double> mine(labels.begin(), labels.end());
+        auto all = comm.allgatherv(mine);
+        std::sort(all.begin(), all.end());
+        all.erase(std::unique(all.begin(), all.end()), all.end());
+        values = all;
+        so.label_values = all;
+    }
+    std::shared_ptr<const ChunkIndex> index;
+    agreed(comm, [&] {
+        if (values.size() > 4096) throw Error(h.path, "has more than 4096 distinct values: it does not look like a label map");
+        if (values.empty()) throw Error(h.path, req.labels ? "has no non-zero label" : "no iso value given");
+        index = std::make_shared<const ChunkIndex>(sum.finish());
+    });
+    return index;
+}
+
+// 4. The plan, made on rank 0 and broadcast so every rank holds the same,
+// and each rank's active chunks.
+void plan_ranks(const Comm& comm, const ChunkIndex& idx, const std::vector<double>& values, bool labels,
+                DistMeshResult& res) {
+    std::string bytes;
+    if (comm.root()) {
+        res.plan = partition_chunks(idx, values, comm.size(), labels);
+        bytes = encode_plan(res.plan);
+    }
+    res.plan = decode_plan(comm.broadcast(bytes));
+    const auto w = chunk_weights(idx, values, labels);
+    for (const auto& r : res.plan) {
+        std::size_t n = 0;
+        for (std::size_t id = r.first; id < r.last; ++id) n += w[id] > 0;
+        res.rank_active.push_back(n);
+    }
+}
+
+// 5. Streaming extraction of this rank's chunks (only the slabs its active
+// chunks need are read); each slab's piece is summarized and written at
+// once. The source is closed after it; every rank's slabs and peak are gathered.
+void extract_share(const Comm& comm, std::unique_ptr<VolumeStream>& src, StreamOptions& so, const ProgressFn& progress,
+                   RankSink& sink, DistMeshResult& res) {
+    const ChunkRange mine = res.plan[std::size_t(comm.rank())];
+    StreamStats st;
+    agreed(comm, [&] {
+        so.first_chunk = mine.first;
+        so.last_chunk = mine.last;
+        so.progress = progress;
+        st = stream_extract(*src, so, sink);
+    });
+    src.reset();
+    const double mine_stats[2] = {double(st.slabs_read), double(st.peak_bytes)};
+    const auto all = comm.allgatherv(mine_stats);
+    for (std::size_t r = 0; r + 1 < all.size(); r += 2) {
+        res.rank_slabs.push_back(std::size_t(all[r]));
+        res.rank_peak_bytes.push_back(std::size_t(all[r + 1]));
+    }
+}
+
+// 6a. Surface s's statistics reduced on rank 0 (collective).
+void reduce_surface(const Comm& comm, const RankSink& sink, std::size_t s, DistSurface& out) {
+    const auto gathered = comm.gather(serialize(std::span<const PieceSummary>(sink.summaries(s))));
+    agreed(comm, [&] {
+        if (!comm.root()) return;
+        std::vector<PieceSummary> pieces;
+        for (const auto& g : gathered) {
+            auto rank_pieces = deserialize_piece_summaries(g);
+            std::size_t t = 0;
+            for (auto& p : rank_pieces) {
+                t += p.triangles;
+                pieces.push_back(std::move(p));
+            }
+            out.rank_triangles.push_back(t);
+        }
+        out.summary = merge_summaries(pieces);
+    });
+}
+
 } // namespace
 
 DistMeshResult mesh_distributed(const Comm& comm, const DistMeshRequest& req) {
@@ -221,126 +397,20 @@ DistMeshResult mesh_distributed(const Comm& comm, const DistMeshRequest& req) {
     res.ranks = comm.size();
     const bool root = comm.root();
     const ProgressFn progress = root ? req.progress : ProgressFn{};
-
-    // 1. The output: a partitioned .pvtp (other formats would need the whole
-    // mesh on one rank).
-    agreed(comm, [&] {
-        if (lower(fs::path(req.output).extension().string()) != ".pvtp")
-            throw Error(req.output, "under mpirun the output must be a partitioned .pvtp (each rank writes its piece); "
-                                    "convert it afterwards, or run without mpirun for .stl/.ply/.obj/.vtp");
-        if (root) check_writable_destination(req.output);
-    });
-
-    // 2. The header (every rank; formats that cannot stream are loaded whole
-    // when they fit the budget, as in one process).
-    std::unique_ptr<VolumeStream> src;
-    agreed(comm, [&] {
-        LoadOptions lo;
-        lo.series = req.series;
-        src = open_volume_stream(req.input, req.memory_budget, lo);
-    });
+    check_output(comm, req);
+    std::unique_ptr<VolumeStream> src = open_source(comm, req);
     const VolumeHeader& h = src->header();
     if (root) res.warnings = h.meta.warnings;
-
-    // 3. The chunk size (rank 0's plan, broadcast: it depends on the thread
-    // count, which may differ between nodes) and the index, built in
-    // parallel: each rank summarizes an equal share of the chunk layers, then
-    // the per-chunk arrays are reduced (MIN, MAX, OR) on every rank.
-    StreamOptions so;
-    so.isos = req.labels ? std::vector<double>{} : req.isos;
-    so.labels = req.labels;
-    so.label_values = req.labels ? req.isos : std::vector<double>{};
-    so.extract = req.extract;
-    so.memory_budget = req.memory_budget;
-    so.overlap = req.overlap;
-    int C = 0;
-    {
-        std::string mine;
-        agreed(comm, [&] {
-            if (root) mine = std::to_string(plan_stream(h, so, nullptr).chunk_size);
-        });
-        C = std::stoi(comm.broadcast(mine));
-    }
+    StreamOptions so = stream_options(req);
     std::vector<double> values = req.labels ? so.label_values : so.isos;
-    std::shared_ptr<const ChunkIndex> index;
-    {
-        ChunkSummaries sum(h.dims, C, h.type);
-        const int layers = sum.counts[2];
-        const int L0 = int(std::int64_t(layers) * comm.rank() / comm.size());
-        const int L1 = int(std::int64_t(layers) * (comm.rank() + 1) / comm.size());
-        // Disjoint k-slices: chunk layer l starts at sample l*C; the last share
-        // runs to the last slice. (ChunkSummaries::add credits each sample to
-        // every chunk holding it, so no slice is read twice.)
-        const std::int64_t k_begin = std::int64_t(L0) * C;
-        const std::int64_t k_end = comm.rank() + 1 == comm.size() ? h.dims[2] : std::int64_t(L1) * C;
-        const std::size_t slice = std::size_t(h.slab_memory_bytes(1) - h.slab_memory_bytes(0));
-        const std::size_t fixed = 3 * sum.finite_min.size() * (2 * sizeof(double) + 1) + std::size_t(h.slab_memory_bytes(0));
-        const std::int64_t per =
-            std::max<std::int64_t>(1, req.memory_budget > fixed ? std::int64_t((req.memory_budget - fixed) / slice) : 1);
-        const bool find_labels = req.labels && values.empty();
-        std::set<double> labels;
-        agreed(comm, [&] {
-            for (std::int64_t k0 = k_begin; k0 < k_end; k0 += per) {
-                const std::int64_t k1 = std::min(k0 + per - 1, k_end - 1);
-                report(progress, double(k0 - k_begin) / double(std::max<std::int64_t>(k_end - k_begin, 1)), "indexing volume",
-                       "isoscope mesh");
-                const Volume slab = src->read_slab(k0, k1);
-                sum.add({&slab, h.dims, k0, h.index_to_lps});
-                if (find_labels) {
-                    for (double v : distinct_labels(slab)) labels.insert(v);
-                    if (labels.size() > 4096)
-                        throw Error(h.path, "has more than 4096 distinct values: it does not look like a label map");
-                }
-            }
-        });
-        sum.finite_min = comm.allreduce_min(sum.finite_min);
-        sum.finite_max = comm.allreduce_max(sum.finite_max);
-        sum.flags = comm.allreduce_bor(sum.flags);
-        const double range[2] = {-sum.lowest, sum.highest}; // one MAX for both ends
-        const auto r = comm.allreduce_max(range);
-        sum.lowest = -r[0];
-        sum.highest = r[1];
-        if (find_labels) {
-            const std::vector<double> mine(labels.begin(), labels.end());
-            auto all = comm.allgatherv(mine);
-            std::sort(all.begin(), all.end());
-            all.erase(std::unique(all.begin(), all.end()), all.end());
-            values = all;
-            so.label_values = all;
-        }
-        agreed(comm, [&] {
-            if (values.size() > 4096) throw Error(h.path, "has more than 4096 distinct values: it does not look like a label map");
-            if (values.empty()) throw Error(h.path, req.labels ? "has no non-zero label" : "no iso value given");
-            index = std::make_shared<const ChunkIndex>(sum.finish());
-        });
-    }
-    so.index = index;
-    const ChunkIndex& idx = *index;
+    const int C = agreed_chunk_size(comm, h, so);
+    so.index = parallel_index(comm, *src, C, req, progress, so, values);
     if (req.labels) {
         std::sort(values.begin(), values.end());
         values.erase(std::unique(values.begin(), values.end()), values.end());
     }
+    plan_ranks(comm, *so.index, values, req.labels, res);
 
-    // 4. The plan, made on rank 0 and broadcast so every rank holds the same.
-    {
-        std::string bytes;
-        if (root) {
-            res.plan = partition_chunks(idx, values, comm.size(), req.labels);
-            bytes = encode_plan(res.plan);
-        }
-        res.plan = decode_plan(comm.broadcast(bytes));
-        const auto w = chunk_weights(idx, values, req.labels);
-        for (const auto& r : res.plan) {
-            std::size_t n = 0;
-            for (std::size_t id = r.first; id < r.last; ++id) n += w[id] > 0;
-            res.rank_active.push_back(n);
-        }
-    }
-    const ChunkRange mine = res.plan[std::size_t(comm.rank())];
-
-    // 5. Streaming extraction of this rank's chunks (only the slabs its
-    // active chunks need are read); each slab's piece is summarized and
-    // written at once.
     std::vector<std::string> paths;
     for (double v : values) paths.push_back(core::surface_output_path(req.output, v, req.labels, values.size()));
     const Staging staging = prepare_staging(comm, paths);
@@ -354,22 +424,7 @@ DistMeshResult mesh_distributed(const Comm& comm, const DistMeshRequest& req) {
     // centre); merge_summaries() moves them to the surface's bounds centre.
     const glm::dvec3 centre = glm::dvec3(h.index_to_lps * glm::dvec4(0.5 * glm::dvec3(h.dims[0] - 1, h.dims[1] - 1, h.dims[2] - 1), 1.0));
     RankSink sink(staging.pieces, staging.stems, comm.rank(), centre);
-    StreamStats st;
-    agreed(comm, [&] {
-        so.first_chunk = mine.first;
-        so.last_chunk = mine.last;
-        so.progress = progress;
-        st = stream_extract(*src, so, sink);
-    });
-    src.reset();
-    {
-        const double mine_stats[2] = {double(st.slabs_read), double(st.peak_bytes)};
-        const auto all = comm.allgatherv(mine_stats);
-        for (std::size_t r = 0; r + 1 < all.size(); r += 2) {
-            res.rank_slabs.push_back(std::size_t(all[r]));
-            res.rank_peak_bytes.push_back(std::size_t(all[r + 1]));
-        }
-    }
+    extract_share(comm, src, so, progress, sink, res);
 
     // 6. Per surface: reduce the statistics on rank 0, then number the
     // pieces, write the summary and move everything into place.
@@ -380,21 +435,7 @@ DistMeshResult mesh_distributed(const Comm& comm, const DistMeshRequest& req) {
         std::snprintf(name, sizeof name, req.labels ? "label %g" : "iso %g", values[i]);
         out.name = name;
         out.path = paths[i];
-        const auto gathered = comm.gather(serialize(std::span<const PieceSummary>(sink.summaries(i))));
-        agreed(comm, [&] {
-            if (!root) return;
-            std::vector<PieceSummary> pieces;
-            for (const auto& g : gathered) {
-                auto rank_pieces = deserialize_piece_summaries(g);
-                std::size_t t = 0;
-                for (auto& p : rank_pieces) {
-                    t += p.triangles;
-                    pieces.push_back(std::move(p));
-                }
-                out.rank_triangles.push_back(t);
-            }
-            out.summary = merge_summaries(pieces);
-        });
+        reduce_surface(comm, sink, i, out);
         agreed(comm, [&] { report(progress, 1.0, "writing pieces", "isoscope mesh"); });
         out.pieces = finish_surface(comm, staging, sink, i);
         res.surfaces.push_back(std::move(out));

@@ -89,7 +89,8 @@ struct StreamStats {
 };
 
 // Plans the slabs for a budget (the chunk size halves until one chunk layer
-// fits, down to 4; below that iso::Error names --memory and the size needed).
+// fits, down to 4; below that iso::Error names the memory budget and the size
+// needed; a chunk size below 2 is an iso::Error of the chunk size).
 StreamPlan plan_stream(const VolumeHeader& h, const StreamOptions& opt, const ChunkIndex* index = nullptr);
 
 // Builds the whole volume's chunk index in one sequential pass (slabs as

@@ -504,6 +504,50 @@ TEST(Stream, EmptySlabsAreSkippedAndRangesOfChunksWork) {
     expect_same_surface(ref, both.meshes[0], "two ranges of chunk ids");
 }
 
+// The engine's errors and warnings name its settings, never command-line
+// flags (the CLI maps "memory budget" and "chunk size" to its own).
+TEST(Stream, BudgetAndChunkSizeMessagesNameTheSettings) {
+    TempDir dir;
+    save_volume(ball({24, 24, 40}, VoxelType::I16, glm::dmat4(1.0)), dir / "v.nrrd", false);
+    auto src = open_volume_stream(dir / "v.nrrd");
+    StreamOptions so;
+    so.isos = {820.0};
+    so.extract.chunk_size = 8;
+    so.memory_budget = 1024; // less than one slice
+    auto where = [&](auto&& f) {
+        try {
+            f();
+        } catch (const Error& e) {
+            EXPECT_EQ(std::string(e.what()).find("--"), std::string::npos) << e.what();
+            return e.where();
+        }
+        return std::string("no error");
+    };
+    EXPECT_EQ(where([&] { plan_stream(src->header(), so); }), "memory budget");
+    so.extract.chunk_size = 1;
+    EXPECT_EQ(where([&] { plan_stream(src->header(), so); }), "chunk size");
+
+    // A source holding the volume whole holds more than this budget.
+    save_volume(ball({24, 24, 40}, VoxelType::F32, glm::dmat4(1.0)), dir / "v.vdb");
+    auto whole = open_volume_stream(dir / "v.vdb", std::size_t(64) << 20);
+    ASSERT_GT(whole->resident_bytes(), 0u);
+    so.extract.chunk_size = 8;
+    so.memory_budget = whole->resident_bytes();
+    CollectSink none;
+    EXPECT_EQ(where([&] { stream_extract(*whole, so, none); }), "memory budget");
+
+    // One slab's samples fit, one chunk layer's estimated output does not: a warning.
+    const std::size_t one_layer = std::size_t(src->header().slab_memory_bytes(8 + 3));
+    so.memory_budget = budget_over_fixed(dir / "v.nrrd", 8, one_layer + 1024);
+    CollectSink sink;
+    const auto st = stream_extract(*src, so, sink);
+    EXPECT_FALSE(st.plan.fits);
+    ASSERT_EQ(st.warnings.size(), 1u);
+    EXPECT_NE(st.warnings[0].find("memory budget"), std::string::npos) << st.warnings[0];
+    EXPECT_NE(st.warnings[0].find("chunk size"), std::string::npos) << st.warnings[0];
+    EXPECT_EQ(st.warnings[0].find("--"), std::string::npos) << st.warnings[0];
+}
+
 TEST(Stream, LabelSurfacesEqualInMemory) {
     TempDir dir;
     // Three labels: nested balls and a slab-crossing bar.
