@@ -11,6 +11,7 @@
 #include <epoxy/egl.h>
 
 #include "renderer/ao/reference.hpp"
+#include "renderer/core/surface_name.hpp"
 #include "renderer/render/disk_ao.hpp"
 #include "renderer/gl/context.hpp"
 
@@ -237,11 +238,8 @@ RenderOutput render_image(Scene& scene, const RenderRequest& req) {
     RenderOutput out;
     std::string isos_text;
     for (const SurfaceId id : scene.surfaces())
-        if (scene.info(id).kind == SurfaceInfo::Kind::Iso) {
-            char b[32];
-            std::snprintf(b, sizeof b, "%s%g", isos_text.empty() ? "" : ",", scene.info(id).value);
-            isos_text += b;
-        }
+        if (scene.info(id).kind == SurfaceInfo::Kind::Iso)
+            isos_text += (isos_text.empty() ? "" : ",") + value_text(scene.info(id).value);
     RenderOptions ro = render_options(req);
     Annotations ann;
     ann.markups = req.markups;

@@ -31,6 +31,7 @@
 #include "io/vtk_mesh.hpp"
 #include "io/vtk_util.hpp"
 #include "renderer/core/stream_mesh.hpp"
+#include "renderer/core/surface_name.hpp"
 #include "renderer/iso/partition.hpp"
 #include "renderer/iso/stream.hpp"
 
@@ -376,9 +377,7 @@ DistMeshResult mesh_distributed(const Comm& comm, const DistMeshRequest& req) {
     for (std::size_t i = 0; i < values.size(); ++i) {
         DistSurface out;
         out.value = values[i];
-        char name[64];
-        std::snprintf(name, sizeof name, req.labels ? "label %g" : "iso %g", values[i]);
-        out.name = name;
+        out.name = core::surface_name(req.labels, values[i]);
         out.path = paths[i];
         const auto gathered = comm.gather(serialize(std::span<const PieceSummary>(sink.summaries(i))));
         agreed(comm, [&] {
