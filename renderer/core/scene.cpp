@@ -191,7 +191,8 @@ SurfaceId Scene::add_isosurface(Mesh m, double iso, const PostProcessOptions& po
 
 void Scene::replace_surface(SurfaceId id, Mesh m, double value, const PostProcessOptions& post) {
     auto& e = impl_->at(id, "Scene::replace_surface");
-    if (e.info.kind == SurfaceInfo::Kind::Iso && e.info.name == surface_name(false, e.info.value)) e.info.name = surface_name(false, value);
+    if (e.info.kind == SurfaceInfo::Kind::Iso && e.info.name == surface_name(false, e.info.value))
+        e.info.name = surface_name(false, value);
     e.info.value = value;
     e.info.post = post;
     e.bounds = Bounds{};
