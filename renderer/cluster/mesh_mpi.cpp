@@ -33,6 +33,9 @@
 #include "renderer/core/stream_mesh.hpp"
 #include "renderer/surface/partition.hpp"
 #include "renderer/surface/stream.hpp"
+#include "renderer/core/surface_name.hpp"
+#include "renderer/surface/partition.hpp"
+#include "renderer/surface/stream.hpp"
 
 namespace iso::cluster {
 
@@ -431,9 +434,7 @@ DistMeshResult mesh_distributed(const Comm& comm, const DistMeshRequest& req) {
     for (std::size_t i = 0; i < values.size(); ++i) {
         DistSurface out;
         out.value = values[i];
-        char name[64];
-        std::snprintf(name, sizeof name, req.labels ? "label %g" : "iso %g", values[i]);
-        out.name = name;
+        out.name = core::surface_name(req.labels, values[i]);
         out.path = paths[i];
         reduce_surface(comm, sink, i, out);
         agreed(comm, [&] { report(progress, 1.0, "writing pieces", "isoscope mesh"); });

@@ -11,6 +11,7 @@
 #include "renderer/ao/reference.hpp"
 #include "renderer/frame/ao_settings.hpp"
 #include "renderer/core/image_metadata.hpp"
+#include "renderer/core/surface_name.hpp"
 #include "renderer/gl/context.hpp"
 
 namespace iso::core {

@@ -5,6 +5,7 @@
 #include <sstream>
 
 #include "io/markups.hpp"
+#include "renderer/core/surface_name.hpp"
 #include "renderer/frame/ao_settings.hpp"
 
 namespace iso::core {
@@ -58,11 +59,7 @@ void add_markups(Text& t, const FrameRecord& f) {
 std::string iso_values_text(const Scene& scene) {
     std::string isos;
     for (const SurfaceId id : scene.surfaces())
-        if (scene.info(id).kind == SurfaceInfo::Kind::Iso) {
-            char b[32];
-            std::snprintf(b, sizeof b, "%s%g", isos.empty() ? "" : ",", scene.info(id).value);
-            isos += b;
-        }
+        if (scene.info(id).kind == SurfaceInfo::Kind::Iso) isos += (isos.empty() ? "" : ",") + value_text(scene.info(id).value);
     return isos;
 }
 

@@ -7,6 +7,7 @@
 #include <optional>
 
 #include "io/error.hpp"
+#include "renderer/core/surface_name.hpp"
 
 namespace iso::core {
 
@@ -175,17 +176,9 @@ ValueRange Scene::value_range() const {
     return r;
 }
 
-namespace {
-std::string iso_name(double value) {
-    char name[64];
-    std::snprintf(name, sizeof name, "iso %g", value);
-    return name;
-}
-} // namespace
-
 SurfaceId Scene::add_isosurface(Mesh m, double iso, const PostProcessOptions& post, std::optional<glm::vec3> color) {
     SurfaceInfo info;
-    info.name = iso_name(iso);
+    info.name = surface_name(false, iso);
     info.kind = SurfaceInfo::Kind::Iso;
     info.value = iso;
     info.source = impl_->volume_source;
@@ -198,7 +191,8 @@ SurfaceId Scene::add_isosurface(Mesh m, double iso, const PostProcessOptions& po
 
 void Scene::replace_surface(SurfaceId id, Mesh m, double value, const PostProcessOptions& post) {
     auto& e = impl_->at(id, "Scene::replace_surface");
-    if (e.info.kind == SurfaceInfo::Kind::Iso && e.info.name == iso_name(e.info.value)) e.info.name = iso_name(value);
+    if (e.info.kind == SurfaceInfo::Kind::Iso && e.info.name == surface_name(false, e.info.value))
+        e.info.name = surface_name(false, value);
     e.info.value = value;
     e.info.post = post;
     e.bounds = Bounds{};
@@ -238,9 +232,7 @@ std::vector<SurfaceId> Scene::add_extracted(std::vector<Mesh> meshes, SurfaceInf
     const bool iso = kind == SurfaceInfo::Kind::Iso;
     for (std::size_t i = 0; i < meshes.size(); ++i) {
         SurfaceInfo info;
-        char name[64];
-        std::snprintf(name, sizeof name, iso ? "iso %g" : "label %g", values[i]);
-        info.name = name;
+        info.name = surface_name(!iso, values[i]);
         info.kind = kind;
         info.value = values[i];
         info.post = post;

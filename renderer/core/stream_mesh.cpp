@@ -16,6 +16,7 @@
 #include "io/volume_io.hpp"
 #include "io/volume_stream.hpp"
 #include "renderer/core/api.hpp"
+#include "renderer/core/surface_name.hpp"
 
 namespace iso::core {
 
@@ -65,9 +66,7 @@ std::string surface_output_path(const std::string& out, double value, bool label
     if (surfaces <= 1) return out;
     namespace fs = std::filesystem;
     const fs::path p(out);
-    char suffix[64];
-    std::snprintf(suffix, sizeof suffix, label ? "-label%g" : "-iso%g", value);
-    return (p.parent_path() / (p.stem().string() + suffix + p.extension().string())).string();
+    return (p.parent_path() / (p.stem().string() + surface_file_suffix(label, value) + p.extension().string())).string();
 }
 
 namespace {
@@ -106,9 +105,7 @@ StreamMeshResult stream_mesh(const StreamMeshRequest& req) {
     so.progress = req.progress;
     if (!req.labels) {
         for (std::size_t i = 0; i < req.isos.size(); ++i) {
-            char name[64];
-            std::snprintf(name, sizeof name, "iso %g", req.isos[i]);
-            r.names.push_back(name);
+            r.names.push_back(surface_name(false, req.isos[i]));
             r.paths.push_back(surface_output_path(req.output, req.isos[i], false, req.isos.size()));
         }
         r.stream = extract_summarized(*src, so, r);
@@ -125,9 +122,7 @@ StreamMeshResult stream_mesh(const StreamMeshRequest& req) {
     std::sort(so.label_values.begin(), so.label_values.end());
     so.label_values.erase(std::unique(so.label_values.begin(), so.label_values.end()), so.label_values.end());
     for (double v : so.label_values) {
-        char name[64];
-        std::snprintf(name, sizeof name, "label %g", v);
-        r.names.push_back(name);
+        r.names.push_back(surface_name(true, v));
         r.paths.push_back(surface_output_path(req.output, v, true, so.label_values.size()));
     }
     if (r.paths.empty()) throw Error(req.input, "has no non-zero label");

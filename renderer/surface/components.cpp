@@ -154,6 +154,33 @@ glm::dvec3 volume_origin(const glm::dvec3& lo, const glm::dvec3& hi) {
     return 0.5 * (lo + hi);
 }
 
+namespace {
+// The piece's edges used by one triangle (PieceSummary::boundary_edges and seam_boundary).
+void summarize_boundary(const SurfacePiece& p, PieceSummary& s) {
+    constexpr std::uint64_t kOffSeam = ~std::uint64_t(0);
+    std::vector<std::uint64_t> key(p.mesh.positions.size(), kOffSeam);
+    for (const auto& [k, v] : p.seam) key[v] = k;
+    std::vector<std::pair<std::uint32_t, std::uint32_t>> edges;
+    edges.reserve(3 * p.mesh.triangles.size());
+    for (const auto& t : p.mesh.triangles)
+        for (int e = 0; e < 3; ++e) edges.push_back(std::minmax(t[e], t[(e + 1) % 3]));
+    std::sort(edges.begin(), edges.end());
+    for (std::size_t i = 0; i < edges.size();) {
+        std::size_t j = i + 1;
+        while (j < edges.size() && edges[j] == edges[i]) ++j;
+        if (j - i == 1) {
+            const auto [a, b] = edges[i];
+            if (key[a] == kOffSeam || key[b] == kOffSeam)
+                ++s.boundary_edges;
+            else
+                s.seam_boundary.push_back(std::minmax(key[a], key[b]));
+        }
+        i = j;
+    }
+    std::sort(s.seam_boundary.begin(), s.seam_boundary.end());
+}
+} // namespace
+
 PieceSummary summarize_piece(const SurfacePiece& p, const glm::dvec3& origin) {
     const Mesh& m = p.mesh;
     PieceSummary s;
@@ -184,6 +211,7 @@ PieceSummary summarize_piece(const SurfacePiece& p, const glm::dvec3& origin) {
     }
     s.seam.reserve(p.seam.size());
     for (const auto& [key, v] : p.seam) s.seam.emplace_back(key, comp[sets.find(v)]);
+    summarize_boundary(p, s);
     return s;
 }
 
@@ -230,6 +258,19 @@ SurfaceSummary merge_summaries(std::span<const PieceSummary> pieces) {
             r.area += pc.area;
             r.volume += volume_about(pc, pieces[i].origin, origin);
         }
+    // A seam edge that one piece alone uses once is on the surface's boundary.
+    std::vector<std::pair<std::uint64_t, std::uint64_t>> seam_edges;
+    for (const auto& p : pieces) {
+        out.boundary_edges += p.boundary_edges;
+        seam_edges.insert(seam_edges.end(), p.seam_boundary.begin(), p.seam_boundary.end());
+    }
+    std::sort(seam_edges.begin(), seam_edges.end());
+    for (std::size_t i = 0; i < seam_edges.size();) {
+        std::size_t j = i + 1;
+        while (j < seam_edges.size() && seam_edges[j] == seam_edges[i]) ++j;
+        out.boundary_edges += j - i == 1;
+        i = j;
+    }
     for (std::uint32_t n = 0; n < merged.size(); ++n) {
         if (sets.find(n) != n) continue;
         ++out.components;
@@ -267,7 +308,9 @@ void SummarizingSink::piece(MeshPiece&& p) {
 std::size_t SummarizingSink::memory_bytes() const {
     std::size_t n = 0;
     for (const auto& s : pieces_)
-        for (const auto& p : s) n += p.components.capacity() * sizeof(ComponentStats) + p.seam.capacity() * sizeof(p.seam[0]);
+        for (const auto& p : s)
+            n += p.components.capacity() * sizeof(ComponentStats) + p.seam.capacity() * sizeof(p.seam[0]) +
+                 p.seam_boundary.capacity() * sizeof(p.seam_boundary[0]);
     return n + next_.memory_bytes();
 }
 
@@ -311,6 +354,12 @@ std::string serialize(const PieceSummary& s) {
         put(out, k);
         put(out, c);
     }
+    put<std::uint64_t>(out, s.boundary_edges);
+    put<std::uint64_t>(out, s.seam_boundary.size());
+    for (const auto& [a, b] : s.seam_boundary) {
+        put(out, a);
+        put(out, b);
+    }
     return out;
 }
 
@@ -338,6 +387,14 @@ PieceSummary deserialize_piece_summary(std::string_view in) {
     for (auto& [k, c] : s.seam) {
         k = get<std::uint64_t>(in);
         c = get<std::uint32_t>(in);
+    }
+    s.boundary_edges = get<std::uint64_t>(in);
+    const auto nb = get<std::uint64_t>(in);
+    if (nb > in.size() / 16) throw Error("deserialize_piece_summary", "truncated summary");
+    s.seam_boundary.resize(nb);
+    for (auto& [a, b] : s.seam_boundary) {
+        a = get<std::uint64_t>(in);
+        b = get<std::uint64_t>(in);
     }
     return s;
 }

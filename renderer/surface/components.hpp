@@ -77,6 +77,12 @@ struct PieceSummary {
     std::vector<ComponentStats> components;
     // (global key, component index) of every seam vertex, sorted by key.
     std::vector<std::pair<std::uint64_t, std::uint32_t>> seam;
+    // Edges used by one triangle of the piece: those with a vertex off the
+    // seam are counted (no other piece has them); those between two seam
+    // vertices are listed as (smaller key, larger key), sorted, since another
+    // piece may hold the other side of the edge.
+    std::size_t boundary_edges = 0;
+    std::vector<std::pair<std::uint64_t, std::uint64_t>> seam_boundary;
 };
 
 // The bounds of a piece's vertices (inverted, min > max, when it has none).
@@ -96,6 +102,10 @@ struct SurfaceSummary {
     std::size_t triangles = 0, vertices = 0, components = 0;
     double area = 0, volume = 0;
     ComponentStats largest; // by triangles, then area
+    // Edges used by one triangle of the whole surface: 0 for a closed
+    // surface (then `volume` is the enclosed volume; otherwise it means
+    // nothing on its own).
+    std::size_t boundary_edges = 0;
 };
 
 // Merges the summaries of all the pieces of one surface: vertices whose key

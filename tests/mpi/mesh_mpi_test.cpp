@@ -9,13 +9,13 @@
 #include <fstream>
 #include <map>
 #include <optional>
-#include <regex>
 #include <set>
 
 #include <unistd.h>
 
 #include <glm/glm.hpp>
 #include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
 #include <vtkCleanPolyData.h>
 #include <vtkNew.h>
 #include <vtkPolyData.h>
@@ -26,6 +26,8 @@
 #include "io/volume_io.hpp"
 #include "io/vtk_mesh.hpp"
 #include "renderer/surface/components.hpp"
+#include "renderer/surface/components.hpp"
+#include "renderer/surface/analysis.hpp"
 #include "test_util.hpp"
 
 using namespace iso;
@@ -88,22 +90,27 @@ ReadBack read_pvtp(const std::string& path) {
 }
 
 struct Summary {
-    std::size_t triangles = 0, vertices = 0, components = 0, largest = 0;
-    double area = 0, volume = 0;
+    std::size_t triangles = 0, vertices = 0, components = 0, largest = 0, boundary_edges = 0;
+    double area = 0;
+    bool closed = false;
+    std::optional<double> volume_mm3; // a closed surface's only
 };
-// Rank 0's line: "iso V: T triangles, N vertices, area A mm^2, volume W mm^3, C components (largest: L triangles, ..."
+// Rank 0's `mesh --json` (the other ranks print nothing): its surfaces.
 std::vector<Summary> parse(const std::string& out) {
     std::vector<Summary> all;
-    const std::regex line(R"(: (\d+) triangles, (\d+) vertices, area ([-0-9.e+]+) mm\^2, volume ([-0-9.e+]+) mm\^3, (\d+) components \(largest: (\d+) triangles)");
-    for (std::sregex_iterator it(out.begin(), out.end(), line), end; it != end; ++it) {
-        Summary s;
-        s.triangles = std::stoull((*it)[1]);
-        s.vertices = std::stoull((*it)[2]);
-        s.area = std::stod((*it)[3]);
-        s.volume = std::stod((*it)[4]);
-        s.components = std::stoull((*it)[5]);
-        s.largest = std::stoull((*it)[6]);
-        all.push_back(s);
+    const auto j = nlohmann::json::parse(out);
+    EXPECT_EQ(j["route"], "mpi");
+    for (const auto& s : j["surfaces"]) {
+        Summary m;
+        m.triangles = s["triangles"];
+        m.vertices = s["vertices"];
+        m.area = s["area_mm2"];
+        m.closed = s["closed"];
+        m.boundary_edges = s["boundary_edges"];
+        if (!s["volume_mm3"].is_null()) m.volume_mm3 = s["volume_mm3"].get<double>();
+        m.components = s["components"]["count"];
+        m.largest = s["components"]["largest"]["triangles"];
+        all.push_back(m);
     }
     return all;
 }
@@ -115,11 +122,12 @@ std::multiset<std::array<float, 3>> positions(const Mesh& m) {
     return s;
 }
 
-// The slabs both ranks of a two-rank run read, from rank 0's "slabs read: N M".
-std::optional<int> slabs_read(const std::string& out) {
-    std::smatch m;
-    if (!std::regex_search(out, m, std::regex(R"(slabs read: (\d+) (\d+))"))) return std::nullopt;
-    return std::stoi(m[1]) + std::stoi(m[2]);
+// The slabs the ranks read, from rank 0's `mesh --json`.
+int slabs_read(const std::string& out) {
+    const auto j = nlohmann::json::parse(out);
+    int n = 0;
+    for (const auto& r : j["mpi"]["slabs_read"]) n += r.get<int>();
+    return n;
 }
 
 // The single-process reference: the CLI's in-memory path, written as .vtp.
@@ -143,11 +151,16 @@ void expect_same_surface(const std::string& pvtp, const Mesh& ref, int pieces, c
     // Same triangles, summed in another order: 1e-9 relative.
     EXPECT_NEAR(a.area, b.area, 1e-9 * b.area);
     EXPECT_NEAR(a.volume, b.volume, 1e-9 * std::abs(b.volume));
-    // The reduced statistics rank 0 printed (6 significant digits).
+    // The reduced statistics rank 0 printed (JSON: every digit).
     EXPECT_EQ(printed.triangles, ref.triangles.size());
     EXPECT_EQ(printed.vertices, ref.positions.size());
-    EXPECT_NEAR(printed.area, b.area, 1e-5 * b.area);
-    EXPECT_NEAR(printed.volume, b.volume, 1e-5 * std::abs(b.volume));
+    EXPECT_NEAR(printed.area, b.area, 1e-9 * b.area);
+    const SurfaceMeasures measured = measure_surface(ref);
+    EXPECT_EQ(printed.closed, measured.closed);
+    EXPECT_EQ(printed.boundary_edges, measured.boundary_edges);
+    // A volume only where it is the enclosed one.
+    EXPECT_EQ(printed.volume_mm3.has_value(), measured.closed);
+    if (printed.volume_mm3) EXPECT_NEAR(*printed.volume_mm3, b.volume, 1e-9 * std::abs(b.volume));
     const SurfaceSummary whole = summarize_mesh(ref);
     EXPECT_EQ(printed.components, whole.components);
     EXPECT_EQ(printed.largest, whole.largest.triangles);
@@ -165,7 +178,7 @@ TEST(MpiMesh, OneTwoAndFourRanksEqualTheSingleProcess) {
     for (int n : {1, 2, 4}) {
         SCOPED_TRACE(n);
         const std::string out = dir / ("n" + std::to_string(n) + ".pvtp");
-        const auto r = test::run_command(mpirun(n) + test::cli() + " mesh " + in + " --iso 500 --chunk 8 -o " + out, true);
+        const auto r = test::run_command(mpirun(n) + test::cli() + " mesh " + in + " --iso 500 --chunk 8 --json -o " + out);
         ASSERT_EQ(r.exit_code, 0) << r.out;
         const auto s = parse(r.out);
         ASSERT_EQ(s.size(), 1u) << "rank 0 alone prints the summary: " << r.out;
@@ -181,11 +194,9 @@ TEST(MpiMesh, OneTwoAndFourRanksEqualTheSingleProcess) {
         save_volume(phantom({160, 120, 40}), wide, false);
         const Mesh wref = reference(wide, "--iso 500", dir / "wide.vtp");
         const std::string out = dir / "small.pvtp";
-        const auto r = test::run_command(mpirun(2) + test::cli() + " mesh " + wide + " --iso 500 --chunk 8 --memory 1 -o " + out, true);
+        const auto r = test::run_command(mpirun(2) + test::cli() + " mesh " + wide + " --iso 500 --chunk 8 --memory 1 --json -o " + out);
         ASSERT_EQ(r.exit_code, 0) << r.out;
-        const auto slabs = slabs_read(r.out);
-        ASSERT_TRUE(slabs) << r.out;
-        EXPECT_GT(*slabs, 2) << "several slabs on some rank: " << r.out;
+        EXPECT_GT(slabs_read(r.out), 2) << "several slabs on some rank: " << r.out;
         const auto s = parse(r.out);
         ASSERT_EQ(s.size(), 1u) << r.out;
         const ReadBack got = read_pvtp(out);
@@ -200,7 +211,7 @@ TEST(MpiMesh, OneTwoAndFourRanksEqualTheSingleProcess) {
 // Each rank runs the streaming driver with its reading, extraction and
 // writing overlapped (the default) or not (--no-overlap): both give the
 // single-process surface. The budget is one at which the single process
-// overlaps on this volume (its `streaming steps` line says so).
+// overlaps on this volume (its `mesh --json` says so).
 TEST(MpiMesh, OverlappedAndSerialRanksEqualTheSingleProcess) {
     TempDir dir;
     const std::string wide = dir / "wide.nrrd";
@@ -208,14 +219,14 @@ TEST(MpiMesh, OverlappedAndSerialRanksEqualTheSingleProcess) {
     const Mesh wref = reference(wide, "--iso 500", dir / "wide.vtp");
     const std::string budget = " --chunk 8 --memory 3";
     {
-        const auto r = test::run_command(test::cli() + " mesh " + wide + " --iso 500 --stream" + budget + " -o " + (dir / "one.ply"), true);
+        const auto r = test::run_command(test::cli() + " mesh " + wide + " --iso 500 --stream" + budget + " --json -o " + (dir / "one.ply"));
         ASSERT_EQ(r.exit_code, 0) << r.out;
-        EXPECT_NE(r.out.find("streaming steps (busy seconds, overlapped)"), std::string::npos) << r.out;
+        EXPECT_EQ(nlohmann::json::parse(r.out)["streaming"]["overlapped"], true) << r.out;
     }
     for (const char* mode : {"", " --no-overlap"}) {
         SCOPED_TRACE(*mode ? "serial" : "overlapped");
         const std::string out = dir / (*mode ? "off.pvtp" : "on.pvtp");
-        const auto r = test::run_command(mpirun(2) + test::cli() + " mesh " + wide + " --iso 500" + budget + mode + " -o " + out, true);
+        const auto r = test::run_command(mpirun(2) + test::cli() + " mesh " + wide + " --iso 500" + budget + mode + " --json -o " + out);
         ASSERT_EQ(r.exit_code, 0) << r.out;
         const auto s = parse(r.out);
         ASSERT_EQ(s.size(), 1u) << r.out;
@@ -244,16 +255,16 @@ TEST(MpiMesh, RanksThatOwnOnlyEmptyChunksTakePartAndWriteNothing) {
     const Mesh ref = reference(in, "--iso 500", dir / "ref.vtp");
     ASSERT_GT(ref.triangles.size(), 20u);
     const std::string out = dir / "ball.pvtp";
-    const auto r = test::run_command(mpirun(4) + test::cli() + " mesh " + in + " --iso 500 --chunk 8 -o " + out, true);
+    const auto r = test::run_command(mpirun(4) + test::cli() + " mesh " + in + " --iso 500 --chunk 8 --json -o " + out);
     ASSERT_EQ(r.exit_code, 0) << r.out;
     const auto sum = parse(r.out);
     ASSERT_EQ(sum.size(), 1u) << r.out;
     expect_same_surface(out, ref, 1, sum[0]);
-    EXPECT_NE(r.out.find("4 ranks, active chunks per rank:"), std::string::npos) << r.out;
-    std::smatch m;
-    ASSERT_TRUE(std::regex_search(r.out, m, std::regex(R"(active chunks per rank: (\d+) (\d+) (\d+) (\d+))"))) << r.out;
+    const auto ranks = nlohmann::json::parse(r.out)["mpi"];
+    EXPECT_EQ(ranks["ranks"], 4) << r.out;
+    ASSERT_EQ(ranks["active_chunks"].size(), 4u) << r.out;
     int idle = 0;
-    for (int i = 1; i <= 4; ++i) idle += std::stoi(m[i]) == 0;
+    for (const auto& n : ranks["active_chunks"]) idle += n.get<int>() == 0;
     EXPECT_EQ(idle, 3) << r.out;
     // The three ranks without surface took part in every step (the job
     // finished) and wrote nothing: only pieces with triangles are written
@@ -267,7 +278,8 @@ TEST(MpiMesh, SeveralIsoValuesGoToOnePvtpEach) {
     TempDir dir;
     const std::string in = dir / "phantom.nii";
     save_volume(phantom({40, 30, 36}), in, false);
-    const auto r = test::run_command(mpirun(2) + test::cli() + " mesh " + in + " --iso 300 --iso 700 --chunk 8 -o " + (dir / "s.pvtp"), true);
+    const auto r =
+        test::run_command(mpirun(2) + test::cli() + " mesh " + in + " --iso 300 --iso 700 --chunk 8 --json -o " + (dir / "s.pvtp"));
     ASSERT_EQ(r.exit_code, 0) << r.out;
     const auto sums = parse(r.out);
     ASSERT_EQ(sums.size(), 2u) << r.out;
@@ -368,7 +380,7 @@ TEST(MpiMesh, LabelSurfacesEqualTheSingleProcess) {
     for (int n : {2, 4}) {
         SCOPED_TRACE(n);
         const std::string out = dir / ("l" + std::to_string(n) + ".pvtp");
-        const auto r = test::run_command(mpirun(n) + test::cli() + " mesh " + in + " --labels --chunk 8 -o " + out, true);
+        const auto r = test::run_command(mpirun(n) + test::cli() + " mesh " + in + " --labels --chunk 8 --json -o " + out);
         ASSERT_EQ(r.exit_code, 0) << r.out;
         const auto sums = parse(r.out);
         ASSERT_EQ(sums.size(), 3u) << "labels 1, 2 and 7 found across ranks: " << r.out;
@@ -409,7 +421,7 @@ TEST(MpiMesh, FloatVolumeWithNaNAndInfEqualsTheSingleProcess) {
     for (int n : {2, 4}) {
         SCOPED_TRACE(n);
         const std::string out = dir / ("f" + std::to_string(n) + ".pvtp");
-        const auto r = test::run_command(mpirun(n) + test::cli() + " mesh " + in + " --iso 0.5 --chunk 6 -o " + out, true);
+        const auto r = test::run_command(mpirun(n) + test::cli() + " mesh " + in + " --iso 0.5 --chunk 6 --json -o " + out);
         ASSERT_EQ(r.exit_code, 0) << r.out;
         const auto sums = parse(r.out);
         ASSERT_EQ(sums.size(), 1u) << r.out;
@@ -434,11 +446,9 @@ TEST(MpiMesh, OpenVdbSlabsOnTwoRanksEqualTheSingleProcess) {
     const Mesh ref = reference(in, "--iso 500", dir / "ref.vtp");
     ASSERT_GT(ref.triangles.size(), 2000u);
     const std::string out = dir / "v.pvtp";
-    const auto r = test::run_command(mpirun(2) + test::cli() + " mesh " + in + " --iso 500 --chunk 8 --memory 3 -o " + out, true);
+    const auto r = test::run_command(mpirun(2) + test::cli() + " mesh " + in + " --iso 500 --chunk 8 --memory 3 --json -o " + out);
     ASSERT_EQ(r.exit_code, 0) << r.out;
-    const auto slabs = slabs_read(r.out);
-    ASSERT_TRUE(slabs) << r.out;
-    EXPECT_GT(*slabs, 2) << "several slabs: " << r.out;
+    EXPECT_GT(slabs_read(r.out), 2) << "several slabs: " << r.out;
     const auto s = parse(r.out);
     ASSERT_EQ(s.size(), 1u) << r.out;
     const ReadBack got = read_pvtp(out);

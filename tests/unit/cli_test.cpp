@@ -83,3 +83,47 @@ TEST(Cli, MeshRefusesBadOutputBeforeWorking) {
     EXPECT_EQ(r.exit_code, 1);
     EXPECT_NE(r.out.find("does not exist"), std::string::npos) << r.out;
 }
+
+// `mesh --json` gives a volume only where it means what it says: the bundled
+// CT's skin at 500 is open at the neck, so its volume is the lower bound
+// that `measure` gives for the same surface, flagged as such, and equal to it.
+TEST(Cli, MeshJsonOpenSurfaceVolumeIsMeasuresLowerBound) {
+    TempDir dir;
+    const std::string in = test::data("headsq.nhdr");
+    const auto m = test::run_command(test::cli() + " mesh " + in + " --iso 500 --json -o " + (dir / "skin.ply"));
+    ASSERT_EQ(m.exit_code, 0) << m.out;
+    const auto mj = nlohmann::json::parse(m.out);
+    const auto ms = test::run_command(test::cli() + " measure " + in + " --iso 500 --json");
+    ASSERT_EQ(ms.exit_code, 0) << ms.out;
+    const auto sj = nlohmann::json::parse(ms.out);
+    EXPECT_EQ(mj["route"], "in memory");
+    EXPECT_TRUE(mj["streaming"].is_null());
+    ASSERT_EQ(mj["surfaces"].size(), 1u);
+    ASSERT_EQ(sj["surfaces"].size(), 1u);
+    const auto& a = mj["surfaces"][0];
+    const auto& b = sj["surfaces"][0];
+    EXPECT_EQ(a["name"], "iso 500");
+    EXPECT_EQ(a["iso"], 500.0);
+    EXPECT_EQ(a["path"], (dir / "skin.ply"));
+    EXPECT_EQ(a["closed"], false);
+    EXPECT_EQ(b["closed"], false);
+    EXPECT_GT(a["boundary_edges"].get<std::size_t>(), 0u);
+    EXPECT_EQ(a["boundary_edges"], b["boundary"]["edges"]);
+    EXPECT_EQ(a["volume_kind"], "lower bound");
+    EXPECT_EQ(a["volume_kind"], b["volume_kind"]);
+    ASSERT_TRUE(a["volume_ml"].is_number());
+    EXPECT_EQ(a["volume_ml"].get<double>(), b["volume_ml"].get<double>());
+    EXPECT_NEAR(a["volume_mm3"].get<double>(), 1000.0 * b["volume_ml"].get<double>(), 1e-9 * a["volume_mm3"].get<double>());
+    EXPECT_EQ(a["triangles"], b["triangles"]);
+    EXPECT_EQ(a["area_mm2"].get<double>(), b["area_mm2"].get<double>());
+    EXPECT_EQ(a["components"]["count"].get<std::size_t>(), b["components"].size());
+    EXPECT_TRUE(a["components"]["largest"]["volume_ml"].is_null()) << "no volume for a component of an open surface";
+    // The file written is the surface measured.
+    EXPECT_EQ(mesh_stats(load_mesh(dir / "skin.ply")).triangles, a["triangles"].get<std::size_t>());
+    // The text summary says the same: open, a lower bound, never a plain volume.
+    const auto t = test::run_command(test::cli() + " mesh " + in + " --iso 500 -o " + (dir / "skin.stl"));
+    ASSERT_EQ(t.exit_code, 0) << t.out;
+    EXPECT_NE(t.out.find("iso 500: " + std::to_string(a["triangles"].get<std::size_t>()) + " triangles"), std::string::npos) << t.out;
+    EXPECT_NE(t.out.find(", open, volume >= "), std::string::npos) << t.out;
+    EXPECT_NE(t.out.find("(lower bound"), std::string::npos) << t.out;
+}

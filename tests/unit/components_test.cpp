@@ -20,6 +20,10 @@
 #include "renderer/surface/components.hpp"
 #include "renderer/surface/extract.hpp"
 #include "renderer/surface/partition.hpp"
+#include "renderer/surface/components.hpp"
+#include "renderer/surface/extract.hpp"
+#include "renderer/surface/analysis.hpp"
+#include "renderer/surface/partition.hpp"
 
 using namespace iso;
 using iso::test::sample_field;
@@ -218,6 +222,7 @@ TEST(Components, TorusCutIntoPiecesIsOneComponentWithTheWholeStats) {
         EXPECT_NEAR(sp.merged.area, ms.area, 1e-12 * ms.area);
         EXPECT_NEAR(sp.merged.volume, ms.volume, 1e-12 * std::abs(ms.volume));
         EXPECT_EQ(sp.merged.components, 1u) << "the ring is joined across the seams";
+        EXPECT_EQ(sp.merged.boundary_edges, 0u) << "the ring is closed: every seam edge has its other side";
         EXPECT_EQ(sp.merged.largest.triangles, ms.triangles);
         EXPECT_NEAR(sp.merged.largest.area, ms.area, 1e-12 * ms.area);
         if (n > 1) {
@@ -297,6 +302,8 @@ TEST(Components, SummaryBytesRoundTrip) {
     s.bounds_min = glm::dvec3(-1, -2, -3);
     s.bounds_max = glm::dvec3(1, 2, 3);
     s.seam = {{17, 0}, {99, 1}, {1ull << 40, 0xFFFFFFFFu}};
+    s.boundary_edges = 5;
+    s.seam_boundary = {{17, 99}, {99, 1ull << 40}};
     const auto t = deserialize_piece_summary(serialize(s));
     EXPECT_EQ(t.triangles, 7u);
     EXPECT_EQ(t.vertices, 9u);
@@ -308,6 +315,8 @@ TEST(Components, SummaryBytesRoundTrip) {
     EXPECT_EQ(t.components[0].moment, glm::dvec3(1, 2, 3));
     EXPECT_EQ(t.origin, s.origin);
     EXPECT_EQ(t.bounds_max, s.bounds_max);
+    EXPECT_EQ(t.boundary_edges, 5u);
+    EXPECT_EQ(t.seam_boundary, s.seam_boundary);
     const PieceSummary two[2] = {s, PieceSummary{}};
     const auto back = deserialize_piece_summaries(serialize(std::span<const PieceSummary>(two)));
     ASSERT_EQ(back.size(), 2u);
@@ -331,12 +340,16 @@ TEST(Components, BundledCtAtATieAndOffIt) {
         const Mesh whole = weld(s);
         const SurfaceSummary ref = summarize_mesh(whole);
         EXPECT_EQ(ref.components, count_components(whole));
+        const std::size_t open_edges = measure_surface(whole).boundary_edges;
+        EXPECT_GT(open_edges, 0u) << "the skin is cut by the volume's border";
+        EXPECT_EQ(ref.boundary_edges, open_edges);
         for (int n : {2, 4}) {
             SCOPED_TRACE(n);
             const Split sp = split(x, s, n);
             EXPECT_EQ(sp.merged.triangles, whole.triangles.size());
             EXPECT_EQ(sp.merged.vertices, whole.positions.size());
             EXPECT_EQ(sp.merged.components, ref.components);
+            EXPECT_EQ(sp.merged.boundary_edges, open_edges) << "edges on the seams are not the boundary";
             EXPECT_EQ(sp.merged.largest.triangles, ref.largest.triangles);
             EXPECT_NEAR(sp.merged.area, ref.area, 1e-12 * ref.area);
             EXPECT_NEAR(sp.merged.volume, ref.volume, 1e-12 * std::abs(ref.volume));
@@ -372,6 +385,7 @@ TEST(Components, SingleProcessStreamingReportsTheWholeMeshStatistics) {
         EXPECT_NEAR(got.area, ms.area, 1e-9 * ms.area);
         EXPECT_NEAR(got.volume, ms.volume, 1e-9 * std::abs(ms.volume));
         EXPECT_EQ(got.components, count_components(whole));
+        EXPECT_EQ(got.boundary_edges, measure_surface(whole).boundary_edges) << "edges on the slab seams are not the boundary";
         EXPECT_EQ(got.largest.triangles, ref.largest.triangles);
         EXPECT_NEAR(got.largest.area, ref.largest.area, 1e-9 * ref.largest.area);
         EXPECT_NEAR(got.largest.volume, ref.largest.volume, 1e-9 * std::abs(ref.largest.volume));

@@ -4,10 +4,12 @@
 // Tolerances: triangle and vertex counts exact; area and volume to 1e-9
 // relative (another summation order); positions exact (same arithmetic).
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
 
+#include <glm/glm.hpp>
 #include <nlohmann/json.hpp>
 
 #include "io/mesh.hpp"
@@ -30,18 +32,24 @@ std::vector<std::array<float, 3>> sorted_positions(const Mesh& m) {
 TEST(StreamCli, MeshStreamEqualsInMemory) {
     TempDir dir;
     const std::string in = test::data("headsq.nhdr");
-    const auto ref = test::run_command(test::cli() + " mesh " + in + " --iso 500 --iso 1150 -o " + (dir / "ref.ply"), true);
+    const auto ref = test::run_command(test::cli() + " mesh " + in + " --iso 500 --iso 1150 --json -o " + (dir / "ref.ply"));
     ASSERT_EQ(ref.exit_code, 0) << ref.out;
     // 2 MiB with 16-cell chunks: several slabs (the volume is 0.7 MiB, so --stream forces streaming).
-    const auto r = test::run_command(test::cli() + " mesh " + in + " --iso 500 --iso 1150 --stream --memory 2 --chunk 16 -o " +
-                                         (dir / "s.ply"),
-                                     true);
+    const auto r = test::run_command(test::cli() + " mesh " + in + " --iso 500 --iso 1150 --stream --memory 2 --chunk 16 --json -o " +
+                                     (dir / "s.ply"));
     ASSERT_EQ(r.exit_code, 0) << r.out;
-    EXPECT_NE(r.out.find("streamed:"), std::string::npos) << r.out;
-    EXPECT_NE(r.out.find("peak memory"), std::string::npos) << r.out;
-    for (const char* v : {"500", "1150"}) {
+    const auto jr = nlohmann::json::parse(ref.out), js = nlohmann::json::parse(r.out);
+    EXPECT_EQ(jr["route"], "in memory");
+    EXPECT_EQ(js["route"], "streamed");
+    ASSERT_TRUE(js["streaming"].is_object()) << r.out;
+    EXPECT_GT(js["streaming"]["engine_peak_bytes"].get<double>(), 0.0);
+    EXPECT_EQ(js["streaming"]["memory_budget_bytes"], 2u << 20);
+    ASSERT_EQ(jr["surfaces"].size(), 2u);
+    ASSERT_EQ(js["surfaces"].size(), 2u);
+    for (std::size_t i = 0; i < 2; ++i) {
+        const std::string v = i == 0 ? "500" : "1150";
         SCOPED_TRACE(v);
-        const Mesh a = load_mesh(dir / ("ref-iso" + std::string(v) + ".ply")), b = load_mesh(dir / ("s-iso" + std::string(v) + ".ply"));
+        const Mesh a = load_mesh(dir / ("ref-iso" + v + ".ply")), b = load_mesh(dir / ("s-iso" + v + ".ply"));
         const auto sa = mesh_stats(a), sb = mesh_stats(b);
         EXPECT_GT(sa.triangles, 10000u);
         EXPECT_EQ(sb.triangles, sa.triangles);
@@ -49,16 +57,24 @@ TEST(StreamCli, MeshStreamEqualsInMemory) {
         EXPECT_NEAR(sb.area, sa.area, 1e-9 * sa.area);
         EXPECT_NEAR(sb.volume, sa.volume, 1e-9 * std::abs(sa.volume));
         EXPECT_TRUE(sorted_positions(a) == sorted_positions(b));
-        // The printed summary line is the in-memory one's.
-        const std::string line = "iso " + std::string(v) + ": " + std::to_string(sa.triangles) + " triangles, " +
-                                 std::to_string(sa.vertices) + " vertices";
-        EXPECT_NE(ref.out.find(line), std::string::npos) << ref.out;
-        EXPECT_NE(r.out.find(line), std::string::npos) << r.out;
+        // The summary is the in-memory one's.
+        for (const auto* j : {&jr, &js}) {
+            const auto& sj = (*j)["surfaces"][i];
+            EXPECT_EQ(sj["name"], "iso " + v);
+            EXPECT_EQ(sj["triangles"], sa.triangles);
+            EXPECT_EQ(sj["vertices"], sa.vertices);
+            EXPECT_NEAR(sj["area_mm2"].get<double>(), sa.area, 1e-9 * sa.area);
+        }
+        EXPECT_EQ(js["surfaces"][i]["path"], (dir / ("s-iso" + v + ".ply")));
     }
     // A budget below the volume's size streams without --stream; .pvtp pieces.
     const auto p = test::run_command(test::cli() + " mesh " + in + " --iso 500 --memory 0.5 --chunk 8 -o " + (dir / "p.pvtp"), true);
     ASSERT_EQ(p.exit_code, 0) << p.out;
     EXPECT_NE(p.out.find("streamed:"), std::string::npos) << p.out;
+    EXPECT_NE(p.out.find("peak memory"), std::string::npos) << p.out;
+    EXPECT_NE(p.out.find("iso 500: " + std::to_string(jr["surfaces"][0]["triangles"].get<std::size_t>()) + " triangles, "),
+              std::string::npos) << p.out;
+    EXPECT_NE(p.out.find(", open, volume not known"), std::string::npos) << "no volume for an open surface streamed: " << p.out;
     EXPECT_TRUE(fs::exists(dir / "p.pvtp"));
     EXPECT_TRUE(fs::exists(dir / "p_0.vtp"));
 }
@@ -142,13 +158,14 @@ TEST(StreamCli, OpenVdbHeaderAndSlabs) {
     EXPECT_EQ(jh["grid"], "density");
     EXPECT_GT(jh["topology_bytes"].get<double>(), 0.0);
     EXPECT_LT(jh["topology_bytes"].get<double>(), jh["memory_bytes"].get<double>());
-    const auto ref = test::run_command(test::cli() + " mesh " + (dir / "h.vdb") + " --iso 500 -o " + (dir / "ref.ply"), true);
+    const auto ref = test::run_command(test::cli() + " mesh " + (dir / "h.vdb") + " --iso 500 --json -o " + (dir / "ref.ply"));
     ASSERT_EQ(ref.exit_code, 0) << ref.out;
-    EXPECT_EQ(ref.out.find("streamed:"), std::string::npos) << ref.out;
-    const auto r = test::run_command(test::cli() + " mesh " + (dir / "h.vdb") + " --iso 500 --memory 2.8 --chunk 8 -o " + (dir / "s.ply"), true);
+    EXPECT_EQ(nlohmann::json::parse(ref.out)["route"], "in memory");
+    const auto r = test::run_command(test::cli() + " mesh " + (dir / "h.vdb") + " --iso 500 --memory 2.8 --chunk 8 --json -o " + (dir / "s.ply"));
     ASSERT_EQ(r.exit_code, 0) << r.out;
-    EXPECT_NE(r.out.find("streamed:"), std::string::npos) << r.out;
-    EXPECT_NE(r.out.find("OpenVDB reader process peak"), std::string::npos) << r.out;
+    const auto js = nlohmann::json::parse(r.out);
+    EXPECT_EQ(js["route"], "streamed");
+    EXPECT_GT(js["streaming"]["reader_peak_bytes"].get<double>(), 0.0) << "read slab by slab through the reading child";
     const Mesh a = load_mesh(dir / "ref.ply"), b = load_mesh(dir / "s.ply");
     const auto sa = mesh_stats(a), sb = mesh_stats(b);
     EXPECT_GT(sa.triangles, 10000u);
@@ -170,14 +187,71 @@ TEST(StreamCli, NoOverlapWritesTheSameFiles) {
     for (const char* ext : {".ply", ".stl"}) {
         SCOPED_TRACE(ext);
         const std::string common = test::cli() + " mesh " + in + " --iso 500 --stream --memory 6 --chunk 8 -o ";
-        const auto on = test::run_command(common + (dir / ("on" + std::string(ext))), true);
-        const auto off = test::run_command(common + (dir / ("off" + std::string(ext))) + " --no-overlap", true);
+        const auto on = test::run_command(common + (dir / ("on" + std::string(ext))) + " --json");
+        const auto off = test::run_command(common + (dir / ("off" + std::string(ext))) + " --no-overlap --json");
         ASSERT_EQ(on.exit_code, 0) << on.out;
         ASSERT_EQ(off.exit_code, 0) << off.out;
-        EXPECT_NE(on.out.find("streaming steps (busy seconds, overlapped)"), std::string::npos) << on.out;
-        EXPECT_NE(off.out.find("streaming steps (busy seconds)"), std::string::npos) << off.out;
+        EXPECT_EQ(nlohmann::json::parse(on.out)["streaming"]["overlapped"], true) << on.out;
+        EXPECT_EQ(nlohmann::json::parse(off.out)["streaming"]["overlapped"], false) << off.out;
         const std::string a = bytes(dir / ("on" + std::string(ext))), b = bytes(dir / ("off" + std::string(ext)));
         EXPECT_GT(a.size(), 100000u);
         EXPECT_TRUE(a == b) << "the files differ";
     }
+}
+
+// A closed surface (a ball inside the grid): `mesh --json` gives its
+// enclosed volume, `measure`'s, in memory and streamed alike; the streamed
+// numbers are the in-memory ones. An open surface streamed (the bundled
+// CT's skin) has no volume: its pieces' statistics have no caps.
+TEST(StreamCli, MeshJsonStreamedEqualsInMemory) {
+    TempDir dir;
+    {
+        const std::array<std::int64_t, 3> d{40, 36, 44};
+        Volume v = Volume::dense(d, VoxelType::I16, make_affine(glm::dvec3(0.9, 1.0, 1.1), glm::dvec3(5, -3, 2), glm::dmat3(1.0)));
+        auto s = v.as<std::int16_t>();
+        for (std::int64_t k = 0; k < d[2]; ++k)
+            for (std::int64_t j = 0; j < d[1]; ++j)
+                for (std::int64_t i = 0; i < d[0]; ++i)
+                    s[v.linear_index(i, j, k)] = std::int16_t(
+                        std::clamp(500.0 + 100.0 * (13.5 - glm::length(glm::dvec3(i, j, k) - glm::dvec3(19, 18, 21))), 0.0, 1000.0));
+        save_volume(v, dir / "ball.nhdr", false);
+    }
+    const std::string ball = dir / "ball.nhdr";
+    const auto mem = test::run_command(test::cli() + " mesh " + ball + " --iso 500 --json -o " + (dir / "m.ply"));
+    const auto str = test::run_command(test::cli() + " mesh " + ball + " --iso 500 --json --stream --memory 0.3 --chunk 8 -o " + (dir / "s.ply"));
+    const auto mea = test::run_command(test::cli() + " measure " + ball + " --iso 500 --json");
+    ASSERT_EQ(mem.exit_code, 0) << mem.out;
+    ASSERT_EQ(str.exit_code, 0) << str.out;
+    ASSERT_EQ(mea.exit_code, 0) << mea.out;
+    const auto jm = nlohmann::json::parse(mem.out), js = nlohmann::json::parse(str.out), jq = nlohmann::json::parse(mea.out);
+    EXPECT_EQ(js["route"], "streamed");
+    ASSERT_TRUE(js["streaming"].is_object());
+    EXPECT_GT(js["streaming"]["slabs_read"].get<int>(), 1) << "several slabs";
+    const auto& a = jm["surfaces"][0];
+    const auto& b = js["surfaces"][0];
+    EXPECT_EQ(a["closed"], true);
+    EXPECT_EQ(a["volume_kind"], "enclosed");
+    EXPECT_EQ(a["volume_ml"].get<double>(), jq["surfaces"][0]["volume_ml"].get<double>()) << "measure's enclosed volume";
+    EXPECT_NEAR(a["volume_ml"].get<double>(), 4.0 / 3.0 * M_PI * std::pow(13.5, 3) * 0.99 / 1000.0, 0.02 * a["volume_ml"].get<double>());
+    for (const char* key : {"triangles", "vertices", "closed", "boundary_edges", "volume_kind"}) EXPECT_EQ(b[key], a[key]) << key;
+    EXPECT_EQ(b["components"]["count"], a["components"]["count"]);
+    EXPECT_EQ(b["components"]["largest"]["triangles"], a["components"]["largest"]["triangles"]);
+    for (const char* key : {"area_mm2", "volume_ml"}) EXPECT_NEAR(b[key].get<double>(), a[key].get<double>(), 1e-9 * a[key].get<double>()) << key;
+    EXPECT_NEAR(b["components"]["largest"]["volume_ml"].get<double>(), a["volume_ml"].get<double>(), 1e-9 * a["volume_ml"].get<double>());
+    // The skin, open at the neck: the same counts, no volume where streamed.
+    const std::string in = test::data("headsq.nhdr");
+    const auto om = test::run_command(test::cli() + " mesh " + in + " --iso 500 --json -o " + (dir / "om.ply"));
+    const auto os = test::run_command(test::cli() + " mesh " + in + " --iso 500 --json --stream --memory 2 --chunk 16 -o " + (dir / "os.ply"));
+    ASSERT_EQ(om.exit_code, 0) << om.out;
+    ASSERT_EQ(os.exit_code, 0) << os.out;
+    const auto jom = nlohmann::json::parse(om.out), jos = nlohmann::json::parse(os.out);
+    const auto& c = jom["surfaces"][0];
+    const auto& o = jos["surfaces"][0];
+    for (const char* key : {"triangles", "vertices", "closed", "boundary_edges"}) EXPECT_EQ(o[key], c[key]) << key;
+    EXPECT_EQ(o["components"]["count"], c["components"]["count"]);
+    EXPECT_NEAR(o["area_mm2"].get<double>(), c["area_mm2"].get<double>(), 1e-9 * c["area_mm2"].get<double>());
+    EXPECT_EQ(c["volume_kind"], "lower bound");
+    EXPECT_TRUE(o["volume_ml"].is_null());
+    EXPECT_TRUE(o["volume_kind"].is_null());
+    EXPECT_TRUE(o["components"]["largest"]["volume_ml"].is_null()) << "no volume for a component of an open surface";
 }

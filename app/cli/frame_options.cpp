@@ -1,0 +1,92 @@
+// The frame's options of `render`, `pick` and `view` (frame_options.hpp).
+#include "app/cli/frame_options.hpp"
+
+#include <cstdio>
+#include <type_traits>
+#include <variant>
+
+#include "renderer/frame/ao_settings.hpp"
+
+namespace iso::cli {
+
+// One option per setting of the AO settings' tables (renderer/frame/ao_settings.hpp)
+// that has one, with its range and help.
+template <class S> void add_ao_options(CLI::App* cmd, S& s, const std::vector<iso::AoSetting<S>>& table) {
+    for (const auto& t : table) {
+        if (!*t.option) continue;
+        std::visit(
+            [&](auto member) {
+                auto* o = cmd->add_option(std::string("--") + t.option, s.*member, t.help);
+                if constexpr (!std::is_same_v<std::decay_t<decltype(s.*member)>, bool>) o->check(CLI::Range(t.lo, t.hi));
+            },
+            t.member);
+    }
+}
+
+void add_cone_options(CLI::App* cmd, iso::ConeAoSettings& c) { add_ao_options(cmd, c, iso::cone_ao_settings()); }
+
+namespace {
+
+// Disk-AO tunables (docs/ao.md, "Disk AO on the GPU"), defaults
+// DiskAoSettings' (measured against Embree by the CPU benchmark), and
+// --ao-disk-blend MIN,MAX for both blend weights at once (parse_disk_blend).
+void add_disk_options(CLI::App* cmd, iso::DiskAoSettings& d, std::string& blend) {
+    add_ao_options(cmd, d, iso::disk_ao_settings());
+    cmd->add_option("--ao-disk-blend", blend, "Convergence blend weights MIN,MAX of the last two passes (disk AO; default 0.7,0.3)");
+}
+
+// "MIN,MAX" of --ao-disk-blend into the settings (empty: unchanged).
+void parse_disk_blend(const std::string& text, iso::DiskAoSettings& d) {
+    if (text.empty()) return;
+    double lo = 0, hi = 0;
+    char tail = 0;
+    if (std::sscanf(text.c_str(), "%lf,%lf%c", &lo, &hi, &tail) != 2)
+        throw iso::Error("--ao-disk-blend", "expected MIN,MAX weights, e.g. 0.7,0.3, got '" + text + "'");
+    if (!(lo >= 0 && lo <= 1 && hi >= 0 && hi <= 1))
+        throw iso::Error("--ao-disk-blend", "weights must be in 0..1, got '" + text + "'");
+    d.min_scale = lo;
+    d.max_scale = hi;
+}
+
+} // namespace
+
+void add_frame_options(CLI::App* c, FrameArgs& a, bool input_required) {
+    auto* in = c->add_option("input", a.in, "Volume file, DICOM folder, or mesh (" + iso::mesh_extensions_text() + ")");
+    if (input_required) in->required();
+    c->add_option("--iso", a.isos, "Iso value (repeatable) for volume inputs")->allow_extra_args(false);
+    c->add_option("--view", a.view, "anterior, posterior, left, right, superior or inferior");
+    c->add_option("--size", a.size, "Image size WxH (default 1024x1024)");
+    c->add_option("--ao", a.ao,
+                  "Ambient occlusion: off, cone (cone tracing), disk (disk hierarchy, high quality for stills), or reference (Embree ray "
+                  "tracing; with --aov ao)");
+    c->add_option("--ao-radius", a.ao_radius, "AO radius R_max in mm")->check(CLI::PositiveNumber);
+    add_cone_options(c, a.cone);
+    add_disk_options(c, a.disk, a.disk_blend);
+    c->add_option("--ao-frames", a.ao_frames, "Still frames accumulated with new jitter sets (cone AO)")->check(CLI::Range(1, 4096));
+    c->add_option("--series", a.series, "DICOM series to load: index or SeriesInstanceUID");
+    add_look_options(c, a.look);
+    c->add_option("--oit-epsilon", a.oit_epsilon, "Translucent surfaces: stop compositing a pixel below this transmittance (default 1/512)")
+        ->check(CLI::Range(0.0, 0.999));
+    c->add_option("--oit-memory", a.oit_memory, "Translucent surfaces: fragment pool cap in MiB (default 256)")->check(CLI::Range(1.0, 65536.0));
+}
+
+iso::core::RenderRequest frame_request(const FrameArgs& a) {
+    iso::core::RenderRequest req;
+    req.view = a.view;
+    if (std::sscanf(a.size.c_str(), "%dx%d", &req.width, &req.height) != 2 || req.width < 1 || req.height < 1)
+        throw iso::Error("--size", "expected WxH, e.g. 1920x1080, got '" + a.size + "'");
+    req.ao = a.ao;
+    req.ao_radius_mm = a.ao_radius;
+    req.cone = a.cone;
+    req.disk = a.disk;
+    parse_disk_blend(a.disk_blend, req.disk);
+    req.ao_frames = a.ao_frames;
+    req.progress = progress_bar();
+    if (!a.look.background.empty()) req.background = hex_option("--background", a.look.background);
+    req.flat_shading = a.look.shading == "flat";
+    req.oit_epsilon = a.oit_epsilon;
+    req.oit_memory_mib = a.oit_memory;
+    return req;
+}
+
+} // namespace iso::cli

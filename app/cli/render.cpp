@@ -1,0 +1,153 @@
+// `isoscope render`: surfaces of a volume or a mesh, or a session of the
+// desktop app, to an annotated image or an AOV (core::render_image).
+#include <iomanip>
+#include <iostream>
+#include <memory>
+#include <optional>
+
+#include "app/cli/commands.hpp"
+#include "app/cli/frame_options.hpp"
+#include "io/atomic_file.hpp"
+#include "io/markups.hpp"
+#include "renderer/core/session.hpp"
+
+namespace iso::cli {
+
+namespace {
+
+struct RenderArgs {
+    FrameArgs frame;
+    std::string out, aov, cache, session;
+    std::vector<std::string> markups;
+    float scale = 1.0f;
+    bool stats = false, no_annotations = false, transparent = false, no_markups = false;
+    bool view_given = false, ao_given = false; // with --session: replace the session's camera / view option
+    int ao_rays = 1024;
+};
+
+void print_stats(const iso::graph::FrameStats& stats, const iso::OitStats& oit) {
+    std::cout << std::left << std::setw(14) << "pass" << std::setw(8) << "ran" << std::setw(12) << "ms" << "created\n";
+    double total = 0;
+    for (const auto& p : stats.passes) {
+        std::cout << std::setw(14) << p.name << std::setw(8) << (p.ran ? "yes" : "culled") << std::setw(12) << std::fixed << std::setprecision(2)
+                  << p.ms << human_bytes(double(p.bytes_created)) << "\n";
+        total += p.ms;
+    }
+    std::cout << "total " << total << " ms; " << stats.physical_resources << " resources created, " << stats.reused_resources
+              << " reused; peak " << human_bytes(double(stats.peak_bytes)) << "\n";
+    if (oit.fragments > 0)
+        std::cout << "transparency: " << oit.fragments << " fragments in " << oit.lists << " pixel lists (longest " << oit.max_list << "), "
+                  << oit.shaded << " shaded, " << oit.merged << " merged past the cap; pool " << oit.capacity << " nodes, " << oit.redraws
+                  << " redraw(s)\n";
+    if (oit.merged > 0)
+        std::cout << "transparency: merged fragments in " << oit.merged_pixels << " pixels, error at most " << std::setprecision(4)
+                  << oit.merge_error_max << " (linear colour, per channel)\n";
+}
+
+// `isoscope render --session`: the request comes from core::session_request,
+// as the desktop app's File > Export image builds it; the frame's other
+// options (size, background, AO tunables, ...) apply on top.
+iso::core::RenderRequest session_render_request(const RenderArgs& a, iso::core::OpenedSession& opened) {
+    const auto& f = a.frame;
+    if (!f.in.empty()) throw iso::Error("--session", "the session names its input: give INPUT or --session, not both");
+    for (const auto& [given, flag] : {std::pair{!f.isos.empty(), "--iso"}, {!f.series.empty(), "--series"},
+                                     {!f.look.opacity.empty(), "--opacity"}, {!f.look.color.empty(), "--color"}})
+        if (given) throw iso::Error(flag, "the session holds the surfaces and the series: not with --session");
+    const iso::core::RenderRequest frame = frame_request(f);
+    iso::core::SessionRenderOptions o;
+    o.width = frame.width;
+    o.height = frame.height;
+    o.scale = a.scale;
+    o.annotations = !a.no_annotations;
+    o.transparent = a.transparent;
+    o.markups = !a.no_markups;
+    if (a.ao_given) o.ao = f.ao;
+    iso::core::RenderRequest req = iso::core::session_request(opened.session, a.session, o);
+    if (a.view_given) {
+        req.camera.reset();
+        req.view = f.view;
+    }
+    req.background = frame.background;
+    req.flat_shading = frame.flat_shading;
+    req.oit_epsilon = frame.oit_epsilon;
+    req.oit_memory_mib = frame.oit_memory_mib;
+    req.ao_radius_mm = frame.ao_radius_mm;
+    req.cone = frame.cone;
+    req.disk = frame.disk;
+    req.ao_frames = frame.ao_frames;
+    req.progress = frame.progress;
+    return req;
+}
+
+int run_render(const RenderArgs& a) {
+    if (a.session.empty() && a.frame.in.empty()) throw iso::Error("isoscope render", "give an INPUT (or --session FILE)");
+    if (a.no_markups && a.session.empty()) throw iso::Error("--no-markups", "only with --session (without it, give no --markups)");
+    std::optional<iso::core::OpenedSession> opened;
+    iso::core::RenderRequest req;
+    if (a.session.empty()) {
+        req = frame_request(a.frame);
+    } else {
+        iso::check_writable_destination(a.out);
+        opened = iso::core::open_session(a.session, progress_bar());
+        for (const auto& w : opened->session.warnings) std::cerr << "warning: " << a.session << ": " << w << "\n";
+        req = session_render_request(a, *opened);
+    }
+    req.scale = a.scale;
+    req.aov_ao = a.aov == "ao";
+    req.aov = req.aov_ao ? iso::Aov::None : iso::aov_from_name(a.aov);
+    req.ao_rays = a.ao_rays;
+    req.cache_dir = a.cache;
+    req.annotations = !a.no_annotations;
+    req.transparent = a.transparent;
+    req.time_passes = a.stats;
+    if (!a.markups.empty() && !a.aov.empty()) throw iso::Error("--markups", "markups are drawn on the colour image, not on an AOV (--aov)");
+    iso::check_writable_destination(a.out);
+    // Markups before the volume: a bad file fails fast, naming itself.
+    for (const auto& path : a.markups) {
+        auto f = iso::load_markups(path);
+        for (const auto& w : f.warnings) std::cerr << "warning: " << path << ": " << w << "\n";
+        for (auto& m : f.markups) req.markups.push_back(std::move(m));
+        req.markups_files.push_back(path);
+    }
+    iso::core::Scene local;
+    if (!opened) open_input(local, a.frame.in, a.frame.series, a.frame.isos, a.frame.look, "render");
+    const auto out = iso::core::render_image(opened ? *opened->scene : local, req);
+    iso::core::export_image(out.image, out.meta, a.out);
+    std::cout << "rendered " << out.image.width << "x" << out.image.height << " (" << out.gl_renderer << ") -> " << a.out << "\n";
+    if (a.stats) print_stats(out.stats, out.oit);
+    if (out.oit.merged > 0)
+        std::cerr << "warning: " << out.oit.merged << " translucent fragments in " << out.oit.merged_pixels << " pixels did not fit the "
+                  << a.frame.oit_memory << " MiB pool (--oit-memory) and were merged, order-independently: error at most " << std::setprecision(3)
+                  << out.oit.merge_error_max << " per channel\n";
+    return 0;
+}
+
+} // namespace
+
+RunFn add_render(CLI::App& cmd, char*) {
+    const auto args = std::make_shared<RenderArgs>();
+    RenderArgs& a = *args;
+    CLI::App* c = &cmd;
+    add_frame_options(c, a.frame, false);
+    c->add_option("--session", a.session, "Render a session file of the desktop app (its input, surfaces, camera, markups, AO) "
+                                          "instead of INPUT; --view replaces its camera, --ao its AO setting");
+    c->add_flag("--no-markups", a.no_markups, "With --session: leave out the session's markups");
+    c->add_option("--scale", a.scale, "Scale of text, lines and glyphs (e.g. 2 for a 2x export)")->check(CLI::Range(0.1, 20.0));
+    c->add_option("--aov", a.aov, "Write a buffer instead of the colour image: depth, normal, id or ao (EXR)");
+    c->add_option("--ao-rays", a.ao_rays, "Rays per pixel for --ao reference")->check(CLI::Range(1, 1 << 20));
+    c->add_option("--ao-cache", a.cache, "Folder caching AO references ('-': none; default ~/.cache/isoscope)");
+    c->add_flag("--no-annotations", a.no_annotations, "No scale bar, orientation letters or labels (--markups are still drawn)");
+    c->add_option("--markups", a.markups, "3D Slicer markups file (.mrk.json) to draw: points, lines with their length, angles "
+                                          "(repeatable; dimmed where a surface hides them)")
+        ->allow_extra_args(false);
+    c->add_flag("--transparent", a.transparent, "Transparent background");
+    c->add_flag("--stats", a.stats, "Print per-pass statistics");
+    c->add_option("-o,--output", a.out, "Output .png, .tif or .exr")->required();
+    return [args, c] {
+        args->view_given = c->get_option("--view")->count() > 0;
+        args->ao_given = c->get_option("--ao")->count() > 0;
+        return run_render(*args);
+    };
+}
+
+} // namespace iso::cli
