@@ -82,6 +82,172 @@ struct Builder {
     }
 };
 
+constexpr const char* kBuildWhere = "disk AO hierarchy";
+
+// Throws for a mesh without triangles, a non-finite vertex or a triangle
+// that names a missing vertex.
+void check_mesh(const Mesh& mesh) {
+    if (mesh.triangles.empty()) throw Error(kBuildWhere, "the mesh has no triangles");
+    const std::size_t nv = mesh.positions.size();
+    for (std::size_t i = 0; i < nv; ++i) {
+        const glm::vec3& q = mesh.positions[i];
+        if (!std::isfinite(q.x) || !std::isfinite(q.y) || !std::isfinite(q.z))
+            throw Error(kBuildWhere, "vertex " + std::to_string(i) + " has a non-finite position");
+    }
+    for (std::size_t t = 0; t < mesh.triangles.size(); ++t)
+        for (const std::uint32_t v : mesh.triangles[t])
+            if (v >= nv)
+                throw Error(kBuildWhere, "triangle " + std::to_string(t) + " refers to vertex " + std::to_string(v) +
+                                             " of " + std::to_string(nv));
+}
+
+// The leaves' disks, per vertex: centre, area and unit normal (zero: no
+// direction); and the vertices that triangles reference, in index order.
+struct VertexDisks {
+    std::vector<double> area;
+    std::vector<glm::dvec3> centre, normal;
+    std::vector<std::int32_t> order;
+};
+
+// A third of the adjacent triangles' areas; the mesh's normal where it has
+// a usable one, else the area-weighted face normal. Double sums.
+VertexDisks vertex_disks(const Mesh& mesh) {
+    const std::size_t nv = mesh.positions.size();
+    const bool has_normals = mesh.normals.size() == nv;
+    VertexDisks d{std::vector<double>(nv, 0.0), std::vector<glm::dvec3>(nv), std::vector<glm::dvec3>(nv, glm::dvec3(0.0)), {}};
+    std::vector<glm::dvec3> face_normal(nv, glm::dvec3(0.0));
+    std::vector<char> referenced(nv, 0);
+    for (const auto& tri : mesh.triangles) {
+        const glm::dvec3 a(mesh.positions[tri[0]]), b(mesh.positions[tri[1]]), c(mesh.positions[tri[2]]);
+        const glm::dvec3 cr = glm::cross(b - a, c - a);  // 2 x area x unit normal
+        const double tri_area = 0.5 * glm::length(cr);
+        for (const std::uint32_t v : tri) {
+            d.area[v] += tri_area / 3.0;
+            face_normal[v] += 0.5 * cr;
+            referenced[v] = 1;
+        }
+    }
+    d.order.reserve(nv);
+    for (std::size_t v = 0; v < nv; ++v) {
+        d.centre[v] = glm::dvec3(mesh.positions[v]);
+        if (!referenced[v]) continue;
+        d.order.push_back(static_cast<std::int32_t>(v));
+        glm::dvec3 nn(0.0);
+        if (has_normals) {
+            nn = glm::dvec3(mesh.normals[v]);
+            if (!std::isfinite(nn.x) || !std::isfinite(nn.y) || !std::isfinite(nn.z)) nn = glm::dvec3(0.0);
+        }
+        if (glm::dot(nn, nn) < 1e-24) nn = face_normal[v];
+        const double l = glm::length(nn);
+        d.normal[v] = l > 1e-300 ? nn / l : glm::dvec3(0.0);  // zero: no direction (all adjacent triangles degenerate)
+    }
+    return d;
+}
+
+// Triangles: each owned by the leaf of its first corner (any corner's leaf
+// lies on the triangle, and a fixed rule needs no search), grouped by
+// owning leaf in node order into h.triangles. Counting sort; returns the
+// offsets: node i owns triangles [owned[i], owned[i + 1]).
+std::vector<std::int32_t> own_triangles(const Mesh& mesh, DiskHierarchy& h) {
+    const auto node_count = static_cast<std::int32_t>(h.nodes.size());
+    std::vector<std::int32_t> owned(static_cast<std::size_t>(node_count) + 1, 0);
+    for (const auto& tri : mesh.triangles) ++owned[static_cast<std::size_t>(h.vertex_node[tri[0]]) + 1];
+    for (std::int32_t i = 0; i < node_count; ++i) owned[static_cast<std::size_t>(i) + 1] += owned[static_cast<std::size_t>(i)];
+    std::vector<std::int32_t> cursor(owned.begin(), owned.end() - 1);
+    h.triangles.assign(3 * mesh.triangles.size(), glm::vec4(0.0f));
+    for (const auto& tri : mesh.triangles) {
+        const auto slot = static_cast<std::size_t>(cursor[static_cast<std::size_t>(h.vertex_node[tri[0]])]++);
+        for (int k = 0; k < 3; ++k) h.triangles[3 * slot + static_cast<std::size_t>(k)] = glm::vec4(mesh.positions[tri[k]], 0.0f);
+    }
+    return owned;
+}
+
+// Leaves: centre, area, normal; bound = the farther of the disk's rim and
+// its owned triangles' corners (so a subtree's bound holds its triangles
+// too, which the R test relies on). Returns each node's reach (leaves only;
+// 0 for parents).
+std::vector<double> fill_leaves(const VertexDisks& d, const std::vector<std::int32_t>& leaf_vertex,
+                                const std::vector<std::int32_t>& owned, DiskHierarchy& h) {
+    const auto node_count = static_cast<std::int32_t>(h.nodes.size());
+    std::vector<double> leaf_reach(static_cast<std::size_t>(node_count), 0.0);
+    for (std::int32_t i = 0; i < node_count; ++i) {
+        const auto iu = static_cast<std::size_t>(i);
+        const std::int32_t v = leaf_vertex[iu];
+        if (v < 0) continue;
+        const auto vu = static_cast<std::size_t>(v);
+        DiskNode& node = h.nodes[iu];
+        double reach = std::sqrt(d.area[vu] / kPi);
+        const std::int32_t first = owned[iu], end = owned[iu + 1];
+        for (std::int32_t t = first; t < end; ++t)
+            for (int k = 0; k < 3; ++k)
+                reach = std::max(reach, glm::length(glm::dvec3(glm::vec3(h.triangles[3 * static_cast<std::size_t>(t) + static_cast<std::size_t>(k)])) - d.centre[vu]));
+        leaf_reach[iu] = reach;
+        node.centre_area = glm::vec4(glm::vec3(d.centre[vu]), static_cast<float>(d.area[vu]));
+        node.normal_bound = glm::vec4(glm::vec3(d.normal[vu]), static_cast<float>(reach));
+        node.links.z = first;
+        node.links.w = end - first;
+    }
+    return leaf_reach;
+}
+
+// Parents, children before parents (reverse pre-order): area-weighted
+// centre and normal sums in double over the children's sums; plain mean
+// of the leaves' centres when the subtree has no area.
+void fill_parents(const VertexDisks& d, const std::vector<std::int32_t>& leaf_vertex, const std::vector<double>& leaf_reach,
+                  DiskHierarchy& h) {
+    const auto node_count = static_cast<std::int32_t>(h.nodes.size());
+    std::vector<glm::dvec3> sum_c(static_cast<std::size_t>(node_count)), sum_n(static_cast<std::size_t>(node_count)),
+        sum_plain(static_cast<std::size_t>(node_count));
+    std::vector<double> sum_a(static_cast<std::size_t>(node_count)), leaves(static_cast<std::size_t>(node_count));
+    for (std::int32_t i = node_count - 1; i >= 0; --i) {
+        const auto iu = static_cast<std::size_t>(i);
+        DiskNode& node = h.nodes[iu];
+        const std::int32_t v = leaf_vertex[iu];
+        if (v >= 0) {
+            const auto vu = static_cast<std::size_t>(v);
+            sum_a[iu] = d.area[vu];
+            sum_c[iu] = d.area[vu] * d.centre[vu];
+            sum_n[iu] = d.area[vu] * d.normal[vu];
+            sum_plain[iu] = d.centre[vu];
+            leaves[iu] = 1.0;
+            continue;
+        }
+        glm::dvec3 c(0.0), nn(0.0), plain(0.0);
+        double a = 0.0, l = 0.0;
+        for (std::int32_t ch = node.links.y; ch < node.links.x; ch = h.nodes[static_cast<std::size_t>(ch)].links.x) {
+            const auto cu = static_cast<std::size_t>(ch);
+            c += sum_c[cu];
+            nn += sum_n[cu];
+            a += sum_a[cu];
+            plain += sum_plain[cu];
+            l += leaves[cu];
+        }
+        sum_c[iu] = c;
+        sum_n[iu] = nn;
+        sum_a[iu] = a;
+        sum_plain[iu] = plain;
+        leaves[iu] = l;
+        const glm::dvec3 centre_p = a > 0.0 ? c / a : plain / l;
+        const double nl = glm::length(nn);
+        // Zero when the leaves' normals cancel (a closed surface's root).
+        const glm::dvec3 normal_p = nl > 1e-12 * std::max(a, 1e-300) ? nn / nl : glm::dvec3(0.0);
+        // Bound: the farthest leaf reach below, over the leaves of the
+        // subtree (exact, not the looser sphere-of-spheres). The float
+        // centre is the one stored, so the bound holds in float too; the
+        // 1 + 1e-6 covers float rounding of the stored radius.
+        const glm::dvec3 centre_f = glm::dvec3(glm::vec3(centre_p));
+        double bound = 0.0;
+        for (std::int32_t j = i + 1; j < node.links.x; ++j) {
+            const auto ju = static_cast<std::size_t>(j);
+            if (leaf_vertex[ju] < 0) continue;
+            bound = std::max(bound, glm::length(glm::dvec3(glm::vec3(d.centre[static_cast<std::size_t>(leaf_vertex[ju])])) - centre_f) +
+                                        leaf_reach[ju]);
+        }
+        node.centre_area = glm::vec4(glm::vec3(centre_p), static_cast<float>(a));
+        node.normal_bound = glm::vec4(glm::vec3(normal_p), static_cast<float>(bound * (1.0 + 1e-6)));
+    }
+}
+
 // ---------------------------------------------------------------- evaluation
 
 // The traversal for one receiver, in T (float: the shader; double: the test
@@ -193,152 +359,19 @@ void fill_parent_terms(const DiskHierarchy& h, std::vector<float>& term, std::ve
 } // namespace
 
 DiskHierarchy build_disk_hierarchy(const Mesh& mesh) {
-    const char* where = "disk AO hierarchy";
-    if (mesh.triangles.empty()) throw Error(where, "the mesh has no triangles");
-    const std::size_t nv = mesh.positions.size();
-    for (std::size_t i = 0; i < nv; ++i) {
-        const glm::vec3& q = mesh.positions[i];
-        if (!std::isfinite(q.x) || !std::isfinite(q.y) || !std::isfinite(q.z))
-            throw Error(where, "vertex " + std::to_string(i) + " has a non-finite position");
-    }
-    for (std::size_t t = 0; t < mesh.triangles.size(); ++t)
-        for (const std::uint32_t v : mesh.triangles[t])
-            if (v >= nv)
-                throw Error(where, "triangle " + std::to_string(t) + " refers to vertex " + std::to_string(v) + " of " +
-                                       std::to_string(nv));
-    const bool has_normals = mesh.normals.size() == nv;
-
-    // Per vertex: a third of the adjacent triangles' areas, the area-weighted
-    // face normal, referenced or not. Double sums.
-    std::vector<double> area(nv, 0.0);
-    std::vector<glm::dvec3> face_normal(nv, glm::dvec3(0.0));
-    std::vector<char> referenced(nv, 0);
-    for (const auto& tri : mesh.triangles) {
-        const glm::dvec3 a(mesh.positions[tri[0]]), b(mesh.positions[tri[1]]), c(mesh.positions[tri[2]]);
-        const glm::dvec3 cr = glm::cross(b - a, c - a);  // 2 x area x unit normal
-        const double tri_area = 0.5 * glm::length(cr);
-        for (const std::uint32_t v : tri) {
-            area[v] += tri_area / 3.0;
-            face_normal[v] += 0.5 * cr;
-            referenced[v] = 1;
-        }
-    }
-    std::vector<glm::dvec3> centre(nv), normal(nv, glm::dvec3(0.0));
-    std::vector<std::int32_t> order;
-    order.reserve(nv);
-    for (std::size_t v = 0; v < nv; ++v) {
-        centre[v] = glm::dvec3(mesh.positions[v]);
-        if (!referenced[v]) continue;
-        order.push_back(static_cast<std::int32_t>(v));
-        glm::dvec3 nn(0.0);
-        if (has_normals) {
-            nn = glm::dvec3(mesh.normals[v]);
-            if (!std::isfinite(nn.x) || !std::isfinite(nn.y) || !std::isfinite(nn.z)) nn = glm::dvec3(0.0);
-        }
-        if (glm::dot(nn, nn) < 1e-24) nn = face_normal[v];
-        const double l = glm::length(nn);
-        normal[v] = l > 1e-300 ? nn / l : glm::dvec3(0.0);  // zero: no direction (all adjacent triangles degenerate)
-    }
-
+    check_mesh(mesh);
+    VertexDisks disks = vertex_disks(mesh);
     DiskHierarchy h;
-    std::vector<std::int32_t> leaf_vertex;
-    h.nodes.reserve(2 * order.size());
-    Builder builder{centre, order, h.nodes, h.node_level, leaf_vertex};
-    builder.build(0, order.size(), 0);
-    const auto node_count = static_cast<std::int32_t>(h.nodes.size());
-
-    h.vertex_node.assign(nv, -1);
-    for (std::int32_t i = 0; i < node_count; ++i)
-        if (leaf_vertex[static_cast<std::size_t>(i)] >= 0) h.vertex_node[static_cast<std::size_t>(leaf_vertex[static_cast<std::size_t>(i)])] = i;
-
-    // Triangles: each owned by the leaf of its first corner (any corner's leaf
-    // lies on the triangle, and a fixed rule needs no search), grouped by
-    // owning leaf in node order. Counting sort.
-    std::vector<std::int32_t> owned(static_cast<std::size_t>(node_count) + 1, 0);
-    for (const auto& tri : mesh.triangles) ++owned[static_cast<std::size_t>(h.vertex_node[tri[0]]) + 1];
-    for (std::int32_t i = 0; i < node_count; ++i) owned[static_cast<std::size_t>(i) + 1] += owned[static_cast<std::size_t>(i)];
-    std::vector<std::int32_t> cursor(owned.begin(), owned.end() - 1);
-    h.triangles.assign(3 * mesh.triangles.size(), glm::vec4(0.0f));
-    for (const auto& tri : mesh.triangles) {
-        const auto slot = static_cast<std::size_t>(cursor[static_cast<std::size_t>(h.vertex_node[tri[0]])]++);
-        for (int k = 0; k < 3; ++k) h.triangles[3 * slot + static_cast<std::size_t>(k)] = glm::vec4(mesh.positions[tri[k]], 0.0f);
-    }
-
-    // Leaves: centre, area, normal; bound = the farther of the disk's rim and
-    // its owned triangles' corners (so a subtree's bound holds its triangles
-    // too, which the R test relies on).
-    std::vector<double> leaf_reach(static_cast<std::size_t>(node_count), 0.0);
-    for (std::int32_t i = 0; i < node_count; ++i) {
-        const auto iu = static_cast<std::size_t>(i);
-        const std::int32_t v = leaf_vertex[iu];
-        if (v < 0) continue;
-        const auto vu = static_cast<std::size_t>(v);
-        DiskNode& node = h.nodes[iu];
-        double reach = std::sqrt(area[vu] / kPi);
-        const std::int32_t first = owned[iu], end = owned[iu + 1];
-        for (std::int32_t t = first; t < end; ++t)
-            for (int k = 0; k < 3; ++k)
-                reach = std::max(reach, glm::length(glm::dvec3(glm::vec3(h.triangles[3 * static_cast<std::size_t>(t) + static_cast<std::size_t>(k)])) - centre[vu]));
-        leaf_reach[iu] = reach;
-        node.centre_area = glm::vec4(glm::vec3(centre[vu]), static_cast<float>(area[vu]));
-        node.normal_bound = glm::vec4(glm::vec3(normal[vu]), static_cast<float>(reach));
-        node.links.z = first;
-        node.links.w = end - first;
-    }
-
-    // Parents, children before parents (reverse pre-order): area-weighted
-    // centre and normal sums in double over the children's sums; plain mean
-    // of the leaves' centres when the subtree has no area.
-    std::vector<glm::dvec3> sum_c(static_cast<std::size_t>(node_count)), sum_n(static_cast<std::size_t>(node_count)),
-        sum_plain(static_cast<std::size_t>(node_count));
-    std::vector<double> sum_a(static_cast<std::size_t>(node_count)), leaves(static_cast<std::size_t>(node_count));
-    for (std::int32_t i = node_count - 1; i >= 0; --i) {
-        const auto iu = static_cast<std::size_t>(i);
-        DiskNode& node = h.nodes[iu];
-        const std::int32_t v = leaf_vertex[iu];
-        if (v >= 0) {
-            const auto vu = static_cast<std::size_t>(v);
-            sum_a[iu] = area[vu];
-            sum_c[iu] = area[vu] * centre[vu];
-            sum_n[iu] = area[vu] * normal[vu];
-            sum_plain[iu] = centre[vu];
-            leaves[iu] = 1.0;
-            continue;
-        }
-        glm::dvec3 c(0.0), nn(0.0), plain(0.0);
-        double a = 0.0, l = 0.0;
-        for (std::int32_t ch = node.links.y; ch < node.links.x; ch = h.nodes[static_cast<std::size_t>(ch)].links.x) {
-            const auto cu = static_cast<std::size_t>(ch);
-            c += sum_c[cu];
-            nn += sum_n[cu];
-            a += sum_a[cu];
-            plain += sum_plain[cu];
-            l += leaves[cu];
-        }
-        sum_c[iu] = c;
-        sum_n[iu] = nn;
-        sum_a[iu] = a;
-        sum_plain[iu] = plain;
-        leaves[iu] = l;
-        const glm::dvec3 centre_p = a > 0.0 ? c / a : plain / l;
-        const double nl = glm::length(nn);
-        // Zero when the leaves' normals cancel (a closed surface's root).
-        const glm::dvec3 normal_p = nl > 1e-12 * std::max(a, 1e-300) ? nn / nl : glm::dvec3(0.0);
-        // Bound: the farthest leaf reach below, over the leaves of the
-        // subtree (exact, not the looser sphere-of-spheres). The float
-        // centre is the one stored, so the bound holds in float too; the
-        // 1 + 1e-6 covers float rounding of the stored radius.
-        const glm::dvec3 centre_f = glm::dvec3(glm::vec3(centre_p));
-        double bound = 0.0;
-        for (std::int32_t j = i + 1; j < node.links.x; ++j) {
-            const auto ju = static_cast<std::size_t>(j);
-            if (leaf_vertex[ju] < 0) continue;
-            bound = std::max(bound, glm::length(glm::dvec3(glm::vec3(centre[static_cast<std::size_t>(leaf_vertex[ju])])) - centre_f) +
-                                        leaf_reach[ju]);
-        }
-        node.centre_area = glm::vec4(glm::vec3(centre_p), static_cast<float>(a));
-        node.normal_bound = glm::vec4(glm::vec3(normal_p), static_cast<float>(bound * (1.0 + 1e-6)));
-    }
+    std::vector<std::int32_t> leaf_vertex; // node -> vertex (-1: a parent)
+    h.nodes.reserve(2 * disks.order.size());
+    Builder builder{disks.centre, disks.order, h.nodes, h.node_level, leaf_vertex};
+    builder.build(0, disks.order.size(), 0);
+    h.vertex_node.assign(mesh.positions.size(), -1);
+    for (std::size_t i = 0; i < h.nodes.size(); ++i)
+        if (leaf_vertex[i] >= 0) h.vertex_node[static_cast<std::size_t>(leaf_vertex[i])] = static_cast<std::int32_t>(i);
+    const std::vector<std::int32_t> owned = own_triangles(mesh, h);
+    const std::vector<double> leaf_reach = fill_leaves(disks, leaf_vertex, owned, h);
+    fill_parents(disks, leaf_vertex, leaf_reach, h);
     h.roots = {0};
     h.levels = 1 + *std::max_element(h.node_level.begin(), h.node_level.end());
     return h;

@@ -22,6 +22,7 @@
 #include <tbb/parallel_for.h>
 
 #include "io/error.hpp"
+#include "renderer/surface/atomic.hpp"
 
 namespace iso::core {
 
@@ -432,8 +433,7 @@ std::vector<SliceSegment> mesh_outline(const Mesh& m, const SliceGrid& g) {
         for (std::size_t t = b * kBlock; t < end; ++t) {
             const auto& tri = m.triangles[t];
             if (tri[0] >= nv || tri[1] >= nv || tri[2] >= nv) {
-                std::size_t expected = bad.load();
-                while (t < expected && !bad.compare_exchange_weak(expected, t)) {}
+                atomic_min(bad, t);
                 continue;
             }
             const double dd[3] = {d[tri[0]], d[tri[1]], d[tri[2]]};

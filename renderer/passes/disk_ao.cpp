@@ -133,6 +133,150 @@ void update_parents(GlResources& gl, const graph::Resources& r, graph::BufferHan
     }
 }
 
+// The execute step of disk_elements. As disk_element_passes: pass k reads
+// the terms of pass k - 1 (none for the first) and writes its own terms
+// and leaf occlusion; parents follow each pass.
+void run_element_passes(const FrameContext& ctx, const graph::Resources& r, graph::BufferHandle params) {
+    GlResources& gl = *ctx.gl;
+    DiskState& S = *ctx.disk;
+    const DiskAoSettings& st = ctx.opt.disk_settings;
+    DiskParams p = base_params(ctx);
+    const int passes = st.passes; // >= 1: the pass is declared only then
+    for (int pass = 0; pass < passes; ++pass) {
+        const int out = pass % 2, in = 1 - out;
+        auto& prog = gl.program({"ao/disk_element.comp"});
+        prog.use();
+        bind_hierarchy(S);
+        S.terms[in].bind_base(GL_SHADER_STORAGE_BUFFER, 3);
+        S.terms[out].bind_base(GL_SHADER_STORAGE_BUFFER, 4);
+        S.occlusion[out].bind_base(GL_SHADER_STORAGE_BUFFER, 7);
+        p.use_terms = pass > 0 ? 1 : 0;
+        bind_params(gl, r, params, p);
+        glDispatchCompute(groups(S.nodes), 1, 1);
+        glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
+        update_parents(gl, r, params, p, S, S.terms[out]);
+        S.final_terms = out;
+    }
+    // The weighted minimum of the last two passes' occlusion.
+    if (passes >= 2) {
+        const int last = (passes - 1) % 2;
+        auto& prog = gl.program({"ao/disk_blend.comp"});
+        prog.use();
+        S.node_buf.bind_base(GL_SHADER_STORAGE_BUFFER, 0);
+        S.terms[last].bind_base(GL_SHADER_STORAGE_BUFFER, 4);
+        S.occlusion[last].bind_base(GL_SHADER_STORAGE_BUFFER, 7);
+        S.occlusion[1 - last].bind_base(GL_SHADER_STORAGE_BUFFER, 8);
+        bind_params(gl, r, params, p);
+        glDispatchCompute(groups(S.nodes), 1, 1);
+        glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
+        update_parents(gl, r, params, p, S, S.terms[last]);
+    }
+    S.terms_valid = true;
+    S.settings = st;
+    S.radius = ctx.opt.ao_settings.radius_mm;
+    ctx.result->disk_elements = true;
+}
+
+struct GatherData {
+    graph::TextureHandle depth, normal, ao;
+    graph::BufferHandle hierarchy, terms, params;
+};
+
+// The execute step of disk_gather: every pixel's receiver against the
+// hierarchy, in bands of rows when progress is reported.
+void run_gather(const FrameContext& ctx, const GatherData& d, const graph::Resources& r) {
+    GlResources& gl = *ctx.gl;
+    DiskState& S = *ctx.disk;
+    const bool read = ctx.hooks.read_disk;
+    auto& prog = gl.program({"ao/disk_gather.comp"}, read ? "#define READ_RECEIVERS 1\n" : "");
+    prog.use();
+    bind_hierarchy(S);
+    S.terms[S.final_terms].bind_base(GL_SHADER_STORAGE_BUFFER, 3);
+    glBindTextureUnit(0, gl.texture(r, d.depth));
+    glBindTextureUnit(1, gl.texture(r, d.normal));
+    glBindImageTexture(0, gl.texture(r, d.ao), 0, GL_FALSE, 0, GL_WRITE_ONLY, GL_R32F);
+    DiskParams p = base_params(ctx);
+    const bool modulated = ctx.opt.disk_settings.passes > 0;
+    p.use_terms = modulated ? 1 : 0;
+    gl::Buffer receivers;
+    const std::size_t pixels = std::size_t(ctx.width) * std::size_t(ctx.height);
+    if (read) {
+        receivers = gl::Buffer(pixels * 2 * sizeof(glm::vec4), nullptr, 0);
+        receivers.bind_base(GL_SHADER_STORAGE_BUFFER, 6);
+    }
+    // With a progress callback, bands of 64 rows, each finished
+    // before it is reported (about 8 on a 512-row image; the
+    // glFinish costs nothing next to a band's traversals).
+    const int band = ctx.opt.progress ? 64 : ctx.height;
+    for (int y0 = 0; y0 < ctx.height; y0 += band) {
+        const int rows = std::min(band, ctx.height - y0);
+        p.row_offset = y0;
+        bind_params(gl, r, d.params, p);
+        glDispatchCompute(GLuint((ctx.width + 7) / 8), GLuint((rows + 7) / 8), 1);
+        if (!ctx.opt.progress) continue;
+        glFinish();
+        if (!ctx.opt.progress(double(y0 + rows) / double(ctx.height), "disk AO")) {
+            ctx.result->cancelled = true;
+            break;
+        }
+    }
+    glMemoryBarrier(GL_TEXTURE_FETCH_BARRIER_BIT | GL_SHADER_IMAGE_ACCESS_BARRIER_BIT | GL_TEXTURE_UPDATE_BARRIER_BIT |
+                    GL_SHADER_STORAGE_BARRIER_BIT);
+    ctx.result->disk_nodes = S.nodes;
+    ctx.result->disk_triangles = S.triangles;
+    if (read) {
+        ctx.result->disk_receivers = receivers.read_all<glm::vec4>();
+        ctx.result->disk_terms.assign(S.nodes, 1.0f);
+        if (S.nodes && modulated)
+            glGetNamedBufferSubData(S.terms[S.final_terms].id(), 0, GLsizeiptr(S.nodes * sizeof(float)), ctx.result->disk_terms.data());
+    }
+}
+
+// disk_build: writes the hierarchy token (build_and_upload).
+graph::BufferHandle add_build_pass(graph::FrameGraph& fg, const FrameContext& ctx, graph::BufferHandle hierarchy) {
+    struct Data {
+        graph::BufferHandle token;
+    };
+    return fg.add_pass<Data>(
+                 "disk_build", [&](graph::FrameGraph::Builder& b, Data& d) { d.token = b.write(hierarchy); },
+                 [&ctx](const Data&, const graph::Resources&) { build_and_upload(ctx); })
+        .token;
+}
+
+// disk_elements: reads the hierarchy token, writes the terms token.
+graph::BufferHandle add_elements_pass(graph::FrameGraph& fg, const FrameContext& ctx, graph::BufferHandle hierarchy,
+                                      graph::BufferHandle terms) {
+    struct Data {
+        graph::BufferHandle hierarchy, token, params;
+    };
+    return fg.add_pass<Data>(
+                 "disk_elements",
+                 [&](graph::FrameGraph::Builder& b, Data& d) {
+                     d.hierarchy = b.read(hierarchy);
+                     d.token = b.write(terms);
+                     d.params = params_buffer<DiskParams>(b, "disk_element_params");
+                 },
+                 [&ctx](const Data& d, const graph::Resources& r) { run_element_passes(ctx, r, d.params); })
+        .token;
+}
+
+// disk_gather: reads depth, normal and both tokens, writes the AO image.
+graph::TextureHandle add_gather_pass(graph::FrameGraph& fg, const FrameContext& ctx, const GBuffer& gb,
+                                     graph::BufferHandle hierarchy, graph::BufferHandle terms) {
+    return fg.add_pass<GatherData>(
+                 "disk_gather",
+                 [&](graph::FrameGraph::Builder& b, GatherData& d) {
+                     d.depth = b.read(gb.depth);
+                     d.normal = b.read(gb.normal);
+                     d.hierarchy = b.read(hierarchy);
+                     d.terms = b.read(terms);
+                     d.ao = b.write(b.create("disk_ao", graph::TextureDesc{ctx.width, ctx.height, graph::Format::R32F}));
+                     d.params = params_buffer<DiskParams>(b, "disk_gather_params");
+                 },
+                 [&ctx](const GatherData& d, const graph::Resources& r) { run_gather(ctx, d, r); })
+        .ao;
+}
+
 } // namespace
 
 graph::TextureHandle disk_ambient_occlusion(graph::FrameGraph& fg, const FrameContext& ctx, const GBuffer& gb) {
@@ -146,136 +290,10 @@ graph::TextureHandle disk_ambient_occlusion(graph::FrameGraph& fg, const FrameCo
                                         S->radius != ctx.opt.ao_settings.radius_mm);
 
     graph::BufferHandle hierarchy = fg.history("disk_hierarchy", kTokenDesc);
-    if (rebuild) {
-        struct Data {
-            graph::BufferHandle token;
-        };
-        hierarchy = fg.add_pass<Data>(
-                          "disk_build", [&](graph::FrameGraph::Builder& b, Data& d) { d.token = b.write(hierarchy); },
-                          [&ctx](const Data&, const graph::Resources&) { build_and_upload(ctx); })
-                        .token;
-    }
-
+    if (rebuild) hierarchy = add_build_pass(fg, ctx, hierarchy);
     graph::BufferHandle terms = fg.history("disk_terms", kTokenDesc);
-    if (elements) {
-        struct Data {
-            graph::BufferHandle hierarchy, token, params;
-        };
-        terms = fg.add_pass<Data>(
-                      "disk_elements",
-                      [&](graph::FrameGraph::Builder& b, Data& d) {
-                          d.hierarchy = b.read(hierarchy);
-                          d.token = b.write(terms);
-                          d.params = params_buffer<DiskParams>(b, "disk_element_params");
-                      },
-                      [&ctx](const Data& d, const graph::Resources& r) {
-                          GlResources& gl = *ctx.gl;
-                          DiskState& S = *ctx.disk;
-                          const DiskAoSettings& st = ctx.opt.disk_settings;
-                          DiskParams p = base_params(ctx);
-                          // As disk_element_passes: pass k reads the terms of
-                          // pass k - 1 (none for the first) and writes its own
-                          // terms and leaf occlusion; parents follow each pass.
-                          const int passes = st.passes; // >= 1: the pass is declared only then
-                          for (int pass = 0; pass < passes; ++pass) {
-                              const int out = pass % 2, in = 1 - out;
-                              auto& prog = gl.program({"ao/disk_element.comp"});
-                              prog.use();
-                              bind_hierarchy(S);
-                              S.terms[in].bind_base(GL_SHADER_STORAGE_BUFFER, 3);
-                              S.terms[out].bind_base(GL_SHADER_STORAGE_BUFFER, 4);
-                              S.occlusion[out].bind_base(GL_SHADER_STORAGE_BUFFER, 7);
-                              p.use_terms = pass > 0 ? 1 : 0;
-                              bind_params(gl, r, d.params, p);
-                              glDispatchCompute(groups(S.nodes), 1, 1);
-                              glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
-                              update_parents(gl, r, d.params, p, S, S.terms[out]);
-                              S.final_terms = out;
-                          }
-                          // The weighted minimum of the last two passes' occlusion.
-                          if (passes >= 2) {
-                              const int last = (passes - 1) % 2;
-                              auto& prog = gl.program({"ao/disk_blend.comp"});
-                              prog.use();
-                              S.node_buf.bind_base(GL_SHADER_STORAGE_BUFFER, 0);
-                              S.terms[last].bind_base(GL_SHADER_STORAGE_BUFFER, 4);
-                              S.occlusion[last].bind_base(GL_SHADER_STORAGE_BUFFER, 7);
-                              S.occlusion[1 - last].bind_base(GL_SHADER_STORAGE_BUFFER, 8);
-                              bind_params(gl, r, d.params, p);
-                              glDispatchCompute(groups(S.nodes), 1, 1);
-                              glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
-                              update_parents(gl, r, d.params, p, S, S.terms[last]);
-                          }
-                          S.terms_valid = true;
-                          S.settings = st;
-                          S.radius = ctx.opt.ao_settings.radius_mm;
-                          ctx.result->disk_elements = true;
-                      })
-                    .token;
-    }
-
-    struct Data {
-        graph::TextureHandle depth, normal, ao;
-        graph::BufferHandle hierarchy, terms, params;
-    };
-    return fg.add_pass<Data>(
-                 "disk_gather",
-                 [&](graph::FrameGraph::Builder& b, Data& d) {
-                     d.depth = b.read(gb.depth);
-                     d.normal = b.read(gb.normal);
-                     d.hierarchy = b.read(hierarchy);
-                     d.terms = b.read(terms);
-                     d.ao = b.write(b.create("disk_ao", graph::TextureDesc{ctx.width, ctx.height, graph::Format::R32F}));
-                     d.params = params_buffer<DiskParams>(b, "disk_gather_params");
-                 },
-                 [&ctx](const Data& d, const graph::Resources& r) {
-                     GlResources& gl = *ctx.gl;
-                     DiskState& S = *ctx.disk;
-                     const bool read = ctx.hooks.read_disk;
-                     auto& prog = gl.program({"ao/disk_gather.comp"}, read ? "#define READ_RECEIVERS 1\n" : "");
-                     prog.use();
-                     bind_hierarchy(S);
-                     S.terms[S.final_terms].bind_base(GL_SHADER_STORAGE_BUFFER, 3);
-                     glBindTextureUnit(0, gl.texture(r, d.depth));
-                     glBindTextureUnit(1, gl.texture(r, d.normal));
-                     glBindImageTexture(0, gl.texture(r, d.ao), 0, GL_FALSE, 0, GL_WRITE_ONLY, GL_R32F);
-                     DiskParams p = base_params(ctx);
-                     const bool modulated = ctx.opt.disk_settings.passes > 0;
-                     p.use_terms = modulated ? 1 : 0;
-                     gl::Buffer receivers;
-                     const std::size_t pixels = std::size_t(ctx.width) * std::size_t(ctx.height);
-                     if (read) {
-                         receivers = gl::Buffer(pixels * 2 * sizeof(glm::vec4), nullptr, 0);
-                         receivers.bind_base(GL_SHADER_STORAGE_BUFFER, 6);
-                     }
-                     // With a progress callback, bands of 64 rows, each finished
-                     // before it is reported (about 8 on a 512-row image; the
-                     // glFinish costs nothing next to a band's traversals).
-                     const int band = ctx.opt.progress ? 64 : ctx.height;
-                     for (int y0 = 0; y0 < ctx.height; y0 += band) {
-                         const int rows = std::min(band, ctx.height - y0);
-                         p.row_offset = y0;
-                         bind_params(gl, r, d.params, p);
-                         glDispatchCompute(GLuint((ctx.width + 7) / 8), GLuint((rows + 7) / 8), 1);
-                         if (!ctx.opt.progress) continue;
-                         glFinish();
-                         if (!ctx.opt.progress(double(y0 + rows) / double(ctx.height), "disk AO")) {
-                             ctx.result->cancelled = true;
-                             break;
-                         }
-                     }
-                     glMemoryBarrier(GL_TEXTURE_FETCH_BARRIER_BIT | GL_SHADER_IMAGE_ACCESS_BARRIER_BIT | GL_TEXTURE_UPDATE_BARRIER_BIT |
-                                     GL_SHADER_STORAGE_BARRIER_BIT);
-                     ctx.result->disk_nodes = S.nodes;
-                     ctx.result->disk_triangles = S.triangles;
-                     if (read) {
-                         ctx.result->disk_receivers = receivers.read_all<glm::vec4>();
-                         ctx.result->disk_terms.assign(S.nodes, 1.0f);
-                         if (S.nodes && modulated)
-                             glGetNamedBufferSubData(S.terms[S.final_terms].id(), 0, GLsizeiptr(S.nodes * sizeof(float)), ctx.result->disk_terms.data());
-                     }
-                 })
-        .ao;
+    if (elements) terms = add_elements_pass(fg, ctx, hierarchy, terms);
+    return add_gather_pass(fg, ctx, gb, hierarchy, terms);
 }
 
 } // namespace iso::passes

@@ -8,6 +8,10 @@
 #include "io/markups.hpp"
 #include "renderer/surface/arena.hpp"
 #include "renderer/surface/analysis.hpp"
+#include "renderer/surface/arena.hpp"
+#include "renderer/surface/atomic.hpp"
+#include "renderer/surface/analysis.hpp"
+#include "renderer/surface/union_find.hpp"
 
 #include <algorithm>
 #include <atomic>
@@ -131,6 +135,16 @@ std::vector<std::uint32_t> weld_positions(const std::vector<glm::vec3>& p) {
 }
 
 // ---- the analysis ----------------------------------------------------------------
+//
+// measure_surface's steps (docs/measure.md, "Surfaces"), each a function:
+// check_input, weld_triangles, connected_components, component_bounds,
+// classify_edges, component_sums, boundary_loops, then the components
+// ordered and totalled (order_components, add_totals) and the warnings.
+
+using Triangle = std::array<std::uint32_t, 3>;
+
+// A triangle with a repeated vertex after welding: zero area, left out of the edges.
+bool collapsed(const Triangle& w) { return w[0] == w[1] || w[1] == w[2] || w[0] == w[2]; }
 
 struct Analysis {
     SurfaceMeasures m;
@@ -139,35 +153,20 @@ struct Analysis {
     std::vector<std::uint32_t> vertex_component;
 };
 
-struct Accum {
-    double area = 0, volume = 0; // mm^2, mm^3 (relative to the component's reference point)
-    std::size_t triangles = 0, degenerate = 0;
-};
-
-struct BoundaryEdge {
-    std::uint32_t from, to;
-    bool operator<(const BoundaryEdge& o) const { return from != o.from ? from < o.from : to < o.to; }
-};
-
-Analysis analyse(const Mesh& mesh) {
-    Analysis out;
-    SurfaceMeasures& m = out.m;
+// Throws for a mesh beyond the edge encoding's sizes, a triangle that names
+// a missing vertex or a vertex that is not finite. The checks run in
+// parallel; the first bad triangle or vertex is named.
+void check_input(const Mesh& mesh) {
     const auto& P = mesh.positions;
     const auto& T = mesh.triangles;
     const std::size_t nv = P.size(), nt = T.size();
-    m.triangles = nt;
     // Vertex indices fit 31 bits (edge entries) and 3 x triangles fit 32 (edge offsets).
     if (nv >= (std::size_t(1) << 31) || nt >= (std::size_t(1) << 30))
         throw Error(kWhere, "more than 2^31 vertices or 2^30 triangles");
-
-    // Input checks, in parallel: the first bad triangle or vertex is named.
     std::atomic<std::size_t> bad_tri{nt}, bad_vertex{nv};
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nt, 1 << 14), [&](const auto& r) {
         for (std::size_t t = r.begin(); t != r.end(); ++t)
-            if (T[t][0] >= nv || T[t][1] >= nv || T[t][2] >= nv) {
-                std::size_t cur = bad_tri.load();
-                while (t < cur && !bad_tri.compare_exchange_weak(cur, t)) {}
-            }
+            if (T[t][0] >= nv || T[t][1] >= nv || T[t][2] >= nv) atomic_min(bad_tri, t);
     });
     if (bad_tri.load() < nt) {
         const std::size_t t = bad_tri.load();
@@ -176,71 +175,93 @@ Analysis analyse(const Mesh& mesh) {
     }
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nv, 1 << 14), [&](const auto& r) {
         for (std::size_t i = r.begin(); i != r.end(); ++i)
-            if (!finite(glm::dvec3(P[i]))) {
-                std::size_t cur = bad_vertex.load();
-                while (i < cur && !bad_vertex.compare_exchange_weak(cur, i)) {}
-            }
+            if (!finite(glm::dvec3(P[i]))) atomic_min(bad_vertex, i);
     });
     if (bad_vertex.load() < nv) throw Error(kWhere, "vertex " + std::to_string(bad_vertex.load()) + " is not finite");
+}
 
-    // 1. Weld: triangles over canonical vertices (equal positions are one vertex).
-    const std::vector<std::uint32_t> canon = weld_positions(P);
-    std::vector<std::array<std::uint32_t, 3>> W(nt);
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nt, 1 << 14), [&](const auto& r) {
-        for (std::size_t t = r.begin(); t != r.end(); ++t) W[t] = {canon[T[t][0]], canon[T[t][1]], canon[T[t][2]]};
+// Step 1: the triangles over canonical vertices (equal positions are one vertex).
+struct Welded {
+    std::vector<std::uint32_t> canon; // per input vertex: weld_positions
+    std::vector<Triangle> triangles;
+};
+
+Welded weld_triangles(const Mesh& mesh) {
+    const auto& T = mesh.triangles;
+    Welded w{weld_positions(mesh.positions), std::vector<Triangle>(T.size())};
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, T.size(), 1 << 14), [&](const auto& r) {
+        for (std::size_t t = r.begin(); t != r.end(); ++t)
+            w.triangles[t] = {w.canon[T[t][0]], w.canon[T[t][1]], w.canon[T[t][2]]};
     });
-    auto collapsed = [](const std::array<std::uint32_t, 3>& w) { return w[0] == w[1] || w[1] == w[2] || w[0] == w[2]; };
+    return w;
+}
 
-    // 2. Components: union-find over canonical vertices, the smaller index
-    // becoming the root (deterministic). Collapsed triangles connect too.
-    std::vector<std::uint32_t> parent(nv);
-    std::iota(parent.begin(), parent.end(), 0u);
-    std::vector<std::uint8_t> used(nv, 0);
-    auto find = [&](std::uint32_t x) {
-        while (parent[x] != x) {
-            parent[x] = parent[parent[x]];
-            x = parent[x];
-        }
-        return x;
-    };
-    auto unite = [&](std::uint32_t a, std::uint32_t b) {
-        a = find(a);
-        b = find(b);
-        if (a == b) return;
-        if (a < b) parent[b] = a;
-        else parent[a] = b;
-    };
+// Step 2: the components of the canonical vertices that triangles use.
+struct Components {
+    std::uint32_t count = 0;
+    std::vector<std::uint8_t> used;   // per canonical vertex: a triangle uses it
+    std::vector<std::uint32_t> label; // per used canonical vertex: its component; kNone elsewhere
+    std::uint32_t of(std::uint32_t canonical) const { return label[canonical]; }
+};
+
+// Union-find (collapsed triangles connect too). Every set's root is its
+// smallest member, so the components are numbered in the order of their
+// smallest vertex (deterministic), and a vertex's root is labelled before it.
+Components connected_components(const std::vector<Triangle>& W, std::size_t nv) {
+    Components c;
+    c.used.assign(nv, 0);
+    UnionFind sets(nv);
     for (const auto& w : W) {
-        used[w[0]] = used[w[1]] = used[w[2]] = 1;
-        unite(w[0], w[1]);
-        unite(w[0], w[2]);
+        c.used[w[0]] = c.used[w[1]] = c.used[w[2]] = 1;
+        sets.unite(w[0], w[1]);
+        sets.unite(w[0], w[2]);
     }
-    std::vector<std::uint32_t> label(nv, kNone);
-    std::uint32_t ncomp = 0;
+    c.label.assign(nv, kNone);
     for (std::uint32_t v = 0; v < nv; ++v) {
-        if (!used[v]) continue;
-        parent[v] = find(v);
-        if (parent[v] == v) label[v] = ncomp++;
+        if (!c.used[v]) continue;
+        const std::uint32_t root = sets.find(v);
+        c.label[v] = root == v ? c.count++ : c.label[root];
     }
-    auto comp_of = [&](std::uint32_t canonical) { return label[parent[canonical]]; };
+    return c;
+}
 
-    // Per component: bounds and the reference point (bounds' centre).
-    std::vector<glm::dvec3> lo(ncomp, glm::dvec3(std::numeric_limits<double>::max())),
-        hi(ncomp, glm::dvec3(std::numeric_limits<double>::lowest()));
-    for (std::uint32_t v = 0; v < nv; ++v) {
-        if (!used[v] || canon[v] != v) continue;
-        const std::uint32_t c = comp_of(v);
-        lo[c] = glm::min(lo[c], glm::dvec3(P[v]));
-        hi[c] = glm::max(hi[c], glm::dvec3(P[v]));
-        ++m.vertices;
+// Per component: bounds and the reference point (the bounds' centre) that
+// its sums are taken about; and the distinct vertices the triangles use.
+struct ComponentBounds {
+    std::vector<glm::dvec3> lo, hi, ref;
+    std::size_t vertices = 0;
+};
+
+ComponentBounds component_bounds(const std::vector<glm::vec3>& P, const std::vector<std::uint32_t>& canon,
+                                 const Components& comps) {
+    const std::uint32_t ncomp = comps.count;
+    ComponentBounds b{std::vector<glm::dvec3>(ncomp, glm::dvec3(std::numeric_limits<double>::max())),
+                      std::vector<glm::dvec3>(ncomp, glm::dvec3(std::numeric_limits<double>::lowest())),
+                      std::vector<glm::dvec3>(ncomp)};
+    for (std::uint32_t v = 0; v < P.size(); ++v) {
+        if (!comps.used[v] || canon[v] != v) continue;
+        const std::uint32_t c = comps.of(v);
+        b.lo[c] = glm::min(b.lo[c], glm::dvec3(P[v]));
+        b.hi[c] = glm::max(b.hi[c], glm::dvec3(P[v]));
+        ++b.vertices;
     }
-    std::vector<glm::dvec3> ref(ncomp);
-    for (std::uint32_t c = 0; c < ncomp; ++c) ref[c] = 0.5 * (lo[c] + hi[c]);
+    for (std::uint32_t c = 0; c < ncomp; ++c) b.ref[c] = 0.5 * (b.lo[c] + b.hi[c]);
+    return b;
+}
 
-    // 3. Edges, bucketed by their lower vertex (counting sort), then each
-    // bucket sorted and its runs classified. An entry is (upper << 1) | 1 when
-    // the triangle runs lower -> upper (vertices < 2^31: 32 bits).
-    std::vector<std::uint32_t> off(nv + 1, 0);
+// The edges of the non-collapsed triangles, bucketed by their lower vertex
+// (counting sort): bucket l is entries[offset[l], offset[l + 1]). An entry
+// is (upper << 1) | 1 when the triangle runs lower -> upper (vertices < 2^31:
+// 32 bits).
+struct EdgeBuckets {
+    std::vector<std::uint32_t> offset, entries;
+};
+
+EdgeBuckets bucket_edges(const std::vector<Triangle>& W, std::size_t nv) {
+    const std::size_t nt = W.size();
+    EdgeBuckets e;
+    auto& off = e.offset;
+    off.assign(nv + 1, 0);
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nt, 1 << 14), [&](const auto& r) {
         for (std::size_t t = r.begin(); t != r.end(); ++t) {
             const auto& w = W[t];
@@ -250,25 +271,42 @@ Analysis analyse(const Mesh& mesh) {
         }
     });
     std::partial_sum(off.begin(), off.end(), off.begin());
-    std::vector<std::uint32_t> entries(off[nv]);
-    {
-        std::vector<std::uint32_t> cursor(off.begin(), off.end() - 1);
-        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nt, 1 << 14), [&](const auto& r) {
-            for (std::size_t t = r.begin(); t != r.end(); ++t) {
-                const auto& w = W[t];
-                if (collapsed(w)) continue;
-                for (int k = 0; k < 3; ++k) {
-                    const std::uint32_t a = w[k], b = w[(k + 1) % 3];
-                    const std::uint32_t l = std::min(a, b), u = std::max(a, b);
-                    const std::uint32_t slot = std::atomic_ref<std::uint32_t>(cursor[l]).fetch_add(1, std::memory_order_relaxed);
-                    entries[slot] = (u << 1) | std::uint32_t(a < b);
-                }
+    e.entries.resize(off[nv]);
+    std::vector<std::uint32_t> cursor(off.begin(), off.end() - 1);
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nt, 1 << 14), [&](const auto& r) {
+        for (std::size_t t = r.begin(); t != r.end(); ++t) {
+            const auto& w = W[t];
+            if (collapsed(w)) continue;
+            for (int k = 0; k < 3; ++k) {
+                const std::uint32_t a = w[k], b = w[(k + 1) % 3];
+                const std::uint32_t l = std::min(a, b), u = std::max(a, b);
+                const std::uint32_t slot = std::atomic_ref<std::uint32_t>(cursor[l]).fetch_add(1, std::memory_order_relaxed);
+                e.entries[slot] = (u << 1) | std::uint32_t(a < b);
             }
-        });
-    }
+        }
+    });
+    return e;
+}
+
+struct BoundaryEdge {
+    std::uint32_t from, to;
+    bool operator<(const BoundaryEdge& o) const { return from != o.from ? from < o.from : to < o.to; }
+};
+
+// Step 3: every edge classified by its uses (SurfaceMeasures' edge counts),
+// with the boundary edges kept for the loops and the counts per component.
+struct EdgeCounts {
+    std::size_t boundary = 0, non_manifold = 0, misoriented = 0;
+    std::vector<BoundaryEdge> chain; // boundary edges, directed as the triangles use them (with multiplicity), sorted
+    std::vector<std::size_t> comp_boundary, comp_misoriented;
+};
+
+// Each bucket sorted and its runs (one edge each) classified, in parallel.
+EdgeCounts classify_edges(const std::vector<Triangle>& W, const Components& comps, std::size_t nv) {
+    EdgeBuckets buckets = bucket_edges(W, nv);
     struct EdgeLocal {
         std::size_t boundary = 0, non_manifold = 0, misoriented = 0;
-        std::vector<BoundaryEdge> chain;          // boundary edges, directed as the triangles use them (with multiplicity)
+        std::vector<BoundaryEdge> chain;
         std::vector<std::uint32_t> boundary_comp; // component of each boundary edge (undirected, once)
         std::vector<std::uint32_t> misoriented_comp;
     };
@@ -276,8 +314,8 @@ Analysis analyse(const Mesh& mesh) {
     tbb::parallel_for(tbb::blocked_range<std::uint32_t>(0, std::uint32_t(nv), 4096), [&](const auto& r) {
         auto& L = edge_locals.local();
         for (std::uint32_t l = r.begin(); l != r.end(); ++l) {
-            auto* b = entries.data() + off[l];
-            auto* e = entries.data() + off[l + 1];
+            auto* b = buckets.entries.data() + buckets.offset[l];
+            auto* e = buckets.entries.data() + buckets.offset[l + 1];
             if (b == e) continue;
             std::sort(b, e);
             for (auto* run = b; run != e;) {
@@ -290,155 +328,184 @@ Analysis analyse(const Mesh& mesh) {
                 if (fwd == back) continue;
                 if (uses == 2) { // two triangles, same direction
                     ++L.misoriented;
-                    L.misoriented_comp.push_back(comp_of(l));
+                    L.misoriented_comp.push_back(comps.of(l));
                     continue;
                 }
                 ++L.boundary;
-                L.boundary_comp.push_back(comp_of(l));
+                L.boundary_comp.push_back(comps.of(l));
                 const BoundaryEdge d = fwd > back ? BoundaryEdge{l, u} : BoundaryEdge{u, l};
                 for (std::size_t x = 0; x < (fwd > back ? fwd - back : back - fwd); ++x) L.chain.push_back(d);
             }
         }
     });
-    std::vector<BoundaryEdge> chain;
-    std::vector<std::size_t> comp_boundary(ncomp, 0), comp_misoriented(ncomp, 0);
+    EdgeCounts out;
+    out.comp_boundary.assign(comps.count, 0);
+    out.comp_misoriented.assign(comps.count, 0);
     for (auto& L : edge_locals) {
-        m.boundary_edges += L.boundary;
-        m.non_manifold_edges += L.non_manifold;
-        m.misoriented_edges += L.misoriented;
-        chain.insert(chain.end(), L.chain.begin(), L.chain.end());
-        for (auto c : L.boundary_comp) ++comp_boundary[c];
-        for (auto c : L.misoriented_comp) ++comp_misoriented[c];
+        out.boundary += L.boundary;
+        out.non_manifold += L.non_manifold;
+        out.misoriented += L.misoriented;
+        out.chain.insert(out.chain.end(), L.chain.begin(), L.chain.end());
+        for (auto c : L.boundary_comp) ++out.comp_boundary[c];
+        for (auto c : L.misoriented_comp) ++out.comp_misoriented[c];
     }
-    std::sort(chain.begin(), chain.end());
-    entries = {};
-    off = {};
+    std::sort(out.chain.begin(), out.chain.end());
+    return out;
+}
 
-    // 4. Area and volume per component: triangles ordered by component
-    // (counting sort), summed by fixed blocks in parallel, the blocks' partial
-    // sums added in order (deterministic whatever the thread count).
+struct Accum {
+    double area = 0, volume = 0; // mm^2, mm^3 (relative to the component's reference point)
+    std::size_t triangles = 0, degenerate = 0;
+};
+
+// Step 4: area and volume per component. The triangles ordered by component
+// (counting sort), summed by fixed blocks in parallel, the blocks' partial
+// sums added in order (deterministic whatever the thread count).
+std::vector<Accum> component_sums(const std::vector<glm::vec3>& P, const std::vector<Triangle>& W, const Components& comps,
+                                  const std::vector<glm::dvec3>& ref) {
+    const std::size_t nt = W.size();
+    const std::uint32_t ncomp = comps.count;
+    std::vector<std::uint32_t> first(ncomp + 1, 0);
+    for (const auto& w : W) ++first[comps.of(w[0]) + 1];
+    std::partial_sum(first.begin(), first.end(), first.begin());
+    std::vector<std::uint32_t> order(nt);
+    if (ncomp == 1) {
+        std::iota(order.begin(), order.end(), 0u);
+    } else {
+        std::vector<std::uint32_t> cur(first.begin(), first.end() - 1);
+        for (std::uint32_t t = 0; t < nt; ++t) order[cur[comps.of(W[t][0])]++] = t;
+    }
+    struct Partial {
+        std::uint32_t comp;
+        Accum a;
+    };
+    constexpr std::size_t kBlock = 16384;
+    const std::size_t nblocks = (nt + kBlock - 1) / kBlock;
+    std::vector<std::vector<Partial>> partials(nblocks);
+    tbb::parallel_for(std::size_t(0), nblocks, [&](std::size_t blk) {
+        auto& out_p = partials[blk];
+        const std::size_t b = blk * kBlock, e = std::min(nt, b + kBlock);
+        for (std::size_t o = b; o < e; ++o) {
+            const auto& w = W[order[o]];
+            const std::uint32_t c = comps.of(w[0]);
+            if (out_p.empty() || out_p.back().comp != c) out_p.push_back({c, {}});
+            Accum& a = out_p.back().a;
+            ++a.triangles;
+            if (collapsed(w)) { ++a.degenerate; continue; }
+            const glm::dvec3 p0 = glm::dvec3(P[w[0]]) - ref[c], p1 = glm::dvec3(P[w[1]]) - ref[c],
+                             p2 = glm::dvec3(P[w[2]]) - ref[c];
+            const double area = 0.5 * glm::length(glm::cross(p1 - p0, p2 - p0));
+            if (area == 0.0) ++a.degenerate;
+            a.area += area;
+            a.volume += glm::dot(p0, glm::cross(p1, p2)) / 6.0;
+        }
+    });
     std::vector<Accum> acc(ncomp);
-    {
-        std::vector<std::uint32_t> first(ncomp + 1, 0);
-        for (const auto& w : W) ++first[comp_of(w[0]) + 1];
-        std::partial_sum(first.begin(), first.end(), first.begin());
-        std::vector<std::uint32_t> order(nt);
-        if (ncomp == 1) {
-            std::iota(order.begin(), order.end(), 0u);
-        } else {
-            std::vector<std::uint32_t> cur(first.begin(), first.end() - 1);
-            for (std::uint32_t t = 0; t < nt; ++t) order[cur[comp_of(W[t][0])]++] = t;
+    for (const auto& blk : partials)
+        for (const auto& part : blk) {
+            Accum& a = acc[part.comp];
+            a.area += part.a.area;
+            a.volume += part.a.volume;
+            a.triangles += part.a.triangles;
+            a.degenerate += part.a.degenerate;
         }
-        struct Partial {
-            std::uint32_t comp;
-            Accum a;
-        };
-        constexpr std::size_t kBlock = 16384;
-        const std::size_t nblocks = (nt + kBlock - 1) / kBlock;
-        std::vector<std::vector<Partial>> partials(nblocks);
-        tbb::parallel_for(std::size_t(0), nblocks, [&](std::size_t blk) {
-            auto& out_p = partials[blk];
-            const std::size_t b = blk * kBlock, e = std::min(nt, b + kBlock);
-            for (std::size_t o = b; o < e; ++o) {
-                const auto& w = W[order[o]];
-                const std::uint32_t c = comp_of(w[0]);
-                if (out_p.empty() || out_p.back().comp != c) out_p.push_back({c, {}});
-                Accum& a = out_p.back().a;
-                ++a.triangles;
-                if (collapsed(w)) { ++a.degenerate; continue; }
-                const glm::dvec3 p0 = glm::dvec3(P[w[0]]) - ref[c], p1 = glm::dvec3(P[w[1]]) - ref[c],
-                                 p2 = glm::dvec3(P[w[2]]) - ref[c];
-                const double area = 0.5 * glm::length(glm::cross(p1 - p0, p2 - p0));
-                if (area == 0.0) ++a.degenerate;
-                a.area += area;
-                a.volume += glm::dot(p0, glm::cross(p1, p2)) / 6.0;
-            }
-        });
-        for (const auto& blk : partials)
-            for (const auto& part : blk) {
-                Accum& a = acc[part.comp];
-                a.area += part.a.area;
-                a.volume += part.a.volume;
-                a.triangles += part.a.triangles;
-                a.degenerate += part.a.degenerate;
-            }
-    }
+    return acc;
+}
 
-    // 5. Boundary loops: the boundary edges, as the triangles use them, form
-    // closed walks (the boundary of a boundary is empty) when no edge is
-    // misoriented. Each walk is closed as soon as it returns to its start
-    // (two loops touching at a vertex stay two) and capped by a fan around
-    // its length-weighted centroid; the fan runs against the boundary's
-    // direction, so the capped surface is closed and oriented as the mesh.
-    std::vector<std::size_t> comp_loops(ncomp, 0);
-    std::vector<double> comp_length(ncomp, 0.0), comp_cap(ncomp, 0.0);
-    bool open_chain = false;
-    {
-        const std::size_t ne = chain.size();
-        std::vector<std::uint8_t> done(ne, 0);
-        std::unordered_map<std::uint32_t, std::size_t> next_out; // vertex -> first possibly unused outgoing edge
-        auto outgoing = [&](std::uint32_t v) -> std::size_t {
-            auto it = next_out.find(v);
-            std::size_t i = it != next_out.end() ? it->second
-                                                 : std::size_t(std::lower_bound(chain.begin(), chain.end(), BoundaryEdge{v, 0}) -
-                                                               chain.begin());
-            while (i < ne && chain[i].from == v && done[i]) ++i;
-            next_out[v] = i;
-            return i < ne && chain[i].from == v ? i : ne;
-        };
-        std::vector<std::size_t> walk;
-        for (std::size_t e0 = 0; e0 < ne; ++e0) {
-            if (done[e0]) continue;
-            walk.clear();
-            const std::uint32_t start = chain[e0].from;
-            std::size_t cur = e0;
-            for (;;) {
-                done[cur] = 1;
-                walk.push_back(cur);
-                const std::uint32_t x = chain[cur].to;
-                if (x == start) break;
-                cur = outgoing(x);
-                if (cur == ne) { open_chain = true; break; }
-            }
-            const std::uint32_t c = comp_of(start);
-            const glm::dvec3 r = ref[c];
-            double length = 0;
-            glm::dvec3 mid(0.0), mean(0.0);
-            for (auto i : walk) {
-                const glm::dvec3 a = glm::dvec3(P[chain[i].from]) - r, b = glm::dvec3(P[chain[i].to]) - r;
-                const double l = glm::length(b - a);
-                length += l;
-                mid += l * 0.5 * (a + b);
-                mean += a;
-            }
-            const glm::dvec3 apex = length > 0 ? mid / length : mean / double(walk.size());
-            double cap = 0;
-            for (auto i : walk) {
-                const glm::dvec3 a = glm::dvec3(P[chain[i].from]) - r, b = glm::dvec3(P[chain[i].to]) - r;
-                cap += glm::dot(b, glm::cross(a, apex)) / 6.0;
-            }
-            ++comp_loops[c];
-            comp_length[c] += length;
-            comp_cap[c] += cap;
+// Step 5: per component, its boundary loops, their length and the volume of
+// their caps (mm^3, about the component's reference point).
+struct BoundaryLoops {
+    std::vector<std::size_t> loops;
+    std::vector<double> length, cap;
+    bool open_chain = false; // a walk found no way on: some boundary edges form no closed loop
+};
+
+// The boundary edges, as the triangles use them, form closed walks (the
+// boundary of a boundary is empty) when no edge is misoriented. Each walk is
+// closed as soon as it returns to its start (two loops touching at a vertex
+// stay two) and capped by a fan around its length-weighted centroid; the fan
+// runs against the boundary's direction, so the capped surface is closed and
+// oriented as the mesh.
+BoundaryLoops boundary_loops(const std::vector<glm::vec3>& P, const std::vector<BoundaryEdge>& chain,
+                             const Components& comps, const std::vector<glm::dvec3>& ref) {
+    BoundaryLoops out{std::vector<std::size_t>(comps.count, 0), std::vector<double>(comps.count, 0.0),
+                      std::vector<double>(comps.count, 0.0)};
+    const std::size_t ne = chain.size();
+    std::vector<std::uint8_t> done(ne, 0);
+    std::unordered_map<std::uint32_t, std::size_t> next_out; // vertex -> first possibly unused outgoing edge
+    auto outgoing = [&](std::uint32_t v) -> std::size_t {
+        auto it = next_out.find(v);
+        std::size_t i = it != next_out.end()
+                            ? it->second
+                            : std::size_t(std::lower_bound(chain.begin(), chain.end(), BoundaryEdge{v, 0}) - chain.begin());
+        while (i < ne && chain[i].from == v && done[i]) ++i;
+        next_out[v] = i;
+        return i < ne && chain[i].from == v ? i : ne;
+    };
+    std::vector<std::size_t> walk;
+    for (std::size_t e0 = 0; e0 < ne; ++e0) {
+        if (done[e0]) continue;
+        walk.clear();
+        const std::uint32_t start = chain[e0].from;
+        std::size_t cur = e0;
+        for (;;) {
+            done[cur] = 1;
+            walk.push_back(cur);
+            const std::uint32_t x = chain[cur].to;
+            if (x == start) break;
+            cur = outgoing(x);
+            if (cur == ne) { out.open_chain = true; break; }
         }
+        const std::uint32_t c = comps.of(start);
+        const glm::dvec3 r = ref[c];
+        double length = 0;
+        glm::dvec3 mid(0.0), mean(0.0);
+        for (auto i : walk) {
+            const glm::dvec3 a = glm::dvec3(P[chain[i].from]) - r, b = glm::dvec3(P[chain[i].to]) - r;
+            const double l = glm::length(b - a);
+            length += l;
+            mid += l * 0.5 * (a + b);
+            mean += a;
+        }
+        const glm::dvec3 apex = length > 0 ? mid / length : mean / double(walk.size());
+        double cap = 0;
+        for (auto i : walk) {
+            const glm::dvec3 a = glm::dvec3(P[chain[i].from]) - r, b = glm::dvec3(P[chain[i].to]) - r;
+            cap += glm::dot(b, glm::cross(a, apex)) / 6.0;
+        }
+        ++out.loops[c];
+        out.length[c] += length;
+        out.cap[c] += cap;
     }
+    return out;
+}
 
-    // 6. Components, totals, order.
-    std::vector<SurfacePart> parts(ncomp);
-    for (std::uint32_t c = 0; c < ncomp; ++c) {
+// Step 6: the components' measures, in the order of their numbering.
+std::vector<SurfacePart> component_parts(const ComponentBounds& bounds, const EdgeCounts& edges,
+                                         const std::vector<Accum>& acc, const BoundaryLoops& loops) {
+    std::vector<SurfacePart> parts(acc.size());
+    for (std::size_t c = 0; c < acc.size(); ++c) {
         SurfacePart& s = parts[c];
         s.triangles = acc[c].triangles;
         s.area_mm2 = acc[c].area;
-        s.boundary_edges = comp_boundary[c];
-        s.boundary_loops = comp_loops[c];
-        s.boundary_length_mm = comp_length[c];
-        s.closed = comp_boundary[c] == 0;
-        s.volume_kind = comp_misoriented[c] ? VolumeKind::Undefined : s.closed ? VolumeKind::Enclosed : VolumeKind::LowerBound;
-        s.volume_ml = s.volume_kind == VolumeKind::Undefined ? kNaN : (acc[c].volume + comp_cap[c]) / 1000.0;
-        s.bounds_min = lo[c];
-        s.bounds_max = hi[c];
-        m.degenerate_triangles += acc[c].degenerate;
+        s.boundary_edges = edges.comp_boundary[c];
+        s.boundary_loops = loops.loops[c];
+        s.boundary_length_mm = loops.length[c];
+        s.closed = edges.comp_boundary[c] == 0;
+        s.volume_kind = edges.comp_misoriented[c] ? VolumeKind::Undefined
+                        : s.closed                ? VolumeKind::Enclosed
+                                                  : VolumeKind::LowerBound;
+        s.volume_ml = s.volume_kind == VolumeKind::Undefined ? kNaN : (acc[c].volume + loops.cap[c]) / 1000.0;
+        s.bounds_min = bounds.lo[c];
+        s.bounds_max = bounds.hi[c];
     }
+    return parts;
+}
+
+// The parts into m.components by volume, descending (undefined volumes
+// last, ties by area, then by numbering); returns each part's rank there.
+std::vector<std::uint32_t> order_components(const std::vector<SurfacePart>& parts, SurfaceMeasures& m) {
+    const auto ncomp = std::uint32_t(parts.size());
     std::vector<std::uint32_t> perm(ncomp);
     std::iota(perm.begin(), perm.end(), 0u);
     std::stable_sort(perm.begin(), perm.end(), [&](std::uint32_t a, std::uint32_t b) {
@@ -454,6 +521,11 @@ Analysis analyse(const Mesh& mesh) {
         rank[perm[i]] = i;
         m.components.push_back(parts[perm[i]]);
     }
+    return rank;
+}
+
+// The whole surface's measures from its components' (in their order).
+void add_totals(SurfaceMeasures& m) {
     m.volume_kind = VolumeKind::Enclosed;
     m.bounds_min = m.bounds_max = glm::dvec3(0.0);
     bool first_part = true;
@@ -462,7 +534,8 @@ Analysis analyse(const Mesh& mesh) {
         m.boundary_loops += s.boundary_loops;
         m.boundary_length_mm += s.boundary_length_mm;
         if (s.volume_kind == VolumeKind::Undefined) m.volume_kind = VolumeKind::Undefined;
-        else if (s.volume_kind == VolumeKind::LowerBound && m.volume_kind == VolumeKind::Enclosed) m.volume_kind = VolumeKind::LowerBound;
+        else if (s.volume_kind == VolumeKind::LowerBound && m.volume_kind == VolumeKind::Enclosed)
+            m.volume_kind = VolumeKind::LowerBound;
         if (s.volume_kind != VolumeKind::Undefined) m.volume_ml += s.volume_ml;
         m.bounds_min = first_part ? s.bounds_min : glm::min(m.bounds_min, s.bounds_min);
         m.bounds_max = first_part ? s.bounds_max : glm::max(m.bounds_max, s.bounds_max);
@@ -470,11 +543,9 @@ Analysis analyse(const Mesh& mesh) {
     }
     if (m.volume_kind == VolumeKind::Undefined) m.volume_ml = kNaN;
     m.closed = m.boundary_edges == 0;
+}
 
-    out.vertex_component.assign(nv, kNone);
-    for (std::uint32_t v = 0; v < nv; ++v)
-        if (used[canon[v]]) out.vertex_component[v] = rank[comp_of(canon[v])];
-
+void add_topology_warnings(SurfaceMeasures& m, bool open_chain) {
     if (m.misoriented_edges)
         m.warnings.push_back(std::to_string(m.misoriented_edges) +
                              " edges are used twice in the same direction: the triangles are not consistently "
@@ -489,6 +560,33 @@ Analysis analyse(const Mesh& mesh) {
         m.warnings.push_back("some boundary edges do not form closed loops");
     if (m.degenerate_triangles)
         m.warnings.push_back(std::to_string(m.degenerate_triangles) + " degenerate triangles (zero area) count as zero");
+}
+
+Analysis analyse(const Mesh& mesh) {
+    check_input(mesh);
+    const auto& P = mesh.positions;
+    const std::size_t nv = P.size();
+    const Welded welded = weld_triangles(mesh);
+    const Components comps = connected_components(welded.triangles, nv);
+    const ComponentBounds bounds = component_bounds(P, welded.canon, comps);
+    const EdgeCounts edges = classify_edges(welded.triangles, comps, nv);
+    const std::vector<Accum> acc = component_sums(P, welded.triangles, comps, bounds.ref);
+    const BoundaryLoops loops = boundary_loops(P, edges.chain, comps, bounds.ref);
+
+    Analysis out;
+    SurfaceMeasures& m = out.m;
+    m.triangles = mesh.triangles.size();
+    m.vertices = bounds.vertices;
+    m.boundary_edges = edges.boundary;
+    m.non_manifold_edges = edges.non_manifold;
+    m.misoriented_edges = edges.misoriented;
+    for (const auto& a : acc) m.degenerate_triangles += a.degenerate;
+    const std::vector<std::uint32_t> rank = order_components(component_parts(bounds, edges, acc, loops), m);
+    add_totals(m);
+    out.vertex_component.assign(nv, kNone);
+    for (std::uint32_t v = 0; v < nv; ++v)
+        if (comps.used[welded.canon[v]]) out.vertex_component[v] = rank[comps.of(welded.canon[v])];
+    add_topology_warnings(m, loops.open_chain);
     return out;
 }
 
@@ -608,6 +706,71 @@ double edge_fraction_spread(const Volume& v, const Mesh& mesh, const std::vector
         ++count;
     }
     return count ? 4.0 * sum / double(count) : kNaN;
+}
+
+// ---- uncertainty -------------------------------------------------------------------
+
+// The Grid Convergence Index's running maxima over the coarse grids (SurfaceMeasures).
+struct Uncertainty {
+    explicit Uncertainty(std::size_t parts) : part_area(parts, 0.0), part_volume(parts, 0.0) {}
+    double area = 0, volume = 0;                // the whole surface
+    std::vector<double> part_area, part_volume; // per fine component
+    int grids = 0;                              // coarse grids compared
+};
+
+// Coarse grid g (coarse_dims(dims, g)): its isosurface measured against
+// `fine` (the measures of the fine surface), whole and per component (the
+// coarse components matched through `cells`). The first grid compared also
+// gives the Richardson extrapolation. A grid less than 1.3x coarser is skipped.
+void compare_coarse_grid(const Volume& v, double iso, int g, const MeasureOptions& opt, const FineCells& cells,
+                         SurfaceMeasures& fine, Uncertainty& u) {
+    glm::dvec3 ratio;
+    const auto dims = coarse_dims(v.dims, g);
+    Volume coarse = resample_extent(v, dims, &ratio);
+    // The representative cell size ratio (Celik et al. 2008): cube root of the cell volume ratio.
+    const double r = std::cbrt(ratio.x * ratio.y * ratio.z);
+    if (r < 1.3) return;
+    ++u.grids;
+    ExtractOptions eo;
+    eo.normals = false;
+    eo.threads = opt.threads;
+    const Mesh cm = extract_isosurface(coarse, iso, eo);
+    const Analysis co = analyse(cm);
+    const double k = 3.0 / (r * r - 1.0); // Fs / (r^p - 1), Fs = 3, p = 2
+    if (u.grids == 1) { // Richardson, p = 2, from the first coarse grid
+        fine.area_extrapolated_mm2 = fine.area_mm2 + (fine.area_mm2 - co.m.area_mm2) / (r * r - 1.0);
+        if (fine.volume_kind != VolumeKind::Undefined)
+            fine.volume_extrapolated_ml = fine.volume_ml + (fine.volume_ml - co.m.volume_ml) / (r * r - 1.0);
+    }
+    u.area = std::max(u.area, k * std::abs(fine.area_mm2 - co.m.area_mm2));
+    u.volume = std::max(u.volume, k * std::abs(fine.volume_ml - co.m.volume_ml));
+    const std::size_t nf = fine.components.size();
+    const auto match = match_components(cells, cm, co.vertex_component, co.m.components.size());
+    std::vector<double> area_c(nf, 0.0), vol_c(nf, 0.0);
+    for (std::size_t c = 0; c < match.size(); ++c) {
+        if (match[c] == kNone) continue;
+        area_c[match[c]] += co.m.components[c].area_mm2;
+        if (co.m.components[c].volume_kind != VolumeKind::Undefined) vol_c[match[c]] += co.m.components[c].volume_ml;
+    }
+    for (std::size_t f = 0; f < nf; ++f) {
+        const auto& s = fine.components[f];
+        u.part_area[f] = std::max(u.part_area[f], k * std::abs(s.area_mm2 - area_c[f]));
+        u.part_volume[f] = std::max(u.part_volume[f], k * std::abs(s.volume_ml - vol_c[f]));
+    }
+}
+
+// SurfaceMeasures::edge_fraction_spread of `surface`, and its warning when the grid does not resolve the edge.
+void add_edge_fraction_spread(const Volume& v, const Mesh& surface, const std::vector<std::uint32_t>& vertex_component,
+                              SurfaceMeasures& result) {
+    result.edge_fraction_spread = edge_fraction_spread(v, surface, vertex_component);
+    if (result.edge_fraction_spread < kResolvedEdgeSpread) {
+        char buf[64];
+        std::snprintf(buf, sizeof buf, "%.2f", result.edge_fraction_spread);
+        result.warnings.push_back(std::string("the edge is sharper than the voxel grid resolves (edge fraction spread ") +
+                                  buf +
+                                  ", below 0.8): the area is biased upward by more than its uncertainty (balls: "
+                                  "1.6 % at a blur of 0.25 voxel, 11 % for a binary mask)");
+    }
 }
 
 } // namespace
@@ -767,65 +930,21 @@ SurfaceMeasures measure_isosurface(const Volume& v, double iso, const Mesh& surf
     in_arena(opt.threads, [&] {
         Analysis fine = analyse(surface);
         result = std::move(fine.m);
-        const std::size_t nf = result.components.size();
-        std::vector<double> ua(nf, 0.0), uv(nf, 0.0);
-        double ua_total = 0, uv_total = 0;
+        Uncertainty u(result.components.size());
         const FineCells cells(v, surface, fine.vertex_component);
-        int grids = 0;
-        for (int g = 0; g < std::max(opt.coarse_grids, 1); ++g) {
-            glm::dvec3 ratio;
-            const auto dims = coarse_dims(v.dims, g);
-            Volume coarse = resample_extent(v, dims, &ratio);
-            // The representative cell size ratio (Celik et al. 2008): cube root of the cell volume ratio.
-            const double r = std::cbrt(ratio.x * ratio.y * ratio.z);
-            if (r < 1.3) continue;
-            ++grids;
-            ExtractOptions eo;
-            eo.normals = false;
-            eo.threads = opt.threads;
-            const Mesh cm = extract_isosurface(coarse, iso, eo);
-            const Analysis co = analyse(cm);
-            const double k = 3.0 / (r * r - 1.0); // Fs / (r^p - 1), Fs = 3, p = 2
-            if (grids == 1) { // Richardson, p = 2, from the first coarse grid
-                result.area_extrapolated_mm2 = result.area_mm2 + (result.area_mm2 - co.m.area_mm2) / (r * r - 1.0);
-                if (result.volume_kind != VolumeKind::Undefined)
-                    result.volume_extrapolated_ml = result.volume_ml + (result.volume_ml - co.m.volume_ml) / (r * r - 1.0);
-            }
-            ua_total = std::max(ua_total, k * std::abs(result.area_mm2 - co.m.area_mm2));
-            uv_total = std::max(uv_total, k * std::abs(result.volume_ml - co.m.volume_ml));
-            const auto match = match_components(cells, cm, co.vertex_component, co.m.components.size());
-            std::vector<double> area_c(nf, 0.0), vol_c(nf, 0.0);
-            for (std::size_t c = 0; c < match.size(); ++c) {
-                if (match[c] == kNone) continue;
-                area_c[match[c]] += co.m.components[c].area_mm2;
-                if (co.m.components[c].volume_kind != VolumeKind::Undefined) vol_c[match[c]] += co.m.components[c].volume_ml;
-            }
-            for (std::size_t f = 0; f < nf; ++f) {
-                const auto& s = result.components[f];
-                ua[f] = std::max(ua[f], k * std::abs(s.area_mm2 - area_c[f]));
-                uv[f] = std::max(uv[f], k * std::abs(s.volume_ml - vol_c[f]));
-            }
-        }
-        result.edge_fraction_spread = edge_fraction_spread(v, surface, fine.vertex_component);
-        if (result.edge_fraction_spread < kResolvedEdgeSpread) {
-            char buf[64];
-            std::snprintf(buf, sizeof buf, "%.2f", result.edge_fraction_spread);
-            result.warnings.push_back(std::string("the edge is sharper than the voxel grid resolves (edge fraction spread ") +
-                                      buf +
-                                      ", below 0.8): the area is biased upward by more than its uncertainty (balls: "
-                                      "1.6 % at a blur of 0.25 voxel, 11 % for a binary mask)");
-        }
-        if (grids == 0) {
+        for (int g = 0; g < std::max(opt.coarse_grids, 1); ++g) compare_coarse_grid(v, iso, g, opt, cells, result, u);
+        add_edge_fraction_spread(v, surface, fine.vertex_component, result);
+        if (u.grids == 0) {
             result.warnings.push_back("no uncertainty: the volume is too thin to coarsen (fewer than 3 samples along "
                                       "two axes)");
             return;
         }
-        result.area_uncertainty_mm2 = ua_total;
-        result.volume_uncertainty_ml = result.volume_kind == VolumeKind::Undefined ? kNaN : uv_total;
-        for (std::size_t f = 0; f < nf; ++f) {
+        result.area_uncertainty_mm2 = u.area;
+        result.volume_uncertainty_ml = result.volume_kind == VolumeKind::Undefined ? kNaN : u.volume;
+        for (std::size_t f = 0; f < u.part_area.size(); ++f) {
             auto& s = result.components[f];
-            s.area_uncertainty_mm2 = ua[f];
-            s.volume_uncertainty_ml = s.volume_kind == VolumeKind::Undefined ? kNaN : uv[f];
+            s.area_uncertainty_mm2 = u.part_area[f];
+            s.volume_uncertainty_ml = s.volume_kind == VolumeKind::Undefined ? kNaN : u.part_volume[f];
         }
     });
     return result;

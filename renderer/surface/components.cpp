@@ -3,36 +3,20 @@
 
 #include <algorithm>
 #include <cstring>
-#include <numeric>
+#include <limits>
 #include <tuple>
 #include <unordered_map>
 
 #include <glm/glm.hpp>
 
 #include "io/error.hpp"
+#include "renderer/surface/union_find.hpp"
 
 namespace iso {
 
 namespace {
 
 constexpr std::uint32_t kNoComponent = 0xFFFFFFFFu;
-
-// Union-find with path halving and union by size.
-struct DisjointSets {
-    std::vector<std::uint32_t> parent, size;
-    explicit DisjointSets(std::size_t n) : parent(n), size(n, 1) { std::iota(parent.begin(), parent.end(), 0u); }
-    std::uint32_t find(std::uint32_t x) {
-        while (parent[x] != x) x = parent[x] = parent[parent[x]];
-        return x;
-    }
-    void unite(std::uint32_t a, std::uint32_t b) {
-        a = find(a), b = find(b);
-        if (a == b) return;
-        if (size[a] < size[b]) std::swap(a, b);
-        parent[b] = a;
-        size[a] += size[b];
-    }
-};
 
 std::array<int, 3> chunk_counts(const std::array<std::int64_t, 3>& dims, int C) {
     std::array<int, 3> n{};
@@ -186,7 +170,7 @@ PieceSummary summarize_piece(const SurfacePiece& p, const glm::dvec3& origin) {
     PieceSummary s;
     s.triangles = m.triangles.size();
     s.vertices = m.positions.size();
-    DisjointSets sets(m.positions.size());
+    UnionFind sets(m.positions.size());
     for (const auto& t : m.triangles) {
         sets.unite(t[0], t[1]);
         sets.unite(t[0], t[2]);
@@ -243,7 +227,7 @@ SurfaceSummary merge_summaries(std::span<const PieceSummary> pieces) {
         for (const auto& [key, c] : pieces[i].seam)
             seam.push_back({key, c == kNoComponent ? kNoComponent : std::uint32_t(base[i] + c)});
     std::sort(seam.begin(), seam.end());
-    DisjointSets sets(base.back());
+    UnionFind sets(base.back());
     for (std::size_t i = 1; i < seam.size(); ++i) {
         if (seam[i].key != seam[i - 1].key) continue;
         --out.vertices; // held by one more piece

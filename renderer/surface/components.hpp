@@ -101,7 +101,7 @@ PieceSummary summarize_piece(const SurfacePiece& p, const glm::dvec3& origin);
 struct SurfaceSummary {
     std::size_t triangles = 0, vertices = 0, components = 0;
     double area = 0, volume = 0;
-    ComponentStats largest; // by triangles, then area
+    ComponentStats largest; // by triangles, then area; of a tie, the first in piece order
     // Edges used by one triangle of the whole surface: 0 for a closed
     // surface (then `volume` is the enclosed volume; otherwise it means
     // nothing on its own).

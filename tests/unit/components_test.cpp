@@ -391,3 +391,34 @@ TEST(Components, SingleProcessStreamingReportsTheWholeMeshStatistics) {
         EXPECT_NEAR(got.largest.volume, ref.largest.volume, 1e-9 * std::abs(ref.largest.volume));
     }
 }
+
+TEST(Components, ATieForTheLargestGoesToTheFirstInPieceOrder) {
+    // Two pieces, no moments (volumes independent of the origin). A seam key
+    // joins a component of piece 0 with piece 1's only one: 2 + 2 triangles,
+    // area 1 + 1, as large as piece 0's other component. The tie goes to the
+    // component that holds the first in piece order (piece 0's first).
+    auto piece = [](std::vector<ComponentStats> comps, std::uint32_t seam_comp) {
+        PieceSummary p;
+        p.components = std::move(comps);
+        p.seam = {{7, seam_comp}};
+        p.bounds_min = glm::dvec3(-1.0);
+        p.bounds_max = glm::dvec3(1.0);
+        return p;
+    };
+    const ComponentStats half_a{2, 1.0, 10.0, glm::dvec3(0.0)}, half_b{2, 1.0, 20.0, glm::dvec3(0.0)};
+    const ComponentStats whole{4, 2.0, 50.0, glm::dvec3(0.0)};
+    {
+        const PieceSummary pieces[2] = {piece({half_a, whole}, 0), piece({half_b}, 0)};
+        const SurfaceSummary s = merge_summaries(pieces);
+        EXPECT_EQ(s.components, 2u);
+        EXPECT_EQ(s.largest.triangles, 4u);
+        EXPECT_EQ(s.largest.volume, 30.0); // the joined halves
+    }
+    {
+        const PieceSummary pieces[2] = {piece({whole, half_a}, 1), piece({half_b}, 0)};
+        const SurfaceSummary s = merge_summaries(pieces);
+        EXPECT_EQ(s.components, 2u);
+        EXPECT_EQ(s.largest.triangles, 4u);
+        EXPECT_EQ(s.largest.volume, 50.0); // the whole component
+    }
+}
