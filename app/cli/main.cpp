@@ -111,6 +111,7 @@ std::string cli_message(const iso::Error& e) {
         {"ambient occlusion frames", "--ao-frames"},
         {"smoothing factor", "--smooth"},
         {"decimation fraction", "--decimate"},
+        {"DICOM series", "--series"},
     };
     std::string where = e.where();
     // renderer/render/disk_ao.cpp names its settings "disk AO <setting>".
