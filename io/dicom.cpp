@@ -51,6 +51,7 @@
 #include <vtkIntArray.h>
 #include <vtkNew.h>
 #include <vtkPointData.h>
+#include <vtkSmartPointer.h>
 #include <vtkStringArray.h>
 #include <vtkType.h>
 
@@ -453,8 +454,9 @@ std::string listing_text(const std::vector<SeriesInfo>& list) {
 int select_series(const Scan& sc, const std::vector<SeriesInfo>& list, const std::string& want) {
     if (want.empty()) {
         if (list.size() == 1) return 0;
-        throw Error(sc.where, "holds " + std::to_string(list.size()) +
-                                  " series; choose one with --series N|UID:" + listing_text(list));
+        throw Error("DICOM series", sc.where + " holds " + std::to_string(list.size()) +
+                                        " series; choose a series by its index in this list or its "
+                                        "SeriesInstanceUID:" + listing_text(list));
     }
     if (std::all_of(want.begin(), want.end(), [](unsigned char c) { return std::isdigit(c); }) &&
         want.size() < 9) {
@@ -525,8 +527,10 @@ double median(std::vector<double> v) {
     return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
 }
 
-Layout lay_out(Group& g, const std::string& where) {
-    const Slice first = g.slices.front(); // a copy: g.slices is rebuilt below
+// What lay_out refuses before looking at positions: multi-frame files,
+// colour images, and slices whose pixel format or size differs from the first.
+void check_pixel_format(const Group& g) {
+    const Slice& first = g.slices.front();
     if (first.frames > 1)
         throw Error(first.file, "multi-frame (enhanced) DICOM files are not supported yet (" +
                                     std::to_string(first.frames) + " frames in one file)");
@@ -540,6 +544,115 @@ Layout lay_out(Group& g, const std::string& where) {
         if (s.rows != first.rows || s.cols != first.cols)
             throw Error(s.file, "image size differs from " + first.file);
     }
+}
+
+double position_along(const Slice& s, const glm::dvec3& normal) { return glm::dot(s.ipp, normal); }
+
+// Sorts the slices along the normal (equal positions by InstanceNumber).
+// Duplicate positions: a copy of the same instance is read once; two
+// different instances at one position mean the series holds several
+// volumes (phases, echoes), which we refuse rather than guess.
+void sort_slices(Group& g, const glm::dvec3& normal, const std::string& where, std::vector<std::string>& warnings) {
+    const auto pos = [&](const Slice& s) { return position_along(s, normal); };
+    std::stable_sort(g.slices.begin(), g.slices.end(), [&](const Slice& a, const Slice& b) {
+        const double pa = pos(a), pb = pos(b);
+        if (pa != pb) return pa < pb;
+        return a.instance_number < b.instance_number;
+    });
+    std::vector<Slice> kept;
+    size_t copies = 0;
+    for (auto& s : g.slices) {
+        if (!kept.empty() && std::abs(pos(s) - pos(kept.back())) < 1e-3) {
+            if (!s.sop_uid.empty() && s.sop_uid == kept.back().sop_uid) {
+                ++copies;
+                continue;
+            }
+            throw Error(where, "two different images at the same position " + fmt_vec(s.ipp) + ": " +
+                                   kept.back().file + " and " + s.file +
+                                   " (several volumes, e.g. phases or echoes, in one series are not supported)");
+        }
+        kept.push_back(std::move(s));
+    }
+    g.slices = std::move(kept);
+    if (copies) warnings.push_back("ignored " + std::to_string(copies) + " duplicate file(s) of the same image");
+}
+
+// Each sorted slice's index on the regular grid (two or more slices): a gap
+// close to a whole number (>= 2) of the typical step leaves slices missing
+// there; any other uneven step makes the spacing irregular (indices 0..n-1,
+// the mean step). Returns whether it is irregular.
+bool place_on_grid(const std::vector<Slice>& slices, const glm::dvec3& normal, std::vector<int>& grid,
+                   std::vector<std::string>& warnings) {
+    const size_t n = slices.size();
+    std::vector<double> p(n), d(n - 1);
+    for (size_t k = 0; k < n; ++k) p[k] = position_along(slices[k], normal);
+    for (size_t k = 0; k + 1 < n; ++k) d[k] = p[k + 1] - p[k];
+    const double m = median(d);
+    const double tol = 0.01; // mm, uniform spacing
+    bool irregular = false;
+    std::vector<std::string> gaps;
+    for (size_t k = 0; k + 1 < n; ++k) {
+        int r = 1;
+        if (std::abs(d[k] - m) > tol) {
+            const double q = d[k] / m;
+            r = int(std::lround(q));
+            if (r < 2 || std::abs(d[k] - r * m) > std::max(tol, 0.1 * m)) {
+                irregular = true;
+                r = 1;
+            } else {
+                gaps.push_back(std::to_string(r - 1) + " slice(s) missing between slice " + std::to_string(k) +
+                               " at " + fmt(p[k], 3) + " mm and slice " + std::to_string(k + 1) + " at " +
+                               fmt(p[k + 1], 3) + " mm (files " + fs::path(slices[k].file).filename().string() +
+                               ", " + fs::path(slices[k + 1].file).filename().string() + ")");
+            }
+        }
+        grid[k + 1] = grid[k] + r;
+    }
+    if (irregular) {
+        for (size_t k = 0; k < n; ++k) grid[k] = int(k);
+        const auto [mn, mx] = std::minmax_element(d.begin(), d.end());
+        warnings.push_back("slice spacing is not uniform (steps from " + fmt(*mn) + " to " + fmt(*mx) +
+                           " mm along the normal); the mean step " + fmt((p[n - 1] - p[0]) / double(n - 1)) +
+                           " mm is used, so positions are approximate");
+    } else {
+        for (const auto& gtxt : gaps)
+            warnings.push_back("missing slice: " + gtxt + "; filled by linear interpolation of the neighbours");
+    }
+    return irregular;
+}
+
+// The step from one grid slice to the next (two or more slices): along the
+// normal, or, under gantry tilt, sheared along the scanner axis so voxels
+// keep their true positions.
+glm::dvec3 slice_step(const std::vector<Slice>& slices, const glm::dvec3& normal, const std::vector<int>& grid,
+                      bool irregular, std::vector<std::string>& warnings) {
+    const size_t n = slices.size();
+    glm::dvec3 step_vec;
+    const glm::dvec3 total = slices[n - 1].ipp - slices[0].ipp;
+    const double along = glm::dot(total, normal);
+    const glm::dvec3 inplane = total - along * normal;
+    const double steps = double(grid[n - 1]);
+    const double angle = std::atan2(glm::length(inplane), along) * 180.0 / M_PI;
+    if (glm::length(inplane) > 0.01 && angle > 0.01) {
+        step_vec = total / steps;
+        warnings.push_back("gantry tilt of " + fmt(angle, 2) +
+                           " degrees: slices are sheared along the scanner axis; the index->LPS affine is "
+                           "sheared to keep voxels at their true positions (not resampled)");
+    } else {
+        step_vec = normal * (along / steps);
+    }
+    // Each slice should sit on the (possibly sheared) line.
+    double worst = 0;
+    for (size_t k = 0; k < n; ++k)
+        worst = std::max(worst, glm::length(slices[0].ipp + double(grid[k]) * step_vec - slices[k].ipp));
+    if (!irregular && worst > 0.05)
+        warnings.push_back("slice positions deviate up to " + fmt(worst) + " mm from a straight line");
+    return step_vec;
+}
+
+Layout lay_out(Group& g, const std::string& where) {
+    check_pixel_format(g);
+    const Slice first = g.slices.front(); // a copy: sort_slices rebuilds g.slices
     std::vector<std::string> warnings;
     const bool multi = g.slices.size() > 1;
     check_geometry(g, multi);
@@ -550,99 +663,18 @@ Layout lay_out(Group& g, const std::string& where) {
 
     const glm::dvec3 row = glm::normalize(first.row), col = glm::normalize(first.col);
     const glm::dvec3 normal = glm::normalize(glm::cross(row, col));
-
-    // Sort along the normal; equal positions by InstanceNumber.
-    auto pos = [&](const Slice& s) { return glm::dot(s.ipp, normal); };
-    std::stable_sort(g.slices.begin(), g.slices.end(), [&](const Slice& a, const Slice& b) {
-        const double pa = pos(a), pb = pos(b);
-        if (pa != pb) return pa < pb;
-        return a.instance_number < b.instance_number;
-    });
-
-    // Duplicate positions: a copy of the same instance is read once; two
-    // different instances at one position mean the series holds several
-    // volumes (phases, echoes), which we refuse rather than guess.
-    {
-        std::vector<Slice> kept;
-        size_t copies = 0;
-        for (auto& s : g.slices) {
-            if (!kept.empty() && std::abs(pos(s) - pos(kept.back())) < 1e-3) {
-                if (!s.sop_uid.empty() && s.sop_uid == kept.back().sop_uid) {
-                    ++copies;
-                    continue;
-                }
-                throw Error(where, "two different images at the same position " + fmt_vec(s.ipp) + ": " +
-                                       kept.back().file + " and " + s.file +
-                                       " (several volumes, e.g. phases or echoes, in one series are not supported)");
-            }
-            kept.push_back(std::move(s));
-        }
-        g.slices = std::move(kept);
-        if (copies) warnings.push_back("ignored " + std::to_string(copies) + " duplicate file(s) of the same image");
-    }
+    sort_slices(g, normal, where, warnings);
 
     const size_t n = g.slices.size();
     Layout out;
-    std::vector<int>& grid = out.grid;
-    grid.assign(n, 0); // slice index on the regular grid
+    out.grid.assign(n, 0); // slice index on the regular grid
     glm::dvec3 step_vec = normal * (first.thickness > 0 ? first.thickness : 1.0);
     if (n == 1 && first.thickness <= 0) warnings.push_back("single slice without SliceThickness: 1 mm assumed");
     if (n == 1 && (!first.has_ipp || !first.has_iop))
         warnings.push_back("ImagePositionPatient/ImageOrientationPatient missing: placed at the origin, axis-aligned");
     if (n > 1) {
-        std::vector<double> p(n), d(n - 1);
-        for (size_t k = 0; k < n; ++k) p[k] = pos(g.slices[k]);
-        for (size_t k = 0; k + 1 < n; ++k) d[k] = p[k + 1] - p[k];
-        const double m = median(d);
-        const double tol = 0.01; // mm, uniform spacing
-        bool irregular = false;
-        std::vector<std::string> gaps;
-        for (size_t k = 0; k + 1 < n; ++k) {
-            int r = 1;
-            if (std::abs(d[k] - m) > tol) {
-                const double q = d[k] / m;
-                r = int(std::lround(q));
-                if (r < 2 || std::abs(d[k] - r * m) > std::max(tol, 0.1 * m)) {
-                    irregular = true;
-                    r = 1;
-                } else {
-                    gaps.push_back(std::to_string(r - 1) + " slice(s) missing between slice " + std::to_string(k) +
-                                   " at " + fmt(p[k], 3) + " mm and slice " + std::to_string(k + 1) + " at " +
-                                   fmt(p[k + 1], 3) + " mm (files " + fs::path(g.slices[k].file).filename().string() +
-                                   ", " + fs::path(g.slices[k + 1].file).filename().string() + ")");
-                }
-            }
-            grid[k + 1] = grid[k] + r;
-        }
-        if (irregular) {
-            for (size_t k = 0; k < n; ++k) grid[k] = int(k);
-            const auto [mn, mx] = std::minmax_element(d.begin(), d.end());
-            warnings.push_back("slice spacing is not uniform (steps from " + fmt(*mn) + " to " + fmt(*mx) +
-                               " mm along the normal); the mean step " + fmt((p[n - 1] - p[0]) / double(n - 1)) +
-                               " mm is used, so positions are approximate");
-        } else {
-            for (const auto& gtxt : gaps)
-                warnings.push_back("missing slice: " + gtxt + "; filled by linear interpolation of the neighbours");
-        }
-        const glm::dvec3 total = g.slices[n - 1].ipp - g.slices[0].ipp;
-        const double along = glm::dot(total, normal);
-        const glm::dvec3 inplane = total - along * normal;
-        const double steps = double(grid[n - 1]);
-        const double angle = std::atan2(glm::length(inplane), along) * 180.0 / M_PI;
-        if (glm::length(inplane) > 0.01 && angle > 0.01) {
-            step_vec = total / steps;
-            warnings.push_back("gantry tilt of " + fmt(angle, 2) +
-                               " degrees: slices are sheared along the scanner axis; the index->LPS affine is "
-                               "sheared to keep voxels at their true positions (not resampled)");
-        } else {
-            step_vec = normal * (along / steps);
-        }
-        // Each slice should sit on the (possibly sheared) line.
-        double worst = 0;
-        for (size_t k = 0; k < n; ++k)
-            worst = std::max(worst, glm::length(g.slices[0].ipp + double(grid[k]) * step_vec - g.slices[k].ipp));
-        if (!irregular && worst > 0.05)
-            warnings.push_back("slice positions deviate up to " + fmt(worst) + " mm from a straight line");
+        const bool irregular = place_on_grid(g.slices, normal, out.grid, warnings);
+        step_vec = slice_step(g.slices, normal, out.grid, irregular, warnings);
     }
 
     glm::dmat4 affine(1.0);
@@ -662,24 +694,23 @@ Layout lay_out(Group& g, const std::string& where) {
     return out;
 }
 
-Volume load_group(Group& g, const Scan& sc, const ProgressFn& progress) {
-    const std::string where = sc.where;
-    Layout layout = lay_out(g, where);
-    const Slice first = g.slices.front();
-    const glm::dmat4& affine = layout.affine;
-    const std::vector<int>& grid = layout.grid;
+// A group's pixels as vtk-dicom decodes them (stored values, no rescale),
+// one output slice per file, checked against the size the headers give.
+struct Pixels {
+    vtkSmartPointer<vtkDICOMReader> reader; // owns the data
+    vtkDataArray* array = nullptr;
+    std::vector<int> file_of_slice; // output slice k holds g.slices[file_of_slice[k]]
+    VoxelType stored = VoxelType::U8;
+};
+
+Pixels read_pixels(const Group& g, const std::string& where, const ProgressFn& progress) {
     const size_t n = g.slices.size();
-    std::vector<std::string> warnings = std::move(layout.warnings);
-
-    const std::int64_t nx = first.cols, ny = first.rows, nz = std::int64_t(grid[n - 1]) + 1;
-    // Fail early on a size that cannot be allocated (float32 is the largest output type we pick
-    // unless the files hold 32/64-bit data).
-    checked_byte_size(where, {nx, ny, nz}, first.bits_allocated > 16 ? VoxelType::F64 : VoxelType::F32);
-
-    // ---- pixels -----------------------------------------------------------
+    const Slice& first = g.slices.front();
     vtkNew<vtkStringArray> names;
     for (const auto& s : g.slices) names->InsertNextValue(s.file);
-    vtkNew<vtkDICOMReader> reader;
+    Pixels px;
+    px.reader = vtkSmartPointer<vtkDICOMReader>::New();
+    vtkDICOMReader* reader = px.reader;
     VtkMessages msgs;
     msgs.watch(reader);
     reader->SetFileNames(names);
@@ -706,6 +737,7 @@ Volume load_group(Group& g, const Scan& sc, const ProgressFn& progress) {
         reader->AddObserver(vtkCommand::ProgressEvent, on_progress);
     }
     reader->Update();
+    reader->RemoveAllObservers(); // they point at this function's locals; the reader lives on with the data
     if (cancelled) throw Cancelled(kWhere);
     if (reader->GetErrorCode() != 0 || !msgs.errors().empty())
         throw Error(where, "cannot read the pixel data" + (msgs.errors().empty() ? "" : ": " + msgs.errors()));
@@ -713,54 +745,71 @@ Volume load_group(Group& g, const Scan& sc, const ProgressFn& progress) {
     int dim[3];
     img->GetDimensions(dim);
     vtkDataArray* arr = img->GetPointData() ? img->GetPointData()->GetScalars() : nullptr;
-    if (!arr || dim[0] != nx || dim[1] != ny || dim[2] != int(n) || arr->GetNumberOfComponents() != 1)
+    if (!arr || dim[0] != first.cols || dim[1] != first.rows || dim[2] != int(n) || arr->GetNumberOfComponents() != 1)
         throw Error(where, "pixel data does not have the size given by the headers (" + std::to_string(dim[0]) +
                                "x" + std::to_string(dim[1]) + "x" + std::to_string(dim[2]) + ")");
     // Map output slices to our files (the reader was told not to sort, but check).
-    std::vector<int> file_of_slice(n);
+    px.file_of_slice.resize(n);
     vtkIntArray* fidx = reader->GetFileIndexArray();
     for (size_t k = 0; k < n; ++k) {
         const int f = fidx && fidx->GetNumberOfTuples() == vtkIdType(n) ? int(fidx->GetComponent(vtkIdType(k), 0))
                                                                            : int(k);
         if (f < 0 || size_t(f) >= n) throw Error(where, "reader returned an unexpected slice order");
-        file_of_slice[k] = f;
+        px.file_of_slice[k] = f;
     }
-    const VoxelType stored = voxel_type_of_vtk(arr->GetDataType(), where);
+    px.array = arr;
+    px.stored = voxel_type_of_vtk(arr->GetDataType(), where);
+    return px;
+}
 
-    // Output type.
+// The type the volume is stored in: the files' own, or after a rescale
+// int16 when every rescaled value is an integer that fits, else float32
+// (float64 for 32/64-bit data).
+struct OutputType {
+    VoxelType type;
+    bool rescale; // some slice's slope/intercept is not 1/0
+};
+
+OutputType output_type(const Group& g, const Pixels& px) {
     bool any_rescale = false, all_integral = true;
     for (const auto& s : g.slices) {
         if (s.has_rescale && (s.slope != 1.0 || s.intercept != 0.0)) any_rescale = true;
         all_integral = all_integral && integral(s.slope) && integral(s.intercept);
     }
-    const std::size_t plane = std::size_t(nx) * std::size_t(ny);
-    const std::byte* raw = static_cast<const std::byte*>(arr->GetVoidPointer(0));
+    const VoxelType stored = px.stored;
+    if (!any_rescale) return {stored, false};
+    const std::size_t plane = std::size_t(g.slices.front().cols) * std::size_t(g.slices.front().rows);
+    const std::byte* raw = static_cast<const std::byte*>(px.array->GetVoidPointer(0));
     const std::size_t ssize = voxel_size(stored);
-    VoxelType out_type = stored;
-    if (any_rescale) {
-        double lo = std::numeric_limits<double>::infinity(), hi = -lo;
-        dispatch_voxel_type(stored, [&](auto t) {
-            using S = decltype(t);
-            for (size_t k = 0; k < n; ++k) {
-                const Slice& s = g.slices[file_of_slice[k]];
-                const S* src = reinterpret_cast<const S*>(raw + k * plane * ssize);
-                for (size_t i = 0; i < plane; ++i) {
-                    const double v = double(src[i]) * s.slope + s.intercept;
-                    lo = std::min(lo, v);
-                    hi = std::max(hi, v);
-                }
+    double lo = std::numeric_limits<double>::infinity(), hi = -lo;
+    dispatch_voxel_type(stored, [&](auto t) {
+        using S = decltype(t);
+        for (size_t k = 0; k < g.slices.size(); ++k) {
+            const Slice& s = g.slices[px.file_of_slice[k]];
+            const S* src = reinterpret_cast<const S*>(raw + k * plane * ssize);
+            for (size_t i = 0; i < plane; ++i) {
+                const double v = double(src[i]) * s.slope + s.intercept;
+                lo = std::min(lo, v);
+                hi = std::max(hi, v);
             }
-        });
-        out_type = (all_integral && lo >= -32768.0 && hi <= 32767.0) ? VoxelType::I16 : VoxelType::F32;
-        if (stored == VoxelType::F64 || stored == VoxelType::I32 || stored == VoxelType::U32)
-            out_type = all_integral && lo >= -32768.0 && hi <= 32767.0 ? VoxelType::I16 : VoxelType::F64;
-    }
-    report(progress, 0.92, kStage, kWhere);
+        }
+    });
+    VoxelType out_type = (all_integral && lo >= -32768.0 && hi <= 32767.0) ? VoxelType::I16 : VoxelType::F32;
+    if (stored == VoxelType::F64 || stored == VoxelType::I32 || stored == VoxelType::U32)
+        out_type = all_integral && lo >= -32768.0 && hi <= 32767.0 ? VoxelType::I16 : VoxelType::F64;
+    return {out_type, true};
+}
 
-    Volume vol = Volume::dense({nx, ny, nz}, out_type, affine);
-    dispatch_voxel_type(stored, [&](auto st) {
+// Copies each file's slice to its place on the grid (rescaled when asked),
+// then fills missing slices linearly between their neighbours on the grid.
+void fill_volume(Volume& vol, const Group& g, const Pixels& px, const std::vector<int>& grid, const OutputType& out) {
+    const size_t n = g.slices.size();
+    const std::size_t plane = std::size_t(vol.dims[0]) * std::size_t(vol.dims[1]);
+    const std::byte* raw = static_cast<const std::byte*>(px.array->GetVoidPointer(0));
+    const std::size_t ssize = voxel_size(px.stored);
+    dispatch_voxel_type(px.stored, [&](auto st) {
         using S = decltype(st);
-        dispatch_voxel_type(out_type, [&](auto ot) {
+        dispatch_voxel_type(out.type, [&](auto ot) {
             using O = decltype(ot);
             auto dst = vol.as<O>();
             auto put = [&](std::size_t idx, double v) {
@@ -768,17 +817,16 @@ Volume load_group(Group& g, const Scan& sc, const ProgressFn& progress) {
                 else dst[idx] = static_cast<O>(v);
             };
             for (size_t k = 0; k < n; ++k) {
-                const size_t fi = file_of_slice[k];
+                const size_t fi = px.file_of_slice[k];
                 const Slice& s = g.slices[fi];
                 const S* src = reinterpret_cast<const S*>(raw + k * plane * ssize);
-                O* out = dst.data() + std::size_t(grid[fi]) * plane;
-                if (any_rescale) {
-                    for (size_t i = 0; i < plane; ++i) put(&out[i] - dst.data(), double(src[i]) * s.slope + s.intercept);
+                O* o = dst.data() + std::size_t(grid[fi]) * plane;
+                if (out.rescale) {
+                    for (size_t i = 0; i < plane; ++i) put(&o[i] - dst.data(), double(src[i]) * s.slope + s.intercept);
                 } else {
-                    for (size_t i = 0; i < plane; ++i) out[i] = static_cast<O>(src[i]);
+                    for (size_t i = 0; i < plane; ++i) o[i] = static_cast<O>(src[i]);
                 }
             }
-            // Fill missing slices linearly between their neighbours on the grid.
             for (size_t k = 0; k + 1 < n; ++k) {
                 const int a = grid[k], b = grid[k + 1];
                 for (int z = a + 1; z < b; ++z) {
@@ -791,6 +839,22 @@ Volume load_group(Group& g, const Scan& sc, const ProgressFn& progress) {
             }
         });
     });
+}
+
+Volume load_group(Group& g, const Scan& sc, const ProgressFn& progress) {
+    const std::string where = sc.where;
+    Layout layout = lay_out(g, where);
+    const Slice first = g.slices.front();
+    const std::int64_t nx = first.cols, ny = first.rows, nz = std::int64_t(layout.grid.back()) + 1;
+    // Fail early on a size that cannot be allocated (float32 is the largest output type we pick
+    // unless the files hold 32/64-bit data).
+    checked_byte_size(where, {nx, ny, nz}, first.bits_allocated > 16 ? VoxelType::F64 : VoxelType::F32);
+
+    const Pixels px = read_pixels(g, where, progress);
+    const OutputType out = output_type(g, px);
+    report(progress, 0.92, kStage, kWhere);
+    Volume vol = Volume::dense({nx, ny, nz}, out.type, layout.affine);
+    fill_volume(vol, g, px, layout.grid, out);
 
     vol.meta.format = "DICOM";
     vol.meta.modality = first.modality;
@@ -799,7 +863,7 @@ Volume load_group(Group& g, const Scan& sc, const ProgressFn& progress) {
     vol.meta.study_uid = first.study_uid;
     vol.meta.series_uid = first.series_uid;
     vol.meta.series_description = first.description;
-    vol.meta.warnings = std::move(warnings);
+    vol.meta.warnings = std::move(layout.warnings);
     return vol;
 }
 

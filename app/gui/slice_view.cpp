@@ -8,21 +8,16 @@
 #include <cmath>
 #include <iostream>
 
+#include "io/color.hpp"
 #include "renderer/core/scene.hpp"
 
 namespace iso::gui {
 
-namespace {
-// The scene's colours are linear; the painter works in sRGB (a plain gamma
-// curve is close enough for an outline's colour).
-double to_srgb(double c) { return std::pow(std::clamp(c, 0.0, 1.0), 1.0 / 2.2); }
-} // namespace
+// Through "#rrggbb", as sessions and the CLI write colours: the colour
+// dialog opens on, and gives back, exactly the hex a session saves.
+QColor to_qcolor(const glm::vec3& linear) { return QColor(QString::fromStdString(hex_from_linear(linear))); }
 
-QColor to_qcolor(const glm::vec3& c) { return QColor::fromRgbF(float(to_srgb(c.r)), float(to_srgb(c.g)), float(to_srgb(c.b))); }
-
-glm::vec3 from_qcolor(const QColor& c) {
-    return {float(std::pow(c.redF(), 2.2)), float(std::pow(c.greenF(), 2.2)), float(std::pow(c.blueF(), 2.2))};
-}
+glm::vec3 from_qcolor(const QColor& c) { return linear_from_hex(c.name(QColor::HexRgb).toStdString()); }
 
 SliceView::SliceView(core::SliceOrientation orientation, QWidget* parent) : QWidget(parent), orientation_(orientation) {
     setFocusPolicy(Qt::StrongFocus);

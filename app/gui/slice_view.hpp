@@ -90,7 +90,9 @@ private:
     std::optional<ValueRange> range_; // the volume's, for the window drag's gain (computed once per content)
 };
 
-// Linear RGB (the scene's surface colours) -> an sRGB QColor, and back.
+// Linear RGB (the scene's surface colours) -> an sRGB QColor, and back,
+// through the one sRGB pair (io/color.hpp): a colour picked as #rrggbb is
+// saved in a session, and typed on the CLI, as the same #rrggbb.
 QColor to_qcolor(const glm::vec3& linear);
 glm::vec3 from_qcolor(const QColor& c);
 

@@ -1,3 +1,5 @@
+// The Surfaces panel (surfaces_panel.hpp): its rows, one named step per line of a row, and the
+// background re-extractions behind them.
 #include "app/gui/surfaces_panel.hpp"
 
 #include <QCheckBox>
@@ -238,18 +240,32 @@ void SurfacesPanel::add_row(std::uint32_t id) {
     r->widget->setFrameShape(QFrame::StyledPanel);
     auto* grid = new QGridLayout(r->widget);
     grid->setContentsMargins(4, 4, 4, 4);
+    add_title_line(*r, grid);
+    add_opacity_line(*r, grid);
+    // Lines 3 and 4, isosurfaces only: the iso slider and number (range: the
+    // volume's values), smoothing and keep-largest.
+    if (info.kind == core::SurfaceInfo::Kind::Iso && scene_->has_volume()) {
+        add_iso_line(*r, grid);
+        add_post_line(*r, grid);
+    }
+    rows_layout_->addWidget(r->widget);
+    rows_.push_back(std::move(row));
+}
 
-    // Line 1: visibility and name, colour, Remove.
-    auto* visible = new QCheckBox(QString::fromStdString(info.name), r->widget);
+// Line 1: visibility and name, colour, Remove.
+void SurfacesPanel::add_title_line(Row& r, QGridLayout* grid) {
+    const std::uint32_t id = r.id;
+    const auto& info = scene_->info(id);
+    auto* visible = new QCheckBox(QString::fromStdString(info.name), r.widget);
     visible->setObjectName("visible");
     visible->setChecked(info.visible);
-    auto* color = new QPushButton(r->widget);
+    auto* color = new QPushButton(r.widget);
     color->setObjectName("color");
     color->setFixedSize(24, 20);
     color->setToolTip("Colour");
     const auto paint_button = [color](const QColor& c) { color->setStyleSheet("background-color: " + c.name()); };
     paint_button(to_qcolor(info.color));
-    auto* remove = new QPushButton("Remove", r->widget);
+    auto* remove = new QPushButton("Remove", r.widget);
     remove->setObjectName("remove");
     auto* line1 = new QHBoxLayout;
     line1->addWidget(visible, 1);
@@ -257,25 +273,9 @@ void SurfacesPanel::add_row(std::uint32_t id) {
     line1->addWidget(remove);
     grid->addLayout(line1, 0, 0, 1, 3);
 
-    // Line 2: opacity, 0..100 %.
-    grid->addWidget(new QLabel("Opacity"), 1, 0);
-    auto* opacity = new QSlider(Qt::Horizontal, r->widget);
-    opacity->setObjectName("opacity");
-    opacity->setRange(0, 100);
-    opacity->setValue(int(std::lround(info.opacity * 100)));
-    auto* percent = new QLabel(QString("%1 %").arg(opacity->value()), r->widget);
-    percent->setMinimumWidth(40);
-    grid->addWidget(opacity, 1, 1);
-    grid->addWidget(percent, 1, 2);
-
     connect(visible, &QCheckBox::toggled, this, [this, id](bool on) {
         scene_->info(id).visible = on;
         notify(true);
-    });
-    connect(opacity, &QSlider::valueChanged, this, [this, id, percent](int v) {
-        scene_->info(id).opacity = float(v) / 100.0f;
-        percent->setText(QString("%1 %").arg(v));
-        notify(false);
     });
     connect(color, &QPushButton::clicked, this, [this, id, paint_button] {
         const QColor c = QColorDialog::getColor(to_qcolor(scene_->info(id).color), this, "Surface colour");
@@ -291,87 +291,112 @@ void SurfacesPanel::add_row(std::uint32_t id) {
         notify(true);
         if (message) message("Removed " + name);
     });
+}
 
-    // Lines 3 and 4, isosurfaces only: the iso slider and number (range: the
-    // volume's values), smoothing and keep-largest.
-    if (info.kind == core::SurfaceInfo::Kind::Iso && scene_->has_volume()) {
-        const auto range = scene_->value_range();
-        const auto type = scene_->volume().type;
-        const bool integral = type != VoxelType::F32 && type != VoxelType::F64 && !scene_->volume().is_sparse();
-        const double span = std::max(range.max - range.min, 1e-9);
-        r->lo = range.min;
-        r->steps = integral && span <= 100000 ? int(std::lround(span)) : 1000;
-        r->step = span / r->steps;
-        const bool hu = scene_->volume().meta.modality == "CT";
-        grid->addWidget(new QLabel("Iso"), 2, 0);
-        r->slider = new QSlider(Qt::Horizontal, r->widget);
-        r->slider->setObjectName("iso_slider");
-        r->slider->setRange(0, r->steps);
-        r->slider->setValue(r->to_slider(info.value));
-        r->slider->setToolTip(QString("Iso value, %1 to %2%3").arg(range.min).arg(range.max).arg(hu ? " HU" : ""));
-        r->value = new QDoubleSpinBox(r->widget);
-        r->value->setObjectName("iso_value");
-        r->value->setRange(range.min, range.max);
-        r->value->setDecimals(integral ? 0 : 3);
-        r->value->setKeyboardTracking(false); // on Enter, arrows or leaving the box
-        r->value->setSuffix(hu ? " HU" : "");
-        r->value->setValue(info.value);
-        r->busy = new QLabel("extracting...", r->widget);
-        r->busy->setObjectName("busy");
-        r->busy->setVisible(false);
-        auto* line2 = new QHBoxLayout;
-        line2->addWidget(r->slider, 1);
-        line2->addWidget(r->value);
-        grid->addLayout(line2, 2, 1, 1, 2);
-        grid->addWidget(r->busy, 3, 1, 1, 2);
+// Line 2: opacity, 0..100 %.
+void SurfacesPanel::add_opacity_line(Row& r, QGridLayout* grid) {
+    const std::uint32_t id = r.id;
+    grid->addWidget(new QLabel("Opacity"), 1, 0);
+    auto* opacity = new QSlider(Qt::Horizontal, r.widget);
+    opacity->setObjectName("opacity");
+    opacity->setRange(0, 100);
+    opacity->setValue(int(std::lround(scene_->info(id).opacity * 100)));
+    auto* percent = new QLabel(QString("%1 %").arg(opacity->value()), r.widget);
+    percent->setMinimumWidth(40);
+    grid->addWidget(opacity, 1, 1);
+    grid->addWidget(percent, 1, 2);
+    connect(opacity, &QSlider::valueChanged, this, [this, id, percent](int v) {
+        scene_->info(id).opacity = float(v) / 100.0f;
+        percent->setText(QString("%1 %").arg(v));
+        notify(false);
+    });
+}
 
-        grid->addWidget(new QLabel("Smoothing"), 4, 0);
-        r->smooth = new QDoubleSpinBox(r->widget);
-        r->smooth->setObjectName("smoothing");
-        r->smooth->setRange(0, 1);
-        r->smooth->setSingleStep(0.1);
-        r->smooth->setDecimals(2);
-        r->smooth->setKeyboardTracking(false);
-        r->smooth->setValue(info.post.smooth);
-        r->smooth->setToolTip("Windowed-sinc smoothing factor, 0 (off) to 1 (strong), as 3D Slicer's");
-        r->largest = new QCheckBox("Keep largest", r->widget);
-        r->largest->setObjectName("keep_largest");
-        r->largest->setChecked(info.post.keep_largest);
-        auto* line4 = new QHBoxLayout;
-        line4->addWidget(r->smooth);
-        line4->addWidget(r->largest);
-        line4->addStretch(1);
-        grid->addLayout(line4, 4, 1, 1, 2);
+// Line 3: the iso slider and its number, kept in step; below them the
+// "extracting..." label of a re-extraction under way.
+void SurfacesPanel::add_iso_line(Row& r, QGridLayout* grid) {
+    const std::uint32_t id = r.id;
+    const double value = scene_->info(id).value;
+    const auto range = scene_->value_range();
+    const auto type = scene_->volume().type;
+    const bool integral = type != VoxelType::F32 && type != VoxelType::F64 && !scene_->volume().is_sparse();
+    const double span = std::max(range.max - range.min, 1e-9);
+    r.lo = range.min;
+    r.steps = integral && span <= 100000 ? int(std::lround(span)) : 1000;
+    r.step = span / r.steps;
+    const bool hu = scene_->volume().meta.modality == "CT";
+    grid->addWidget(new QLabel("Iso"), 2, 0);
+    r.slider = new QSlider(Qt::Horizontal, r.widget);
+    r.slider->setObjectName("iso_slider");
+    r.slider->setRange(0, r.steps);
+    r.slider->setValue(r.to_slider(value));
+    r.slider->setToolTip(QString("Iso value, %1 to %2%3").arg(range.min).arg(range.max).arg(hu ? " HU" : ""));
+    r.value = new QDoubleSpinBox(r.widget);
+    r.value->setObjectName("iso_value");
+    r.value->setRange(range.min, range.max);
+    r.value->setDecimals(integral ? 0 : 3);
+    r.value->setKeyboardTracking(false); // on Enter, arrows or leaving the box
+    r.value->setSuffix(hu ? " HU" : "");
+    r.value->setValue(value);
+    r.busy = new QLabel("extracting...", r.widget);
+    r.busy->setObjectName("busy");
+    r.busy->setVisible(false);
+    auto* line2 = new QHBoxLayout;
+    line2->addWidget(r.slider, 1);
+    line2->addWidget(r.value);
+    grid->addLayout(line2, 2, 1, 1, 2);
+    grid->addWidget(r.busy, 3, 1, 1, 2);
 
-        connect(r->slider, &QSlider::valueChanged, this, [this, id](int s) {
-            Row* row = find(id);
-            if (!row || row->syncing) return;
-            row->syncing = true;
-            row->value->setValue(row->from_slider(s));
-            row->syncing = false;
-            set_iso(id, row->value->value());
-        });
-        connect(r->value, &QDoubleSpinBox::valueChanged, this, [this, id](double v) {
-            Row* row = find(id);
-            if (!row || row->syncing) return;
-            row->syncing = true;
-            row->slider->setValue(row->to_slider(v));
-            row->syncing = false;
-            set_iso(id, v);
-        });
-        const auto post_changed = [this, id] {
-            Row* row = find(id);
-            if (!row || row->syncing) return;
-            PostProcessOptions p = row->wanted_post;
-            p.smooth = row->smooth->value();
-            p.keep_largest = row->largest->isChecked();
-            set_post(id, p);
-        };
-        connect(r->smooth, &QDoubleSpinBox::valueChanged, this, post_changed);
-        connect(r->largest, &QCheckBox::toggled, this, post_changed);
-    }
-    rows_layout_->addWidget(r->widget);
-    rows_.push_back(std::move(row));
+    connect(r.slider, &QSlider::valueChanged, this, [this, id](int s) {
+        Row* row = find(id);
+        if (!row || row->syncing) return;
+        row->syncing = true;
+        row->value->setValue(row->from_slider(s));
+        row->syncing = false;
+        set_iso(id, row->value->value());
+    });
+    connect(r.value, &QDoubleSpinBox::valueChanged, this, [this, id](double v) {
+        Row* row = find(id);
+        if (!row || row->syncing) return;
+        row->syncing = true;
+        row->slider->setValue(row->to_slider(v));
+        row->syncing = false;
+        set_iso(id, v);
+    });
+}
+
+// Line 4: smoothing and keep-largest, the post-processing a re-extraction applies.
+void SurfacesPanel::add_post_line(Row& r, QGridLayout* grid) {
+    const std::uint32_t id = r.id;
+    const PostProcessOptions& post = scene_->info(id).post;
+    grid->addWidget(new QLabel("Smoothing"), 4, 0);
+    r.smooth = new QDoubleSpinBox(r.widget);
+    r.smooth->setObjectName("smoothing");
+    r.smooth->setRange(0, 1);
+    r.smooth->setSingleStep(0.1);
+    r.smooth->setDecimals(2);
+    r.smooth->setKeyboardTracking(false);
+    r.smooth->setValue(post.smooth);
+    r.smooth->setToolTip("Windowed-sinc smoothing factor, 0 (off) to 1 (strong), as 3D Slicer's");
+    r.largest = new QCheckBox("Keep largest", r.widget);
+    r.largest->setObjectName("keep_largest");
+    r.largest->setChecked(post.keep_largest);
+    auto* line4 = new QHBoxLayout;
+    line4->addWidget(r.smooth);
+    line4->addWidget(r.largest);
+    line4->addStretch(1);
+    grid->addLayout(line4, 4, 1, 1, 2);
+
+    const auto post_changed = [this, id] {
+        Row* row = find(id);
+        if (!row || row->syncing) return;
+        PostProcessOptions p = row->wanted_post;
+        p.smooth = row->smooth->value();
+        p.keep_largest = row->largest->isChecked();
+        set_post(id, p);
+    };
+    connect(r.smooth, &QDoubleSpinBox::valueChanged, this, post_changed);
+    connect(r.largest, &QCheckBox::toggled, this, post_changed);
 }
 
 void SurfacesPanel::remove_row(std::uint32_t id) {

@@ -1,13 +1,13 @@
-// The Surfaces panel of the main window (issue 14, docs/gui.md "Surfaces
-// panel"): presets and an iso value to add an isosurface (in the
-// background, with the window's progress dialog and Cancel), and one row per
-// surface: visibility, name, colour, opacity, and for isosurfaces an iso
-// slider with its number, smoothing, keep-largest and Remove. Moving the
-// slider re-extracts in the background without a dialog; the surface on
-// screen stays until the new mesh is swapped in on the GUI thread, and the
-// latest value wins. Presentation only: extraction, post-processing and the
-// surfaces are the core's (core::Scene::extract_isosurface, add_isosurface,
-// replace_surface, remove_surface).
+// The Surfaces panel of the main window (docs/gui.md "Surfaces panel"):
+// presets and an iso value to add an isosurface (in the background, with the
+// window's progress dialog and Cancel), and one row per surface: visibility,
+// name, colour, opacity, and for isosurfaces an iso slider with its number,
+// smoothing, keep-largest and Remove. Moving the slider re-extracts in the
+// background without a dialog; the surface on screen stays until the new mesh
+// is swapped in on the GUI thread, and the latest value wins. Presentation
+// only: extraction, post-processing and the surfaces are the core's
+// (core::Scene::extract_isosurface, add_isosurface, replace_surface,
+// remove_surface).
 #pragma once
 
 #include <exception>
@@ -22,6 +22,7 @@
 #include "renderer/surface/postprocess.hpp"
 
 class QComboBox;
+class QGridLayout;
 class QDoubleSpinBox;
 class QCheckBox;
 class QLabel;
@@ -76,6 +77,11 @@ private:
     struct Row;
     struct Worker;
     void add_row(std::uint32_t id);
+    // The lines of a row, each with what its controls do.
+    void add_title_line(Row& r, QGridLayout* grid);
+    void add_opacity_line(Row& r, QGridLayout* grid);
+    void add_iso_line(Row& r, QGridLayout* grid);
+    void add_post_line(Row& r, QGridLayout* grid);
     void remove_row(std::uint32_t id);
     Row* find(std::uint32_t id) const;
     void request(Row& r);

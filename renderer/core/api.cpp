@@ -173,30 +173,6 @@ RenderOptions frame_options(const RenderRequest& req) {
     return ro;
 }
 
-glm::vec3 linear_from_hex(const std::string& text) {
-    unsigned r = 0, g = 0, b = 0;
-    char tail = 0;
-    if (text.size() != 7 || text[0] != '#' || std::sscanf(text.c_str() + 1, "%2x%2x%2x%c", &r, &g, &b, &tail) != 3 ||
-        text.find_first_not_of("0123456789abcdefABCDEF", 1) != std::string::npos)
-        throw Error("colour", "expected #rrggbb (sRGB hex), got '" + text + "'");
-    const auto lin = [](unsigned v) {
-        const double c = v / 255.0;
-        return float(c <= 0.04045 ? c / 12.92 : std::pow((c + 0.055) / 1.055, 2.4));
-    };
-    return {lin(r), lin(g), lin(b)};
-}
-
-std::string hex_from_linear(const glm::vec3& linear) {
-    const auto enc = [](float v) {
-        const double c = std::clamp(double(v), 0.0, 1.0);
-        const double s = c <= 0.0031308 ? 12.92 * c : 1.055 * std::pow(c, 1.0 / 2.4) - 0.055;
-        return unsigned(std::lround(std::clamp(s, 0.0, 1.0) * 255.0));
-    };
-    char b[8];
-    std::snprintf(b, sizeof b, "#%02x%02x%02x", enc(linear.r), enc(linear.g), enc(linear.b));
-    return b;
-}
-
 RenderOutput render_input(const std::string& input, const RenderRequest& req) {
     Scene scene;
     LoadOptions lo;

@@ -7,6 +7,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "io/color.hpp"
 #include "io/markups.hpp"
 #include "io/mesh.hpp"
 #include "renderer/core/scene.hpp"
@@ -90,12 +91,9 @@ struct RenderRequest {
 RenderOptions frame_options(const RenderRequest& req);
 Camera frame_camera(const Scene& scene, const RenderRequest& req);
 
-// "#rrggbb" (sRGB, as colour pickers and CSS give it) -> linear RGB.
-// Throws iso::Error("colour", ...) naming the text.
-glm::vec3 linear_from_hex(const std::string& text);
-// Linear RGB (clamped to [0, 1]) -> "#rrggbb" sRGB, rounded to the nearest
-// 8-bit value: linear_from_hex(hex_from_linear(c)) is within half a step.
-std::string hex_from_linear(const glm::vec3& linear);
+// "#rrggbb" <-> linear RGB, the one sRGB pair (io/color.hpp), for the core's callers.
+using iso::hex_from_linear;
+using iso::linear_from_hex;
 
 struct RenderOutput {
     Image image;

@@ -7,6 +7,7 @@
 #include <glm/geometric.hpp>
 
 #include "io/atomic_file.hpp"
+#include "io/color.hpp"
 #include "io/error.hpp"
 #include "io/read_file.hpp"
 #include "io/image.hpp"

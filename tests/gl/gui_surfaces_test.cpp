@@ -1,10 +1,11 @@
-// The Surfaces panel (issue 14, docs/gui.md "Surfaces panel") driven
+// The Surfaces panel (docs/gui.md "Surfaces panel") driven
 // in-process through QTest in a real X server: GuiSurfaces.UnderXvfb starts
 // this program again under xvfb-run, which runs GuiSurfacesInXvfb (skipped
 // when started any other way). Expected values come from the core API
 // (extract_isosurface, postprocess, measure_surface), not from the panel.
 #include <QApplication>
 #include <QCheckBox>
+#include <QColorDialog>
 #include <QDoubleSpinBox>
 #include <QMessageBox>
 #include <QProgressDialog>
@@ -12,15 +13,20 @@
 #include <QSlider>
 #include <QStatusBar>
 #include <QTest>
+#include <QTimer>
 
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <fstream>
+
+#include <nlohmann/json.hpp>
 
 #include "app/gui/main_window.hpp"
 #include "app/gui/slice_view.hpp"
 #include "app/gui/surfaces_panel.hpp"
 #include "app/gui/viewer.hpp"
+#include "io/color.hpp"
 #include "io/volume_io.hpp"
 #include "renderer/core/scene.hpp"
 #include "renderer/surface/extract.hpp"
@@ -56,6 +62,27 @@ void expect_new_frame(gui::MainWindow& w, int frames_before) {
     EXPECT_TRUE(w.viewer()->error().empty()) << w.viewer()->error();
 }
 
+// Answers the next colour dialog (QColorDialog::getColor runs its own event
+// loop): `shown` gets the colour it opened with; then it picks `pick`, or is
+// cancelled when `pick` is not valid.
+void answer_colour_dialog(QWidget& owner, const QColor& pick, QString& shown) {
+    auto* timer = new QTimer(&owner);
+    QObject::connect(timer, &QTimer::timeout, timer, [timer, pick, &shown] {
+        auto* dialog = qobject_cast<QColorDialog*>(QApplication::activeModalWidget());
+        if (!dialog || !dialog->isVisible()) return;
+        timer->stop();
+        timer->deleteLater();
+        shown = dialog->currentColor().name();
+        if (pick.isValid()) {
+            dialog->setCurrentColor(pick);
+            dialog->accept();
+        } else {
+            dialog->reject();
+        }
+    });
+    timer->start(20);
+}
+
 // A 512 x 512 x 400 int16 CT-sized volume (a ball of 1000 in 0, a linear
 // ramp across its surface), written raw: extracting it takes long enough to
 // press Cancel (the range index alone reads all 200 MB).
@@ -77,7 +104,7 @@ std::string big_volume(const std::filesystem::path& dir) {
 }
 } // namespace
 
-TEST(GuiSurfaces, UnderXvfb) { test::run_inner_under_xvfb(kInner, "GuiSurfacesInXvfb.*"); }
+TEST(GuiSurfaces, UnderXvfb) { test::run_inner_under_xvfb(kInner, "GuiSurfacesInXvfb.*", 2); }
 
 TEST(GuiSurfacesInXvfb, AddOpacitySliderLargestRemoveAndCancel) {
     if (!std::getenv(kInner)) GTEST_SKIP() << "runs inside xvfb-run, started by GuiSurfaces.UnderXvfb";
@@ -235,4 +262,50 @@ TEST(GuiSurfacesInXvfb, AddOpacitySliderLargestRemoveAndCancel) {
     auto* axial = w.slice_view(core::SliceOrientation::Axial);
     QTest::mouseClick(axial, Qt::LeftButton, {}, QPoint(axial->width() / 2, axial->height() / 2));
     EXPECT_EQ(w.statusBar()->currentMessage().left(5), "LPS (");
+}
+
+// A colour picked in a row's colour dialog is the colour the scene shades
+// with in linear light (the sRGB transfer, not a gamma curve), opens the
+// dialog again as the same colour, and is saved in a session as picked.
+TEST(GuiSurfacesInXvfb, PickedColourIsStoredAndSavedAsPicked) {
+    if (!std::getenv(kInner)) GTEST_SKIP() << "runs inside xvfb-run, started by GuiSurfaces.UnderXvfb";
+    test::TempDir dir;
+    const auto app = test::make_app("gui_surfaces_test", dir / "config");
+    gui::MainWindow w;
+    w.resize(1200, 900);
+    w.show();
+    ASSERT_TRUE(QTest::qWaitForWindowExposed(&w));
+    w.open_path(QString::fromStdString(test::data("headsq.nhdr")));
+    ASSERT_TRUE(wait_until([&] { return !w.busy(); }, 60000)) << "the load did not finish";
+    add_through_panel(w, 1150);
+    ASSERT_EQ(w.scene().surfaces().size(), 1u);
+    const auto id = w.scene().surfaces()[0];
+    auto* button = child<QPushButton>(w.surfaces_panel()->row(id), "color");
+    ASSERT_NE(button, nullptr);
+
+    QString shown;
+    answer_colour_dialog(w, QColor("#1a1a1a"), shown);
+    QTest::mouseClick(button, Qt::LeftButton);
+    ASSERT_TRUE(wait_until([&] { return !shown.isEmpty(); }, 10000)) << "no colour dialog";
+    const float linear = float(linear_from_srgb(0x1a / 255.0));
+    EXPECT_NEAR(linear, 0.0103298, 1e-7); // the published sRGB curve at 26/255
+    EXPECT_EQ(w.scene().info(id).color, glm::vec3(linear));
+    EXPECT_TRUE(button->styleSheet().contains("#1a1a1a")) << button->styleSheet().toStdString();
+
+    // Opened again it starts from the colour picked; Cancel leaves it.
+    shown.clear();
+    answer_colour_dialog(w, QColor(), shown);
+    QTest::mouseClick(button, Qt::LeftButton);
+    ASSERT_TRUE(wait_until([&] { return !shown.isEmpty(); }, 10000)) << "no colour dialog";
+    EXPECT_EQ(shown.toStdString(), "#1a1a1a");
+    EXPECT_EQ(w.scene().info(id).color, glm::vec3(linear));
+
+    const std::string session = dir / "picked.isoscope.json";
+    w.save_session(QString::fromStdString(session));
+    ASSERT_TRUE(wait_until([&] { return !w.busy(); }, 60000));
+    std::ifstream in(session);
+    ASSERT_TRUE(in) << w.statusBar()->currentMessage().toStdString();
+    const auto j = nlohmann::json::parse(in);
+    ASSERT_EQ(j.at("surfaces").size(), 1u);
+    EXPECT_EQ(j["surfaces"][0].at("color"), "#1a1a1a");
 }

@@ -242,14 +242,6 @@ TEST(Session, SavingKeepsTheOldFileWholeOnFailure) {
     EXPECT_THROW(core::save_session(s, dir / "no/such/folder/s.json"), Error);
 }
 
-TEST(Session, HexColoursRoundTrip) {
-    for (unsigned v = 0; v < 256; ++v) {
-        char hex[8];
-        std::snprintf(hex, sizeof hex, "#%02x%02x%02x", v, 255 - v, (v * 7) % 256);
-        EXPECT_EQ(core::hex_from_linear(core::linear_from_hex(hex)), hex);
-    }
-}
-
 TEST(Session, OpensItsSceneAndCapturesItBack) {
     TempDir dir;
     core::Session s = example(test::data("headsq.nhdr")); // the bone smoothed (0.25) and kept largest
