@@ -30,6 +30,7 @@
 #include "app/gui/view_toolbar.hpp"
 #include "app/gui/viewer.hpp"
 #include "gui_test_util.hpp"
+#include "tests/support/pixels.hpp"
 #include "io/image.hpp"
 #include "renderer/core/api.hpp"
 #include "renderer/core/scene.hpp"
@@ -40,6 +41,7 @@ namespace fs = std::filesystem;
 
 namespace {
 constexpr const char* kInner = "ISOSCOPE_GUI_EXPORT_TEST_IN_XVFB";
+using test::differing;
 using test::wait_until;
 
 QAction* file_action(QMainWindow& w, const QString& text) {
@@ -54,12 +56,6 @@ template <class T> T* wait_for_child(QWidget& w, const char* name) {
     return found;
 }
 
-std::size_t differing(const Image& a, const Image& b) {
-    if (a.width != b.width || a.height != b.height || a.channels != b.channels || a.bytes.size() != b.bytes.size()) return SIZE_MAX;
-    std::size_t n = 0;
-    for (std::size_t i = 0; i < a.bytes.size(); ++i) n += a.bytes[i] != b.bytes[i];
-    return n;
-}
 
 // Seconds since the test began, per step (stdout: where the time goes under Xvfb and llvmpipe).
 void step(const QElapsedTimer& t, const char* what) { std::printf("%6.2f s  %s\n", t.elapsed() / 1000.0, what); }

@@ -19,7 +19,7 @@
 
 #include <gtest/gtest.h>
 
-#include "test_util.hpp"
+#include "tests/support/test_util.hpp"
 
 namespace iso::test {
 

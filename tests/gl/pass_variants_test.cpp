@@ -10,7 +10,7 @@
 #include "renderer/iso/extract.hpp"
 #include "renderer/render/renderer.hpp"
 #include "gl_test.hpp"
-#include "test_util.hpp"
+#include "tests/support/test_util.hpp"
 
 using namespace iso;
 using PassVariants = test::GlTest;

@@ -26,7 +26,7 @@
 #include "io/volume_io.hpp"
 #include "io/vtk_mesh.hpp"
 #include "renderer/iso/components.hpp"
-#include "test_util.hpp"
+#include "tests/support/test_util.hpp"
 
 using namespace iso;
 using iso::test::TempDir;

@@ -10,7 +10,7 @@
 #include <map>
 
 #include "io/error.hpp"
-#include "test_util.hpp"
+#include "tests/support/test_util.hpp"
 
 using namespace iso::graph;
 

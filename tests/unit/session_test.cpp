@@ -6,17 +6,18 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
-#include <sstream>
 
 #include <nlohmann/json.hpp>
 
 #include "io/error.hpp"
 #include "io/image.hpp"
 #include "renderer/core/session.hpp"
-#include "test_util.hpp"
+#include "tests/support/test_util.hpp"
 
 using namespace iso;
 using iso::test::TempDir;
+using iso::test::read_file;
+using iso::test::write_file;
 namespace fs = std::filesystem;
 
 namespace {
@@ -65,22 +66,10 @@ core::Session example(const std::string& input) {
     return s;
 }
 
-std::string slurp(const std::string& path) {
-    std::ifstream f(path);
-    std::stringstream ss;
-    ss << f.rdbuf();
-    return ss.str();
-}
-
-void write(const std::string& path, const std::string& text) {
-    std::ofstream f(path, std::ios::trunc);
-    f << text;
-}
-
 // The message of the iso::Error that loading `text` as a session throws ("" when none).
 std::string load_error(const TempDir& dir, const std::string& text) {
     const std::string path = dir / "broken.json";
-    write(path, text);
+    write_file(path, text);
     try {
         core::load_session(path);
     } catch (const Error& e) {
@@ -97,7 +86,7 @@ TEST(Session, SavedAndLoadedBackExactly) {
     const std::string path = dir / "sub/s.json";
     fs::create_directories(dir.path() / "sub");
     core::save_session(s, path);
-    const auto j = nlohmann::json::parse(slurp(path));
+    const auto j = nlohmann::json::parse(read_file(path));
     EXPECT_EQ(j["format"], "isoscope-session");
     EXPECT_EQ(j["version"], core::kSessionVersion);
     // Not below the session's folder: absolute.
@@ -150,8 +139,8 @@ TEST(Session, InputBelowTheSessionFolderIsRelativeAndMovesWithIt) {
     for (const char* f : {"headsq.nhdr", "headsq.raw"}) fs::copy_file(test::data(f), dir.path() / "a" / "data" / f);
     core::Session s = example(dir / "a/data/headsq.nhdr");
     core::save_session(s, dir / "a/s.json");
-    EXPECT_EQ(nlohmann::json::parse(slurp(dir / "a/s.json"))["input"]["path"], "data/headsq.nhdr");
-    EXPECT_EQ(nlohmann::json::parse(slurp(dir / "a/s.json"))["surfaces"][0]["source"], "data/headsq.nhdr");
+    EXPECT_EQ(nlohmann::json::parse(read_file(dir / "a/s.json"))["input"]["path"], "data/headsq.nhdr");
+    EXPECT_EQ(nlohmann::json::parse(read_file(dir / "a/s.json"))["surfaces"][0]["source"], "data/headsq.nhdr");
     fs::rename(dir.path() / "a", dir.path() / "b");
     const auto r = core::load_session(dir / "b/s.json");
     EXPECT_EQ(r.input, (dir.path() / "b" / "data" / "headsq.nhdr").string());
@@ -176,7 +165,7 @@ TEST(Session, RefusalsNameTheFileAndTheField) {
     TempDir dir;
     const std::string file = dir / "broken.json";
     core::save_session(example(test::data("headsq.nhdr")), dir / "good.json");
-    const std::string good = slurp(dir / "good.json");
+    const std::string good = read_file(dir / "good.json");
     const auto edited = [&](const std::function<void(nlohmann::json&)>& edit) {
         auto j = nlohmann::json::parse(good);
         edit(j);
@@ -235,10 +224,10 @@ TEST(Session, SavingKeepsTheOldFileWholeOnFailure) {
     TempDir dir;
     core::Session s = example(test::data("headsq.nhdr"));
     core::save_session(s, dir / "s.json");
-    const std::string before = slurp(dir / "s.json");
+    const std::string before = read_file(dir / "s.json");
     s.markups[0].points.pop_back(); // a Line with one point cannot be written
     EXPECT_THROW(core::save_session(s, dir / "s.json"), Error);
-    EXPECT_EQ(slurp(dir / "s.json"), before);
+    EXPECT_EQ(read_file(dir / "s.json"), before);
     EXPECT_THROW(core::save_session(s, dir / "no/such/folder/s.json"), Error);
 }
 
@@ -338,9 +327,9 @@ TEST(SessionCli, RefusalsNameTheSessionAndTheFlag) {
     EXPECT_NE(r.out.find("no such file"), std::string::npos) << r.out;
 
     core::save_session(example(test::data("headsq.nhdr")), dir / "s.json");
-    auto j = nlohmann::json::parse(slurp(dir / "s.json"));
+    auto j = nlohmann::json::parse(read_file(dir / "s.json"));
     j["surfaces"][0]["color"] = "#12345";
-    write(dir / "bad.json", j.dump());
+    write_file(dir / "bad.json", j.dump());
     r = run("--session " + (dir / "bad.json") + " -o " + (dir / "x.png"));
     EXPECT_EQ(r.exit_code, 1) << r.out;
     EXPECT_NE(r.out.find(dir / "bad.json" + ": surfaces[0].color: expected #rrggbb"), std::string::npos) << r.out;

@@ -26,11 +26,11 @@
 #include "io/error.hpp"
 #include "io/sparse.hpp"
 #include "io/volume_io.hpp"
-#include "measure_phantoms.hpp"
+#include "tests/support/measure_phantoms.hpp"
 #include "renderer/core/measure.hpp"
 #include "renderer/core/scene.hpp"
-#include "test_meshes.hpp"
-#include "test_util.hpp"
+#include "tests/support/meshes.hpp"
+#include "tests/support/test_util.hpp"
 
 using namespace iso;
 using namespace iso::core;
@@ -91,33 +91,6 @@ Where where(const Volume& v, const glm::dvec3& idx) {
         if (x < 0 || x > n - 1) rim = true;
     }
     return rim ? Where::Rim : Where::Interior;
-}
-
-// A UV sphere of radius r about c: `stacks` rings (even: one ring on the
-// equator), `slices` segments, outward-facing, closed and indexed.
-Mesh uv_sphere(const glm::dvec3& c, double r, int stacks, int slices) {
-    Mesh m;
-    m.positions.emplace_back(glm::vec3(c + glm::dvec3(0, 0, r))); // north pole, 0
-    for (int i = 1; i < stacks; ++i) {
-        const double th = kPi * double(i) / double(stacks);
-        // Exactly 0 on the equator, so its vertices lie exactly on the plane z = c.z.
-        const double z = 2 * i == stacks ? 0.0 : std::cos(th);
-        for (int j = 0; j < slices; ++j) {
-            const double ph = 2 * kPi * double(j) / double(slices);
-            m.positions.emplace_back(glm::vec3(c + r * glm::dvec3(std::sin(th) * std::cos(ph), std::sin(th) * std::sin(ph), z)));
-        }
-    }
-    m.positions.emplace_back(glm::vec3(c - glm::dvec3(0, 0, r))); // south pole
-    const auto south = std::uint32_t(m.positions.size() - 1);
-    auto ring = [&](int i, int j) { return std::uint32_t(1 + (i - 1) * slices + (j % slices)); };
-    for (int j = 0; j < slices; ++j) m.triangles.push_back({0, ring(1, j), ring(1, j + 1)});
-    for (int i = 1; i + 1 < stacks; ++i)
-        for (int j = 0; j < slices; ++j) {
-            m.triangles.push_back({ring(i, j), ring(i + 1, j), ring(i + 1, j + 1)});
-            m.triangles.push_back({ring(i, j), ring(i + 1, j + 1), ring(i, j + 1)});
-        }
-    for (int j = 0; j < slices; ++j) m.triangles.push_back({south, ring(stacks - 1, j + 1), ring(stacks - 1, j)});
-    return m;
 }
 
 // An axis-aligned box [lo, hi] as 8 vertices and 12 outward triangles.

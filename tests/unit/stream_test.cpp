@@ -31,7 +31,7 @@
 #include "io/volume_stream.hpp"
 #include "renderer/iso/extract.hpp"
 #include "renderer/iso/stream.hpp"
-#include "test_util.hpp"
+#include "tests/support/test_util.hpp"
 
 // Is this an AddressSanitizer build? (GCC defines __SANITIZE_ADDRESS__, Clang answers __has_feature.)
 #if defined(__SANITIZE_ADDRESS__)
@@ -49,6 +49,8 @@ namespace iso {
 namespace {
 namespace fs = std::filesystem;
 using test::TempDir;
+using test::files_in;
+using test::read_file;
 
 // A wobbly ball (values fall off from the centre), in int16, with integer
 // values so that iso values equal to samples (ties) occur; or float32.
@@ -672,19 +674,6 @@ TEST(Stream, TruncatedAndMalformedFilesAreErrorsAndNothingIsWritten) {
     EXPECT_FALSE(open_volume_stream(dir / "c.nii.gz", std::size_t(1) << 20)->streaming());
 }
 
-// Every file under `dir` (relative paths, sorted); a file's bytes.
-std::vector<std::string> files_in(const fs::path& dir) {
-    std::vector<std::string> names;
-    for (const auto& e : fs::recursive_directory_iterator(dir)) names.push_back(fs::relative(e.path(), dir).string());
-    std::sort(names.begin(), names.end());
-    return names;
-}
-
-std::string file_bytes(const fs::path& p) {
-    std::ifstream in(p, std::ios::binary);
-    return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-}
-
 TEST(Stream, CancellingLeavesNoOutputAndKeepsTheUsersFile) {
     TempDir dir;
     const Volume v = ball({24, 24, 60}, VoxelType::I16, glm::dmat4(1.0));
@@ -703,7 +692,7 @@ TEST(Stream, CancellingLeavesNoOutputAndKeepsTheUsersFile) {
             auto sink = make_mesh_sink({dir / name});
             EXPECT_THROW(stream_extract(*src, so, *sink), Cancelled);
         }
-        EXPECT_EQ(file_bytes(dir / name), "the user's file");
+        EXPECT_EQ(read_file(dir / name), "the user's file");
         // v.nrrd and the user's file: no pieces, no temporaries
         EXPECT_EQ(files_in(dir.path()), (std::vector<std::string>{name, "v.nrrd"}));
         fs::remove(dir / name);
@@ -889,7 +878,7 @@ TEST(Stream, OverlapWritesTheSameFiles) {
                     layers = st.plan.layers_per_slab;
                 }
                 listing[overlap] = files_in(out);
-                for (const auto& f : listing[overlap]) bytes[overlap].push_back(file_bytes(out / f));
+                for (const auto& f : listing[overlap]) bytes[overlap].push_back(read_file(out / f));
             }
             EXPECT_EQ(listing[0], listing[1]);
             EXPECT_GT(listing[1].size(), 0u);
@@ -1022,7 +1011,7 @@ TEST(Stream, OverlapCancelStopsEveryStep) {
         EXPECT_EQ(calls_after.load(), 0);
         EXPECT_EQ(seen_running.load(), 2u) << "the reader and the writer run while the extraction reports progress";
         EXPECT_EQ(stream_threads_running(), 0u) << "a reader or writer thread is left running";
-        EXPECT_EQ(file_bytes(dir / name), "the user's file");
+        EXPECT_EQ(read_file(dir / name), "the user's file");
         EXPECT_EQ(files_in(dir.path()), (std::vector<std::string>{name, "v.nrrd"}));
         fs::remove(dir / name);
     }

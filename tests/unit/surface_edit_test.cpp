@@ -12,7 +12,7 @@
 #include "io/error.hpp"
 #include "renderer/iso/extract.hpp"
 #include "renderer/iso/measure.hpp"
-#include "test_util.hpp"
+#include "tests/support/test_util.hpp"
 
 using namespace iso;
 
