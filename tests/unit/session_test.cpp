@@ -11,7 +11,10 @@
 
 #include "io/error.hpp"
 #include "io/image.hpp"
+#include "io/volume_io.hpp"
 #include "renderer/core/session.hpp"
+#include "renderer/iso/extract.hpp"
+#include "renderer/iso/postprocess.hpp"
 #include "tests/support/test_util.hpp"
 
 using namespace iso;
@@ -260,13 +263,20 @@ TEST(Session, OpensItsSceneAndCapturesItBack) {
         EXPECT_EQ(info.kind, core::SurfaceInfo::Kind::Iso);
         EXPECT_EQ(info.value, s.surfaces[i].value);
         EXPECT_EQ(info.name, s.surfaces[i].name);
-        EXPECT_EQ(info.color, core::linear_from_hex(s.surfaces[i].color));
+        // The hex colour decoded by the published sRGB formula (IEC 61966-2-1), written out here.
+        for (int c = 0; c < 3; ++c) {
+            const double code = std::stoi(s.surfaces[i].color.substr(1 + 2 * std::size_t(c), 2), nullptr, 16) / 255.0;
+            const double linear = code <= 0.04045 ? code / 12.92 : std::pow((code + 0.055) / 1.055, 2.4);
+            EXPECT_NEAR(info.color[c], linear, 1e-6) << s.surfaces[i].color << " channel " << c;
+        }
         EXPECT_EQ(info.opacity, s.surfaces[i].opacity);
         EXPECT_EQ(info.visible, s.surfaces[i].visible);
         EXPECT_EQ(info.post.smooth, s.surfaces[i].post.smooth);
         EXPECT_EQ(info.post.keep_largest, s.surfaces[i].post.keep_largest);
-        // As the Surfaces panel extracts it.
-        const Mesh expected = scene.extract_isosurface(s.surfaces[i].value, {}, s.surfaces[i].post);
+        // A fresh extraction of the file through the library's free functions
+        // (not the Scene that opened the session): load, extract, post-process.
+        Mesh expected = extract_isosurface(load_volume(s.input), s.surfaces[i].value);
+        if (needs_postprocess(s.surfaces[i].post)) expected = postprocess(expected, s.surfaces[i].post);
         EXPECT_EQ(scene.mesh(opened.surfaces[i]).triangles.size(), expected.triangles.size());
         EXPECT_GT(expected.triangles.size(), 10000u);
     }
