@@ -1,6 +1,6 @@
 // Sessions and export in the desktop app (docs/gui.md "Sessions and
 // export", docs/sessions.md), driven in-process through QTest under
-// xvfb-run (GuiExport.UnderXvfb starts this program again inside it). The
+// xvfb-run (as CTest runs this program; it skips without a display). The
 // exported image is compared pixel by pixel with `isoscope render
 // --session` run as a process; the reopened session with the core's state
 // of the first window; the saved surface with the core's mesh.
@@ -40,7 +40,6 @@ using namespace iso;
 namespace fs = std::filesystem;
 
 namespace {
-constexpr const char* kInner = "ISOSCOPE_GUI_EXPORT_TEST_IN_XVFB";
 using test::differing;
 using test::wait_until;
 
@@ -68,10 +67,8 @@ void screenshot(QWidget& w, const std::string& name) {
 }
 } // namespace
 
-TEST(GuiExport, UnderXvfb) { test::run_inner_under_xvfb(kInner, "GuiExportInXvfb.*"); }
-
-TEST(GuiExportInXvfb, ExportSaveOpenSessionAndSurfaces) {
-    if (!std::getenv(kInner)) GTEST_SKIP() << "runs inside xvfb-run, started by GuiExport.UnderXvfb";
+TEST(GuiExport, ExportSaveOpenSessionAndSurfaces) {
+    ISO_SKIP_WITHOUT_DISPLAY();
     test::TempDir dir;
     const auto app = test::make_app("gui_export_test", dir / "config");
     QElapsedTimer clock;

@@ -1,7 +1,6 @@
-// Pick and measure in the desktop app (issue 14, docs/gui.md "Pick and
-// measure"), driven in-process through QTest in a real X server:
-// GuiMeasure.UnderXvfb starts this program again under xvfb-run, which runs
-// GuiMeasureInXvfb. Expected values come from the core API and the CLI
+// Pick and measure in the desktop app (docs/gui.md "Pick and
+// measure"), driven in-process through QTest in a real X server (CTest runs
+// this program under xvfb-run). Expected values come from the core API and the CLI
 // (`isoscope pick`: core::pick, render_image's own frame in another process;
 // core::pixel_to_lps, iso::distance_mm / angle_deg, io/markups), not from
 // the window's own state.
@@ -40,7 +39,6 @@
 using namespace iso;
 
 namespace {
-constexpr const char* kInner = "ISOSCOPE_GUI_MEASURE_TEST_IN_XVFB";
 using test::wait_until;
 // The readout prints 2 decimals: the printed number is within half a unit of the last digit.
 constexpr double kPrinted = 0.005 + 1e-9;
@@ -75,10 +73,8 @@ void hover(QWidget* w, QPoint at) {
 
 } // namespace
 
-TEST(GuiMeasure, UnderXvfb) { test::run_inner_under_xvfb(kInner, "GuiMeasureInXvfb.*"); }
-
-TEST(GuiMeasureInXvfb, PickReadoutRulerAngleMarkupsSaveAndLoad) {
-    if (!std::getenv(kInner)) GTEST_SKIP() << "runs inside xvfb-run, started by GuiMeasure.UnderXvfb";
+TEST(GuiMeasure, PickReadoutRulerAngleMarkupsSaveAndLoad) {
+    ISO_SKIP_WITHOUT_DISPLAY();
     test::TempDir dir;
     const auto app = test::make_app("gui_measure_test", dir / "config");
     const std::filesystem::path out = test::output_dir("gui_measure");
