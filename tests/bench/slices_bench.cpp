@@ -22,6 +22,7 @@
 
 using namespace iso;
 using namespace iso::core;
+using iso::test::oblique_affine;
 
 namespace {
 

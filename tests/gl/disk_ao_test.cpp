@@ -23,14 +23,15 @@
 
 #include <glm/glm.hpp>
 
-#include "tests/support/ao_metrics.hpp"
 #include "gl_test.hpp"
 #include "pass_harness.hpp"
 #include "renderer/ao/disk_geometry.hpp"
 #include "renderer/ao/disk_hierarchy.hpp"
 #include "renderer/core/api.hpp"
 #include "renderer/render/renderer.hpp"
+#include "tests/support/ao_metrics.hpp"
 #include "tests/support/meshes.hpp"
+#include "tests/support/scenes.hpp"
 #include "tests/support/test_util.hpp"
 
 using namespace iso;

@@ -12,6 +12,7 @@
 #include <filesystem>
 
 #include "gui_measure_util.hpp"
+#include "renderer/core/pick.hpp"
 #include "renderer/iso/measure.hpp"
 #include "renderer/render/overlay.hpp"
 

@@ -26,6 +26,7 @@
 #include "app/gui/slice_view.hpp"
 #include "app/gui/viewer.hpp"
 #include "gui_test_util.hpp"
+#include "renderer/core/scene.hpp"
 #include "renderer/core/slices.hpp"
 
 namespace iso::test {
