@@ -33,14 +33,14 @@
 
 #include <nlohmann/json.hpp>
 
-#include "ao_metrics.hpp"
+#include "tests/support/ao_metrics.hpp"
 #include "bench_util.hpp"
 #include "io/image.hpp"
 #include "io/mesh.hpp"
 #include "renderer/ao/reference.hpp"
 #include "renderer/core/api.hpp"
 #include "renderer/gl/context.hpp"
-#include "thin_phantom.hpp"
+#include "tests/support/thin_phantom.hpp"
 
 namespace fs = std::filesystem;
 using namespace iso;

@@ -40,7 +40,7 @@
 #include <vtkPolyData.h>
 #include <vtkShortArray.h>
 
-#include "../unit/measure_phantoms.hpp"
+#include "tests/support/measure_phantoms.hpp"
 #include "bench_util.hpp"
 #include "ct_phantom.hpp"
 #include "vtk_volume.hpp"

@@ -26,7 +26,7 @@
 
 #include "bench_util.hpp"
 #include "io/error.hpp"
-#include "renderer/ao/transparency_reference.hpp"
+#include "tests/support/transparency_reference.hpp"
 #include "renderer/core/scene.hpp"
 #include "renderer/gl/context.hpp"
 #include "renderer/gl/objects.hpp"

@@ -11,56 +11,33 @@
 #include <glm/glm.hpp>
 #include <gtest/gtest.h>
 
-#include "../bench/ao_metrics.hpp"
+#include "tests/support/ao_metrics.hpp"
 #include "gl_test.hpp"
 #include "renderer/ao/reference.hpp"
 #include "renderer/core/api.hpp"
 #include "renderer/surface/extract.hpp"
 #include "renderer/gpu/renderer.hpp"
-#include "test_meshes.hpp"
-#include "test_util.hpp"
+#include "renderer/surface/extract.hpp"
+#include "renderer/gpu/renderer.hpp"
+#include "tests/support/meshes.hpp"
+#include "tests/support/pixels.hpp"
+#include "tests/support/scenes.hpp"
+#include "tests/support/slice_map.hpp"
+#include "tests/support/test_util.hpp"
 
 using namespace iso;
 using ConeAo = test::GlTest;
 using ConeAoStress = test::GlTest;
+using test::float_at;
+using test::looking;
+using test::sphere_mesh;
+using test::texel_of;
+using test::voxel_at;
 
 namespace {
 
 Mesh box(glm::vec3 lo, glm::vec3 hi) { return test::flat_box_mesh(lo, hi); }
 
-Mesh sphere_mesh(glm::dvec3 c, double r, double voxel) {
-    const int n = int(std::ceil(2.4 * r / voxel)) + 1;
-    const glm::dvec3 origin = c - glm::dvec3(1.2 * r);
-    auto v = Volume::dense({n, n, n}, VoxelType::F32, make_affine(glm::dvec3(voxel), origin));
-    for (int k = 0; k < n; ++k)
-        for (int j = 0; j < n; ++j)
-            for (int i = 0; i < n; ++i)
-                v.as<float>()[v.linear_index(i, j, k)] = float(r - glm::length(origin + voxel * glm::dvec3(i, j, k) - c));
-    return extract_isosurface(v, 0.0, {});
-}
-
-Camera looking(glm::dvec3 eye, glm::dvec3 target, glm::dvec3 up, double near_plane = 1, double far_plane = 2000) {
-    Camera c;
-    c.eye = eye;
-    c.target = target;
-    c.up = up;
-    c.near_plane = near_plane;
-    c.far_plane = far_plane;
-    return c;
-}
-
-// Voxel index whose centre is the first at or beyond depth z (as the shader).
-int voxel_at(const SliceMap& sm, double z) {
-    return int(std::clamp(std::ceil((z - sm.z_near) / sm.voxel_length() - 0.5), 0.0, double(sm.bits())));
-}
-
-// Projected texel of an eye-space point (rows bottom-up, as GL).
-glm::ivec2 texel_of(const SliceMap& sm, glm::dvec3 world) {
-    const glm::dvec4 c = sm.projection * sm.view * glm::dvec4(world, 1.0);
-    return {int(std::floor((c.x / c.w * 0.5 + 0.5) * sm.width)), int(std::floor((c.y / c.w * 0.5 + 0.5) * sm.height))};
-}
-
-float at(const Image& img, int x, int y) { return img.floats[std::size_t(y) * std::size_t(img.width) + std::size_t(x)]; }
 
 RenderOptions ao_options(int size, double radius) {
     RenderOptions o;
@@ -211,7 +188,7 @@ TEST_F(ConeAo, SphereOcclusionByAHalfSpaceIsItsVolumeFraction) {
             for (int y = 48; y < 208; ++y) {
                 const int row = 255 - y;
                 if (std::abs(depth.floats[std::size_t(row) * 256 + std::size_t(x)] - 300.0f) > 0.01f) continue;
-                const float v = at(img, x, row);
+                const float v = float_at(img, x, row);
                 if (weight == 0) {
                     EXPECT_NEAR(v, expected, 0.12) << "pixel " << x << "," << row << " at " << dist << " mm from the wall";
                 }

@@ -13,29 +13,23 @@
 #include <glm/gtc/matrix_transform.hpp>
 #include <gtest/gtest.h>
 
-#include "../bench/ao_metrics.hpp"
-#include "../bench/thin_phantom.hpp"
+#include "tests/support/ao_metrics.hpp"
+#include "tests/support/thin_phantom.hpp"
 #include "gl_test.hpp"
-#include "test_meshes.hpp"
+#include "tests/support/meshes.hpp"
+#include "tests/support/scenes.hpp"
+#include "tests/support/slice_map.hpp"
 #include "renderer/core/api.hpp"
 #include "renderer/gpu/renderer.hpp"
 
 using namespace iso;
 using ConeAoThin = test::GlTest;
+using test::texel_of;
+using test::voxel_at;
 
 namespace {
 
 Mesh box(glm::vec3 lo, glm::vec3 hi) { return test::flat_box_mesh(lo, hi); }
-
-Camera looking_down(double height) {
-    Camera c;
-    c.eye = {0, 0, height};
-    c.target = {0, 0, 0};
-    c.up = {0, 1, 0};
-    c.near_plane = 1;
-    c.far_plane = 2000;
-    return c;
-}
 
 RenderOptions ao_options(int size, double radius, bool surface) {
     RenderOptions o;
@@ -47,17 +41,8 @@ RenderOptions ao_options(int size, double radius, bool surface) {
     return o;
 }
 
-glm::ivec2 texel_of(const SliceMap& sm, glm::dvec3 world) {
-    const glm::dvec4 c = sm.projection * sm.view * glm::dvec4(world, 1.0);
-    return {int(std::floor((c.x / c.w * 0.5 + 0.5) * sm.width)), int(std::floor((c.y / c.w * 0.5 + 0.5) * sm.height))};
-}
-
 // The voxel holding linear depth z.
 int voxel_holding(const SliceMap& sm, double z) { return int(std::floor((z - sm.z_near) / sm.voxel_length())); }
-// The first voxel whose centre lies at or beyond z (the solid pass's).
-int voxel_at(const SliceMap& sm, double z) {
-    return int(std::clamp(std::ceil((z - sm.z_near) / sm.voxel_length() - 0.5), 0.0, double(sm.bits())));
-}
 
 // The set bits of a texel's column below voxel `below`.
 std::set<int> bits_of(const SliceMap& sm, int x, int y, int below) {
@@ -78,7 +63,7 @@ TEST_F(ConeAoThin, SheetThinnerThanAVoxelSetsExactlyItsVoxel) {
     ren.add(box({-40, -30, -t}, {0, 30, 0}), {});   // the sheet
     ren.add(box({20, -5, 0}, {30, 5, 20}), {});     // nearest depth 230
     ren.add(box({-100, -100, -70}, {100, 100, -60}), {}); // floor: far bound
-    const Camera cam = looking_down(250);
+    const Camera cam = test::looking({0, 0, 250}, {0, 0, 0}, {0, 1, 0});
     for (const bool surface : {false, true}) {
         const auto r = ren.render(cam, ao_options(128, 30, surface), {.read_slicemap = true});
         const auto& sm = r.slicemap;
@@ -121,7 +106,7 @@ TEST_F(ConeAoThin, SurfaceVoxelsStayInsideThickSolids) {
     Renderer ren;
     ren.add(box({-40, -30, 0}, {0, 30, 20}), {});
     ren.add(box({-100, -100, -70}, {100, 100, -60}), {});
-    const Camera cam = looking_down(250);
+    const Camera cam = test::looking({0, 0, 250}, {0, 0, 0}, {0, 1, 0});
     const auto off = ren.render(cam, ao_options(128, 30, false), {.read_slicemap = true}).slicemap;
     const auto on = ren.render(cam, ao_options(128, 30, true), {.read_slicemap = true}).slicemap;
     ASSERT_EQ(off.z_near, on.z_near);
@@ -148,7 +133,7 @@ TEST_F(ConeAoThin, SurfaceVoxelsKeepTheSlicemapReuse) {
     Renderer ren;
     ren.add(box({-20, -20, 0}, {20, 20, 10}), {});
     ren.add(box({-100, -100, -10}, {100, 100, 0}), {});
-    const Camera cam = looking_down(250);
+    const Camera cam = test::looking({0, 0, 250}, {0, 0, 0}, {0, 1, 0});
     auto o = ao_options(64, 10, true);
     EXPECT_TRUE(ren.render(cam, o).voxelized);
     EXPECT_FALSE(ren.render(cam, o).voxelized) << "camera, scene and settings unchanged";
@@ -174,7 +159,7 @@ TEST_F(ConeAoThin, TiltedSheetThinnerThanAVoxelKeepsItsVoxelsInEveryColumn) {
     ren.add(sheet, {});
     ren.add(box({40, -5, -50}, {50, 5, 30}), {});           // nearest visible depth 220
     ren.add(box({-100, -100, -70}, {100, 100, -60}), {}); // floor: far bound
-    const Camera cam = looking_down(250);
+    const Camera cam = test::looking({0, 0, 250}, {0, 0, 0}, {0, 1, 0});
     const glm::dvec3 n = glm::dvec3(tilt * glm::vec3(0, 0, 1));
     for (const bool surface : {false, true}) {
         const auto sm = ren.render(cam, ao_options(128, 30, surface), {.read_slicemap = true}).slicemap;

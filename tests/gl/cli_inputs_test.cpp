@@ -5,7 +5,7 @@
 #include <filesystem>
 
 #include "io/image.hpp"
-#include "test_util.hpp"
+#include "tests/support/test_util.hpp"
 
 using namespace iso;
 using iso::test::TempDir;

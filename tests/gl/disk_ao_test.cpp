@@ -23,18 +23,21 @@
 
 #include <glm/glm.hpp>
 
-#include "../bench/ao_metrics.hpp"
 #include "gl_test.hpp"
 #include "pass_harness.hpp"
 #include "renderer/ao/disk_geometry.hpp"
 #include "renderer/ao/disk_hierarchy.hpp"
 #include "renderer/core/api.hpp"
 #include "renderer/gpu/renderer.hpp"
-#include "test_meshes.hpp"
-#include "test_util.hpp"
+#include "renderer/gpu/renderer.hpp"
+#include "tests/support/ao_metrics.hpp"
+#include "tests/support/meshes.hpp"
+#include "tests/support/scenes.hpp"
+#include "tests/support/test_util.hpp"
 
 using namespace iso;
 using DiskAo = test::GlTest;
+using test::looking;
 
 namespace {
 
@@ -252,16 +255,6 @@ TEST_F(DiskAo, GlslKernelsMatchTheCppFloatTemplates) {
 namespace {
 
 Mesh box(glm::vec3 lo, glm::vec3 hi) { return test::flat_box_mesh(lo, hi); }
-
-Camera looking(glm::dvec3 eye, glm::dvec3 target, glm::dvec3 up) {
-    Camera c;
-    c.eye = eye;
-    c.target = target;
-    c.up = up;
-    c.near_plane = 1;
-    c.far_plane = 2000;
-    return c;
-}
 
 RenderOptions disk_options(int size, double radius) {
     RenderOptions o;

@@ -7,7 +7,7 @@
 #include "renderer/gl/objects.hpp"
 #include "renderer/surface/extract.hpp"
 #include "gl_test.hpp"
-#include "test_util.hpp"
+#include "tests/support/test_util.hpp"
 
 using namespace iso;
 using GBufferLayout = test::GlTest;

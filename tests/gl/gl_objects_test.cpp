@@ -8,7 +8,7 @@
 
 #include "gl_test.hpp"
 #include "io/error.hpp"
-#include "test_util.hpp"
+#include "tests/support/test_util.hpp"
 
 using namespace iso;
 using GlObjects = test::GlTest;

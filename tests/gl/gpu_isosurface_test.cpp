@@ -12,7 +12,7 @@
 
 #include "gl_test.hpp"
 #include "io/volume_io.hpp"
-#include "test_util.hpp"
+#include "tests/support/test_util.hpp"
 
 using namespace iso;
 using GpuIsosurface = test::GlTest;

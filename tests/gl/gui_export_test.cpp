@@ -1,6 +1,6 @@
 // Sessions and export in the desktop app (docs/gui.md "Sessions and
 // export", docs/sessions.md), driven in-process through QTest under
-// xvfb-run (GuiExport.UnderXvfb starts this program again inside it). The
+// xvfb-run (as CTest runs this program; it skips without a display). The
 // exported image is compared pixel by pixel with `isoscope render
 // --session` run as a process; the reopened session with the core's state
 // of the first window; the saved surface with the core's mesh.
@@ -30,6 +30,7 @@
 #include "app/gui/view_toolbar.hpp"
 #include "app/gui/viewer.hpp"
 #include "gui_test_util.hpp"
+#include "tests/support/pixels.hpp"
 #include "io/image.hpp"
 #include "renderer/core/api.hpp"
 #include "renderer/core/scene.hpp"
@@ -39,7 +40,7 @@ using namespace iso;
 namespace fs = std::filesystem;
 
 namespace {
-constexpr const char* kInner = "ISOSCOPE_GUI_EXPORT_TEST_IN_XVFB";
+using test::differing;
 using test::wait_until;
 
 QAction* file_action(QMainWindow& w, const QString& text) {
@@ -54,12 +55,6 @@ template <class T> T* wait_for_child(QWidget& w, const char* name) {
     return found;
 }
 
-std::size_t differing(const Image& a, const Image& b) {
-    if (a.width != b.width || a.height != b.height || a.channels != b.channels || a.bytes.size() != b.bytes.size()) return SIZE_MAX;
-    std::size_t n = 0;
-    for (std::size_t i = 0; i < a.bytes.size(); ++i) n += a.bytes[i] != b.bytes[i];
-    return n;
-}
 
 // Seconds since the test began, per step (stdout: where the time goes under Xvfb and llvmpipe).
 void step(const QElapsedTimer& t, const char* what) { std::printf("%6.2f s  %s\n", t.elapsed() / 1000.0, what); }
@@ -72,10 +67,8 @@ void screenshot(QWidget& w, const std::string& name) {
 }
 } // namespace
 
-TEST(GuiExport, UnderXvfb) { test::run_inner_under_xvfb(kInner, "GuiExportInXvfb.*"); }
-
-TEST(GuiExportInXvfb, ExportSaveOpenSessionAndSurfaces) {
-    if (!std::getenv(kInner)) GTEST_SKIP() << "runs inside xvfb-run, started by GuiExport.UnderXvfb";
+TEST(GuiExport, ExportSaveOpenSessionAndSurfaces) {
+    ISO_SKIP_WITHOUT_DISPLAY();
     test::TempDir dir;
     const auto app = test::make_app("gui_export_test", dir / "config");
     QElapsedTimer clock;

@@ -1,7 +1,6 @@
 // The Surfaces panel (docs/gui.md "Surfaces panel") driven
-// in-process through QTest in a real X server: GuiSurfaces.UnderXvfb starts
-// this program again under xvfb-run, which runs GuiSurfacesInXvfb (skipped
-// when started any other way). Expected values come from the core API
+// in-process through QTest in a real X server (CTest runs this program under
+// xvfb-run; it skips without a display). Expected values come from the core API
 // (extract_isosurface, postprocess, measure_surface), not from the panel.
 #include <QApplication>
 #include <QCheckBox>
@@ -37,7 +36,6 @@
 using namespace iso;
 
 namespace {
-constexpr const char* kInner = "ISOSCOPE_GUI_SURFACES_TEST_IN_XVFB";
 using test::wait_until;
 
 template <class T> T* child(QWidget* row, const char* name) {
@@ -104,10 +102,8 @@ std::string big_volume(const std::filesystem::path& dir) {
 }
 } // namespace
 
-TEST(GuiSurfaces, UnderXvfb) { test::run_inner_under_xvfb(kInner, "GuiSurfacesInXvfb.*", 2); }
-
-TEST(GuiSurfacesInXvfb, AddOpacitySliderLargestRemoveAndCancel) {
-    if (!std::getenv(kInner)) GTEST_SKIP() << "runs inside xvfb-run, started by GuiSurfaces.UnderXvfb";
+TEST(GuiSurfaces, AddOpacitySliderLargestRemoveAndCancel) {
+    ISO_SKIP_WITHOUT_DISPLAY();
     test::TempDir dir;
     const auto app = test::make_app("gui_surfaces_test", dir / "config");
     const auto out = test::output_dir("gui_surfaces");
@@ -267,8 +263,8 @@ TEST(GuiSurfacesInXvfb, AddOpacitySliderLargestRemoveAndCancel) {
 // A colour picked in a row's colour dialog is the colour the scene shades
 // with in linear light (the sRGB transfer, not a gamma curve), opens the
 // dialog again as the same colour, and is saved in a session as picked.
-TEST(GuiSurfacesInXvfb, PickedColourIsStoredAndSavedAsPicked) {
-    if (!std::getenv(kInner)) GTEST_SKIP() << "runs inside xvfb-run, started by GuiSurfaces.UnderXvfb";
+TEST(GuiSurfaces, PickedColourIsStoredAndSavedAsPicked) {
+    ISO_SKIP_WITHOUT_DISPLAY();
     test::TempDir dir;
     const auto app = test::make_app("gui_surfaces_test", dir / "config");
     gui::MainWindow w;

@@ -1,8 +1,9 @@
 // Shared by the desktop app's tests (tests/gl/main_window_test.cpp,
-// tests/gl/gui_*_test.cpp): each program's outer test starts the same
-// program again under xvfb-run (run_inner_under_xvfb), whose inner tests
-// drive the widgets in-process with QTest (make_app). Expected values come
-// from the core API, not from the window's own state.
+// tests/gl/gui_*_test.cpp): they drive the widgets in-process with QTest
+// (make_app) in a real X server. CTest runs each of these programs under
+// xvfb-run (tests/CMakeLists.txt); started without a display they skip
+// (ISO_SKIP_WITHOUT_DISPLAY). Expected values come from the core API, not from
+// the window's own state.
 #pragma once
 
 #include <QApplication>
@@ -19,7 +20,7 @@
 
 #include <gtest/gtest.h>
 
-#include "test_util.hpp"
+#include "tests/support/test_util.hpp"
 
 namespace iso::test {
 
@@ -43,23 +44,18 @@ inline double lit_fraction(const QImage& img) {
     return double(lit) / double(g.width() * g.height());
 }
 
-// The outer test: runs this program again under xvfb-run with `inner_env`
-// set and only `filter`'s tests; expects `tests` of them to pass, none skipped.
-// Skips when xvfb-run is missing.
-inline void run_inner_under_xvfb(const char* inner_env, const std::string& filter, int tests = 1) {
-    if (std::getenv(inner_env)) GTEST_SKIP() << "already inside xvfb-run";
-    if (run_command("command -v xvfb-run").exit_code != 0) GTEST_SKIP() << "xvfb-run is not installed (./setup.sh)";
-    const std::string self = std::filesystem::read_symlink("/proc/self/exe").string();
-    const auto r = run_command(std::string(inner_env) + "=1 xvfb-run -a -s '-screen 0 1600x1200x24' " + self +
-                                   " --gtest_filter='" + filter + "'",
-                               true);
-    EXPECT_EQ(r.exit_code, 0) << r.out;
-    // It ran (a skip inside would also exit 0).
-    EXPECT_NE(r.out.find("[  PASSED  ] " + std::to_string(tests) + " test"), std::string::npos) << r.out;
-    EXPECT_EQ(r.out.find("SKIPPED"), std::string::npos) << r.out;
+// Why a test skips: no X display to open windows on (CTest starts these
+// programs under xvfb-run when it is installed; ./setup.sh installs it).
+inline const char* missing_display() {
+    const char* d = std::getenv("DISPLAY");
+    return d && *d ? nullptr : "no X display (DISPLAY unset): run under xvfb-run, as CTest does (./setup.sh installs it)";
 }
 
-// The inner tests' application: GL 4.5 core surfaces, settings (recent
+// First in every test that opens windows: skips, saying why, without a display.
+#define ISO_SKIP_WITHOUT_DISPLAY()                                                                                     \
+    if (const char* why = ::iso::test::missing_display()) GTEST_SKIP() << why
+
+// The tests' application: GL 4.5 core surfaces, settings (recent
 // files) in `config_dir`, not the user's. Keep it while the test runs and
 // let it go before the test ends (one per process: Qt allows one at a time;
 // a static one would outlive Qt's own statics).

@@ -1,7 +1,7 @@
 // The desktop app's opening of multi-series DICOM folders and its views'
-// interaction (issue 14, docs/gui.md), driven in-process through QTest under
-// Xvfb (each GuiViews test starts this program again under xvfb-run for one
-// GuiViewsInXvfb test). Expected values come from the core API
+// interaction (docs/gui.md), driven in-process through QTest under
+// Xvfb (CTest runs this program under xvfb-run; it skips without a
+// display). Expected values come from the core API
 // (core::list_series, core::pixel_to_lps, core::sample_at_pixel,
 // iso::sample_volume, core::drag_window, Scene::camera) and from the
 // analytic field the volume was sampled from, not from the widgets' state.
@@ -31,10 +31,10 @@
 #include "app/gui/slice_view.hpp"
 #include "app/gui/view_toolbar.hpp"
 #include "app/gui/viewer.hpp"
-#include "dicom_fixtures.hpp"
+#include "tests/support/dicom_fixtures.hpp"
 #include "gui_test_util.hpp"
 #include "io/volume_io.hpp"
-#include "measure_phantoms.hpp"
+#include "tests/support/measure_phantoms.hpp"
 #include "renderer/core/api.hpp"
 #include "renderer/core/scene.hpp"
 #include "renderer/core/slices.hpp"
@@ -44,10 +44,6 @@ using namespace iso;
 using test::wait_until;
 
 namespace {
-constexpr const char* kInner = "ISOSCOPE_GUI_VIEWS_TEST_IN_XVFB";
-
-#define SKIP_OUTSIDE_XVFB()                                                                                    \
-    if (!std::getenv(kInner)) GTEST_SKIP() << "runs inside xvfb-run, started by its GuiViews test"
 
 // Drops a local file or folder on the window (straight to its handler:
 // QApplication routes drag events only during a drag the platform started).
@@ -151,12 +147,8 @@ void check_drawn(const gui::MainWindow& w, const gui::SliceView* view, const cha
 
 } // namespace
 
-TEST(GuiViews, SeriesChooserUnderXvfb) { test::run_inner_under_xvfb(kInner, "GuiViewsInXvfb.TwoSeriesFolderShowsTheChooser"); }
-TEST(GuiViews, ObliqueSlicesUnderXvfb) { test::run_inner_under_xvfb(kInner, "GuiViewsInXvfb.ObliqueVolumeSliceClicksPanZoomAndWindow"); }
-TEST(GuiViews, ThreeDViewUnderXvfb) { test::run_inner_under_xvfb(kInner, "GuiViewsInXvfb.ThreeDViewMouseAndToolBar"); }
-
-TEST(GuiViewsInXvfb, TwoSeriesFolderShowsTheChooser) {
-    SKIP_OUTSIDE_XVFB();
+TEST(GuiViews, TwoSeriesFolderShowsTheChooser) {
+    ISO_SKIP_WITHOUT_DISPLAY();
     test::TempDir dir;
     const auto app = test::make_app("gui_views_test", dir / "config");
 
@@ -261,8 +253,8 @@ TEST(GuiViewsInXvfb, TwoSeriesFolderShowsTheChooser) {
     EXPECT_TRUE(w.series().isEmpty());
 }
 
-TEST(GuiViewsInXvfb, ObliqueVolumeSliceClicksPanZoomAndWindow) {
-    SKIP_OUTSIDE_XVFB();
+TEST(GuiViews, ObliqueVolumeSliceClicksPanZoomAndWindow) {
+    ISO_SKIP_WITHOUT_DISPLAY();
     test::TempDir dir;
     const auto app = test::make_app("gui_views_test", dir / "config");
 
@@ -340,8 +332,8 @@ TEST(GuiViewsInXvfb, ObliqueVolumeSliceClicksPanZoomAndWindow) {
         check_drawn(w, w.slice_view(o), "new window");
 }
 
-TEST(GuiViewsInXvfb, ThreeDViewMouseAndToolBar) {
-    SKIP_OUTSIDE_XVFB();
+TEST(GuiViews, ThreeDViewMouseAndToolBar) {
+    ISO_SKIP_WITHOUT_DISPLAY();
     test::TempDir dir;
     const auto app = test::make_app("gui_views_test", dir / "config");
     // A CT-like ball (1000 inside, 0 outside) on the oblique grid: its 500 surface is a sphere.

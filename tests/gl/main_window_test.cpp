@@ -1,7 +1,6 @@
-// The desktop app's main window (issue 14, docs/gui.md) driven in-process
-// through QTest in a real X server: MainWindow.UnderXvfb starts this program
-// again under xvfb-run, which runs the MainWindowInXvfb tests (skipped when
-// started any other way). Expected values come from the core API
+// The desktop app's main window (docs/gui.md) driven in-process
+// through QTest in a real X server (CTest runs this program under xvfb-run;
+// the window tests skip without a display). Expected values come from the core API
 // (core::sample_at_pixel, the scene), not from the window's own state.
 #include <QApplication>
 #include <QElapsedTimer>
@@ -30,12 +29,9 @@
 using namespace iso;
 
 namespace {
-constexpr const char* kInner = "ISOSCOPE_MAIN_WINDOW_TEST_IN_XVFB";
 using test::lit_fraction;
 using test::wait_until;
 } // namespace
-
-TEST(MainWindow, UnderXvfb) { test::run_inner_under_xvfb(kInner, "MainWindowInXvfb.*"); }
 
 TEST(MainWindow, NoArgumentsWithoutADisplayStaysACommandLineTool) {
     // The README's headless commands keep working: no display, no window.
@@ -47,8 +43,8 @@ TEST(MainWindow, NoArgumentsWithoutADisplayStaysACommandLineTool) {
     EXPECT_NE(h.out.find("input"), std::string::npos) << h.out;
 }
 
-TEST(MainWindowInXvfb, OpenSlicesClickSurfaceAndBrokenFile) {
-    if (!std::getenv(kInner)) GTEST_SKIP() << "runs inside xvfb-run, started by MainWindow.UnderXvfb";
+TEST(MainWindow, OpenSlicesClickSurfaceAndBrokenFile) {
+    ISO_SKIP_WITHOUT_DISPLAY();
     test::TempDir dir;
     // Recent files go to a throwaway settings folder, not the user's.
     const auto app = test::make_app("main_window_test", dir / "config");

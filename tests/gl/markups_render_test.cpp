@@ -14,11 +14,16 @@
 #include "io/image.hpp"
 #include "renderer/frame/annotations.hpp"
 #include "renderer/gpu/renderer.hpp"
-#include "test_util.hpp"
+#include "renderer/frame/annotations.hpp"
+#include "renderer/gpu/renderer.hpp"
+#include "tests/support/pixels.hpp"
+#include "tests/support/test_util.hpp"
 
 using namespace iso;
 using MarkupsRender = test::GlTest;
 using iso::test::TempDir;
+using iso::test::Rgb;
+using iso::test::rgb_at;
 
 namespace {
 
@@ -32,13 +37,6 @@ Mesh wall() {
     return m;
 }
 
-struct Rgb {
-    int r = 0, g = 0, b = 0;
-};
-Rgb at(const Image& img, int x, int y) {
-    const auto* p = &img.bytes[(std::size_t(y) * img.width + x) * img.channels];
-    return {p[0], p[1], p[2]};
-}
 bool near_colour(Rgb a, Rgb b, int tol) { return std::abs(a.r - b.r) <= tol && std::abs(a.g - b.g) <= tol && std::abs(a.b - b.b) <= tol; }
 
 // Where the camera sees an LPS point: pixels from the image's top-left
@@ -100,7 +98,7 @@ struct Stage {
 std::size_t count(const Image& img, Rgb colour, glm::dvec2 c, int half, int tol = 2) {
     std::size_t n = 0;
     for (int y = std::max(0, int(c.y) - half); y <= std::min(img.height - 1, int(c.y) + half); ++y)
-        for (int x = std::max(0, int(c.x) - half); x <= std::min(img.width - 1, int(c.x) + half); ++x) n += near_colour(at(img, x, y), colour, tol);
+        for (int x = std::max(0, int(c.x) - half); x <= std::min(img.width - 1, int(c.x) + half); ++x) n += near_colour(rgb_at(img, x, y), colour, tol);
     return n;
 }
 
@@ -122,17 +120,17 @@ TEST_F(MarkupsRender, PointInFrontIsFullStrengthBehindIsDimmed) {
     std::size_t n = 0;
     for (int y = int(f.y) - 12; y <= int(f.y) + 12; ++y)
         for (int x = int(f.x) - 12; x <= int(f.x) + 12; ++x)
-            if (near_colour(at(img, x, y), green, 2)) {
+            if (near_colour(rgb_at(img, x, y), green, 2)) {
                 sum += glm::dvec2(x + 0.5, y + 0.5);
                 ++n;
             }
     ASSERT_GT(n, 30u) << "the glyph in front is drawn at full strength";
     EXPECT_NEAR(sum.x / n, f.x, 0.75);
     EXPECT_NEAR(sum.y / n, f.y, 0.75);
-    EXPECT_TRUE(near_colour(at(img, int(f.x), int(f.y)), green, 2));
+    EXPECT_TRUE(near_colour(rgb_at(img, int(f.x), int(f.y)), green, 2));
     // Behind: the colour at 35 % over the wall, no outline; the wall and the image elsewhere unchanged.
     const glm::dvec2 b = st.px(behind);
-    const Rgb wall_px = at(bare, int(b.x), int(b.y)), dim = at(img, int(b.x), int(b.y));
+    const Rgb wall_px = rgb_at(bare, int(b.x), int(b.y)), dim = rgb_at(img, int(b.x), int(b.y));
     ASSERT_GT(wall_px.r, 20) << "the wall is there";
     EXPECT_EQ(count(img, green, b, 12), 0u) << "nothing at full strength behind the wall";
     EXPECT_NEAR(dim.g, 0.35 * 255 + 0.65 * wall_px.g, 2.0);
@@ -141,11 +139,11 @@ TEST_F(MarkupsRender, PointInFrontIsFullStrengthBehindIsDimmed) {
     EXPECT_LT(dim.g, 255 - 40);
     EXPECT_NEAR(count(img, dim, b, 12, 1), double(n), 4.0) << "the dimmed glyph is the same cross";
     // Behind the wall's plane but beside it, nothing hides it: full strength on the background.
-    EXPECT_TRUE(near_colour(at(img, int(st.px(beside).x), int(st.px(beside).y)), green, 2));
+    EXPECT_TRUE(near_colour(rgb_at(img, int(st.px(beside).x), int(st.px(beside).y)), green, 2));
     EXPECT_NEAR(double(count(img, green, st.px(beside), 12)), double(n), 4.0);
     // Above the occlusion tolerance only: a point 0.5 mm behind the wall's surface is not hidden.
     st.ann.markups = {fiducial({0, 0.5, 0}, {0, 1, 0})};
-    EXPECT_TRUE(near_colour(at(st.render(), kSize / 2, kSize / 2), green, 2));
+    EXPECT_TRUE(near_colour(rgb_at(st.render(), kSize / 2, kSize / 2), green, 2));
 }
 
 TEST_F(MarkupsRender, HiddenPartsOfALineAreDimmedAndDashed) {
@@ -164,11 +162,11 @@ TEST_F(MarkupsRender, HiddenPartsOfALineAreDimmedAndDashed) {
         // behind: from 55 % (2 mm behind, past the 1 mm tolerance) to 94 %.
         const double t = k / 40.0;
         const glm::dvec2 p = st.px(glm::mix(a, c, 0.1 + t * 0.35)), q = st.px(glm::mix(a, c, 0.55 + t * 0.4));
-        front_full += near_colour(at(img, int(p.x), int(p.y)), magenta, 2);
-        const Rgb r = at(img, int(q.x), int(q.y));
+        front_full += near_colour(rgb_at(img, int(p.x), int(p.y)), magenta, 2);
+        const Rgb r = rgb_at(img, int(q.x), int(q.y));
         back_full += near_colour(r, magenta, 2);
         back_dim += r.r > 100 && r.r < 200 && r.b > 100 && r.b < 200;
-        back_gap += near_colour(r, at(bare, int(q.x), int(q.y)), 2); // the wall, untouched
+        back_gap += near_colour(r, rgb_at(bare, int(q.x), int(q.y)), 2); // the wall, untouched
         ++samples;
     }
     EXPECT_EQ(front_full, samples) << "in front: solid, full strength";
@@ -191,13 +189,13 @@ TEST_F(MarkupsRender, LengthAndAngleLabelsAreWritten) {
     const glm::dvec2 mid = st.px({0, -10, 20});
     std::size_t text = 0;
     for (int y = int(mid.y) - 24; y < int(mid.y) - 4; ++y)
-        for (int x = int(mid.x) - 30; x <= int(mid.x) + 30; ++x) text += near_colour(at(img, x, y), {0, 255, 255}, 2);
+        for (int x = int(mid.x) - 30; x <= int(mid.x) + 30; ++x) text += near_colour(rgb_at(img, x, y), {0, 255, 255}, 2);
     EXPECT_GT(text, 40u) << "\"42.3 mm\" above the line";
     // The angle: text pixels below the vertex (away from both arms, which open upwards).
     const glm::dvec2 v = st.px({0, -10, -30});
     std::size_t value = 0;
     for (int y = int(v.y) + 6; y < int(v.y) + 30; ++y)
-        for (int x = int(v.x) - 25; x <= int(v.x) + 25; ++x) value += near_colour(at(img, x, y), {255, 255, 0}, 2);
+        for (int x = int(v.x) - 25; x <= int(v.x) + 25; ++x) value += near_colour(rgb_at(img, x, y), {255, 255, 0}, 2);
     EXPECT_GT(value, 30u) << "\"90.0 deg\" below the vertex";
     // Without the labels' markups, those boxes hold no such pixels (the wall and background are grey and black).
     st.ann.markups.clear();
@@ -218,7 +216,7 @@ TEST_F(MarkupsRender, ScaleTwoDoublesGlyphsAndLines) {
         const Image img = st.render(scale);
         std::size_t n = 0;
         for (int y = int(line.y) - 4; y <= int(line.y) + 4; ++y) // the length label is above, farther out
-            for (int x = int(line.x) - 20; x < int(line.x) + 20; ++x) n += near_colour(at(img, x, y), {255, 0, 255}, 2);
+            for (int x = int(line.x) - 20; x < int(line.x) + 20; ++x) n += near_colour(rgb_at(img, x, y), {255, 0, 255}, 2);
         return double(n);
     };
     const double l1 = band(1), l2 = band(2);

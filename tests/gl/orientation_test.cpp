@@ -13,9 +13,9 @@
 #include <glm/glm.hpp>
 
 #include "gl_test.hpp"
-#include "orientation_landmarks.hpp"
+#include "tests/support/orientation_landmarks.hpp"
 #include "renderer/core/api.hpp"
-#include "test_util.hpp"
+#include "tests/support/test_util.hpp"
 
 using namespace iso;
 // core::render_input() renders in this process, on its own context: the

@@ -10,7 +10,7 @@
 #include "renderer/surface/extract.hpp"
 #include "renderer/gpu/renderer.hpp"
 #include "gl_test.hpp"
-#include "test_util.hpp"
+#include "tests/support/test_util.hpp"
 
 using namespace iso;
 using PassVariants = test::GlTest;

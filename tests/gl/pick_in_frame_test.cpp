@@ -11,7 +11,7 @@
 #include "gl_test.hpp"
 #include "io/error.hpp"
 #include "renderer/core/pick.hpp"
-#include "test_util.hpp"
+#include "tests/support/test_util.hpp"
 
 using namespace iso;
 using PickInFrame = test::GlTest;

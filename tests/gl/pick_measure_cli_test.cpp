@@ -14,7 +14,7 @@
 #include "io/mesh.hpp"
 #include "renderer/core/api.hpp"
 #include "renderer/core/pick.hpp"
-#include "test_util.hpp"
+#include "tests/support/test_util.hpp"
 
 using namespace iso;
 using iso::test::TempDir;

@@ -13,7 +13,9 @@
 
 #include "gl_test.hpp"
 #include "renderer/gpu/renderer.hpp"
-#include "test_scenes.hpp"
+#include "renderer/gpu/renderer.hpp"
+#include "tests/support/meshes.hpp"
+#include "tests/support/scenes.hpp"
 
 using namespace iso;
 using namespace iso::test;
@@ -73,7 +75,7 @@ RenderResult pick(const Scene& s, const Camera& cam, int size, PickRegion region
 Scene nested_shells() {
     Scene s;
     for (double r : {8.0, 14.0, 20.0}) {
-        s.meshes.push_back(sphere(r, 0.9));
+        s.meshes.push_back(sphere_mesh(glm::dvec3(0), r, 0.9));
         s.opacity.push_back(0.3f);
     }
     return s;
@@ -195,7 +197,7 @@ TEST_F(Pick, EmptyRegionBackgroundAndTheImageBorder) {
 
 TEST_F(Pick, WithAoAndTransparencyOnTheListsAreTheSame) {
     Scene s = nested_shells();
-    s.meshes.push_back(sphere(4.0, 0.5));
+    s.meshes.push_back(sphere_mesh(glm::dvec3(0), 4.0, 0.5));
     s.opacity.push_back(1.0f); // an opaque core
     const Camera cam = anterior(box(20));
     const PickRegion region{29, 31, 3, 3};

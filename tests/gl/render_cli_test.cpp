@@ -4,9 +4,9 @@
 #include <filesystem>
 #include <sstream>
 
-#include "image_compare.hpp"
+#include "tests/support/image_compare.hpp"
 #include "io/image.hpp"
-#include "test_util.hpp"
+#include "tests/support/test_util.hpp"
 
 using namespace iso;
 using iso::test::TempDir;

@@ -12,26 +12,19 @@
 #include "renderer/gl/objects.hpp"
 #include "renderer/frame/annotations.hpp"
 #include "renderer/surface/extract.hpp"
-#include "test_util.hpp"
+#include "renderer/frame/annotations.hpp"
+#include "renderer/surface/extract.hpp"
+#include "tests/support/meshes.hpp"
+#include "tests/support/pixels.hpp"
+#include "tests/support/test_util.hpp"
 
 using namespace iso;
 using Render = test::GlTest;
+using test::float_at;
+using test::sphere_mesh;
 
 namespace {
 
-// A fine mesh of a sphere (radius r around c) from a distance field.
-Mesh sphere_mesh(glm::dvec3 c, double r, double voxel) {
-    const int n = int(std::ceil(2.4 * r / voxel)) + 1;
-    const glm::dvec3 origin = c - glm::dvec3(1.2 * r);
-    auto v = Volume::dense({n, n, n}, VoxelType::F32, make_affine(glm::dvec3(voxel), origin));
-    for (int k = 0; k < n; ++k)
-        for (int j = 0; j < n; ++j)
-            for (int i = 0; i < n; ++i)
-                v.as<float>()[v.linear_index(i, j, k)] = float(r - glm::length(origin + voxel * glm::dvec3(i, j, k) - c));
-    return extract_isosurface(v, 0.0, {});
-}
-
-float at(const Image& img, int x, int y, int c = 0) { return img.floats[(std::size_t(y) * img.width + x) * img.channels + c]; }
 
 } // namespace
 
@@ -49,8 +42,8 @@ TEST_F(Render, DepthAndNormalAovsMatchTheAnalyticSphere) {
     ASSERT_TRUE(depth.image.is_float);
     // Centre pixel: the sphere's nearest point, at distance |eye - c| - r along the axis.
     const double expected = glm::length(cam.eye - c) - r;
-    EXPECT_NEAR(at(depth.image, 64, 64), expected, 0.25) << "mm";
-    EXPECT_TRUE(std::isinf(at(depth.image, 0, 0))) << "background is infinitely far";
+    EXPECT_NEAR(float_at(depth.image, 64, 64), expected, 0.25) << "mm";
+    EXPECT_TRUE(std::isinf(float_at(depth.image, 0, 0))) << "background is infinitely far";
     // A pixel halfway to the silhouette: ray-sphere intersection along that pixel's ray.
     {
         const int px = 64 + 20, py = 64;
@@ -63,12 +56,12 @@ TEST_F(Render, DepthAndNormalAovsMatchTheAnalyticSphere) {
         ASSERT_GT(disc, 0);
         const double hit = -b - std::sqrt(disc);
         const double axial = hit * glm::dot(dir, f);
-        EXPECT_NEAR(at(depth.image, px, py), axial, 0.3);
+        EXPECT_NEAR(float_at(depth.image, px, py), axial, 0.3);
     }
     opt.aov = Aov::Normal;
     const auto normal = ren.render(cam, opt);
     // Facing the camera at the centre: the anterior direction (-y in LPS).
-    EXPECT_NEAR(at(normal.image, 64, 64, 1), -1.0, 0.01);
+    EXPECT_NEAR(float_at(normal.image, 64, 64, 1), -1.0, 0.01);
     // Lighting is culled when only an AOV is asked for.
     for (const auto& p : normal.stats.passes) {
         if (p.name == "lighting") {
@@ -97,14 +90,14 @@ TEST_F(Render, IdAovAndAnteriorOrientation) {
     const auto pl = pixel({60, 0, 0}), pr = pixel({-60, 0, 0});
     EXPECT_GT(pl.x, 80);
     EXPECT_LT(pr.x, 80);
-    EXPECT_EQ(at(img, pl.x, pl.y), float(left));
-    EXPECT_EQ(at(img, pr.x, pr.y), float(right));
-    EXPECT_EQ(at(img, 80, 40), 0.0f);
+    EXPECT_EQ(float_at(img, pl.x, pl.y), float(left));
+    EXPECT_EQ(float_at(img, pr.x, pr.y), float(right));
+    EXPECT_EQ(float_at(img, 80, 40), 0.0f);
     cam.set_view(PatientView::Posterior, ren.bounds());
     const auto back = ren.render(cam, opt).image;
     const auto bl = pixel({60, 0, 0});
     EXPECT_LT(bl.x, 80) << "from behind, the patient's left is on the image's left";
-    EXPECT_EQ(at(back, bl.x, bl.y), float(left));
+    EXPECT_EQ(float_at(back, bl.x, bl.y), float(left));
 }
 
 TEST_F(Render, ExtremeScalesAndNearFarRatio) {
@@ -119,7 +112,7 @@ TEST_F(Render, ExtremeScalesAndNearFarRatio) {
     cam.fov_y_degrees = 0.005; // a telephoto view of it
     RenderOptions opt{.width = 64, .height = 64, .aov = Aov::Depth};
     const auto d = tiny.render(cam, opt).image;
-    EXPECT_NEAR(at(d, 32, 32), 2000.0 - 0.05, 0.02) << "reversed-Z float depth keeps sub-0.1 mm precision at 2 m";
+    EXPECT_NEAR(float_at(d, 32, 32), 2000.0 - 0.05, 0.02) << "reversed-Z float depth keeps sub-0.1 mm precision at 2 m";
     // Whole body at 2 m scale and micro-CT at 0.01 mm.
     for (double scale : {1000.0, 0.01}) {
         Renderer ren;
@@ -127,7 +120,7 @@ TEST_F(Render, ExtremeScalesAndNearFarRatio) {
         Camera c2;
         c2.set_view(PatientView::Left, ren.bounds());
         const auto img = ren.render(c2, {.width = 64, .height = 64, .aov = Aov::Depth}).image;
-        EXPECT_NEAR(at(img, 32, 32), glm::length(c2.eye - glm::dvec3(scale, 0, 0)) - scale, 0.02 * scale);
+        EXPECT_NEAR(float_at(img, 32, 32), glm::length(c2.eye - glm::dvec3(scale, 0, 0)) - scale, 0.02 * scale);
     }
 }
 

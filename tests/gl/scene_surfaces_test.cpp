@@ -6,7 +6,7 @@
 
 #include "renderer/gl/context.hpp"
 #include "gl_test.hpp"
-#include "test_util.hpp"
+#include "tests/support/test_util.hpp"
 
 using namespace iso;
 using SceneSurfacesGl = test::GlTest;

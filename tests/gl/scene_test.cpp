@@ -5,7 +5,8 @@
 
 #include "renderer/gl/context.hpp"
 #include "gl_test.hpp"
-#include "test_util.hpp"
+#include "tests/support/pixels.hpp"
+#include "tests/support/test_util.hpp"
 
 using namespace iso;
 using SceneGl = test::GlTest;
@@ -33,7 +34,7 @@ TEST_F(SceneGl, EditsShowInTheNextFrame) {
     o.aov = Aov::None;
     const auto red = [&] {
         const auto img = s.render(cam, o).image;
-        return int(img.bytes[(32 * 64 + 32) * 4 + 0]) - int(img.bytes[(32 * 64 + 32) * 4 + 2]);
+        return test::byte_at(img, 32, 32, 0) - test::byte_at(img, 32, 32, 2);
     };
     s.info(1).color = {0.2f, 0.2f, 0.9f};
     const int blue_skin = red();

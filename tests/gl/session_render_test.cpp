@@ -9,10 +9,12 @@
 #include "io/image.hpp"
 #include "renderer/core/api.hpp"
 #include "renderer/core/session.hpp"
-#include "test_util.hpp"
+#include "tests/support/pixels.hpp"
+#include "tests/support/test_util.hpp"
 
 using namespace iso;
 using iso::test::TempDir;
+using iso::test::differing;
 
 namespace {
 
@@ -47,12 +49,6 @@ core::Session head_session() {
     return s;
 }
 
-std::size_t differing(const Image& a, const Image& b) {
-    if (a.width != b.width || a.height != b.height || a.channels != b.channels || a.bytes.size() != b.bytes.size()) return SIZE_MAX;
-    std::size_t n = 0;
-    for (std::size_t i = 0; i < a.bytes.size(); ++i) n += a.bytes[i] != b.bytes[i];
-    return n;
-}
 
 } // namespace
 

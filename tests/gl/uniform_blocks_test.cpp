@@ -8,7 +8,7 @@
 #include "renderer/gl/objects.hpp"
 #include "renderer/passes/gbuffer_layout.hpp"
 #include "gl_test.hpp"
-#include "test_util.hpp"
+#include "tests/support/test_util.hpp"
 
 using namespace iso;
 using UniformBlocks = test::GlTest;

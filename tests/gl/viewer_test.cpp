@@ -4,8 +4,8 @@
 #include <filesystem>
 
 #include "io/image.hpp"
-#include "image_compare.hpp"
-#include "test_util.hpp"
+#include "tests/support/image_compare.hpp"
+#include "tests/support/test_util.hpp"
 
 using namespace iso;
 

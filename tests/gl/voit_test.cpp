@@ -18,8 +18,12 @@
 #include "renderer/ao/transparency_reference.hpp"
 #include "renderer/surface/extract.hpp"
 #include "renderer/gpu/renderer.hpp"
-#include "test_scenes.hpp"
-#include "test_util.hpp"
+#include "tests/support/transparency_reference.hpp"
+#include "renderer/surface/extract.hpp"
+#include "renderer/gpu/renderer.hpp"
+#include "tests/support/meshes.hpp"
+#include "tests/support/scenes.hpp"
+#include "tests/support/test_util.hpp"
 
 using namespace iso;
 using namespace iso::test;
@@ -83,7 +87,7 @@ Comparison compare(const std::vector<Layer>& layers, const Camera& cam, int size
 
 TEST_F(Voit, ListLengthsAreTheDepthComplexityOfNestedSpheres) {
     std::vector<Layer> layers;
-    for (double r : {10.0, 20.0, 30.0}) layers.push_back({sphere(r), {0.6f, 0.4f, 0.2f}, 0.3f});
+    for (double r : {10.0, 20.0, 30.0}) layers.push_back({sphere_mesh(glm::dvec3(0), r), {0.6f, 0.4f, 0.2f}, 0.3f});
     const Camera cam = anterior(box(30));
     RenderResult r;
     RenderHooks hooks;
@@ -106,9 +110,9 @@ TEST_F(Voit, ListLengthsAreTheDepthComplexityOfNestedSpheres) {
 
 TEST_F(Voit, NestedSpheresOverAnOpaqueCoreMatchTheReference) {
     std::vector<Layer> layers;
-    layers.push_back({sphere(8), {0.8f, 0.2f, 0.2f}, 1.0f}); // opaque core (albedo exact in 8 bits)
-    layers.push_back({sphere(18), {0.2f, 0.6f, 0.9f}, 0.5f});
-    layers.push_back({sphere(28), {0.9f, 0.9f, 0.3f}, 0.3f});
+    layers.push_back({sphere_mesh(glm::dvec3(0), 8), {0.8f, 0.2f, 0.2f}, 1.0f}); // opaque core (albedo exact in 8 bits)
+    layers.push_back({sphere_mesh(glm::dvec3(0), 18), {0.2f, 0.6f, 0.9f}, 0.5f});
+    layers.push_back({sphere_mesh(glm::dvec3(0), 28), {0.9f, 0.9f, 0.3f}, 0.3f});
     const auto c = compare(layers, anterior(box(28)), 96);
     EXPECT_GT(c.foreground, 2000u);
     EXPECT_LE(c.rmse, 0.003) << "max " << c.max;
@@ -230,8 +234,8 @@ TEST_F(Voit, AllOpaqueScenesRunNoListPasses) {
 // at opacity 0.9999 (VOIT, its own AO per fragment); and that AO is real:
 // the slab darkens around the ball.
 TEST_F(Voit, TranslucentFragmentsGetTheirOwnAo) {
-    const Mesh slab = cuboid({-15, 0, -15}, {15, 6, 15}); // front face y = 0, facing the anterior camera
-    const Mesh ball = sphere(4.0, 0.5);
+    const Mesh slab = flat_box_mesh({-15, 0, -15}, {15, 6, 15}); // front face y = 0, facing the anterior camera
+    const Mesh ball = sphere_mesh(glm::dvec3(0), 4.0, 0.5);
     Mesh near_ball = ball;
     for (auto& p : near_ball.positions) p += glm::vec3(0, -5.5f, 0); // 1.5 mm in front of the slab
     const Mesh backdrop = plate(25, 40);                              // opaque: the same z range in both frames

@@ -26,9 +26,9 @@
 #include "io/volume_io.hpp"
 #include "io/vtk_mesh.hpp"
 #include "renderer/surface/components.hpp"
-#include "renderer/surface/components.hpp"
 #include "renderer/surface/analysis.hpp"
-#include "test_util.hpp"
+#include "renderer/surface/components.hpp"
+#include "tests/support/test_util.hpp"
 
 using namespace iso;
 using iso::test::TempDir;

@@ -3,7 +3,7 @@
 
 #include <cmath>
 
-#include "test_util.hpp"
+#include "tests/support/test_util.hpp"
 
 using namespace iso;
 

@@ -5,7 +5,7 @@
 #include <nlohmann/json.hpp>
 
 #include "io/mesh.hpp"
-#include "test_util.hpp"
+#include "tests/support/test_util.hpp"
 
 using namespace iso;
 using iso::test::TempDir;

@@ -14,8 +14,8 @@
 
 #include "io/mesh.hpp"
 #include "io/volume_io.hpp"
-#include "measure_phantoms.hpp"
-#include "test_util.hpp"
+#include "tests/support/measure_phantoms.hpp"
+#include "tests/support/test_util.hpp"
 #include "renderer/core/stream_mesh.hpp"
 #include "renderer/surface/components.hpp"
 #include "renderer/surface/extract.hpp"

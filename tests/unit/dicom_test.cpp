@@ -32,8 +32,9 @@
 
 #include "io/error.hpp"
 #include "io/volume_io.hpp"
-#include "dicom_fixtures.hpp"
-#include "test_util.hpp"
+#include "tests/support/dicom_fixtures.hpp"
+#include "tests/support/expect.hpp"
+#include "tests/support/test_util.hpp"
 
 using namespace iso;
 using iso::test::TempDir;
@@ -111,10 +112,7 @@ glm::dmat4 expected_affine(const std::vector<Header>& hs, int steps) {
     return m;
 }
 
-void expect_affine_near(const glm::dmat4& a, const glm::dmat4& b, double tol = kMm) {
-    for (int c = 0; c < 4; ++c)
-        for (int r = 0; r < 4; ++r) EXPECT_NEAR(a[c][r], b[c][r], tol) << "column " << c << " row " << r;
-}
+void expect_affine_near(const glm::dmat4& a, const glm::dmat4& b, double tol = kMm) { test::expect_affine_near(a, b, tol); }
 
 // Raw stored pixel values of an uncompressed 16-bit file: the PixelData value is
 // the last rows*cols*2 bytes of the files vtkDICOMWriter writes.

@@ -18,10 +18,14 @@
 #include <vtkXMLImageDataWriter.h>
 
 #include "io/volume_io.hpp"
-#include "test_util.hpp"
+#include "tests/support/expect.hpp"
+#include "tests/support/test_util.hpp"
 
 using namespace iso;
 using iso::test::TempDir;
+using iso::test::expect_affine_near;
+using iso::test::read_file;
+using iso::test::write_file;
 namespace fs = std::filesystem;
 
 namespace {
@@ -31,11 +35,6 @@ std::vector<std::int16_t> raw_int16(const std::string& path) {
     std::vector<std::int16_t> v(fs::file_size(path) / 2);
     f.read(reinterpret_cast<char*>(v.data()), std::streamsize(v.size() * 2));
     return v;
-}
-
-void expect_affine_near(const glm::dmat4& a, const glm::dmat4& b, double tol) {
-    for (int c = 0; c < 4; ++c)
-        for (int r = 0; r < 4; ++r) EXPECT_NEAR(a[c][r], b[c][r], tol) << "element [col " << c << "][row " << r << "]";
 }
 
 glm::dmat4 oblique(glm::dvec3 spacing, glm::dvec3 origin, bool mirror = false) {
@@ -63,7 +62,6 @@ void expect_same_samples(const Volume& a, const Volume& b) {
     EXPECT_EQ(std::memcmp(a.bytes().data(), b.bytes().data(), a.bytes().size()), 0);
 }
 
-void write_text(const std::string& path, const std::string& text) { std::ofstream(path, std::ios::binary) << text; }
 
 // Expects load_volume(path) to throw an Error naming the file and containing `reason`.
 void expect_error(const std::string& path, const std::string& reason) {
@@ -134,7 +132,7 @@ TEST(Formats, NrrdSpacesAreConvertedToLps) {
     TempDir dir;
     // 2 x 2 x 2 int8 data, RAS space: x and y flip.
     std::string body(8, '\x01');
-    write_text(dir / "ras.nrrd", "NRRD0004\ntype: int8\ndimension: 3\nspace: right-anterior-superior\nsizes: 2 2 2\n"
+    write_file(dir / "ras.nrrd", "NRRD0004\ntype: int8\ndimension: 3\nspace: right-anterior-superior\nsizes: 2 2 2\n"
                                  "space directions: (1,0,0) (0,2,0) (0,0,3)\nspace origin: (10,20,30)\nencoding: raw\n\n" + body);
     const Volume v = load_volume(dir / "ras.nrrd");
     expect_affine_near(v.index_to_lps, glm::dmat4(glm::dvec4(-1, 0, 0, 0), glm::dvec4(0, -2, 0, 0), glm::dvec4(0, 0, 3, 0),
@@ -295,78 +293,74 @@ TEST(Formats, NanVoxelsGiveAWarningWithCounts) {
 TEST(Formats, BadInputGivesClearErrors) {
     TempDir dir;
     expect_error(dir / "missing.nrrd", "no such file");
-    write_text(dir / "empty.nii", "");
+    write_file(dir / "empty.nii", "");
     expect_error(dir / "empty.nii", "empty");
-    write_text(dir / "garbage.nrrd", "this is not a nrrd file at all\n");
+    write_file(dir / "garbage.nrrd", "this is not a nrrd file at all\n");
     expect_error(dir / "garbage.nrrd", "NRRD");
-    write_text(dir / "garbage.mha", "\x01\x02\x03\x04 binary junk");
+    write_file(dir / "garbage.mha", "\x01\x02\x03\x04 binary junk");
     expect_error(dir / "garbage.mha", "");
-    write_text(dir / "x.xyz", "?");
+    write_file(dir / "x.xyz", "?");
     expect_error(dir / "x.xyz", "unsupported volume format");
 
     // Truncated data: raw NRRD and MetaImage with half their bytes.
     const Volume v = ramp({16, 16, 16}, VoxelType::I16, glm::dmat4(1.0));
     save_volume(v, dir / "full.nrrd", false);
     {
-        std::ifstream in(dir / "full.nrrd", std::ios::binary);
-        std::string all((std::istreambuf_iterator<char>(in)), {});
-        write_text(dir / "cut.nrrd", all.substr(0, all.size() / 2));
+        const std::string all = read_file(dir / "full.nrrd");
+        write_file(dir / "cut.nrrd", all.substr(0, all.size() / 2));
     }
     expect_error(dir / "cut.nrrd", "");
-    write_text(dir / "cut.mha", "ObjectType = Image\nNDims = 3\nDimSize = 16 16 16\nElementType = MET_SHORT\nElementDataFile = LOCAL\n" +
+    write_file(dir / "cut.mha", "ObjectType = Image\nNDims = 3\nDimSize = 16 16 16\nElementType = MET_SHORT\nElementDataFile = LOCAL\n" +
                                     std::string(100, '\0'));
     expect_error(dir / "cut.mha", "truncated");
     // Truncated gzip NIfTI.
     save_volume(v, dir / "full.nii.gz");
     {
-        std::ifstream in(dir / "full.nii.gz", std::ios::binary);
-        std::string all((std::istreambuf_iterator<char>(in)), {});
-        write_text(dir / "cut.nii.gz", all.substr(0, all.size() / 2));
+        const std::string all = read_file(dir / "full.nii.gz");
+        write_file(dir / "cut.nii.gz", all.substr(0, all.size() / 2));
     }
     expect_error(dir / "cut.nii.gz", "");
     // Header/data size mismatch in a detached MetaImage.
-    write_text(dir / "small.raw", std::string(10, '\0'));
-    write_text(dir / "mismatch.mhd", "NDims = 3\nDimSize = 8 8 8\nElementType = MET_UCHAR\nElementDataFile = small.raw\n");
+    write_file(dir / "small.raw", std::string(10, '\0'));
+    write_file(dir / "mismatch.mhd", "NDims = 3\nDimSize = 8 8 8\nElementType = MET_UCHAR\nElementDataFile = small.raw\n");
     expect_error(dir / "mismatch.mhd", "truncated");
     // Dimensions whose product overflows.
-    write_text(dir / "huge.mha", "NDims = 3\nDimSize = 2147483648 2147483648 2147483648\nElementType = MET_FLOAT\nElementDataFile = LOCAL\n");
+    write_file(dir / "huge.mha", "NDims = 3\nDimSize = 2147483648 2147483648 2147483648\nElementType = MET_FLOAT\nElementDataFile = LOCAL\n");
     expect_error(dir / "huge.mha", "overflow");
-    write_text(dir / "huge.nrrd", "NRRD0004\ntype: float\ndimension: 3\nsizes: 2147483648 2147483648 2147483648\nencoding: raw\n\n");
+    write_file(dir / "huge.nrrd", "NRRD0004\ntype: float\ndimension: 3\nsizes: 2147483648 2147483648 2147483648\nencoding: raw\n\n");
     expect_error(dir / "huge.nrrd", "");
     // Unsupported voxel types.
-    write_text(dir / "rgb.mha", "NDims = 3\nDimSize = 2 2 2\nElementType = MET_UCHAR\nElementNumberOfChannels = 3\nElementDataFile = LOCAL\n" +
+    write_file(dir / "rgb.mha", "NDims = 3\nDimSize = 2 2 2\nElementType = MET_UCHAR\nElementNumberOfChannels = 3\nElementDataFile = LOCAL\n" +
                                     std::string(24, '\0'));
     expect_error(dir / "rgb.mha", "scalar");
-    write_text(dir / "i64.nrrd", "NRRD0004\ntype: int64\ndimension: 3\nsizes: 2 2 2\nendian: little\nencoding: raw\n\n" + std::string(64, '\0'));
+    write_file(dir / "i64.nrrd", "NRRD0004\ntype: int64\ndimension: 3\nsizes: 2 2 2\nendian: little\nencoding: raw\n\n" + std::string(64, '\0'));
     expect_error(dir / "i64.nrrd", "unsupported voxel type");
     // Zero and negative spacing, non-orthogonal directions.
-    write_text(dir / "zero.mha", "NDims = 3\nDimSize = 2 2 2\nElementSpacing = 1 0 1\nElementType = MET_UCHAR\nElementDataFile = LOCAL\n" +
+    write_file(dir / "zero.mha", "NDims = 3\nDimSize = 2 2 2\nElementSpacing = 1 0 1\nElementType = MET_UCHAR\nElementDataFile = LOCAL\n" +
                                      std::string(8, '\0'));
     expect_error(dir / "zero.mha", "spacing");
-    write_text(dir / "neg.mha", "NDims = 3\nDimSize = 2 2 2\nElementSpacing = 1 -2 1\nElementType = MET_UCHAR\nElementDataFile = LOCAL\n" +
+    write_file(dir / "neg.mha", "NDims = 3\nDimSize = 2 2 2\nElementSpacing = 1 -2 1\nElementType = MET_UCHAR\nElementDataFile = LOCAL\n" +
                                     std::string(8, '\0'));
     expect_error(dir / "neg.mha", "spacing");
-    write_text(dir / "skew.nrrd", "NRRD0004\ntype: uint8\ndimension: 3\nspace: left-posterior-superior\nsizes: 2 2 2\n"
+    write_file(dir / "skew.nrrd", "NRRD0004\ntype: uint8\ndimension: 3\nspace: left-posterior-superior\nsizes: 2 2 2\n"
                                   "space directions: (1,0,0) (0.5,1,0) (0,0,1)\nencoding: raw\n\n" + std::string(8, '\0'));
     expect_error(dir / "skew.nrrd", "not orthogonal");
-    write_text(dir / "zerodir.nrrd", "NRRD0004\ntype: uint8\ndimension: 3\nspace: left-posterior-superior\nsizes: 2 2 2\n"
+    write_file(dir / "zerodir.nrrd", "NRRD0004\ntype: uint8\ndimension: 3\nspace: left-posterior-superior\nsizes: 2 2 2\n"
                                      "space directions: (1,0,0) (0,0,0) (0,0,1)\nencoding: raw\n\n" + std::string(8, '\0'));
     expect_error(dir / "zerodir.nrrd", "spacing");
 }
 
 TEST(Formats, FailedSaveLeavesExistingFileAlone) {
     TempDir dir;
-    write_text(dir / "keep.nrrd", "user data");
+    write_file(dir / "keep.nrrd", "user data");
     Volume sparse_like = ramp({2, 2, 2}, VoxelType::U8, glm::dmat4(1.0));
     EXPECT_THROW(save_volume(sparse_like, dir / "keep.abc"), Error);
     EXPECT_THROW(save_volume(sparse_like, dir / "no-such-folder/x.nrrd"), Error);
     // A volume NIfTI-1 cannot hold (dimension > 32767) must not touch the target.
-    write_text(dir / "keep.nii", "user data");
+    write_file(dir / "keep.nii", "user data");
     Volume big = Volume::dense({40000, 1, 1}, VoxelType::U8, glm::dmat4(1.0));
     EXPECT_THROW(save_volume(big, dir / "keep.nii"), Error);
-    std::ifstream in(dir / "keep.nii");
-    std::string s((std::istreambuf_iterator<char>(in)), {});
-    EXPECT_EQ(s, "user data");
+    EXPECT_EQ(read_file(dir / "keep.nii"), "user data");
     for (auto& e : fs::directory_iterator(dir.path()))
         EXPECT_EQ(e.path().filename().string().find(".isoscope-tmp"), std::string::npos) << e.path();
 }

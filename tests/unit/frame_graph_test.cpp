@@ -10,7 +10,7 @@
 #include <map>
 
 #include "io/error.hpp"
-#include "test_util.hpp"
+#include "tests/support/test_util.hpp"
 
 using namespace iso::graph;
 
@@ -171,6 +171,7 @@ TEST(ResourcePool, WaitingResourcesAreEvictedByAge) {
     one_frame(pool, other);
     EXPECT_EQ(be.live.size(), 2u);
     one_frame(pool, other);
+    EXPECT_EQ(be.live.size(), 2u) << "evicted before it waited 3 frames";
     one_frame(pool, other);
     EXPECT_EQ(be.live.size(), 1u) << "the old size was evicted";
     EXPECT_EQ(pool.stats().destroyed, 1u);
@@ -181,14 +182,15 @@ TEST(ResourcePool, HistoryPersistsAndSaysWhenItIsFresh) {
     RecordingBackend be;
     ResourcePool pool(be);
     const TextureDesc arr{16, 8, Format::RGBA32UI, 4};
-    auto frame = [&](const TextureDesc& d, bool* fresh, std::uint64_t* id) {
+    auto frame_in = [](ResourcePool& in, const TextureDesc& d, bool* fresh, std::uint64_t* id) {
         FrameGraph g;
         const auto h = g.history("accum", d);
         struct T { TextureHandle t; };
         g.add_pass<T>("accumulate", [&](FrameGraph::Builder& b, T& t) { t.t = b.write(b.read(h)); b.side_effect(); },
                       [&](const T& t, const Resources& r) { *fresh = r.fresh(t.t); *id = r.get(t.t); });
-        g.execute(pool);
+        g.execute(in);
     };
+    auto frame = [&](const TextureDesc& d, bool* fresh, std::uint64_t* id) { frame_in(pool, d, fresh, id); };
     bool fresh = false;
     std::uint64_t a = 0, b = 0;
     frame(arr, &fresh, &a);
@@ -202,12 +204,28 @@ TEST(ResourcePool, HistoryPersistsAndSaysWhenItIsFresh) {
     frame(TextureDesc{16, 8, Format::RGBA32UI, 2}, &fresh, &b);
     EXPECT_TRUE(fresh);
     EXPECT_EQ(be.live.size(), 1u);
-    // Unused history is evicted after max_history_age frames.
+    // A history declared but never needed is never made.
     ResourcePool short_lived(be, 3, 2);
     FrameGraph g;
-    g.history("unused", arr); // declared, never needed: never made
+    g.history("unused", arr);
     g.execute(short_lived);
     EXPECT_EQ(short_lived.stats().history, 0u);
+    // History unused for max_history_age (2) frames is evicted: it survives
+    // one frame that does not use it and goes at the end of the second.
+    frame_in(short_lived, arr, &fresh, &a);
+    EXPECT_TRUE(fresh);
+    EXPECT_EQ(short_lived.stats().history, 1u);
+    const std::size_t destroyed = short_lived.stats().destroyed;
+    one_frame(short_lived, kColor);
+    EXPECT_TRUE(short_lived.has_history("accum", arr)) << "evicted after one unused frame";
+    EXPECT_EQ(short_lived.stats().history, 1u);
+    one_frame(short_lived, kColor);
+    EXPECT_FALSE(short_lived.has_history("accum", arr)) << "kept after max_history_age unused frames";
+    EXPECT_EQ(short_lived.stats().history, 0u);
+    EXPECT_EQ(short_lived.stats().destroyed, destroyed + 1);
+    // Used again: made afresh.
+    frame_in(short_lived, arr, &fresh, &b);
+    EXPECT_TRUE(fresh);
 }
 
 TEST(FrameGraph, CompileCullsWithoutRunningAnything) {

@@ -5,7 +5,7 @@
 #include "renderer/passes/build_frame.hpp"
 
 #include "io/error.hpp"
-#include "test_util.hpp"
+#include "tests/support/test_util.hpp"
 
 using namespace iso;
 using Passes = std::vector<std::string>;

@@ -1,13 +1,13 @@
 // The golden-image helper (image_compare.hpp): its three thresholds at and
 // just past their limits, shape mismatches, the files it writes on failure
 // and ISOSCOPE_UPDATE_GOLDEN=1.
-#include "image_compare.hpp"
+#include "tests/support/image_compare.hpp"
 
 #include <cstdlib>
 #include <filesystem>
 #include <optional>
 
-#include "test_util.hpp"
+#include "tests/support/test_util.hpp"
 
 using namespace iso;
 

@@ -23,10 +23,12 @@
 #include <vtkFloatArray.h>
 #include <vtkShortArray.h>
 
-#include "measure_phantoms.hpp"
-#include "test_util.hpp"
+#include "tests/support/measure_phantoms.hpp"
+#include "tests/support/meshes.hpp"
+#include "tests/support/test_util.hpp"
 
 using namespace iso;
+using iso::test::canonical;
 using iso::test::plain_sums;
 using iso::test::sample_field;
 
@@ -100,22 +102,6 @@ Mesh flying_edges(const Volume& v, double iso, std::size_t* moved = nullptr) {
     fe->ComputeGradientsOff();
     fe->ComputeScalarsOff();
     return run_in_index_space(*fe, arr, v, true, moved);
-}
-
-// Triangles as position triples, rotated to start at the smallest vertex
-// (orientation kept) and sorted: equal lists mean equal meshes.
-using Tri = std::array<std::array<float, 3>, 3>;
-std::vector<Tri> canonical(const Mesh& m) {
-    std::vector<Tri> out;
-    for (const auto& t : m.triangles) {
-        Tri tri;
-        for (int k = 0; k < 3; ++k) tri[k] = {m.positions[t[k]].x, m.positions[t[k]].y, m.positions[t[k]].z};
-        const int first = int(std::min_element(tri.begin(), tri.end()) - tri.begin());
-        std::rotate(tri.begin(), tri.begin() + first, tri.end());
-        out.push_back(tri);
-    }
-    std::sort(out.begin(), out.end());
-    return out;
 }
 
 // Edges used by other than exactly two triangles in opposite directions

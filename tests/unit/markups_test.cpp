@@ -5,27 +5,22 @@
 // angles come from hand geometry or Python (datasets/markups/README.md).
 #include <cmath>
 #include <filesystem>
-#include <fstream>
 
 #include <glm/glm.hpp>
 #include <nlohmann/json.hpp>
 
 #include "io/error.hpp"
 #include "io/markups.hpp"
-#include "test_util.hpp"
+#include "tests/support/test_util.hpp"
 
 using namespace iso;
 using iso::test::TempDir;
+using iso::test::read_file;
+using iso::test::write_file;
 namespace fs = std::filesystem;
 
 namespace {
 
-std::string slurp(const std::string& path) {
-    std::ifstream f(path, std::ios::binary);
-    return std::string((std::istreambuf_iterator<char>(f)), {});
-}
-
-void write(const std::string& path, const std::string& text) { std::ofstream(path, std::ios::binary) << text; }
 
 MarkupControlPoint point(const std::string& label, glm::dvec3 p) {
     MarkupControlPoint c;
@@ -156,7 +151,7 @@ TEST(Markups, WrittenFileHasSlicersFields) {
     // A stale stored length is replaced by the one computed from the points.
     in.markups[1].measurements.push_back({"length", 99.0, "cm", false, "", ""});
     save_markups(in, dir / "m.mrk.json");
-    const auto j = nlohmann::json::parse(slurp(dir / "m.mrk.json"));
+    const auto j = nlohmann::json::parse(read_file(dir / "m.mrk.json"));
     // Slicer up to 5.0.x accepts only this exact URL.
     EXPECT_EQ(j["@schema"], "https://raw.githubusercontent.com/slicer/slicer/master/Modules/Loadable/Markups/Resources/"
                             "Schema/markups-schema-v1.0.3.json#");
@@ -190,7 +185,7 @@ TEST(Markups, WrittenFileHasSlicersFields) {
     EXPECT_EQ(undefined["position"], "");
     EXPECT_EQ(undefined["positionStatus"], "undefined");
     // Slicer's layout: a position on one line.
-    EXPECT_NE(slurp(dir / "m.mrk.json").find("\"position\": [4.0, 6.0, 3.0]"), std::string::npos);
+    EXPECT_NE(read_file(dir / "m.mrk.json").find("\"position\": [4.0, 6.0, 3.0]"), std::string::npos);
 }
 
 TEST(Markups, AngleWithoutArmHasNoValue) {
@@ -201,7 +196,7 @@ TEST(Markups, AngleWithoutArmHasNoValue) {
     a.points = {point("", {1, 1, 1}), point("", {1, 1, 1}), point("", {2, 1, 1})};
     f.markups = {a};
     save_markups(f, dir / "a.mrk.json");
-    const auto j = nlohmann::json::parse(slurp(dir / "a.mrk.json"));
+    const auto j = nlohmann::json::parse(read_file(dir / "a.mrk.json"));
     EXPECT_FALSE(j["markups"][0]["measurements"][0].contains("value"));
     const MarkupsFile back = load_markups(dir / "a.mrk.json");
     const auto* m = find(back.markups[0], "angle");
@@ -278,7 +273,7 @@ TEST(Markups, AcceptsWhatSlicerAccepts) {
                                "https://raw.githubusercontent.com/slicer/slicer/master/Modules/Loadable/Markups/"
                                "Resources/Schema/markups-schema-v1.0.0.json#",
                                "MARKUPS-SCHEMA-V1.12.7.JSON"}) {
-        write(dir / "s.mrk.json", std::string(R"({"@schema": ")") + schema +
+        write_file(dir / "s.mrk.json", std::string(R"({"@schema": ")") + schema +
                                       R"(", "markups": [{"type": "Line", "coordinateUnits": ["mm", "UCUM", "millimeter"],
                                          "controlPoints": [{"position": [0, 0, 0]}, {"position": [3, 4, 0]}]}]})");
         const MarkupsFile f = load_markups(dir / "s.mrk.json");
@@ -287,7 +282,7 @@ TEST(Markups, AcceptsWhatSlicerAccepts) {
         EXPECT_EQ(f.markups[0].points[1].status, PositionStatus::Defined) << schema;
     }
     // Curves are read as their control points; every markup of a file is read.
-    write(dir / "c.mrk.json",
+    write_file(dir / "c.mrk.json",
           file_with(R"({"type": "Curve", "coordinateSystem": "RAS", "controlPoints": [{"position": [1, 2, 3]}, {"position": [4, 5, 6]},
                         {"position": [7, 8, 9]}]}, {"type": "ClosedCurve", "controlPoints": []}, )" + kLine));
     const MarkupsFile c = load_markups(dir / "c.mrk.json");
@@ -304,12 +299,12 @@ TEST(Markups, BadInputNamesFileAndReason) {
     fs::create_directories(dir / "folder.mrk.json");
     expect_error(dir / "folder.mrk.json", "not a regular file");
     auto bad = [&](const std::string& name, const std::string& text, const std::string& reason) {
-        write(dir / name, text);
+        write_file(dir / name, text);
         expect_error(dir / name, reason);
     };
     bad("empty.mrk.json", "", "empty");
     bad("text.mrk.json", "this is not JSON", "not valid JSON");
-    const std::string fixture = slurp(test::data("markups/slicer-line-ras.mrk.json"));
+    const std::string fixture = read_file(test::data("markups/slicer-line-ras.mrk.json"));
     ASSERT_GT(fixture.size(), 100u);
     bad("truncated.mrk.json", fixture.substr(0, fixture.size() / 2), "unexpected end of input");
     bad("toplevel.mrk.json", "[1, 2]", "not an object");
@@ -367,7 +362,7 @@ TEST(Markups, BadInputNamesFileAndReason) {
 TEST(Markups, WriterRefusesWhatSlicerCannotRead) {
     TempDir dir;
     auto refused = [&](const MarkupsFile& f, const std::string& reason) {
-        write(dir / "keep.mrk.json", "user data");
+        write_file(dir / "keep.mrk.json", "user data");
         try {
             save_markups(f, dir / "keep.mrk.json");
             ADD_FAILURE() << "written; expected '" << reason << "'";
@@ -375,7 +370,7 @@ TEST(Markups, WriterRefusesWhatSlicerCannotRead) {
             EXPECT_EQ(e.where(), dir / "keep.mrk.json");
             EXPECT_NE(e.reason().find(reason), std::string::npos) << e.what();
         }
-        EXPECT_EQ(slurp(dir / "keep.mrk.json"), "user data"); // untouched
+        EXPECT_EQ(read_file(dir / "keep.mrk.json"), "user data"); // untouched
     };
     refused(MarkupsFile{}, "no markups");
     MarkupsFile f = sample();

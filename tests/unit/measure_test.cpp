@@ -18,10 +18,11 @@
 
 #include "io/error.hpp"
 #include "io/sparse.hpp"
-#include "measure_phantoms.hpp"
 #include "renderer/surface/extract.hpp"
-#include "test_meshes.hpp"
-#include "test_util.hpp"
+#include "tests/support/measure_phantoms.hpp"
+#include "renderer/surface/extract.hpp"
+#include "tests/support/meshes.hpp"
+#include "tests/support/test_util.hpp"
 
 using namespace iso;
 using namespace iso::test;

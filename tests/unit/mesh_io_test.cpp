@@ -2,16 +2,17 @@
 // real Stanford bunny), the SPACE tag written and honoured, bad input.
 #include <filesystem>
 #include <cstring>
-#include <fstream>
 
 #include <glm/glm.hpp>
 
 #include "io/error.hpp"
 #include "io/mesh.hpp"
-#include "test_util.hpp"
+#include "tests/support/test_util.hpp"
 
 using namespace iso;
 using iso::test::TempDir;
+using iso::test::read_file;
+using iso::test::write_file;
 namespace fs = std::filesystem;
 
 namespace {
@@ -35,12 +36,6 @@ Mesh cube() {
     return m;
 }
 
-std::string slurp(const std::string& path) {
-    std::ifstream f(path, std::ios::binary);
-    return std::string((std::istreambuf_iterator<char>(f)), {});
-}
-
-void write(const std::string& path, const std::string& text) { std::ofstream(path, std::ios::binary) << text; }
 
 } // namespace
 
@@ -106,27 +101,27 @@ TEST(MeshIo, NormalsAndColoursSurviveWhereTheFormatHasThem) {
 TEST(MeshIo, SpaceTagIsWrittenAndRasIsConverted) {
     TempDir dir;
     save_mesh(cube(), dir / "c.stl");
-    EXPECT_EQ(slurp(dir / "c.stl").substr(0, 9), "SPACE=LPS");
+    EXPECT_EQ(read_file(dir / "c.stl").substr(0, 9), "SPACE=LPS");
     save_mesh(cube(), dir / "c.ply");
-    EXPECT_NE(slurp(dir / "c.ply").find("comment SPACE=LPS"), std::string::npos);
+    EXPECT_NE(read_file(dir / "c.ply").find("comment SPACE=LPS"), std::string::npos);
     save_mesh(cube(), dir / "c.obj");
-    EXPECT_NE(slurp(dir / "c.obj").find("SPACE=LPS"), std::string::npos);
+    EXPECT_NE(read_file(dir / "c.obj").find("SPACE=LPS"), std::string::npos);
     save_mesh(cube(), dir / "c.vtp");
-    EXPECT_NE(slurp(dir / "c.vtp").find("SPACE"), std::string::npos);
+    EXPECT_NE(read_file(dir / "c.vtp").find("SPACE"), std::string::npos);
 
     // Slicer writes RAS meshes with such a tag: x and y flip on read.
-    write(dir / "ras.obj", "# SPACE=RAS\nv 1 2 3\nv 4 5 6\nv 7 8 10\nf 1 2 3\n");
+    write_file(dir / "ras.obj", "# SPACE=RAS\nv 1 2 3\nv 4 5 6\nv 7 8 10\nf 1 2 3\n");
     const Mesh r = load_mesh(dir / "ras.obj");
     EXPECT_EQ(r.positions[0], glm::vec3(-1, -2, 3));
     EXPECT_FALSE(r.warnings.empty());
-    write(dir / "ras.stl", "solid SPACE=RAS\nfacet normal 0 0 1\nouter loop\nvertex 1 2 3\nvertex 4 5 6\nvertex 7 8 10\n"
+    write_file(dir / "ras.stl", "solid SPACE=RAS\nfacet normal 0 0 1\nouter loop\nvertex 1 2 3\nvertex 4 5 6\nvertex 7 8 10\n"
                            "endloop\nendfacet\nendsolid\n");
     EXPECT_EQ(load_mesh(dir / "ras.stl").positions[0], glm::vec3(-1, -2, 3));
-    write(dir / "ras.ply", "ply\nformat ascii 1.0\ncomment SPACE=RAS\nelement vertex 3\nproperty float x\nproperty float y\n"
+    write_file(dir / "ras.ply", "ply\nformat ascii 1.0\ncomment SPACE=RAS\nelement vertex 3\nproperty float x\nproperty float y\n"
                            "property float z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n"
                            "1 2 3\n4 5 6\n7 8 10\n3 0 1 2\n");
     EXPECT_EQ(load_mesh(dir / "ras.ply").positions[0], glm::vec3(-1, -2, 3));
-    write(dir / "lps.obj", "v 1 2 3\nv 4 5 6\nv 7 8 10\nf 1 2 3\n");
+    write_file(dir / "lps.obj", "v 1 2 3\nv 4 5 6\nv 7 8 10\nf 1 2 3\n");
     EXPECT_EQ(load_mesh(dir / "lps.obj").positions[0], glm::vec3(1, 2, 3)); // untagged: LPS
 }
 
@@ -142,40 +137,40 @@ TEST(MeshIo, BadInput) {
         }
     };
     expect_error(dir / "missing.stl", "no such file");
-    write(dir / "empty.ply", "");
+    write_file(dir / "empty.ply", "");
     expect_error(dir / "empty.ply", "empty");
-    write(dir / "x.off", "OFF");
+    write_file(dir / "x.off", "OFF");
     expect_error(dir / "x.off", "unsupported mesh format");
     // Binary STL announcing more triangles than it holds.
     std::string stl(84, '\0');
     const std::uint32_t n = 1000;
     std::memcpy(stl.data() + 80, &n, 4);
-    write(dir / "short.stl", stl + std::string(50 * 10, '\0'));
+    write_file(dir / "short.stl", stl + std::string(50 * 10, '\0'));
     expect_error(dir / "short.stl", "truncated");
-    write(dir / "garbage.stl", std::string(200, 'x'));
+    write_file(dir / "garbage.stl", std::string(200, 'x'));
     expect_error(dir / "garbage.stl", "");
-    write(dir / "noend.ply", "ply\nformat ascii 1.0\nelement vertex 3\n");
+    write_file(dir / "noend.ply", "ply\nformat ascii 1.0\nelement vertex 3\n");
     expect_error(dir / "noend.ply", "end_header");
-    write(dir / "huge.ply", "ply\nformat binary_little_endian 1.0\nelement vertex 4000000000\nproperty float x\n"
+    write_file(dir / "huge.ply", "ply\nformat binary_little_endian 1.0\nelement vertex 4000000000\nproperty float x\n"
                             "element face 1\nproperty list uchar int vertex_indices\nend_header\n");
     expect_error(dir / "huge.ply", "truncated");
-    write(dir / "nan.obj", "v nan 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
+    write_file(dir / "nan.obj", "v nan 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
     expect_error(dir / "nan.obj", "NaN");
-    write(dir / "bad.vtp", "<VTKFile type=\"PolyData\"><broken");
+    write_file(dir / "bad.vtp", "<VTKFile type=\"PolyData\"><broken");
     expect_error(dir / "bad.vtp", "");
     // A mangled array format: VTK would read it as appended data and trust its
     // compression header (a division by zero the fuzz smoke found).
     {
-        std::string v = slurp(ISOSCOPE_SOURCE_DIR "/tests/fuzz/regressions/vtp/crash-vtp-crash-4eaf944ab1554cf45e1a8a8200df37f552b003a3");
+        std::string v = read_file(ISOSCOPE_SOURCE_DIR "/tests/fuzz/regressions/vtp/crash-vtp-crash-4eaf944ab1554cf45e1a8a8200df37f552b003a3");
         ASSERT_FALSE(v.empty());
-        write(dir / "format.vtp", v);
+        write_file(dir / "format.vtp", v);
         expect_error(dir / "format.vtp", "format 'appe' is not ascii, binary or appended");
     }
     // Writing: a bad index is refused; a missing folder is named; nothing overwritten.
     Mesh bad = cube();
     bad.triangles.push_back({0, 1, 99});
-    write(dir / "keep.stl", "user data");
+    write_file(dir / "keep.stl", "user data");
     EXPECT_THROW(save_mesh(bad, dir / "keep.stl"), Error);
-    EXPECT_EQ(slurp(dir / "keep.stl"), "user data");
+    EXPECT_EQ(read_file(dir / "keep.stl"), "user data");
     EXPECT_THROW(save_mesh(cube(), dir / "no/such/folder/m.stl"), Error);
 }

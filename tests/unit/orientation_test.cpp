@@ -11,9 +11,9 @@
 
 #include <glm/glm.hpp>
 
-#include "orientation_landmarks.hpp"
+#include "tests/support/orientation_landmarks.hpp"
 #include "renderer/core/api.hpp"
-#include "test_util.hpp"
+#include "tests/support/test_util.hpp"
 
 using namespace iso;
 

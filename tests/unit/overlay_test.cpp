@@ -8,7 +8,7 @@
 
 #include <glm/glm.hpp>
 
-#include "test_util.hpp"
+#include "tests/support/test_util.hpp"
 
 using namespace iso;
 

@@ -22,9 +22,11 @@
 #include "tests/bench/bench_util.hpp"
 #include "tests/bench/proc_monitor.hpp"
 #include "tests/bench/scale_volume.hpp"
+#include "tests/support/test_util.hpp"
 
 using namespace iso;
 using namespace iso::bench;
+using iso::test::read_file;
 namespace fs = std::filesystem;
 
 namespace {
@@ -34,11 +36,6 @@ fs::path fresh_dir(const std::string& name) {
     fs::remove_all(d);
     fs::create_directories(d);
     return d;
-}
-
-std::string bytes_of(const fs::path& p) {
-    std::ifstream f(p, std::ios::binary);
-    return std::string(std::istreambuf_iterator<char>(f), {});
 }
 
 constexpr std::uint64_t kMiB = 1 << 20;
@@ -135,12 +132,12 @@ TEST(ScaleVolume, DeterministicAndSeeded) {
     const std::uint32_t crc_a = write_scale_volume(p, (dir / "a.nii").string());
     const std::uint32_t crc_b = write_scale_volume(p, (dir / "b.nii").string());
     EXPECT_EQ(crc_a, crc_b);
-    EXPECT_EQ(bytes_of(dir / "a.nii"), bytes_of(dir / "b.nii"));
-    const std::string data = bytes_of(dir / "a.nii").substr(352);
+    EXPECT_EQ(read_file(dir / "a.nii"), read_file(dir / "b.nii"));
+    const std::string data = read_file(dir / "a.nii").substr(352);
     EXPECT_EQ(crc_a, std::uint32_t(crc32(0L, reinterpret_cast<const Bytef*>(data.data()), uInt(data.size()))));
     p.seed = 17;
     write_scale_volume(p, (dir / "c.nii").string());
-    EXPECT_NE(bytes_of(dir / "a.nii"), bytes_of(dir / "c.nii"));
+    EXPECT_NE(read_file(dir / "a.nii"), read_file(dir / "c.nii"));
 }
 
 // Reuse through the sidecar; a changed header is regenerated; a file we did not
@@ -190,7 +187,7 @@ TEST(ScaleVolume, ReusedWhenTheSidecarMatches) {
         EXPECT_EQ(e.where(), theirs.string());
         EXPECT_NE(std::string(e.what()).find("not overwritten"), std::string::npos);
     }
-    EXPECT_EQ(bytes_of(theirs), "not ours");
+    EXPECT_EQ(read_file(theirs), "not ours");
 }
 
 // Cancelled from the progress callback: Cancelled is thrown, nothing is left
@@ -321,8 +318,8 @@ TEST(ProcMonitor, FailuresAreRecordedNotFatal) {
     auto r = run_measured({"/bin/sh", "-c", "echo 12 triangles; echo oops >&2; exit 3"}, o, e);
     EXPECT_TRUE(r.started);
     EXPECT_EQ(r.exit_code, 3);
-    EXPECT_EQ(bytes_of(o), "12 triangles\n");
-    EXPECT_EQ(bytes_of(e), "oops\n");
+    EXPECT_EQ(read_file(o), "12 triangles\n");
+    EXPECT_EQ(read_file(e), "oops\n");
 
     r = run_measured({"/nonexistent/isoscope", "mesh"}, o, e);
     EXPECT_FALSE(r.started);

@@ -7,7 +7,7 @@
 #include <filesystem>
 
 #include "io/error.hpp"
-#include "test_util.hpp"
+#include "tests/support/test_util.hpp"
 
 using namespace iso;
 using iso::test::TempDir;
@@ -23,8 +23,10 @@ TEST(Scene, VolumeIsosurfacesAreSortedNamedAndColoured) {
     EXPECT_EQ(s.info(2).name, "iso 1150");
     EXPECT_EQ(s.info(1).kind, core::SurfaceInfo::Kind::Iso);
     EXPECT_EQ(s.info(2).value, 1150.0);
-    EXPECT_EQ(s.info(1).color, core::surface_color(0, 2)) << "skin-toned outer surface";
-    EXPECT_EQ(s.info(2).color, core::surface_color(1, 2));
+    // The default colours, linear RGB, stated here rather than read from the
+    // palette under test: skin tone outside, bone white inside.
+    EXPECT_EQ(s.info(1).color, glm::vec3(0.93f, 0.72f, 0.60f)) << "skin-toned outer surface";
+    EXPECT_EQ(s.info(2).color, glm::vec3(0.95f, 0.92f, 0.84f)) << "bone-white inner surface";
     EXPECT_EQ(s.info(1).source, test::data("headsq.nhdr"));
     EXPECT_GT(s.mesh(1).triangles.size(), 10000u);
     EXPECT_EQ(s.sources(), (std::vector<std::string>{test::data("headsq.nhdr")}));

@@ -6,17 +6,21 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
-#include <sstream>
 
 #include <nlohmann/json.hpp>
 
 #include "io/error.hpp"
 #include "io/image.hpp"
+#include "io/volume_io.hpp"
 #include "renderer/core/session.hpp"
-#include "test_util.hpp"
+#include "renderer/surface/extract.hpp"
+#include "renderer/surface/postprocess.hpp"
+#include "tests/support/test_util.hpp"
 
 using namespace iso;
 using iso::test::TempDir;
+using iso::test::read_file;
+using iso::test::write_file;
 namespace fs = std::filesystem;
 
 namespace {
@@ -65,22 +69,10 @@ core::Session example(const std::string& input) {
     return s;
 }
 
-std::string slurp(const std::string& path) {
-    std::ifstream f(path);
-    std::stringstream ss;
-    ss << f.rdbuf();
-    return ss.str();
-}
-
-void write(const std::string& path, const std::string& text) {
-    std::ofstream f(path, std::ios::trunc);
-    f << text;
-}
-
 // The message of the iso::Error that loading `text` as a session throws ("" when none).
 std::string load_error(const TempDir& dir, const std::string& text) {
     const std::string path = dir / "broken.json";
-    write(path, text);
+    write_file(path, text);
     try {
         core::load_session(path);
     } catch (const Error& e) {
@@ -97,7 +89,7 @@ TEST(Session, SavedAndLoadedBackExactly) {
     const std::string path = dir / "sub/s.json";
     fs::create_directories(dir.path() / "sub");
     core::save_session(s, path);
-    const auto j = nlohmann::json::parse(slurp(path));
+    const auto j = nlohmann::json::parse(read_file(path));
     EXPECT_EQ(j["format"], "isoscope-session");
     EXPECT_EQ(j["version"], core::kSessionVersion);
     // Not below the session's folder: absolute.
@@ -150,8 +142,8 @@ TEST(Session, InputBelowTheSessionFolderIsRelativeAndMovesWithIt) {
     for (const char* f : {"headsq.nhdr", "headsq.raw"}) fs::copy_file(test::data(f), dir.path() / "a" / "data" / f);
     core::Session s = example(dir / "a/data/headsq.nhdr");
     core::save_session(s, dir / "a/s.json");
-    EXPECT_EQ(nlohmann::json::parse(slurp(dir / "a/s.json"))["input"]["path"], "data/headsq.nhdr");
-    EXPECT_EQ(nlohmann::json::parse(slurp(dir / "a/s.json"))["surfaces"][0]["source"], "data/headsq.nhdr");
+    EXPECT_EQ(nlohmann::json::parse(read_file(dir / "a/s.json"))["input"]["path"], "data/headsq.nhdr");
+    EXPECT_EQ(nlohmann::json::parse(read_file(dir / "a/s.json"))["surfaces"][0]["source"], "data/headsq.nhdr");
     fs::rename(dir.path() / "a", dir.path() / "b");
     const auto r = core::load_session(dir / "b/s.json");
     EXPECT_EQ(r.input, (dir.path() / "b" / "data" / "headsq.nhdr").string());
@@ -176,7 +168,7 @@ TEST(Session, RefusalsNameTheFileAndTheField) {
     TempDir dir;
     const std::string file = dir / "broken.json";
     core::save_session(example(test::data("headsq.nhdr")), dir / "good.json");
-    const std::string good = slurp(dir / "good.json");
+    const std::string good = read_file(dir / "good.json");
     const auto edited = [&](const std::function<void(nlohmann::json&)>& edit) {
         auto j = nlohmann::json::parse(good);
         edit(j);
@@ -235,10 +227,10 @@ TEST(Session, SavingKeepsTheOldFileWholeOnFailure) {
     TempDir dir;
     core::Session s = example(test::data("headsq.nhdr"));
     core::save_session(s, dir / "s.json");
-    const std::string before = slurp(dir / "s.json");
+    const std::string before = read_file(dir / "s.json");
     s.markups[0].points.pop_back(); // a Line with one point cannot be written
     EXPECT_THROW(core::save_session(s, dir / "s.json"), Error);
-    EXPECT_EQ(slurp(dir / "s.json"), before);
+    EXPECT_EQ(read_file(dir / "s.json"), before);
     EXPECT_THROW(core::save_session(s, dir / "no/such/folder/s.json"), Error);
 }
 
@@ -263,13 +255,20 @@ TEST(Session, OpensItsSceneAndCapturesItBack) {
         EXPECT_EQ(info.kind, core::SurfaceInfo::Kind::Iso);
         EXPECT_EQ(info.value, s.surfaces[i].value);
         EXPECT_EQ(info.name, s.surfaces[i].name);
-        EXPECT_EQ(info.color, core::linear_from_hex(s.surfaces[i].color));
+        // The hex colour decoded by the published sRGB formula (IEC 61966-2-1), written out here.
+        for (int c = 0; c < 3; ++c) {
+            const double code = std::stoi(s.surfaces[i].color.substr(1 + 2 * std::size_t(c), 2), nullptr, 16) / 255.0;
+            const double linear = code <= 0.04045 ? code / 12.92 : std::pow((code + 0.055) / 1.055, 2.4);
+            EXPECT_NEAR(info.color[c], linear, 1e-6) << s.surfaces[i].color << " channel " << c;
+        }
         EXPECT_EQ(info.opacity, s.surfaces[i].opacity);
         EXPECT_EQ(info.visible, s.surfaces[i].visible);
         EXPECT_EQ(info.post.smooth, s.surfaces[i].post.smooth);
         EXPECT_EQ(info.post.keep_largest, s.surfaces[i].post.keep_largest);
-        // As the Surfaces panel extracts it.
-        const Mesh expected = scene.extract_isosurface(s.surfaces[i].value, {}, s.surfaces[i].post);
+        // A fresh extraction of the file through the library's free functions
+        // (not the Scene that opened the session): load, extract, post-process.
+        Mesh expected = extract_isosurface(load_volume(s.input), s.surfaces[i].value);
+        if (needs_postprocess(s.surfaces[i].post)) expected = postprocess(expected, s.surfaces[i].post);
         EXPECT_EQ(scene.mesh(opened.surfaces[i]).triangles.size(), expected.triangles.size());
         EXPECT_GT(expected.triangles.size(), 10000u);
     }
@@ -330,9 +329,9 @@ TEST(SessionCli, RefusalsNameTheSessionAndTheFlag) {
     EXPECT_NE(r.out.find("no such file"), std::string::npos) << r.out;
 
     core::save_session(example(test::data("headsq.nhdr")), dir / "s.json");
-    auto j = nlohmann::json::parse(slurp(dir / "s.json"));
+    auto j = nlohmann::json::parse(read_file(dir / "s.json"));
     j["surfaces"][0]["color"] = "#12345";
-    write(dir / "bad.json", j.dump());
+    write_file(dir / "bad.json", j.dump());
     r = run("--session " + (dir / "bad.json") + " -o " + (dir / "x.png"));
     EXPECT_EQ(r.exit_code, 1) << r.out;
     EXPECT_NE(r.out.find(dir / "bad.json" + ": surfaces[0].color: expected #rrggbb"), std::string::npos) << r.out;

@@ -10,7 +10,6 @@
 #include "renderer/core/slices.hpp"
 
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -21,16 +20,15 @@
 #include <glm/geometric.hpp>
 #include <glm/matrix.hpp>
 #include <openvdb/openvdb.h>
-#include <tbb/task_arena.h>
 
 #include "io/error.hpp"
 #include "io/sparse.hpp"
 #include "io/volume_io.hpp"
-#include "measure_phantoms.hpp"
+#include "tests/support/measure_phantoms.hpp"
 #include "renderer/core/measure.hpp"
 #include "renderer/core/scene.hpp"
-#include "test_meshes.hpp"
-#include "test_util.hpp"
+#include "tests/support/meshes.hpp"
+#include "tests/support/test_util.hpp"
 
 using namespace iso;
 using namespace iso::core;
@@ -93,33 +91,6 @@ Where where(const Volume& v, const glm::dvec3& idx) {
     return rim ? Where::Rim : Where::Interior;
 }
 
-// A UV sphere of radius r about c: `stacks` rings (even: one ring on the
-// equator), `slices` segments, outward-facing, closed and indexed.
-Mesh uv_sphere(const glm::dvec3& c, double r, int stacks, int slices) {
-    Mesh m;
-    m.positions.emplace_back(glm::vec3(c + glm::dvec3(0, 0, r))); // north pole, 0
-    for (int i = 1; i < stacks; ++i) {
-        const double th = kPi * double(i) / double(stacks);
-        // Exactly 0 on the equator, so its vertices lie exactly on the plane z = c.z.
-        const double z = 2 * i == stacks ? 0.0 : std::cos(th);
-        for (int j = 0; j < slices; ++j) {
-            const double ph = 2 * kPi * double(j) / double(slices);
-            m.positions.emplace_back(glm::vec3(c + r * glm::dvec3(std::sin(th) * std::cos(ph), std::sin(th) * std::sin(ph), z)));
-        }
-    }
-    m.positions.emplace_back(glm::vec3(c - glm::dvec3(0, 0, r))); // south pole
-    const auto south = std::uint32_t(m.positions.size() - 1);
-    auto ring = [&](int i, int j) { return std::uint32_t(1 + (i - 1) * slices + (j % slices)); };
-    for (int j = 0; j < slices; ++j) m.triangles.push_back({0, ring(1, j), ring(1, j + 1)});
-    for (int i = 1; i + 1 < stacks; ++i)
-        for (int j = 0; j < slices; ++j) {
-            m.triangles.push_back({ring(i, j), ring(i + 1, j), ring(i + 1, j + 1)});
-            m.triangles.push_back({ring(i, j), ring(i + 1, j + 1), ring(i, j + 1)});
-        }
-    for (int j = 0; j < slices; ++j) m.triangles.push_back({south, ring(stacks - 1, j + 1), ring(stacks - 1, j)});
-    return m;
-}
-
 // An axis-aligned box [lo, hi] as 8 vertices and 12 outward triangles.
 Mesh box(glm::dvec3 lo, glm::dvec3 hi) { return test::box_mesh(lo, hi); }
 
@@ -153,17 +124,6 @@ Loops chain(const std::vector<SliceSegment>& s) {
         out.lengths.push_back(n);
     }
     return out;
-}
-
-template <class F> double median_ms(int runs, F f) {
-    std::vector<double> t;
-    for (int i = 0; i < runs; ++i) {
-        const auto t0 = std::chrono::steady_clock::now();
-        f();
-        t.push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
-    }
-    std::sort(t.begin(), t.end());
-    return t[t.size() / 2];
 }
 
 } // namespace
@@ -611,50 +571,6 @@ TEST(SliceReslice, SparseVolumesResliceAsDense) {
     }
 }
 
-TEST(SliceReslice, TimingOf512x512) {
-    // A print, not an assertion (tests never assert on time). A CT-sized
-    // int16 volume on the oblique grid; ISOSCOPE_SLICES_BIG=1 uses 512 x 512 x 400.
-    const bool big = std::getenv("ISOSCOPE_SLICES_BIG") != nullptr;
-    const std::array<std::int64_t, 3> dims = big ? std::array<std::int64_t, 3>{512, 512, 400}
-                                                 : std::array<std::int64_t, 3>{256, 256, 200};
-    Volume v = Volume::dense(dims, VoxelType::I16, oblique_affine(dims, big ? 0.7 : 1.4, kCentre));
-    auto s = v.as<std::int16_t>();
-    for (std::size_t i = 0; i < s.size(); ++i) s[i] = std::int16_t((i * 2654435761u) >> 20);
-    std::printf("reslice 512x512 from %lldx%lldx%lld int16 (oblique), median of 15, %d TBB threads:\n", (long long)dims[0],
-                (long long)dims[1], (long long)dims[2], tbb::this_task_arena::max_concurrency());
-    SliceImage img;
-    for (auto p : default_planes(v)) {
-        zoom_to_fit(p, 512, 512);
-        const SliceGrid g = slice_grid(p, 512, 512);
-        for (Interp interp : {Interp::Linear, Interp::Nearest}) {
-            const double ms = median_ms(15, [&] { reslice(v, g, interp, img); });
-            std::printf("  %-8s %-7s %7.2f ms\n", slice_orientation_name(p.orientation),
-                        interp == Interp::Linear ? "linear" : "nearest", ms);
-        }
-    }
-    const double wl = median_ms(15, [&] { (void)apply_window(img, {40, 400}, PixelFormat::Rgba8); });
-    std::printf("  window/level 512x512 -> RGBA8 %.2f ms\n", wl);
-    if (big) {
-        // Sparse storage goes through Volume::value (an OpenVDB tree lookup per sample).
-        const std::array<std::int64_t, 3> sd{256, 256, 200};
-        auto grid = openvdb::FloatGrid::create(0.0f);
-        auto acc = grid->getAccessor();
-        for (int k = 0; k < sd[2]; ++k)
-            for (int j = 0; j < sd[1]; ++j)
-                for (int i = 0; i < sd[0]; ++i) acc.setValue(openvdb::Coord(i, j, k), float((i * 7 + j * 3 + k) % 1000));
-        auto sg = std::make_shared<SparseGrid>();
-        sg->grid = grid;
-        const Volume sparse = Volume::sparse(sg, sd, oblique_affine(sd, 1.4, kCentre));
-        for (auto p : default_planes(sparse)) {
-            zoom_to_fit(p, 512, 512);
-            const SliceGrid g = slice_grid(p, 512, 512);
-            const double ms = median_ms(5, [&] { reslice(sparse, g, Interp::Linear, img); });
-            std::printf("  sparse 256x256x200 (all active) %-8s linear %7.2f ms\n", slice_orientation_name(p.orientation), ms);
-        }
-    }
-    SUCCEED();
-}
-
 // ---- window / level --------------------------------------------------------------------------
 
 TEST(SliceWindow, EndsOfTheWindowAreBlackAndWhite) {
@@ -815,15 +731,13 @@ TEST(SliceOutline, FacesInThePlaneAndDegenerateTriangles) {
     }
 }
 
-TEST(SliceOutline, TimingOfAMillionTriangles) {
+// The parallel path (blocks of 32768 triangles) on a large mesh: the
+// segments still chain into closed loops (tests/bench/slices_bench.cpp times it).
+TEST(SliceOutline, AMillionTrianglesChainIntoClosedLoops) {
     const Mesh sphere = uv_sphere({1, 2, 3}, 80, 640, 1024); // 1.31 M triangles
     SlicePlane p;
     p.origin = p.center = {1, 2, 3.3};
     p.pixel_mm = 0.35;
     const SliceGrid g = slice_grid(p, 512, 512);
-    std::size_t n = 0;
-    const double ms = median_ms(9, [&] { n = mesh_outline(sphere, g).size(); });
-    std::printf("outline of %zu triangles: %zu segments, median of 9 %.2f ms (%d TBB threads)\n", sphere.triangles.size(), n,
-                ms, tbb::this_task_arena::max_concurrency());
     EXPECT_TRUE(chain(mesh_outline(sphere, g)).ok);
 }

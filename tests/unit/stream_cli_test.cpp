@@ -14,10 +14,11 @@
 
 #include "io/mesh.hpp"
 #include "io/volume_io.hpp"
-#include "test_util.hpp"
+#include "tests/support/test_util.hpp"
 
 using namespace iso;
 using iso::test::TempDir;
+using iso::test::read_file;
 namespace fs = std::filesystem;
 
 namespace {
@@ -114,8 +115,7 @@ TEST(StreamCli, InfoReadsOnlyTheHeader) {
     // A copy of the header and its data file.
     fs::copy_file(test::data("headsq.nhdr"), dir / "h.nhdr");
     {
-        std::ifstream hin(test::data("headsq.nhdr"));
-        std::string text((std::istreambuf_iterator<char>(hin)), std::istreambuf_iterator<char>());
+        const std::string text = read_file(test::data("headsq.nhdr"));
         const auto at = text.find("data file:");
         ASSERT_NE(at, std::string::npos);
         const auto eol = text.find('\n', at);
@@ -180,10 +180,6 @@ TEST(StreamCli, OpenVdbHeaderAndSlabs) {
 TEST(StreamCli, NoOverlapWritesTheSameFiles) {
     TempDir dir;
     const std::string in = test::data("headsq.nhdr");
-    auto bytes = [](const fs::path& p) {
-        std::ifstream f(p, std::ios::binary);
-        return std::string((std::istreambuf_iterator<char>(f)), std::istreambuf_iterator<char>());
-    };
     for (const char* ext : {".ply", ".stl"}) {
         SCOPED_TRACE(ext);
         const std::string common = test::cli() + " mesh " + in + " --iso 500 --stream --memory 6 --chunk 8 -o ";
@@ -193,7 +189,7 @@ TEST(StreamCli, NoOverlapWritesTheSameFiles) {
         ASSERT_EQ(off.exit_code, 0) << off.out;
         EXPECT_EQ(nlohmann::json::parse(on.out)["streaming"]["overlapped"], true) << on.out;
         EXPECT_EQ(nlohmann::json::parse(off.out)["streaming"]["overlapped"], false) << off.out;
-        const std::string a = bytes(dir / ("on" + std::string(ext))), b = bytes(dir / ("off" + std::string(ext)));
+        const std::string a = read_file(dir / ("on" + std::string(ext))), b = read_file(dir / ("off" + std::string(ext)));
         EXPECT_GT(a.size(), 100000u);
         EXPECT_TRUE(a == b) << "the files differ";
     }

@@ -9,7 +9,6 @@
 // sums run in another order (per piece) and the volume about another centre.
 #include <algorithm>
 #include <atomic>
-#include <chrono>
 #include <cmath>
 #include <cstring>
 #include <filesystem>
@@ -31,7 +30,10 @@
 #include "io/volume_stream.hpp"
 #include "renderer/surface/extract.hpp"
 #include "renderer/surface/stream.hpp"
-#include "test_util.hpp"
+#include "renderer/surface/extract.hpp"
+#include "renderer/surface/stream.hpp"
+#include "tests/support/big_ball.hpp"
+#include "tests/support/test_util.hpp"
 
 // Is this an AddressSanitizer build? (GCC defines __SANITIZE_ADDRESS__, Clang answers __has_feature.)
 #if defined(__SANITIZE_ADDRESS__)
@@ -49,6 +51,8 @@ namespace iso {
 namespace {
 namespace fs = std::filesystem;
 using test::TempDir;
+using test::files_in;
+using test::read_file;
 
 // A wobbly ball (values fall off from the centre), in int16, with integer
 // values so that iso values equal to samples (ties) occur; or float32.
@@ -716,19 +720,6 @@ TEST(Stream, TruncatedAndMalformedFilesAreErrorsAndNothingIsWritten) {
     EXPECT_FALSE(open_volume_stream(dir / "c.nii.gz", std::size_t(1) << 20)->streaming());
 }
 
-// Every file under `dir` (relative paths, sorted); a file's bytes.
-std::vector<std::string> files_in(const fs::path& dir) {
-    std::vector<std::string> names;
-    for (const auto& e : fs::recursive_directory_iterator(dir)) names.push_back(fs::relative(e.path(), dir).string());
-    std::sort(names.begin(), names.end());
-    return names;
-}
-
-std::string file_bytes(const fs::path& p) {
-    std::ifstream in(p, std::ios::binary);
-    return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-}
-
 TEST(Stream, CancellingLeavesNoOutputAndKeepsTheUsersFile) {
     TempDir dir;
     const Volume v = ball({24, 24, 60}, VoxelType::I16, glm::dmat4(1.0));
@@ -747,7 +738,7 @@ TEST(Stream, CancellingLeavesNoOutputAndKeepsTheUsersFile) {
             auto sink = make_mesh_sink({dir / name});
             EXPECT_THROW(stream_extract(*src, so, *sink), Cancelled);
         }
-        EXPECT_EQ(file_bytes(dir / name), "the user's file");
+        EXPECT_EQ(read_file(dir / name), "the user's file");
         // v.nrrd and the user's file: no pieces, no temporaries
         EXPECT_EQ(files_in(dir.path()), (std::vector<std::string>{name, "v.nrrd"}));
         fs::remove(dir / name);
@@ -933,7 +924,7 @@ TEST(Stream, OverlapWritesTheSameFiles) {
                     layers = st.plan.layers_per_slab;
                 }
                 listing[overlap] = files_in(out);
-                for (const auto& f : listing[overlap]) bytes[overlap].push_back(file_bytes(out / f));
+                for (const auto& f : listing[overlap]) bytes[overlap].push_back(read_file(out / f));
             }
             EXPECT_EQ(listing[0], listing[1]);
             EXPECT_GT(listing[1].size(), 0u);
@@ -1066,7 +1057,7 @@ TEST(Stream, OverlapCancelStopsEveryStep) {
         EXPECT_EQ(calls_after.load(), 0);
         EXPECT_EQ(seen_running.load(), 2u) << "the reader and the writer run while the extraction reports progress";
         EXPECT_EQ(stream_threads_running(), 0u) << "a reader or writer thread is left running";
-        EXPECT_EQ(file_bytes(dir / name), "the user's file");
+        EXPECT_EQ(read_file(dir / name), "the user's file");
         EXPECT_EQ(files_in(dir.path()), (std::vector<std::string>{name, "v.nrrd"}));
         fs::remove(dir / name);
     }
@@ -1080,31 +1071,6 @@ std::size_t status_kib(const char* key) {
     while (std::getline(f, line))
         if (line.rfind(key, 0) == 0) return std::size_t(std::atoll(line.c_str() + std::strlen(key)));
     return 0;
-}
-
-// A 512 x 512 x nz int16 ball written slice by slice (never held whole) as a
-// detached NRRD header and its raw data; `wobble` adds a ripple.
-std::string write_big_ball(const TempDir& dir, int nz, double dz, bool wobble) {
-    const int nx = 512, ny = 512;
-    {
-        std::ofstream h(dir / "big.nhdr");
-        h << "NRRD0004\ntype: short\ndimension: 3\nspace: left-posterior-superior\nsizes: 512 512 " << nz
-          << "\nspace directions: (0.5,0,0) (0,0.5,0) (0,0," << dz << ")\nkinds: domain domain domain\nendian: little\n"
-             "encoding: raw\nspace origin: (0,0,0)\ndata file: big.raw\n";
-    }
-    std::ofstream d(dir / "big.raw", std::ios::binary);
-    std::vector<std::int16_t> slice(std::size_t(nx) * ny);
-    for (int k = 0; k < nz; ++k) {
-        for (int j = 0; j < ny; ++j)
-            for (int i = 0; i < nx; ++i) {
-                const double x = i - 255.5, y = j - 255.5, z = (k - 0.5 * (nz - 1)) * dz / 0.5;
-                double f = 1000.0 - 4.0 * std::sqrt(x * x + y * y + z * z);
-                if (wobble) f += 30.0 * std::sin(0.05 * i) * std::cos(0.07 * j + 0.01 * k);
-                slice[std::size_t(j) * nx + i] = std::int16_t(f);
-            }
-        d.write(reinterpret_cast<const char*>(slice.data()), std::streamsize(slice.size() * 2));
-    }
-    return dir / "big.nhdr";
 }
 
 // Streams the 128 MiB volume in `budget_mib` and checks the engine's
@@ -1152,7 +1118,7 @@ StreamPlan check_memory_bound(const TempDir& dir, std::size_t budget_mib, std::s
 TEST(Stream, A128MiBVolumeStreamsWithin32MiB) {
     TempDir dir;
     // 512 x 512 x 256 int16 (128 MiB), never held whole.
-    write_big_ball(dir, 256, 0.8, false);
+    test::write_big_ball(dir.path(), 256, 0.8, false);
     // 32 MiB: two slabs and their output do not fit, the steps run one after another.
     const StreamPlan serial = check_memory_bound(dir, 32);
     EXPECT_FALSE(serial.overlap);
@@ -1167,40 +1133,6 @@ TEST(Stream, A128MiBVolumeStreamsWithin32MiB) {
     const StreamPlan overlapped = check_memory_bound(dir, 96, index);
     EXPECT_TRUE(overlapped.overlap);
     EXPECT_GT(overlapped.slabs, 2u);
-}
-
-// A measurement, not a check (run with --gtest_also_run_disabled_tests;
-// docs/isosurface.md quotes it): a 512 x 512 x 2048 int16 volume (1 GiB),
-// written slice by slice, streamed with a 128 MiB budget, then extracted in
-// memory by the same process (after the streaming, so that the streaming's
-// VmHWM is not raised by it).
-TEST(Stream, DISABLED_Measure1GiB) {
-    TempDir dir;
-    write_big_ball(dir, 2048, 0.25, true);
-    const std::size_t budget = std::size_t(128) << 20;
-    { std::ofstream("/proc/self/clear_refs") << "5"; }
-    const std::size_t base_kib = status_kib("VmRSS:");
-    auto t0 = std::chrono::steady_clock::now();
-    auto src = open_volume_stream(dir / "big.nhdr");
-    StreamOptions so;
-    so.isos = {500.0};
-    so.memory_budget = budget;
-    auto sink = make_mesh_sink({dir / "big.ply"});
-    const auto st = stream_extract(*src, so, *sink);
-    const double ts = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-    const std::size_t hwm_stream = status_kib("VmHWM:");
-    const auto ms = sink->stats()[0];
-    t0 = std::chrono::steady_clock::now();
-    const Mesh ref = extract_isosurface(load_volume(dir / "big.nhdr"), 500.0);
-    const double tm = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-    const std::size_t hwm_mem = status_kib("VmHWM:");
-    std::printf("1 GiB int16, iso 500: streamed (budget 128 MiB) %.1f s [index+read %.1f s, extract %.1f s, write %.1f s], "
-                "%zu slabs of %d layers (chunk %d), engine peak %.1f MiB, VmHWM %.1f MiB (base %.1f MiB); "
-                "in memory (load + extract, no write) %.1f s, VmHWM %.1f MiB; %zu triangles (in memory %zu)\n",
-                ts, st.read_seconds, st.extract_seconds, st.write_seconds, st.plan.slabs, st.plan.layers_per_slab, st.plan.chunk_size,
-                double(st.peak_bytes) / 1048576.0, double(hwm_stream) / 1024.0, double(base_kib) / 1024.0, tm,
-                double(hwm_mem) / 1024.0, std::size_t(ms.triangles), ref.triangles.size());
-    EXPECT_EQ(ms.triangles, ref.triangles.size());
 }
 
 } // namespace

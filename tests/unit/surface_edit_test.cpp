@@ -12,7 +12,9 @@
 #include "io/error.hpp"
 #include "renderer/surface/extract.hpp"
 #include "renderer/surface/analysis.hpp"
-#include "test_util.hpp"
+#include "renderer/surface/extract.hpp"
+#include "renderer/surface/analysis.hpp"
+#include "tests/support/test_util.hpp"
 
 using namespace iso;
 
@@ -159,8 +161,9 @@ TEST(SurfaceEdit, AddReplaceRemoveKeepIdsStable) {
     EXPECT_EQ(s.info(skin).name, "iso 500");
     EXPECT_EQ(s.info(skin).kind, core::SurfaceInfo::Kind::Iso);
     EXPECT_EQ(s.info(skin).source, test::data("headsq.nhdr"));
-    EXPECT_EQ(s.info(skin).color, core::surface_color(0, 2)) << "the first skin-toned";
-    EXPECT_EQ(s.info(bone).color, core::surface_color(1, 2)) << "then bone white";
+    // The default colours, linear RGB, stated here rather than read from the palette under test.
+    EXPECT_EQ(s.info(skin).color, glm::vec3(0.93f, 0.72f, 0.60f)) << "the first skin-toned";
+    EXPECT_EQ(s.info(bone).color, glm::vec3(0.95f, 0.92f, 0.84f)) << "then bone white";
     EXPECT_EQ(s.info(third).color, glm::vec3(0.1f, 0.2f, 0.3f));
     EXPECT_EQ(s.info(bone).post.smooth, 0.5);
 

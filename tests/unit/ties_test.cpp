@@ -40,11 +40,14 @@
 #include <vtkShortArray.h>
 
 #include "io/volume_io.hpp"
-#include "measure_phantoms.hpp"
 #include "renderer/surface/analysis.hpp"
-#include "test_util.hpp"
+#include "tests/support/measure_phantoms.hpp"
+#include "tests/support/meshes.hpp"
+#include "renderer/surface/analysis.hpp"
+#include "tests/support/test_util.hpp"
 
 using namespace iso;
+using iso::test::canonical;
 using iso::test::plain_sums;
 
 namespace {
@@ -156,21 +159,6 @@ Report check(const Mesh& m, const Volume& v) {
         i = j;
     }
     return r;
-}
-
-// Triangles as position triples, rotated to start at the smallest vertex
-// (orientation kept) and sorted: equal lists mean equal meshes.
-using Tri = std::array<std::array<float, 3>, 3>;
-std::vector<Tri> canonical(const Mesh& m) {
-    std::vector<Tri> out;
-    for (const auto& t : m.triangles) {
-        Tri tri;
-        for (int k = 0; k < 3; ++k) tri[k] = {m.positions[t[k]].x, m.positions[t[k]].y, m.positions[t[k]].z};
-        std::rotate(tri.begin(), std::min_element(tri.begin(), tri.end()), tri.end());
-        out.push_back(tri);
-    }
-    std::sort(out.begin(), out.end());
-    return out;
 }
 
 // Checks one volume at one iso value: manifold, and the same at every chunk size.

@@ -1,4 +1,4 @@
-// A thin-structure CT phantom (issue 15): a CT-angiogram-like volume in
+// A thin-structure CT phantom: a CT-angiogram-like volume in
 // Hounsfield units with a branching, contrast-filled vessel tree whose radii
 // go from 3.5 mm down to ~0.45 mm (below the 0.7 x 0.7 x 1.0 mm voxel), two
 // thin bone shells (1.2 and 2 mm) and a thin bone plate (1 mm) behind it, in

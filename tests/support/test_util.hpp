@@ -1,11 +1,16 @@
-// Helpers shared by the CPU tests.
+// Helpers shared by the tests (CPU, GL, MPI): data paths, temporary
+// folders, reading and writing whole files, running the CLI as a process.
 #pragma once
 
+#include <algorithm>
 #include <array>
 #include <cstdio>
 #include <filesystem>
+#include <fstream>
+#include <iterator>
 #include <memory>
 #include <string>
+#include <vector>
 
 #include <gtest/gtest.h>
 
@@ -31,6 +36,26 @@ public:
 private:
     std::filesystem::path path_;
 };
+
+// A file's bytes ("" when it cannot be read).
+inline std::string read_file(const std::filesystem::path& path) {
+    std::ifstream f(path, std::ios::binary);
+    return std::string(std::istreambuf_iterator<char>(f), {});
+}
+
+// Writes `bytes` as the whole file, replacing what was there.
+inline void write_file(const std::filesystem::path& path, const std::string& bytes) {
+    std::ofstream(path, std::ios::binary | std::ios::trunc) << bytes;
+}
+
+// Every file and folder under `dir`, as paths relative to it, sorted.
+inline std::vector<std::string> files_in(const std::filesystem::path& dir) {
+    std::vector<std::string> names;
+    for (const auto& e : std::filesystem::recursive_directory_iterator(dir))
+        names.push_back(std::filesystem::relative(e.path(), dir).string());
+    std::sort(names.begin(), names.end());
+    return names;
+}
 
 struct CommandResult {
     int exit_code = -1;

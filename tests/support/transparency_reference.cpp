@@ -1,4 +1,4 @@
-#include "renderer/ao/transparency_reference.hpp"
+#include "tests/support/transparency_reference.hpp"
 
 #include <algorithm>
 #include <cmath>

@@ -1,0 +1,172 @@
+// Picking in the desktop app's 3D view (docs/gui.md "Pick and measure"),
+// driven in-process through QTest in a real X server (CTest runs this
+// program under xvfb-run; it skips without a display): a click's readout,
+// hover, a click after rotating, and what a pick leaves alone. Expected
+// values come from `isoscope pick` (core::pick, render_image's own frame in
+// another process) and core::pick on a fresh scene, not from the window's
+// own state.
+#include <QElapsedTimer>
+#include <QStatusBar>
+#include <QTest>
+
+#include <algorithm>
+#include <cstdio>
+#include <thread>
+
+#include "gui_measure_util.hpp"
+#include "renderer/core/pick.hpp"
+#include "renderer/core/scene.hpp"
+
+using namespace iso;
+using namespace iso::test;
+using GuiPick = HeadWindow;
+
+TEST_F(GuiPick, ClickShowsTheCliPickAndMovesTheCrosshair) {
+    gui::MainWindow& w = window();
+    gui::Viewer* viewer = w.viewer();
+    const QSize size = viewer->image_size();
+    const QPoint at = face_pixel(size);
+    QTest::mouseClick(viewer, Qt::LeftButton, {}, at);
+    const std::string msg = w.statusBar()->currentMessage().toStdString();
+    std::printf("3D click at %d,%d: %s\n", at.x(), at.y(), msg.c_str());
+    const auto shown = parse_readout(msg);
+    ASSERT_TRUE(shown) << msg;
+    nlohmann::json layer;
+    ASSERT_NO_FATAL_FAILURE(cli_pick(size, at, layer));
+    EXPECT_EQ(layer["surface"], "iso 1150") << "through the skin at 0.3 the bone is what is seen: " << layer;
+    const glm::dvec3 expected = json_lps(layer);
+    EXPECT_NEAR(shown->lps.x, expected.x, kPrinted);
+    EXPECT_NEAR(shown->lps.y, expected.y, kPrinted);
+    EXPECT_NEAR(shown->lps.z, expected.z, kPrinted);
+    EXPECT_NEAR(shown->value, layer["hu"].get<double>(), kPrinted);
+    EXPECT_EQ(shown->surface, layer["surface"].get<std::string>());
+    // ... and the slice views' crosshair moved there (each plane through the point).
+    EXPECT_NEAR(w.slice_view(core::SliceOrientation::Axial)->grid().offset_mm, expected.z, 1e-6);
+    EXPECT_NEAR(w.slice_view(core::SliceOrientation::Coronal)->grid().offset_mm, expected.y, 1e-6);
+    EXPECT_NEAR(w.slice_view(core::SliceOrientation::Sagittal)->grid().offset_mm, expected.x, 1e-6);
+
+    // A background pixel says so.
+    QTest::mouseClick(viewer, Qt::LeftButton, {}, QPoint(3, 3));
+    EXPECT_EQ(w.statusBar()->currentMessage(), "background");
+}
+
+// Throttled picks, the latest position wins.
+TEST_F(GuiPick, HoverPicksAreThrottledAndFollowThePointer) {
+    gui::MainWindow& w = window();
+    gui::Viewer* viewer = w.viewer();
+    const QPoint at = face_pixel(viewer->image_size());
+    auto* tools = w.measure_tools();
+    const int before = tools->hover_picks();
+    hover(viewer, QPoint(at.x() - 30, at.y()));
+    ASSERT_TRUE(wait_until([&] { return tools->hover_picks() > before; }, 5000)) << "no hover pick";
+    const auto hovered = viewer->pick_at(QPointF(at.x() - 30 + 0.5, at.y() + 0.5));
+    EXPECT_EQ(w.statusBar()->currentMessage(), tools->readout(hovered));
+    // A burst of moves at once: one pick, for the last position.
+    const int burst = tools->hover_picks();
+    const QPoint last(at.x() + 20, at.y() + 25);
+    QTest::qWait(2 * tools->hover_interval_ms()); // an idle pointer
+    for (int k = 0; k < 10; ++k) hover(viewer, QPoint(at.x() - 20 + 4 * k, at.y() + 2 * k + 7));
+    hover(viewer, last);
+    QTest::qWait(3 * tools->hover_interval_ms());
+    EXPECT_EQ(tools->hover_picks() - burst, 1) << "hover picks are not throttled";
+    EXPECT_EQ(w.statusBar()->currentMessage(), tools->readout(viewer->pick_at(QPointF(last) + QPointF(0.5, 0.5))));
+    // A pointer moving for 2 s, a move every 10 ms: at most one pick per
+    // interval (80 ms or more), and the readout follows.
+    const int moving = tools->hover_picks();
+    QElapsedTimer t;
+    t.start();
+    // At least 2 s; on a loaded machine (picks slow, the interval adapts
+    // upwards) on until two picks came, at most 10 s.
+    for (int k = 0; t.elapsed() < 2000 || (tools->hover_picks() - moving < 2 && t.elapsed() < 10000); ++k) {
+        hover(viewer, QPoint(at.x() - 40 + (k % 80), at.y() + 30));
+        QTest::qWait(10);
+    }
+    const double seconds = t.elapsed() / 1000.0;
+    const int picks = tools->hover_picks() - moving;
+    std::printf("hover: %d picks in %.2f s of moving, interval now %d ms\n", picks, seconds, tools->hover_interval_ms());
+    EXPECT_GE(picks, 2) << "the readout does not follow a moving pointer";
+    EXPECT_LE(picks, int(seconds * 1000 / 80) + 1) << "hover picks are not throttled";
+}
+
+// Rotate with the mouse (left drag), then click: the readout is core::pick's
+// with the view's camera (a fresh scene of the same state, on a worker
+// thread: render_image has its own EGL context).
+TEST_F(GuiPick, ClickAfterRotatingIsCorePickWithTheViewsCamera) {
+    gui::MainWindow& w = window();
+    gui::Viewer* viewer = w.viewer();
+    const QSize size = viewer->image_size();
+    const Camera before = viewer->camera();
+    const QPoint from(size.width() / 2, size.height() / 2), to = from + QPoint(70, -25);
+    // Events straight to the view (QTest::mouseMove moves the X pointer, whose events arrive later).
+    const auto send = [&](QEvent::Type type, QPoint at, Qt::MouseButtons held) {
+        const Qt::MouseButton button = type == QEvent::MouseMove ? Qt::NoButton : Qt::LeftButton;
+        QMouseEvent e(type, QPointF(at), viewer->mapToGlobal(QPointF(at)), button, held, Qt::NoModifier);
+        QCoreApplication::sendEvent(viewer, &e);
+    };
+    send(QEvent::MouseButtonPress, from, Qt::LeftButton);
+    for (int k = 1; k <= 5; ++k) send(QEvent::MouseMove, from + (to - from) * k / 5, Qt::LeftButton);
+    send(QEvent::MouseButtonRelease, to, Qt::NoButton);
+    const Camera turned = viewer->camera();
+    ASSERT_GT(glm::length(turned.eye - before.eye), 1.0) << "the left drag did not rotate the view";
+    const int drawn = viewer->frames();
+    ASSERT_TRUE(wait_until([&] { return viewer->frames() > drawn; }, 30000));
+    const QPoint px(size.width() / 2 - 14, int(size.height() * 0.47));
+    QTest::mouseClick(viewer, Qt::LeftButton, {}, px);
+    const std::string turned_msg = w.statusBar()->currentMessage().toStdString();
+    std::printf("3D click after rotating, at %d,%d: %s\n", px.x(), px.y(), turned_msg.c_str());
+    const auto got = parse_readout(turned_msg);
+    ASSERT_TRUE(got) << turned_msg;
+    core::PickResult ref;
+    std::string error;
+    std::thread worker([&] {
+        try {
+            core::Scene s;
+            s.open(headsq());
+            const auto ids = s.add_isosurfaces({500, 1150});
+            s.info(ids[0]).opacity = 0.3f;
+            core::RenderRequest req;
+            req.width = size.width();
+            req.height = size.height();
+            req.camera = turned;
+            core::PickRequest at_px;
+            at_px.x = px.x();
+            at_px.y = px.y();
+            ref = core::pick(s, req, at_px);
+        } catch (const std::exception& e) {
+            error = e.what();
+        }
+    });
+    worker.join();
+    ASSERT_TRUE(error.empty()) << error;
+    ASSERT_TRUE(ref.visible.has_value()) << "the pixel should see the head after the turn";
+    const auto& l = ref.layers[*ref.visible];
+    EXPECT_NEAR(got->lps.x, l.lps.x, kPrinted);
+    EXPECT_NEAR(got->lps.y, l.lps.y, kPrinted);
+    EXPECT_NEAR(got->lps.z, l.lps.z, kPrinted);
+    ASSERT_TRUE(l.hu.has_value());
+    EXPECT_NEAR(got->value, *l.hu, kPrinted);
+    EXPECT_EQ(got->surface, l.name);
+}
+
+// What a pick costs in the view (docs/gui.md: the frame it rides on,
+// presented, and the resolve; printed), and picks leave the view's AO
+// accumulation alone: the next frame adds to it.
+TEST_F(GuiPick, PicksLeaveTheAoAccumulationAlone) {
+    gui::MainWindow& w = window();
+    gui::Viewer* viewer = w.viewer();
+    const QSize size = viewer->image_size();
+    const QPoint at = face_pixel(size);
+    std::vector<double> ms;
+    for (int k = 0; k < 5; ++k) ms.push_back(viewer->pick_at(QPointF(at) + QPointF(0.5, 0.5)).frame_ms);
+    std::sort(ms.begin(), ms.end());
+    std::printf("3D view pick at %dx%d: median %.1f ms, min %.1f, max %.1f of 5\n", size.width(), size.height(), ms[2], ms[0],
+                ms[4]);
+    if (viewer->options().ao) {
+        ASSERT_TRUE(wait_until([&] { return viewer->converged(); }, 120000)) << "the AO did not converge";
+        const int ao_frames = viewer->ao_frames(), drawn = viewer->frames();
+        viewer->pick_at(QPointF(at));
+        viewer->update();
+        ASSERT_TRUE(wait_until([&] { return viewer->frames() > drawn; }, 10000));
+        EXPECT_EQ(viewer->ao_frames(), ao_frames + 1) << "a pick restarted the view's AO accumulation";
+    }
+}
