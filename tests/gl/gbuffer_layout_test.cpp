@@ -5,6 +5,7 @@
 
 #include "renderer/gl/context.hpp"
 #include "renderer/gl/objects.hpp"
+#include "renderer/gpu/renderer.hpp"
 #include "renderer/surface/extract.hpp"
 #include "gl_test.hpp"
 #include "tests/support/test_util.hpp"
