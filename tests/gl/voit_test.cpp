@@ -15,12 +15,9 @@
 #include <glm/glm.hpp>
 
 #include "gl_test.hpp"
-#include "renderer/ao/transparency_reference.hpp"
 #include "renderer/surface/extract.hpp"
 #include "renderer/gpu/renderer.hpp"
 #include "tests/support/transparency_reference.hpp"
-#include "renderer/surface/extract.hpp"
-#include "renderer/gpu/renderer.hpp"
 #include "tests/support/meshes.hpp"
 #include "tests/support/scenes.hpp"
 #include "tests/support/test_util.hpp"
