@@ -34,8 +34,6 @@
 #include "renderer/surface/partition.hpp"
 #include "renderer/surface/stream.hpp"
 #include "renderer/core/surface_name.hpp"
-#include "renderer/surface/partition.hpp"
-#include "renderer/surface/stream.hpp"
 
 namespace iso::cluster {
 

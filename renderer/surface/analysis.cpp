@@ -8,9 +8,7 @@
 #include "io/markups.hpp"
 #include "renderer/surface/arena.hpp"
 #include "renderer/surface/analysis.hpp"
-#include "renderer/surface/arena.hpp"
 #include "renderer/surface/atomic.hpp"
-#include "renderer/surface/analysis.hpp"
 #include "renderer/surface/union_find.hpp"
 
 #include <algorithm>

@@ -17,8 +17,6 @@
 #include "renderer/core/api.hpp"
 #include "renderer/surface/extract.hpp"
 #include "renderer/gpu/renderer.hpp"
-#include "renderer/surface/extract.hpp"
-#include "renderer/gpu/renderer.hpp"
 #include "tests/support/meshes.hpp"
 #include "tests/support/pixels.hpp"
 #include "tests/support/scenes.hpp"

@@ -29,7 +29,6 @@
 #include "renderer/ao/disk_hierarchy.hpp"
 #include "renderer/core/api.hpp"
 #include "renderer/gpu/renderer.hpp"
-#include "renderer/gpu/renderer.hpp"
 #include "tests/support/ao_metrics.hpp"
 #include "tests/support/meshes.hpp"
 #include "tests/support/scenes.hpp"

@@ -18,8 +18,6 @@
 #include "renderer/surface/analysis.hpp"
 #include "renderer/frame/annotations.hpp"
 #include "gui_test_util.hpp"
-#include "renderer/surface/analysis.hpp"
-#include "renderer/frame/annotations.hpp"
 
 using namespace iso;
 using namespace iso::test;

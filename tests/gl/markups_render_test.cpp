@@ -14,8 +14,6 @@
 #include "io/image.hpp"
 #include "renderer/frame/annotations.hpp"
 #include "renderer/gpu/renderer.hpp"
-#include "renderer/frame/annotations.hpp"
-#include "renderer/gpu/renderer.hpp"
 #include "tests/support/pixels.hpp"
 #include "tests/support/test_util.hpp"
 

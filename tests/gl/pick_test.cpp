@@ -13,7 +13,6 @@
 
 #include "gl_test.hpp"
 #include "renderer/gpu/renderer.hpp"
-#include "renderer/gpu/renderer.hpp"
 #include "tests/support/meshes.hpp"
 #include "tests/support/scenes.hpp"
 

@@ -12,8 +12,6 @@
 #include "renderer/gl/objects.hpp"
 #include "renderer/frame/annotations.hpp"
 #include "renderer/surface/extract.hpp"
-#include "renderer/frame/annotations.hpp"
-#include "renderer/surface/extract.hpp"
 #include "tests/support/meshes.hpp"
 #include "tests/support/pixels.hpp"
 #include "tests/support/test_util.hpp"

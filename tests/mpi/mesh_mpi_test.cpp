@@ -27,7 +27,6 @@
 #include "io/vtk_mesh.hpp"
 #include "renderer/surface/components.hpp"
 #include "renderer/surface/analysis.hpp"
-#include "renderer/surface/components.hpp"
 #include "tests/support/test_util.hpp"
 
 using namespace iso;

@@ -20,10 +20,7 @@
 #include "renderer/surface/components.hpp"
 #include "renderer/surface/extract.hpp"
 #include "renderer/surface/partition.hpp"
-#include "renderer/surface/components.hpp"
-#include "renderer/surface/extract.hpp"
 #include "renderer/surface/analysis.hpp"
-#include "renderer/surface/partition.hpp"
 
 using namespace iso;
 using iso::test::sample_field;

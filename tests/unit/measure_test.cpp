@@ -20,7 +20,6 @@
 #include "io/sparse.hpp"
 #include "renderer/surface/extract.hpp"
 #include "tests/support/measure_phantoms.hpp"
-#include "renderer/surface/extract.hpp"
 #include "tests/support/meshes.hpp"
 #include "tests/support/test_util.hpp"
 

@@ -30,8 +30,6 @@
 #include "io/volume_stream.hpp"
 #include "renderer/surface/extract.hpp"
 #include "renderer/surface/stream.hpp"
-#include "renderer/surface/extract.hpp"
-#include "renderer/surface/stream.hpp"
 #include "tests/support/big_ball.hpp"
 #include "tests/support/test_util.hpp"
 

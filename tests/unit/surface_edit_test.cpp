@@ -12,8 +12,6 @@
 #include "io/error.hpp"
 #include "renderer/surface/extract.hpp"
 #include "renderer/surface/analysis.hpp"
-#include "renderer/surface/extract.hpp"
-#include "renderer/surface/analysis.hpp"
 #include "tests/support/test_util.hpp"
 
 using namespace iso;

@@ -43,7 +43,6 @@
 #include "renderer/surface/analysis.hpp"
 #include "tests/support/measure_phantoms.hpp"
 #include "tests/support/meshes.hpp"
-#include "renderer/surface/analysis.hpp"
 #include "tests/support/test_util.hpp"
 
 using namespace iso;
