@@ -8,6 +8,7 @@
 #include <glm/glm.hpp>
 
 #include "io/error.hpp"
+#include "renderer/gl/context.hpp"
 #include "renderer/surface/analysis.hpp"
 
 namespace iso::core {
@@ -69,19 +70,20 @@ PickRegion pick_region(const PickRequest& p) {
 }
 
 PickResult pick(Scene& scene, const RenderRequest& req, const PickRequest& p) {
-    validate(p, req.width, req.height);
-    RenderRequest r = req;
-    r.pick = pick_region(p);
-    const auto t0 = std::chrono::steady_clock::now();
-    const RenderOutput frame = render_image(scene, r);
-    PickResult out = resolve_pick(scene, frame.camera, req.width, req.height, frame.pick, p);
-    out.frame_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
-    return out;
+    const gl::ScopedCurrent context;
+    // One GL context serves every scene of the process: free this one's GPU
+    // resources while it is current.
+    struct Release {
+        Scene& s;
+        ~Release() { s.release_gpu(); }
+    } release{scene};
+    return pick_in_frame(scene, frame_camera(scene, req), frame_options(req), p);
 }
 
 PickResult pick_in_frame(Scene& scene, const Camera& camera, RenderOptions opt, const PickRequest& p) {
     validate(p, opt.width, opt.height);
     opt.pick = pick_region(p);
+    opt.image = false; // the lists are the output: no lighting, VOIT resolve or read-back
     const auto t0 = std::chrono::steady_clock::now();
     const RenderResult frame = scene.render(camera, opt);
     PickResult out = resolve_pick(scene, camera, opt.width, opt.height, frame.pick, p);

@@ -75,6 +75,10 @@ struct RenderOptions {
     // the image back; 0 means read back into RenderResult::image.
     unsigned target_framebuffer = 0;
     bool present = false;
+    // Off: the frame has no image output, neither read back nor presented (a
+    // frame that only picks): the graph then culls what only the image
+    // needs (AO, lighting, the VOIT resolve, the overlay, the read-back).
+    bool image = true;
     // Finish the GPU's work at the end of each pass so that per-pass times
     // are real (costs some throughput; for --stats and benchmarks).
     bool time_passes = false;

@@ -203,7 +203,8 @@ RenderResult Renderer::render(const Camera& camera, const RenderOptions& opt, co
         if (opt.time_passes) fg.set_pass_epilogue([] { glFinish(); });
         passes::build_frame(fg, ctx);
         result.stats = fg.execute(im.pool);
-        if (ctx.translucent.empty()) return result;
+        // Without an image the resolve did not run: no fragment count to size the pool from, nothing to redraw.
+        if (ctx.translucent.empty() || !opt.image) return result;
         // Sizes are powers of two and shrink only when four times too large,
         // so a moving view keeps its pool instead of remaking it each frame.
         const std::size_t n = std::size_t(result.oit.fragments);

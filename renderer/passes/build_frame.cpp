@@ -80,6 +80,7 @@ void build_frame(graph::FrameGraph& fg, const FrameContext& ctx) {
     PickBuffers picked;
     if (!ctx.translucent.empty()) color = voit(fg, ctx, gb, color, opt.ao && !opt.flat_shading ? &ao : nullptr, picked);
     if (ctx.pick) pick(fg, ctx, gb, picked);
+    if (!opt.image) return; // nothing reads the colour image or an AOV: their passes are culled
     if (opt.annotations) color = overlay(fg, ctx, color, gb.depth);
     if (opt.present) return present(fg, ctx, color);
     // The colour image, or the AOV: depth, AO, or the G-buffer channel the layout table names.

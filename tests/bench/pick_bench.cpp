@@ -17,9 +17,13 @@
 //   (b) the frame with the pick riding on it, to the resolved result
 //       (the lists read back, the layers' exact points),
 //   (c) = (b) - (a) of the same pair: what the pick adds to its frame;
-// and core::pick (the API the CLI calls), which renders through
-// render_image: the scene is uploaded and freed on each call and the
-// colour image read back, so it is not a per-pick latency of a live view.
+//   (d) a click or hover in the 3D view: a frame that only picks (no image
+//       output, so the graph culls lighting, the VOIT resolve and the
+//       read-back), to the resolved result, against
+//   (e) the same frame reading the colour image back, as the view's picks
+//       did before;
+// and core::pick (the API the CLI calls): the scene is uploaded and freed
+// on each call, so it is not a per-pick latency of a live view.
 // Also: frames in blocks all without or all with a pick (does switching
 // cost anything?), and per-pass times (time_passes) without and with a pick
 // (where the added cost goes).
@@ -132,36 +136,18 @@ struct OurPick {
     std::optional<std::size_t> visible;
 };
 
-// The pixel's ray against the listed triangle's plane in double precision
-// (core::pick's step, which the API does not expose apart from a render).
-OurPick resolve(const PickList& list, const Camera& cam, int x, int y, int size, const std::vector<const Mesh*>& meshes) {
+// Our pick as the core resolves it (core::resolve_pick: the pixel's ray
+// meets each listed triangle in double precision), as the bench records it
+// (surfaces 0-based).
+OurPick resolve(const core::Scene& scene, const PickList& list, const Camera& cam, int x, int y, int size) {
+    core::PickRequest p;
+    p.x = x;
+    p.y = y;
+    p.threshold = kThreshold;
+    const core::PickResult r = core::resolve_pick(scene, cam, size, size, list, p);
     OurPick out;
-    const auto& frags = list.pixels[std::size_t(y - list.region.y) * std::size_t(list.region.width) + std::size_t(x - list.region.x)];
-    const Ray ray = cam.pixel_ray(x + 0.5, y + 0.5, size, size);
-    for (const PickFragment& f : frags) {
-        Layer l;
-        l.surface = int(f.object) - 1;
-        l.triangle = f.primitive;
-        const Mesh& m = *meshes.at(std::size_t(l.surface));
-        const auto& tri = m.triangles.at(f.primitive);
-        const glm::dvec3 a(m.positions[tri[0]]), b(m.positions[tri[1]]), c(m.positions[tri[2]]);
-        const glm::dvec3 e1 = b - a, e2 = c - a, p = glm::cross(ray.dir, e2);
-        const double det = glm::dot(e1, p);
-        if (std::abs(det) > 1e-300) {
-            const glm::dvec3 s = ray.origin - a, q = glm::cross(s, e1);
-            const double u = glm::dot(s, p) / det, v = glm::dot(ray.dir, q) / det;
-            l.lps = ray.origin + (glm::dot(e2, q) / det) * ray.dir;
-            l.on_triangle = u >= 0 && v >= 0 && u + v <= 1;
-        } else {
-            l.lps = (a + b + c) / 3.0;
-            l.on_triangle = false;
-        }
-        const double acc = 1.0 - double(f.transmittance) * (1.0 - double(f.alpha));
-        const bool reaches = acc >= kThreshold;
-        if (reaches && !out.visible) out.visible = out.layers.size();
-        out.layers.push_back(l);
-        if (f.alpha >= 1.0f || reaches) break;
-    }
+    out.visible = r.visible;
+    for (const auto& l : r.layers) out.layers.push_back({int(l.surface) - 1, l.triangle, l.lps, l.on_triangle});
     return out;
 }
 
@@ -185,6 +171,7 @@ struct PickRow {
     std::vector<Hit> ref;
     std::optional<Hit> ref_visible;
     std::vector<double> a, b, c; // ms per repetition
+    std::vector<double> click_only, click_image; // a click's frame without and with an image output (d, e)
     OurPick ours;
     std::optional<double> api_ms, api_frame_ms;
     std::optional<glm::dvec3> api_lps;
@@ -305,8 +292,6 @@ int main(int argc, char** argv) {
                 const glm::dvec3 p0(written[s].positions[t[0]]), p1(written[s].positions[t[1]]), p2(written[s].positions[t[2]]);
                 ref_tris.push_back({p0, p1 - p0, p2 - p0, int(s), std::uint32_t(k)});
             }
-        std::vector<const Mesh*> ours_meshes;
-        for (const auto id : ids) ours_meshes.push_back(&scene.mesh(id));
 
         gl::HeadlessContext ctx;
         ctx.make_current();
@@ -352,7 +337,7 @@ int main(int argc, char** argv) {
                 RenderResult r = scene.render(cam, o);
                 glFinish();
                 OurPick picked;
-                if (p) picked = resolve(r.pick, cam, p->x, p->y, S, ours_meshes);
+                if (p) picked = resolve(scene, r.pick, cam, p->x, p->y, S);
                 const double ms = 1000.0 * (bench::now_s() - t0);
                 if (gl_renderer.empty()) gl_renderer = r.gl_renderer;
                 return std::make_pair(ms, picked);
@@ -377,6 +362,29 @@ int main(int argc, char** argv) {
                     r.b.push_back(tb);
                     r.c.push_back(tb - ta);
                 }
+            // A click or hover in the 3D view (core::pick_in_frame): a frame that only picks, whose graph culls
+            // lighting, the VOIT resolve and the read-back (d), against the same frame reading the colour image
+            // back as the view's picks did before (e); alternating, each to the resolved result.
+            const auto click = [&](const PickRow& p, bool image) {
+                RenderOptions o = plain;
+                o.present = false;
+                o.target_framebuffer = 0;
+                o.image = image;
+                o.pick = PickRegion{p.x, p.y, 1, 1};
+                const double t0 = bench::now_s();
+                const RenderResult r = scene.render(cam, o);
+                resolve(scene, r.pick, cam, p.x, p.y, S);
+                return 1000.0 * (bench::now_s() - t0);
+            };
+            for (int w = 0; w < 2; ++w) click(rows[0], true), click(rows[0], false);
+            for (int rep = 0; rep < a.reps; ++rep)
+                for (std::size_t i = 0; i < rows.size(); ++i) {
+                    PickRow& r = rows[i];
+                    const bool only_first = (rep + i) % 2 == 0;
+                    const double first = click(r, !only_first), second = click(r, only_first);
+                    r.click_only.push_back(only_first ? first : second);
+                    r.click_image.push_back(only_first ? second : first);
+                }
             // Toggling: in blocks of frames all without or all with a pick (a new pixel each, as hover picking would),
             // the first frame of a block follows a frame of the other kind; the rest follow their own kind.
             std::vector<double> steady_a, steady_b, toggle_a, toggle_b, created_toggle_a, created_toggle_b, created_steady;
@@ -388,7 +396,7 @@ int main(int argc, char** argv) {
                     const double t0 = bench::now_s();
                     RenderResult r = scene.render(cam, o);
                     glFinish();
-                    if (with) resolve(r.pick, cam, o.pick->x, o.pick->y, S, ours_meshes);
+                    if (with) resolve(scene, r.pick, cam, o.pick->x, o.pick->y, S);
                     const double ms = 1000.0 * (bench::now_s() - t0);
                     const double created = double(r.stats.physical_resources);
                     if (block == 0) continue; // the first block follows the A/B loop's last frame
@@ -487,8 +495,10 @@ int main(int argc, char** argv) {
 
             // ---- latency table ----
             // Every sample: picks x repetitions (ours, the selector, the cell picker), frames (VTK's), calls (core::pick).
-            std::vector<double> va, vb, vc, vapi, vapi_frame, vcp, vsel;
+            std::vector<double> va, vb, vc, vd, ve, vapi, vapi_frame, vcp, vsel;
             for (const auto& r : rows) {
+                vd.insert(vd.end(), r.click_only.begin(), r.click_only.end());
+                ve.insert(ve.end(), r.click_image.begin(), r.click_image.end());
                 va.insert(va.end(), r.a.begin(), r.a.end());
                 vb.insert(vb.end(), r.b.begin(), r.b.end());
                 vc.insert(vc.end(), r.c.begin(), r.c.end());
@@ -500,7 +510,9 @@ int main(int argc, char** argv) {
             sum.latency.push_back({"ours: frame, no pick (a)", stat(va)});
             sum.latency.push_back({"ours: frame with the pick riding on it, to the result (b)", stat(vb)});
             sum.latency.push_back({"ours: the pick's added cost, (b) - (a) of each pair", stat(vc)});
-            sum.latency.push_back({"ours: core::pick (API; uploads the scene, reads the image back)", stat(vapi)});
+            sum.latency.push_back({"ours: a click in the 3D view: a frame that only picks, to the result (d)", stat(vd)});
+            sum.latency.push_back({"ours: the same click reading the colour image back, as before (e)", stat(ve)});
+            sum.latency.push_back({"ours: core::pick (API; uploads the scene, a pick-only frame)", stat(vapi)});
             if (have_vtk) {
                 sum.latency.push_back({"VTK: frame (Render + WaitForCompletion)", stat(vtk_frames)});
                 sum.latency.push_back({"VTK: vtkHardwareSelector::Select, 1 px, cells", stat(vsel)});
@@ -511,7 +523,7 @@ int main(int argc, char** argv) {
             for (const auto& [name, st] : sum.latency)
                 if (st.n) std::printf("| %s | %zu | %s | %s | %s |\n", name.c_str(), st.n, fmt_ms(st.median).c_str(), fmt_ms(st.p25).c_str(),
                                       fmt_ms(st.p75).c_str());
-            std::printf("\ncore::pick's own frame_ms (render_image inside it): median %.1f ms\n", stat(vapi_frame).median);
+            std::printf("\ncore::pick's own frame_ms (its pick-only frame): median %.1f ms\n", stat(vapi_frame).median);
             if (have_vtk)
                 std::printf("VTK: vtkCellLocator builds %.1f ms (skin) and %.1f ms (bone), once, before the picks\n",
                             locator_ms.size() > 0 ? locator_ms[0] : 0.0, locator_ms.size() > 1 ? locator_ms[1] : 0.0);

@@ -149,3 +149,19 @@ TEST(Frame, TranslucentObjectsAddTheListPassesAndAovsCullThem) {
     o = options();
     EXPECT_EQ(compile(o, {}, 1.0f).running, (Passes{"gbuffer", "lighting", "readback"})) << "all opaque: no list passes";
 }
+
+TEST(Frame, APickOnlyFrameRunsNoLightingResolveOrReadback) {
+    RenderOptions o = options();
+    o.pick = PickRegion{10, 10, 1, 1};
+    // Riding on a colour frame, the pick adds its passes to the whole chain.
+    EXPECT_EQ(compile(o, {}, 0.4f).running,
+              (Passes{"gbuffer", "lighting", "oit_fragments", "oit_resolve", "pick_resolve", "read_pick", "readback"}));
+    // Without an image output only the geometry passes that list the fragments and the pick itself run,
+    // even with AO and annotations asked for (nothing reads them).
+    o.image = false;
+    o.ao = true;
+    Annotations ann;
+    o.annotations = &ann;
+    EXPECT_EQ(compile(o, {}, 0.4f).running, (Passes{"gbuffer", "oit_fragments", "pick_resolve", "read_pick"}));
+    EXPECT_EQ(compile(o, {}, 1.0f).running, (Passes{"gbuffer", "pick_resolve", "read_pick"})) << "all opaque: no list pass";
+}
