@@ -1,4 +1,4 @@
-// The desktop application's main window (issue 14, docs/gui.md): the 3D view
+// The desktop application's main window (docs/gui.md): the 3D view
 // and the axial, coronal and sagittal slice views of one core::Scene, a
 // window/level bar, File > Open (files, DICOM folders, recent files, drag
 // and drop) loading in the background, and a Surfaces dock adding

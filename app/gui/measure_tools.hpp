@@ -1,4 +1,4 @@
-// Pick and measure in the main window (issue 14, docs/gui.md "Pick and
+// Pick and measure in the main window (docs/gui.md "Pick and
 // measure"): the 3D view's click and hover readout (LPS, value, surface) in
 // the status bar, a 3D click moving the slice views' crosshair, and the Ruler
 // and Angle tools, which take their points from the 3D view's pick (the

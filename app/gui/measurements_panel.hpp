@@ -1,4 +1,4 @@
-// The Measurements dock (issue 14, docs/gui.md "Pick and measure"): a table
+// The Measurements dock (docs/gui.md "Pick and measure"): a table
 // of the window's markups (MainWindow::markups(): rulers, angles, and what a
 // loaded .mrk.json holds) with the name (editable), the kind, the value
 // (mm or degrees, computed by the core from the points each time the

@@ -1,4 +1,4 @@
-// The series chooser (issue 14, docs/gui.md): when a DICOM folder holds
+// The series chooser (docs/gui.md): when a DICOM folder holds
 // several series, the main window lists them first (core::list_series, on a
 // worker thread) and shows this table to choose one from: modality,
 // description, series number, dimensions, slices and what loading would warn

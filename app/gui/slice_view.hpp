@@ -1,4 +1,4 @@
-// One slice view of the main window (issue 14, docs/gui.md): paints the
+// One slice view of the main window (docs/gui.md): paints the
 // volume resliced on its plane through the window (core::reslice,
 // core::apply_window), the surfaces' outlines (core::mesh_outline) and the
 // crosshair. Presentation only: the plane belongs to the main window, which

@@ -1,4 +1,4 @@
-// The 3D view's tool bar (issue 14, docs/gui.md): patient-view buttons
+// The 3D view's tool bar (docs/gui.md): patient-view buttons
 // (A, P, L, R, S, I: Viewer::set_view, as `isoscope render --view`), "Reset
 // view" (the anterior view the window opens with, fitted again), an ambient
 // occlusion toggle (ViewerOptions::ao) and a transparency toggle

@@ -1,5 +1,5 @@
-// Exact geometric kernels of disk-based ambient occlusion (issue 15,
-// `--ao disk`): Bunnell's disk hierarchy as improved by Hoberock & Jia,
+// Exact geometric kernels of disk-based ambient occlusion
+// (`--ao disk`): Bunnell's disk hierarchy as improved by Hoberock & Jia,
 // "High-Quality Ambient Occlusion", GPU Gems 3 ch. 12 (docs/ao.md, "Disk AO:
 // exact kernels").
 //

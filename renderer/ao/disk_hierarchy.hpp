@@ -1,4 +1,4 @@
-// Disk hierarchy of disk-based ambient occlusion (issue 15, `--ao disk`):
+// Disk hierarchy of disk-based ambient occlusion (`--ao disk`):
 // Bunnell's elements (one oriented disk per vertex) grouped into a tree that
 // is built once per surface on the CPU and uploaded as flat arrays, and the
 // CPU evaluation of the whole method (element passes, convergence blend,

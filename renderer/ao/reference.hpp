@@ -1,4 +1,4 @@
-// Ground truth for ambient occlusion (issue 5), by ray tracing with Embree:
+// Ground truth for ambient occlusion, by ray tracing with Embree:
 // the cosine-weighted visibility of the hemisphere around the normal,
 // limited to distance R (a ray that hits nothing within R counts as
 // unoccluded), 1 = unoccluded. This is the one AO definition every method is

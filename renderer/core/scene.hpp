@@ -2,8 +2,8 @@
 // `isoscope view` build one, the Qt widget draws it. It holds what was
 // opened (a volume, mesh files), the surfaces made from them as handles with
 // the properties a user edits (colour, opacity, visibility, pickable), and
-// the verbs: render, export mesh, export image (pick and measure join with
-// issue 13). Modelled on Polyscope's structures (include/polyscope/structure.h).
+// the verbs: render, export mesh, export image (pick and measure are
+// core/pick.hpp and core/measure.hpp). Modelled on Polyscope's structures (include/polyscope/structure.h).
 // Errors name the operation and the file, never a command-line flag: the
 // CLI maps them (app/cli/main.cpp).
 #pragma once

@@ -1,4 +1,4 @@
-// The slice views' headless half (issue 14, docs/slices.md): axial, coronal
+// The slice views' headless half (docs/slices.md): axial, coronal
 // and sagittal planes in LPS through a shared crosshair, the volume resliced
 // on them (oblique, anisotropic and sheared grids exactly), window/level to
 // 8-bit grey, pixel <-> LPS both ways with the value under a click, and the

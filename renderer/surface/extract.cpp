@@ -223,7 +223,7 @@ void run_chunk(const Block<T>& b, const ChunkGeom& g, const Frame& f, const Cls&
 
     auto lin = [&](std::int64_t x, std::int64_t y, std::int64_t z) { return std::size_t(x + nx * (y + ny * z)); };
 
-    // One vertex per cut edge (issue 16: also where the edge ends on a tied
+    // One vertex per cut edge (also where the edge ends on a tied
     // sample), at t clamped to [kEdgeMargin, 1 - kEdgeMargin] (extract.hpp).
     auto make_vertex = [&](std::int64_t lx, std::int64_t ly, std::int64_t lz, int axis) -> std::uint32_t {
         const std::size_t sp = lin(lx, ly, lz);

@@ -16,7 +16,7 @@
 // negated world-space gradient (central differences, one-sided at the volume
 // border), transformed with the inverse transpose of the affine's linear part.
 //
-// Ties (sample == iso; issue 16): a tied sample is inside, like any sample
+// Ties (sample == iso): a tied sample is inside, like any sample
 // >= iso, and every cut edge has its own vertex, also an edge that ends on a
 // tied sample. The surface is then the marching-cubes surface of a field in
 // which the tied samples are raised by an infinitesimal amount: its topology
@@ -176,7 +176,7 @@ struct ChunkMesh {
     std::vector<std::pair<std::uint64_t, std::uint32_t>> border;
     // With ExtractOptions::keep_keys: every vertex's key, 4 * (linear index of
     // its edge's first sample) + axis (0..2). Every vertex lies on exactly one
-    // edge, strictly inside it; since issue 16 there is no axis 3 (a vertex on
+    // edge, strictly inside it; there is no axis 3 (a vertex on
     // a sample, shared by the edges tied there).
     std::vector<std::uint64_t> keys;
 };

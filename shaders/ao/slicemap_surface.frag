@@ -1,6 +1,6 @@
 #version 450
 #extension GL_GOOGLE_include_directive : require
-// Surface voxels (issue 15): OR-blended after the solid XOR pass, every
+// Surface voxels: OR-blended after the solid XOR pass, every
 // fragment sets voxels its surface passes through within its texel, on the
 // solid's side of it: the depths [z, z + h] or [z - h, z], h = half the depth
 // change across the texel (0.5 (|dz/dx| + |dz/dy|)), as the voxels whose

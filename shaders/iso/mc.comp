@@ -3,7 +3,7 @@
 // Same conventions as the CPU path (renderer/surface/extract.hpp): a sample >= iso
 // is inside, t = (iso - s0) / (s1 - s0) in double precision from the edge's
 // lower-index end, clamped to [edge_margin, 1 - edge_margin] on every edge (a
-// tie gets its own vertex per cut edge, just inside the edge: issue 16,
+// tie gets its own vertex per cut edge, just inside the edge,
 // extract.hpp kEdgeMargin), VTK's MC table, world = index_to_lps * index,
 // normals = -world gradient. One source, five passes selected by PASS:
 //   1 MARK         per chunk sample and axis: mark the vertex slot a cut edge needs
@@ -70,7 +70,7 @@ dvec3 gradient(ivec3 g) {
 }
 
 // The slot whose vertex lies on edge (l, axis) of the chunk lattice: every
-// cut edge has its own (issue 16: no slot for a vertex on a sample).
+// cut edge has its own (no slot for a vertex on a sample).
 uint vertex_slot(ivec3 l, int axis) { return slot_index(l, axis); }
 
 bool on_border(int p, int a) { return p % chunk_size == 0 && p > 0 && p < dims[a] - 1; }

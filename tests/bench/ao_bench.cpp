@@ -1,4 +1,4 @@
-// Ambient occlusion: run time against error (issue 5; docs/ao.md).
+// Ambient occlusion: run time against error (docs/ao.md).
 //
 // For each scene (the bundled CT's skin and bone surfaces, the Stanford
 // bunny, the thin-structure phantom of thin_phantom.hpp), AO radius and image
@@ -65,7 +65,7 @@ struct Args {
     bool extras = true;               // still frames, voxel reference
     bool voxel_ref_each = false;      // --voxel-ref: voxel-grid reference for every --config
     std::string replot;               // --replot CSV: only redraw OUT/ao_time_rmse.png from saved results
-    std::string disk = "sweep";       // --disk none|default|sweep: disk AO rows (issue 15)
+    std::string disk = "sweep";       // --disk none|default|sweep: disk AO rows
 };
 
 struct Scene {
@@ -196,7 +196,7 @@ struct ConeConfig {
     double strength = 1.0;
     double ray_weight = 0.5;
     int surface = -1; // ConeAoSettings::surface_voxels: 0 off, 1 on, -1 the renderer's default
-    double axis = ConeAoSettings{}.axis_weight; // axis probes (default on since issue 15)
+    double axis = ConeAoSettings{}.axis_weight; // axis probes (default on)
 };
 
 std::string describe(const ConeConfig& c) {
@@ -415,10 +415,9 @@ int main(int argc, char** argv) {
             {3, 1, 4, 0.25, 1, 1.0, 1, 1, 0.5, 1, 1.0},
             {4, 2, 4, 0.25, 1, 1.0, 1, 1, 0.35, 1, 1.0},
             {4, 3, 4, 0.5, 1, 1.0, 1, 1, 0.5, 1, 1.0},
-            // thin structures (issue 15; docs/ao.md "Thin structures"): every
+            // thin structures (docs/ao.md "Thin structures"): every
             // row above has the default axis probes; here surface voxels, and
-            // the defaults and a cheap setting without the probes (as before
-            // issue 15)
+            // the defaults and a cheap setting without the probes
             {8, 5, 8, 1.0, 2, 1.0, 1, 1, 0.5, 1, 0.5, 1},
             {8, 5, 8, 1.0, 2, 1.0, 1, 1, 0.5, 1, 0.5, -1, 0.0},
             {4, 3, 4, 0.5, 1, 1.0, 1, 1, 0.5, 1, 0.5, -1, 0.0},
@@ -564,7 +563,7 @@ int main(int argc, char** argv) {
                     save_grey(img, stem + "_cone.png");
                     save_diff(img, ref.image, stem + "_cone_minus_reference.png");
                 }
-                // ---- Disk AO (issue 15; docs/ao.md, "Disk AO on the GPU") ----
+                // ---- Disk AO (docs/ao.md, "Disk AO on the GPU") ----
                 // Default settings, then a small sweep of the element passes and
                 // the traversal epsilon. Each timed frame starts from scratch
                 // (the meshes replaced, so the hierarchy is rebuilt): AO ms =

@@ -1,5 +1,5 @@
-// Frame times of the desktop app's 3D view while rotating (issue 14's
-// "Interaction stays responsive", docs/gui.md): the main window opens
+// Frame times of the desktop app's 3D view while rotating
+// ("Interaction stays responsive", docs/gui.md): the main window opens
 // datasets/headsq.nhdr, adds the skin (iso 500) and the bone (1150), and the
 // 3D view turns about its target in N steps; each frame is timed from the
 // camera change (Viewer::set_camera, which calls update()) to the widget's

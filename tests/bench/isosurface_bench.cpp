@@ -1,4 +1,4 @@
-// Isosurface benchmark (issue 3): our chunked marching cubes against
+// Isosurface benchmark: our chunked marching cubes against
 // vtkFlyingEdges3D and OpenVDB's volumeToMesh on the same volume, iso value
 // and thread count, each measurement in its own child process.
 //

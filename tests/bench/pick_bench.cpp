@@ -1,4 +1,4 @@
-// Picking benchmark (issue 13): the latency of our pick, which rides on a
+// Picking benchmark: the latency of our pick, which rides on a
 // frame (the frame's geometry passes list the pixel's fragments, then the
 // pixel's ray meets the listed triangles in double precision), against
 // VTK 9.1's vtkHardwareSelector (selection passes rendered for the pick) and

@@ -1,4 +1,4 @@
-// Out-of-core / MPI scaling benchmark (issue 16): `isoscope mesh` streaming
+// Out-of-core / MPI scaling benchmark: `isoscope mesh` streaming
 // with a memory budget, as one process and under `mpirun -np N`, against
 // VTK's Flying Edges holding the whole volume, on generated CT-like int16
 // volumes of 2 GiB and 8 GiB (tests/bench/scale_volume.hpp). Every run is

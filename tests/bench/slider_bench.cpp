@@ -1,4 +1,4 @@
-// The iso slider's latency (issue 14, docs/gui.md "Surfaces panel"): the time
+// The iso slider's latency (docs/gui.md "Surfaces panel"): the time
 // from a new slider value to the new surface on screen, as the Surfaces panel
 // does it: re-extraction (core::Scene::extract_isosurface), the swap on the
 // GUI thread (Scene::replace_surface) and the first frame that shows it

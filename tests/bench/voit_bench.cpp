@@ -1,4 +1,4 @@
-// Transparency benchmark (issue 12): our VOIT against VTK 9.1's
+// Transparency benchmark: our VOIT against VTK 9.1's
 // weighted-blended OIT (its default) and dual depth peeling (4 peels, VTK's
 // default, and until converged), same meshes, colours, opacities, camera and
 // image size, in the same run (VTK under xvfb-run through oit_peer). Errors

@@ -1,4 +1,4 @@
-// Cone AO on thin structures (issue 15; docs/ao.md "Thin structures"):
+// Cone AO on thin structures (docs/ao.md "Thin structures"):
 // exact read-back of the surface voxels (a sheet thinner than a voxel seen
 // face-on sets exactly the voxels around it, where the solid XOR pass alone
 // sets nothing; a tilted one keeps voxels, within its depths, in every
@@ -214,7 +214,7 @@ TEST_F(ConeAoThin, ThinStructurePhantomAgainstTheEmbreeReference) {
     rq.cache_dir = "-";
     const auto ref = core::render_input(file, rq);
     rq.ao = "cone";
-    rq.cone.axis_weight = 0; // the estimator before issue 15: spheres only
+    rq.cone.axis_weight = 0; // the estimator without axis probes: spheres only
     const auto cone = core::render_input(file, rq);
     rq.cone.surface_voxels = true;
     const auto surface = core::render_input(file, rq);

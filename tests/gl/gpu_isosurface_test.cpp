@@ -125,7 +125,7 @@ TEST_F(GpuIsosurface, SmallBatchesGiveTheSameResult) {
     expect_same(cpu, gpu, 0.0);
 }
 
-// Ties (issue 16): every cut edge has its own vertex, at t clamped to
+// Ties: every cut edge has its own vertex, at t clamped to
 // [kEdgeMargin, 1 - kEdgeMargin], on both paths, bit for bit: integer
 // checkerboards with every inside sample a tie, plateaus and single voxels
 // equal to iso, the bundled CT at 500 and 1150 (int16: exact in float).

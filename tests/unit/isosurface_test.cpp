@@ -105,7 +105,7 @@ Mesh flying_edges(const Volume& v, double iso, std::size_t* moved = nullptr) {
 }
 
 // Edges used by other than exactly two triangles in opposite directions
-// (an edge used twice in each direction, a pinch, counts too: issue 16).
+// (an edge used twice in each direction, a pinch, counts too).
 std::size_t bad_edges(const Mesh& m) {
     std::map<std::pair<std::uint32_t, std::uint32_t>, int> directed;
     for (const auto& t : m.triangles)

@@ -4,7 +4,7 @@
 // that a reader placed on the raw voxels (index space, which no header can
 // change): it must be anterior of them, inferior of the eyes' level and
 // superior of the chin. With the identity directions the headers carried
-// before issue 17 the head was upside down and this test fails (the nose lands
+// before the fix the head was upside down and this test fails (the nose lands
 // above the eyes).
 #include <algorithm>
 #include <map>

@@ -1,4 +1,4 @@
-// Manifold surfaces at ties (issue 16): iso values equal to sample values.
+// Manifold surfaces at ties: iso values equal to sample values.
 //
 // Every volume here is extracted at an iso value that some samples equal
 // exactly. For each result we check, from the stored float positions:
@@ -394,7 +394,7 @@ TEST(Ties, BundledCtAt500And1150) {
             for (std::size_t i = 0; i < c.keys.size(); ++i) {
                 const std::uint64_t lin = c.keys[i] / 4;
                 const int axis = int(c.keys[i] % 4);
-                if (axis == 3) { // before issue 16: a vertex on a sample
+                if (axis == 3) { // the old extractor's vertex on a sample
                     ++on_sample;
                     continue;
                 }
