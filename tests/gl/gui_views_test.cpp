@@ -152,7 +152,7 @@ TEST(GuiViews, TwoSeriesFolderShowsTheChooser) {
     test::TempDir dir;
     const auto app = test::make_app("gui_views_test", dir / "config");
 
-    // Two series in one folder (vtkDICOMWriter, tests/unit/dicom_fixtures.hpp);
+    // Two series in one folder (vtkDICOMWriter, tests/support/dicom_fixtures.hpp);
     // the second has a slice missing (a warning the chooser shows).
     const std::string folder = dir / "two";
     test::SeriesSpec a;
