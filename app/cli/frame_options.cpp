@@ -51,41 +51,37 @@ void parse_disk_blend(const std::string& text, iso::DiskAoSettings& d) {
 } // namespace
 
 void add_frame_options(CLI::App* c, FrameArgs& a, bool input_required) {
+    auto& req = a.req;
     auto* in = c->add_option("input", a.in, "Volume file, DICOM folder, or mesh (" + iso::mesh_extensions_text() + ")");
     if (input_required) in->required();
-    c->add_option("--iso", a.isos, "Iso value (repeatable) for volume inputs")->allow_extra_args(false);
-    c->add_option("--view", a.view, "anterior, posterior, left, right, superior or inferior");
+    c->add_option("--iso", req.isos, "Iso value (repeatable) for volume inputs")->allow_extra_args(false);
+    c->add_option("--view", req.view, "anterior, posterior, left, right, superior or inferior");
     c->add_option("--size", a.size, "Image size WxH (default 1024x1024)");
     c->add_option("--ao", a.ao,
                   "Ambient occlusion: off, cone (cone tracing), disk (disk hierarchy, high quality for stills), or reference (Embree ray "
                   "tracing; with --aov ao)");
-    c->add_option("--ao-radius", a.ao_radius, "AO radius R_max in mm")->check(CLI::PositiveNumber);
-    add_cone_options(c, a.cone);
-    add_disk_options(c, a.disk, a.disk_blend);
-    c->add_option("--ao-frames", a.ao_frames, "Still frames accumulated with new jitter sets (cone AO)")->check(CLI::Range(1, 4096));
-    c->add_option("--series", a.series, "DICOM series to load: index or SeriesInstanceUID");
+    c->add_option("--ao-radius", req.look.cone.radius_mm, "AO radius R_max in mm")->check(CLI::PositiveNumber);
+    add_cone_options(c, req.look.cone);
+    add_disk_options(c, req.look.disk, a.disk_blend);
+    c->add_option("--ao-frames", req.look.ao_frames, "Still frames accumulated with new jitter sets (cone AO)")->check(CLI::Range(1, 4096));
+    c->add_option("--series", req.series, "DICOM series to load: index or SeriesInstanceUID");
     add_look_options(c, a.look);
-    c->add_option("--oit-epsilon", a.oit_epsilon, "Translucent surfaces: stop compositing a pixel below this transmittance (default 1/512)")
+    c->add_option("--oit-epsilon", req.look.oit_epsilon,
+                  "Translucent surfaces: stop compositing a pixel below this transmittance (default 1/512)")
         ->check(CLI::Range(0.0, 0.999));
-    c->add_option("--oit-memory", a.oit_memory, "Translucent surfaces: fragment pool cap in MiB (default 256)")->check(CLI::Range(1.0, 65536.0));
+    c->add_option("--oit-memory", req.look.oit_memory_mib, "Translucent surfaces: fragment pool cap in MiB (default 256)")
+        ->check(CLI::Range(1.0, 65536.0));
 }
 
 iso::core::RenderRequest frame_request(const FrameArgs& a) {
-    iso::core::RenderRequest req;
-    req.view = a.view;
+    iso::core::RenderRequest req = a.req;
     if (std::sscanf(a.size.c_str(), "%dx%d", &req.width, &req.height) != 2 || req.width < 1 || req.height < 1)
         throw iso::Error("--size", "expected WxH, e.g. 1920x1080, got '" + a.size + "'");
-    req.ao = a.ao;
-    req.ao_radius_mm = a.ao_radius;
-    req.cone = a.cone;
-    req.disk = a.disk;
-    parse_disk_blend(a.disk_blend, req.disk);
-    req.ao_frames = a.ao_frames;
+    req.look.ao = iso::ao_method_from_name(a.ao);
+    parse_disk_blend(a.disk_blend, req.look.disk);
     req.progress = progress_bar();
-    if (!a.look.background.empty()) req.background = hex_option("--background", a.look.background);
-    req.flat_shading = a.look.shading == "flat";
-    req.oit_epsilon = a.oit_epsilon;
-    req.oit_memory_mib = a.oit_memory;
+    if (!a.look.background.empty()) req.look.background = hex_option("--background", a.look.background);
+    req.look.flat_shading = a.look.shading == "flat";
     return req;
 }
 

@@ -17,24 +17,19 @@ namespace iso::cli {
 void add_cone_options(CLI::App* cmd, iso::ConeAoSettings& c);
 
 // What fixes a frame, shared by `render` and `pick`: a pick's pixel is a
-// pixel of the image `render` writes with the same options.
+// pixel of the image `render` writes with the same options. The options are
+// bound to the core's request itself (`req`: view, series, iso values, the
+// AO settings, transparency's); only what needs parsing is held as text.
 struct FrameArgs {
-    std::string in, view = "anterior", size = "1024x1024", series, ao = "off";
-    std::vector<double> isos;
-    double ao_radius = 10.0;
-    int ao_frames = 1;
-    iso::ConeAoSettings cone;
-    iso::DiskAoSettings disk;
-    std::string disk_blend;
-    Look look;
-    float oit_epsilon = 1.0f / 512.0f;
-    double oit_memory = 256;
+    std::string in, size = "1024x1024", ao = "off", disk_blend;
+    Look look; // surface colours and opacities, background, shading
+    iso::core::RenderRequest req;
 };
 
 void add_frame_options(CLI::App* c, FrameArgs& a, bool input_required = true);
 
-// The core's request for the frame (--size, --background and --ao-disk-blend
-// parsed here: a bad text names its flag).
+// The core's request for the frame: `req` with --size, --ao, --background,
+// --shading and --ao-disk-blend parsed in (a bad text names its flag).
 iso::core::RenderRequest frame_request(const FrameArgs& a);
 
 } // namespace iso::cli

@@ -52,7 +52,7 @@ int run_pick(const PickArgs& a) {
     p.threshold = a.threshold;
     p.all_layers = a.all_layers;
     iso::core::Scene scene;
-    open_input(scene, a.frame.in, a.frame.series, a.frame.isos, a.frame.look, "pick");
+    open_input(scene, a.frame.in, req.series, req.isos, a.frame.look, "pick");
     const auto r = iso::core::pick(scene, req, p);
     if (!r.complete) std::cerr << "warning: the pick's lists overflowed: some layers are missing\n";
     if (a.json) {

@@ -19,10 +19,8 @@ struct RenderArgs {
     FrameArgs frame;
     std::string out, aov, cache, session;
     std::vector<std::string> markups;
-    float scale = 1.0f;
-    bool stats = false, no_annotations = false, transparent = false, no_markups = false;
-    bool view_given = false, ao_given = false; // with --session: replace the session's camera / view option
-    int ao_rays = 1024;
+    bool stats = false, no_annotations = false, no_markups = false;
+    bool view_given = false, ao_given = false; // with --session: replace the session's camera / AO method
 };
 
 void print_stats(const iso::graph::FrameStats& stats, const iso::OitStats& oit) {
@@ -46,37 +44,18 @@ void print_stats(const iso::graph::FrameStats& stats, const iso::OitStats& oit) 
 
 // `isoscope render --session`: the request comes from core::session_request,
 // as the desktop app's File > Export image builds it; the frame's other
-// options (size, background, AO tunables, ...) apply on top.
+// options (size, background, AO settings, ...) are the command line's.
 iso::core::RenderRequest session_render_request(const RenderArgs& a, iso::core::OpenedSession& opened) {
     const auto& f = a.frame;
     if (!f.in.empty()) throw iso::Error("--session", "the session names its input: give INPUT or --session, not both");
-    for (const auto& [given, flag] : {std::pair{!f.isos.empty(), "--iso"}, {!f.series.empty(), "--series"},
+    for (const auto& [given, flag] : {std::pair{!f.req.isos.empty(), "--iso"}, {!f.req.series.empty(), "--series"},
                                      {!f.look.opacity.empty(), "--opacity"}, {!f.look.color.empty(), "--color"}})
         if (given) throw iso::Error(flag, "the session holds the surfaces and the series: not with --session");
-    const iso::core::RenderRequest frame = frame_request(f);
-    iso::core::SessionRenderOptions o;
-    o.width = frame.width;
-    o.height = frame.height;
-    o.scale = a.scale;
-    o.annotations = !a.no_annotations;
-    o.transparent = a.transparent;
-    o.markups = !a.no_markups;
-    if (a.ao_given) o.ao = f.ao;
-    iso::core::RenderRequest req = iso::core::session_request(opened.session, a.session, o);
-    if (a.view_given) {
-        req.camera.reset();
-        req.view = f.view;
-    }
-    req.background = frame.background;
-    req.flat_shading = frame.flat_shading;
-    req.oit_epsilon = frame.oit_epsilon;
-    req.oit_memory_mib = frame.oit_memory_mib;
-    req.ao_radius_mm = frame.ao_radius_mm;
-    req.cone = frame.cone;
-    req.disk = frame.disk;
-    req.ao_frames = frame.ao_frames;
-    req.progress = frame.progress;
-    return req;
+    iso::core::SessionParts take;
+    take.camera = !a.view_given;
+    take.markups = !a.no_markups;
+    take.ao = !a.ao_given;
+    return iso::core::session_request(opened.session, a.session, frame_request(f), take);
 }
 
 int run_render(const RenderArgs& a) {
@@ -92,13 +71,9 @@ int run_render(const RenderArgs& a) {
         for (const auto& w : opened->session.warnings) std::cerr << "warning: " << a.session << ": " << w << "\n";
         req = session_render_request(a, *opened);
     }
-    req.scale = a.scale;
-    req.aov_ao = a.aov == "ao";
-    req.aov = req.aov_ao ? iso::Aov::None : iso::aov_from_name(a.aov);
-    req.ao_rays = a.ao_rays;
+    req.aov = iso::aov_from_name(a.aov);
     req.cache_dir = a.cache;
     req.annotations = !a.no_annotations;
-    req.transparent = a.transparent;
     req.time_passes = a.stats;
     if (!a.markups.empty() && !a.aov.empty()) throw iso::Error("--markups", "markups are drawn on the colour image, not on an AOV (--aov)");
     iso::check_writable_destination(a.out);
@@ -110,14 +85,14 @@ int run_render(const RenderArgs& a) {
         req.markups_files.push_back(path);
     }
     iso::core::Scene local;
-    if (!opened) open_input(local, a.frame.in, a.frame.series, a.frame.isos, a.frame.look, "render");
+    if (!opened) open_input(local, a.frame.in, req.series, req.isos, a.frame.look, "render");
     const auto out = iso::core::render_image(opened ? *opened->scene : local, req);
     iso::core::export_image(out.image, out.meta, a.out);
     std::cout << "rendered " << out.image.width << "x" << out.image.height << " (" << out.gl_renderer << ") -> " << a.out << "\n";
     if (a.stats) print_stats(out.stats, out.oit);
     if (out.oit.merged > 0)
         std::cerr << "warning: " << out.oit.merged << " translucent fragments in " << out.oit.merged_pixels << " pixels did not fit the "
-                  << a.frame.oit_memory << " MiB pool (--oit-memory) and were merged, order-independently: error at most " << std::setprecision(3)
+                  << req.look.oit_memory_mib << " MiB pool (--oit-memory) and were merged, order-independently: error at most " << std::setprecision(3)
                   << out.oit.merge_error_max << " per channel\n";
     return 0;
 }
@@ -132,15 +107,15 @@ RunFn add_render(CLI::App& cmd, char*) {
     c->add_option("--session", a.session, "Render a session file of the desktop app (its input, surfaces, camera, markups, AO) "
                                           "instead of INPUT; --view replaces its camera, --ao its AO setting");
     c->add_flag("--no-markups", a.no_markups, "With --session: leave out the session's markups");
-    c->add_option("--scale", a.scale, "Scale of text, lines and glyphs (e.g. 2 for a 2x export)")->check(CLI::Range(0.1, 20.0));
+    c->add_option("--scale", a.frame.req.scale, "Scale of text, lines and glyphs (e.g. 2 for a 2x export)")->check(CLI::Range(0.1, 20.0));
     c->add_option("--aov", a.aov, "Write a buffer instead of the colour image: depth, normal, id or ao (EXR)");
-    c->add_option("--ao-rays", a.ao_rays, "Rays per pixel for --ao reference")->check(CLI::Range(1, 1 << 20));
+    c->add_option("--ao-rays", a.frame.req.look.ao_rays, "Rays per pixel for --ao reference")->check(CLI::Range(1, 1 << 20));
     c->add_option("--ao-cache", a.cache, "Folder caching AO references ('-': none; default ~/.cache/isoscope)");
     c->add_flag("--no-annotations", a.no_annotations, "No scale bar, orientation letters or labels (--markups are still drawn)");
     c->add_option("--markups", a.markups, "3D Slicer markups file (.mrk.json) to draw: points, lines with their length, angles "
                                           "(repeatable; dimmed where a surface hides them)")
         ->allow_extra_args(false);
-    c->add_flag("--transparent", a.transparent, "Transparent background");
+    c->add_flag("--transparent", a.frame.req.look.transparent_background, "Transparent background");
     c->add_flag("--stats", a.stats, "Print per-pass statistics");
     c->add_option("-o,--output", a.out, "Output .png, .tif or .exr")->required();
     return [args, c] {

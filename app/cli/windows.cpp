@@ -37,16 +37,16 @@ struct ViewArgs {
 
 int run_view(ViewArgs a, char* argv0) {
     const auto initial = iso::patient_view_from_name(a.view);
-    iso::validate(a.opt.cone); // before the long part
+    if (!a.look.background.empty()) a.opt.look.background = hex_option("--background", a.look.background);
+    a.opt.look.flat_shading = a.look.shading == "flat";
+    a.opt.look.ao = iso::ao_method_from_name(a.ao);
+    iso::validate(a.opt.look); // before the long part
     iso::core::Scene scene;
     open_input(scene, a.in, a.series, a.isos, a.look, "view");
-    if (!a.look.background.empty()) a.opt.background = hex_option("--background", a.look.background);
-    a.opt.flat_shading = a.look.shading == "flat";
     use_gl45_surfaces();
     int qargc = 1;
     char* qargv[] = {argv0, nullptr};
     QApplication qapp(qargc, qargv);
-    a.opt.ao = a.ao == "cone";
     iso::gui::Viewer w(scene, initial, a.opt);
     w.setWindowTitle(QString::fromStdString("isoscope - " + a.in));
     w.resize(800, 600);
@@ -88,9 +88,9 @@ RunFn add_view(CLI::App& cmd, char* argv0) {
     c->add_option("--series", a.series, "DICOM series to load: index or SeriesInstanceUID");
     c->add_option("--screenshot", a.screenshot, "Save the first converged frame to this PNG and quit (tests)");
     c->add_option("--ao", a.ao, "Ambient occlusion: cone (default) or off; key O toggles it")->check(CLI::IsMember({"cone", "off"}));
-    c->add_option("--ao-radius", a.opt.cone.radius_mm, "AO radius R_max in mm")->check(CLI::PositiveNumber);
-    add_cone_options(c, a.opt.cone);
-    c->add_option("--ao-frames", a.opt.still_frames, "Still frames accumulated with new jitter sets while nothing moves")
+    c->add_option("--ao-radius", a.opt.look.cone.radius_mm, "AO radius R_max in mm")->check(CLI::PositiveNumber);
+    add_cone_options(c, a.opt.look.cone);
+    c->add_option("--ao-frames", a.opt.look.ao_frames, "Still frames accumulated with new jitter sets while nothing moves")
         ->check(CLI::Range(1, 4096));
     add_look_options(c, a.look);
     return [args, argv0] { return run_view(*args, argv0); };

@@ -1,5 +1,7 @@
 #include "app/gui/export_dialog.hpp"
 
+#include <algorithm>
+
 #include <QCheckBox>
 #include <QComboBox>
 #include <QDialogButtonBox>
@@ -55,7 +57,7 @@ QDialogButtonBox* buttons(QDialog* d, const QString& ok) {
 
 // ---- Export image ----------------------------------------------------------------------
 
-ExportDialog::ExportDialog(QSize size, bool ao, const QString& file, const QString& session_note, QWidget* parent) : QDialog(parent) {
+ExportDialog::ExportDialog(QSize size, AoMethod ao, const QString& file, const QString& session_note, QWidget* parent) : QDialog(parent) {
     setWindowTitle("Export image");
     setObjectName("export_dialog");
     auto* col = new QVBoxLayout(this);
@@ -97,7 +99,7 @@ ExportDialog::ExportDialog(QSize size, bool ao, const QString& file, const QStri
     ao_->addItem("cone traced", "cone");
     // The disk hierarchy (docs/ao.md, "Disk AO on the GPU"): slower, closer to ray tracing; for stills.
     ao_->addItem("high quality (disk)", "disk");
-    ao_->setCurrentIndex(ao ? 1 : 0);
+    ao_->setCurrentIndex(std::max(0, ao_->findData(QString(ao_method_name(ao)))));
     form->addRow("Ambient occlusion:", ao_);
     file_ = file_row(this, form, file, "PNG (*.png);;TIFF (*.tif *.tiff);;OpenEXR (*.exr)");
     col->addLayout(form);
@@ -110,16 +112,22 @@ ExportDialog::ExportDialog(QSize size, bool ao, const QString& file, const QStri
     col->addWidget(buttons(this, "Export"));
 }
 
-core::SessionRenderOptions ExportDialog::options() const {
-    core::SessionRenderOptions o;
-    o.width = width_->value();
-    o.height = height_->value();
-    o.scale = float(scale_->value());
-    o.annotations = annotations_->isChecked();
-    o.transparent = transparent_->isChecked();
-    o.markups = markups_->isChecked();
-    o.ao = ao_->currentData().toString().toStdString();
-    return o;
+core::RenderRequest ExportDialog::frame() const {
+    core::RenderRequest r;
+    r.width = width_->value();
+    r.height = height_->value();
+    r.scale = float(scale_->value());
+    r.annotations = annotations_->isChecked();
+    r.look.transparent_background = transparent_->isChecked();
+    r.look.ao = ao_method_from_name(ao_->currentData().toString().toStdString());
+    return r;
+}
+
+core::SessionParts ExportDialog::parts() const {
+    core::SessionParts p;
+    p.markups = markups_->isChecked();
+    p.ao = false; // the dialog's AO box chooses
+    return p;
 }
 
 QString ExportDialog::path() const { return file_->text().trimmed(); }

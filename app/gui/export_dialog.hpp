@@ -22,13 +22,17 @@ class QSpinBox;
 namespace iso::gui {
 
 // Size, annotation scale, annotations, transparent background, markups,
-// AO (off / cone) and the file (.png, .tif, .exr). Widgets are named
+// AO (off / cone / disk) and the file (.png, .tif, .exr). Widgets are named
 // (width, height, scale, annotations, transparent, markups, ao, file) for
 // tests; OK refuses an empty name or another extension, saying why.
 class ExportDialog : public QDialog {
 public:
-    ExportDialog(QSize size, bool ao, const QString& file, const QString& session_note, QWidget* parent = nullptr);
-    core::SessionRenderOptions options() const;
+    // `ao`: the method the AO box starts at (the 3D view's).
+    ExportDialog(QSize size, AoMethod ao, const QString& file, const QString& session_note, QWidget* parent = nullptr);
+    // The frame chosen (size, scale, annotations, background, AO method)
+    // and what of it the session gives (its camera, markups if chosen).
+    core::RenderRequest frame() const;
+    core::SessionParts parts() const;
     QString path() const;
     void accept() override;
 

@@ -32,7 +32,8 @@ class QVBoxLayout;
 namespace iso::core {
 class Scene;
 struct Session;
-struct SessionRenderOptions;
+struct RenderRequest;
+struct SessionParts;
 } // namespace iso::core
 
 namespace iso::gui {
@@ -100,7 +101,7 @@ public:
     // --session` does (the session file it names: the current one when
     // the state is unchanged since it was saved or opened, else PATH.session.json
     // written next to the image).
-    void export_image(const QString& path, const core::SessionRenderOptions& options);
+    void export_image(const QString& path, const core::RenderRequest& frame, const core::SessionParts& take);
     // File > Save surfaces: one surface in LPS mm (.stl, .ply, .obj, .vtp).
     void save_surface(std::uint32_t id, const QString& path);
 

@@ -58,9 +58,8 @@ core::Session MainWindow::current_session() const {
     std::optional<core::WindowLevel> window;
     if (scene_->has_volume()) window = window_;
     // The 3D view's toggles (the view bar keeps them across scenes).
-    const bool ao = viewer_ ? viewer_->options().ao : view_bar_->ao();
-    const bool transparency = viewer_ ? viewer_->options().transparency : view_bar_->transparency();
-    return core::capture_session(*scene_, path_.toStdString(), series_.toStdString(), camera, window, ao, markups_, transparency);
+    const FrameLook look = viewer_ ? viewer_->options().look : view_bar_->look();
+    return core::capture_session(*scene_, path_.toStdString(), series_.toStdString(), camera, window, look, markups_);
 }
 
 void MainWindow::add_session_actions(QMenu* file) {
@@ -88,7 +87,7 @@ void MainWindow::add_session_actions(QMenu* file) {
                                    : "The image's metadata names the current session, " + named + " (unchanged since saved).";
         auto* d = new ExportDialog(viewer_ ? viewer_->image_size() : QSize(1024, 1024), current_session().ao, image, note, this);
         d->setAttribute(Qt::WA_DeleteOnClose);
-        connect(d, &QDialog::accepted, this, [this, d] { export_image(d->path(), d->options()); });
+        connect(d, &QDialog::accepted, this, [this, d] { export_image(d->path(), d->frame(), d->parts()); });
         d->open();
     });
     file->addAction("Save s&urfaces...", this, [this] {
@@ -149,7 +148,7 @@ void MainWindow::open_session(const QString& path) {
                 if (s.window) set_window_level(*s.window);
                 set_markups(s.markups);
                 // Through the view bar, which keeps its toggles for later views and gives them to this one.
-                view_bar_->ao_action()->setChecked(s.ao);
+                view_bar_->ao_action()->setChecked(s.ao != AoMethod::Off);
                 view_bar_->transparency_action()->setChecked(s.transparency);
                 if (viewer_) {
                     view_bar_->attach(*viewer_);
@@ -161,7 +160,7 @@ void MainWindow::open_session(const QString& path) {
             });
 }
 
-void MainWindow::export_image(const QString& path, const core::SessionRenderOptions& options) {
+void MainWindow::export_image(const QString& path, const core::RenderRequest& frame, const core::SessionParts& take) {
     if (busy()) {
         statusBar()->showMessage("Busy: wait for the current task or cancel it");
         return;
@@ -178,11 +177,11 @@ void MainWindow::export_image(const QString& path, const core::SessionRenderOpti
     // back and opened into a scene of its own (the window's scene and its GL
     // objects belong to the 3D view), rendered headlessly and written.
     run_job("Exporting " + path, false,
-            [now, write, image, session_file, options](const ProgressFn& progress) {
+            [now, write, image, session_file, frame, take](const ProgressFn& progress) {
                 check_writable_destination(image);
                 if (write) core::save_session(*now, session_file);
                 const auto opened = core::open_session(session_file, progress);
-                core::RenderRequest req = core::session_request(opened.session, session_file, options);
+                core::RenderRequest req = core::session_request(opened.session, session_file, frame, take);
                 req.progress = progress; // disk AO's gather reports and can be cancelled
                 const auto out = core::render_image(*opened.scene, req);
                 core::export_image(out.image, out.meta, image);

@@ -42,26 +42,28 @@ ViewToolBar::ViewToolBar(std::function<Viewer*()> viewer, QWidget* parent)
     ao_->setObjectName("ambient_occlusion");
     ao_->setToolTip("Ambient occlusion (cone traced)");
     ao_->setCheckable(true);
-    ao_->setChecked(ViewerOptions{}.ao);
+    ao_->setChecked(ViewerOptions{}.look.ao != AoMethod::Off);
     transparency_ = addAction("Transparency");
     transparency_->setObjectName("transparency");
     transparency_->setToolTip("Draw surfaces with their opacity; off: every surface opaque");
     transparency_->setCheckable(true);
-    transparency_->setChecked(ViewerOptions{}.transparency);
+    transparency_->setChecked(ViewerOptions{}.look.transparency);
     connect(ao_, &QAction::toggled, this, [this] { apply_toggles(); });
     connect(transparency_, &QAction::toggled, this, [this] { apply_toggles(); });
 }
 
-bool ViewToolBar::ao() const { return ao_->isChecked(); }
-bool ViewToolBar::transparency() const { return transparency_->isChecked(); }
+FrameLook ViewToolBar::look(FrameLook base) const {
+    base.ao = ao_->isChecked() ? AoMethod::Cone : AoMethod::Off;
+    base.transparency = transparency_->isChecked();
+    return base;
+}
 
 void ViewToolBar::attach(Viewer& v) const {
     ViewerOptions o = v.options();
-    o.ao = ao();
-    o.transparency = transparency();
+    o.look = look(o.look);
     v.set_options(o);
     // The O key in the view: the button follows (and, through toggled, sets the same again).
-    v.on_options_changed = [this](Viewer& w) { ao_->setChecked(w.options().ao); };
+    v.on_options_changed = [this](Viewer& w) { ao_->setChecked(w.options().look.ao != AoMethod::Off); };
 }
 
 void ViewToolBar::apply_toggles() {

@@ -1,8 +1,8 @@
 // The 3D view's tool bar (docs/gui.md): patient-view buttons
 // (A, P, L, R, S, I: Viewer::set_view, as `isoscope render --view`), "Reset
 // view" (the anterior view the window opens with, fitted again), an ambient
-// occlusion toggle (ViewerOptions::ao) and a transparency toggle
-// (ViewerOptions::transparency: off draws every surface opaque without
+// occlusion toggle (the look's AO: cone or off) and a transparency toggle
+// (FrameLook::transparency: off draws every surface opaque without
 // touching the surfaces' opacities). The main window recreates its viewer
 // with each scene; the bar keeps the toggles and applies them to each new one.
 #pragma once
@@ -24,8 +24,8 @@ public:
 
     // Gives a newly made viewer the bar's toggles.
     void attach(Viewer& v) const;
-    bool ao() const;
-    bool transparency() const;
+    // The bar's toggles applied to `base` (AO cone or off, transparency).
+    FrameLook look(FrameLook base = ViewerOptions{}.look) const;
     QAction* view_action(PatientView v) const { return views_[int(v)]; }
     QAction* reset_action() const { return reset_; }
     QAction* ao_action() const { return ao_; }

@@ -77,11 +77,8 @@ RenderOptions Viewer::frame_options() const {
     // While a drag turns, pans or zooms the view, frames go without AO (on
     // software GL it costs 2-3x a frame, docs/gui.md); the still frames after
     // the release bring it back and accumulate it.
-    opt.ao = options_.ao && !(dragging_ && !options_.ao_while_dragging);
-    opt.ao_settings = options_.cone;
-    opt.background = glm::vec4(options_.background, 1.0f);
-    opt.flat_shading = options_.flat_shading;
-    opt.transparency = options_.transparency;
+    opt.look = options_.look;
+    if (dragging_ && !options_.ao_while_dragging) opt.look.ao = AoMethod::Off;
     return opt;
 }
 
@@ -94,11 +91,13 @@ void Viewer::draw() {
     const std::size_t objects = scene_.renderer().gl_objects_created();
     if (frames_ == 1) objects_after_first_frame_ = objects;
     objects_since_first_frame_ = objects - objects_after_first_frame_;
-    ao_frames_ = opt.ao ? r.ao_frames : 0;
+    // Cone AO accumulates still frames; the other methods are done in one.
+    const bool accumulates = opt.look.ao == AoMethod::Cone;
+    ao_frames_ = accumulates ? r.ao_frames : 0;
     // Progressive AO: while the camera and the scene stay still, keep
     // drawing so new jitter sets accumulate and the noise averages out; any
     // interaction restarts the accumulation (the renderer sees the change).
-    if (opt.ao && ao_frames_ < options_.still_frames) QTimer::singleShot(0, this, [this] { update(); });
+    if (accumulates && ao_frames_ < options_.look.ao_frames) QTimer::singleShot(0, this, [this] { update(); });
 }
 
 void Viewer::set_camera(const Camera& c) {
@@ -129,7 +128,7 @@ core::PickResult Viewer::pick_at(QPointF image_pixel) {
     // not depend on: no AO, no overlay, and read back rather than presented,
     // so the picture on screen and its AO accumulation stay as they are.
     RenderOptions opt = frame_options();
-    opt.ao = false;
+    opt.look.ao = AoMethod::Off;
     opt.annotations = nullptr;
     opt.present = false;
     opt.target_framebuffer = 0;
@@ -189,7 +188,7 @@ void Viewer::keyPressEvent(QKeyEvent* e) {
                                                        {Qt::Key_L, PatientView::Left},     {Qt::Key_R, PatientView::Right},
                                                        {Qt::Key_S, PatientView::Superior}, {Qt::Key_I, PatientView::Inferior}};
     if (e->key() == Qt::Key_O) { // ambient occlusion on / off
-        options_.ao = !options_.ao;
+        options_.look.ao = options_.look.ao == AoMethod::Off ? AoMethod::Cone : AoMethod::Off;
         update();
         if (on_options_changed) on_options_changed(*this);
         return;

@@ -15,8 +15,8 @@
 
 #include "io/markups.hpp"
 #include "app/gui/pointer_drag.hpp"
-#include "renderer/frame/ao_settings.hpp"
 #include "renderer/frame/camera.hpp"
+#include "renderer/frame/frame.hpp"
 
 namespace iso {
 struct Annotations;
@@ -29,17 +29,21 @@ struct PickResult;
 
 namespace iso::gui {
 
+// The 3D view's look is a frame's (FrameLook: cone AO on, 16 still frames
+// by default; key O toggles AO between off and cone), plus how it behaves
+// while the camera moves.
 struct ViewerOptions {
-    bool ao = true;          // cone-traced AO (key O toggles it)
-    ConeAoSettings cone;     // its settings
-    int still_frames = 16;   // while nothing moves, this many frames accumulate new jitter sets
-    glm::vec3 background{0.08f, 0.09f, 0.11f}; // linear RGB
-    bool flat_shading = false;
-    // Off: every surface is drawn opaque whatever its opacity (RenderOptions::transparency).
-    bool transparency = true;
+    FrameLook look = interactive_look();
     // AO in the frames drawn while a mouse drag moves the camera (off: those
     // frames go without it and the still frames after the release bring it back).
     bool ao_while_dragging = false;
+
+    static FrameLook interactive_look() {
+        FrameLook l;
+        l.ao = AoMethod::Cone;
+        l.ao_frames = 16; // still frames accumulating new jitter sets while nothing moves
+        return l;
+    }
 };
 
 class Viewer : public QOpenGLWidget {
@@ -48,9 +52,11 @@ public:
     explicit Viewer(core::Scene& scene, PatientView view, ViewerOptions options = {}, QWidget* parent = nullptr);
     ~Viewer() override;
     int frames() const { return frames_; }
-    // True once the picture stopped changing: AO off, or its still frames
-    // all accumulated.
-    bool converged() const { return frames_ > 0 && (!options_.ao || ao_frames_ >= options_.still_frames); }
+    // True once the picture stopped changing: no cone AO, or its still
+    // frames all accumulated.
+    bool converged() const {
+        return frames_ > 0 && (options_.look.ao != AoMethod::Cone || ao_frames_ >= options_.look.ao_frames);
+    }
     int ao_frames() const { return ao_frames_; }
     // A mouse drag is moving the camera now.
     bool dragging() const { return dragging_; }

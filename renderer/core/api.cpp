@@ -83,7 +83,7 @@ Image ao_reference_cached(Scene& scene, const Camera& cam, const RenderOptions& 
     key.precision(17);
     key << "ao-reference v1 (Embree, Malley, rotated Hammersley, seed 1)\n"
         << t.at("isoscope:input_sha256") << "\n" << (t.count("isoscope:iso") ? t.at("isoscope:iso") : "") << "\n"
-        << t.at("isoscope:camera") << "\n" << ro.width << "x" << ro.height << "\n" << req.ao_radius_mm << "\n" << req.ao_rays;
+        << t.at("isoscope:camera") << "\n" << ro.width << "x" << ro.height << "\n" << req.look.cone.radius_mm << "\n" << req.look.ao_rays;
     const auto dir = cache_folder(req.cache_dir);
     const auto file = dir.empty() ? std::filesystem::path() : dir / "ao" / (sha256_of_string(key.str()) + ".exr");
     std::error_code ec;
@@ -102,7 +102,7 @@ Image ao_reference_cached(Scene& scene, const Camera& cam, const RenderOptions& 
     // from Embree rays against the same meshes.
     RenderOptions d = ro;
     d.annotations = nullptr;
-    d.ao = false;
+    d.look.ao = AoMethod::Off;
     d.aov = Aov::Depth;
     const Image depth = scene.render(cam, d).image;
     d.aov = Aov::Normal;
@@ -112,8 +112,8 @@ Image ao_reference_cached(Scene& scene, const Camera& cam, const RenderOptions& 
         if (scene.info(id).visible) ptrs.push_back(&scene.mesh(id));
     AoReference reference(ptrs);
     AoReferenceOptions ao;
-    ao.radius_mm = req.ao_radius_mm;
-    ao.rays = req.ao_rays;
+    ao.radius_mm = req.look.cone.radius_mm;
+    ao.rays = req.look.ao_rays;
     Image img = reference.image(cam, depth, normal, ao);
     if (!file.empty()) {
         std::filesystem::create_directories(file.parent_path(), ec);
@@ -131,45 +131,22 @@ Image ao_reference_cached(Scene& scene, const Camera& cam, const RenderOptions& 
 } // namespace
 
 RenderOptions frame_options(const RenderRequest& req) {
+    validate(req.look);
+    const AoMethod method = req.look.ao;
+    if (method == AoMethod::Reference && req.aov != Aov::Ao)
+        throw Error("ambient occlusion reference", "the ray-traced reference is written only as the raw AO term (the ao AOV)");
+    if (req.aov == Aov::Ao && method == AoMethod::Off) throw Error("ao AOV", "needs cone, disk or reference ambient occlusion");
     RenderOptions ro;
     ro.width = req.width;
     ro.height = req.height;
+    ro.look = req.look;
+    // The reference's GL frame gives it depth and normals only (ao_reference_cached).
+    if (method == AoMethod::Reference) ro.look.ao = AoMethod::Off;
     ro.aov = req.aov;
     ro.scale = req.scale;
-    ro.background = glm::vec4(req.background, req.transparent ? 0.0f : 1.0f);
-    ro.flat_shading = req.flat_shading;
-    ro.transparency = req.transparency;
-    ro.oit_epsilon = req.oit_epsilon;
-    if (!(req.oit_memory_mib >= 1.0 && req.oit_memory_mib <= 65536.0))
-        throw Error("transparency memory", "expected 1..65536 MiB, got " + std::to_string(req.oit_memory_mib));
-    ro.oit_memory_bytes = std::size_t(req.oit_memory_mib * 1048576.0);
     ro.time_passes = req.time_passes;
     ro.pick = req.pick;
-    if (req.ao != "off" && req.ao != "cone" && req.ao != "disk" && req.ao != "reference")
-        throw Error("ambient occlusion", "method must be off, cone, disk or reference, got '" + req.ao + "'");
-    if (req.ao == "reference" && !req.aov_ao)
-        throw Error("ambient occlusion reference", "the ray-traced reference is written only as the raw AO term (the ao AOV)");
-    if (req.aov_ao && req.ao == "off") throw Error("ao AOV", "needs cone, disk or reference ambient occlusion");
-    if (req.ao_frames < 1 || req.ao_frames > 4096)
-        throw Error("ambient occlusion frames", "expected 1..4096, got " + std::to_string(req.ao_frames));
-    if (req.ao == "cone") {
-        ro.ao = !req.aov_ao;
-        ro.ao_settings = req.cone;
-        ro.ao_settings.radius_mm = req.ao_radius_mm;
-        validate(ro.ao_settings);
-        if (req.aov_ao) ro.aov = Aov::Ao;
-    }
-    if (req.ao == "disk") {
-        // R lives in ao_settings for both methods (RenderOptions).
-        ro.ao = !req.aov_ao;
-        ro.ao_method = AoMethod::Disk;
-        ro.ao_settings.radius_mm = req.ao_radius_mm;
-        validate(ro.ao_settings);
-        ro.disk_settings = req.disk;
-        validate(ro.disk_settings);
-        if (req.aov_ao) ro.aov = Aov::Ao;
-        ro.progress = req.progress; // the gather takes seconds: progress and cancel
-    }
+    if (method == AoMethod::Disk) ro.progress = req.progress; // the gather takes seconds: progress and cancel
     return ro;
 }
 
@@ -199,11 +176,11 @@ RenderOutput render_image(Scene& scene, const RenderRequest& req) {
     Annotations ann;
     ann.markups = req.markups;
     ann.scale_bar = ann.orientation = req.annotations;
-    const bool colour_image = req.aov == Aov::None && !req.aov_ao; // annotations and markups go on it only
+    const bool colour_image = req.aov == Aov::None; // annotations and markups go on it only
     if ((req.annotations || !ann.markups.empty()) && colour_image) ro.annotations = &ann;
     const Camera cam = frame_camera(scene, req);
     // Still frames: each adds new jitter sets to the running mean of the AO.
-    for (int f = 1; req.ao == "cone" && f < req.ao_frames; ++f) scene.render(cam, ro);
+    for (int f = 1; req.look.ao == AoMethod::Cone && f < req.look.ao_frames; ++f) scene.render(cam, ro);
     auto r = scene.render(cam, ro);
     // One GL context serves every scene of the process: free this one's GPU
     // resources while it is current.
@@ -220,7 +197,7 @@ RenderOutput render_image(Scene& scene, const RenderRequest& req) {
     out.pick = std::move(r.pick);
     out.gl_renderer = r.gl_renderer;
     out.camera = cam;
-    if (req.aov_ao && req.ao == "reference") out.image = ao_reference_cached(scene, cam, ro, out.meta.text, req, out.ao_cache_hit);
+    if (req.look.ao == AoMethod::Reference) out.image = ao_reference_cached(scene, cam, ro, out.meta.text, req, out.ao_cache_hit);
     return out;
 }
 

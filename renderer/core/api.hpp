@@ -34,13 +34,27 @@ nlohmann::json describe(const Volume& v);
 
 // ---- rendering ------------------------------------------------------------
 
+// A frame as a front end asks for it: the one description that the CLI's
+// options, the desktop app's exports and sessions fill in. What it looks
+// like is `look` (the same FrameLook the 3D view and the renderer read);
+// the rest says what to draw it of, from where, at what size, and what else
+// to put on it or record.
 struct RenderRequest {
     std::vector<double> isos;        // render_input: for volume inputs (meshes are drawn as they are)
     std::string series;              // render_input: DICOM series choice
     std::string view = "anterior";   // patient view
+    // The camera to draw with instead of `view`'s (a session's, the 3D
+    // view's): its eye, target, up and field of view are kept, its near and
+    // far planes fitted to the visible surfaces (as the 3D view does).
+    std::optional<Camera> camera;
     int width = 1024, height = 1024;
+    // Background, transparency, flat shading and ambient occlusion: "cone"
+    // and "disk" darken the ambient light of the colour image; "reference"
+    // (Embree ray tracing) only as the ao AOV, which writes the raw term
+    // (1 = unoccluded) of any method.
+    FrameLook look;
+    Aov aov = Aov::None;             // a buffer instead of the colour image
     float scale = 1.0f;              // annotation scale (text, lines, glyphs)
-    Aov aov = Aov::None;
     bool annotations = true;         // scale bar and orientation letters
     // 3D Slicer markups (LPS mm; io/markups.hpp) drawn over the colour image,
     // with annotations on or off, never on AOVs: glyphs, labels, lines with
@@ -49,25 +63,7 @@ struct RenderRequest {
     // files they came from, recorded with their SHA-256 in the metadata.
     std::vector<Markup> markups;
     std::vector<std::string> markups_files;
-    bool transparent = false;        // transparent background (colour images)
-    bool transparency = true;        // off: every surface drawn opaque (RenderOptions::transparency)
-    glm::vec3 background{0.08f, 0.09f, 0.11f}; // linear RGB
-    bool flat_shading = false;       // each surface its albedo: no lighting, no AO
-    float oit_epsilon = 1.0f / 512.0f;  // translucent surfaces: stop below this transmittance
-    double oit_memory_mib = 256;     // translucent surfaces: fragment pool cap
     bool time_passes = false;        // real per-pass GPU times (glFinish after each pass)
-    // Ambient occlusion: "off", "cone" (cone tracing in the slicemap; in the
-    // colour image it darkens the ambient light), "disk" (the disk hierarchy
-    // of GPU Gems 3 ch. 12, for still pictures; likewise) or "reference"
-    // (Embree ray tracing; only as --aov ao). --aov ao writes the raw term
-    // (1 = unoccluded).
-    bool aov_ao = false;
-    std::string ao = "off";
-    double ao_radius_mm = 10.0;      // R_max, for every method
-    ConeAoSettings cone;             // tunables of "cone" (its radius_mm is set from ao_radius_mm)
-    DiskAoSettings disk;             // tunables of "disk"
-    int ao_frames = 1;               // still frames accumulated (new jitter sets each) for "cone"
-    int ao_rays = 1024;              // rays per pixel for "reference"
     // Reference results are cached by a hash of everything they depend on
     // (input file contents, iso values, camera, size, radius, rays) under
     // this folder; empty: $ISOSCOPE_CACHE_DIR, else $XDG_CACHE_HOME/isoscope,
@@ -76,10 +72,6 @@ struct RenderRequest {
     ProgressFn progress;
     // A pick riding on this frame (core::pick() sets it): image pixels from the top-left.
     std::optional<PickRegion> pick;
-    // The camera to draw with instead of `view`'s (a session's, the 3D
-    // view's): its eye, target, up and field of view are kept, its near and
-    // far planes fitted to the visible surfaces (as the 3D view does).
-    std::optional<Camera> camera;
     // The session file this state came from (core/session.hpp): its path
     // and SHA-256 go into the metadata.
     std::string session_file;

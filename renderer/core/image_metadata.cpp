@@ -88,17 +88,18 @@ std::string surfaces_text(const Scene& scene) {
 
 void add_shading(Text& t, const FrameRecord& f) {
     const auto& req = f.req;
-    t["isoscope:shading"] = req.flat_shading ? "flat (albedo only)" : "lit";
-    if (!req.transparency) t["isoscope:transparency"] = "off: every surface drawn opaque, whatever its opacity";
+    const FrameLook& look = req.look;
+    t["isoscope:shading"] = look.flat_shading ? "flat (albedo only)" : "lit";
+    if (!look.transparency) t["isoscope:transparency"] = "off: every surface drawn opaque, whatever its opacity";
     const auto& oit = f.result.oit;
     if (oit.fragments > 0) {
-        t["isoscope:transparency"] = "VOIT per-pixel fragment lists, front to back, epsilon " + std::to_string(req.oit_epsilon) + "; " +
+        t["isoscope:transparency"] = "VOIT per-pixel fragment lists, front to back, epsilon " + std::to_string(look.oit_epsilon) + "; " +
                                      std::to_string(oit.fragments) + " fragments" +
                                      (oit.merged ? ", " + std::to_string(oit.merged) + " merged past the memory cap (error at most " +
                                                        std::to_string(oit.merge_error_max) + " per channel)"
                                                  : std::string());
     }
-    if (req.aov != Aov::None && !req.aov_ao)
+    if (req.aov != Aov::None && req.aov != Aov::Ao)
         t["isoscope:aov"] = std::string(req.aov == Aov::Depth    ? "depth (mm along the view axis)"
                                         : req.aov == Aov::Normal ? "normal (LPS)"
                                                                  : "id") +
@@ -107,21 +108,21 @@ void add_shading(Text& t, const FrameRecord& f) {
 
 // The AO method and every one of its settings (from the settings' tables).
 void add_ambient_occlusion(Text& t, const FrameRecord& f) {
-    const auto& req = f.req;
-    if (req.ao != "off") t["isoscope:ao_radius_mm"] = number_text(req.ao_radius_mm);
-    if (req.ao == "cone") {
+    const FrameLook& look = f.req.look;
+    if (look.ao != AoMethod::Off) t["isoscope:ao_radius_mm"] = number_text(look.cone.radius_mm);
+    if (look.ao == AoMethod::Cone) {
         t["isoscope:ao"] = "cone (cone tracing in a solid slicemap voxelization)";
-        t["isoscope:ao_parameters"] = settings_text(f.options.ao_settings) + "; frames " + std::to_string(req.ao_frames);
+        t["isoscope:ao_parameters"] = settings_text(look.cone) + "; frames " + std::to_string(look.ao_frames);
     }
-    if (req.ao == "disk") {
+    if (look.ao == AoMethod::Disk) {
         t["isoscope:ao"] = "disk (disk hierarchy with exact near triangles, GPU Gems 3 ch. 12)";
-        t["isoscope:ao_parameters"] = settings_text(f.options.disk_settings);
+        t["isoscope:ao_parameters"] = settings_text(look.disk);
     }
-    if (req.aov_ao) {
+    if (f.req.aov == Aov::Ao) {
         t["isoscope:aov"] = "ao (1 = unoccluded; cosine-weighted visibility within the radius; NaN = background)";
-        if (req.ao == "reference") {
+        if (look.ao == AoMethod::Reference) {
             t["isoscope:ao"] = "reference (Embree ray tracing)";
-            t["isoscope:ao_rays"] = std::to_string(req.ao_rays);
+            t["isoscope:ao_rays"] = std::to_string(look.ao_rays);
         }
     }
 }

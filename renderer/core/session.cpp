@@ -83,7 +83,7 @@ public:
         }
         if (const json* v = member(root, "view"); v && !v->is_null()) {
             if (!v->is_object()) fail("view", "must be an object");
-            s.ao = boolean(*v, "ao", "view.ao", true);
+            s.ao = boolean(*v, "ao", "view.ao", true) ? AoMethod::Cone : AoMethod::Off;
             s.transparency = boolean(*v, "transparency", "view.transparency", true);
         }
         if (const json* m = member(root, "markups"); m && !m->is_null()) {
@@ -218,8 +218,7 @@ private:
 } // namespace
 
 Session capture_session(const Scene& scene, const std::string& input, const std::string& series, const std::optional<Camera>& camera,
-                        const std::optional<WindowLevel>& window, bool ao, std::vector<Markup> markups,
-                        bool transparency) {
+                        const std::optional<WindowLevel>& window, const FrameLook& view, std::vector<Markup> markups) {
     Session s;
     s.input = input.empty() ? std::string() : normal_absolute(input).string();
     s.series = series;
@@ -238,8 +237,9 @@ Session capture_session(const Scene& scene, const std::string& input, const std:
     }
     s.camera = camera;
     s.window = window;
-    s.ao = ao;
-    s.transparency = transparency;
+    // The 3D view draws cone AO or none (its interactive method).
+    s.ao = view.ao == AoMethod::Off ? AoMethod::Off : AoMethod::Cone;
+    s.transparency = view.transparency;
     s.markups = std::move(markups);
     return s;
 }
@@ -277,7 +277,7 @@ ordered_json session_json(const Session& s, const std::string& session_path) {
         j["window_level"] = {{"center", s.window->center}, {"width", s.window->width}};
     else
         j["window_level"] = nullptr;
-    j["view"] = {{"ao", s.ao}, {"transparency", s.transparency}};
+    j["view"] = {{"ao", s.ao != AoMethod::Off}, {"transparency", s.transparency}};
     if (s.markups.empty()) {
         j["markups"] = nullptr;
     } else {
@@ -396,19 +396,13 @@ OpenedSession open_session(const std::string& path, const ProgressFn& progress) 
     }
 }
 
-RenderRequest session_request(const Session& s, const std::string& session_file, const SessionRenderOptions& o) {
-    RenderRequest req;
-    req.width = o.width;
-    req.height = o.height;
-    req.scale = o.scale;
-    req.annotations = o.annotations;
-    req.transparent = o.transparent;
-    if (o.markups) req.markups = s.markups;
-    req.camera = s.camera;
-    req.ao = o.ao.empty() ? (s.ao ? "cone" : "off") : o.ao;
-    req.transparency = s.transparency;
-    req.session_file = session_file;
-    return req;
+RenderRequest session_request(const Session& s, const std::string& session_file, RenderRequest frame, const SessionParts& take) {
+    if (take.camera) frame.camera = s.camera;
+    if (take.markups) frame.markups.insert(frame.markups.end(), s.markups.begin(), s.markups.end());
+    if (take.ao) frame.look.ao = s.ao;
+    frame.look.transparency = s.transparency;
+    frame.session_file = session_file;
+    return frame;
 }
 
 } // namespace iso::core

@@ -51,7 +51,7 @@ struct Session {
     // are fitted to the surfaces when drawn). None: the anterior view.
     std::optional<Camera> camera;
     std::optional<WindowLevel> window; // the slice views' window/level
-    bool ao = true;                    // the 3D view's ambient occlusion (cone) on
+    AoMethod ao = AoMethod::Cone;      // the 3D view's ambient occlusion: cone or off (the file's view.ao: true or false)
     bool transparency = true;          // the 3D view's transparency on (off: every surface opaque)
     std::vector<Markup> markups;       // LPS mm
     // Found while loading, not stored: e.g. the input changed since saving.
@@ -59,9 +59,10 @@ struct Session {
 };
 
 // What the window shows, as a session (no file access: the SHA-256 is left
-// empty); each surface's post-processing is its SurfaceInfo::post.
+// empty); each surface's post-processing is its SurfaceInfo::post; the 3D
+// view's AO (cone or off) and transparency toggle come from `view`.
 Session capture_session(const Scene& scene, const std::string& input, const std::string& series, const std::optional<Camera>& camera,
-                        const std::optional<WindowLevel>& window, bool ao, std::vector<Markup> markups, bool transparency = true);
+                        const std::optional<WindowLevel>& window, const FrameLook& view, std::vector<Markup> markups);
 
 // The JSON of a session stored at `session_path` (paths below its folder
 // relative) and back. from_json checks every field and throws iso::Error
@@ -99,20 +100,21 @@ OpenedSession open_session(const Session& s, const ProgressFn& progress = {});
 // load_session and open_session; the input's errors come prefixed with the session's path.
 OpenedSession open_session(const std::string& path, const ProgressFn& progress = {});
 
-// How to render a session: `isoscope render --session` and the desktop
-// app's File > Export image both build their request with session_request.
-struct SessionRenderOptions {
-    int width = 1024, height = 1024;
-    float scale = 1.0f;       // annotation scale
-    bool annotations = true;  // scale bar and orientation letters
-    bool markups = true;      // the session's markups
-    bool transparent = false; // transparent background
-    std::string ao;           // "off", "cone", "disk" (export only); empty: the session's view option
+// Which parts of a session's picture the session gives (the others are the
+// caller's): its camera (else the frame's view), its markups (added to the
+// frame's) and its AO method (else the frame's). The transparency toggle
+// is always the session's.
+struct SessionParts {
+    bool camera = true;
+    bool markups = true;
+    bool ao = true;
 };
 
-// The render request for the session's state: its camera (else the
-// anterior view), markups, AO, transparency; `session_file` (may be empty) is recorded
-// in the image's metadata with its SHA-256.
-RenderRequest session_request(const Session& s, const std::string& session_file, const SessionRenderOptions& o);
+// The render request for the session's state: `frame` (size, scale,
+// annotations, background, AO settings, ...: the caller's) with the parts
+// `take` names from the session; `session_file` (may be empty) is recorded
+// in the image's metadata with its SHA-256. `isoscope render --session` and
+// the desktop app's File > Export image both build their request with it.
+RenderRequest session_request(const Session& s, const std::string& session_file, RenderRequest frame, const SessionParts& take = {});
 
 } // namespace iso::core

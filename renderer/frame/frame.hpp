@@ -34,11 +34,52 @@ struct SceneObject {
 
 
 enum class Aov { None, Depth, Normal, Id, Ao };
-
-// How the AO image is computed (docs/ao.md): cone tracing in a slicemap
-// (interactive), or the disk hierarchy of GPU Gems 3 ch. 12 (still pictures).
-enum class AoMethod { Cone, Disk };
 Aov aov_from_name(const std::string& name); // "depth", "normal", "id", "ao"; throws iso::Error
+
+// How the AO term is computed (docs/ao.md): not at all; cone tracing in a
+// slicemap (interactive); the disk hierarchy of GPU Gems 3 ch. 12 (still
+// pictures); or Embree ray tracing, the reference, which the core computes
+// on the CPU and writes only as the ao AOV (the GL renderer draws such a
+// frame without AO).
+enum class AoMethod { Off, Cone, Disk, Reference };
+const char* ao_method_name(AoMethod m);               // "off", "cone", "disk", "reference"
+AoMethod ao_method_from_name(const std::string& name); // throws iso::Error("ambient occlusion", ...)
+
+// How a frame shades its surfaces: the one description that the CLI's
+// options, the 3D view, sessions, image exports and the renderer all read
+// (each takes what applies to it: the renderer ignores ao_frames and
+// ao_rays, the 3D view ao_rays).
+struct FrameLook {
+    glm::vec3 background{0.08f, 0.09f, 0.11f}; // linear RGB
+    bool transparent_background = false;        // colour images: alpha 0 where no surface is
+    // Off: every surface is drawn opaque whatever its opacity (the desktop
+    // app's transparency toggle); the VOIT passes then have nothing to do.
+    bool transparency = true;
+    // Flat shading: every surface is its albedo (no lighting, no AO), so
+    // transparency compositing can be checked exactly.
+    bool flat_shading = false;
+    // VOIT (order-independent transparency through per-pixel fragment
+    // lists) for surfaces with opacity < 1: stop compositing a pixel once the
+    // remaining transmittance is below oit_epsilon; the node pool grows up
+    // to oit_memory_mib.
+    float oit_epsilon = 1.0f / 512.0f;
+    double oit_memory_mib = 256;
+    // Ambient occlusion (modulates the ambient term; Aov::Ao reads it raw).
+    // Off: its passes are culled. cone.radius_mm is R for every method; the
+    // other members of `cone` are the cone tracer's, `disk` the disk
+    // method's (docs/ao.md, "Disk AO on the GPU").
+    AoMethod ao = AoMethod::Off;
+    ConeAoSettings cone;
+    DiskAoSettings disk;
+    int ao_frames = 1;   // cone: still frames accumulated, each with new jitter sets (the 3D view: while nothing moves)
+    int ao_rays = 1024;  // reference: rays per pixel
+    bool operator==(const FrameLook&) const = default;
+};
+
+// Every member's range (the settings of the AO method asked for through
+// their tables); throws iso::Error naming the first setting out of range,
+// never a flag.
+void validate(const FrameLook& look);
 
 // A pick region in image pixels, from the image's top-left corner.
 struct PickRegion {
@@ -66,7 +107,7 @@ struct PickList {
 
 struct RenderOptions {
     int width = 512, height = 512;
-    glm::vec4 background{0.08f, 0.09f, 0.11f, 1.0f}; // linear; alpha 0 for a transparent background
+    FrameLook look;
     Aov aov = Aov::None;
     // Annotations drawn over the colour image (not over AOVs); null: none.
     const struct Annotations* annotations = nullptr;
@@ -82,26 +123,6 @@ struct RenderOptions {
     // Finish the GPU's work at the end of each pass so that per-pass times
     // are real (costs some throughput; for --stats and benchmarks).
     bool time_passes = false;
-    // Flat shading: every surface is its albedo (no lighting, no AO), so
-    // transparency compositing can be checked exactly.
-    bool flat_shading = false;
-    // Off: every object is drawn opaque whatever its opacity (the desktop
-    // app's transparency toggle); the VOIT passes then have nothing to do.
-    bool transparency = true;
-    // VOIT (order-independent transparency through per-pixel fragment
-    // lists) for objects with opacity < 1: stop compositing a pixel once the
-    // remaining transmittance is below oit_epsilon; the node pool grows up
-    // to oit_memory_bytes.
-    float oit_epsilon = 1.0f / 512.0f;
-    std::size_t oit_memory_bytes = std::size_t(256) << 20;
-    // Ambient occlusion (modulates the ambient term; Aov::Ao reads it raw).
-    // Off: its passes are culled. ao_settings.radius_mm is R for both
-    // methods; the other members of ao_settings are the cone tracer's,
-    // disk_settings the disk method's (docs/ao.md, "Disk AO on the GPU").
-    bool ao = false;
-    AoMethod ao_method = AoMethod::Cone;
-    ConeAoSettings ao_settings;
-    DiskAoSettings disk_settings;
     // Long passes (disk AO's gather: seconds per frame on llvmpipe) run in
     // bands and report after each (stage "disk AO"); returning false stops
     // them: the frame is finished without the rest and RenderResult::cancelled

@@ -19,15 +19,6 @@
 
 namespace iso {
 
-Aov aov_from_name(const std::string& n) {
-    if (n == "depth") return Aov::Depth;
-    if (n == "normal") return Aov::Normal;
-    if (n == "id") return Aov::Id;
-    if (n == "ao") return Aov::Ao;
-    if (n.empty() || n == "none") return Aov::None;
-    throw Error("AOV", "unknown AOV '" + n + "' (depth, normal, id, ao)");
-}
-
 namespace {
 
 constexpr std::size_t kOitMinNodes = 1 << 16;   // the pool never shrinks below this
@@ -163,21 +154,18 @@ RenderResult Renderer::render(const Camera& camera, const RenderOptions& opt, co
     if (opt.width < 1 || opt.height < 1 || opt.width > 16384 || opt.height > 16384)
         throw Error("render", "image size " + std::to_string(opt.width) + "x" + std::to_string(opt.height) +
                                   " is out of range (1..16384)");
-    if (!(opt.oit_epsilon >= 0.0f && opt.oit_epsilon < 1.0f))
-        throw Error("transparency epsilon", "must be at least 0 and below 1, got " + std::to_string(opt.oit_epsilon));
-    if (opt.oit_memory_bytes < (std::size_t(1) << 20))
-        throw Error("transparency memory", "the fragment pool needs at least 1 MiB");
+    validate(opt.look);
     Impl& im = *impl_;
     std::vector<passes::DrawItem> draws;
     for (std::size_t i = 0; i < im.meshes.size(); ++i) {
         const auto& m = im.meshes[i];
         if (!m.object.visible || m.count == 0) continue;
-        draws.push_back({m.vao.id(), m.count, std::uint32_t(i + 1), m.object.color, opt.transparency ? std::clamp(m.object.opacity, 0.0f, 1.0f) : 1.0f, m.bounds});
+        draws.push_back({m.vao.id(), m.count, std::uint32_t(i + 1), m.object.color, opt.look.transparency ? std::clamp(m.object.opacity, 0.0f, 1.0f) : 1.0f, m.bounds});
     }
     const Bounds b = bounds();
     // The VOIT pool: sized from the last frame's fragment count; a frame that
     // overflows it is drawn again with a pool large enough, up to the cap.
-    const std::size_t cap_max = opt.oit_memory_bytes / passes::kOitNodeBytes;
+    const std::size_t cap_max = std::size_t(opt.look.oit_memory_mib * 1048576.0) / passes::kOitNodeBytes;
     // A first frame guesses two fragments per pixel.
     const std::size_t first_guess = std::bit_ceil(std::max(kOitMinNodes, 2 * std::size_t(opt.width) * std::size_t(opt.height)));
     std::size_t capacity = std::min(im.oit_next_capacity ? im.oit_next_capacity : first_guess, cap_max);

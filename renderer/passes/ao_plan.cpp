@@ -44,7 +44,7 @@ AoPlan plan_ao(const FrameContext& ctx) {
     AoPlan p;
     const int W = ctx.width, H = ctx.height;
     const double aspect = double(W) / double(H);
-    p.settings = ctx.opt.ao_settings;
+    p.settings = ctx.opt.look.cone;
     // The chain is declared even when AO is off (the graph culls it); bad
     // settings matter only when AO is asked for, and build_frame() refuses
     // them then.

@@ -5,6 +5,7 @@
 
 #include "renderer/passes/build_frame.hpp"
 #include "renderer/passes/gbuffer_layout.hpp"
+#include "io/error.hpp"
 #include "renderer/frame/ao_settings.hpp"
 
 namespace iso::passes {
@@ -63,22 +64,25 @@ FrameContext make_context(const Camera& camera, const RenderOptions& opt, std::v
 
 void build_frame(graph::FrameGraph& fg, const FrameContext& ctx) {
     const RenderOptions& opt = ctx.opt;
-    const bool ao_wanted = opt.ao || opt.aov == Aov::Ao;
-    const bool disk = opt.ao_method == AoMethod::Disk;
-    if (ao_wanted) validate(opt.ao_settings);
-    if (ao_wanted && disk) validate(opt.disk_settings);
+    // The GL frame computes cone and disk AO; the reference is the core's (on the CPU).
+    const AoMethod method = opt.look.ao;
+    if (method == AoMethod::Reference) throw Error("ambient occlusion", "the ray-traced reference is computed by the core, not in a GL frame");
+    if (opt.aov == Aov::Ao && method == AoMethod::Off) throw Error("ao AOV", "needs cone, disk or reference ambient occlusion");
+    validate(opt.look);
+    const bool lit_ao = method != AoMethod::Off;
+    const bool disk = method == AoMethod::Disk;
     const GBuffer gb = gbuffer(fg, ctx);
     // Declared always: culled by the graph when neither lighting nor the read-back reads it.
     const AmbientOcclusion ao = ambient_occlusion(fg, ctx, gb);
     // Disk AO replaces the cone chain's image (the cone chain is then culled).
     const graph::TextureHandle ao_image = disk ? disk_ambient_occlusion(fg, ctx, gb) : ao.ao;
-    graph::TextureHandle color = lighting(fg, ctx, gb, opt.ao ? ao_image : graph::TextureHandle{});
+    graph::TextureHandle color = lighting(fg, ctx, gb, lit_ao ? ao_image : graph::TextureHandle{});
     // Scene content, not an output request, decides this one: no translucent
     // object, no list passes. Lit translucent fragments get their own AO
     // (traced through the cone chain: the disk hierarchy holds the opaque
     // surfaces only).
     PickBuffers picked;
-    if (!ctx.translucent.empty()) color = voit(fg, ctx, gb, color, opt.ao && !opt.flat_shading ? &ao : nullptr, picked);
+    if (!ctx.translucent.empty()) color = voit(fg, ctx, gb, color, lit_ao && !opt.look.flat_shading ? &ao : nullptr, picked);
     if (ctx.pick) pick(fg, ctx, gb, picked);
     if (!opt.image) return; // nothing reads the colour image or an AOV: their passes are culled
     if (opt.annotations) color = overlay(fg, ctx, color, gb.depth);

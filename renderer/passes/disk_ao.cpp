@@ -87,7 +87,7 @@ void build_and_upload(const FrameContext& ctx) {
 
 DiskParams base_params(const FrameContext& ctx) {
     const DiskState& S = *ctx.disk;
-    const DiskAoSettings& st = ctx.opt.disk_settings;
+    const DiskAoSettings& st = ctx.opt.look.disk;
     DiskParams p;
     p.near_plane = float(ctx.camera.near_plane);
     p.far_plane = float(ctx.camera.far_plane);
@@ -95,7 +95,7 @@ DiskParams base_params(const FrameContext& ctx) {
     const glm::dmat4 proj = ctx.camera.projection(double(ctx.width) / double(ctx.height));
     p.proj_scale = {float(proj[0][0]), float(proj[1][1])};
     p.view_to_world = glm::mat4(glm::inverse(ctx.camera.view()));
-    p.radius = float(ctx.opt.ao_settings.radius_mm);
+    p.radius = float(ctx.opt.look.cone.radius_mm);
     p.clip_epsilon = float(st.clip_epsilon);
     p.traversal_epsilon = float(st.traversal_epsilon);
     p.distance_attenuation = float(st.distance_attenuation);
@@ -139,7 +139,7 @@ void update_parents(GlResources& gl, const graph::Resources& r, graph::BufferHan
 void run_element_passes(const FrameContext& ctx, const graph::Resources& r, graph::BufferHandle params) {
     GlResources& gl = *ctx.gl;
     DiskState& S = *ctx.disk;
-    const DiskAoSettings& st = ctx.opt.disk_settings;
+    const DiskAoSettings& st = ctx.opt.look.disk;
     DiskParams p = base_params(ctx);
     const int passes = st.passes; // >= 1: the pass is declared only then
     for (int pass = 0; pass < passes; ++pass) {
@@ -173,7 +173,7 @@ void run_element_passes(const FrameContext& ctx, const graph::Resources& r, grap
     }
     S.terms_valid = true;
     S.settings = st;
-    S.radius = ctx.opt.ao_settings.radius_mm;
+    S.radius = ctx.opt.look.cone.radius_mm;
     ctx.result->disk_elements = true;
 }
 
@@ -196,7 +196,7 @@ void run_gather(const FrameContext& ctx, const GatherData& d, const graph::Resou
     glBindTextureUnit(1, gl.texture(r, d.normal));
     glBindImageTexture(0, gl.texture(r, d.ao), 0, GL_FALSE, 0, GL_WRITE_ONLY, GL_R32F);
     DiskParams p = base_params(ctx);
-    const bool modulated = ctx.opt.disk_settings.passes > 0;
+    const bool modulated = ctx.opt.look.disk.passes > 0;
     p.use_terms = modulated ? 1 : 0;
     gl::Buffer receivers;
     const std::size_t pixels = std::size_t(ctx.width) * std::size_t(ctx.height);
@@ -285,9 +285,9 @@ graph::TextureHandle disk_ambient_occlusion(graph::FrameGraph& fg, const FrameCo
     const bool rebuild = !S || S->key != key;
     // No element passes (passes = 0, the default): every term is 1 and the
     // gather sums unmodulated form factors.
-    const bool modulated = ctx.opt.disk_settings.passes > 0;
-    const bool elements = modulated && (rebuild || !S->terms_valid || !same_settings(S->settings, ctx.opt.disk_settings) ||
-                                        S->radius != ctx.opt.ao_settings.radius_mm);
+    const bool modulated = ctx.opt.look.disk.passes > 0;
+    const bool elements = modulated && (rebuild || !S->terms_valid || !same_settings(S->settings, ctx.opt.look.disk) ||
+                                        S->radius != ctx.opt.look.cone.radius_mm);
 
     graph::BufferHandle hierarchy = fg.history("disk_hierarchy", kTokenDesc);
     if (rebuild) hierarchy = add_build_pass(fg, ctx, hierarchy);

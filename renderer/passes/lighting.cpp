@@ -30,8 +30,8 @@ graph::TextureHandle lighting(graph::FrameGraph& fg, const FrameContext& ctx, co
                      glBindTextureUnit(1, gl.texture(r, d.albedo));
                      if (d.ao.valid()) glBindTextureUnit(2, gl.texture(r, d.ao));
                      bind_params(gl, r, d.params,
-                                 LightingParams{std140::mat3(ctx.world_to_view), ctx.opt.background, d.ao.valid() ? 1u : 0u,
-                                                ctx.opt.flat_shading ? 1u : 0u});
+                                 LightingParams{std140::mat3(ctx.world_to_view), glm::vec4(ctx.opt.look.background, ctx.opt.look.transparent_background ? 0.0f : 1.0f), d.ao.valid() ? 1u : 0u,
+                                                ctx.opt.look.flat_shading ? 1u : 0u});
                      glBindVertexArray(gl.vertex_array("fullscreen"));
                      glDrawArrays(GL_TRIANGLES, 0, 3);
                      glBindVertexArray(0);

@@ -21,8 +21,8 @@ OitParams oit_params(const FrameContext& ctx) {
     p.view_rotation = std140::mat3(ctx.world_to_view);
     p.image_size = {ctx.width, ctx.height};
     p.capacity = std::uint32_t(ctx.oit_capacity);
-    p.epsilon = ctx.opt.oit_epsilon;
-    p.flat_shading = ctx.opt.flat_shading ? 1u : 0u;
+    p.epsilon = ctx.opt.look.oit_epsilon;
+    p.flat_shading = ctx.opt.look.flat_shading ? 1u : 0u;
     p.near_far = {float(ctx.camera.near_plane), float(ctx.camera.far_plane)};
     p.cut_range = ctx.translucent_depth.y > ctx.translucent_depth.x ? ctx.translucent_depth : p.near_far;
     return p;

@@ -160,9 +160,9 @@ int main(int argc, char** argv) {
     for (int round = 0; round < rounds; ++round)
         for (auto& c : cases) {
             gui::ViewerOptions o = v->options();
-            o.ao = c.ao;
-            o.still_frames = 1; // every rotation frame is a first frame; no extra still frames in between
-            o.transparency = true;
+            o.look.ao = c.ao ? AoMethod::Cone : AoMethod::Off;
+            o.look.ao_frames = 1; // every rotation frame is a first frame; no extra still frames in between
+            o.look.transparency = true;
             v->set_options(o);
             w.scene().info(ids[0]).opacity = c.translucent ? 0.3f : 1.0f;
             if (round == 0) v->set_view(PatientView::Anterior);

@@ -452,7 +452,7 @@ int main(int argc, char** argv) {
                 cmd << " --mesh " << files[i] << " --color " << v3(glm::dvec3(scene.info(ids[i]).color)) << " --opacity " << opacity[i];
             cmd << " --eye " << v3(cam.eye) << " --target " << v3(cam.target) << " --up " << v3(cam.up) << " --fov " << cam.fov_y_degrees
                 << " --near " << cam.near_plane << " --far " << cam.far_plane << " --size " << S << "x" << S << " --background "
-                << v3(glm::dvec3(glm::vec3(plain.background))) << " --reps " << a.reps << " --frames 10";
+                << v3(glm::dvec3(plain.look.background)) << " --reps " << a.reps << " --frames 10";
             for (const auto& r : rows) cmd << " --pixel " << r.x << "," << r.y;
             cmd << " 2>" << peer_log;
             const std::string line = bench::capture(cmd.str());

@@ -67,7 +67,7 @@ void run_case(const Case& c, const Args& a, std::vector<Row>& rows) {
     RenderOptions ro;
     ro.width = a.width;
     ro.height = a.height;
-    ro.ao = a.ao;
+    ro.look.ao = a.ao ? AoMethod::Cone : AoMethod::Off;
     // The surface the slider starts from, drawn once (uploaded, AO built).
     const auto id = s.add_isosurface(s.extract_isosurface(c.start), c.start);
     const Camera cam = s.camera(PatientView::Anterior, double(a.width) / a.height);

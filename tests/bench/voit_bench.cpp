@@ -176,8 +176,8 @@ int main(int argc, char** argv) {
             cam.fit(ren.bounds(), 1.0);
             RenderOptions o;
             o.width = o.height = S;
-            o.flat_shading = true;
-            const glm::dvec3 bg(o.background);
+            o.look.flat_shading = true;
+            const glm::dvec3 bg(o.look.background);
             std::cerr << "[voit_bench] " << name << ": reference (Embree, every hit)\n";
             const TransparencyImage ref = transparency_reference(ref_surfaces, cam, S, S, bg);
             std::size_t fg = 0, hits = 0, deepest = 0;

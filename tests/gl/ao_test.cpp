@@ -41,7 +41,8 @@ RenderOptions ao_options(int size, double radius) {
     RenderOptions o;
     o.width = o.height = size;
     o.aov = Aov::Ao;
-    o.ao_settings.radius_mm = radius;
+    o.look.ao = AoMethod::Cone;
+    o.look.cone.radius_mm = radius;
     return o;
 }
 
@@ -106,7 +107,7 @@ TEST_F(SliceMap, NestedSphericalShellsXorToTheirGap) {
     ren.add(sphere_mesh(c, 30, 0.75), {});
     const Camera cam = looking(c + glm::dvec3(0, -400, 0), c, {0, 0, 1});
     auto o = ao_options(96, 200);
-    o.ao_settings.layers = 4;
+    o.look.cone.layers = 4;
     const auto r = ren.render(cam, o, {.read_slicemap = true});
     const auto& sm = r.slicemap;
     ASSERT_EQ(sm.bits(), 512);
@@ -155,12 +156,12 @@ TEST_F(ConeAo, SphereOcclusionByAHalfSpaceIsItsVolumeFraction) {
     ren.add(box({0, -100, -10}, {100, 100, 40}), {});
     const Camera cam = looking({0, 0, 300}, {0, 0, 0}, {0, 1, 0}, 10, 1000);
     auto o = ao_options(256, R);
-    o.ao_settings.resolution = 1.0; // the cone pass itself, no upsampling
-    o.ao_settings.cones = 1;
-    o.ao_settings.spheres = 1;
-    o.ao_settings.samples = 32;
-    o.ao_settings.jitter_sets = 16;
-    o.ao_settings.temporal = false;
+    o.look.cone.resolution = 1.0; // the cone pass itself, no upsampling
+    o.look.cone.cones = 1;
+    o.look.cone.spheres = 1;
+    o.look.cone.samples = 32;
+    o.look.cone.jitter_sets = 16;
+    o.look.cone.temporal = false;
     RenderOptions d = o;
     d.aov = Aov::Depth;
     const auto depth = ren.render(cam, d).image;
@@ -171,7 +172,7 @@ TEST_F(ConeAo, SphereOcclusionByAHalfSpaceIsItsVolumeFraction) {
     // square root of a noisy estimate is biased low where o is small, so
     // only its mean over a pixel column is held to a bound (0.05).
     for (double weight : {0.0, 1.0}) {
-        o.ao_settings.ray_weight = weight;
+        o.look.cone.ray_weight = weight;
         const auto img = ren.render(cam, o).image;
         // Columns of pixels at several distances from the wall (x < 0 on the floor).
         int tested = 0;
@@ -216,15 +217,15 @@ TEST_F(ConeAo, CtSkinAndBunnyAgainstTheEmbreeReference) {
         rq.isos = k.isos;
         rq.view = k.view;
         rq.width = rq.height = 256;
-        rq.aov_ao = true;
-        rq.ao = "reference";
-        rq.ao_radius_mm = k.radius;
-        rq.ao_rays = 512;
+        rq.aov = Aov::Ao;
+        rq.look.ao = AoMethod::Reference;
+        rq.look.cone.radius_mm = k.radius;
+        rq.look.ao_rays = 512;
         rq.cache_dir = "-";
         const auto ref = core::render_input(k.input, rq);
-        rq.ao = "cone";
+        rq.look.ao = AoMethod::Cone;
         const auto cone = core::render_input(k.input, rq);
-        const auto e = ao_error(cone.image, ref.image, rq.ao_rays);
+        const auto e = ao_error(cone.image, ref.image, rq.look.ao_rays);
         EXPECT_GT(e.pixels, 5000u);
         EXPECT_LE(e.rmse, k.max_rmse) << k.input << ": bias " << e.bias << " MAE " << e.mae << " p95 " << e.p95;
         EXPECT_LE(std::abs(e.bias), 0.03) << k.input;
@@ -253,18 +254,18 @@ TEST_F(ConeAo, CoarseConePassIsUpsampledAlongSurfacesNotAcrossEdges) {
         rq.isos = k.isos;
         rq.view = k.view;
         rq.width = rq.height = 256;
-        rq.aov_ao = true;
-        rq.ao = "reference";
-        rq.ao_radius_mm = k.radius;
-        rq.ao_rays = 512;
+        rq.aov = Aov::Ao;
+        rq.look.ao = AoMethod::Reference;
+        rq.look.cone.radius_mm = k.radius;
+        rq.look.ao_rays = 512;
         rq.cache_dir = "-";
         const auto ref = core::render_input(k.input, rq);
-        rq.ao = "cone";
-        rq.cone.resolution = 1.0;
+        rq.look.ao = AoMethod::Cone;
+        rq.look.cone.resolution = 1.0;
         const auto full = core::render_input(k.input, rq);
-        rq.cone.resolution = 0.5;
+        rq.look.cone.resolution = 0.5;
         const auto half = core::render_input(k.input, rq);
-        const auto ef = ao_error(full.image, ref.image, rq.ao_rays), eh = ao_error(half.image, ref.image, rq.ao_rays);
+        const auto ef = ao_error(full.image, ref.image, rq.look.ao_rays), eh = ao_error(half.image, ref.image, rq.look.ao_rays);
         EXPECT_LE(eh.rmse, ef.rmse + 0.005) << k.input << ": full " << ef.rmse << ", half " << eh.rmse;
         std::size_t nan_mismatch = 0;
         for (std::size_t i = 0; i < full.image.floats.size(); ++i)
@@ -282,11 +283,11 @@ TEST_F(ConeAo, CoarseConePassIsUpsampledAlongSurfacesNotAcrossEdges) {
     const auto block = ren.add(box({-20, -20, 0}, {20, 20, 40}), {});
     const Camera cam = looking({0, 0, 300}, {0, 0, 0}, {0, 1, 0});
     RenderOptions o = ao_options(128, 10.0);
-    o.ao_settings.temporal = false;
-    o.ao_settings.resolution = 1.0;
+    o.look.cone.temporal = false;
+    o.look.cone.resolution = 1.0;
     const Image full = ren.render(cam, o).image;
     for (double res : {0.5, 0.25}) {
-        o.ao_settings.resolution = res;
+        o.look.cone.resolution = res;
         const Image half = ren.render(cam, o).image;
         o.aov = Aov::Id;
         const Image id = ren.render(cam, o).image;
@@ -345,8 +346,8 @@ TEST_F(ConeAo, GuardBandKeepsOccludersJustOffScreen) {
         ro.rays = 256;
         const Image ref = reference.image(c, depth, normal, ro);
         RenderOptions o = ao_options(S, R);
-        o.ao_settings.guard = guard;
-        o.ao_settings.temporal = false;
+        o.look.cone.guard = guard;
+        o.look.cone.temporal = false;
         const auto r = ren.render(c, o);
         *used = r.ao_guard;
         double e = 0, ref_mean = 0;
@@ -405,7 +406,7 @@ TEST_F(ConeAo, PassesAreCulledWhenOffAndTheSlicemapIsReusedWhenStill) {
     auto off = ren.render(cam, o);
     EXPECT_TRUE(culled(off.stats, "voxelize")) << "declared once with AO off";
     EXPECT_TRUE(culled(off.stats, "cone_ao")) << "declared once with AO off";
-    o.ao = true;
+    o.look.ao = AoMethod::Cone;
     auto a = ren.render(cam, o);
     EXPECT_TRUE(a.voxelized);
     EXPECT_EQ(a.ao_frames, 1);
@@ -440,8 +441,8 @@ TEST_F(ConeAo, StillFramesConvergeInsteadOfFlickering) {
     ren.add(box({-10, -10, 0}, {10, 10, 15}), {});
     const Camera cam = looking({40, -120, 160}, {0, 0, 0}, {0, 0, 1});
     auto o = ao_options(128, 10);
-    o.ao_settings.samples = 4;
-    o.ao_settings.cones = 4;
+    o.look.cone.samples = 4;
+    o.look.cone.cones = 4;
     std::vector<Image> frames;
     for (int f = 0; f < 16; ++f) frames.push_back(ren.render(cam, o).image);
     auto change = [&](int f) { // RMS change from frame f-1 to f
@@ -458,7 +459,7 @@ TEST_F(ConeAo, StillFramesConvergeInsteadOfFlickering) {
     };
     EXPECT_GT(change(1), 0.0) << "a new jitter set each still frame";
     EXPECT_LT(change(15), 0.25 * change(1)) << "running mean: changes shrink like 1/frame";
-    o.ao_settings.temporal = false;
+    o.look.cone.temporal = false;
     const auto x = ren.render(cam, o).image, y = ren.render(cam, o).image;
     EXPECT_EQ(x.floats.size(), y.floats.size());
     for (std::size_t i = 0; i < x.floats.size(); ++i)
@@ -517,7 +518,7 @@ TEST_F(ConeAoStress, ThinSheetAndDeepCavityAgainstTheReference) {
     const int S = 256;
     const double R = 10;
     auto o = ao_options(S, R);
-    o.ao_settings.layers = 4;
+    o.look.cone.layers = 4;
     const auto cone = ren.render(cam, o).image;
     RenderOptions d = o;
     d.aov = Aov::Depth;
@@ -588,7 +589,7 @@ TEST_F(ConeAoStress, NearPlaneEmptySceneAndSingleTriangle) {
         for (float v : img.floats) ASSERT_TRUE(std::isnan(v)) << "empty scene: all background";
         RenderOptions o;
         o.width = o.height = 32;
-        o.ao = true;
+        o.look.ao = AoMethod::Cone;
         EXPECT_NO_THROW(ren.render(cam, o));
     }
     {

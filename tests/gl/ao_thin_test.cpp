@@ -35,9 +35,10 @@ RenderOptions ao_options(int size, double radius, bool surface) {
     RenderOptions o;
     o.width = o.height = size;
     o.aov = Aov::Ao;
-    o.ao_settings.radius_mm = radius;
-    o.ao_settings.surface_voxels = surface;
-    o.ao_settings.guard = 0; // no guard band: the slicemap is the view's grid and its range starts at the nearest visible depth
+    o.look.ao = AoMethod::Cone;
+    o.look.cone.radius_mm = radius;
+    o.look.cone.surface_voxels = surface;
+    o.look.cone.guard = 0; // no guard band: the slicemap is the view's grid and its range starts at the nearest visible depth
     return o;
 }
 
@@ -137,10 +138,10 @@ TEST_F(ConeAoThin, SurfaceVoxelsKeepTheSlicemapReuse) {
     auto o = ao_options(64, 10, true);
     EXPECT_TRUE(ren.render(cam, o).voxelized);
     EXPECT_FALSE(ren.render(cam, o).voxelized) << "camera, scene and settings unchanged";
-    o.ao_settings.surface_voxels = false;
+    o.look.cone.surface_voxels = false;
     EXPECT_TRUE(ren.render(cam, o).voxelized) << "surface voxels turned off";
     EXPECT_FALSE(ren.render(cam, o).voxelized);
-    o.ao_settings.surface_voxels = true;
+    o.look.cone.surface_voxels = true;
     EXPECT_TRUE(ren.render(cam, o).voxelized) << "surface voxels turned on";
 }
 
@@ -207,29 +208,29 @@ TEST_F(ConeAoThin, ThinStructurePhantomAgainstTheEmbreeReference) {
     rq.isos = {150};
     rq.view = "anterior";
     rq.width = rq.height = 256;
-    rq.aov_ao = true;
-    rq.ao = "reference";
-    rq.ao_radius_mm = 10;
-    rq.ao_rays = 512;
+    rq.aov = Aov::Ao;
+    rq.look.ao = AoMethod::Reference;
+    rq.look.cone.radius_mm = 10;
+    rq.look.ao_rays = 512;
     rq.cache_dir = "-";
     const auto ref = core::render_input(file, rq);
-    rq.ao = "cone";
-    rq.cone.axis_weight = 0; // the estimator without axis probes: spheres only
+    rq.look.ao = AoMethod::Cone;
+    rq.look.cone.axis_weight = 0; // the estimator without axis probes: spheres only
     const auto cone = core::render_input(file, rq);
-    rq.cone.surface_voxels = true;
+    rq.look.cone.surface_voxels = true;
     const auto surface = core::render_input(file, rq);
-    rq.cone.surface_voxels = false;
-    rq.cone.ray_weight = 1;
+    rq.look.cone.surface_voxels = false;
+    rq.look.cone.ray_weight = 1;
     const auto rw1 = core::render_input(file, rq);
-    rq.cone.ray_weight = 0.5;
-    rq.cone = {}; // the defaults: axis probes on
-    EXPECT_EQ(rq.cone.axis_weight, 1.0);
+    rq.look.cone.ray_weight = 0.5;
+    rq.look.cone = {}; // the defaults: axis probes on
+    EXPECT_EQ(rq.look.cone.axis_weight, 1.0);
     const auto axis = core::render_input(file, rq);
-    rq.ao = "disk"; // the other mode, its defaults
+    rq.look.ao = AoMethod::Disk; // the other mode, its defaults
     const auto disk = core::render_input(file, rq);
     std::filesystem::remove(file);
-    const auto e_axis = ao_error(axis.image, ref.image, rq.ao_rays);
-    const auto e_disk = ao_error(disk.image, ref.image, rq.ao_rays);
+    const auto e_axis = ao_error(axis.image, ref.image, rq.look.ao_rays);
+    const auto e_disk = ao_error(disk.image, ref.image, rq.look.ao_rays);
     std::printf("thin phantom 256x256: disk RMSE %.4f bias %+.4f p95 %.4f\n", e_disk.rmse, e_disk.bias, e_disk.p95);
     // Disk AO: measured 0.029 (bias -0.006) here, 0.031 at 512x512 against a 1024-ray
     // reference (docs/ao.md); the bound leaves room for this 512-ray
@@ -238,8 +239,8 @@ TEST_F(ConeAoThin, ThinStructurePhantomAgainstTheEmbreeReference) {
     EXPECT_LE(e_disk.rmse, 0.045) << "disk: bias " << e_disk.bias << " p95 " << e_disk.p95;
     EXPECT_LE(std::abs(e_disk.bias), 0.02);
     EXPECT_LT(e_disk.rmse, e_axis.rmse);
-    const auto e = ao_error(cone.image, ref.image, rq.ao_rays), e_surface = ao_error(surface.image, ref.image, rq.ao_rays),
-               e_rw1 = ao_error(rw1.image, ref.image, rq.ao_rays);
+    const auto e = ao_error(cone.image, ref.image, rq.look.ao_rays), e_surface = ao_error(surface.image, ref.image, rq.look.ao_rays),
+               e_rw1 = ao_error(rw1.image, ref.image, rq.look.ao_rays);
     Image ones = ref.image;
     for (auto& v : ones.floats)
         if (std::isfinite(v)) v = 1;

@@ -259,8 +259,8 @@ RenderOptions disk_options(int size, double radius) {
     RenderOptions o;
     o.width = o.height = size;
     o.aov = Aov::Ao;
-    o.ao_method = AoMethod::Disk;
-    o.ao_settings.radius_mm = radius;
+    o.look.ao = AoMethod::Disk;
+    o.look.cone.radius_mm = radius;
     return o;
 }
 
@@ -322,8 +322,8 @@ TEST_F(DiskAo, ElementTermsAndGatherMatchTheCpuHierarchy) {
         SCOPED_TRACE("passes " + std::to_string(passes));
         RenderOptions o = disk_options(96, radius);
         if (passes) {
-            o.disk_settings.passes = passes;
-            o.disk_settings.traversal_epsilon = 8;
+            o.look.disk.passes = passes;
+            o.look.disk.traversal_epsilon = 8;
         }
         RenderHooks hooks;
         hooks.read_disk = true;
@@ -331,7 +331,7 @@ TEST_F(DiskAo, ElementTermsAndGatherMatchTheCpuHierarchy) {
         ASSERT_EQ(r.disk_elements, passes > 0);
         ASSERT_EQ(r.disk_nodes, h.nodes.size());
         ASSERT_EQ(r.disk_terms.size(), h.nodes.size());
-        const std::vector<float> cpu_terms = disk_element_terms(h, o.disk_settings, radius);
+        const std::vector<float> cpu_terms = disk_element_terms(h, o.look.disk, radius);
         ASSERT_EQ(cpu_terms.size(), h.nodes.size());
         std::vector<double> term_err;
         double open = 0;
@@ -356,7 +356,7 @@ TEST_F(DiskAo, ElementTermsAndGatherMatchTheCpuHierarchy) {
             ASSERT_TRUE(nb.w == 1.0f || nb.w == -1.0f) << nb.w;
             const glm::dvec3 n = glm::dvec3(glm::vec3(nb));
             const double cpu =
-                1.0 - disk_occlusion_sided(h, glm::dvec3(glm::vec3(pa)), n, double(nb.w) * n, r.disk_terms, o.disk_settings, radius);
+                1.0 - disk_occlusion_sided(h, glm::dvec3(glm::vec3(pa)), n, double(nb.w) * n, r.disk_terms, o.look.disk, radius);
             px_err.push_back(std::abs(double(pa.w) - cpu));
             dark += cpu < 0.8;
             // The AO image holds the same value (its rows top-down).
@@ -388,15 +388,15 @@ TEST_F(DiskAo, CtSkinAndBunnyAgainstTheEmbreeReference) {
         rq.isos = k.isos;
         rq.view = k.view;
         rq.width = rq.height = 256;
-        rq.aov_ao = true;
-        rq.ao = "reference";
-        rq.ao_radius_mm = k.radius;
-        rq.ao_rays = 512;
+        rq.aov = Aov::Ao;
+        rq.look.ao = AoMethod::Reference;
+        rq.look.cone.radius_mm = k.radius;
+        rq.look.ao_rays = 512;
         const auto ref = core::render_input(k.input, rq);
-        rq.ao = "disk";
+        rq.look.ao = AoMethod::Disk;
         rq.time_passes = true;
         const auto disk = core::render_input(k.input, rq);
-        const auto e = ao_error(disk.image, ref.image, rq.ao_rays);
+        const auto e = ao_error(disk.image, ref.image, rq.look.ao_rays);
         double gather_ms = 0, element_ms = 0;
         for (const auto& p : disk.stats.passes) {
             if (p.name == "disk_gather") gather_ms = p.ms;
@@ -426,22 +426,20 @@ TEST_F(DiskAo, PassesAreCulledWhenOffAndTheHierarchyIsKeptAcrossViews) {
     const Camera cam = looking({30, -300, 40}, {0, 0, 0}, {0, 0, 1});
     RenderOptions o;
     o.width = o.height = 48;
-    o.ao_method = AoMethod::Disk;
-    o.ao_settings.radius_mm = 10;
-    o.disk_settings.passes = 2; // the element passes run (the default has none)
+    o.look.ao = AoMethod::Off;
+    o.look.cone.radius_mm = 10;
+    o.look.disk.passes = 2; // the element passes run (the default has none)
     const auto off = ren.render(cam, o);
-    for (const char* pass : {"disk_build", "disk_elements", "disk_gather"}) {
-        EXPECT_TRUE(declared(off.stats, pass)) << pass;
+    for (const char* pass : {"disk_build", "disk_elements", "disk_gather", "cone_ao"})
         EXPECT_FALSE(ran(off.stats, pass)) << pass << " with AO off";
-    }
     EXPECT_FALSE(off.disk_built);
-    EXPECT_FALSE(ran(off.stats, "cone_ao")) << "disk AO does not run the cone chain";
-    o.ao = true;
+    o.look.ao = AoMethod::Disk;
     const auto a = ren.render(cam, o);
     EXPECT_TRUE(a.disk_built);
     EXPECT_TRUE(a.disk_elements);
     EXPECT_TRUE(ran(a.stats, "disk_gather"));
     EXPECT_FALSE(ran(a.stats, "voxelize")) << "disk AO does not run the cone chain";
+    EXPECT_FALSE(ran(a.stats, "cone_ao"));
     Camera moved = cam;
     moved.orbit(20, 5);
     const auto b = ren.render(moved, o);
@@ -449,11 +447,11 @@ TEST_F(DiskAo, PassesAreCulledWhenOffAndTheHierarchyIsKeptAcrossViews) {
     EXPECT_FALSE(b.disk_elements) << "the terms do not depend on the camera";
     EXPECT_FALSE(declared(b.stats, "disk_build"));
     EXPECT_TRUE(ran(b.stats, "disk_gather"));
-    o.disk_settings.passes = 3;
+    o.look.disk.passes = 3;
     const auto c = ren.render(moved, o);
     EXPECT_FALSE(c.disk_built);
     EXPECT_TRUE(c.disk_elements) << "new settings";
-    o.ao_settings.radius_mm = 12;
+    o.look.cone.radius_mm = 12;
     EXPECT_TRUE(ren.render(moved, o).disk_elements) << "new radius";
     ren.add(box({-5, -5, 25}, {5, 5, 35}), {});
     const auto d = ren.render(moved, o);
@@ -461,14 +459,14 @@ TEST_F(DiskAo, PassesAreCulledWhenOffAndTheHierarchyIsKeptAcrossViews) {
     EXPECT_TRUE(d.disk_elements);
     ren.object(3).visible = false;
     EXPECT_TRUE(ren.render(moved, o).disk_built) << "the visible set changed";
-    o.disk_settings.passes = 0;
+    o.look.disk.passes = 0;
     const auto none = ren.render(moved, o);
     EXPECT_FALSE(none.disk_elements) << "no element passes";
     EXPECT_FALSE(declared(none.stats, "disk_elements"));
     EXPECT_TRUE(ran(none.stats, "disk_gather"));
     // The colour image with disk AO differs from the one without.
     const auto lit = ren.render(moved, o);
-    o.ao = false;
+    o.look.ao = AoMethod::Off;
     const auto unlit = ren.render(moved, o);
     EXPECT_NE(lit.image.bytes, unlit.image.bytes);
 }
@@ -484,9 +482,9 @@ TEST_F(DiskAo, GatherReportsProgressInBandsAndCanBeCancelled) {
     rq.view = "anterior";
     rq.width = 96;
     rq.height = 200;
-    rq.aov_ao = true;
-    rq.ao = "disk";
-    rq.ao_radius_mm = 0.05;
+    rq.aov = Aov::Ao;
+    rq.look.ao = AoMethod::Disk;
+    rq.look.cone.radius_mm = 0.05;
     const std::string input = test::data("bunny.vtp");
     const auto plain = core::render_input(input, rq);
     std::vector<double> disk_fractions;

@@ -178,17 +178,18 @@ TEST(GuiExport, ExportSaveOpenSessionAndSurfaces) {
     // ---- File > Save session (with the view bar's transparency off); an unchanged state's export names it
     ASSERT_NE(w.view_toolbar(), nullptr);
     w.view_toolbar()->transparency_action()->trigger();
-    ASSERT_FALSE(w.viewer()->options().transparency);
+    ASSERT_FALSE(w.viewer()->options().look.transparency);
     const std::string session = dir / "study.isoscope.json";
     w.save_session(QString::fromStdString(session));
     ASSERT_TRUE(wait_until([&] { return !w.busy(); }, 60000));
     ASSERT_TRUE(fs::exists(session)) << w.statusBar()->currentMessage().toStdString();
     EXPECT_EQ(w.session_path().toStdString(), session);
-    core::SessionRenderOptions small;
+    core::RenderRequest small;
     small.width = 96;
     small.height = 72;
-    small.ao = "off";
-    w.export_image(QString::fromStdString(dir / "again.png"), small);
+    core::SessionParts parts;
+    parts.ao = false; // small.look.ao: off
+    w.export_image(QString::fromStdString(dir / "again.png"), small, parts);
     ASSERT_TRUE(wait_until([&] { return !w.busy(); }, 120000));
     ImageMetadata again;
     load_image(dir / "again.png", &again);
@@ -198,7 +199,7 @@ TEST(GuiExport, ExportSaveOpenSessionAndSurfaces) {
     // An export into a folder that does not exist: a dialog names the file, nothing is written.
     {
         const std::string nowhere = dir / "no/such/folder/x.png";
-        w.export_image(QString::fromStdString(nowhere), small);
+        w.export_image(QString::fromStdString(nowhere), small, parts);
         ASSERT_TRUE(wait_until([&] { return !w.busy(); }, 60000));
         QMessageBox* box = nullptr;
         ASSERT_TRUE(wait_until([&] { return (box = w.findChild<QMessageBox*>("error")) && box->isVisible(); }, 10000));
@@ -257,9 +258,9 @@ TEST(GuiExport, ExportSaveOpenSessionAndSurfaces) {
         EXPECT_NEAR(c2.up[k], orbited.up[k], 1e-9);
     }
     EXPECT_NEAR(c2.fov_y_degrees, orbited.fov_y_degrees, 1e-9);
-    EXPECT_EQ(w2.viewer()->options().ao, w.viewer()->options().ao);
-    EXPECT_FALSE(w2.viewer()->options().transparency);
-    EXPECT_FALSE(w2.view_toolbar()->transparency());
+    EXPECT_EQ(w2.viewer()->options().look.ao, w.viewer()->options().look.ao);
+    EXPECT_FALSE(w2.viewer()->options().look.transparency);
+    EXPECT_FALSE(w2.view_toolbar()->transparency_action()->isChecked());
     EXPECT_EQ(w2.window_level().center, w.window_level().center);
     EXPECT_EQ(w2.window_level().width, w.window_level().width);
     ASSERT_EQ(w2.markups().size(), 1u);

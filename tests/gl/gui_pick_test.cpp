@@ -161,7 +161,7 @@ TEST_F(GuiPick, PicksLeaveTheAoAccumulationAlone) {
     std::sort(ms.begin(), ms.end());
     std::printf("3D view pick at %dx%d: median %.1f ms, min %.1f, max %.1f of 5\n", size.width(), size.height(), ms[2], ms[0],
                 ms[4]);
-    if (viewer->options().ao) {
+    if (viewer->options().look.ao != AoMethod::Off) {
         ASSERT_TRUE(wait_until([&] { return viewer->converged(); }, 120000)) << "the AO did not converge";
         const int ao_frames = viewer->ao_frames(), drawn = viewer->frames();
         viewer->pick_at(QPointF(at));

@@ -359,17 +359,17 @@ TEST(GuiViews, ThreeDViewMouseAndToolBar) {
     ASSERT_NE(bar, nullptr);
 
     // ---- AO toggle
-    EXPECT_TRUE(viewer->options().ao);
+    EXPECT_NE(viewer->options().look.ao, AoMethod::Off);
     bar->ao_action()->trigger();
-    EXPECT_FALSE(viewer->options().ao);
+    EXPECT_EQ(viewer->options().look.ao, AoMethod::Off);
     // The O key in the view toggles it too, and the button follows.
     viewer->setFocus();
     QTest::keyClick(viewer, Qt::Key_O);
-    EXPECT_TRUE(viewer->options().ao);
-    EXPECT_TRUE(bar->ao());
+    EXPECT_NE(viewer->options().look.ao, AoMethod::Off);
+    EXPECT_TRUE(bar->ao_action()->isChecked());
     QTest::keyClick(viewer, Qt::Key_O);
-    EXPECT_FALSE(viewer->options().ao);
-    EXPECT_FALSE(bar->ao());
+    EXPECT_EQ(viewer->options().look.ao, AoMethod::Off);
+    EXPECT_FALSE(bar->ao_action()->isChecked());
 
     // ---- patient-view buttons and reset: the scene's camera for that view
     const double aspect = double(viewer->width()) / double(viewer->height());
@@ -434,7 +434,7 @@ TEST(GuiViews, ThreeDViewMouseAndToolBar) {
 
     // ---- AO waits while a drag moves the camera, and comes back when it stops
     bar->ao_action()->trigger();
-    ASSERT_TRUE(viewer->options().ao);
+    ASSERT_NE(viewer->options().look.ao, AoMethod::Off);
     ASSERT_TRUE(wait_until([&] { return viewer->converged(); }, 60000)) << "the AO did not converge";
     {
         auto send = [&](QEvent::Type type, QPointF at, Qt::MouseButton button, Qt::MouseButtons held) {
@@ -451,21 +451,21 @@ TEST(GuiViews, ThreeDViewMouseAndToolBar) {
         send(QEvent::MouseButtonRelease, mid + QPointF(30, 0), Qt::LeftButton, Qt::NoButton);
         EXPECT_FALSE(viewer->dragging());
         ASSERT_TRUE(wait_until([&] { return viewer->converged(); }, 60000)) << "the AO did not come back after the drag";
-        EXPECT_EQ(viewer->ao_frames(), viewer->options().still_frames);
+        EXPECT_EQ(viewer->ao_frames(), viewer->options().look.ao_frames);
         EXPECT_EQ(clicks, 1);
     }
     bar->ao_action()->trigger();
-    ASSERT_FALSE(viewer->options().ao);
+    ASSERT_EQ(viewer->options().look.ao, AoMethod::Off);
 
     // ---- transparency off: the translucent skin is drawn as if opaque
     // (the frames compared pixel for pixel; AO is off, so each frame is final)
     bar->reset_action()->trigger();
     const auto id = w.scene().surfaces().front();
     w.scene().info(id).opacity = 0.3f;
-    ASSERT_TRUE(bar->transparency());
+    ASSERT_TRUE(bar->transparency_action()->isChecked());
     const QImage translucent = viewer->grabFramebuffer();
     bar->transparency_action()->trigger();
-    EXPECT_FALSE(viewer->options().transparency);
+    EXPECT_FALSE(viewer->options().look.transparency);
     const QImage forced = viewer->grabFramebuffer();
     EXPECT_EQ(w.scene().info(id).opacity, 0.3f) << "the toggle must not edit the surface";
     bar->transparency_action()->trigger();

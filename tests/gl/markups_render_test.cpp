@@ -81,8 +81,8 @@ struct Stage {
         cam.set_view(PatientView::Anterior, ren.bounds());
         ann.scale_bar = ann.orientation = false;
         opt.width = opt.height = kSize;
-        opt.background = {0, 0, 0, 1};
-        opt.flat_shading = true;
+        opt.look.background = {0, 0, 0};
+        opt.look.flat_shading = true;
         opt.annotations = &ann;
     }
     Image render(float scale = 1.0f) {

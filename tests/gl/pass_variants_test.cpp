@@ -40,9 +40,10 @@ TEST_F(PassVariants, AoForEveryLayerCountAndResolution) {
                 RenderOptions o;
                 o.width = o.height = 64;
                 o.aov = Aov::Ao;
-                o.ao_settings.radius_mm = 8;
-                o.ao_settings.layers = layers;
-                o.ao_settings.resolution = resolution;
+                o.look.ao = AoMethod::Cone;
+                o.look.cone.radius_mm = 8;
+                o.look.cone.layers = layers;
+                o.look.cone.resolution = resolution;
                 SCOPED_TRACE("layers " + std::to_string(layers) + ", resolution " + std::to_string(resolution) + (zoomed ? ", zoomed" : ""));
                 const auto r = ren.render(cam, o);
                 EXPECT_EQ(zoomed, r.ao_guard > 0);

@@ -98,7 +98,7 @@ TEST_F(PickInFrame, ALiveViewPicksWhatCorePickGivesWithoutUploadingAgain) {
     view.height = H;
     view.present = true;
     view.target_framebuffer = fb.id();
-    view.ao = true;
+    view.look.ao = AoMethod::Cone;
     scene.render(cam, view);
     for (std::size_t i = 0; i < picks.size(); ++i) {
         SCOPED_TRACE("pixel " + std::to_string(picks[i].x) + "," + std::to_string(picks[i].y));

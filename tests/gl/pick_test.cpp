@@ -67,7 +67,7 @@ RenderResult pick(const Scene& s, const Camera& cam, int size, PickRegion region
     RenderOptions o;
     o.width = o.height = size;
     o.pick = region;
-    o.ao = ao;
+    o.look.ao = ao ? AoMethod::Cone : AoMethod::Off;
     return ren.render(cam, o);
 }
 

@@ -139,8 +139,8 @@ TEST_F(Render, DegenerateAndEmptyScenes) {
         const double s = linear <= 0.0031308 ? 12.92 * linear : 1.055 * std::pow(linear, 1 / 2.4) - 0.055;
         return int(std::lround(255 * s));
     };
-    const std::array<int, 4> background{srgb8(opt.background.r), srgb8(opt.background.g), srgb8(opt.background.b),
-                                        int(std::lround(255 * opt.background.a))};
+    const std::array<int, 4> background{srgb8(opt.look.background.r), srgb8(opt.look.background.g), srgb8(opt.look.background.b),
+                                        opt.look.transparent_background ? 0 : 255};
     ASSERT_EQ(background, (std::array<int, 4>{80, 85, 93, 255}));
     std::size_t other = 0;
     for (std::size_t p = 0; p < img.bytes.size() / 4; ++p) {
@@ -178,7 +178,7 @@ TEST_F(Render, SteadyFramesMakeNoNewGlObjects) {
     window_fb.attach(GL_COLOR_ATTACHMENT0, window);
     RenderOptions o;
     o.width = o.height = 96;
-    o.ao = true;
+    o.look.ao = AoMethod::Cone;
     o.annotations = &ann;
     o.present = true;
     o.target_framebuffer = window_fb.id();

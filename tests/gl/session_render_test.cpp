@@ -39,7 +39,7 @@ core::Session head_session() {
     Camera c = probe.camera(PatientView::Anterior, 4.0 / 3.0);
     c.orbit(35, 20);
     s.camera = c;
-    s.ao = false;
+    s.ao = AoMethod::Off;
     Markup m;
     m.type = MarkupType::Line;
     m.points.resize(2);
@@ -57,7 +57,7 @@ TEST(SessionRender, EqualsRenderImageOfTheSameStateAndTheCli) {
     const core::Session s = head_session();
     const std::string file = dir / "s.json";
     core::save_session(s, file);
-    core::SessionRenderOptions o;
+    core::RenderRequest o;
     o.width = 320;
     o.height = 240;
 
@@ -101,7 +101,7 @@ TEST(SessionRender, EqualsRenderImageOfTheSameStateAndTheCli) {
         auto o2 = core::open_session(dir / "opaque.json");
         const auto c = core::render_image(*o2.scene, core::session_request(o2.session, dir / "opaque.json", o));
         core::RenderRequest hand_opaque = hand;
-        hand_opaque.transparency = false;
+        hand_opaque.look.transparency = false;
         EXPECT_EQ(differing(c.image, core::render_image(scene, hand_opaque).image), 0u);
         EXPECT_GT(differing(c.image, a.image), 1000u); // the skin hides the bone now
         EXPECT_EQ(c.meta.text.count("isoscope:transparency"), 1u);

@@ -59,10 +59,10 @@ Comparison compare(const std::vector<Layer>& layers, const Camera& cam, int size
     const std::vector<ReferenceSurface> ref = add_layers(ren, layers);
     RenderOptions o;
     o.width = o.height = size;
-    o.flat_shading = true;
-    o.oit_epsilon = 0.0f; // composite everything: the reference has no early exit
+    o.look.flat_shading = true;
+    o.look.oit_epsilon = 0.0f; // composite everything: the reference has no early exit
     auto r = ren.render(cam, o, hooks);
-    const auto bg = glm::dvec3(o.background);
+    const auto bg = glm::dvec3(o.look.background);
     const TransparencyImage t = transparency_reference(ref, cam, size, size, bg);
     Comparison c;
     double sum = 0;
@@ -173,9 +173,9 @@ TEST_F(Voit, PastTheCapFragmentsAreMergedWithinTheirStatedBound) {
     const std::vector<ReferenceSurface> ref = add_layers(ren, layers);
     RenderOptions o;
     o.width = o.height = 128;
-    o.flat_shading = true;
-    o.oit_epsilon = 0.0f;
-    o.oit_memory_bytes = std::size_t(1) << 20; // 52428 nodes for 200 layers x ~4000 pixels
+    o.look.flat_shading = true;
+    o.look.oit_epsilon = 0.0f;
+    o.look.oit_memory_mib = 1; // 52428 nodes for 200 layers x ~4000 pixels
     const Camera cam = anterior(box(20));
     const auto r = ren.render(cam, o);
     EXPECT_EQ(r.oit.capacity, (std::size_t(1) << 20) / 20);
@@ -190,7 +190,7 @@ TEST_F(Voit, PastTheCapFragmentsAreMergedWithinTheirStatedBound) {
     // coverage; about 0.98^26 x (1 - 0.98^174) where 26 layers are kept.
     EXPECT_GT(r.oit.merge_error_max, 0.3);
     EXPECT_LE(r.oit.merge_error_max, 1.0);
-    const TransparencyImage t = transparency_reference(ref, cam, 128, 128, glm::dvec3(o.background));
+    const TransparencyImage t = transparency_reference(ref, cam, 128, 128, glm::dvec3(o.look.background));
     double worst = 0, sum = 0;
     std::size_t n = 0;
     for (std::size_t p = 0; p < t.linear.size(); ++p) {
@@ -247,11 +247,11 @@ TEST_F(Voit, TranslucentFragmentsGetTheirOwnAo) {
         ren.add(backdrop, {});
         RenderOptions o;
         o.width = o.height = 96;
-        o.ao = ao;
+        o.look.ao = ao ? AoMethod::Cone : AoMethod::Off;
         o.aov = aov;
-        o.ao_settings.resolution = 1.0; // the cone pass at full size, as the fragments are traced
-        o.ao_settings.radius_mm = 8.0;
-        o.ao_settings.strength = 4.0; // the ambient term is small: make its occlusion show in 8 bits
+        o.look.cone.resolution = 1.0; // the cone pass at full size, as the fragments are traced
+        o.look.cone.radius_mm = 8.0;
+        o.look.cone.strength = 4.0; // the ambient term is small: make its occlusion show in 8 bits
         return ren.render(cam, o);
     };
     const auto ids = render(1.0f, false, Aov::Id);
@@ -301,7 +301,7 @@ TEST_F(Voit, TransparencyOffDrawsEveryObjectOpaque) {
         ren.add(plate(5, 20), {});
         RenderOptions o;
         o.width = o.height = 48;
-        o.transparency = transparency;
+        o.look.transparency = transparency;
         auto r = ren.render(anterior(box(20)), o);
         EXPECT_EQ(ren.object(1).opacity, front_opacity);
         return r;

@@ -62,35 +62,34 @@ TEST(Frame, OpaqueColourWithoutAoRunsGbufferLightingReadback) {
 
 TEST(Frame, AoOnRunsTheConeChainBeforeLighting) {
     RenderOptions o = options();
-    o.ao = true;
+    o.look.ao = AoMethod::Cone;
     EXPECT_EQ(compile(o).running, (Passes{"gbuffer", "zrange", "voxelize", "cone_ao", "ao_upsample", "lighting", "readback"}));
-    o.ao_settings.resolution = 1.0; // traced at full size: no upsampling
+    o.look.cone.resolution = 1.0; // traced at full size: no upsampling
     EXPECT_EQ(compile(o).running, (Passes{"gbuffer", "zrange", "voxelize", "cone_ao", "lighting", "readback"}));
     EXPECT_EQ(compile(o, {.read_slicemap = true}).running, (Passes{"gbuffer", "zrange", "voxelize", "cone_ao", "read_slicemap", "lighting", "readback"}));
 }
 
 // Disk AO (docs/ao.md, "Disk AO on the GPU"): its chain replaces the cone
 // chain; a first frame builds the hierarchy and runs the element passes;
-// with AO off or a depth AOV nothing of it runs; bad disk settings are
-// refused only when AO is asked for.
+// with a depth AOV nothing of it runs; bad disk settings are refused only
+// when disk AO is asked for.
 TEST(Frame, DiskAoRunsItsOwnChainInsteadOfTheCones) {
     RenderOptions o = options();
-    o.ao_method = AoMethod::Disk;
-    EXPECT_EQ(compile(o).running, (Passes{"gbuffer", "lighting", "readback"}));
-    o.ao = true;
+    o.look.ao = AoMethod::Disk;
     // Default: no element passes (passes = 0).
     EXPECT_EQ(compile(o).running, (Passes{"gbuffer", "disk_build", "disk_gather", "lighting", "readback"}));
-    o.disk_settings.passes = 2;
+    o.look.disk.passes = 2;
     EXPECT_EQ(compile(o).running, (Passes{"gbuffer", "disk_build", "disk_elements", "disk_gather", "lighting", "readback"}));
     o.aov = Aov::Depth;
     EXPECT_EQ(compile(o).running, (Passes{"gbuffer", "readback"}));
-    o.ao = false;
-    o.aov = Aov::Ao;
+    o.aov = Aov::Ao; // the raw term, without lighting
     EXPECT_EQ(compile(o).running, (Passes{"gbuffer", "disk_build", "disk_elements", "disk_gather", "readback"}));
     o.aov = Aov::None;
-    o.disk_settings.passes = -1;
-    EXPECT_EQ(compile(o).running, (Passes{"gbuffer", "lighting", "readback"})) << "AO off: not checked";
-    o.ao = true;
+    o.look.disk.passes = -1;
+    o.look.ao = AoMethod::Cone;
+    EXPECT_EQ(compile(o).running, (Passes{"gbuffer", "zrange", "voxelize", "cone_ao", "ao_upsample", "lighting", "readback"}))
+        << "cone AO: the disk settings are not checked";
+    o.look.ao = AoMethod::Disk;
     try {
         compile(o);
         ADD_FAILURE() << "passes = -1 was accepted";
@@ -99,14 +98,23 @@ TEST(Frame, DiskAoRunsItsOwnChainInsteadOfTheCones) {
     }
 }
 
+// The ao AOV needs a method that the GL frame computes; the reference is the core's.
+TEST(Frame, TheAoAovNeedsAGlAoMethod) {
+    RenderOptions o = options();
+    o.aov = Aov::Ao;
+    for (const AoMethod m : {AoMethod::Off, AoMethod::Reference}) {
+        o.look.ao = m;
+        EXPECT_THROW(compile(o), Error) << ao_method_name(m);
+    }
+}
+
 TEST(Frame, AnAovRunsOnlyItsProducers) {
     RenderOptions o = options();
-    o.ao = true; // on, but a depth AOV does not read it
+    o.look.ao = AoMethod::Cone; // on, but a depth AOV does not read it
     for (const Aov aov : {Aov::Depth, Aov::Normal, Aov::Id}) {
         o.aov = aov;
         EXPECT_EQ(compile(o).running, (Passes{"gbuffer", "readback"})) << int(aov);
     }
-    o.ao = false;
     o.aov = Aov::Ao; // the raw AO term without lighting
     EXPECT_EQ(compile(o).running, (Passes{"gbuffer", "zrange", "voxelize", "cone_ao", "ao_upsample", "readback"}));
 }
@@ -125,9 +133,9 @@ TEST(Frame, AnnotationsAddTheOverlayAndPresentReplacesTheReadback) {
 
 TEST(Frame, BadAoSettingsAreRefusedOnlyWhenAoIsAskedFor) {
     RenderOptions o = options();
-    o.ao_settings.cones = 0;
+    o.look.cone.cones = 0;
     EXPECT_EQ(compile(o).running, (Passes{"gbuffer", "lighting", "readback"}));
-    o.ao = true;
+    o.look.ao = AoMethod::Cone;
     try {
         compile(o);
         ADD_FAILURE() << "cones = 0 was accepted";
@@ -141,7 +149,7 @@ TEST(Frame, TranslucentObjectsAddTheListPassesAndAovsCullThem) {
     EXPECT_EQ(compile(o, {}, 0.4f).running, (Passes{"gbuffer", "lighting", "oit_fragments", "oit_resolve", "readback"}));
     EXPECT_EQ(compile(o, {.read_oit_lists = true}, 0.4f).running,
               (Passes{"gbuffer", "lighting", "oit_fragments", "read_oit_lists", "oit_resolve", "readback"}));
-    o.ao = true; // AO of the opaque surfaces still runs under the glass
+    o.look.ao = AoMethod::Cone; // AO of the opaque surfaces still runs under the glass
     EXPECT_EQ(compile(o, {}, 0.4f).running,
               (Passes{"gbuffer", "zrange", "voxelize", "cone_ao", "ao_upsample", "lighting", "oit_fragments", "oit_sort", "oit_ao", "oit_resolve", "readback"}));
     o.aov = Aov::Depth; // the AOVs describe the opaque surfaces: no list is built
@@ -159,7 +167,7 @@ TEST(Frame, APickOnlyFrameRunsNoLightingResolveOrReadback) {
     // Without an image output only the geometry passes that list the fragments and the pick itself run,
     // even with AO and annotations asked for (nothing reads them).
     o.image = false;
-    o.ao = true;
+    o.look.ao = AoMethod::Cone;
     Annotations ann;
     o.annotations = &ann;
     EXPECT_EQ(compile(o, {}, 0.4f).running, (Passes{"gbuffer", "oit_fragments", "pick_resolve", "read_pick"}));

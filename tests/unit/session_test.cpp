@@ -63,7 +63,7 @@ core::Session example(const std::string& input) {
     c.fov_y_degrees = 27.5;
     s.camera = c;
     s.window = core::WindowLevel{1963.5, 3926.25};
-    s.ao = false;
+    s.ao = AoMethod::Off;
     s.transparency = false;
     s.markups = {line({1.5, 2.25, -3.0}, {40.0, 50.0 / 3.0, -60.0}, "ruler")};
     return s;
@@ -124,7 +124,7 @@ TEST(Session, SavedAndLoadedBackExactly) {
     ASSERT_TRUE(r.window.has_value());
     EXPECT_EQ(r.window->center, 1963.5);
     EXPECT_EQ(r.window->width, 3926.25);
-    EXPECT_FALSE(r.ao);
+    EXPECT_EQ(r.ao, AoMethod::Off);
     EXPECT_FALSE(r.transparency);
     ASSERT_EQ(r.markups.size(), 1u);
     EXPECT_EQ(r.markups[0].name, "ruler");
@@ -198,7 +198,7 @@ TEST(Session, RefusalsNameTheFileAndTheField) {
         {edited([](auto& j) { j["camera"]["up"] = j["camera"]["target"]; j["camera"]["eye"] = {0, 0, 0}; }), "camera.up: is zero or along"},
         {edited([](auto& j) { j["window_level"]["width"] = 0; }), "window_level.width: must be positive"},
         {edited([](auto& j) { j["view"]["ao"] = "yes"; }), "view.ao: must be true or false"},
-        {edited([](auto& j) { j["view"]["transparency"] = 0; }), "view.transparency: must be true or false"},
+        {edited([](auto& j) { j["view"]["transparency"] = 0; }), "view.look.transparency: must be true or false"},
         {edited([](auto& j) { j["markups"]["markups"][0]["controlPoints"].erase(1); }), "markups: markup 1 (Line 'ruler'): a Line needs 2"},
     };
     for (const auto& c : cases) {
@@ -273,9 +273,11 @@ TEST(Session, OpensItsSceneAndCapturesItBack) {
         EXPECT_GT(expected.triangles.size(), 10000u);
     }
     // What the scene shows, captured again, is the same state.
+    FrameLook view;
+    view.ao = opened.session.ao;
+    view.transparency = opened.session.transparency;
     const auto back = core::capture_session(scene, opened.session.input, opened.session.series, opened.session.camera,
-                                            opened.session.window, opened.session.ao, opened.session.markups,
-                                            opened.session.transparency);
+                                            opened.session.window, view, opened.session.markups);
     EXPECT_TRUE(core::same_state(back, s));
 
     // Cancelled through the progress function.
@@ -295,29 +297,36 @@ TEST(Session, OpensItsSceneAndCapturesItBack) {
 
 TEST(Session, RenderRequest) {
     const core::Session s = example(test::data("headsq.nhdr"));
-    core::SessionRenderOptions o;
+    core::RenderRequest o;
     o.width = 640;
     o.height = 480;
     o.scale = 2;
     o.annotations = false;
-    o.transparent = true;
+    o.look.transparent_background = true;
+    o.look.ao = AoMethod::Disk;
+    o.look.cone.radius_mm = 7;
     auto r = core::session_request(s, "x.json", o);
+    // The caller's frame...
     EXPECT_EQ(r.width, 640);
     EXPECT_EQ(r.height, 480);
     EXPECT_EQ(r.scale, 2.0f);
     EXPECT_FALSE(r.annotations);
-    EXPECT_TRUE(r.transparent);
+    EXPECT_TRUE(r.look.transparent_background);
+    EXPECT_EQ(r.look.cone.radius_mm, 7);
+    // ... with the session's camera, markups, AO method and transparency toggle.
     ASSERT_TRUE(r.camera.has_value());
     EXPECT_EQ(r.camera->eye, s.camera->eye);
     EXPECT_EQ(r.markups.size(), 1u);
-    EXPECT_EQ(r.ao, "off"); // the session's view options
-    EXPECT_FALSE(r.transparency);
+    EXPECT_EQ(r.look.ao, AoMethod::Off); // example() turns the 3D view's AO off
+    EXPECT_FALSE(r.look.transparency);
     EXPECT_EQ(r.session_file, "x.json");
-    o.markups = false;
-    o.ao = "cone";
-    r = core::session_request(s, "", o);
+    core::SessionParts take;
+    take.markups = take.ao = take.camera = false;
+    r = core::session_request(s, "", o, take);
     EXPECT_TRUE(r.markups.empty());
-    EXPECT_EQ(r.ao, "cone");
+    EXPECT_EQ(r.look.ao, AoMethod::Disk);
+    EXPECT_FALSE(r.camera.has_value());
+    EXPECT_FALSE(r.look.transparency) << "the transparency toggle is always the session's";
 }
 
 TEST(SessionCli, RefusalsNameTheSessionAndTheFlag) {

@@ -1,0 +1,64 @@
+// The frame vocabulary's names and checks (frame.hpp).
+#include "renderer/frame/frame.hpp"
+
+#include <cmath>
+#include <cstdio>
+#include <utility>
+
+#include "io/error.hpp"
+
+namespace iso {
+
+Aov aov_from_name(const std::string& n) {
+    if (n == "depth") return Aov::Depth;
+    if (n == "normal") return Aov::Normal;
+    if (n == "id") return Aov::Id;
+    if (n == "ao") return Aov::Ao;
+    if (n.empty() || n == "none") return Aov::None;
+    throw Error("AOV", "unknown AOV '" + n + "' (depth, normal, id, ao)");
+}
+
+namespace {
+
+constexpr std::pair<AoMethod, const char*> kAoMethods[] = {
+    {AoMethod::Off, "off"}, {AoMethod::Cone, "cone"}, {AoMethod::Disk, "disk"}, {AoMethod::Reference, "reference"}};
+
+// A range check whose error names the setting and shows the number as given.
+void check_range(const char* setting, double v, double lo, double hi) {
+    if (!(v >= lo && v <= hi)) {
+        char b[160];
+        std::snprintf(b, sizeof b, "expected %.9g..%.9g, got %.9g", lo, hi, v);
+        throw Error(setting, b);
+    }
+}
+
+} // namespace
+
+const char* ao_method_name(AoMethod m) {
+    for (const auto& [method, name] : kAoMethods)
+        if (method == m) return name;
+    return "off";
+}
+
+AoMethod ao_method_from_name(const std::string& name) {
+    for (const auto& [method, n] : kAoMethods)
+        if (name == n) return method;
+    throw Error("ambient occlusion", "method must be off, cone, disk or reference, got '" + name + "'");
+}
+
+void validate(const FrameLook& look) {
+    for (const float c : {look.background.r, look.background.g, look.background.b})
+        if (!std::isfinite(c)) throw Error("background", "colour components must be finite numbers");
+    if (!(look.oit_epsilon >= 0.0f && look.oit_epsilon < 1.0f))
+        throw Error("transparency epsilon", "must be at least 0 and below 1, got " + std::to_string(look.oit_epsilon));
+    check_range("transparency memory", look.oit_memory_mib, 1.0, 65536.0);
+    check_range("ambient occlusion frames", look.ao_frames, 1, 4096);
+    check_range("ambient occlusion rays", look.ao_rays, 1, 1 << 20);
+    // A method's settings are checked when it is asked for (the cone's
+    // radius is every method's R; disk frames trace translucent surfaces'
+    // AO with the cone's settings).
+    if (look.ao != AoMethod::Off) validate(look.cone);
+    if (look.ao == AoMethod::Disk) validate(look.disk);
+}
+
+} // namespace iso
