@@ -140,9 +140,13 @@ RenderOptions frame_options(const RenderRequest& req) {
     ro.width = req.width;
     ro.height = req.height;
     ro.look = req.look;
-    // The reference's GL frame gives it depth and normals only (ao_reference_cached).
-    if (method == AoMethod::Reference) ro.look.ao = AoMethod::Off;
     ro.aov = req.aov;
+    // The reference is traced on the CPU from the depth and normal AOVs
+    // (ao_reference_cached); the GL frame itself draws the cheapest of them.
+    if (method == AoMethod::Reference) {
+        ro.look.ao = AoMethod::Off;
+        ro.aov = Aov::Depth;
+    }
     ro.scale = req.scale;
     ro.time_passes = req.time_passes;
     ro.pick = req.pick;
@@ -172,6 +176,12 @@ Camera frame_camera(const Scene& scene, const RenderRequest& req) {
 
 RenderOutput render_image(Scene& scene, const RenderRequest& req) {
     const gl::ScopedCurrent context;
+    // One GL context serves every scene of the process: free this one's GPU
+    // resources while it is current, also when a frame throws.
+    struct Release {
+        Scene& s;
+        ~Release() { s.release_gpu(); }
+    } release{scene};
     RenderOptions ro = frame_options(req);
     Annotations ann;
     ann.markups = req.markups;
@@ -182,12 +192,6 @@ RenderOutput render_image(Scene& scene, const RenderRequest& req) {
     // Still frames: each adds new jitter sets to the running mean of the AO.
     for (int f = 1; req.look.ao == AoMethod::Cone && f < req.look.ao_frames; ++f) scene.render(cam, ro);
     auto r = scene.render(cam, ro);
-    // One GL context serves every scene of the process: free this one's GPU
-    // resources while it is current.
-    struct Release {
-        Scene& s;
-        ~Release() { s.release_gpu(); }
-    } release{scene};
     if (r.cancelled) throw Cancelled("disk AO");
     RenderOutput out;
     out.meta = frame_metadata({scene, req, ro, cam, r, colour_image ? &ann : nullptr});

@@ -198,7 +198,7 @@ TEST(Session, RefusalsNameTheFileAndTheField) {
         {edited([](auto& j) { j["camera"]["up"] = j["camera"]["target"]; j["camera"]["eye"] = {0, 0, 0}; }), "camera.up: is zero or along"},
         {edited([](auto& j) { j["window_level"]["width"] = 0; }), "window_level.width: must be positive"},
         {edited([](auto& j) { j["view"]["ao"] = "yes"; }), "view.ao: must be true or false"},
-        {edited([](auto& j) { j["view"]["transparency"] = 0; }), "view.look.transparency: must be true or false"},
+        {edited([](auto& j) { j["view"]["transparency"] = 0; }), "view.transparency: must be true or false"},
         {edited([](auto& j) { j["markups"]["markups"][0]["controlPoints"].erase(1); }), "markups: markup 1 (Line 'ruler'): a Line needs 2"},
     };
     for (const auto& c : cases) {
