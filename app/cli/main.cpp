@@ -28,7 +28,7 @@ const Command kCommands[] = {
      iso::cli::add_view},
     {"pick",
      "What is seen at a pixel of the image `render` writes with the same options: "
-     "surface, LPS point, normal, value (HU); every layer through translucent ones",
+     "surface, LPS point, normal, value (HU for CT); every layer through translucent ones",
      iso::cli::add_pick},
     {"measure",
      "Measure surfaces (area, volume, closed/open, components, uncertainty) and points "

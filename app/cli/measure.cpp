@@ -11,6 +11,7 @@
 #include "io/markups.hpp"
 #include "io/mesh.hpp"
 #include "renderer/core/measure.hpp"
+#include "renderer/core/value_unit.hpp"
 
 namespace iso::cli {
 
@@ -19,7 +20,7 @@ namespace {
 struct MeasureArgs {
     std::string in, series, out;
     std::vector<double> isos;
-    std::vector<std::string> distance, angle, hu;
+    std::vector<std::string> distance, angle, values;
     bool json = false;
 };
 
@@ -30,7 +31,7 @@ int run_measure(const MeasureArgs& a) {
     for (std::size_t i = 0; i + 2 < a.angle.size(); i += 3)
         points.angles.push_back({iso::core::parse_point("--angle", a.angle[i]), iso::core::parse_point("--angle", a.angle[i + 1]),
                                  iso::core::parse_point("--angle", a.angle[i + 2])});
-    for (const auto& t : a.hu) points.values.push_back(iso::core::parse_point("--hu", t));
+    for (const auto& t : a.values) points.values.push_back(iso::core::parse_point("--value", t));
     if (!a.out.empty()) {
         const std::string suffix = ".mrk.json";
         if (a.out.size() < suffix.size() || a.out.compare(a.out.size() - suffix.size(), suffix.size(), suffix) != 0)
@@ -67,10 +68,12 @@ int run_measure(const MeasureArgs& a) {
         for (const auto& d : j["distances"]) std::cout << "distance " << std::setprecision(3) << d["distance_mm"].get<double>() << " mm\n";
         for (const auto& an : j["angles"]) std::cout << "angle " << std::setprecision(3) << an["angle_deg"].get<double>() << " deg\n";
         for (const auto& v : j["values"]) {
-            if (v["value"].is_null())
+            if (v["value"].is_null()) {
                 std::cout << "value: outside the volume\n";
-            else
-                std::cout << "value " << std::setprecision(2) << v["value"].get<double>() << "\n";
+            } else {
+                const std::string unit = v["unit"].is_null() ? "" : v["unit"].get<std::string>();
+                std::cout << iso::core::value_readout(v["value"].get<double>(), unit) << "\n";
+            }
         }
     }
     if (!a.out.empty()) std::cerr << "markups -> " << a.out << "\n";
@@ -88,7 +91,8 @@ RunFn add_measure(CLI::App& cmd, char*) {
     c->add_option("--series", a.series, "DICOM series to load: index or SeriesInstanceUID");
     c->add_option("--distance", a.distance, "Distance between two points: --distance X,Y,Z X,Y,Z (LPS mm; repeatable)")->expected(2)->multi_option_policy(CLI::MultiOptionPolicy::TakeAll);
     c->add_option("--angle", a.angle, "Angle at the middle of three points: --angle P1 P2 P3 (repeatable)")->expected(3)->multi_option_policy(CLI::MultiOptionPolicy::TakeAll);
-    c->add_option("--hu", a.hu, "The volume's value (HU for CT) at a point X,Y,Z (repeatable)")->expected(1)->multi_option_policy(CLI::MultiOptionPolicy::TakeAll);
+    // --hu is the option's earlier name: scripts that use it keep working.
+    c->add_option("--value,--hu", a.values, "The volume's value (HU for CT) at a point X,Y,Z (repeatable)")->expected(1)->multi_option_policy(CLI::MultiOptionPolicy::TakeAll);
     c->add_flag("--json", a.json, "Print JSON");
     c->add_option("-o,--output", a.out, "Write the points, distances and angles as 3D Slicer markups (.mrk.json, LPS)");
     return [args] { return run_measure(*args); };

@@ -8,6 +8,7 @@
 #include "app/cli/commands.hpp"
 #include "app/cli/frame_options.hpp"
 #include "renderer/core/pick.hpp"
+#include "renderer/core/value_unit.hpp"
 
 namespace iso::cli {
 
@@ -69,7 +70,7 @@ int run_pick(const PickArgs& a) {
         std::cout << (r.visible && *r.visible == i ? "* " : "  ") << std::setw(10) << std::left << l.name << std::right << std::setprecision(2)
                   << " LPS (" << l.lps.x << ", " << l.lps.y << ", " << l.lps.z << ") mm, depth " << l.depth_mm << " mm, alpha "
                   << std::setprecision(3) << l.alpha << ", share " << l.share;
-        if (l.hu) std::cout << ", value " << std::setprecision(1) << *l.hu;
+        if (l.value) std::cout << ", " << iso::core::value_readout(*l.value, l.unit);
         if (l.voxel) std::cout << ", voxel (" << (*l.voxel)[0] << ", " << (*l.voxel)[1] << ", " << (*l.voxel)[2] << ")";
         std::cout << ", triangle " << l.triangle << "\n";
     }

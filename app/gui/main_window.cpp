@@ -38,6 +38,7 @@
 #include "io/error.hpp"
 #include "renderer/core/api.hpp"
 #include "renderer/core/scene.hpp"
+#include "renderer/core/value_unit.hpp"
 
 namespace iso::gui {
 
@@ -497,7 +498,11 @@ void MainWindow::slice_clicked(SliceView& view, QPointF pixel) {
     core::set_crosshair(planes_, lps);
     QString msg = QString("LPS (%1, %2, %3) mm").arg(lps.x, 0, 'f', 2).arg(lps.y, 0, 'f', 2).arg(lps.z, 0, 'f', 2);
     if (s)
-        msg += QString(", value %1, voxel (%2, %3, %4)").arg(s->value, 0, 'f', 2).arg(s->voxel[0]).arg(s->voxel[1]).arg(s->voxel[2]);
+        msg += QString(", %1, voxel (%2, %3, %4)")
+                   .arg(QString::fromStdString(core::value_readout(s->value, core::value_unit(scene_->volume()))))
+                   .arg(s->voxel[0])
+                   .arg(s->voxel[1])
+                   .arg(s->voxel[2]);
     else
         msg += ", outside the volume";
     statusBar()->showMessage(msg);

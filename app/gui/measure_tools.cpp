@@ -18,6 +18,7 @@
 #include "renderer/core/pick.hpp"
 #include "renderer/core/scene.hpp"
 #include "renderer/core/slices.hpp"
+#include "renderer/core/value_unit.hpp"
 #include "renderer/frame/annotations.hpp"
 
 namespace iso::gui {
@@ -131,10 +132,7 @@ QString MeasureTools::readout(const core::PickResult& r) const {
     if (!r.visible) return "background";
     const core::PickLayer& l = r.layers[*r.visible];
     QString s = lps_text(l.lps);
-    if (l.hu) {
-        const bool ct = window_.scene().has_volume() && window_.scene().volume().meta.modality == "CT";
-        s += QString(", %1 %2").arg(ct ? "HU" : "value").arg(*l.hu, 0, 'f', 2);
-    }
+    if (l.value) s += ", " + QString::fromStdString(core::value_readout(*l.value, l.unit));
     return s + ", surface " + QString::fromStdString(l.name);
 }
 

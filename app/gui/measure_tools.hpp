@@ -69,8 +69,8 @@ public:
     void redraw();
 
     // The status bar's text for a pick of the 3D view:
-    // "LPS (x, y, z) mm, HU v, surface NAME" (the value is "value v" unless
-    // the volume is CT; left out where there is none), or "background".
+    // "LPS (x, y, z) mm, READOUT, surface NAME" (READOUT: core::value_readout,
+    // "v HU" for CT, else "value v"; left out where there is none), or "background".
     QString readout(const core::PickResult& r) const;
     // Hover picks made so far (throttled: one per interval, the latest position wins).
     int hover_picks() const { return hover_picks_; }

@@ -21,6 +21,7 @@
 #include "app/gui/slice_view.hpp"
 #include "io/error.hpp"
 #include "renderer/core/scene.hpp"
+#include "renderer/core/value_unit.hpp"
 
 namespace iso::gui {
 
@@ -43,6 +44,12 @@ constexpr IsoPreset kIsoPresets[] = {
     {"bone", 300, true},
     {"contrast-filled vessels", 200, true},
 };
+
+// " HU" after the numbers of a volume in Hounsfield units (core::value_unit), else nothing.
+QString unit_suffix(const core::Scene* scene) {
+    const std::string_view unit = scene ? core::value_unit(*scene) : std::string_view{};
+    return unit.empty() ? QString() : " " + QString::fromUtf8(unit.data(), qsizetype(unit.size()));
+}
 
 bool same_post(const PostProcessOptions& a, const PostProcessOptions& b) {
     return a.smooth == b.smooth && a.decimate == b.decimate && a.keep_largest == b.keep_largest;
@@ -166,7 +173,8 @@ void SurfacesPanel::set_scene(core::Scene* scene) {
 
 void SurfacesPanel::update_presets() {
     // CT in Hounsfield units: the HU presets first and the numbers marked HU.
-    const bool hu = scene_ && scene_->has_volume() && scene_->volume().meta.modality == "CT";
+    const QString unit = unit_suffix(scene_);
+    const bool hu = !unit.isEmpty();
     preset_->clear();
     for (int pass = 0; pass < 2; ++pass)
         for (int i = 0; i < int(std::size(kIsoPresets)); ++i) {
@@ -174,11 +182,11 @@ void SurfacesPanel::update_presets() {
             if ((pass == 0) != (p.hu == hu)) continue;
             preset_->addItem(QString("%1: %2%3").arg(p.name).arg(p.value).arg(p.hu ? " HU" : ""), i);
         }
-    iso_->setSuffix(hu ? " HU" : "");
+    iso_->setSuffix(unit);
     iso_->setValue(kIsoPresets[preset_->itemData(0).toInt()].value);
     if (scene_ && scene_->has_volume()) {
         const auto r = scene_->value_range();
-        range_->setText(QString("Values %1 to %2%3").arg(r.min).arg(r.max).arg(hu ? " HU" : ""));
+        range_->setText(QString("Values %1 to %2%3").arg(r.min).arg(r.max).arg(unit));
     } else {
         range_->setText("Open a volume to add surfaces");
     }
@@ -324,19 +332,19 @@ void SurfacesPanel::add_iso_line(Row& r, QGridLayout* grid) {
     r.lo = range.min;
     r.steps = integral && span <= 100000 ? int(std::lround(span)) : 1000;
     r.step = span / r.steps;
-    const bool hu = scene_->volume().meta.modality == "CT";
+    const QString unit = unit_suffix(scene_);
     grid->addWidget(new QLabel("Iso"), 2, 0);
     r.slider = new QSlider(Qt::Horizontal, r.widget);
     r.slider->setObjectName("iso_slider");
     r.slider->setRange(0, r.steps);
     r.slider->setValue(r.to_slider(value));
-    r.slider->setToolTip(QString("Iso value, %1 to %2%3").arg(range.min).arg(range.max).arg(hu ? " HU" : ""));
+    r.slider->setToolTip(QString("Iso value, %1 to %2%3").arg(range.min).arg(range.max).arg(unit));
     r.value = new QDoubleSpinBox(r.widget);
     r.value->setObjectName("iso_value");
     r.value->setRange(range.min, range.max);
     r.value->setDecimals(integral ? 0 : 3);
     r.value->setKeyboardTracking(false); // on Enter, arrows or leaving the box
-    r.value->setSuffix(hu ? " HU" : "");
+    r.value->setSuffix(unit);
     r.value->setValue(value);
     r.busy = new QLabel("extracting...", r.widget);
     r.busy->setObjectName("busy");

@@ -4,6 +4,7 @@
 #include <cstdio>
 
 #include "io/error.hpp"
+#include "renderer/core/value_unit.hpp"
 
 namespace iso::core {
 
@@ -97,10 +98,12 @@ nlohmann::json measure_json(const Scene& scene, const std::vector<SurfaceMeasure
     for (const auto& p : points.distances) d.push_back({{"points", {vec(p[0]), vec(p[1])}}, {"distance_mm", distance_mm(p[0], p[1])}});
     for (const auto& p : points.angles)
         a.push_back({{"points", {vec(p[0]), vec(p[1]), vec(p[2])}}, {"angle_deg", angle_deg(p[0], p[1], p[2])}});
+    const std::string_view unit = value_unit(scene);
     for (const auto& p : points.values) {
         const auto s = value_at(scene, p);
         json o{{"point", vec(p)}};
         o["value"] = s ? number(s->value) : json(nullptr);
+        o["unit"] = s && !unit.empty() ? json(std::string(unit)) : json(nullptr);
         o["voxel"] = s ? json::array({s->voxel[0], s->voxel[1], s->voxel[2]}) : json(nullptr);
         if (!s) o["note"] = "outside the volume";
         v.push_back(std::move(o));

@@ -40,12 +40,13 @@ glm::dvec3 parse_point(const std::string& what, const std::string& text);
 struct PointMeasurements {
     std::vector<std::array<glm::dvec3, 2>> distances;
     std::vector<std::array<glm::dvec3, 3>> angles; // the angle at the middle point
-    std::vector<glm::dvec3> values;                // the volume's value (HU) at each
+    std::vector<glm::dvec3> values;                // the volume's value at each
 };
 
 // JSON of `isoscope measure --json`: "surfaces" (per surface: name, iso,
 // area_mm2, volume_ml, volume_kind, closed, boundary, components,
-// uncertainty, warnings), "distances", "angles", "values".
+// uncertainty, warnings), "distances", "angles", "values" (per point: point,
+// value, unit (value_unit; null without one or without a value), voxel).
 nlohmann::json measure_json(const Scene& scene, const std::vector<SurfaceMeasurement>& surfaces, const PointMeasurements& points);
 
 // The points as 3D Slicer markups (LPS): one Line per distance (with its

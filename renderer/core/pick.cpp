@@ -8,6 +8,7 @@
 #include <glm/glm.hpp>
 
 #include "io/error.hpp"
+#include "renderer/core/value_unit.hpp"
 #include "renderer/gl/context.hpp"
 #include "renderer/surface/analysis.hpp"
 
@@ -134,7 +135,7 @@ PickResult resolve_pick(const Scene& scene, const Camera& camera, int width, int
         const SurfaceInfo& info = scene.info(f.object);
         l.name = info.name;
         l.kind = info.kind;
-        l.value = info.value;
+        l.surface_value = info.value;
         l.triangle = f.primitive;
         l.alpha = f.alpha;
         l.share = double(f.transmittance) * double(f.alpha);
@@ -161,7 +162,8 @@ PickResult resolve_pick(const Scene& scene, const Camera& camera, int width, int
         l.normal = glm::length(n) > 0 ? glm::normalize(n) : n;
         if (volume && info.kind != SurfaceInfo::Kind::Mesh)
             if (const auto s = sample_volume(*volume, l.lps)) {
-                l.hu = s->value;
+                l.value = s->value;
+                l.unit = value_unit(*volume);
                 l.voxel = s->voxel;
             }
         const bool reaches = l.accumulated_alpha >= p.threshold;
@@ -196,8 +198,8 @@ nlohmann::json pick_json(const PickResult& r) {
         json j;
         j["surface"] = l.name;
         j["surface_id"] = l.surface;
-        j["iso"] = l.kind == SurfaceInfo::Kind::Iso ? json(l.value) : json(nullptr);
-        if (l.kind == SurfaceInfo::Kind::Label) j["label"] = l.value;
+        j["iso"] = l.kind == SurfaceInfo::Kind::Iso ? json(l.surface_value) : json(nullptr);
+        if (l.kind == SurfaceInfo::Kind::Label) j["label"] = l.surface_value;
         j["lps"] = vec(l.lps);
         j["normal"] = vec(l.normal);
         j["triangle"] = l.triangle;
@@ -205,7 +207,8 @@ nlohmann::json pick_json(const PickResult& r) {
         j["depth_mm"] = l.depth_mm;
         j["alpha"] = l.alpha;
         j["share"] = l.share;
-        j["hu"] = l.hu ? json(*l.hu) : json(nullptr);
+        j["value"] = l.value ? json(*l.value) : json(nullptr);
+        j["unit"] = l.unit.empty() ? json(nullptr) : json(l.unit);
         j["voxel"] = l.voxel ? json::array({(*l.voxel)[0], (*l.voxel)[1], (*l.voxel)[2]}) : json(nullptr);
         layers.push_back(std::move(j));
     }

@@ -3,7 +3,8 @@
 // every layer behind it. The pick rides on that frame (its geometry passes
 // list the fragments); positions are then exact: the pixel's ray meets the
 // listed triangle in double precision (not a depth buffer unprojected), and
-// from the LPS point come the normal, the voxel and the value (HU) there.
+// from the LPS point come the normal, the voxel and the volume's value there
+// with its unit (value_unit: HU for CT).
 #pragma once
 
 #include <array>
@@ -38,7 +39,7 @@ struct PickLayer {
     SurfaceId surface = 0;
     std::string name;                  // "iso 500", a mesh file's name
     SurfaceInfo::Kind kind = SurfaceInfo::Kind::Mesh;
-    double value = 0;                  // iso value or label (Iso, Label surfaces)
+    double surface_value = 0;          // the surface's iso value or label (Iso, Label surfaces)
     std::uint32_t triangle = 0;        // index into the surface's mesh
     glm::dvec3 lps{0.0};               // where the pixel's ray meets the triangle, LPS mm
     glm::dvec3 normal{0.0};            // the surface's normal there (interpolated), LPS, unit
@@ -48,7 +49,8 @@ struct PickLayer {
     double alpha = 1;                  // the surface's opacity
     double share = 0;                  // of the pixel's colour: transmittance in front x alpha
     double accumulated_alpha = 0;      // 1 - transmittance behind this layer
-    std::optional<double> hu;          // the volume's value there (trilinear, after rescale)
+    std::optional<double> value;       // the volume's value there (trilinear, after rescale)
+    std::string unit;                  // value's unit (value_unit): "HU" for CT, else empty
     std::optional<std::array<std::int64_t, 3>> voxel; // the nearest voxel
 };
 
@@ -99,9 +101,9 @@ PickResult resolve_pick(const Scene& scene, const Camera& camera, int width, int
                         const PickRequest& p);
 
 // The JSON `isoscope pick --json` prints: visible, layers (surface, iso,
-// lps, normal, triangle, depth_mm, alpha, share, hu, voxel), view and
-// projection (column-major, as the image metadata), and the rectangle's
-// triangles when asked.
+// lps, normal, triangle, depth_mm, alpha, share, value, unit (null when
+// none), voxel), view and projection (column-major, as the image metadata),
+// and the rectangle's triangles when asked.
 nlohmann::json pick_json(const PickResult& r);
 
 } // namespace iso::core

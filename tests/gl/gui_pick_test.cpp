@@ -38,7 +38,7 @@ TEST_F(GuiPick, ClickShowsTheCliPickAndMovesTheCrosshair) {
     EXPECT_NEAR(shown->lps.x, expected.x, kPrinted);
     EXPECT_NEAR(shown->lps.y, expected.y, kPrinted);
     EXPECT_NEAR(shown->lps.z, expected.z, kPrinted);
-    EXPECT_NEAR(shown->value, layer["hu"].get<double>(), kPrinted);
+    EXPECT_NEAR(shown->value, layer["value"].get<double>(), kPrinted);
     EXPECT_EQ(shown->surface, layer["surface"].get<std::string>());
     // ... and the slice views' crosshair moved there (each plane through the point).
     EXPECT_NEAR(w.slice_view(core::SliceOrientation::Axial)->grid().offset_mm, expected.z, 1e-6);
@@ -143,8 +143,8 @@ TEST_F(GuiPick, ClickAfterRotatingIsCorePickWithTheViewsCamera) {
     EXPECT_NEAR(got->lps.x, l.lps.x, kPrinted);
     EXPECT_NEAR(got->lps.y, l.lps.y, kPrinted);
     EXPECT_NEAR(got->lps.z, l.lps.z, kPrinted);
-    ASSERT_TRUE(l.hu.has_value());
-    EXPECT_NEAR(got->value, *l.hu, kPrinted);
+    ASSERT_TRUE(l.value.has_value());
+    EXPECT_NEAR(got->value, *l.value, kPrinted);
     EXPECT_EQ(got->surface, l.name);
 }
 

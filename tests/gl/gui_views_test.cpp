@@ -38,6 +38,7 @@
 #include "renderer/core/api.hpp"
 #include "renderer/core/scene.hpp"
 #include "renderer/core/slices.hpp"
+#include "renderer/core/value_unit.hpp"
 #include "renderer/surface/analysis.hpp"
 
 using namespace iso;
@@ -251,6 +252,16 @@ TEST(GuiViews, TwoSeriesFolderShowsTheChooser) {
     ASSERT_TRUE(w.scene().has_volume());
     EXPECT_EQ(w.scene().volume().dims[2], 8);
     EXPECT_TRUE(w.series().isEmpty());
+
+    // ---- a slice click on this CT reads out its value in HU (core::value_readout, as the 3D readout does)
+    auto* axial = w.slice_view(core::SliceOrientation::Axial);
+    const QPoint at(axial->width() / 2, axial->height() / 2);
+    const core::SliceGrid g = axial->grid();
+    QTest::mouseClick(axial, Qt::LeftButton, {}, at);
+    const auto s = core::sample_at_pixel(w.scene().volume(), g, {double(at.x()), double(at.y())});
+    ASSERT_TRUE(s) << "the click missed the volume";
+    const std::string msg = w.statusBar()->currentMessage().toStdString();
+    EXPECT_NE(msg.find(", " + core::value_readout(s->value, "HU") + ", voxel ("), std::string::npos) << msg;
 }
 
 TEST(GuiViews, ObliqueVolumeSliceClicksPanZoomAndWindow) {

@@ -38,7 +38,8 @@ void expect_same(const core::PickResult& a, const core::PickResult& b) {
         EXPECT_EQ(x.depth_mm, y.depth_mm);
         EXPECT_EQ(x.alpha, y.alpha);
         EXPECT_EQ(x.share, y.share);
-        EXPECT_EQ(x.hu, y.hu);
+        EXPECT_EQ(x.value, y.value);
+        EXPECT_EQ(x.unit, y.unit);
         EXPECT_EQ(x.voxel, y.voxel);
     }
     EXPECT_EQ(a.rect.x, b.rect.x);

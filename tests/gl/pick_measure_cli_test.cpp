@@ -2,8 +2,9 @@
 // CT: the visible pick through skin at opacity 0.3 is the bone behind it;
 // picked positions agree with a ray cast of the written mesh to 1e-3 mm;
 // the value there is the trilinear interpolation computed here; a pick's
-// JSON has what the issue names; `measure` writes Slicer markups that read
-// back, and refuses bad points naming the flag.
+// JSON has what the issue names; a CT's values are in HU, and the slice
+// readout of a picked point says what the pick says; `measure` writes Slicer
+// markups that read back, and refuses bad points naming the flag.
 #include <cmath>
 #include <filesystem>
 
@@ -14,6 +15,8 @@
 #include "io/mesh.hpp"
 #include "renderer/core/api.hpp"
 #include "renderer/core/pick.hpp"
+#include "renderer/core/slices.hpp"
+#include "renderer/core/value_unit.hpp"
 #include "tests/support/test_util.hpp"
 
 using namespace iso;
@@ -105,8 +108,9 @@ TEST(PickCore, ThroughSkinTheVisiblePickIsTheBoneAndPositionsAreExact) {
             EXPECT_NEAR(t_layer, *t, 1e-3);
             ++checked;
             // The value there: trilinear in the volume, computed here.
-            ASSERT_TRUE(l.hu);
-            EXPECT_NEAR(*l.hu, trilinear(scene.volume(), l.lps), 1e-6);
+            ASSERT_TRUE(l.value);
+            EXPECT_NEAR(*l.value, trilinear(scene.volume(), l.lps), 1e-6);
+            EXPECT_EQ(l.unit, "") << "headsq has no modality: its values have no unit";
             EXPECT_NEAR(glm::length(l.normal), 1.0, 1e-9);
         }
         // Layers: front to back, shares sum to at most 1.
@@ -130,8 +134,12 @@ TEST(PickCore, TheCliPrintsTheIssuesJson) {
     ASSERT_TRUE(j["visible"].is_number());
     const auto& layers = j["layers"];
     ASSERT_GE(layers.size(), 2u);
-    for (const char* key : {"surface", "iso", "lps", "normal", "triangle", "depth_mm", "alpha", "share", "hu", "voxel"})
+    for (const char* key : {"surface", "iso", "lps", "normal", "triangle", "depth_mm", "alpha", "share", "value", "unit", "voxel"})
         EXPECT_TRUE(layers[0].contains(key)) << key;
+    // headsq says no modality: a value, with no unit, and no "hu" key.
+    EXPECT_TRUE(layers[0]["value"].is_number());
+    EXPECT_TRUE(layers[0]["unit"].is_null());
+    EXPECT_FALSE(layers[0].contains("hu"));
     EXPECT_EQ(layers[0]["iso"].get<double>(), 500.0);
     EXPECT_EQ(j["view"].size(), 16u);
     EXPECT_EQ(j["projection"].size(), 16u);
@@ -143,6 +151,55 @@ TEST(PickCore, TheCliPrintsTheIssuesJson) {
     const auto bad = test::run_command(test::cli() + " pick " + test::data("headsq.nhdr") + " --iso 500 --at 3", true);
     EXPECT_EQ(bad.exit_code, 1);
     EXPECT_NE(bad.out.find("--at"), std::string::npos) << bad.out;
+}
+
+namespace {
+
+// headsq's samples under a MetaImage header that says CT.
+std::string headsq_as_ct(const TempDir& dir) {
+    fs::copy_file(test::data("headsq.raw"), dir / "headsq.raw");
+    test::write_file(dir / "ct.mhd", "Modality = MET_MOD_CT\n" + test::read_file(test::data("headsq.mhd")));
+    return dir / "ct.mhd";
+}
+
+} // namespace
+
+// On a CT the pick's value is in HU (JSON: "unit": "HU"), and the slice
+// views' readout of the picked point (sample_at_pixel at that point's pixel
+// of each plane through it) gives the same value and the same text.
+TEST(PickCore, ACtPickIsInHuAndTheSliceReadoutAgrees) {
+    TempDir dir;
+    core::Scene scene;
+    scene.open(headsq_as_ct(dir));
+    scene.add_isosurfaces({500, 1150});
+    core::PickRequest p;
+    p.x = 128;
+    p.y = 70;
+    const auto r = core::pick(scene, request(), p);
+    ASSERT_TRUE(r.visible);
+    const core::PickLayer& l = r.layers[*r.visible];
+    ASSERT_TRUE(l.value);
+    EXPECT_EQ(l.unit, "HU");
+    const auto j = core::pick_json(r)["layers"][*r.visible];
+    EXPECT_EQ(j["value"].get<double>(), *l.value);
+    EXPECT_EQ(j["unit"], "HU");
+    EXPECT_FALSE(j.contains("hu"));
+    const std::string readout = core::value_readout(*l.value, l.unit);
+    EXPECT_NE(readout.find(" HU"), std::string::npos) << readout;
+
+    const Volume& v = scene.volume();
+    auto planes = core::default_planes(v);
+    core::set_crosshair(planes, l.lps);
+    for (const auto& plane : planes) {
+        SCOPED_TRACE(core::slice_orientation_name(plane.orientation));
+        const core::SliceGrid g = core::slice_grid(plane, 300, 200);
+        const core::SlicePoint at = core::lps_to_pixel(g, l.lps);
+        EXPECT_NEAR(at.distance_mm, 0.0, 1e-9);
+        const auto s = core::sample_at_pixel(v, g, at.pixel);
+        ASSERT_TRUE(s);
+        EXPECT_NEAR(s->value, *l.value, 1e-6);
+        EXPECT_EQ(core::value_readout(s->value, core::value_unit(v)), readout);
+    }
 }
 
 TEST(MeasureCli, SurfacesPointsAndSlicerMarkups) {
@@ -163,6 +220,17 @@ TEST(MeasureCli, SurfacesPointsAndSlicerMarkups) {
     EXPECT_NEAR(j["distances"][0]["distance_mm"].get<double>(), 50.0, 1e-9);
     EXPECT_NEAR(j["angles"][0]["angle_deg"].get<double>(), 90.0, 1e-9);
     EXPECT_TRUE(j["values"][0]["value"].is_number());
+    EXPECT_TRUE(j["values"][0]["unit"].is_null()) << "headsq says no modality";
+    // --value is the option's name, --hu its earlier one: the same point, the same text.
+    const std::string measure = test::cli() + " measure " + test::data("headsq.nhdr") + " --iso 1150";
+    const auto by_value = test::run_command(measure + " --value -98.9,20,-12", false);
+    const auto by_hu = test::run_command(measure + " --hu -98.9,20,-12", false);
+    ASSERT_EQ(by_value.exit_code, 0) << by_value.out;
+    ASSERT_EQ(by_hu.exit_code, 0) << by_hu.out;
+    EXPECT_EQ(by_value.out, by_hu.out);
+    const std::string last = "\n" + core::value_readout(j["values"][0]["value"].get<double>(), "") + "\n";
+    ASSERT_GE(by_value.out.size(), last.size());
+    EXPECT_EQ(by_value.out.substr(by_value.out.size() - last.size()), last) << by_value.out;
     const MarkupsFile f = load_markups(out);
     ASSERT_EQ(f.markups.size(), 3u);
     EXPECT_EQ(f.markups[0].type, MarkupType::Line);
