@@ -45,7 +45,7 @@ run_ctest ctest --test-dir build --output-on-failure -j "$jobs" || { summary; ex
 if [[ $mode == quick ]]; then summary; exit 0; fi
 
 echo "== tests under AddressSanitizer + UndefinedBehaviorSanitizer"
-cmake -S . -B build-asan -G Ninja -DCMAKE_BUILD_TYPE=Debug -DISOSCOPE_SANITIZE=ON >/dev/null
+cmake -S . -B build-asan -G Ninja -DCMAKE_BUILD_TYPE=Debug -DISOSCOPE_SANITIZE=ON -DISOSCOPE_BUILD_BENCHMARKS=OFF >/dev/null
 cmake --build build-asan -j "$jobs"
 # VTK and OpenVDB allocate globals that LeakSanitizer reports at exit; leaks
 # are checked by the fuzzers on our own code paths instead.

@@ -50,6 +50,8 @@ std::string flag_of(std::string where) {
         {"ambient occlusion frames", "--ao-frames"},
         {"ambient occlusion rays", "--ao-rays"},
         {"cone AO setting radius", "--ao-radius"},
+        {"disk AO setting blend_min", "--ao-disk-blend"},
+        {"disk AO setting blend_max", "--ao-disk-blend"},
         {"transparency epsilon", "--oit-epsilon"},
         {"transparency memory", "--oit-memory"},
         {"background", "--background"},

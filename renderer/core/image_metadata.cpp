@@ -21,12 +21,6 @@ std::vector<float> flat(const glm::dmat4& m) {
     return v;
 }
 
-std::string number_text(double v) {
-    char b[64];
-    std::snprintf(b, sizeof b, "%.9g", v);
-    return b;
-}
-
 // Files as absolute paths and their SHA-256, one a line each.
 void add_files(Text& t, const std::vector<std::string>& files, const char* key, const char* hash_key) {
     std::string paths, sums;

@@ -59,8 +59,9 @@ const std::vector<AoSetting<DiskAoSettings>>& disk_ao_settings() {
          "Distance attenuation 1/(1 + k d^2), k 0..100 (disk AO; default 0)"},
         {"triangle_attenuation", &S::triangle_attenuation, 0, 16, "ao-disk-triangle-t",
          "Triangle attenuation: emitter term^t, t 0..16 (disk AO; default 1)"},
-        {"blend_min", &S::min_scale, 0, 1, "ao-disk-blend-min", "Convergence blend: weight of the smaller of the last two passes (disk AO; default 0.7)"},
-        {"blend_max", &S::max_scale, 0, 1, "ao-disk-blend-max", "Convergence blend: weight of the larger of the last two passes (disk AO; default 0.3)"},
+        // Both weights together are the CLI's --ao-disk-blend MIN,MAX (app/cli/frame_options.cpp).
+        {"blend_min", &S::min_scale, 0, 1, "", "Convergence blend: weight of the smaller of the last two passes (disk AO; default 0.7)"},
+        {"blend_max", &S::max_scale, 0, 1, "", "Convergence blend: weight of the larger of the last two passes (disk AO; default 0.3)"},
         // 0 lets a receiver see its own disk; beyond a tenth of R it floats visibly off the surface.
         {"receiver_offset", &S::receiver_offset, 0, 0.1, "ao-disk-offset",
          "Receiver raised along its normal by this x R against self-occlusion, 0..0.1 (disk AO; default 0.001)"},
@@ -68,13 +69,13 @@ const std::vector<AoSetting<DiskAoSettings>>& disk_ao_settings() {
     return table;
 }
 
-namespace {
-
 std::string number_text(double v) {
     char b[64];
     std::snprintf(b, sizeof b, "%.9g", v);
     return b;
 }
+
+namespace {
 
 template <class S> void validate_table(const S& s, const std::vector<AoSetting<S>>& table, const char* prefix) {
     for (const auto& t : table) {

@@ -140,6 +140,10 @@ void validate(const DiskAoSettings& s);
 // Every tabled member equal (the disk hierarchy's element terms depend on all of them).
 bool same_settings(const DiskAoSettings& a, const DiskAoSettings& b);
 
+// A setting's number as the metadata and the errors write it: %.9g (every
+// float exactly, doubles to 9 significant digits).
+std::string number_text(double v);
+
 // "name value; name value; ..." of every tabled setting (doubles as %.9g,
 // booleans on/off), for the image metadata.
 std::string settings_text(const ConeAoSettings& s);

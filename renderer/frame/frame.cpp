@@ -2,7 +2,6 @@
 #include "renderer/frame/frame.hpp"
 
 #include <cmath>
-#include <cstdio>
 #include <utility>
 
 #include "io/error.hpp"
@@ -25,11 +24,7 @@ constexpr std::pair<AoMethod, const char*> kAoMethods[] = {
 
 // A range check whose error names the setting and shows the number as given.
 void check_range(const char* setting, double v, double lo, double hi) {
-    if (!(v >= lo && v <= hi)) {
-        char b[160];
-        std::snprintf(b, sizeof b, "expected %.9g..%.9g, got %.9g", lo, hi, v);
-        throw Error(setting, b);
-    }
+    if (!(v >= lo && v <= hi)) throw Error(setting, "expected " + number_text(lo) + ".." + number_text(hi) + ", got " + number_text(v));
 }
 
 } // namespace
