@@ -8,8 +8,8 @@ namespace iso {
 std::string temp_path_for(const std::string& path) {
     static std::atomic<unsigned> counter{0};
     const std::filesystem::path p(path);
-    const std::string name = ".isoscope-tmp-" + std::to_string(::getpid()) + "-" +
-                             std::to_string(counter++) + "-" + p.filename().string();
+    const std::string name =
+        ".isoscope-tmp-" + std::to_string(::getpid()) + "-" + std::to_string(counter++) + "-" + p.filename().string();
     return (p.parent_path() / name).string();
 }
 

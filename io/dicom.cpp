@@ -290,7 +290,7 @@ bool same_geometry_class(const Slice& a, const Slice& b) {
 }
 
 struct Scan {
-    std::vector<Group> groups;     // listed series, in listing order
+    std::vector<Group> groups;      // listed series, in listing order
     std::vector<std::string> notes; // dropped localizers, skipped files
     std::string where;              // folder or file to name in messages
 };
@@ -359,9 +359,8 @@ Scan scan(const std::vector<std::string>& inputs, const ProgressFn& progress) {
     }
 
     // Drop localizers.
-    const bool any_regular = std::any_of(groups.begin(), groups.end(), [](const Group& g) {
-        return !g.slices.front().localizer;
-    });
+    const bool any_regular =
+        std::any_of(groups.begin(), groups.end(), [](const Group& g) { return !g.slices.front().localizer; });
     size_t dropped = 0;
     std::vector<bool> drop(groups.size(), false);
     for (size_t g = 0; g < groups.size(); ++g) {
@@ -456,14 +455,14 @@ int select_series(const Scan& sc, const std::vector<SeriesInfo>& list, const std
         if (list.size() == 1) return 0;
         throw Error("DICOM series", sc.where + " holds " + std::to_string(list.size()) +
                                         " series; choose a series by its index in this list or its "
-                                        "SeriesInstanceUID:" + listing_text(list));
+                                        "SeriesInstanceUID:" +
+                                        listing_text(list));
     }
-    if (std::all_of(want.begin(), want.end(), [](unsigned char c) { return std::isdigit(c); }) &&
-        want.size() < 9) {
+    if (std::all_of(want.begin(), want.end(), [](unsigned char c) { return std::isdigit(c); }) && want.size() < 9) {
         const int idx = std::stoi(want);
         if (idx < 0 || size_t(idx) >= list.size())
-            throw Error(sc.where, "no series " + want + " (there are " + std::to_string(list.size()) +
-                                      "):" + listing_text(list));
+            throw Error(sc.where,
+                        "no series " + want + " (there are " + std::to_string(list.size()) + "):" + listing_text(list));
         // A purely numeric UID is not a valid DICOM UID, so an index is meant.
         return idx;
     }
@@ -475,8 +474,7 @@ int select_series(const Scan& sc, const std::vector<SeriesInfo>& list, const std
     if (by_base.size() == 1) return by_base[0];
     if (by_base.size() > 1)
         throw Error(sc.where, "series " + want + " was split into " + std::to_string(by_base.size()) +
-                                  " parts (different orientation, size or spacing); choose one:" +
-                                  listing_text(list));
+                                  " parts (different orientation, size or spacing); choose one:" + listing_text(list));
     throw Error(sc.where, "no series with UID " + want + "; available:" + listing_text(list));
 }
 
@@ -514,8 +512,8 @@ void check_geometry(const Group& g, bool need_position) {
                                     ", |column| = " + fmt(lc, 5) + ", row.column = " + fmt(d, 5) + ")");
         if (!std::isfinite(s.spacing_between_rows) || !std::isfinite(s.spacing_between_cols) ||
             !(s.spacing_between_rows > 0) || !(s.spacing_between_cols > 0))
-            throw Error(s.file, "PixelSpacing is zero, negative or not finite (" + fmt(s.spacing_between_rows) +
-                                    "\\" + fmt(s.spacing_between_cols) + ")");
+            throw Error(s.file, "PixelSpacing is zero, negative or not finite (" + fmt(s.spacing_between_rows) + "\\" +
+                                    fmt(s.spacing_between_cols) + ")");
         if (s.has_rescale && (!std::isfinite(s.slope) || !std::isfinite(s.intercept) || s.slope == 0))
             throw Error(s.file, "RescaleSlope/RescaleIntercept are invalid");
     }
@@ -535,14 +533,13 @@ void check_pixel_format(const Group& g) {
         throw Error(first.file, "multi-frame (enhanced) DICOM files are not supported yet (" +
                                     std::to_string(first.frames) + " frames in one file)");
     for (const auto& s : g.slices) {
-        if (s.samples != 1 || (s.photometric != "MONOCHROME1" && s.photometric != "MONOCHROME2" &&
-                               !s.photometric.empty()))
+        if (s.samples != 1 ||
+            (s.photometric != "MONOCHROME1" && s.photometric != "MONOCHROME2" && !s.photometric.empty()))
             throw Error(s.file, "colour images (" + s.photometric + ", " + std::to_string(s.samples) +
                                     " samples per pixel) are not supported: isoscope reads greyscale CT/MR");
         if (s.bits_allocated != first.bits_allocated || s.pixel_rep != first.pixel_rep)
             throw Error(s.file, "pixel format (BitsAllocated/PixelRepresentation) differs from " + first.file);
-        if (s.rows != first.rows || s.cols != first.cols)
-            throw Error(s.file, "image size differs from " + first.file);
+        if (s.rows != first.rows || s.cols != first.cols) throw Error(s.file, "image size differs from " + first.file);
     }
 }
 
@@ -567,8 +564,8 @@ void sort_slices(Group& g, const glm::dvec3& normal, const std::string& where, s
                 ++copies;
                 continue;
             }
-            throw Error(where, "two different images at the same position " + fmt_vec(s.ipp) + ": " +
-                                   kept.back().file + " and " + s.file +
+            throw Error(where, "two different images at the same position " + fmt_vec(s.ipp) + ": " + kept.back().file +
+                                   " and " + s.file +
                                    " (several volumes, e.g. phases or echoes, in one series are not supported)");
         }
         kept.push_back(std::move(s));
@@ -600,10 +597,10 @@ bool place_on_grid(const std::vector<Slice>& slices, const glm::dvec3& normal, s
                 irregular = true;
                 r = 1;
             } else {
-                gaps.push_back(std::to_string(r - 1) + " slice(s) missing between slice " + std::to_string(k) +
-                               " at " + fmt(p[k], 3) + " mm and slice " + std::to_string(k + 1) + " at " +
-                               fmt(p[k + 1], 3) + " mm (files " + fs::path(slices[k].file).filename().string() +
-                               ", " + fs::path(slices[k + 1].file).filename().string() + ")");
+                gaps.push_back(std::to_string(r - 1) + " slice(s) missing between slice " + std::to_string(k) + " at " +
+                               fmt(p[k], 3) + " mm and slice " + std::to_string(k + 1) + " at " + fmt(p[k + 1], 3) +
+                               " mm (files " + fs::path(slices[k].file).filename().string() + ", " +
+                               fs::path(slices[k + 1].file).filename().string() + ")");
             }
         }
         grid[k + 1] = grid[k] + r;
@@ -656,7 +653,8 @@ Layout lay_out(Group& g, const std::string& where) {
     std::vector<std::string> warnings;
     const bool multi = g.slices.size() > 1;
     check_geometry(g, multi);
-    if (!first.has_spacing) warnings.push_back("PixelSpacing is missing; 1 mm assumed");
+    if (!first.has_spacing)
+        warnings.push_back("PixelSpacing is missing; 1 mm assumed");
     else if (first.imager_spacing)
         warnings.push_back("PixelSpacing is missing; ImagerPixelSpacing (at the detector) used instead, "
                            "measurements may be off by the magnification factor");
@@ -684,11 +682,9 @@ Layout lay_out(Group& g, const std::string& where) {
     affine[3] = glm::dvec4(g.slices[0].ipp, 1.0);
     check_affine(where, affine, /*allow_shear=*/true);
     const std::string desc = upper(first.description);
-    if (desc.find("SCOUT") != std::string::npos || desc.find("LOCALI") != std::string::npos ||
-        first.localizer)
-        warnings.push_back("series \"" + first.description + "\" looks like a scout/localizer (" +
-                           std::to_string(n) + " slice(s), " + fmt(glm::length(step_vec)) +
-                           " mm apart): not meant for 3D reconstruction");
+    if (desc.find("SCOUT") != std::string::npos || desc.find("LOCALI") != std::string::npos || first.localizer)
+        warnings.push_back("series \"" + first.description + "\" looks like a scout/localizer (" + std::to_string(n) +
+                           " slice(s), " + fmt(glm::length(step_vec)) + " mm apart): not meant for 3D reconstruction");
     out.affine = affine;
     out.warnings = std::move(warnings);
     return out;
@@ -746,14 +742,14 @@ Pixels read_pixels(const Group& g, const std::string& where, const ProgressFn& p
     img->GetDimensions(dim);
     vtkDataArray* arr = img->GetPointData() ? img->GetPointData()->GetScalars() : nullptr;
     if (!arr || dim[0] != first.cols || dim[1] != first.rows || dim[2] != int(n) || arr->GetNumberOfComponents() != 1)
-        throw Error(where, "pixel data does not have the size given by the headers (" + std::to_string(dim[0]) +
-                               "x" + std::to_string(dim[1]) + "x" + std::to_string(dim[2]) + ")");
+        throw Error(where, "pixel data does not have the size given by the headers (" + std::to_string(dim[0]) + "x" +
+                               std::to_string(dim[1]) + "x" + std::to_string(dim[2]) + ")");
     // Map output slices to our files (the reader was told not to sort, but check).
     px.file_of_slice.resize(n);
     vtkIntArray* fidx = reader->GetFileIndexArray();
     for (size_t k = 0; k < n; ++k) {
-        const int f = fidx && fidx->GetNumberOfTuples() == vtkIdType(n) ? int(fidx->GetComponent(vtkIdType(k), 0))
-                                                                           : int(k);
+        const int f =
+            fidx && fidx->GetNumberOfTuples() == vtkIdType(n) ? int(fidx->GetComponent(vtkIdType(k), 0)) : int(k);
         if (f < 0 || size_t(f) >= n) throw Error(where, "reader returned an unexpected slice order");
         px.file_of_slice[k] = f;
     }
@@ -813,8 +809,10 @@ void fill_volume(Volume& vol, const Group& g, const Pixels& px, const std::vecto
             using O = decltype(ot);
             auto dst = vol.as<O>();
             auto put = [&](std::size_t idx, double v) {
-                if constexpr (std::is_integral_v<O>) dst[idx] = static_cast<O>(std::llround(v));
-                else dst[idx] = static_cast<O>(v);
+                if constexpr (std::is_integral_v<O>)
+                    dst[idx] = static_cast<O>(std::llround(v));
+                else
+                    dst[idx] = static_cast<O>(v);
             };
             for (size_t k = 0; k < n; ++k) {
                 const size_t fi = px.file_of_slice[k];

@@ -15,8 +15,8 @@ class Error : public std::runtime_error {
 public:
     // `where` is a file path or, for non-file errors, the operation's name.
     Error(std::string where, std::string reason)
-        : std::runtime_error(where.empty() ? reason : where + ": " + reason),
-          where_(std::move(where)), reason_(std::move(reason)) {}
+        : std::runtime_error(where.empty() ? reason : where + ": " + reason), where_(std::move(where)),
+          reason_(std::move(reason)) {}
 
     const std::string& where() const noexcept { return where_; }
     const std::string& reason() const noexcept { return reason_; }

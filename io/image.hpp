@@ -13,12 +13,12 @@ namespace iso {
 struct Image {
     int width = 0, height = 0, channels = 4;
     bool is_float = false;
-    std::vector<std::uint8_t> bytes;   // !is_float
-    std::vector<float> floats;         // is_float
+    std::vector<std::uint8_t> bytes; // !is_float
+    std::vector<float> floats;       // is_float
 };
 
 struct ImageMetadata {
-    std::map<std::string, std::string> text;               // e.g. "isoscope:input"
+    std::map<std::string, std::string> text;                // e.g. "isoscope:input"
     std::map<std::string, std::vector<float>> float_arrays; // e.g. "isoscope:view" (16 floats, column-major)
 };
 

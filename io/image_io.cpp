@@ -32,7 +32,8 @@ void save_image(const Image& img, const std::string& path, const ImageMetadata& 
     write_atomically(path, [&](const std::string& tmp) {
         auto out = OIIO::ImageOutput::create(tmp);
         if (!out) throw Error(path, "OpenImageIO cannot write this format: " + OIIO::geterror());
-        OIIO::ImageSpec spec(img.width, img.height, img.channels, img.is_float ? OIIO::TypeDesc::FLOAT : OIIO::TypeDesc::UINT8);
+        OIIO::ImageSpec spec(img.width, img.height, img.channels,
+                             img.is_float ? OIIO::TypeDesc::FLOAT : OIIO::TypeDesc::UINT8);
         if (img.channels == 4) spec.alpha_channel = 3;
         if (img.is_float) {
             if (img.channels == 1) spec.channelnames = {"Z"};
@@ -44,8 +45,10 @@ void save_image(const Image& img, const std::string& path, const ImageMetadata& 
         const bool tiff = ext == ".tif" || ext == ".tiff";
         std::string description;
         for (const auto& [k, v] : meta.text) {
-            if (tiff) description += k + ": " + v + "\n";
-            else spec.attribute(k, v);
+            if (tiff)
+                description += k + ": " + v + "\n";
+            else
+                spec.attribute(k, v);
         }
         for (const auto& [k, v] : meta.float_arrays) {
             if (ext == ".exr") {
@@ -55,8 +58,10 @@ void save_image(const Image& img, const std::string& path, const ImageMetadata& 
                 std::ostringstream os;
                 os.precision(9);
                 for (std::size_t i = 0; i < v.size(); ++i) os << (i ? " " : "") << v[i];
-                if (tiff) description += k + ": " + os.str() + "\n";
-                else spec.attribute(k, os.str());
+                if (tiff)
+                    description += k + ": " + os.str() + "\n";
+                else
+                    spec.attribute(k, os.str());
             }
         }
         if (tiff && !description.empty()) spec.attribute("ImageDescription", description);

@@ -69,9 +69,7 @@ const char* status_name(PositionStatus s) {
 }
 
 // The number of control points a type must have, or 0 when any number will do.
-std::size_t required_points(MarkupType t) {
-    return t == MarkupType::Line ? 2 : t == MarkupType::Angle ? 3 : 0;
-}
+std::size_t required_points(MarkupType t) { return t == MarkupType::Line ? 2 : t == MarkupType::Angle ? 3 : 0; }
 
 bool finite(const glm::dvec3& v) { return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z); }
 
@@ -154,7 +152,8 @@ private:
     bool bool_or(const json& obj, const char* key, const std::string& where, bool fallback) const {
         const json* v = member(obj, key);
         if (!v) return fallback;
-        if (!v->is_boolean()) fail(where, "\"" + std::string(key) + "\" must be true or false, not a " + v->type_name());
+        if (!v->is_boolean())
+            fail(where, "\"" + std::string(key) + "\" must be true or false, not a " + v->type_name());
         return v->get<bool>();
     }
 
@@ -184,7 +183,8 @@ private:
         if (!v) return std::nullopt;
         const glm::dvec3 c = vec3(*v, where, "display \"" + std::string(key) + "\"");
         for (int k = 0; k < 3; ++k)
-            if (c[k] < 0.0 || c[k] > 1.0) fail(where, "display \"" + std::string(key) + "\" has a component outside [0, 1]");
+            if (c[k] < 0.0 || c[k] > 1.0)
+                fail(where, "display \"" + std::string(key) + "\" has a component outside [0, 1]");
         return c;
     }
 
@@ -203,7 +203,8 @@ private:
         }
         if (!known) {
             if (type == "Plane" || type == "ROI")
-                fail(where, "markup type '" + type + "' is not supported (isoscope reads Fiducial, Line, Angle, Curve and ClosedCurve)");
+                fail(where, "markup type '" + type +
+                                "' is not supported (isoscope reads Fiducial, Line, Angle, Curve and ClosedCurve)");
             fail(where, "unknown markup type '" + printable(type) + "'");
         }
         m.name = string_or(item, "name", where);
@@ -257,7 +258,8 @@ private:
             fail(where, "\"coordinateUnits\" must be a string or [code, scheme, meaning]");
         }
         if (code != "mm")
-            fail(where, "coordinate units '" + printable(code) + "' are not supported (isoscope reads millimetres, \"mm\")");
+            fail(where,
+                 "coordinate units '" + printable(code) + "' are not supported (isoscope reads millimetres, \"mm\")");
     }
 
     MarkupControlPoint read_point(const json& item, const std::string& where) const {
@@ -267,10 +269,14 @@ private:
         p.label = string_or(item, "label", where);
         p.description = string_or(item, "description", where);
         const std::string status = string_or(item, "positionStatus", where, "defined");
-        if (status == "defined") p.status = PositionStatus::Defined;
-        else if (status == "preview") p.status = PositionStatus::Preview;
-        else if (status == "undefined") p.status = PositionStatus::Undefined;
-        else fail(where, "position status '" + printable(status) + "' is not defined, preview or undefined");
+        if (status == "defined")
+            p.status = PositionStatus::Defined;
+        else if (status == "preview")
+            p.status = PositionStatus::Preview;
+        else if (status == "undefined")
+            p.status = PositionStatus::Undefined;
+        else
+            fail(where, "position status '" + printable(status) + "' is not defined, preview or undefined");
         const json* pos = member(item, "position");
         if (p.status == PositionStatus::Defined) {
             if (!pos) fail(where, "no \"position\" for a defined point");
@@ -357,7 +363,8 @@ void check_for_writing(const Markup& m, std::size_t index, const std::string& pa
     if (m.type == MarkupType::Curve || m.type == MarkupType::ClosedCurve)
         throw Error(path, where + ": curves are read, not written (their length is measured along Slicer's spline)");
     if (const std::size_t need = required_points(m.type); need && m.points.size() != need)
-        throw Error(path, where + ": needs " + std::to_string(need) + " control points, has " + std::to_string(m.points.size()));
+        throw Error(path, where + ": needs " + std::to_string(need) + " control points, has " +
+                              std::to_string(m.points.size()));
     for (std::size_t i = 0; i < m.points.size(); ++i)
         if (m.points[i].status == PositionStatus::Defined && !finite(m.points[i].position))
             throw Error(path, where + ": control point " + std::to_string(i + 1) + " has a NaN or infinite position");
@@ -389,8 +396,10 @@ ordered_json markup_json(const Markup& m) {
         cp["label"] = p.label;
         cp["description"] = p.description;
         cp["associatedNodeID"] = "";
-        if (p.status == PositionStatus::Defined) cp["position"] = vec_json(p.position);
-        else cp["position"] = "";
+        if (p.status == PositionStatus::Defined)
+            cp["position"] = vec_json(p.position);
+        else
+            cp["position"] = "";
         // Slicer's identity orientation as it writes it in LPS (file comment).
         cp["orientation"] = ordered_json::array({-1.0, -0.0, -0.0, -0.0, -1.0, -0.0, 0.0, 0.0, 1.0});
         cp["selected"] = p.selected;
@@ -459,8 +468,10 @@ std::optional<MarkupMeasurement> computed_measurement(const Markup& m) {
     for (const auto& p : m.points)
         if (p.status != PositionStatus::Defined || !finite(p.position)) return meas;
     const auto& p = m.points;
-    if (m.type == MarkupType::Line) meas.value = line_length_mm(p[0].position, p[1].position);
-    else meas.value = angle_degrees(p[0].position, p[1].position, p[2].position);
+    if (m.type == MarkupType::Line)
+        meas.value = line_length_mm(p[0].position, p[1].position);
+    else
+        meas.value = angle_degrees(p[0].position, p[1].position, p[2].position);
     return meas;
 }
 

@@ -22,12 +22,12 @@ enum class MarkupType { Fiducial, Line, Angle, Curve, ClosedCurve };
 enum class PositionStatus { Defined, Preview, Undefined };
 
 struct MarkupControlPoint {
-    std::string id;          // unique within its markup ("1", "2", ...); the writer numbers empty ones
-    std::string label;       // shown next to the point in Slicer
+    std::string id;    // unique within its markup ("1", "2", ...); the writer numbers empty ones
+    std::string label; // shown next to the point in Slicer
     std::string description;
     glm::dvec3 position{0.0}; // LPS mm; meaningful only when status is Defined
     PositionStatus status = PositionStatus::Defined;
-    bool selected = true;    // Slicer draws selected points in the display's selected colour
+    bool selected = true; // Slicer draws selected points in the display's selected colour
     bool locked = false;
     bool visible = true;
 };
@@ -38,7 +38,7 @@ struct MarkupMeasurement {
     std::string units;           // "mm", "deg", ... (a coded entry's code value when the file has one)
     bool enabled = true;
     std::string description;
-    std::string print_format;    // printf-style, as Slicer shows it ("%-#4.4g%s"); may be empty
+    std::string print_format; // printf-style, as Slicer shows it ("%-#4.4g%s"); may be empty
 };
 
 struct Markup {

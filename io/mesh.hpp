@@ -13,11 +13,11 @@
 namespace iso {
 
 struct Mesh {
-    std::vector<glm::vec3> positions;            // LPS mm
-    std::vector<glm::vec3> normals;              // empty or one per position, unit length
-    std::vector<glm::u8vec4> colors;             // empty or one per position, RGBA8
+    std::vector<glm::vec3> positions; // LPS mm
+    std::vector<glm::vec3> normals;   // empty or one per position, unit length
+    std::vector<glm::u8vec4> colors;  // empty or one per position, RGBA8
     std::vector<std::array<std::uint32_t, 3>> triangles;
-    std::vector<std::string> warnings;           // non-fatal findings while reading
+    std::vector<std::string> warnings; // non-fatal findings while reading
 
     bool empty() const { return triangles.empty(); }
 };

@@ -98,11 +98,6 @@ Fmt format_of(const std::string& path) {
     throw Error(path, "unsupported mesh format '" + ext + "' (expected " + mesh_extensions_text() + ")");
 }
 
-
-
-
-
-
 vtkSmartPointer<vtkPolyData> run_reader(vtkAlgorithm* reader, const std::string& path) {
     vtkNew<VtkMessages> msgs;
     msgs->watch(reader);
@@ -124,7 +119,10 @@ Mesh from_polydata(vtkPolyData* in, const std::string& path) {
         vtkIdType npts;
         const vtkIdType* ids;
         for (polys->InitTraversal(); polys->GetNextCell(npts, ids);)
-            if (npts != 3) { all_triangles = false; break; }
+            if (npts != 3) {
+                all_triangles = false;
+                break;
+            }
     }
     if (!all_triangles) {
         vtkNew<vtkTriangleFilter> tf;
@@ -144,7 +142,9 @@ Mesh from_polydata(vtkPolyData* in, const std::string& path) {
         if (!std::isfinite(p[0]) || !std::isfinite(p[1]) || !std::isfinite(p[2])) ++bad;
         m.positions[std::size_t(i)] = glm::vec3(float(p[0]), float(p[1]), float(p[2]));
     }
-    if (bad) throw Error(path, std::to_string(bad) + " of " + std::to_string(np) + " vertices have NaN or infinite coordinates");
+    if (bad)
+        throw Error(path,
+                    std::to_string(bad) + " of " + std::to_string(np) + " vertices have NaN or infinite coordinates");
     auto* polys = pd->GetPolys();
     m.triangles.reserve(std::size_t(polys->GetNumberOfCells()));
     vtkIdType npts;
@@ -153,10 +153,12 @@ Mesh from_polydata(vtkPolyData* in, const std::string& path) {
         if (npts != 3) continue;
         for (int k = 0; k < 3; ++k)
             if (ids[k] < 0 || ids[k] >= np)
-                throw Error(path, "a triangle refers to vertex " + std::to_string(ids[k]) + " of " + std::to_string(np));
+                throw Error(path,
+                            "a triangle refers to vertex " + std::to_string(ids[k]) + " of " + std::to_string(np));
         m.triangles.push_back({std::uint32_t(ids[0]), std::uint32_t(ids[1]), std::uint32_t(ids[2])});
     }
-    if (auto* n = pd->GetPointData()->GetNormals(); n && n->GetNumberOfComponents() == 3 && n->GetNumberOfTuples() == np) {
+    if (auto* n = pd->GetPointData()->GetNormals();
+        n && n->GetNumberOfComponents() == 3 && n->GetNumberOfTuples() == np) {
         m.normals.resize(std::size_t(np));
         for (vtkIdType i = 0; i < np; ++i) {
             double v[3];
@@ -168,8 +170,8 @@ Mesh from_polydata(vtkPolyData* in, const std::string& path) {
     vtkDataArray* c = pd->GetPointData()->GetScalars();
     if (!c) c = pd->GetPointData()->GetArray("RGB");
     if (!c) c = pd->GetPointData()->GetArray("RGBA");
-    if (c && c->GetDataType() == VTK_UNSIGNED_CHAR && (c->GetNumberOfComponents() == 3 || c->GetNumberOfComponents() == 4) &&
-        c->GetNumberOfTuples() == np) {
+    if (c && c->GetDataType() == VTK_UNSIGNED_CHAR &&
+        (c->GetNumberOfComponents() == 3 || c->GetNumberOfComponents() == 4) && c->GetNumberOfTuples() == np) {
         m.colors.resize(std::size_t(np));
         for (vtkIdType i = 0; i < np; ++i) {
             double v[4] = {0, 0, 0, 255};
@@ -181,7 +183,8 @@ Mesh from_polydata(vtkPolyData* in, const std::string& path) {
     std::size_t degenerate = 0;
     for (const auto& t : m.triangles)
         if (t[0] == t[1] || t[1] == t[2] || t[0] == t[2]) ++degenerate;
-    if (degenerate) m.warnings.push_back(std::to_string(degenerate) + " degenerate triangles (repeated vertices) kept as read");
+    if (degenerate)
+        m.warnings.push_back(std::to_string(degenerate) + " degenerate triangles (repeated vertices) kept as read");
     return m;
 }
 
@@ -190,7 +193,8 @@ vtkSmartPointer<vtkPolyData> to_polydata(const Mesh& m, bool with_colors) {
     vtkNew<vtkPoints> pts;
     pts->SetDataTypeToFloat();
     pts->SetNumberOfPoints(vtkIdType(m.positions.size()));
-    for (std::size_t i = 0; i < m.positions.size(); ++i) pts->SetPoint(vtkIdType(i), m.positions[i].x, m.positions[i].y, m.positions[i].z);
+    for (std::size_t i = 0; i < m.positions.size(); ++i)
+        pts->SetPoint(vtkIdType(i), m.positions[i].x, m.positions[i].y, m.positions[i].z);
     pd->SetPoints(pts);
     vtkNew<vtkCellArray> polys;
     polys->AllocateExact(vtkIdType(m.triangles.size()), vtkIdType(3 * m.triangles.size()));
@@ -231,7 +235,8 @@ void write_obj(const Mesh& m, const std::string& path) {
         for (const auto& n : m.normals) f << "vn " << n.x << ' ' << n.y << ' ' << n.z << '\n';
     for (const auto& t : m.triangles) {
         if (normals)
-            f << "f " << t[0] + 1 << "//" << t[0] + 1 << ' ' << t[1] + 1 << "//" << t[1] + 1 << ' ' << t[2] + 1 << "//" << t[2] + 1 << '\n';
+            f << "f " << t[0] + 1 << "//" << t[0] + 1 << ' ' << t[1] + 1 << "//" << t[1] + 1 << ' ' << t[2] + 1 << "//"
+              << t[2] + 1 << '\n';
         else
             f << "f " << t[0] + 1 << ' ' << t[1] + 1 << ' ' << t[2] + 1 << '\n';
     }
@@ -279,7 +284,8 @@ Mesh load_mesh(const std::string& path) {
             if (!r->CanReadFile(path.c_str())) throw Error(path, "not a VTK XML PolyData file");
             detail::check_vtk_xml_headers(path);
             auto pd = run_reader(r, path);
-            if (auto* s = vtkStringArray::SafeDownCast(pd->GetFieldData()->GetAbstractArray("SPACE")); s && s->GetNumberOfValues() > 0)
+            if (auto* s = vtkStringArray::SafeDownCast(pd->GetFieldData()->GetAbstractArray("SPACE"));
+                s && s->GetNumberOfValues() > 0)
                 space = s->GetValue(0);
             m = from_polydata(pd, path);
             break;
@@ -291,14 +297,15 @@ Mesh load_mesh(const std::string& path) {
     const std::uint32_t n = std::uint32_t(m.positions.size());
     for (const auto& t : m.triangles)
         if (t[0] >= n || t[1] >= n || t[2] >= n)
-            throw Error(path, "a triangle refers to a vertex that does not exist (" + std::to_string(std::max({t[0], t[1], t[2]})) + " of " +
-                                  std::to_string(n) + ")");
+            throw Error(path, "a triangle refers to a vertex that does not exist (" +
+                                  std::to_string(std::max({t[0], t[1], t[2]})) + " of " + std::to_string(n) + ")");
     if (!m.normals.empty() && m.normals.size() != m.positions.size()) m.normals.clear();
     if (!m.colors.empty() && m.colors.size() != m.positions.size()) m.colors.clear();
     std::size_t degenerate = 0;
     for (const auto& t : m.triangles)
         if (t[0] == t[1] || t[1] == t[2] || t[0] == t[2]) ++degenerate;
-    if (degenerate && fmt != Fmt::Vtp) m.warnings.push_back(std::to_string(degenerate) + " degenerate triangles (repeated vertices) kept as read");
+    if (degenerate && fmt != Fmt::Vtp)
+        m.warnings.push_back(std::to_string(degenerate) + " degenerate triangles (repeated vertices) kept as read");
     if (space == "RAS") {
         // A 180-degree turn about z: determinant +1, so winding and outward normals stay.
         for (auto& p : m.positions) p = glm::vec3(-p.x, -p.y, p.z);

@@ -45,7 +45,8 @@ struct Welder {
     std::uint32_t add(const glm::vec3& p) {
         std::uint32_t bits[3];
         std::memcpy(bits, &p, sizeof bits);
-        const std::uint64_t h = (std::uint64_t(bits[0]) * 0x9E3779B97F4A7C15ull) ^ (std::uint64_t(bits[1]) * 0xC2B2AE3D27D4EB4Full) ^ bits[2];
+        const std::uint64_t h = (std::uint64_t(bits[0]) * 0x9E3779B97F4A7C15ull) ^
+                                (std::uint64_t(bits[1]) * 0xC2B2AE3D27D4EB4Full) ^ bits[2];
         auto& b = buckets[h];
         for (auto i : b)
             if (m.positions[i] == p) return i;
@@ -83,8 +84,9 @@ Mesh parse_stl(const std::string& path, std::string& space) {
     // ASCII: "vertex x y z" three at a time.
     const auto start = s.find_first_not_of(" \t\r\n");
     if (start == std::string::npos || s.compare(start, 5, "solid") != 0)
-        throw Error(path, "truncated or malformed binary STL: the header announces " + std::to_string(n) + " triangles (" +
-                              std::to_string(84 + 50 * std::uint64_t(n)) + " bytes), the file has " + std::to_string(s.size()) + " bytes");
+        throw Error(path, "truncated or malformed binary STL: the header announces " + std::to_string(n) +
+                              " triangles (" + std::to_string(84 + 50 * std::uint64_t(n)) + " bytes), the file has " +
+                              std::to_string(s.size()) + " bytes");
     space = tag_in(s.substr(start, s.find('\n', start) - start));
     std::istringstream in(s);
     std::string word;
@@ -114,10 +116,10 @@ namespace {
 enum class PT { I8, U8, I16, U16, I32, U32, F32, F64 };
 bool ply_type(const std::string& t, PT& out) {
     static const std::pair<const char*, PT> table[] = {
-        {"char", PT::I8},   {"int8", PT::I8},     {"uchar", PT::U8},   {"uint8", PT::U8},   {"short", PT::I16},
-        {"int16", PT::I16}, {"ushort", PT::U16},  {"uint16", PT::U16}, {"int", PT::I32},    {"int32", PT::I32},
-        {"uint", PT::U32},  {"uint32", PT::U32},  {"float", PT::F32},  {"float32", PT::F32}, {"double", PT::F64},
-        {"float64", PT::F64}};
+        {"char", PT::I8},   {"int8", PT::I8},     {"uchar", PT::U8},   {"uint8", PT::U8},
+        {"short", PT::I16}, {"int16", PT::I16},   {"ushort", PT::U16}, {"uint16", PT::U16},
+        {"int", PT::I32},   {"int32", PT::I32},   {"uint", PT::U32},   {"uint32", PT::U32},
+        {"float", PT::F32}, {"float32", PT::F32}, {"double", PT::F64}, {"float64", PT::F64}};
     for (auto& [name, t2] : table)
         if (t == name) {
             out = t2;
@@ -167,12 +169,36 @@ public:
         switch (t) {
         case PT::I8: return double(std::int8_t(b[0]));
         case PT::U8: return double(b[0]);
-        case PT::I16: { std::int16_t v; std::memcpy(&v, b, 2); return v; }
-        case PT::U16: { std::uint16_t v; std::memcpy(&v, b, 2); return v; }
-        case PT::I32: { std::int32_t v; std::memcpy(&v, b, 4); return v; }
-        case PT::U32: { std::uint32_t v; std::memcpy(&v, b, 4); return v; }
-        case PT::F32: { float v; std::memcpy(&v, b, 4); return v; }
-        case PT::F64: { double v; std::memcpy(&v, b, 8); return v; }
+        case PT::I16: {
+            std::int16_t v;
+            std::memcpy(&v, b, 2);
+            return v;
+        }
+        case PT::U16: {
+            std::uint16_t v;
+            std::memcpy(&v, b, 2);
+            return v;
+        }
+        case PT::I32: {
+            std::int32_t v;
+            std::memcpy(&v, b, 4);
+            return v;
+        }
+        case PT::U32: {
+            std::uint32_t v;
+            std::memcpy(&v, b, 4);
+            return v;
+        }
+        case PT::F32: {
+            float v;
+            std::memcpy(&v, b, 4);
+            return v;
+        }
+        case PT::F64: {
+            double v;
+            std::memcpy(&v, b, 8);
+            return v;
+        }
         }
         return 0;
     }
@@ -184,7 +210,9 @@ private:
         const char* b = d_.data() + pos_;
         char* e = nullptr;
         const double v = std::strtod(b, &e);
-        if (e == b) throw Error(path_, "malformed PLY data: '" + std::string(b, std::min<std::size_t>(12, d_.size() - pos_)) + "'");
+        if (e == b)
+            throw Error(path_,
+                        "malformed PLY data: '" + std::string(b, std::min<std::size_t>(12, d_.size() - pos_)) + "'");
         pos_ += std::size_t(e - b);
         return v;
     }
@@ -232,7 +260,8 @@ Mesh parse_ply(const std::string& path, std::string& space) {
             if (t == "list") {
                 std::string ct, it;
                 ls >> ct >> it >> p.name;
-                if (!ply_type(ct, p.count_type) || !ply_type(it, p.type)) throw Error(path, "malformed PLY list property: " + line);
+                if (!ply_type(ct, p.count_type) || !ply_type(it, p.type))
+                    throw Error(path, "malformed PLY list property: " + line);
                 p.list = true;
             } else {
                 if (!ply_type(t, p.type)) throw Error(path, "unknown PLY property type '" + t + "'");
@@ -246,7 +275,8 @@ Mesh parse_ply(const std::string& path, std::string& space) {
     // Plausibility: every element instance takes at least one byte (two in ASCII).
     std::uint64_t instances = 0;
     for (const auto& e : elements) instances += e.count;
-    if (instances > s.size() - body) throw Error(path, "PLY header announces more elements than the file can hold (truncated?)");
+    if (instances > s.size() - body)
+        throw Error(path, "PLY header announces more elements than the file can hold (truncated?)");
 
     Mesh m;
     PlyReader r(path, s, body, format);
@@ -274,19 +304,22 @@ Mesh parse_ply(const std::string& path, std::string& space) {
                 std::vector<std::uint32_t> idx(static_cast<std::size_t>(cnt));
                 for (auto& x : idx) {
                     const double v = r.read(pr.type);
-                    if (!(v >= 0 && v < 4294967295.0)) throw Error(path, "PLY face with a negative or invalid vertex index");
+                    if (!(v >= 0 && v < 4294967295.0))
+                        throw Error(path, "PLY face with a negative or invalid vertex index");
                     x = std::uint32_t(v);
                 }
                 if (face && (pr.name == "vertex_indices" || pr.name == "vertex_index"))
                     for (std::size_t k = 2; k < idx.size(); ++k) m.triangles.push_back({idx[0], idx[k - 1], idx[k]});
             }
             if (vertex) {
-                const glm::vec3 p(static_cast<float>(vals[std::size_t(ix[0])]), static_cast<float>(vals[std::size_t(ix[1])]),
+                const glm::vec3 p(static_cast<float>(vals[std::size_t(ix[0])]),
+                                  static_cast<float>(vals[std::size_t(ix[1])]),
                                   static_cast<float>(vals[std::size_t(ix[2])]));
                 require_finite(path, p, "a vertex");
                 m.positions.push_back(p);
                 if (normals)
-                    m.normals.emplace_back(float(vals[std::size_t(ix[3])]), float(vals[std::size_t(ix[4])]), float(vals[std::size_t(ix[5])]));
+                    m.normals.emplace_back(float(vals[std::size_t(ix[3])]), float(vals[std::size_t(ix[4])]),
+                                           float(vals[std::size_t(ix[5])]));
                 if (colors) {
                     auto c = [&](int k) { return std::uint8_t(std::clamp(vals[std::size_t(ix[k])], 0.0, 255.0)); };
                     m.colors.emplace_back(c(6), c(7), c(8), ix[9] >= 0 ? c(9) : std::uint8_t(255));
@@ -350,7 +383,8 @@ Mesh parse_obj(const std::string& path, std::string& space) {
                             std::int64_t v = 0;
                             auto [ptr, ec] = std::from_chars(tok.data() + start, tok.data() + i, v);
                             if (ec != std::errc() || ptr != tok.data() + i)
-                                throw Error(path, "line " + std::to_string(lineno) + ": malformed face index '" + tok + "'");
+                                throw Error(path,
+                                            "line " + std::to_string(lineno) + ": malformed face index '" + tok + "'");
                             idx[field] = v;
                         }
                         ++field;
@@ -360,7 +394,8 @@ Mesh parse_obj(const std::string& path, std::string& space) {
                 auto resolve = [&](std::int64_t i, std::size_t n) -> std::int64_t {
                     if (i > 0 && std::uint64_t(i) <= n) return i - 1;
                     if (i < 0 && std::uint64_t(-i) <= n) return std::int64_t(n) + i;
-                    throw Error(path, "line " + std::to_string(lineno) + ": face refers to a vertex that does not exist");
+                    throw Error(path,
+                                "line " + std::to_string(lineno) + ": face refers to a vertex that does not exist");
                 };
                 fv.push_back(resolve(idx[0], m.positions.size()));
                 if (idx[2] != 0) {
@@ -370,7 +405,8 @@ Mesh parse_obj(const std::string& path, std::string& space) {
                     fn.push_back(-1);
                 }
             }
-            if (fv.size() < 3) throw Error(path, "line " + std::to_string(lineno) + ": a face needs at least three vertices");
+            if (fv.size() < 3)
+                throw Error(path, "line " + std::to_string(lineno) + ": a face needs at least three vertices");
             for (std::size_t k = 0; k < fv.size(); ++k)
                 if (fn[k] != fv[k]) normals_match = false;
             for (std::size_t k = 2; k < fv.size(); ++k)
@@ -379,7 +415,8 @@ Mesh parse_obj(const std::string& path, std::string& space) {
     }
     if (m.positions.empty()) throw Error(path, "OBJ file has no vertices");
     // Per-vertex normals only when every face uses vertex i's normal i (as we write them).
-    if (any_vn_ref && normals_match && vn.size() >= m.positions.size()) m.normals.assign(vn.begin(), vn.begin() + std::ptrdiff_t(m.positions.size()));
+    if (any_vn_ref && normals_match && vn.size() >= m.positions.size())
+        m.normals.assign(vn.begin(), vn.begin() + std::ptrdiff_t(m.positions.size()));
     return m;
 }
 

@@ -40,7 +40,8 @@ namespace fs = std::filesystem;
 
 std::size_t MeshPiece::memory_bytes() const {
     return mesh.positions.capacity() * sizeof(glm::vec3) + mesh.normals.capacity() * sizeof(glm::vec3) +
-           mesh.triangles.capacity() * sizeof(mesh.triangles[0]) + (lower.capacity() + upper.capacity()) * sizeof(lower[0]);
+           mesh.triangles.capacity() * sizeof(mesh.triangles[0]) +
+           (lower.capacity() + upper.capacity()) * sizeof(lower[0]);
 }
 
 namespace {
@@ -79,7 +80,10 @@ struct SurfaceState {
                 if (vertices >= 0xFFFFFFFFull) throw Error("streaming", "the surface has more than 4 billion vertices");
                 id[v] = std::uint32_t(vertices++);
                 const glm::dvec3 q(p.mesh.positions[v]);
-                if (!any) { lo = hi = q; any = true; }
+                if (!any) {
+                    lo = hi = q;
+                    any = true;
+                }
                 lo = glm::min(lo, q);
                 hi = glm::max(hi, q);
             }
@@ -92,7 +96,8 @@ struct SurfaceState {
             have_c0 = true;
         }
         for (const auto& t : p.mesh.triangles) {
-            const TriangleTerms tt = triangle_terms(c0, p.mesh.positions[t[0]], p.mesh.positions[t[1]], p.mesh.positions[t[2]]);
+            const TriangleTerms tt =
+                triangle_terms(c0, p.mesh.positions[t[0]], p.mesh.positions[t[1]], p.mesh.positions[t[2]]);
             area += tt.area;
             det_sum += tt.det;
             w += tt.moment;
@@ -110,7 +115,9 @@ struct SurfaceState {
         s.volume = volume_moved(det_sum / 6.0, w, c0, 0.5 * (lo + hi));
         return s;
     }
-    std::size_t bytes() const { return seam.size() * (sizeof(std::uint64_t) + sizeof(std::uint32_t) + 2 * sizeof(void*)); }
+    std::size_t bytes() const {
+        return seam.size() * (sizeof(std::uint64_t) + sizeof(std::uint32_t) + 2 * sizeof(void*));
+    }
 };
 
 class SinkBase : public MeshSink {
@@ -206,7 +213,8 @@ void write_vtp_piece(const Mesh& m, bool normals, const std::string& file, const
     // faster to write and read; what ParaView's own writers do.
     w->EncodeAppendedDataOff();
     if (!w->Write() || msgs->has_error())
-        throw Error(file, "cannot write " + what + ": " + (msgs->has_error() ? msgs->first_error() : "VTK writer failed"));
+        throw Error(file,
+                    "cannot write " + what + ": " + (msgs->has_error() ? msgs->first_error() : "VTK writer failed"));
 }
 
 std::string write_pvtp_summary(const fs::path& scratch, const std::string& stem, std::size_t pieces, bool normals,
@@ -276,7 +284,8 @@ public:
             if (pieces_ > 0) write(s, pieces_ - 1, Mesh{}, written_[s] == pieces_); // trailing empty pieces
             const fs::path dest(paths_[s]);
             const std::string stem = dest.stem().string();
-            const std::string file = write_pvtp_summary(dirs_[s] / "summary", stem, pieces_, normals_, false, paths_[s]);
+            const std::string file =
+                write_pvtp_summary(dirs_[s] / "summary", stem, pieces_, normals_, false, paths_[s]);
             // Pieces first, the summary last.
             for (std::size_t i = 0; i < pieces_; ++i) {
                 const std::string name = stem + "_" + std::to_string(i) + ".vtp";
@@ -325,7 +334,8 @@ public:
     }
     // Appends everything written here to `out`.
     void copy_to(SpillFile& out) {
-        if (std::fflush(f_) != 0 || std::fseek(f_, 0, SEEK_SET) != 0) throw Error(path_, "cannot re-read the temporary file");
+        if (std::fflush(f_) != 0 || std::fseek(f_, 0, SEEK_SET) != 0)
+            throw Error(path_, "cannot re-read the temporary file");
         std::vector<char> buf(1 << 20);
         std::size_t n;
         while ((n = std::fread(buf.data(), 1, buf.size(), f_)) > 0) out.put(buf.data(), n);
@@ -423,7 +433,8 @@ public:
             auto& f = files_[s];
             const auto st = states_[s].stats();
             if (f.stl) {
-                if (st.triangles > 0xFFFFFFFFull) throw Error(paths_[s], "more than 4 billion triangles do not fit an STL file");
+                if (st.triangles > 0xFFFFFFFFull)
+                    throw Error(paths_[s], "more than 4 billion triangles do not fit an STL file");
                 const std::uint32_t n = std::uint32_t(st.triangles);
                 f.out.seek_put(80, &n, 4);
             } else {
@@ -433,9 +444,11 @@ public:
                 final_file.open(f.out.path() + ".ply");
                 std::string h = "ply\nformat binary_little_endian 1.0\ncomment SPACE=LPS\n"
                                 "comment written by isoscope; coordinates in millimetres\n";
-                h += "element vertex " + std::to_string(st.vertices) + "\nproperty float x\nproperty float y\nproperty float z\n";
+                h += "element vertex " + std::to_string(st.vertices) +
+                     "\nproperty float x\nproperty float y\nproperty float z\n";
                 if (f.vertex_bytes == 24) h += "property float nx\nproperty float ny\nproperty float nz\n";
-                h += "element face " + std::to_string(st.triangles) + "\nproperty list uchar int vertex_indices\nend_header\n";
+                h += "element face " + std::to_string(st.triangles) +
+                     "\nproperty list uchar int vertex_indices\nend_header\n";
                 final_file.put(h.data(), h.size());
                 f.out.copy_to(final_file);
                 f.faces.copy_to(final_file);
@@ -486,7 +499,9 @@ std::unique_ptr<MeshSink> make_mesh_sink(const std::vector<std::string>& paths) 
     if (e == ".pvtp") return std::make_unique<PvtpSink>(paths);
     if (e == ".ply" || e == ".stl") return std::make_unique<AssembledSink>(paths);
     if (e == ".vtp")
-        throw Error(paths[0], "a single .vtp cannot be written without holding the whole mesh: write .pvtp (pieces), .ply or .stl");
+        throw Error(
+            paths[0],
+            "a single .vtp cannot be written without holding the whole mesh: write .pvtp (pieces), .ply or .stl");
     throw Error(paths[0], "streamed output must be .pvtp, .ply or .stl");
 }
 

@@ -64,7 +64,7 @@ void write_vtp_piece(const Mesh& m, bool normals, const std::string& file, const
 // <stem>/ folder beside it with `subdirectory`) into the folder `scratch`
 // (created; VTK writes stand-in pieces there too) and returns its path, to be
 // renamed into place by the caller. Errors name `what`.
-std::string write_pvtp_summary(const std::filesystem::path& scratch, const std::string& stem, std::size_t pieces, bool normals,
-                               bool subdirectory, const std::string& what);
+std::string write_pvtp_summary(const std::filesystem::path& scratch, const std::string& stem, std::size_t pieces,
+                               bool normals, bool subdirectory, const std::string& what);
 
 } // namespace iso

@@ -75,13 +75,14 @@ std::vector<double> numbers(const std::string& path, const std::string& key, con
 
 VoxelType element_type(const std::string& path, const std::string& t) {
     static const std::map<std::string, VoxelType> types = {
-        {"MET_CHAR", VoxelType::I8},   {"MET_UCHAR", VoxelType::U8},   {"MET_SHORT", VoxelType::I16},
+        {"MET_CHAR", VoxelType::I8},    {"MET_UCHAR", VoxelType::U8},  {"MET_SHORT", VoxelType::I16},
         {"MET_USHORT", VoxelType::U16}, {"MET_INT", VoxelType::I32},   {"MET_UINT", VoxelType::U32},
-        {"MET_FLOAT", VoxelType::F32}, {"MET_DOUBLE", VoxelType::F64}};
+        {"MET_FLOAT", VoxelType::F32},  {"MET_DOUBLE", VoxelType::F64}};
     auto it = types.find(t);
     if (it == types.end())
-        throw Error(path, "unsupported ElementType '" + t + "' (supported: MET_CHAR, MET_UCHAR, MET_SHORT, MET_USHORT, "
-                                                           "MET_INT, MET_UINT, MET_FLOAT, MET_DOUBLE)");
+        throw Error(path, "unsupported ElementType '" + t +
+                              "' (supported: MET_CHAR, MET_UCHAR, MET_SHORT, MET_USHORT, "
+                              "MET_INT, MET_UINT, MET_FLOAT, MET_DOUBLE)");
     return it->second;
 }
 
@@ -108,7 +109,8 @@ VolumeHeader read_metaimage_header(const std::string& path) {
     const auto d = numbers(path, "DimSize", *dim_s, std::size_t(ndims));
     std::array<std::int64_t, 3> dims{1, 1, 1};
     for (int a = 0; a < ndims; ++a) {
-        if (!(d[std::size_t(a)] >= 1 && d[std::size_t(a)] < 9.2e18) || d[std::size_t(a)] != std::floor(d[std::size_t(a)]))
+        if (!(d[std::size_t(a)] >= 1 && d[std::size_t(a)] < 9.2e18) ||
+            d[std::size_t(a)] != std::floor(d[std::size_t(a)]))
             throw Error(path, "DimSize value " + std::to_string(d[std::size_t(a)]) + " is not a positive integer");
         dims[std::size_t(a)] = std::int64_t(d[std::size_t(a)]);
     }
@@ -136,7 +138,8 @@ VolumeHeader read_metaimage_header(const std::string& path) {
     }
     for (int a = 0; a < 3; ++a)
         if (!(spacing[a] > 0.0) || !std::isfinite(spacing[a]))
-            throw Error(path, std::string("spacing along ") + "ijk"[a] + " (ElementSpacing) is zero, negative or not a number");
+            throw Error(path, std::string("spacing along ") + "ijk"[a] +
+                                  " (ElementSpacing) is zero, negative or not a number");
     if (ndims == 2) dir[2] = glm::cross(dir[0], dir[1]);
     const glm::dmat4 affine = make_affine(spacing, origin, dir);
     check_affine(path, affine);
@@ -156,7 +159,8 @@ VolumeHeader read_metaimage_header(const std::string& path) {
         out.meta.modality = mod;
     }
     if (const auto* msb = get({"ElementByteOrderMSB", "BinaryDataByteOrderMSB"}))
-        out.swap_bytes = voxel_size(type) > 1 && (*msb == "True" || *msb == "true" || *msb == "TRUE") != (std::endian::native == std::endian::big);
+        out.swap_bytes = voxel_size(type) > 1 && (*msb == "True" || *msb == "true" || *msb == "TRUE") !=
+                                                     (std::endian::native == std::endian::big);
     const std::string* data_file = get({"ElementDataFile"});
     const bool compressed = [&] {
         const auto* c = get({"CompressedData"});
@@ -167,8 +171,8 @@ VolumeHeader read_metaimage_header(const std::string& path) {
         if (const auto* hs = get({"HeaderSize"}); hs && std::atoll(hs->c_str()) > 0)
             throw Error(path, "HeaderSize with attached data is not supported");
         if (!compressed && available < bytes)
-            throw Error(path, "truncated: the header announces " + std::to_string(bytes) + " bytes of data, the file holds " +
-                                  std::to_string(available));
+            throw Error(path, "truncated: the header announces " + std::to_string(bytes) +
+                                  " bytes of data, the file holds " + std::to_string(available));
         out.data_file = path;
         out.data_offset = h.header_bytes;
     } else if (*data_file != "LIST" && data_file->find('%') == std::string::npos) {
@@ -210,7 +214,8 @@ Volume read_metaimage(const std::string& path) {
     if (!arr) throw Error(path, "no samples could be read (truncated or corrupt data)");
     int vd[3];
     img->GetDimensions(vd);
-    if (vd[0] != dims[0] || vd[1] != dims[1] || vd[2] != dims[2] || std::size_t(arr->GetNumberOfValues()) * voxel_size(type) != bytes ||
+    if (vd[0] != dims[0] || vd[1] != dims[1] || vd[2] != dims[2] ||
+        std::size_t(arr->GetNumberOfValues()) * voxel_size(type) != bytes ||
         arr->GetDataTypeSize() != int(voxel_size(type)))
         throw Error(path, "the data read does not match the header (truncated or corrupt compressed data?)");
     Volume v = Volume::dense(dims, type, affine);

@@ -19,7 +19,9 @@ namespace fs = std::filesystem;
 
 namespace {
 
-struct NimDeleter { void operator()(nifti_image* n) const { nifti_image_free(n); } };
+struct NimDeleter {
+    void operator()(nifti_image* n) const { nifti_image_free(n); }
+};
 using NimPtr = std::unique_ptr<nifti_image, NimDeleter>;
 
 VoxelType voxel_type(const std::string& path, int dt) {
@@ -35,7 +37,8 @@ VoxelType voxel_type(const std::string& path, int dt) {
     default: break;
     }
     const char* name = nifti_datatype_string(dt);
-    throw Error(path, std::string("unsupported voxel type ") + (name ? name : "?") + " (datatype " + std::to_string(dt) +
+    throw Error(path, std::string("unsupported voxel type ") + (name ? name : "?") + " (datatype " +
+                          std::to_string(dt) +
                           "); supported: int8, uint8, int16, uint16, int32, uint32, float32, float64");
 }
 
@@ -97,7 +100,8 @@ NimPtr read_nim_header(const std::string& path) {
 }
 
 VolumeHeader header_of(const std::string& path, const nifti_image* nim) {
-    if (nim->dim[0] < 2 || nim->dim[0] > 7) throw Error(path, "dim[0] = " + std::to_string(nim->dim[0]) + " is invalid");
+    if (nim->dim[0] < 2 || nim->dim[0] > 7)
+        throw Error(path, "dim[0] = " + std::to_string(nim->dim[0]) + " is invalid");
     for (int a = 4; a <= nim->dim[0]; ++a)
         if (nim->dim[a] > 1)
             throw Error(path, "has " + std::to_string(nim->dim[a]) + " samples along dimension " + std::to_string(a) +
@@ -116,7 +120,8 @@ VolumeHeader header_of(const std::string& path, const nifti_image* nim) {
         ras = from_mat44(nim->qto_xyz);
     } else {
         for (int a = 0; a < 3; ++a) ras[a][a] = nim->pixdim[a + 1] > 0 ? nim->pixdim[a + 1] : 1.0;
-        h.meta.warnings.push_back("no sform or qform (both codes 0): orientation unknown, pixdim spacing on RAS axes assumed");
+        h.meta.warnings.push_back(
+            "no sform or qform (both codes 0): orientation unknown, pixdim spacing on RAS axes assumed");
     }
     h.index_to_lps = ras_to_lps(ras);
     check_affine(path, h.index_to_lps);
@@ -133,8 +138,9 @@ VolumeHeader header_of(const std::string& path, const nifti_image* nim) {
         const auto isize = fs::file_size(h.data_file, ec);
         if (ec) throw Error(path, "data file '" + h.data_file + "' does not exist");
         if (isize < std::uintmax_t(nim->iname_offset) + bytes)
-            throw Error(path, "truncated: the header announces " + std::to_string(bytes) + " bytes of data after offset " +
-                                  std::to_string(nim->iname_offset) + ", the file has " + std::to_string(isize) + " bytes");
+            throw Error(path, "truncated: the header announces " + std::to_string(bytes) +
+                                  " bytes of data after offset " + std::to_string(nim->iname_offset) +
+                                  ", the file has " + std::to_string(isize) + " bytes");
     }
 
     h.slope = nim->scl_slope;
@@ -158,10 +164,13 @@ VolumeHeader header_of(const std::string& path, const nifti_image* nim) {
                 const double b = double(std::numeric_limits<T>::max()) * h.slope + h.inter;
                 const double lo = std::min(a, b), hi = std::max(a, b);
                 auto fits = [&](double l, double u) { return lo >= l && hi <= u; };
-                if (fits(double(std::numeric_limits<T>::lowest()), double(std::numeric_limits<T>::max()))) h.type = h.stored;
-                else if (fits(double(std::numeric_limits<std::int32_t>::lowest()), double(std::numeric_limits<std::int32_t>::max())))
+                if (fits(double(std::numeric_limits<T>::lowest()), double(std::numeric_limits<T>::max())))
+                    h.type = h.stored;
+                else if (fits(double(std::numeric_limits<std::int32_t>::lowest()),
+                              double(std::numeric_limits<std::int32_t>::max())))
                     h.type = VoxelType::I32;
-                else h.type = VoxelType::F64;
+                else
+                    h.type = VoxelType::F64;
                 return 0;
             });
         }
@@ -197,10 +206,12 @@ Volume read_nifti(const std::string& path) {
         const char* msg = gzerror(gz, &err);
         const bool bad = n < 0 || (err != Z_OK && err != Z_BUF_ERROR);
         const std::string why = msg ? msg : "";
-        if (gzclose_r(gz) != Z_OK || bad) throw Error(path, "corrupt or truncated gzip data" + (why.empty() ? "" : " (" + why + ")"));
+        if (gzclose_r(gz) != Z_OK || bad)
+            throw Error(path, "corrupt or truncated gzip data" + (why.empty() ? "" : " (" + why + ")"));
         if (total < std::uintmax_t(nim->iname_offset) + bytes)
             throw Error(path, "truncated: " + std::to_string(bytes) + " bytes of data expected after offset " +
-                                  std::to_string(nim->iname_offset) + ", the decompressed file has " + std::to_string(total));
+                                  std::to_string(nim->iname_offset) + ", the decompressed file has " +
+                                  std::to_string(total));
     }
     if (nifti_image_load(nim.get()) != 0 || !nim->data)
         throw Error(path, "cannot read the data (truncated or corrupt file)");
@@ -262,7 +273,8 @@ void write_nifti(const Volume& v, const std::string& path) {
                            &nim->qoffset_y, &nim->qoffset_z, nullptr, nullptr, nullptr, &nim->qfac);
     nim->xyz_units = NIFTI_UNITS_MM;
     std::strncpy(nim->descrip, "isoscope", sizeof nim->descrip - 1);
-    if (nifti_set_filenames(nim.get(), path.c_str(), 0, 1) != 0) throw Error(path, "not a NIfTI file name (.nii or .nii.gz)");
+    if (nifti_set_filenames(nim.get(), path.c_str(), 0, 1) != 0)
+        throw Error(path, "not a NIfTI file name (.nii or .nii.gz)");
     nim->nifti_type = NIFTI_FTYPE_NIFTI1_1;
     // nifti_image_free() frees `data`: give it a copy it may own.
     nim->data = std::malloc(v.bytes().size());
@@ -270,7 +282,8 @@ void write_nifti(const Volume& v, const std::string& path) {
     std::memcpy(nim->data, v.bytes().data(), v.bytes().size());
     nifti_image_write(nim.get()); // reports failure only on stderr: check the result
     std::error_code ec;
-    if (!fs::is_regular_file(path, ec) || fs::file_size(path, ec) < 348) throw Error(path, "writing the NIfTI file failed");
+    if (!fs::is_regular_file(path, ec) || fs::file_size(path, ec) < 348)
+        throw Error(path, "writing the NIfTI file failed");
 }
 
 } // namespace iso

@@ -15,10 +15,16 @@ namespace iso {
 
 namespace {
 
-struct NrrdDeleter { void operator()(Nrrd* n) const { nrrdNuke(n); } };
+struct NrrdDeleter {
+    void operator()(Nrrd* n) const { nrrdNuke(n); }
+};
 // For a nrrd that wraps memory it does not own: frees the struct, not the data.
-struct NrrdWrapDeleter { void operator()(Nrrd* n) const { nrrdNix(n); } };
-struct NioDeleter { void operator()(NrrdIoState* n) const { nrrdIoStateNix(n); } };
+struct NrrdWrapDeleter {
+    void operator()(Nrrd* n) const { nrrdNix(n); }
+};
+struct NioDeleter {
+    void operator()(NrrdIoState* n) const { nrrdIoStateNix(n); }
+};
 using NrrdPtr = std::unique_ptr<Nrrd, NrrdDeleter>;
 using NioPtr = std::unique_ptr<NrrdIoState, NioDeleter>;
 
@@ -170,9 +176,9 @@ VolumeHeader read_nrrd_header(const std::string& path) {
 
     // Where the samples are, for streaming: one data file (or the header's
     // own), raw or gzip, no line skips.
-    h.encoding = nio->encoding == nrrdEncodingRaw ? DataEncoding::Raw
+    h.encoding = nio->encoding == nrrdEncodingRaw    ? DataEncoding::Raw
                  : nio->encoding == nrrdEncodingGzip ? DataEncoding::Gzip
-                                                       : DataEncoding::Other;
+                                                     : DataEncoding::Other;
     h.swap_bytes = voxel_size(h.stored) > 1 && nio->endian != airEndianUnknown && nio->endian != airMyEndian();
     const unsigned files = nio->dataFNArr ? nio->dataFNArr->len : 0;
     if (files > 1 || nio->lineSkip > 0 || (nio->dataFSkip != nullptr)) {
@@ -190,7 +196,8 @@ VolumeHeader read_nrrd_header(const std::string& path) {
         std::error_code ec;
         const auto size = std::filesystem::file_size(h.data_file, ec);
         if (ec) throw Error(path, "data file '" + h.data_file + "' cannot be read: " + ec.message());
-        if (nio->byteSkip == -1) h.data_offset = size >= h.stored_bytes() ? size - h.stored_bytes() : 0; // "byte skip: -1": data at the end
+        if (nio->byteSkip == -1)
+            h.data_offset = size >= h.stored_bytes() ? size - h.stored_bytes() : 0; // "byte skip: -1": data at the end
         if (size < h.data_offset + h.stored_bytes())
             throw Error(path, "truncated: the header announces " + std::to_string(h.stored_bytes()) + " bytes of data" +
                                   (h.data_file != path ? " in '" + h.data_file + "'" : "") + " after offset " +
@@ -253,7 +260,8 @@ void write_nrrd(const Volume& v, const std::string& path, bool compress) {
         try {
             save((dir / dest.filename()).string());
             for (const auto& e : fs::directory_iterator(dir))
-                if (e.path().filename() != dest.filename()) fs::rename(e.path(), dest.parent_path() / e.path().filename());
+                if (e.path().filename() != dest.filename())
+                    fs::rename(e.path(), dest.parent_path() / e.path().filename());
             fs::rename(dir / dest.filename(), dest);
         } catch (...) {
             std::error_code ec;

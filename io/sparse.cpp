@@ -17,8 +17,14 @@ ValueRange sparse_value_range(const SparseGrid& g) {
     ValueRange r;
     double lo = std::numeric_limits<double>::max(), hi = std::numeric_limits<double>::lowest();
     auto visit = [&](float x) {
-        if (std::isnan(x)) { ++r.nan_count; return; }
-        if (std::isinf(x)) { ++r.inf_count; return; }
+        if (std::isnan(x)) {
+            ++r.nan_count;
+            return;
+        }
+        if (std::isinf(x)) {
+            ++r.inf_count;
+            return;
+        }
         lo = std::min(lo, double(x));
         hi = std::max(hi, double(x));
     };
@@ -26,7 +32,10 @@ ValueRange sparse_value_range(const SparseGrid& g) {
     // plus the background, which every inactive voxel takes.
     for (auto it = g.grid->cbeginValueOn(); it; ++it) visit(*it);
     visit(g.grid->background());
-    if (lo <= hi) { r.min = lo; r.max = hi; }
+    if (lo <= hi) {
+        r.min = lo;
+        r.max = hi;
+    }
     return r;
 }
 

@@ -106,14 +106,17 @@ std::string first_float_grid(openvdb::io::File& in, std::string& others) {
         else
             others += (others.empty() ? "" : ", ") + it.gridName() + " (" + meta->valueType() + ")";
     }
-    if (found.empty()) throw std::runtime_error("no float grid in the file" + (others.empty() ? std::string() : " (grids: " + others + ")"));
+    if (found.empty())
+        throw std::runtime_error("no float grid in the file" +
+                                 (others.empty() ? std::string() : " (grids: " + others + ")"));
     return found;
 }
 
 openvdb::FloatGrid::Ptr read_float_grid(openvdb::io::File& in, const std::string& name) {
     auto grid = openvdb::gridPtrCast<openvdb::FloatGrid>(in.readGrid(name));
     if (!grid) throw std::runtime_error("grid '" + name + "' is not a float grid");
-    if (!grid->transform().isLinear()) throw std::runtime_error("grid '" + name + "' has a non-linear transform (frustum): unsupported");
+    if (!grid->transform().isLinear())
+        throw std::runtime_error("grid '" + name + "' has a non-linear transform (frustum): unsupported");
     return grid;
 }
 
@@ -186,7 +189,8 @@ int child_main(int argc, char** argv) {
             const std::string name = first_float_grid(in, others);
             const auto grid = read_float_grid(in, name);
             const std::uint64_t topology = grid->memUsage();
-            const std::uint64_t values = std::uint64_t(grid->tree().leafCount()) * openvdb::FloatTree::LeafNodeType::SIZE * sizeof(float);
+            const std::uint64_t values =
+                std::uint64_t(grid->tree().leafCount()) * openvdb::FloatTree::LeafNodeType::SIZE * sizeof(float);
             const openvdb::CoordBBox box = grid->evalActiveVoxelBoundingBox();
             const openvdb::Mat4d m = grid->transform().baseMap()->getAffineMap()->getMat4();
             std::ostringstream o;
@@ -247,7 +251,8 @@ __attribute__((constructor)) void child_entry(int argc, char** argv, char**) {
 // (kOutFd, kStatusFd), close-on-exec.
 void make_pipe(int fds[2], const std::string& path) {
     int p[2];
-    if (::pipe2(p, O_CLOEXEC) != 0) throw Error(path, std::string("cannot start the VDB reader process: ") + std::strerror(errno));
+    if (::pipe2(p, O_CLOEXEC) != 0)
+        throw Error(path, std::string("cannot start the VDB reader process: ") + std::strerror(errno));
     for (int e = 0; e < 2; ++e) {
         fds[e] = ::fcntl(p[e], F_DUPFD_CLOEXEC, 10);
         ::close(p[e]);
@@ -320,9 +325,12 @@ std::string run_reader(const std::string& path, std::vector<std::string> args, s
         const std::string mib = std::to_string((cap >> 20) + 1);
         const std::string add = "allocator_may_return_null=1:max_allocation_size_mb=" + mib +
                                 ":hard_rss_limit_mb=" + std::to_string((cap >> 20) + 2048);
-        auto it = std::find_if(env_s.begin(), env_s.end(), [](const std::string& e) { return e.rfind("ASAN_OPTIONS=", 0) == 0; });
-        if (it == env_s.end()) env_s.push_back("ASAN_OPTIONS=" + add);
-        else *it += (it->size() > 13 ? ":" : "") + add;
+        auto it = std::find_if(env_s.begin(), env_s.end(),
+                               [](const std::string& e) { return e.rfind("ASAN_OPTIONS=", 0) == 0; });
+        if (it == env_s.end())
+            env_s.push_back("ASAN_OPTIONS=" + add);
+        else
+            *it += (it->size() > 13 ? ":" : "") + add;
     }
 #endif
     std::vector<char*> envp;
@@ -352,8 +360,7 @@ std::string run_reader(const std::string& path, std::vector<std::string> args, s
     std::string msg = read_all(status[0]);
     ::close(status[0]);
     int st = 0;
-    while (::waitpid(pid, &st, 0) < 0 && errno == EINTR) {
-    }
+    while (::waitpid(pid, &st, 0) < 0 && errno == EINTR) {}
     if (WIFEXITED(st) && WEXITSTATUS(st) == 0 && consume_error.empty()) {
         if (msg.rfind("ok", 0) != 0) throw Error(path, "the VDB reader process gave no result");
         return msg.substr(std::min<std::size_t>(msg.size(), 3));
@@ -364,8 +371,10 @@ std::string run_reader(const std::string& path, std::vector<std::string> args, s
                                   " MiB allowed to it (corrupt file? ISOSCOPE_VDB_READ_MEMORY sets the limit in MiB)");
         throw Error(path, msg);
     }
-    if (WIFSIGNALED(st) && WTERMSIG(st) == SIGALRM) throw Error(path, "OpenVDB did not finish reading the file in time (corrupt?)");
-    if (WIFEXITED(st) && WEXITSTATUS(st) == 0) throw Error(path, "cannot take the grid from the VDB reader process: " + consume_error);
+    if (WIFSIGNALED(st) && WTERMSIG(st) == SIGALRM)
+        throw Error(path, "OpenVDB did not finish reading the file in time (corrupt?)");
+    if (WIFEXITED(st) && WEXITSTATUS(st) == 0)
+        throw Error(path, "cannot take the grid from the VDB reader process: " + consume_error);
     throw Error(path, "OpenVDB's reader failed on this file (corrupt or truncated?)");
 }
 
@@ -400,7 +409,8 @@ Volume read_vdb(const std::string& path) {
     init_openvdb();
     check_file(path);
     openvdb::FloatGrid::Ptr grid;
-    const std::string others = run_reader(path, {"whole", path}, default_reader_cap(), [&](std::istream& is) { grid = receive_grid(is); });
+    const std::string others =
+        run_reader(path, {"whole", path}, default_reader_cap(), [&](std::istream& is) { grid = receive_grid(is); });
     const openvdb::CoordBBox bbox = grid->evalActiveVoxelBoundingBox();
     std::array<std::int64_t, 3> dims{1, 1, 1}, offset{0, 0, 0};
     if (!bbox.empty()) {
@@ -426,7 +436,8 @@ VdbHeader read_vdb_header(const std::string& path) {
     init_openvdb();
     check_file(path);
     std::string text;
-    run_reader(path, {"header", path}, default_reader_cap(), [&](std::istream& is) { text.assign(std::istreambuf_iterator<char>(is), {}); });
+    run_reader(path, {"header", path}, default_reader_cap(),
+               [&](std::istream& is) { text.assign(std::istreambuf_iterator<char>(is), {}); });
     VdbHeader h;
     std::istringstream in(text);
     std::string others;
@@ -483,7 +494,8 @@ Volume read_vdb_slab(const VdbHeader& h, std::int64_t k0, std::int64_t k1, std::
     // The child holds the topology (twice, for a moment, while clipping) and
     // the leaves meeting the box (leaves are 8^3: up to 7 voxels beyond each
     // face; kLeafBytesPerVoxel), once more while it writes them out.
-    const double leaves = double(hi[0] - lo[0] + 16) * double(hi[1] - lo[1] + 16) * double(hi[2] - lo[2] + 16) * kLeafBytesPerVoxel;
+    const double leaves =
+        double(hi[0] - lo[0] + 16) * double(hi[1] - lo[1] + 16) * double(hi[2] - lo[2] + 16) * kLeafBytesPerVoxel;
     const std::size_t cap = std::size_t(2 * double(h.topology_bytes) + 2 * leaves) + (std::size_t(256) << 20);
     const std::string status = run_reader(vh.path, args, cap, [&](std::istream& is) { grid = receive_grid(is); });
     if (child_peak) *child_peak = std::size_t(std::strtoull(status.c_str(), nullptr, 10));
@@ -517,8 +529,9 @@ void write_vdb(const Volume& v, const std::string& path) {
                 }
     }
     // Index space of the grid: ours shifted by `offset`.
-    const glm::dmat4 m = v.index_to_lps * glm::dmat4(glm::dvec4(1, 0, 0, 0), glm::dvec4(0, 1, 0, 0), glm::dvec4(0, 0, 1, 0),
-                                                     glm::dvec4(-offset.x(), -offset.y(), -offset.z(), 1));
+    const glm::dmat4 m =
+        v.index_to_lps * glm::dmat4(glm::dvec4(1, 0, 0, 0), glm::dvec4(0, 1, 0, 0), glm::dvec4(0, 0, 1, 0),
+                                    glm::dvec4(-offset.x(), -offset.y(), -offset.z(), 1));
     openvdb::Mat4d vm;
     for (int r = 0; r < 4; ++r)
         for (int c = 0; c < 4; ++c) vm(c, r) = m[c][r];

@@ -52,7 +52,10 @@ std::size_t max_volume_bytes() {
 std::string human_bytes(double b) {
     const char* unit[] = {"B", "KiB", "MiB", "GiB", "TiB", "PiB", "EiB"};
     int u = 0;
-    while (b >= 1024.0 && u < 6) { b /= 1024.0; ++u; }
+    while (b >= 1024.0 && u < 6) {
+        b /= 1024.0;
+        ++u;
+    }
     std::ostringstream os;
     os.precision(3);
     os << b << ' ' << unit[u];
@@ -60,27 +63,26 @@ std::string human_bytes(double b) {
 }
 } // namespace
 
-std::size_t checked_byte_size(const std::string& file, std::array<std::int64_t, 3> dims,
-                              VoxelType type) {
+std::size_t checked_byte_size(const std::string& file, std::array<std::int64_t, 3> dims, VoxelType type) {
     for (int a = 0; a < 3; ++a)
         if (dims[a] <= 0)
-            throw Error(file, "dimension " + std::to_string(a) + " is " + std::to_string(dims[a]) +
-                                  " (must be positive)");
+            throw Error(file,
+                        "dimension " + std::to_string(a) + " is " + std::to_string(dims[a]) + " (must be positive)");
     // Multiply in unsigned 128 bits so a product that overflows 64 bits is
     // reported as such rather than wrapping.
     unsigned __int128 n = 1;
     for (auto d : dims) n *= static_cast<unsigned __int128>(d);
     n *= voxel_size(type);
     if (n > std::numeric_limits<std::size_t>::max() / 2)
-        throw Error(file, "dimensions " + std::to_string(dims[0]) + " x " + std::to_string(dims[1]) +
-                              " x " + std::to_string(dims[2]) + " overflow the addressable size");
+        throw Error(file, "dimensions " + std::to_string(dims[0]) + " x " + std::to_string(dims[1]) + " x " +
+                              std::to_string(dims[2]) + " overflow the addressable size");
     const auto bytes = static_cast<std::size_t>(n);
     const auto limit = max_volume_bytes();
     if (bytes > limit)
-        throw Error(file, "volume of " + std::to_string(dims[0]) + " x " + std::to_string(dims[1]) +
-                              " x " + std::to_string(dims[2]) + " " + voxel_type_name(type) +
-                              " needs " + human_bytes(double(bytes)) + ", more than the " +
-                              human_bytes(double(limit)) + " allowed on this machine");
+        throw Error(file, "volume of " + std::to_string(dims[0]) + " x " + std::to_string(dims[1]) + " x " +
+                              std::to_string(dims[2]) + " " + voxel_type_name(type) + " needs " +
+                              human_bytes(double(bytes)) + ", more than the " + human_bytes(double(limit)) +
+                              " allowed on this machine");
     return bytes;
 }
 
@@ -92,8 +94,7 @@ void check_affine(const std::string& file, const glm::dmat4& m, bool allow_shear
     const char* axis = "ijk";
     for (int a = 0; a < 3; ++a) {
         double len = glm::length(col[a]);
-        if (!(len > 0.0))
-            throw Error(file, std::string("spacing along ") + axis[a] + " is zero or negative");
+        if (!(len > 0.0)) throw Error(file, std::string("spacing along ") + axis[a] + " is zero or negative");
     }
     const double det = glm::determinant(glm::dmat3(col[0], col[1], col[2]));
     if (!(std::abs(det) > 0.0)) throw Error(file, "direction cosines are degenerate (zero determinant)");
@@ -103,8 +104,8 @@ void check_affine(const std::string& file, const glm::dmat4& m, bool allow_shear
             double c = glm::dot(col[a], col[b]) / (glm::length(col[a]) * glm::length(col[b]));
             if (std::abs(c) > 1e-4) {
                 std::ostringstream os;
-                os << "direction cosines are not orthogonal (axes " << axis[a] << " and " << axis[b]
-                   << " at " << std::acos(std::clamp(c, -1.0, 1.0)) * 180.0 / M_PI << " degrees)";
+                os << "direction cosines are not orthogonal (axes " << axis[a] << " and " << axis[b] << " at "
+                   << std::acos(std::clamp(c, -1.0, 1.0)) * 180.0 / M_PI << " degrees)";
                 throw Error(file, os.str());
             }
         }
@@ -166,14 +167,23 @@ ValueRange Volume::value_range() const {
         T lo = std::numeric_limits<T>::max(), hi = std::numeric_limits<T>::lowest();
         for (T x : s) {
             if constexpr (std::is_floating_point_v<T>) {
-                if (std::isnan(x)) { ++r.nan_count; continue; }
-                if (std::isinf(x)) { ++r.inf_count; continue; }
+                if (std::isnan(x)) {
+                    ++r.nan_count;
+                    continue;
+                }
+                if (std::isinf(x)) {
+                    ++r.inf_count;
+                    continue;
+                }
             }
             lo = x < lo ? x : lo;
             hi = x > hi ? x : hi;
             any = true;
         }
-        if (any) { r.min = double(lo); r.max = double(hi); }
+        if (any) {
+            r.min = double(lo);
+            r.max = double(hi);
+        }
         return 0;
     });
     return r;

@@ -57,10 +57,10 @@ template <class F> decltype(auto) dispatch_voxel_type(VoxelType t, F&& f) {
 
 // One DICOM series found in a folder (listed by `isoscope info`).
 struct SeriesInfo {
-    std::string uid;          // SeriesInstanceUID (plus a suffix when split)
-    std::string description;  // SeriesDescription
+    std::string uid;         // SeriesInstanceUID (plus a suffix when split)
+    std::string description; // SeriesDescription
     std::string modality;
-    int number = 0;           // SeriesNumber
+    int number = 0; // SeriesNumber
     std::array<int, 3> dims{0, 0, 0};
     std::size_t files = 0;
     // What loading it would warn about, from the headers alone (missing
@@ -70,12 +70,12 @@ struct SeriesInfo {
 };
 
 struct Metadata {
-    std::string source;        // file or folder it was read from
-    std::string format;        // "DICOM", "NIfTI", "NRRD", "MetaImage", "VTI", "OpenVDB"
-    std::string modality;      // "CT", "MR", ... when the format says
+    std::string source;   // file or folder it was read from
+    std::string format;   // "DICOM", "NIfTI", "NRRD", "MetaImage", "VTI", "OpenVDB"
+    std::string modality; // "CT", "MR", ... when the format says
     std::string patient_name, patient_id, study_uid, series_uid, series_description;
-    std::vector<SeriesInfo> series;   // every series in a DICOM folder
-    int selected_series = -1;         // index into `series` that was loaded
+    std::vector<SeriesInfo> series;    // every series in a DICOM folder
+    int selected_series = -1;          // index into `series` that was loaded
     std::vector<std::string> warnings; // non-fatal findings (NaN counts, gaps, tilt, ...)
 };
 
@@ -92,8 +92,7 @@ public:
 
     // Dense volume of the given type, zero-filled. Throws iso::Error when the
     // size overflows or cannot be allocated.
-    static Volume dense(std::array<std::int64_t, 3> dims, VoxelType type,
-                        const glm::dmat4& index_to_lps);
+    static Volume dense(std::array<std::int64_t, 3> dims, VoxelType type, const glm::dmat4& index_to_lps);
     static Volume sparse(std::shared_ptr<const SparseGrid> grid, std::array<std::int64_t, 3> dims,
                          const glm::dmat4& index_to_lps);
 
@@ -110,9 +109,7 @@ public:
     // Dense storage; precondition: !is_sparse().
     std::span<std::byte> bytes() { return {data_.get(), byte_size_}; }
     std::span<const std::byte> bytes() const { return {data_.get(), byte_size_}; }
-    template <class T> std::span<T> as() {
-        return {reinterpret_cast<T*>(data_.get()), byte_size_ / sizeof(T)};
-    }
+    template <class T> std::span<T> as() { return {reinterpret_cast<T*>(data_.get()), byte_size_ / sizeof(T)}; }
     template <class T> std::span<const T> as() const {
         return {reinterpret_cast<const T*>(data_.get()), byte_size_ / sizeof(T)};
     }
@@ -131,7 +128,9 @@ public:
     ValueRange value_range() const;
 
 private:
-    struct FreeDeleter { void operator()(std::byte* p) const; };
+    struct FreeDeleter {
+        void operator()(std::byte* p) const;
+    };
     std::unique_ptr<std::byte[], FreeDeleter> data_;
     std::size_t byte_size_ = 0;
     std::shared_ptr<const SparseGrid> sparse_;
@@ -141,10 +140,8 @@ private:
 // naming `file`: non-positive or overflowing dimensions, a byte size beyond
 // `max_bytes`, zero/negative/non-finite spacing, non-orthogonal or degenerate
 // direction cosines (tolerance: |cos| <= 1e-4 between columns).
-std::size_t checked_byte_size(const std::string& file, std::array<std::int64_t, 3> dims,
-                              VoxelType type);
-void check_affine(const std::string& file, const glm::dmat4& index_to_lps,
-                  bool allow_shear = false);
+std::size_t checked_byte_size(const std::string& file, std::array<std::int64_t, 3> dims, VoxelType type);
+void check_affine(const std::string& file, const glm::dmat4& index_to_lps, bool allow_shear = false);
 
 // Scans for NaN/Inf in floating-point volumes and appends a warning with the counts.
 void warn_non_finite(Volume& v);

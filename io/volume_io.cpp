@@ -50,22 +50,22 @@ Volume load_volume(const std::string& path, const LoadOptions& opt) {
     VolumeFormat f = volume_format_of(path);
     Volume v;
     try {
-    switch (f) {
-    case VolumeFormat::Dicom: v = read_dicom({path}, opt); break;
-    case VolumeFormat::Nifti: v = read_nifti(path); break;
-    case VolumeFormat::Nrrd: v = read_nrrd(path); break;
-    case VolumeFormat::MetaImage: v = read_metaimage(path); break;
-    case VolumeFormat::Vti: v = read_vti(path); break;
-    case VolumeFormat::Vdb: v = read_vdb(path); break;
-    case VolumeFormat::Unknown:
-        // Extension-less files are common for DICOM; let the DICOM reader decide.
-        if (fs::is_regular_file(path, ec) && fs::path(path).extension().empty()) {
-            v = read_dicom({path}, opt);
-            break;
+        switch (f) {
+        case VolumeFormat::Dicom: v = read_dicom({path}, opt); break;
+        case VolumeFormat::Nifti: v = read_nifti(path); break;
+        case VolumeFormat::Nrrd: v = read_nrrd(path); break;
+        case VolumeFormat::MetaImage: v = read_metaimage(path); break;
+        case VolumeFormat::Vti: v = read_vti(path); break;
+        case VolumeFormat::Vdb: v = read_vdb(path); break;
+        case VolumeFormat::Unknown:
+            // Extension-less files are common for DICOM; let the DICOM reader decide.
+            if (fs::is_regular_file(path, ec) && fs::path(path).extension().empty()) {
+                v = read_dicom({path}, opt);
+                break;
+            }
+            throw Error(path, "unsupported volume format (expected .nii, .nii.gz, .nrrd, .nhdr, .mha, .mhd, "
+                              ".vti, .vdb, or a DICOM file or folder)");
         }
-        throw Error(path, "unsupported volume format (expected .nii, .nii.gz, .nrrd, .nhdr, .mha, .mhd, "
-                          ".vti, .vdb, or a DICOM file or folder)");
-    }
     } catch (const std::bad_alloc&) {
         // Libraries (VTK's XML reader, OpenVDB) allocate what a header claims.
         throw Error(path, "not enough memory to read this file (a corrupt header announcing a huge size?)");
@@ -86,8 +86,9 @@ VolumeHeader read_volume_header(const std::string& path) {
     case VolumeFormat::Vdb: return read_vdb_header(path).header;
     default: break;
     }
-    throw Error(path, std::string("the header of a ") + volume_format_name(f) +
-                          " volume cannot be read without its samples (header-only reading: NIfTI, NRRD, MetaImage, OpenVDB)");
+    throw Error(
+        path, std::string("the header of a ") + volume_format_name(f) +
+                  " volume cannot be read without its samples (header-only reading: NIfTI, NRRD, MetaImage, OpenVDB)");
 }
 
 Volume load_dicom_files(const std::vector<std::string>& files, const LoadOptions& opt) {
@@ -102,7 +103,10 @@ void save_volume(const Volume& v, const std::string& path, bool compress) {
     case VolumeFormat::Nrrd:
         // A detached header (.nhdr) names its data file, so it cannot be written under a
         // temporary name; the writer handles .nhdr atomicity itself.
-        if (lower(fs::path(path).extension().string()) == ".nhdr") { write_nrrd(v, path, compress); return; }
+        if (lower(fs::path(path).extension().string()) == ".nhdr") {
+            write_nrrd(v, path, compress);
+            return;
+        }
         write_atomically(path, [&](const std::string& tmp) { write_nrrd(v, tmp, compress); });
         return;
     case VolumeFormat::Vdb: write_atomically(path, [&](const std::string& tmp) { write_vdb(v, tmp); }); return;

@@ -48,7 +48,7 @@ struct VolumeHeader {
     VoxelType stored = VoxelType::U8; // as in the file
     VoxelType type = VoxelType::U8;   // in memory, after rescale (see rescale)
     glm::dmat4 index_to_lps{1.0};
-    Metadata meta;                    // source, format, description, warnings
+    Metadata meta; // source, format, description, warnings
     // NIfTI scl_slope/scl_inter: samples are stored * slope + inter, converted to `type`.
     bool rescale = false;
     double slope = 1.0, inter = 0.0;
@@ -72,7 +72,8 @@ struct VolumeHeader {
     // Memory a slab of `slices` k-slices costs: its samples and the above.
     std::uint64_t slab_memory_bytes(std::int64_t slices) const {
         const std::uint64_t slice = std::uint64_t(dims[0] * dims[1]);
-        if (reader_bytes_per_voxel == 0.0 && reader_extra_slices == 0) return slice * std::uint64_t(slices) * voxel_size(type);
+        if (reader_bytes_per_voxel == 0.0 && reader_extra_slices == 0)
+            return slice * std::uint64_t(slices) * voxel_size(type);
         return std::uint64_t(std::ceil(double(slice) * double(slices + reader_extra_slices) *
                                        (double(voxel_size(type)) + reader_bytes_per_voxel)));
     }
@@ -106,11 +107,11 @@ Volume read_vdb(const std::string& path);
 // grid's active bounding box) and what reading costs, from the grid's
 // metadata and topology (no leaf values are read).
 struct VdbHeader {
-    VolumeHeader header;              // format Vdb, F32, encoding Other
-    std::string grid;                 // its name in the file
+    VolumeHeader header;                         // format Vdb, F32, encoding Other
+    std::string grid;                            // its name in the file
     std::array<std::int64_t, 3> offset{0, 0, 0}; // the grid index of our (0,0,0)
-    std::uint64_t topology_bytes = 0; // the tree without leaf values: what the child holds to read any slab
-    std::uint64_t grid_bytes = 0;     // the grid loaded whole (topology and the values of every leaf)
+    std::uint64_t topology_bytes = 0;            // the tree without leaf values: what the child holds to read any slab
+    std::uint64_t grid_bytes = 0;                // the grid loaded whole (topology and the values of every leaf)
 };
 VdbHeader read_vdb_header(const std::string& path);
 // k-slices [k0, k1] of the grid as a sparse volume (dims[0] x dims[1] x

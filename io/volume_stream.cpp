@@ -25,8 +25,8 @@ glm::dmat4 slab_affine(const glm::dmat4& m, std::int64_t k0) {
 
 void check_range(const VolumeHeader& h, std::int64_t k0, std::int64_t k1) {
     if (k0 < 0 || k1 < k0 || k1 >= h.dims[2])
-        throw Error(h.path, "slices " + std::to_string(k0) + ".." + std::to_string(k1) + " requested, the volume has 0.." +
-                                std::to_string(h.dims[2] - 1));
+        throw Error(h.path, "slices " + std::to_string(k0) + ".." + std::to_string(k1) +
+                                " requested, the volume has 0.." + std::to_string(h.dims[2] - 1));
 }
 
 // Stored samples -> the in-memory type: byte order, then scl_slope/inter as
@@ -94,7 +94,8 @@ public:
     explicit RawStream(VolumeHeader h) {
         header_ = std::move(h);
         fd_ = ::open(header_.data_file.c_str(), O_RDONLY | O_CLOEXEC);
-        if (fd_ < 0) throw Error(header_.path, "cannot open its data file '" + header_.data_file + "': " + std::strerror(errno));
+        if (fd_ < 0)
+            throw Error(header_.path, "cannot open its data file '" + header_.data_file + "': " + std::strerror(errno));
     }
     ~RawStream() override {
         if (fd_ >= 0) ::close(fd_);
@@ -126,7 +127,8 @@ public:
     explicit GzipStream(VolumeHeader h) {
         header_ = std::move(h);
         const int fd = ::open(header_.data_file.c_str(), O_RDONLY | O_CLOEXEC);
-        if (fd < 0) throw Error(header_.path, "cannot open its data file '" + header_.data_file + "': " + std::strerror(errno));
+        if (fd < 0)
+            throw Error(header_.path, "cannot open its data file '" + header_.data_file + "': " + std::strerror(errno));
         if (::lseek(fd, off_t(header_.data_offset), SEEK_SET) < 0) {
             ::close(fd);
             throw Error(header_.path, "cannot seek to the gzip data");
@@ -169,12 +171,14 @@ public:
             get(dst, n, at);
             pos_ += n;
             // Keep the last few slices read.
-            const std::size_t keep = std::size_t(kTailSlices * header_.dims[0] * header_.dims[1]) * voxel_size(header_.stored);
+            const std::size_t keep =
+                std::size_t(kTailSlices * header_.dims[0] * header_.dims[1]) * voxel_size(header_.stored);
             if (n >= keep) {
                 tail_.assign(dst + (n - keep), dst + n);
             } else {
                 tail_.insert(tail_.end(), dst, dst + n);
-                if (tail_.size() > keep) tail_.erase(tail_.begin(), tail_.begin() + std::ptrdiff_t(tail_.size() - keep));
+                if (tail_.size() > keep)
+                    tail_.erase(tail_.begin(), tail_.begin() + std::ptrdiff_t(tail_.size() - keep));
             }
         });
     }
@@ -269,14 +273,16 @@ std::uintmax_t size_on_disk(const std::string& path) {
     std::error_code ec;
     if (fs::is_regular_file(path, ec)) return fs::file_size(path, ec);
     std::uintmax_t n = 0;
-    for (auto it = fs::recursive_directory_iterator(path, ec); !ec && it != fs::recursive_directory_iterator(); it.increment(ec))
+    for (auto it = fs::recursive_directory_iterator(path, ec); !ec && it != fs::recursive_directory_iterator();
+         it.increment(ec))
         if (it->is_regular_file(ec)) n += it->file_size(ec);
     return n;
 }
 
 } // namespace
 
-std::unique_ptr<VolumeStream> open_volume_stream(const std::string& path, std::size_t in_memory_limit, const LoadOptions& opt) {
+std::unique_ptr<VolumeStream> open_volume_stream(const std::string& path, std::size_t in_memory_limit,
+                                                 const LoadOptions& opt) {
     std::error_code ec;
     if (!fs::exists(path, ec)) throw Error(path, "no such file or folder");
     const VolumeFormat f = volume_format_of(path);
@@ -285,7 +291,8 @@ std::unique_ptr<VolumeStream> open_volume_stream(const std::string& path, std::s
     if (f == VolumeFormat::Nifti || f == VolumeFormat::Nrrd || f == VolumeFormat::MetaImage) {
         VolumeHeader h = read_volume_header(path);
         if (h.encoding == DataEncoding::Raw) return std::make_unique<RawStream>(std::move(h));
-        if (h.encoding == DataEncoding::Gzip && f == VolumeFormat::Nrrd) return std::make_unique<GzipStream>(std::move(h));
+        if (h.encoding == DataEncoding::Gzip && f == VolumeFormat::Nrrd)
+            return std::make_unique<GzipStream>(std::move(h));
         why = f == VolumeFormat::Nifti       ? "gzip-compressed NIfTI (.nii.gz) is not streamed: decompress it to .nii"
               : f == VolumeFormat::MetaImage ? "zlib-compressed MetaImage is not streamed: write it uncompressed"
                                              : "NRRD with this encoding or several data files is not streamed";
@@ -294,14 +301,17 @@ std::unique_ptr<VolumeStream> open_volume_stream(const std::string& path, std::s
         // Loaded whole (and sliced sparse) when it fits: reading it whole holds
         // the grid twice for a moment (in the reading child and here).
         VdbHeader h = read_vdb_header(path);
-        if (in_memory_limit == 0 || 2 * h.grid_bytes > in_memory_limit) return std::make_unique<VdbStream>(std::move(h));
+        if (in_memory_limit == 0 || 2 * h.grid_bytes > in_memory_limit)
+            return std::make_unique<VdbStream>(std::move(h));
     } else {
-        why = std::string(volume_format_name(f)) + " volumes are not streamed (NIfTI, NRRD raw/gzip, MetaImage raw and OpenVDB are)";
+        why = std::string(volume_format_name(f)) +
+              " volumes are not streamed (NIfTI, NRRD raw/gzip, MetaImage raw and OpenVDB are)";
         need = size_on_disk(path);
     }
     if (in_memory_limit == 0 || need > in_memory_limit)
-        throw Error(path, "cannot be streamed: " + why + "; loading it whole needs about " + std::to_string(need >> 20) +
-                              " MiB, more than the " + std::to_string(in_memory_limit >> 20) + " MiB allowed");
+        throw Error(path, "cannot be streamed: " + why + "; loading it whole needs about " +
+                              std::to_string(need >> 20) + " MiB, more than the " +
+                              std::to_string(in_memory_limit >> 20) + " MiB allowed");
     return std::make_unique<MemoryStream>(load_volume(path, opt));
 }
 

@@ -40,7 +40,8 @@ Volume read_vti(const std::string& path) {
     if (!arr) throw Error(path, "no point data array (cell data images are not supported)");
     if (arr->GetNumberOfComponents() != 1)
         throw Error(path, std::string("array '") + (arr->GetName() ? arr->GetName() : "") + "' has " +
-                              std::to_string(arr->GetNumberOfComponents()) + " components: only scalar volumes are supported");
+                              std::to_string(arr->GetNumberOfComponents()) +
+                              " components: only scalar volumes are supported");
     VoxelType type;
     switch (arr->GetDataType()) {
     case VTK_SIGNED_CHAR:

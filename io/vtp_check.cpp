@@ -85,8 +85,8 @@ void check_vtk_xml_headers(const std::string& path) {
     }
     const std::uint64_t file_size = s.size();
     static const std::regex array_re("<(DataArray|Array)\\b[^>]*>");
-    for (auto it = std::sregex_iterator(s.begin(), s.begin() + std::ptrdiff_t(appended == std::string::npos ? s.size() : appended),
-                                        array_re);
+    for (auto it = std::sregex_iterator(
+             s.begin(), s.begin() + std::ptrdiff_t(appended == std::string::npos ? s.size() : appended), array_re);
          it != std::sregex_iterator(); ++it) {
         const std::string tag = it->str();
         const std::string format = attr(tag, "format");
@@ -99,11 +99,13 @@ void check_vtk_xml_headers(const std::string& path) {
         std::size_t data_start = 0;
         const std::size_t want = compressed ? 3 * hs : hs;
         if (format == "appended") {
-            if (appended == std::string::npos) throw Error(path, "an array refers to appended data, but the file has none");
+            if (appended == std::string::npos)
+                throw Error(path, "an array refers to appended data, but the file has none");
             const std::string off = attr(tag, "offset");
             char* end = nullptr;
             const unsigned long long o = std::strtoull(off.c_str(), &end, 10);
-            if (off.empty() || *end || appended + o > s.size()) throw Error(path, "an array's appended-data offset is outside the file");
+            if (off.empty() || *end || appended + o > s.size())
+                throw Error(path, "an array's appended-data offset is outside the file");
             data_start = appended + std::size_t(o);
             head = appended_b64 ? base64(s, data_start, want) : s.substr(data_start, want);
         } else {
@@ -112,17 +114,21 @@ void check_vtk_xml_headers(const std::string& path) {
         }
         if (head.size() < want) throw Error(path, "an array's binary header is truncated");
         if (!compressed) {
-            if (get_int(head, 0, hs, big) > file_size * 4) throw Error(path, "an array claims more data than the file holds");
+            if (get_int(head, 0, hs, big) > file_size * 4)
+                throw Error(path, "an array claims more data than the file holds");
             continue;
         }
-        const std::uint64_t blocks = get_int(head, 0, hs, big), block = get_int(head, 1, hs, big), last = get_int(head, 2, hs, big);
-        if (blocks > file_size) throw Error(path, "an array's compression header claims " + std::to_string(blocks) + " blocks");
+        const std::uint64_t blocks = get_int(head, 0, hs, big), block = get_int(head, 1, hs, big),
+                            last = get_int(head, 2, hs, big);
+        if (blocks > file_size)
+            throw Error(path, "an array's compression header claims " + std::to_string(blocks) + " blocks");
         // VTK divides by the block size even for an empty array.
         if (block == 0 || block > (std::uint64_t(1) << 30) || last > block)
             throw Error(path, "an array's compression header has an invalid block size");
         if (blocks == 0) continue;
-        const std::string sizes = format == "appended" && !appended_b64 ? s.substr(data_start + want, std::size_t(blocks) * hs)
-                                                                         : base64(s, data_start, want + std::size_t(blocks) * hs).substr(want);
+        const std::string sizes = format == "appended" && !appended_b64
+                                      ? s.substr(data_start + want, std::size_t(blocks) * hs)
+                                      : base64(s, data_start, want + std::size_t(blocks) * hs).substr(want);
         if (sizes.size() < blocks * hs) throw Error(path, "an array's compression header is truncated");
         std::uint64_t total = 0;
         for (std::uint64_t b = 0; b < blocks; ++b) {

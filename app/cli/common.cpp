@@ -17,7 +17,10 @@ namespace iso::cli {
 std::string human_bytes(double b) {
     const char* unit[] = {"B", "KiB", "MiB", "GiB", "TiB"};
     int u = 0;
-    while (b >= 1024.0 && u < 4) { b /= 1024.0; ++u; }
+    while (b >= 1024.0 && u < 4) {
+        b /= 1024.0;
+        ++u;
+    }
     std::ostringstream os;
     os << std::fixed << std::setprecision(u ? 1 : 0) << b << ' ' << unit[u];
     return os.str();
@@ -99,12 +102,15 @@ void print_warnings(const std::vector<std::string>& warnings, const std::string&
 }
 
 void add_look_options(CLI::App* cmd, Look& l) {
-    cmd->add_option("--opacity", l.opacity, "Surface opacity 0..1, repeatable in the order of --iso (translucent: VOIT)")
+    cmd->add_option("--opacity", l.opacity,
+                    "Surface opacity 0..1, repeatable in the order of --iso (translucent: VOIT)")
         ->check(CLI::Range(0.0, 1.0))
         ->allow_extra_args(false);
-    cmd->add_option("--color", l.color, "Surface colour '#rrggbb' (sRGB), repeatable in the order of --iso")->allow_extra_args(false);
+    cmd->add_option("--color", l.color, "Surface colour '#rrggbb' (sRGB), repeatable in the order of --iso")
+        ->allow_extra_args(false);
     cmd->add_option("--background", l.background, "Background colour '#rrggbb' (sRGB)");
-    cmd->add_option("--shading", l.shading, "lit, or flat (each surface its colour: no lighting, no AO)")->check(CLI::IsMember({"lit", "flat"}));
+    cmd->add_option("--shading", l.shading, "lit, or flat (each surface its colour: no lighting, no AO)")
+        ->check(CLI::IsMember({"lit", "flat"}));
 }
 
 glm::vec3 hex_option(const std::string& flag, const std::string& text) {
@@ -117,8 +123,8 @@ glm::vec3 hex_option(const std::string& flag, const std::string& text) {
 
 // Opens the input of `render` and `view`: a mesh, or a volume and its
 // isosurfaces (--iso required), and gives the surfaces their look.
-void open_input(iso::core::Scene& scene, const std::string& input, const std::string& series, const std::vector<double>& isos,
-                const Look& look, const std::string& command) {
+void open_input(iso::core::Scene& scene, const std::string& input, const std::string& series,
+                const std::vector<double>& isos, const Look& look, const std::string& command) {
     iso::LoadOptions lo;
     lo.series = series;
     lo.progress = progress_bar();
@@ -129,7 +135,8 @@ void open_input(iso::core::Scene& scene, const std::string& input, const std::st
         if (isos.empty()) throw iso::Error("isoscope " + command, input + " is a volume: give --iso V (repeatable)");
         const auto ids = scene.add_isosurfaces(isos, {}, {}, progress_bar());
         for (const auto id : ids)
-            for (const auto& w : scene.mesh(id).warnings) std::cerr << "warning: " << scene.info(id).name << ": " << w << "\n";
+            for (const auto& w : scene.mesh(id).warnings)
+                std::cerr << "warning: " << scene.info(id).name << ": " << w << "\n";
         for (const double v : isos)
             for (const auto id : ids)
                 if (scene.info(id).value == v) in_order.push_back(id);
@@ -143,7 +150,8 @@ void open_input(iso::core::Scene& scene, const std::string& input, const std::st
     per_surface("--opacity", look.opacity.size());
     per_surface("--color", look.color.size());
     for (std::size_t i = 0; i < look.opacity.size(); ++i) scene.info(in_order[i]).opacity = float(look.opacity[i]);
-    for (std::size_t i = 0; i < look.color.size(); ++i) scene.info(in_order[i]).color = hex_option("--color", look.color[i]);
+    for (std::size_t i = 0; i < look.color.size(); ++i)
+        scene.info(in_order[i]).color = hex_option("--color", look.color[i]);
 }
 
 } // namespace iso::cli

@@ -17,7 +17,8 @@ template <class S> void add_ao_options(CLI::App* cmd, S& s, const std::vector<is
         std::visit(
             [&](auto member) {
                 auto* o = cmd->add_option(std::string("--") + t.option, s.*member, t.help);
-                if constexpr (!std::is_same_v<std::decay_t<decltype(s.*member)>, bool>) o->check(CLI::Range(t.lo, t.hi));
+                if constexpr (!std::is_same_v<std::decay_t<decltype(s.*member)>, bool>)
+                    o->check(CLI::Range(t.lo, t.hi));
             },
             t.member);
     }
@@ -32,7 +33,8 @@ namespace {
 // --ao-disk-blend MIN,MAX for both blend weights at once (parse_disk_blend).
 void add_disk_options(CLI::App* cmd, iso::DiskAoSettings& d, std::string& blend) {
     add_ao_options(cmd, d, iso::disk_ao_settings());
-    cmd->add_option("--ao-disk-blend", blend, "Convergence blend weights MIN,MAX of the last two passes (disk AO; default 0.7,0.3)");
+    cmd->add_option("--ao-disk-blend", blend,
+                    "Convergence blend weights MIN,MAX of the last two passes (disk AO; default 0.7,0.3)");
 }
 
 // "MIN,MAX" of --ao-disk-blend into the settings (empty: unchanged).
@@ -58,18 +60,21 @@ void add_frame_options(CLI::App* c, FrameArgs& a, bool input_required) {
     c->add_option("--view", req.view, "anterior, posterior, left, right, superior or inferior");
     c->add_option("--size", a.size, "Image size WxH (default 1024x1024)");
     c->add_option("--ao", a.ao,
-                  "Ambient occlusion: off, cone (cone tracing), disk (disk hierarchy, high quality for stills), or reference (Embree ray "
+                  "Ambient occlusion: off, cone (cone tracing), disk (disk hierarchy, high quality for stills), or "
+                  "reference (Embree ray "
                   "tracing; with --aov ao)");
     c->add_option("--ao-radius", req.look.cone.radius_mm, "AO radius R_max in mm")->check(CLI::PositiveNumber);
     add_cone_options(c, req.look.cone);
     add_disk_options(c, req.look.disk, a.disk_blend);
-    c->add_option("--ao-frames", req.look.ao_frames, "Still frames accumulated with new jitter sets (cone AO)")->check(CLI::Range(1, 4096));
+    c->add_option("--ao-frames", req.look.ao_frames, "Still frames accumulated with new jitter sets (cone AO)")
+        ->check(CLI::Range(1, 4096));
     c->add_option("--series", req.series, "DICOM series to load: index or SeriesInstanceUID");
     add_look_options(c, a.look);
     c->add_option("--oit-epsilon", req.look.oit_epsilon,
                   "Translucent surfaces: stop compositing a pixel below this transmittance (default 1/512)")
         ->check(CLI::Range(0.0, 0.999));
-    c->add_option("--oit-memory", req.look.oit_memory_mib, "Translucent surfaces: fragment pool cap in MiB (default 256)")
+    c->add_option("--oit-memory", req.look.oit_memory_mib,
+                  "Translucent surfaces: fragment pool cap in MiB (default 256)")
         ->check(CLI::Range(1.0, 65536.0));
 }
 

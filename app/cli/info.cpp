@@ -41,9 +41,9 @@ void print_info(const nlohmann::json& j, std::ostream& os) {
         int i = 0;
         for (const auto& s : j["series"]) {
             os << (i == j["selected_series"].get<int>() ? " *" : "  ") << "[" << i << "] "
-               << s["modality"].get<std::string>() << " #" << s["number"] << " " << s["dims"][0] << "x"
-               << s["dims"][1] << "x" << s["dims"][2] << " (" << s["files"] << " files) "
-               << s["description"].get<std::string>() << "  " << s["uid"].get<std::string>() << "\n";
+               << s["modality"].get<std::string>() << " #" << s["number"] << " " << s["dims"][0] << "x" << s["dims"][1]
+               << "x" << s["dims"][2] << " (" << s["files"] << " files) " << s["description"].get<std::string>() << "  "
+               << s["uid"].get<std::string>() << "\n";
             for (const auto& w : s["warnings"]) os << "       warning: " << w.get<std::string>() << "\n";
             ++i;
         }
@@ -86,9 +86,12 @@ RunFn add_info(CLI::App& cmd, char*) {
     c->add_option("path", a.path, "Volume file or DICOM folder")->required();
     c->add_option("--series", a.series, "DICOM series to load: index in the listing or SeriesInstanceUID");
     c->add_flag("--json", a.json, "Print one JSON object");
-    c->add_flag("--header-only", a.header_only, "Read only the header (NIfTI, NRRD, MetaImage; OpenVDB: metadata and topology): no value range");
-    c->add_option("--memory", a.memory_mib, "Volumes larger than this (MiB) are described from their header only "
-                                            "(default: a quarter of physical memory)")->check(CLI::PositiveNumber);
+    c->add_flag("--header-only", a.header_only,
+                "Read only the header (NIfTI, NRRD, MetaImage; OpenVDB: metadata and topology): no value range");
+    c->add_option("--memory", a.memory_mib,
+                  "Volumes larger than this (MiB) are described from their header only "
+                  "(default: a quarter of physical memory)")
+        ->check(CLI::PositiveNumber);
     return [args] { return run_info(*args); };
 }
 

@@ -35,7 +35,8 @@ std::vector<int> ints(const std::string& flag, const std::string& text, std::siz
             break;
         }
     }
-    if (v.size() != n) throw iso::Error(flag, "expected " + std::to_string(n) + " integers separated by commas, got '" + text + "'");
+    if (v.size() != n)
+        throw iso::Error(flag, "expected " + std::to_string(n) + " integers separated by commas, got '" + text + "'");
     return v;
 }
 
@@ -47,7 +48,8 @@ int run_pick(const PickArgs& a) {
     p.y = at[1];
     if (!a.rect.empty()) {
         const auto r = ints("--rect", a.rect, 4);
-        if (r[2] < 1 || r[3] < 1) throw iso::Error("--rect", "width and height must be at least 1, got '" + a.rect + "'");
+        if (r[2] < 1 || r[3] < 1)
+            throw iso::Error("--rect", "width and height must be at least 1, got '" + a.rect + "'");
         p.rect = {r[0], r[1], r[2], r[3]};
     }
     p.threshold = a.threshold;
@@ -61,15 +63,18 @@ int run_pick(const PickArgs& a) {
         return 0;
     }
     std::cout << "pixel " << r.x << "," << r.y << " of " << r.width << "x" << r.height << ": ";
-    if (r.layers.empty()) std::cout << "background\n";
-    else if (!r.visible) std::cout << "nothing opaque enough (threshold " << a.threshold << ")\n";
-    else std::cout << r.layers[*r.visible].name << "\n";
+    if (r.layers.empty())
+        std::cout << "background\n";
+    else if (!r.visible)
+        std::cout << "nothing opaque enough (threshold " << a.threshold << ")\n";
+    else
+        std::cout << r.layers[*r.visible].name << "\n";
     std::cout << std::fixed;
     for (std::size_t i = 0; i < r.layers.size(); ++i) {
         const auto& l = r.layers[i];
-        std::cout << (r.visible && *r.visible == i ? "* " : "  ") << std::setw(10) << std::left << l.name << std::right << std::setprecision(2)
-                  << " LPS (" << l.lps.x << ", " << l.lps.y << ", " << l.lps.z << ") mm, depth " << l.depth_mm << " mm, alpha "
-                  << std::setprecision(3) << l.alpha << ", share " << l.share;
+        std::cout << (r.visible && *r.visible == i ? "* " : "  ") << std::setw(10) << std::left << l.name << std::right
+                  << std::setprecision(2) << " LPS (" << l.lps.x << ", " << l.lps.y << ", " << l.lps.z << ") mm, depth "
+                  << l.depth_mm << " mm, alpha " << std::setprecision(3) << l.alpha << ", share " << l.share;
         if (l.value) std::cout << ", " << iso::core::value_readout(*l.value, l.unit);
         if (l.voxel) std::cout << ", voxel (" << (*l.voxel)[0] << ", " << (*l.voxel)[1] << ", " << (*l.voxel)[2] << ")";
         std::cout << ", triangle " << l.triangle << "\n";
@@ -87,7 +92,8 @@ RunFn add_pick(CLI::App& cmd, char*) {
     add_frame_options(c, a.frame);
     c->add_option("--at", a.at, "Pixel X,Y from the image's top-left")->required();
     c->add_option("--rect", a.rect, "Also list the triangles visible in the rectangle X,Y,W,H");
-    c->add_option("--threshold", a.threshold, "The visible layer: the first whose accumulated opacity reaches this (default 0.5)")
+    c->add_option("--threshold", a.threshold,
+                  "The visible layer: the first whose accumulated opacity reaches this (default 0.5)")
         ->check(CLI::Range(0.0, 1.0));
     c->add_flag("--all-layers", a.all_layers, "List every layer down to the first opaque one");
     c->add_flag("--json", a.json, "Print JSON");

@@ -24,22 +24,23 @@ struct RenderArgs {
 };
 
 void print_stats(const iso::graph::FrameStats& stats, const iso::OitStats& oit) {
-    std::cout << std::left << std::setw(14) << "pass" << std::setw(8) << "ran" << std::setw(12) << "ms" << "created\n";
+    std::cout << std::left << std::setw(14) << "pass" << std::setw(8) << "ran" << std::setw(12) << "ms"
+              << "created\n";
     double total = 0;
     for (const auto& p : stats.passes) {
-        std::cout << std::setw(14) << p.name << std::setw(8) << (p.ran ? "yes" : "culled") << std::setw(12) << std::fixed << std::setprecision(2)
-                  << p.ms << human_bytes(double(p.bytes_created)) << "\n";
+        std::cout << std::setw(14) << p.name << std::setw(8) << (p.ran ? "yes" : "culled") << std::setw(12)
+                  << std::fixed << std::setprecision(2) << p.ms << human_bytes(double(p.bytes_created)) << "\n";
         total += p.ms;
     }
-    std::cout << "total " << total << " ms; " << stats.physical_resources << " resources created, " << stats.reused_resources
-              << " reused; peak " << human_bytes(double(stats.peak_bytes)) << "\n";
+    std::cout << "total " << total << " ms; " << stats.physical_resources << " resources created, "
+              << stats.reused_resources << " reused; peak " << human_bytes(double(stats.peak_bytes)) << "\n";
     if (oit.fragments > 0)
-        std::cout << "transparency: " << oit.fragments << " fragments in " << oit.lists << " pixel lists (longest " << oit.max_list << "), "
-                  << oit.shaded << " shaded, " << oit.merged << " merged past the cap; pool " << oit.capacity << " nodes, " << oit.redraws
-                  << " redraw(s)\n";
+        std::cout << "transparency: " << oit.fragments << " fragments in " << oit.lists << " pixel lists (longest "
+                  << oit.max_list << "), " << oit.shaded << " shaded, " << oit.merged << " merged past the cap; pool "
+                  << oit.capacity << " nodes, " << oit.redraws << " redraw(s)\n";
     if (oit.merged > 0)
-        std::cout << "transparency: merged fragments in " << oit.merged_pixels << " pixels, error at most " << std::setprecision(4)
-                  << oit.merge_error_max << " (linear colour, per channel)\n";
+        std::cout << "transparency: merged fragments in " << oit.merged_pixels << " pixels, error at most "
+                  << std::setprecision(4) << oit.merge_error_max << " (linear colour, per channel)\n";
 }
 
 // `isoscope render --session`: the request comes from core::session_request,
@@ -48,8 +49,10 @@ void print_stats(const iso::graph::FrameStats& stats, const iso::OitStats& oit) 
 iso::core::RenderRequest session_render_request(const RenderArgs& a, iso::core::OpenedSession& opened) {
     const auto& f = a.frame;
     if (!f.in.empty()) throw iso::Error("--session", "the session names its input: give INPUT or --session, not both");
-    for (const auto& [given, flag] : {std::pair{!f.req.isos.empty(), "--iso"}, {!f.req.series.empty(), "--series"},
-                                     {!f.look.opacity.empty(), "--opacity"}, {!f.look.color.empty(), "--color"}})
+    for (const auto& [given, flag] : {std::pair{!f.req.isos.empty(), "--iso"},
+                                      {!f.req.series.empty(), "--series"},
+                                      {!f.look.opacity.empty(), "--opacity"},
+                                      {!f.look.color.empty(), "--color"}})
         if (given) throw iso::Error(flag, "the session holds the surfaces and the series: not with --session");
     iso::core::SessionParts take;
     take.camera = !a.view_given;
@@ -59,8 +62,10 @@ iso::core::RenderRequest session_render_request(const RenderArgs& a, iso::core::
 }
 
 int run_render(const RenderArgs& a) {
-    if (a.session.empty() && a.frame.in.empty()) throw iso::Error("isoscope render", "give an INPUT (or --session FILE)");
-    if (a.no_markups && a.session.empty()) throw iso::Error("--no-markups", "only with --session (without it, give no --markups)");
+    if (a.session.empty() && a.frame.in.empty())
+        throw iso::Error("isoscope render", "give an INPUT (or --session FILE)");
+    if (a.no_markups && a.session.empty())
+        throw iso::Error("--no-markups", "only with --session (without it, give no --markups)");
     std::optional<iso::core::OpenedSession> opened;
     iso::core::RenderRequest req;
     if (a.session.empty()) {
@@ -75,7 +80,8 @@ int run_render(const RenderArgs& a) {
     req.cache_dir = a.cache;
     req.annotations = !a.no_annotations;
     req.time_passes = a.stats;
-    if (!a.markups.empty() && !a.aov.empty()) throw iso::Error("--markups", "markups are drawn on the colour image, not on an AOV (--aov)");
+    if (!a.markups.empty() && !a.aov.empty())
+        throw iso::Error("--markups", "markups are drawn on the colour image, not on an AOV (--aov)");
     iso::check_writable_destination(a.out);
     // Markups before the volume: a bad file fails fast, naming itself.
     for (const auto& path : a.markups) {
@@ -88,12 +94,14 @@ int run_render(const RenderArgs& a) {
     if (!opened) open_input(local, a.frame.in, req.series, req.isos, a.frame.look, "render");
     const auto out = iso::core::render_image(opened ? *opened->scene : local, req);
     iso::core::export_image(out.image, out.meta, a.out);
-    std::cout << "rendered " << out.image.width << "x" << out.image.height << " (" << out.gl_renderer << ") -> " << a.out << "\n";
+    std::cout << "rendered " << out.image.width << "x" << out.image.height << " (" << out.gl_renderer << ") -> "
+              << a.out << "\n";
     if (a.stats) print_stats(out.stats, out.oit);
     if (out.oit.merged > 0)
-        std::cerr << "warning: " << out.oit.merged << " translucent fragments in " << out.oit.merged_pixels << " pixels did not fit the "
-                  << req.look.oit_memory_mib << " MiB pool (--oit-memory) and were merged, order-independently: error at most " << std::setprecision(3)
-                  << out.oit.merge_error_max << " per channel\n";
+        std::cerr << "warning: " << out.oit.merged << " translucent fragments in " << out.oit.merged_pixels
+                  << " pixels did not fit the " << req.look.oit_memory_mib
+                  << " MiB pool (--oit-memory) and were merged, order-independently: error at most "
+                  << std::setprecision(3) << out.oit.merge_error_max << " per channel\n";
     return 0;
 }
 
@@ -104,16 +112,21 @@ RunFn add_render(CLI::App& cmd, char*) {
     RenderArgs& a = *args;
     CLI::App* c = &cmd;
     add_frame_options(c, a.frame, false);
-    c->add_option("--session", a.session, "Render a session file of the desktop app (its input, surfaces, camera, markups, AO) "
-                                          "instead of INPUT; --view replaces its camera, --ao its AO setting");
+    c->add_option("--session", a.session,
+                  "Render a session file of the desktop app (its input, surfaces, camera, markups, AO) "
+                  "instead of INPUT; --view replaces its camera, --ao its AO setting");
     c->add_flag("--no-markups", a.no_markups, "With --session: leave out the session's markups");
-    c->add_option("--scale", a.frame.req.scale, "Scale of text, lines and glyphs (e.g. 2 for a 2x export)")->check(CLI::Range(0.1, 20.0));
+    c->add_option("--scale", a.frame.req.scale, "Scale of text, lines and glyphs (e.g. 2 for a 2x export)")
+        ->check(CLI::Range(0.1, 20.0));
     c->add_option("--aov", a.aov, "Write a buffer instead of the colour image: depth, normal, id or ao (EXR)");
-    c->add_option("--ao-rays", a.frame.req.look.ao_rays, "Rays per pixel for --ao reference")->check(CLI::Range(1, 1 << 20));
+    c->add_option("--ao-rays", a.frame.req.look.ao_rays, "Rays per pixel for --ao reference")
+        ->check(CLI::Range(1, 1 << 20));
     c->add_option("--ao-cache", a.cache, "Folder caching AO references ('-': none; default ~/.cache/isoscope)");
-    c->add_flag("--no-annotations", a.no_annotations, "No scale bar, orientation letters or labels (--markups are still drawn)");
-    c->add_option("--markups", a.markups, "3D Slicer markups file (.mrk.json) to draw: points, lines with their length, angles "
-                                          "(repeatable; dimmed where a surface hides them)")
+    c->add_flag("--no-annotations", a.no_annotations,
+                "No scale bar, orientation letters or labels (--markups are still drawn)");
+    c->add_option("--markups", a.markups,
+                  "3D Slicer markups file (.mrk.json) to draw: points, lines with their length, angles "
+                  "(repeatable; dimmed where a surface hides them)")
         ->allow_extra_args(false);
     c->add_flag("--transparent", a.frame.req.look.transparent_background, "Transparent background");
     c->add_flag("--stats", a.stats, "Print per-pass statistics");

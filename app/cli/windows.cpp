@@ -87,10 +87,12 @@ RunFn add_view(CLI::App& cmd, char* argv0) {
     c->add_option("--view", a.view, "Initial view: anterior, posterior, left, right, superior or inferior");
     c->add_option("--series", a.series, "DICOM series to load: index or SeriesInstanceUID");
     c->add_option("--screenshot", a.screenshot, "Save the first converged frame to this PNG and quit (tests)");
-    c->add_option("--ao", a.ao, "Ambient occlusion: cone (default) or off; key O toggles it")->check(CLI::IsMember({"cone", "off"}));
+    c->add_option("--ao", a.ao, "Ambient occlusion: cone (default) or off; key O toggles it")
+        ->check(CLI::IsMember({"cone", "off"}));
     c->add_option("--ao-radius", a.opt.look.cone.radius_mm, "AO radius R_max in mm")->check(CLI::PositiveNumber);
     add_cone_options(c, a.opt.look.cone);
-    c->add_option("--ao-frames", a.opt.look.ao_frames, "Still frames accumulated with new jitter sets while nothing moves")
+    c->add_option("--ao-frames", a.opt.look.ao_frames,
+                  "Still frames accumulated with new jitter sets while nothing moves")
         ->check(CLI::Range(1, 4096));
     add_look_options(c, a.look);
     return [args, argv0] { return run_view(*args, argv0); };
@@ -110,8 +112,10 @@ int run_gui(const std::string& in, char* argv0) {
     // A session (.json: no volume or mesh format uses it) restores what it saved.
     const std::string json = ".json";
     const bool session = in.size() > json.size() && in.compare(in.size() - json.size(), json.size(), json) == 0;
-    if (session) w.open_session(QString::fromStdString(in));
-    else if (!in.empty()) w.open_path(QString::fromStdString(in));
+    if (session)
+        w.open_session(QString::fromStdString(in));
+    else if (!in.empty())
+        w.open_path(QString::fromStdString(in));
     return qapp.exec();
 }
 

@@ -57,7 +57,8 @@ QDialogButtonBox* buttons(QDialog* d, const QString& ok) {
 
 // ---- Export image ----------------------------------------------------------------------
 
-ExportDialog::ExportDialog(QSize size, AoMethod ao, const QString& file, const QString& session_note, QWidget* parent) : QDialog(parent) {
+ExportDialog::ExportDialog(QSize size, AoMethod ao, const QString& file, const QString& session_note, QWidget* parent)
+    : QDialog(parent) {
     setWindowTitle("Export image");
     setObjectName("export_dialog");
     auto* col = new QVBoxLayout(this);
@@ -151,7 +152,8 @@ namespace {
 const char* const kMeshFormats[][2] = {{"STL", "stl"}, {"PLY", "ply"}, {"OBJ", "obj"}, {"VTP (VTK XML)", "vtp"}};
 }
 
-SaveSurfacesDialog::SaveSurfacesDialog(const core::Scene& scene, const QString& folder, QWidget* parent) : QDialog(parent) {
+SaveSurfacesDialog::SaveSurfacesDialog(const core::Scene& scene, const QString& folder, QWidget* parent)
+    : QDialog(parent) {
     setWindowTitle("Save surfaces");
     setObjectName("save_surfaces_dialog");
     auto* col = new QVBoxLayout(this);
@@ -159,7 +161,9 @@ SaveSurfacesDialog::SaveSurfacesDialog(const core::Scene& scene, const QString& 
     surface_ = new QComboBox(this);
     surface_->setObjectName("surface");
     for (const auto id : scene.surfaces())
-        surface_->addItem(QString("%1 (%2 triangles)").arg(QString::fromStdString(scene.info(id).name)).arg(scene.mesh(id).triangles.size()),
+        surface_->addItem(QString("%1 (%2 triangles)")
+                              .arg(QString::fromStdString(scene.info(id).name))
+                              .arg(scene.mesh(id).triangles.size()),
                           id);
     form->addRow("Surface:", surface_);
     format_ = new QComboBox(this);
@@ -197,7 +201,8 @@ void SaveSurfacesDialog::accept() {
     } else if (path().isEmpty()) {
         problem_->setText("Choose a file name.");
     } else if (suffix != format_->currentData().toString()) {
-        problem_->setText("The file name must end in ." + format_->currentData().toString() + " for " + format_->currentText() + ".");
+        problem_->setText("The file name must end in ." + format_->currentData().toString() + " for " +
+                          format_->currentText() + ".");
     } else {
         QDialog::accept();
         return;

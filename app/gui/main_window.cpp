@@ -71,8 +71,9 @@ MainWindow::MainWindow(QWidget* parent) : QMainWindow(parent), scene_(std::make_
     grid->setContentsMargins(2, 2, 2, 2);
     grid->setSpacing(2);
     view3d_ = new QStackedWidget(central);
-    placeholder_ = new QLabel("Open a volume (File > Open, or drop a file or folder here),\nthen add a surface in the Surfaces panel.",
-                              view3d_);
+    placeholder_ = new QLabel(
+        "Open a volume (File > Open, or drop a file or folder here),\nthen add a surface in the Surfaces panel.",
+        view3d_);
     placeholder_->setAlignment(Qt::AlignCenter);
     view3d_->addWidget(placeholder_);
     view3d_->setMinimumSize(320, 240);
@@ -110,7 +111,41 @@ MainWindow::MainWindow(QWidget* parent) : QMainWindow(parent), scene_(std::make_
     file->addSeparator();
     file->addAction("&Quit", QKeySequence::Quit, this, [this] { close(); });
 
-    // ---- window / level bar
+    add_window_level_bar();
+    tools_ = new MeasureTools(*this);
+
+    // ---- 3D view bar: patient views, reset, AO and transparency toggles
+    view_bar_ = new ViewToolBar([this] { return viewer_; }, this);
+    addToolBar(view_bar_);
+
+    // ---- Surfaces dock
+    auto* dock = new QDockWidget("Surfaces", this);
+    dock->setObjectName("surfaces");
+    surfaces_ = new SurfacesPanel(dock);
+    surfaces_->run_job = [this](const QString& title, auto work, auto done) {
+        run_job(title, false, std::move(work), std::move(done));
+    };
+    surfaces_->busy = [this] { return busy(); };
+    surfaces_->message = [this](const QString& m) { statusBar()->showMessage(m); };
+    surfaces_->error = [this](const QString& title, const QString& what, std::exception_ptr e) {
+        show_error(title, what, e);
+    };
+    surfaces_->changed = [this](bool outlines) {
+        update_3d();
+        if (outlines) refresh_slices();
+    };
+    surfaces_->set_scene(scene_.get());
+    dock->setWidget(surfaces_);
+    addDockWidget(Qt::RightDockWidgetArea, dock);
+    measurements_ = new MeasurementsPanel(*this);
+    addDockWidget(Qt::RightDockWidgetArea, measurements_);
+
+    statusBar()->showMessage("Ready");
+    for (std::size_t i = 0; i < 3; ++i) views_[i]->set_content(scene_.get(), &planes_[i]);
+}
+
+// The window/level bar: presets (CT's from Radiopaedia's table), centre and width.
+void MainWindow::add_window_level_bar() {
     auto* wl = addToolBar("Window/level");
     wl->setObjectName("window_level");
     wl->addWidget(new QLabel(" Window: "));
@@ -150,32 +185,6 @@ MainWindow::MainWindow(QWidget* parent) : QMainWindow(parent), scene_(std::make_
     connect(center_, &QDoubleSpinBox::valueChanged, this, spin_changed);
     connect(width_, &QDoubleSpinBox::valueChanged, this, spin_changed);
     set_window_level(window_);
-    tools_ = new MeasureTools(*this);
-
-    // ---- 3D view bar: patient views, reset, AO and transparency toggles
-    view_bar_ = new ViewToolBar([this] { return viewer_; }, this);
-    addToolBar(view_bar_);
-
-    // ---- Surfaces dock
-    auto* dock = new QDockWidget("Surfaces", this);
-    dock->setObjectName("surfaces");
-    surfaces_ = new SurfacesPanel(dock);
-    surfaces_->run_job = [this](const QString& title, auto work, auto done) { run_job(title, false, std::move(work), std::move(done)); };
-    surfaces_->busy = [this] { return busy(); };
-    surfaces_->message = [this](const QString& m) { statusBar()->showMessage(m); };
-    surfaces_->error = [this](const QString& title, const QString& what, std::exception_ptr e) { show_error(title, what, e); };
-    surfaces_->changed = [this](bool outlines) {
-        update_3d();
-        if (outlines) refresh_slices();
-    };
-    surfaces_->set_scene(scene_.get());
-    dock->setWidget(surfaces_);
-    addDockWidget(Qt::RightDockWidgetArea, dock);
-    measurements_ = new MeasurementsPanel(*this);
-    addDockWidget(Qt::RightDockWidgetArea, measurements_);
-
-    statusBar()->showMessage("Ready");
-    for (std::size_t i = 0; i < 3; ++i) views_[i]->set_content(scene_.get(), &planes_[i]);
 }
 
 MainWindow::~MainWindow() {
@@ -303,26 +312,28 @@ void MainWindow::choose_series(const QString& folder) {
     auto list = std::make_shared<std::vector<SeriesInfo>>();
     const std::string p = folder.toStdString();
     // Headers only, but a large folder takes a while: in the background, abandonable.
-    run_job("Listing the DICOM series in " + folder, true, [list, p](const ProgressFn&) { *list = core::list_series(p); },
-            [this, list, folder](std::exception_ptr e) {
-                if (e) {
-                    show_error("Cannot open", "Cannot open " + folder, e);
-                    return;
-                }
-                if (list->size() <= 1) {
-                    load(folder, {});
-                    return;
-                }
-                auto* chooser = new SeriesDialog(folder, std::move(*list), this);
-                chooser->setAttribute(Qt::WA_DeleteOnClose);
-                chooser->on_chosen = [this, chooser, folder](int row) {
-                    // By UID: it names the series whatever else the folder gains.
-                    const QString uid = QString::fromStdString(chooser->series()[std::size_t(row)].uid);
-                    QTimer::singleShot(0, this, [this, folder, uid] { open_path(folder, uid); });
-                };
-                connect(chooser, &QDialog::rejected, this, [this, folder] { statusBar()->showMessage("Opening " + folder + ": cancelled"); });
-                chooser->open(); // window-modal, not exec(): the event loop (and tests) go on
-            });
+    run_job(
+        "Listing the DICOM series in " + folder, true, [list, p](const ProgressFn&) { *list = core::list_series(p); },
+        [this, list, folder](std::exception_ptr e) {
+            if (e) {
+                show_error("Cannot open", "Cannot open " + folder, e);
+                return;
+            }
+            if (list->size() <= 1) {
+                load(folder, {});
+                return;
+            }
+            auto* chooser = new SeriesDialog(folder, std::move(*list), this);
+            chooser->setAttribute(Qt::WA_DeleteOnClose);
+            chooser->on_chosen = [this, chooser, folder](int row) {
+                // By UID: it names the series whatever else the folder gains.
+                const QString uid = QString::fromStdString(chooser->series()[std::size_t(row)].uid);
+                QTimer::singleShot(0, this, [this, folder, uid] { open_path(folder, uid); });
+            };
+            connect(chooser, &QDialog::rejected, this,
+                    [this, folder] { statusBar()->showMessage("Opening " + folder + ": cancelled"); });
+            chooser->open(); // window-modal, not exec(): the event loop (and tests) go on
+        });
 }
 
 void MainWindow::load(const QString& path, const QString& series) {
@@ -332,24 +343,25 @@ void MainWindow::load(const QString& path, const QString& series) {
     }
     auto result = std::make_shared<std::unique_ptr<core::Scene>>();
     const std::string p = path.toStdString(), chosen = series.toStdString();
-    run_job("Opening " + path, true,
-            [result, p, chosen](const ProgressFn& progress) {
-                // A fresh scene on the worker: the one on screen stays untouched
-                // until the load succeeded.
-                auto s = std::make_unique<core::Scene>();
-                LoadOptions opt;
-                opt.progress = progress;
-                opt.series = chosen;
-                s->open(p, opt);
-                *result = std::move(s);
-            },
-            [this, result, path, series](std::exception_ptr e) {
-                if (e) {
-                    show_error("Cannot open", "Cannot open " + path, e);
-                    return;
-                }
-                set_scene(std::move(*result), path, series);
-            });
+    run_job(
+        "Opening " + path, true,
+        [result, p, chosen](const ProgressFn& progress) {
+            // A fresh scene on the worker: the one on screen stays untouched
+            // until the load succeeded.
+            auto s = std::make_unique<core::Scene>();
+            LoadOptions opt;
+            opt.progress = progress;
+            opt.series = chosen;
+            s->open(p, opt);
+            *result = std::move(s);
+        },
+        [this, result, path, series](std::exception_ptr e) {
+            if (e) {
+                show_error("Cannot open", "Cannot open " + path, e);
+                return;
+            }
+            set_scene(std::move(*result), path, series);
+        });
 }
 
 void MainWindow::set_scene(std::unique_ptr<core::Scene> scene, const QString& path, const QString& series) {
@@ -365,7 +377,7 @@ void MainWindow::set_scene(std::unique_ptr<core::Scene> scene, const QString& pa
     path_ = path;
     series_ = series;
     session_path_.clear(); // open_session sets it again
-    markups_.clear(); // measurements belong to what was open
+    markups_.clear();      // measurements belong to what was open
     tools_->reset();
     measurements_->refresh();
     planes_ = {};
@@ -383,16 +395,18 @@ void MainWindow::set_scene(std::unique_ptr<core::Scene> scene, const QString& pa
     remember_recent(path);
     if (scene_->has_volume()) {
         const auto& v = scene_->volume();
-        statusBar()->showMessage(QString("Opened %1: %2 x %3 x %4").arg(path).arg(v.dims[0]).arg(v.dims[1]).arg(v.dims[2]));
+        statusBar()->showMessage(
+            QString("Opened %1: %2 x %3 x %4").arg(path).arg(v.dims[0]).arg(v.dims[1]).arg(v.dims[2]));
     } else {
         statusBar()->showMessage("Opened " + path);
     }
 }
 
 void MainWindow::open_file_dialog() {
-    const QString f = QFileDialog::getOpenFileName(this, "Open file", QString(),
-                                                   "Volumes and meshes (*.nrrd *.nhdr *.nii *.nii.gz *.mha *.mhd *.vti *.vdb *.dcm "
-                                                   "*.stl *.ply *.obj *.vtp *.vtk);;All files (*)");
+    const QString f =
+        QFileDialog::getOpenFileName(this, "Open file", QString(),
+                                     "Volumes and meshes (*.nrrd *.nhdr *.nii *.nii.gz *.mha *.mhd *.vti *.vdb *.dcm "
+                                     "*.stl *.ply *.obj *.vtp *.vtk);;All files (*)");
     if (!f.isEmpty()) open_path(f);
 }
 
@@ -432,7 +446,8 @@ void MainWindow::dropEvent(QDropEvent* e) {
     const QString path = urls.front().toLocalFile();
     QTimer::singleShot(0, this, [this, path] {
         // A session (.json; Slicer's .mrk.json are markups, not sessions) restores what it saved.
-        const bool session = path.endsWith(".json", Qt::CaseInsensitive) && !path.endsWith(".mrk.json", Qt::CaseInsensitive);
+        const bool session =
+            path.endsWith(".json", Qt::CaseInsensitive) && !path.endsWith(".mrk.json", Qt::CaseInsensitive);
         session ? open_session(path) : open_path(path);
     });
 }

@@ -131,6 +131,7 @@ private:
     void open_file_dialog();
     void open_folder_dialog();
     void add_session_actions(QMenu* file); // File menu entries (session_io.cpp)
+    void add_window_level_bar();           // the window/level tool bar
 
     std::unique_ptr<core::Scene> scene_;
     std::array<core::SlicePlane, 3> planes_{};
@@ -150,8 +151,8 @@ private:
     QString session_path_;
     MeasureTools* tools_ = nullptr;
     MeasurementsPanel* measurements_ = nullptr;
-    std::shared_ptr<Job> job_;                   // the job the window waits for
-    std::vector<std::shared_ptr<Job>> running_;  // every worker still running (abandoned ones too)
+    std::shared_ptr<Job> job_;                  // the job the window waits for
+    std::vector<std::shared_ptr<Job>> running_; // every worker still running (abandoned ones too)
     bool updating_window_ = false;
 };
 

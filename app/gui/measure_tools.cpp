@@ -104,10 +104,11 @@ void MeasureTools::set_tool(Tool t) {
     if (t == Tool::None)
         window_.statusBar()->showMessage("Measuring off: a click shows what is there and moves the crosshair");
     else
-        window_.statusBar()->showMessage(QString("%1: click %2 points in the 3D view (on the visible surface) or on a slice%3")
-                                             .arg(tool_name(t))
-                                             .arg(points_needed(t))
-                                             .arg(t == Tool::Angle ? " (arm, vertex, arm)" : ""));
+        window_.statusBar()->showMessage(
+            QString("%1: click %2 points in the 3D view (on the visible surface) or on a slice%3")
+                .arg(tool_name(t))
+                .arg(points_needed(t))
+                .arg(t == Tool::Angle ? " (arm, vertex, arm)" : ""));
 }
 
 void MeasureTools::attach(Viewer& viewer) {
@@ -153,7 +154,7 @@ std::optional<glm::dvec3> MeasureTools::pick_and_show(Viewer& v, QPointF pixel, 
 
 void MeasureTools::viewer_click(Viewer& v, QPointF pixel) {
     if (window_.busy()) return; // a worker is changing the scene
-    hover_timer_->stop();        // the click's readout is the newer one
+    hover_timer_->stop();       // the click's readout is the newer one
     hover_at_.reset();
     const auto lps = pick_and_show(v, pixel, false);
     if (tool_ == Tool::None) {
@@ -256,7 +257,8 @@ QString MeasureTools::next_name(MarkupType type) const {
     const auto& all = window_.markups();
     int n = 1 + int(std::count_if(all.begin(), all.end(), [&](const Markup& m) { return m.type == type; }));
     const auto taken = [&](const QString& name) {
-        return std::any_of(all.begin(), all.end(), [&](const Markup& m) { return QString::fromStdString(m.name) == name; });
+        return std::any_of(all.begin(), all.end(),
+                           [&](const Markup& m) { return QString::fromStdString(m.name) == name; });
     };
     while (taken(QString("%1 %2").arg(base).arg(n))) ++n;
     return QString("%1 %2").arg(base).arg(n);
@@ -267,8 +269,11 @@ void MeasureTools::add_point(const glm::dvec3& lps) {
     const std::size_t need = points_needed(tool_);
     if (pending_.size() < need) {
         redraw();
-        window_.statusBar()->showMessage(
-            QString("%1: point %2 of %3 at %4").arg(tool_name(tool_)).arg(pending_.size()).arg(need).arg(lps_text(lps)));
+        window_.statusBar()->showMessage(QString("%1: point %2 of %3 at %4")
+                                             .arg(tool_name(tool_))
+                                             .arg(pending_.size())
+                                             .arg(need)
+                                             .arg(lps_text(lps)));
         return;
     }
     Markup m;
@@ -285,8 +290,9 @@ void MeasureTools::add_point(const glm::dvec3& lps) {
     all.push_back(m);
     window_.set_markups(std::move(all)); // the views and the panel follow
     const std::string value = markup_measurement_text(m);
-    window_.statusBar()->showMessage(QString::fromStdString(m.name) + ": " +
-                                     (value.empty() ? QString("no value (an arm has no length)") : QString::fromStdString(value)));
+    window_.statusBar()->showMessage(
+        QString::fromStdString(m.name) + ": " +
+        (value.empty() ? QString("no value (an arm has no length)") : QString::fromStdString(value)));
 }
 
 void MeasureTools::redraw() {

@@ -37,7 +37,8 @@ QString value_text(const Markup& m) {
                                           : QString("%1%2").arg(*meas->value, 0, 'f', 2).arg(QChar(0x00B0));
     }
     for (const auto& s : m.measurements)
-        if (s.name == "length" && s.value) return QString("%1 %2 (stored)").arg(*s.value, 0, 'f', 2).arg(QString::fromStdString(s.units));
+        if (s.name == "length" && s.value)
+            return QString("%1 %2 (stored)").arg(*s.value, 0, 'f', 2).arg(QString::fromStdString(s.units));
     return QString("%1 point(s)").arg(m.points.size());
 }
 
@@ -54,7 +55,8 @@ MeasurementsPanel::MeasurementsPanel(MainWindow& window) : QDockWidget("Measurem
     table_->horizontalHeader()->setSectionResizeMode(Value, QHeaderView::ResizeToContents);
     table_->horizontalHeader()->setSectionResizeMode(Delete, QHeaderView::ResizeToContents);
     table_->setSelectionBehavior(QAbstractItemView::SelectRows);
-    table_->setEditTriggers(QAbstractItemView::DoubleClicked | QAbstractItemView::EditKeyPressed | QAbstractItemView::AnyKeyPressed);
+    table_->setEditTriggers(QAbstractItemView::DoubleClicked | QAbstractItemView::EditKeyPressed |
+                            QAbstractItemView::AnyKeyPressed);
     connect(table_, &QTableWidget::itemChanged, this, [this](QTableWidgetItem* item) {
         if (filling_ || item->column() != Name) return;
         rename(item->row(), item->text());
@@ -74,7 +76,8 @@ void MeasurementsPanel::refresh() {
         auto* name = new QTableWidgetItem(QString::fromStdString(m.name));
         name->setToolTip("Double-click to rename");
         table_->setItem(row, Name, name);
-        for (const auto& [col, text] : {std::pair{int(Kind), kind_text(m.type)}, std::pair{int(Value), value_text(m)}}) {
+        for (const auto& [col, text] :
+             {std::pair{int(Kind), kind_text(m.type)}, std::pair{int(Value), value_text(m)}}) {
             auto* item = new QTableWidgetItem(text);
             item->setFlags(item->flags() & ~Qt::ItemIsEditable);
             table_->setItem(row, col, item);
@@ -85,7 +88,8 @@ void MeasurementsPanel::refresh() {
         del->setToolTip("Delete this measurement");
         del->setAutoRaise(true);
         // Queued: the button goes with the table's rebuild.
-        connect(del, &QToolButton::clicked, this, [this, row] { QTimer::singleShot(0, this, [this, row] { remove(row); }); });
+        connect(del, &QToolButton::clicked, this,
+                [this, row] { QTimer::singleShot(0, this, [this, row] { remove(row); }); });
         table_->setCellWidget(row, Delete, del);
     }
     filling_ = false;
@@ -172,7 +176,8 @@ void MeasurementsPanel::save_dialog() {
 }
 
 void MeasurementsPanel::load_dialog() {
-    const QString f = QFileDialog::getOpenFileName(&window_, "Load markups", QString(), "3D Slicer markups (*.mrk.json *.json);;All files (*)");
+    const QString f = QFileDialog::getOpenFileName(&window_, "Load markups", QString(),
+                                                   "3D Slicer markups (*.mrk.json *.json);;All files (*)");
     if (!f.isEmpty()) load(f);
 }
 

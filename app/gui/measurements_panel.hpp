@@ -43,8 +43,8 @@ private:
 
     MainWindow& window_;
     QTableWidget* table_ = nullptr;
-    bool filling_ = false;   // the table is being rebuilt: its item changes are not edits
-    bool renaming_ = false;  // a rename from the table: the table already shows it
+    bool filling_ = false;  // the table is being rebuilt: its item changes are not edits
+    bool renaming_ = false; // a rename from the table: the table already shows it
 };
 
 } // namespace iso::gui

@@ -21,7 +21,8 @@ SeriesDialog::SeriesDialog(const QString& folder, std::vector<SeriesInfo> series
     setObjectName("series_chooser");
     setWindowTitle("Choose a DICOM series");
     auto* col = new QVBoxLayout(this);
-    col->addWidget(new QLabel(QString("%1 holds %2 series; choose the one to open:").arg(folder).arg(series_.size()), this));
+    col->addWidget(
+        new QLabel(QString("%1 holds %2 series; choose the one to open:").arg(folder).arg(series_.size()), this));
 
     table_ = new QTableWidget(int(series_.size()), ColumnCount, this);
     table_->setObjectName("series_table");
@@ -49,8 +50,7 @@ SeriesDialog::SeriesDialog(const QString& folder, std::vector<SeriesInfo> series
             table_->setItem(r, c, item);
         }
         // A series that will not load stands out before it is tried.
-        if (!s.warnings.empty())
-            table_->item(r, Warnings)->setForeground(QColor(200, 120, 0));
+        if (!s.warnings.empty()) table_->item(r, Warnings)->setForeground(QColor(200, 120, 0));
     }
     table_->horizontalHeader()->setSectionResizeMode(QHeaderView::ResizeToContents);
     table_->horizontalHeader()->setStretchLastSection(true);

@@ -28,7 +28,9 @@ QString settings_folder(const char* key) {
     return f.isEmpty() ? QDir::homePath() : f;
 }
 
-void remember_folder(const char* key, const QString& file) { QSettings().setValue(key, QFileInfo(file).absolutePath()); }
+void remember_folder(const char* key, const QString& file) {
+    QSettings().setValue(key, QFileInfo(file).absolutePath());
+}
 
 // The session file an export names: the current one when it holds this
 // state, else one written next to the image.
@@ -69,7 +71,9 @@ void MainWindow::add_session_actions(QMenu* file) {
         if (!f.isEmpty()) open_session(f);
     });
     file->addAction("Sa&ve session...", QKeySequence::Save, this, [this] {
-        const QString start = session_path_.isEmpty() ? QDir(settings_folder("session_folder")).filePath("session.isoscope.json") : session_path_;
+        const QString start = session_path_.isEmpty()
+                                  ? QDir(settings_folder("session_folder")).filePath("session.isoscope.json")
+                                  : session_path_;
         const QString f = QFileDialog::getSaveFileName(this, "Save session", start, "isoscope sessions (*.json)");
         if (!f.isEmpty()) save_session(f);
     });
@@ -80,12 +84,15 @@ void MainWindow::add_session_actions(QMenu* file) {
             return;
         }
         bool write = false;
-        const QString image = QDir(settings_folder("export_folder")).filePath(QFileInfo(path_).completeBaseName() + ".png");
+        const QString image =
+            QDir(settings_folder("export_folder")).filePath(QFileInfo(path_).completeBaseName() + ".png");
         const QString named = export_session_path(session_path_, current_session(), image, write);
-        const QString note = write ? "The state is also saved as a session next to the image (IMAGE.session.json); the image's "
-                                     "metadata names it, so `isoscope render --session` can make it again."
-                                   : "The image's metadata names the current session, " + named + " (unchanged since saved).";
-        auto* d = new ExportDialog(viewer_ ? viewer_->image_size() : QSize(1024, 1024), current_session().ao, image, note, this);
+        const QString note =
+            write ? "The state is also saved as a session next to the image (IMAGE.session.json); the image's "
+                    "metadata names it, so `isoscope render --session` can make it again."
+                  : "The image's metadata names the current session, " + named + " (unchanged since saved).";
+        auto* d = new ExportDialog(viewer_ ? viewer_->image_size() : QSize(1024, 1024), current_session().ao, image,
+                                   note, this);
         d->setAttribute(Qt::WA_DeleteOnClose);
         connect(d, &QDialog::accepted, this, [this, d] { export_image(d->path(), d->frame(), d->parts()); });
         d->open();
@@ -114,16 +121,17 @@ void MainWindow::save_session(const QString& path) {
     auto session = std::make_shared<core::Session>(current_session());
     const std::string p = path.toStdString();
     // The input's SHA-256 is computed on the worker (a DICOM folder can be large).
-    run_job("Saving the session " + path, false, [session, p](const ProgressFn&) { core::save_session(*session, p); },
-            [this, path](std::exception_ptr e) {
-                if (e) {
-                    show_error("Cannot save the session", "Cannot save the session " + path, e);
-                    return;
-                }
-                session_path_ = path;
-                remember_folder("session_folder", path);
-                statusBar()->showMessage("Saved the session " + path);
-            });
+    run_job(
+        "Saving the session " + path, false, [session, p](const ProgressFn&) { core::save_session(*session, p); },
+        [this, path](std::exception_ptr e) {
+            if (e) {
+                show_error("Cannot save the session", "Cannot save the session " + path, e);
+                return;
+            }
+            session_path_ = path;
+            remember_folder("session_folder", path);
+            statusBar()->showMessage("Saved the session " + path);
+        });
 }
 
 void MainWindow::open_session(const QString& path) {
@@ -135,29 +143,31 @@ void MainWindow::open_session(const QString& path) {
     const std::string p = path.toStdString();
     // A fresh scene on the worker, as open_path: the one on screen stays
     // until the session opened.
-    run_job("Opening the session " + path, true, [result, p](const ProgressFn& progress) { *result = core::open_session(p, progress); },
-            [this, result, path](std::exception_ptr e) {
-                if (e) {
-                    show_error("Cannot open the session", "Cannot open the session " + path, e);
-                    return;
-                }
-                const core::Session& s = result->session;
-                set_scene(std::move(result->scene), QString::fromStdString(s.input), QString::fromStdString(s.series));
-                session_path_ = path;
-                remember_folder("session_folder", path);
-                if (s.window) set_window_level(*s.window);
-                set_markups(s.markups);
-                // Through the view bar, which keeps its toggles for later views and gives them to this one.
-                view_bar_->ao_action()->setChecked(s.ao != AoMethod::Off);
-                view_bar_->transparency_action()->setChecked(s.transparency);
-                if (viewer_) {
-                    view_bar_->attach(*viewer_);
-                    if (s.camera) viewer_->set_camera(*s.camera);
-                }
-                QString msg = "Opened the session " + path;
-                for (const auto& w : s.warnings) msg += "; warning: " + QString::fromStdString(w);
-                statusBar()->showMessage(msg);
-            });
+    run_job(
+        "Opening the session " + path, true,
+        [result, p](const ProgressFn& progress) { *result = core::open_session(p, progress); },
+        [this, result, path](std::exception_ptr e) {
+            if (e) {
+                show_error("Cannot open the session", "Cannot open the session " + path, e);
+                return;
+            }
+            const core::Session& s = result->session;
+            set_scene(std::move(result->scene), QString::fromStdString(s.input), QString::fromStdString(s.series));
+            session_path_ = path;
+            remember_folder("session_folder", path);
+            if (s.window) set_window_level(*s.window);
+            set_markups(s.markups);
+            // Through the view bar, which keeps its toggles for later views and gives them to this one.
+            view_bar_->ao_action()->setChecked(s.ao != AoMethod::Off);
+            view_bar_->transparency_action()->setChecked(s.transparency);
+            if (viewer_) {
+                view_bar_->attach(*viewer_);
+                if (s.camera) viewer_->set_camera(*s.camera);
+            }
+            QString msg = "Opened the session " + path;
+            for (const auto& w : s.warnings) msg += "; warning: " + QString::fromStdString(w);
+            statusBar()->showMessage(msg);
+        });
 }
 
 void MainWindow::export_image(const QString& path, const core::RenderRequest& frame, const core::SessionParts& take) {
@@ -176,24 +186,25 @@ void MainWindow::export_image(const QString& path, const core::RenderRequest& fr
     // Exactly `isoscope render --session SESSION`: the session file is read
     // back and opened into a scene of its own (the window's scene and its GL
     // objects belong to the 3D view), rendered headlessly and written.
-    run_job("Exporting " + path, false,
-            [now, write, image, session_file, frame, take](const ProgressFn& progress) {
-                check_writable_destination(image);
-                if (write) core::save_session(*now, session_file);
-                const auto opened = core::open_session(session_file, progress);
-                core::RenderRequest req = core::session_request(opened.session, session_file, frame, take);
-                req.progress = progress; // disk AO's gather reports and can be cancelled
-                const auto out = core::render_image(*opened.scene, req);
-                core::export_image(out.image, out.meta, image);
-            },
-            [this, path, session](std::exception_ptr e) {
-                if (e) {
-                    show_error("Cannot export the image", "Cannot export " + path, e);
-                    return;
-                }
-                remember_folder("export_folder", path);
-                statusBar()->showMessage("Exported " + path + " (session " + session + ")");
-            });
+    run_job(
+        "Exporting " + path, false,
+        [now, write, image, session_file, frame, take](const ProgressFn& progress) {
+            check_writable_destination(image);
+            if (write) core::save_session(*now, session_file);
+            const auto opened = core::open_session(session_file, progress);
+            core::RenderRequest req = core::session_request(opened.session, session_file, frame, take);
+            req.progress = progress; // disk AO's gather reports and can be cancelled
+            const auto out = core::render_image(*opened.scene, req);
+            core::export_image(out.image, out.meta, image);
+        },
+        [this, path, session](std::exception_ptr e) {
+            if (e) {
+                show_error("Cannot export the image", "Cannot export " + path, e);
+                return;
+            }
+            remember_folder("export_folder", path);
+            statusBar()->showMessage("Exported " + path + " (session " + session + ")");
+        });
 }
 
 void MainWindow::save_surface(std::uint32_t id, const QString& path) {
@@ -205,15 +216,16 @@ void MainWindow::save_surface(std::uint32_t id, const QString& path) {
     const std::string p = path.toStdString();
     // The worker only reads the mesh; nothing edits meshes while the
     // window-modal progress dialog is up.
-    run_job("Saving " + path, false, [s, id, p](const ProgressFn&) { s->export_mesh(id, p); },
-            [this, path](std::exception_ptr e) {
-                if (e) {
-                    show_error("Cannot save the surface", "Cannot save " + path, e);
-                    return;
-                }
-                remember_folder("surface_folder", path);
-                statusBar()->showMessage("Saved " + path + " (LPS mm)");
-            });
+    run_job(
+        "Saving " + path, false, [s, id, p](const ProgressFn&) { s->export_mesh(id, p); },
+        [this, path](std::exception_ptr e) {
+            if (e) {
+                show_error("Cannot save the surface", "Cannot save " + path, e);
+                return;
+            }
+            remember_folder("surface_folder", path);
+            statusBar()->showMessage("Saved " + path + " (LPS mm)");
+        });
 }
 
 } // namespace iso::gui

@@ -92,7 +92,9 @@ void SliceView::paintEvent(QPaintEvent*) {
     p.drawLine(QPointF(c.x, 0), QPointF(c.x, height()));
     p.drawLine(QPointF(0, c.y), QPointF(width(), c.y));
     p.setPen(Qt::yellow);
-    p.drawText(QPointF(6, 16), QString("%1  %2 mm").arg(core::slice_orientation_name(orientation_)).arg(plane_->offset_mm(), 0, 'f', 1));
+    p.drawText(
+        QPointF(6, 16),
+        QString("%1  %2 mm").arg(core::slice_orientation_name(orientation_)).arg(plane_->offset_mm(), 0, 'f', 1));
     if (on_paint_overlay) on_paint_overlay(*this, p);
 }
 
@@ -124,7 +126,8 @@ void SliceView::mouseMoveEvent(QMouseEvent* e) {
         core::pan_pixels(*plane_, {d.x(), d.y()});
         refresh();
     } else if (e->buttons() & Qt::RightButton) {
-        core::zoom_about(*plane_, width(), height(), {drag_.press.x(), drag_.press.y()}, core::drag_zoom_factor(-d.y(), height()));
+        core::zoom_about(*plane_, width(), height(), {drag_.press.x(), drag_.press.y()},
+                         core::drag_zoom_factor(-d.y(), height()));
         refresh();
     }
 }

@@ -37,12 +37,9 @@ struct IsoPreset {
     bool hu;
 };
 constexpr IsoPreset kIsoPresets[] = {
-    {"skin (headsq)", 500, false},
-    {"bone (headsq)", 1150, false},
-    {"skin", -500, true},
-    {"soft tissue", 20, true},
-    {"bone", 300, true},
-    {"contrast-filled vessels", 200, true},
+    {"skin (headsq)", 500, false}, {"bone (headsq)", 1150, false},
+    {"skin", -500, true},          {"soft tissue", 20, true},
+    {"bone", 300, true},           {"contrast-filled vessels", 200, true},
 };
 
 // " HU" after the numbers of a volume in Hounsfield units (core::value_unit), else nothing.
@@ -207,20 +204,22 @@ void SurfacesPanel::add_surface(double iso, const PostProcessOptions& post) {
     auto mesh = std::make_shared<Mesh>();
     core::Scene* s = scene_;
     const unsigned generation = generation_;
-    run_job(QString("Extracting the isosurface at %1").arg(iso),
-            [s, iso, post, mesh](const ProgressFn& progress) { *mesh = s->extract_isosurface(iso, {}, post, progress); },
-            [this, s, iso, post, mesh, generation](std::exception_ptr e) {
-                if (e) {
-                    if (error) error("Surface extraction failed", QString("Cannot extract the isosurface at %1").arg(iso), e);
-                    return;
-                }
-                if (s != scene_ || generation != generation_) return; // another scene meanwhile
-                const std::size_t triangles = mesh->triangles.size();
-                const auto id = scene_->add_isosurface(std::move(*mesh), iso, post);
-                add_row(id);
-                notify(true);
-                if (message) message(QString("Added the isosurface at %1: %2 triangles").arg(iso).arg(triangles));
-            });
+    run_job(
+        QString("Extracting the isosurface at %1").arg(iso),
+        [s, iso, post, mesh](const ProgressFn& progress) { *mesh = s->extract_isosurface(iso, {}, post, progress); },
+        [this, s, iso, post, mesh, generation](std::exception_ptr e) {
+            if (e) {
+                if (error)
+                    error("Surface extraction failed", QString("Cannot extract the isosurface at %1").arg(iso), e);
+                return;
+            }
+            if (s != scene_ || generation != generation_) return; // another scene meanwhile
+            const std::size_t triangles = mesh->triangles.size();
+            const auto id = scene_->add_isosurface(std::move(*mesh), iso, post);
+            add_row(id);
+            notify(true);
+            if (message) message(QString("Added the isosurface at %1: %2 triangles").arg(iso).arg(triangles));
+        });
 }
 
 // ---- rows ------------------------------------------------------------------------------
@@ -504,8 +503,7 @@ void SurfacesPanel::finished(std::uint32_t id, const std::shared_ptr<Worker>& w)
             std::rethrow_exception(w->error);
         } catch (const Cancelled&) {
             cancelled = true;
-        } catch (...) {
-        }
+        } catch (...) {}
         if (!cancelled && current && error)
             error("Surface extraction failed", QString("Cannot extract the isosurface at %1").arg(w->iso), w->error);
     } else if (current) {
@@ -516,7 +514,9 @@ void SurfacesPanel::finished(std::uint32_t id, const std::shared_ptr<Worker>& w)
             visible->setText(QString::fromStdString(scene_->info(id).name));
         notify(true);
         if (message)
-            message(QString("%1: %2 triangles").arg(QString::fromStdString(scene_->info(id).name)).arg(scene_->mesh(id).triangles.size()));
+            message(QString("%1: %2 triangles")
+                        .arg(QString::fromStdString(scene_->info(id).name))
+                        .arg(scene_->mesh(id).triangles.size()));
     }
     // A newer value came in meanwhile: extract it now (unless it is what is shown).
     if (!current) {

@@ -67,8 +67,8 @@ public:
     std::function<void(const QString& title, std::function<void(const ProgressFn&)> work,
                        std::function<void(std::exception_ptr)> done)>
         run_job;
-    std::function<bool()> busy;                          // the window waits for a job
-    std::function<void(const QString&)> message;         // the status bar
+    std::function<bool()> busy;                  // the window waits for a job
+    std::function<void(const QString&)> message; // the status bar
     std::function<void(const QString& title, const QString& what, std::exception_ptr)> error; // a dialog
     // The surfaces changed: redraw the 3D view; `outlines`: the slice views' outlines too.
     std::function<void(bool outlines)> changed;

@@ -148,9 +148,7 @@ void Viewer::set_markups(std::vector<Markup> markups) {
 
 QPointF Viewer::to_image(QPointF widget) const { return widget * devicePixelRatioF(); }
 
-void Viewer::mousePressEvent(QMouseEvent* e) {
-    drag_.start(e->position());
-}
+void Viewer::mousePressEvent(QMouseEvent* e) { drag_.start(e->position()); }
 
 void Viewer::mouseReleaseEvent(QMouseEvent* e) {
     if (e->button() == Qt::LeftButton && !drag_.dragged && on_click) on_click(*this, to_image(e->position()));
@@ -184,9 +182,9 @@ void Viewer::wheelEvent(QWheelEvent* e) {
 }
 
 void Viewer::keyPressEvent(QKeyEvent* e) {
-    static const std::pair<int, PatientView> keys[] = {{Qt::Key_A, PatientView::Anterior}, {Qt::Key_P, PatientView::Posterior},
-                                                       {Qt::Key_L, PatientView::Left},     {Qt::Key_R, PatientView::Right},
-                                                       {Qt::Key_S, PatientView::Superior}, {Qt::Key_I, PatientView::Inferior}};
+    static const std::pair<int, PatientView> keys[] = {
+        {Qt::Key_A, PatientView::Anterior}, {Qt::Key_P, PatientView::Posterior}, {Qt::Key_L, PatientView::Left},
+        {Qt::Key_R, PatientView::Right},    {Qt::Key_S, PatientView::Superior},  {Qt::Key_I, PatientView::Inferior}};
     if (e->key() == Qt::Key_O) { // ambient occlusion on / off
         options_.look.ao = options_.look.ao == AoMethod::Off ? AoMethod::Cone : AoMethod::Off;
         update();

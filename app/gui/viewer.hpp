@@ -24,7 +24,7 @@ struct RenderOptions;
 namespace core {
 class Scene;
 struct PickResult;
-}
+} // namespace core
 } // namespace iso
 
 namespace iso::gui {

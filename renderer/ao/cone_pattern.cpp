@@ -38,7 +38,7 @@ std::vector<glm::vec2> poisson_disk(int n, std::uint32_t seed) {
     // bias every volume estimate toward the sphere's outer columns.
     std::mt19937 rng(seed * 2654435761u + 12345u);
     std::uniform_real_distribution<double> u(0.0, 1.0);
-    double d = n > 1 ? 0.9 / std::sqrt(double(n)) : 0.0;  // ~0.85 of the hexagonal packing distance
+    double d = n > 1 ? 0.9 / std::sqrt(double(n)) : 0.0; // ~0.85 of the hexagonal packing distance
     std::vector<glm::dvec2> pts;
     int fails = 0;
     while (int(pts.size()) < n) {
@@ -100,7 +100,8 @@ std::vector<glm::vec4> cone_pattern(const ConeAoSettings& s, std::uint32_t frame
         const auto disk = poisson_disk(s.samples, std::uint32_t(frame * 7919u + std::uint32_t(j) * 104729u + 1u));
         const double b = 2.0 * kPi * u(rng); // the disk pattern also turns
         for (const auto& p : disk)
-            samples.emplace_back(float(std::cos(b) * p.x - std::sin(b) * p.y), float(std::sin(b) * p.x + std::cos(b) * p.y), 0.0f, 0.0f);
+            samples.emplace_back(float(std::cos(b) * p.x - std::sin(b) * p.y),
+                                 float(std::sin(b) * p.x + std::cos(b) * p.y), 0.0f, 0.0f);
     }
     out.insert(out.end(), sets.begin(), sets.end());
     out.insert(out.end(), samples.begin(), samples.end());

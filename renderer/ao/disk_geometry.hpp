@@ -50,11 +50,10 @@ namespace iso {
 // last point (q[3] == q[2]); invisible sets all four to p (so the quad has no
 // area and no form factor) with count 0. `count` (0, 3 or 4) and `visible`
 // say the same explicitly.
-template <typename T>
-struct ClippedQuad {
+template <typename T> struct ClippedQuad {
     glm::vec<3, T> q[4];
-    int count = 0;         // distinct points: 0 (invisible), 3 or 4
-    bool visible = false;  // count > 0
+    int count = 0;        // distinct points: 0 (invisible), 3 or 4
+    bool visible = false; // count > 0
 };
 
 template <typename T>
@@ -110,13 +109,12 @@ T clipped_triangle_form_factor(const glm::vec<3, T>& p, const glm::vec<3, T>& n,
 // lies below the tangent plane, gives 0 (front-facing only, unlike the signed
 // polygon_form_factor). c == p gives 0.
 template <typename T>
-T disk_form_factor(const glm::vec<3, T>& p, const glm::vec<3, T>& n, const glm::vec<3, T>& c,
-                   const glm::vec<3, T>& m, T area);
+T disk_form_factor(const glm::vec<3, T>& p, const glm::vec<3, T>& n, const glm::vec<3, T>& c, const glm::vec<3, T>& m,
+                   T area);
 
 // Distance attenuation (chapter, listing 4): the factor 1 / (1 + k d^2) that
 // multiplies an element's contribution; d2 = squared distance to it, k >= 0.
-template <typename T>
-T distance_attenuation(T d2, T k = T(DiskAoSettings{}.distance_attenuation));
+template <typename T> T distance_attenuation(T d2, T k = T(DiskAoSettings{}.distance_attenuation));
 
 // Triangle attenuation (chapter, listing 5): the factor pow(e, t) that
 // multiplies a triangle's form factor, e = the element's term from the
@@ -124,8 +122,7 @@ T distance_attenuation(T d2, T k = T(DiskAoSettings{}.distance_attenuation));
 // unoccluded, so an unoccluded emitter is not attenuated), t >= 0. Written
 // out for e = 0 (pow(0, t) is undefined in GLSL for t <= 0): 0 for t > 0, 1
 // for t == 0.
-template <typename T>
-T triangle_attenuation(T element_term, T t = T(DiskAoSettings{}.triangle_attenuation));
+template <typename T> T triangle_attenuation(T element_term, T t = T(DiskAoSettings{}.triangle_attenuation));
 
 // Convergence (chapter, listing 3): the weighted blend of the last two
 // iterations' values o0, o1 of one element, min_scale * min + max_scale * max.

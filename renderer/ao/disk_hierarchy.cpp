@@ -29,8 +29,8 @@ constexpr double kPi = 3.14159265358979323846;
 // ---------------------------------------------------------------- build
 
 struct Builder {
-    const std::vector<glm::dvec3>& centre;  // per vertex
-    std::vector<std::int32_t>& order;       // referenced vertices, permuted by the splits
+    const std::vector<glm::dvec3>& centre; // per vertex
+    std::vector<std::int32_t>& order;      // referenced vertices, permuted by the splits
     std::vector<DiskNode>& nodes;
     std::vector<std::int32_t>& level;
     std::vector<std::int32_t>& leaf_vertex; // node -> vertex (-1 parent)
@@ -47,10 +47,11 @@ struct Builder {
         const int axis = ext.x >= ext.y && ext.x >= ext.z ? 0 : (ext.y >= ext.z ? 1 : 2);
         const std::size_t mid = lo + (hi - lo) / 2;
         // Ties broken by vertex index: the build is deterministic.
-        std::nth_element(order.begin() + lo, order.begin() + mid, order.begin() + hi, [&](std::int32_t a, std::int32_t b) {
-            const double ca = centre[a][axis], cb = centre[b][axis];
-            return ca < cb || (ca == cb && a < b);
-        });
+        std::nth_element(order.begin() + lo, order.begin() + mid, order.begin() + hi,
+                         [&](std::int32_t a, std::int32_t b) {
+                             const double ca = centre[a][axis], cb = centre[b][axis];
+                             return ca < cb || (ca == cb && a < b);
+                         });
         return mid;
     }
 
@@ -114,12 +115,13 @@ struct VertexDisks {
 VertexDisks vertex_disks(const Mesh& mesh) {
     const std::size_t nv = mesh.positions.size();
     const bool has_normals = mesh.normals.size() == nv;
-    VertexDisks d{std::vector<double>(nv, 0.0), std::vector<glm::dvec3>(nv), std::vector<glm::dvec3>(nv, glm::dvec3(0.0)), {}};
+    VertexDisks d{
+        std::vector<double>(nv, 0.0), std::vector<glm::dvec3>(nv), std::vector<glm::dvec3>(nv, glm::dvec3(0.0)), {}};
     std::vector<glm::dvec3> face_normal(nv, glm::dvec3(0.0));
     std::vector<char> referenced(nv, 0);
     for (const auto& tri : mesh.triangles) {
         const glm::dvec3 a(mesh.positions[tri[0]]), b(mesh.positions[tri[1]]), c(mesh.positions[tri[2]]);
-        const glm::dvec3 cr = glm::cross(b - a, c - a);  // 2 x area x unit normal
+        const glm::dvec3 cr = glm::cross(b - a, c - a); // 2 x area x unit normal
         const double tri_area = 0.5 * glm::length(cr);
         for (const std::uint32_t v : tri) {
             d.area[v] += tri_area / 3.0;
@@ -139,7 +141,7 @@ VertexDisks vertex_disks(const Mesh& mesh) {
         }
         if (glm::dot(nn, nn) < 1e-24) nn = face_normal[v];
         const double l = glm::length(nn);
-        d.normal[v] = l > 1e-300 ? nn / l : glm::dvec3(0.0);  // zero: no direction (all adjacent triangles degenerate)
+        d.normal[v] = l > 1e-300 ? nn / l : glm::dvec3(0.0); // zero: no direction (all adjacent triangles degenerate)
     }
     return d;
 }
@@ -152,12 +154,14 @@ std::vector<std::int32_t> own_triangles(const Mesh& mesh, DiskHierarchy& h) {
     const auto node_count = static_cast<std::int32_t>(h.nodes.size());
     std::vector<std::int32_t> owned(static_cast<std::size_t>(node_count) + 1, 0);
     for (const auto& tri : mesh.triangles) ++owned[static_cast<std::size_t>(h.vertex_node[tri[0]]) + 1];
-    for (std::int32_t i = 0; i < node_count; ++i) owned[static_cast<std::size_t>(i) + 1] += owned[static_cast<std::size_t>(i)];
+    for (std::int32_t i = 0; i < node_count; ++i)
+        owned[static_cast<std::size_t>(i) + 1] += owned[static_cast<std::size_t>(i)];
     std::vector<std::int32_t> cursor(owned.begin(), owned.end() - 1);
     h.triangles.assign(3 * mesh.triangles.size(), glm::vec4(0.0f));
     for (const auto& tri : mesh.triangles) {
         const auto slot = static_cast<std::size_t>(cursor[static_cast<std::size_t>(h.vertex_node[tri[0]])]++);
-        for (int k = 0; k < 3; ++k) h.triangles[3 * slot + static_cast<std::size_t>(k)] = glm::vec4(mesh.positions[tri[k]], 0.0f);
+        for (int k = 0; k < 3; ++k)
+            h.triangles[3 * slot + static_cast<std::size_t>(k)] = glm::vec4(mesh.positions[tri[k]], 0.0f);
     }
     return owned;
 }
@@ -180,7 +184,11 @@ std::vector<double> fill_leaves(const VertexDisks& d, const std::vector<std::int
         const std::int32_t first = owned[iu], end = owned[iu + 1];
         for (std::int32_t t = first; t < end; ++t)
             for (int k = 0; k < 3; ++k)
-                reach = std::max(reach, glm::length(glm::dvec3(glm::vec3(h.triangles[3 * static_cast<std::size_t>(t) + static_cast<std::size_t>(k)])) - d.centre[vu]));
+                reach = std::max(
+                    reach,
+                    glm::length(glm::dvec3(glm::vec3(
+                                    h.triangles[3 * static_cast<std::size_t>(t) + static_cast<std::size_t>(k)])) -
+                                d.centre[vu]));
         leaf_reach[iu] = reach;
         node.centre_area = glm::vec4(glm::vec3(d.centre[vu]), static_cast<float>(d.area[vu]));
         node.normal_bound = glm::vec4(glm::vec3(d.normal[vu]), static_cast<float>(reach));
@@ -193,8 +201,8 @@ std::vector<double> fill_leaves(const VertexDisks& d, const std::vector<std::int
 // Parents, children before parents (reverse pre-order): area-weighted
 // centre and normal sums in double over the children's sums; plain mean
 // of the leaves' centres when the subtree has no area.
-void fill_parents(const VertexDisks& d, const std::vector<std::int32_t>& leaf_vertex, const std::vector<double>& leaf_reach,
-                  DiskHierarchy& h) {
+void fill_parents(const VertexDisks& d, const std::vector<std::int32_t>& leaf_vertex,
+                  const std::vector<double>& leaf_reach, DiskHierarchy& h) {
     const auto node_count = static_cast<std::int32_t>(h.nodes.size());
     std::vector<glm::dvec3> sum_c(static_cast<std::size_t>(node_count)), sum_n(static_cast<std::size_t>(node_count)),
         sum_plain(static_cast<std::size_t>(node_count));
@@ -240,8 +248,10 @@ void fill_parents(const VertexDisks& d, const std::vector<std::int32_t>& leaf_ve
         for (std::int32_t j = i + 1; j < node.links.x; ++j) {
             const auto ju = static_cast<std::size_t>(j);
             if (leaf_vertex[ju] < 0) continue;
-            bound = std::max(bound, glm::length(glm::dvec3(glm::vec3(d.centre[static_cast<std::size_t>(leaf_vertex[ju])])) - centre_f) +
-                                        leaf_reach[ju]);
+            bound =
+                std::max(bound, glm::length(glm::dvec3(glm::vec3(d.centre[static_cast<std::size_t>(leaf_vertex[ju])])) -
+                                            centre_f) +
+                                    leaf_reach[ju]);
         }
         node.centre_area = glm::vec4(glm::vec3(centre_p), static_cast<float>(a));
         node.normal_bound = glm::vec4(glm::vec3(normal_p), static_cast<float>(bound * (1.0 + 1e-6)));
@@ -386,8 +396,10 @@ DiskHierarchy concatenate(const std::vector<const DiskHierarchy*>& parts) {
         const auto tri_offset = static_cast<std::int32_t>(out.triangles.size() / 3);
         for (DiskNode node : part->nodes) {
             node.links.x += node_offset;
-            if (node.links.y >= 0) node.links.y += node_offset;
-            else node.links.z += tri_offset;
+            if (node.links.y >= 0)
+                node.links.y += node_offset;
+            else
+                node.links.z += tri_offset;
             out.nodes.push_back(node);
         }
         for (const std::int32_t r : part->roots) out.roots.push_back(r + node_offset);
@@ -406,8 +418,9 @@ double disk_occlusion(const DiskHierarchy& h, const glm::dvec3& p, const glm::dv
         disk_occlusion_t<float>(h, glm::vec3(p), glm::vec3(n), node_term, s, static_cast<float>(radius)));
 }
 
-double disk_occlusion_sided(const DiskHierarchy& h, const glm::dvec3& p, const glm::dvec3& n, const glm::dvec3& face_normal,
-                            const std::vector<float>& node_term, const DiskAoSettings& s, double radius) {
+double disk_occlusion_sided(const DiskHierarchy& h, const glm::dvec3& p, const glm::dvec3& n,
+                            const glm::dvec3& face_normal, const std::vector<float>& node_term, const DiskAoSettings& s,
+                            double radius) {
     const float side = glm::dot(glm::vec3(n), glm::vec3(face_normal)) < 0.0f ? -1.0f : 1.0f;
     return static_cast<double>(
         disk_occlusion_t<float>(h, glm::vec3(p), glm::vec3(n), node_term, s, static_cast<float>(radius), side));
@@ -432,7 +445,7 @@ std::vector<float> disk_element_passes(const DiskHierarchy& h, const DiskAoSetti
 
     // Leaf occlusion of the last two passes (pass 1 unmodulated).
     std::vector<float> previous_occ(n, 0.0f), occ(n, 0.0f);
-    std::vector<float> term;  // empty: all 1, the first pass
+    std::vector<float> term; // empty: all 1, the first pass
     for (int pass = 0; pass < passes; ++pass) {
         previous_occ.swap(occ);
         tbb::parallel_for(std::size_t(0), leaves.size(), [&](std::size_t li) {

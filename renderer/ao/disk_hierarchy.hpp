@@ -46,12 +46,12 @@ struct DiskNode {
 static_assert(sizeof(DiskNode) == 48, "DiskNode must match the std430 layout");
 
 struct DiskHierarchy {
-    std::vector<DiskNode> nodes;          // depth-first pre-order, roots first in their subtrees
-    std::vector<std::int32_t> roots;      // root of each surface's tree (one per build; concatenate adds)
-    std::vector<glm::vec4> triangles;     // 3 per triangle (xyz LPS mm, w = 0), grouped by owning leaf
+    std::vector<DiskNode> nodes;           // depth-first pre-order, roots first in their subtrees
+    std::vector<std::int32_t> roots;       // root of each surface's tree (one per build; concatenate adds)
+    std::vector<glm::vec4> triangles;      // 3 per triangle (xyz LPS mm, w = 0), grouped by owning leaf
     std::vector<std::int32_t> vertex_node; // mesh vertex -> its leaf (-1: unreferenced vertex)
-    std::vector<std::int32_t> node_level; // depth of each node (root 0), for bottom-up passes
-    int levels = 0;                       // 1 + deepest level
+    std::vector<std::int32_t> node_level;  // depth of each node (root 0), for bottom-up passes
+    int levels = 0;                        // 1 + deepest level
 };
 
 // Builds the tree of one surface (LPS mm). Degenerate triangles add no area;
@@ -90,8 +90,9 @@ std::vector<float> disk_element_terms(const DiskHierarchy& h, const DiskAoSettin
 // the form factor's sign flipped). Otherwise the same as disk_occlusion.
 // Interpolated normals of marching-cubes surfaces do this at thin
 // structures (docs/ao.md, "Disk AO: hierarchy and CPU evaluation", limits).
-double disk_occlusion_sided(const DiskHierarchy& h, const glm::dvec3& p, const glm::dvec3& n, const glm::dvec3& face_normal,
-                            const std::vector<float>& node_term, const DiskAoSettings& s, double radius);
+double disk_occlusion_sided(const DiskHierarchy& h, const glm::dvec3& p, const glm::dvec3& n,
+                            const glm::dvec3& face_normal, const std::vector<float>& node_term, const DiskAoSettings& s,
+                            double radius);
 
 // The same passes; also appends each pass's terms (before the blend) to
 // `per_pass` when not null (tests and the benchmark: convergence).

@@ -25,23 +25,24 @@ struct AoReference::Impl {
 
 AoReference::AoReference(const std::vector<const Mesh*>& meshes) : impl_(std::make_unique<Impl>()) {
     impl_->device = rtcNewDevice(nullptr);
-    if (!impl_->device) throw Error("Embree", "cannot create a device (error " + std::to_string(rtcGetDeviceError(nullptr)) + ")");
+    if (!impl_->device)
+        throw Error("Embree", "cannot create a device (error " + std::to_string(rtcGetDeviceError(nullptr)) + ")");
     impl_->scene = rtcNewScene(impl_->device);
     rtcSetSceneBuildQuality(impl_->scene, RTC_BUILD_QUALITY_HIGH);
     Bounds b;
     for (const Mesh* m : meshes) {
         if (!m || m->triangles.empty()) continue;
         RTCGeometry g = rtcNewGeometry(impl_->device, RTC_GEOMETRY_TYPE_TRIANGLE);
-        auto* v = static_cast<float*>(rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 3 * sizeof(float),
-                                                              m->positions.size()));
+        auto* v = static_cast<float*>(rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
+                                                              3 * sizeof(float), m->positions.size()));
         for (std::size_t i = 0; i < m->positions.size(); ++i) {
             v[3 * i] = m->positions[i].x;
             v[3 * i + 1] = m->positions[i].y;
             v[3 * i + 2] = m->positions[i].z;
             b.add(glm::dvec3(m->positions[i]));
         }
-        auto* idx = static_cast<unsigned*>(rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, 3 * sizeof(unsigned),
-                                                                   m->triangles.size()));
+        auto* idx = static_cast<unsigned*>(rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3,
+                                                                   3 * sizeof(unsigned), m->triangles.size()));
         std::memcpy(idx, m->triangles.data(), m->triangles.size() * 3 * sizeof(unsigned));
         rtcCommitGeometry(g);
         rtcAttachGeometry(impl_->scene, g);
@@ -81,11 +82,14 @@ double hash01(unsigned x) {
 // Calls f(direction) for `opt.rays` cosine-distributed directions around n
 // (Malley's method over rotated Hammersley points); stops early when f
 // returns false.
-template <class F> void for_each_direction(const glm::dvec3& n, const AoReferenceOptions& opt, unsigned pixel_seed, F&& f) {
+template <class F>
+void for_each_direction(const glm::dvec3& n, const AoReferenceOptions& opt, unsigned pixel_seed, F&& f) {
     // An orthonormal frame around n.
-    const glm::dvec3 t = glm::normalize(std::abs(n.x) > 0.9 ? glm::cross(n, glm::dvec3(0, 1, 0)) : glm::cross(n, glm::dvec3(1, 0, 0)));
+    const glm::dvec3 t =
+        glm::normalize(std::abs(n.x) > 0.9 ? glm::cross(n, glm::dvec3(0, 1, 0)) : glm::cross(n, glm::dvec3(1, 0, 0)));
     const glm::dvec3 bt = glm::cross(n, t);
-    const double u0 = hash01(opt.seed * 0x9E3779B9u + pixel_seed * 2u), v0 = hash01(opt.seed * 0x85EBCA6Bu + pixel_seed * 2u + 1u);
+    const double u0 = hash01(opt.seed * 0x9E3779B9u + pixel_seed * 2u),
+                 v0 = hash01(opt.seed * 0x85EBCA6Bu + pixel_seed * 2u + 1u);
     for (int i = 0; i < opt.rays; ++i) {
         double u = (i + 0.5) / opt.rays + u0, v = radical_inverse(unsigned(i)) + v0;
         u -= std::floor(u);
@@ -101,7 +105,8 @@ template <class F> void for_each_direction(const glm::dvec3& n, const AoReferenc
 // depth/normal AOVs (p: the point in LPS mm, n: unit normal, i: pixel index)
 // and returns the image of its results (NaN elsewhere).
 template <class F>
-Image per_visible_pixel(const Camera& cam, const Image& depth, const Image& normal, const AoReferenceOptions& opt, int stride, F&& f) {
+Image per_visible_pixel(const Camera& cam, const Image& depth, const Image& normal, const AoReferenceOptions& opt,
+                        int stride, F&& f) {
     if (depth.width != normal.width || depth.height != normal.height || depth.channels != 1 || normal.channels != 3)
         throw Error("ao reference", "depth (1 channel) and normal (3 channels) images of the same size are needed");
     if (!(opt.radius_mm > 0) || opt.rays < 1) throw Error("ao reference", "radius and ray count must be positive");
@@ -135,7 +140,8 @@ Image per_visible_pixel(const Camera& cam, const Image& depth, const Image& norm
 }
 } // namespace
 
-double AoReference::at(const glm::dvec3& p, const glm::dvec3& n_in, const AoReferenceOptions& opt, unsigned pixel_seed) const {
+double AoReference::at(const glm::dvec3& p, const glm::dvec3& n_in, const AoReferenceOptions& opt,
+                       unsigned pixel_seed) const {
     const glm::dvec3 n = glm::normalize(n_in);
     const glm::dvec3 origin = p + n * impl_->epsilon;
     int unoccluded = 0;
@@ -161,44 +167,47 @@ double AoReference::at(const glm::dvec3& p, const glm::dvec3& n_in, const AoRefe
     return double(unoccluded) / double(opt.rays);
 }
 
-Image AoReference::image(const Camera& cam, const Image& depth, const Image& normal, const AoReferenceOptions& opt) const {
-    return per_visible_pixel(cam, depth, normal, opt, 1,
-                             [&](const glm::dvec3& p, const glm::dvec3& n, std::size_t i) { return at(p, n, opt, unsigned(i)); });
+Image AoReference::image(const Camera& cam, const Image& depth, const Image& normal,
+                         const AoReferenceOptions& opt) const {
+    return per_visible_pixel(cam, depth, normal, opt, 1, [&](const glm::dvec3& p, const glm::dvec3& n, std::size_t i) {
+        return at(p, n, opt, unsigned(i));
+    });
 }
 
-Image voxel_ao_image(const SliceMap& sm, const Camera& cam, const Image& depth, const Image& normal, const AoReferenceOptions& opt,
-                     double bias, int stride) {
+Image voxel_ao_image(const SliceMap& sm, const Camera& cam, const Image& depth, const Image& normal,
+                     const AoReferenceOptions& opt, double bias, int stride) {
     if (sm.empty()) throw Error("voxel ao reference", "no slicemap (render with read_slicemap)");
     if (stride < 1) throw Error("voxel ao reference", "stride must be >= 1");
     const double dz = sm.voxel_length();
     const double p00 = sm.projection[0][0], p11 = sm.projection[1][1];
     const glm::dmat3 rot(sm.view);
-    return per_visible_pixel(cam, depth, normal, opt, stride, [&](const glm::dvec3& pw, const glm::dvec3& nw, std::size_t i) {
-        // Eye space, as the cone-tracing shader works (camera looks down -z).
-        const glm::dvec3 p = glm::dvec3(sm.view * glm::dvec4(pw, 1.0));
-        const glm::dvec3 n = glm::normalize(rot * nw);
-        const double D = -p.z;
-        const double texel_w = 2.0 * D / (p11 * sm.height);
-        // The same raised tangent plane as the shader: the surface's own voxels do not occlude.
-        const double beta = bias * (std::abs(n.z) * dz + 0.5 * (std::abs(n.x) + std::abs(n.y)) * texel_w);
-        const double step = 0.5 * std::min(dz, texel_w);
-        int unoccluded = 0;
-        for_each_direction(n, opt, unsigned(i), [&](const glm::dvec3& d) {
-            for (double t = step; t <= opt.radius_mm; t += step) {
-                const glm::dvec3 q = p + t * d;
-                if (glm::dot(n, q - p) <= beta) continue;
-                const double Dq = -q.z;
-                if (Dq <= 0) return;
-                const int x = int(std::floor((p00 * q.x / Dq * 0.5 + 0.5) * sm.width));
-                const int y = int(std::floor((p11 * q.y / Dq * 0.5 + 0.5) * sm.height));
-                const int b = int(std::floor((Dq - sm.z_near) / dz));
-                if (x < 0 || y < 0 || x >= sm.width || y >= sm.height || b < 0 || b >= sm.bits()) continue;
-                if (sm.bit(x, y, b)) return; // blocked
-            }
-            ++unoccluded;
+    return per_visible_pixel(
+        cam, depth, normal, opt, stride, [&](const glm::dvec3& pw, const glm::dvec3& nw, std::size_t i) {
+            // Eye space, as the cone-tracing shader works (camera looks down -z).
+            const glm::dvec3 p = glm::dvec3(sm.view * glm::dvec4(pw, 1.0));
+            const glm::dvec3 n = glm::normalize(rot * nw);
+            const double D = -p.z;
+            const double texel_w = 2.0 * D / (p11 * sm.height);
+            // The same raised tangent plane as the shader: the surface's own voxels do not occlude.
+            const double beta = bias * (std::abs(n.z) * dz + 0.5 * (std::abs(n.x) + std::abs(n.y)) * texel_w);
+            const double step = 0.5 * std::min(dz, texel_w);
+            int unoccluded = 0;
+            for_each_direction(n, opt, unsigned(i), [&](const glm::dvec3& d) {
+                for (double t = step; t <= opt.radius_mm; t += step) {
+                    const glm::dvec3 q = p + t * d;
+                    if (glm::dot(n, q - p) <= beta) continue;
+                    const double Dq = -q.z;
+                    if (Dq <= 0) return;
+                    const int x = int(std::floor((p00 * q.x / Dq * 0.5 + 0.5) * sm.width));
+                    const int y = int(std::floor((p11 * q.y / Dq * 0.5 + 0.5) * sm.height));
+                    const int b = int(std::floor((Dq - sm.z_near) / dz));
+                    if (x < 0 || y < 0 || x >= sm.width || y >= sm.height || b < 0 || b >= sm.bits()) continue;
+                    if (sm.bit(x, y, b)) return; // blocked
+                }
+                ++unoccluded;
+            });
+            return double(unoccluded) / double(opt.rays);
         });
-        return double(unoccluded) / double(opt.rays);
-    });
 }
 
 } // namespace iso

@@ -22,10 +22,10 @@
 namespace iso {
 
 struct AoReferenceOptions {
-    double radius_mm = 10.0;  // R
-    int rays = 1024;          // N per point
+    double radius_mm = 10.0; // R
+    int rays = 1024;         // N per point
     unsigned seed = 1;
-    int threads = 0;          // 0: all
+    int threads = 0; // 0: all
 };
 
 class AoReference {
@@ -58,7 +58,7 @@ private:
 // cone tracer with bias factor `bias`), so that the cone tracer's error
 // splits into voxelization error (this vs AoReference) and cone error (cone
 // vs this). Every `stride`-th pixel in x and y; NaN elsewhere.
-Image voxel_ao_image(const SliceMap& sm, const Camera& cam, const Image& depth, const Image& normal, const AoReferenceOptions& opt,
-                     double bias = 1.0, int stride = 1);
+Image voxel_ao_image(const SliceMap& sm, const Camera& cam, const Image& depth, const Image& normal,
+                     const AoReferenceOptions& opt, double bias = 1.0, int stride = 1);
 
 } // namespace iso

@@ -79,7 +79,8 @@ bool replaceable_piece_dir(const fs::path& dir, const std::string& stem) {
     std::error_code ec;
     if (!fs::exists(dir, ec)) return true;
     if (!fs::is_directory(dir, ec)) return false;
-    const std::regex piece(std::regex_replace(stem, std::regex(R"([.^$|()\[\]{}*+?\\])"), R"(\$&)") + R"(_[0-9]+\.vtp)");
+    const std::regex piece(std::regex_replace(stem, std::regex(R"([.^$|()\[\]{}*+?\\])"), R"(\$&)") +
+                           R"(_[0-9]+\.vtp)");
     for (const auto& e : fs::directory_iterator(dir, ec))
         if (!e.is_regular_file() || !std::regex_match(e.path().filename().string(), piece)) return false;
     return !ec;
@@ -97,7 +98,8 @@ public:
         : dirs_(std::move(piece_dirs)), stems_(std::move(stems)), rank_(rank), origin_(origin), sums_(dirs_.size()),
           files_(dirs_.size()) {}
     void begin(std::size_t surfaces, std::size_t, bool normals) override {
-        if (surfaces != dirs_.size()) throw Error("isoscope mesh", "the streaming driver made another number of surfaces");
+        if (surfaces != dirs_.size())
+            throw Error("isoscope mesh", "the streaming driver made another number of surfaces");
         normals_ = normals;
     }
     void piece(MeshPiece&& p) override {
@@ -113,8 +115,8 @@ public:
         sums_[p.surface].push_back(summarize_piece(sp, origin_));
         if (sp.mesh.triangles.empty()) return; // nothing to read: not written, not listed
         const std::string stem = stems_[p.surface];
-        const fs::path file =
-            dirs_[p.surface] / (stem + "_r" + std::to_string(rank_) + "_" + std::to_string(files_[p.surface].size()) + ".vtp");
+        const fs::path file = dirs_[p.surface] / (stem + "_r" + std::to_string(rank_) + "_" +
+                                                  std::to_string(files_[p.surface].size()) + ".vtp");
         write_vtp_piece(sp.mesh, normals_, file.string(), "the piece");
         files_[p.surface].push_back(file);
     }
@@ -140,8 +142,8 @@ private:
 // once every rank has written and agreed, so a failed job leaves the
 // previous output (or nothing) at the output paths, never a mix.
 struct Staging {
-    fs::path dir;                                 // the staging folder
-    std::vector<fs::path> dests, finals, pieces;  // per surface: the .pvtp, its piece folder, the staged piece folder
+    fs::path dir;                                // the staging folder
+    std::vector<fs::path> dests, finals, pieces; // per surface: the .pvtp, its piece folder, the staged piece folder
     std::vector<std::string> stems;
 };
 
@@ -162,8 +164,9 @@ Staging prepare_staging(const Comm& comm, const std::vector<std::string>& paths)
         if (!comm.root()) return;
         for (std::size_t s = 0; s < paths.size(); ++s)
             if (!replaceable_piece_dir(st.finals[s], st.stems[s]))
-                throw Error(paths[s], "the piece folder " + st.finals[s].string() +
-                                          " exists and holds other files; it is not replaced (move it or choose another name)");
+                throw Error(paths[s],
+                            "the piece folder " + st.finals[s].string() +
+                                " exists and holds other files; it is not replaced (move it or choose another name)");
         for (const auto& d : st.pieces) {
             std::error_code ec;
             fs::create_directories(d, ec);
@@ -202,8 +205,8 @@ std::size_t finish_surface(const Comm& comm, const Staging& st, const RankSink& 
             total = 1;
         }
         // Pieces listed as <stem>/<stem>_<i>.vtp.
-        const fs::path summary = write_pvtp_summary(st.dir / ("summary-" + std::to_string(s)), stem, total, normals, true,
-                                                    st.dests[s].string());
+        const fs::path summary = write_pvtp_summary(st.dir / ("summary-" + std::to_string(s)), stem, total, normals,
+                                                    true, st.dests[s].string());
         std::error_code ec;
         fs::remove_all(st.finals[s], ec);
         fs::rename(st.pieces[s], st.finals[s], ec);
@@ -274,14 +277,15 @@ void summarize_share(const Comm& comm, VolumeStream& src, ChunkSummaries& sum, s
     const std::int64_t k_begin = std::int64_t(L0) * C;
     const std::int64_t k_end = comm.rank() + 1 == comm.size() ? h.dims[2] : std::int64_t(L1) * C;
     const std::size_t slice = std::size_t(h.slab_memory_bytes(1) - h.slab_memory_bytes(0));
-    const std::size_t fixed = 3 * sum.finite_min.size() * (2 * sizeof(double) + 1) + std::size_t(h.slab_memory_bytes(0));
+    const std::size_t fixed =
+        3 * sum.finite_min.size() * (2 * sizeof(double) + 1) + std::size_t(h.slab_memory_bytes(0));
     const std::int64_t per =
         std::max<std::int64_t>(1, memory_budget > fixed ? std::int64_t((memory_budget - fixed) / slice) : 1);
     agreed(comm, [&] {
         for (std::int64_t k0 = k_begin; k0 < k_end; k0 += per) {
             const std::int64_t k1 = std::min(k0 + per - 1, k_end - 1);
-            report(progress, double(k0 - k_begin) / double(std::max<std::int64_t>(k_end - k_begin, 1)), "indexing volume",
-                   "isoscope mesh");
+            report(progress, double(k0 - k_begin) / double(std::max<std::int64_t>(k_end - k_begin, 1)),
+                   "indexing volume", "isoscope mesh");
             const Volume slab = src.read_slab(k0, k1);
             sum.add({&slab, h.dims, k0, h.index_to_lps});
             if (labels) {
@@ -307,7 +311,8 @@ void reduce_summaries(const Comm& comm, ChunkSummaries& sum) {
 // 3. The index, built in parallel with chunk size C. Labels: when none are
 // given, every rank's labels found, gathered into `values` and `so`.
 std::shared_ptr<const ChunkIndex> parallel_index(const Comm& comm, VolumeStream& src, int C, const DistMeshRequest& req,
-                                                 const ProgressFn& progress, StreamOptions& so, std::vector<double>& values) {
+                                                 const ProgressFn& progress, StreamOptions& so,
+                                                 std::vector<double>& values) {
     const VolumeHeader& h = src.header();
     ChunkSummaries sum(h.dims, C, h.type);
     const bool find_labels = req.labels && values.empty();
@@ -324,7 +329,8 @@ std::shared_ptr<const ChunkIndex> parallel_index(const Comm& comm, VolumeStream&
     }
     std::shared_ptr<const ChunkIndex> index;
     agreed(comm, [&] {
-        if (values.size() > 4096) throw Error(h.path, "has more than 4096 distinct values: it does not look like a label map");
+        if (values.size() > 4096)
+            throw Error(h.path, "has more than 4096 distinct values: it does not look like a label map");
         if (values.empty()) throw Error(h.path, req.labels ? "has no non-zero label" : "no iso value given");
         index = std::make_shared<const ChunkIndex>(sum.finish());
     });
@@ -421,24 +427,25 @@ DistMeshResult mesh_distributed(const Comm& comm, const DistMeshRequest& req) {
         fs::remove_all(staging.dir, ec);
     };
     try {
-    // Every piece's volume about one point near the data (the volume's
-    // centre); merge_summaries() moves them to the surface's bounds centre.
-    const glm::dvec3 centre = glm::dvec3(h.index_to_lps * glm::dvec4(0.5 * glm::dvec3(h.dims[0] - 1, h.dims[1] - 1, h.dims[2] - 1), 1.0));
-    RankSink sink(staging.pieces, staging.stems, comm.rank(), centre);
-    extract_share(comm, src, so, progress, sink, res);
+        // Every piece's volume about one point near the data (the volume's
+        // centre); merge_summaries() moves them to the surface's bounds centre.
+        const glm::dvec3 centre =
+            glm::dvec3(h.index_to_lps * glm::dvec4(0.5 * glm::dvec3(h.dims[0] - 1, h.dims[1] - 1, h.dims[2] - 1), 1.0));
+        RankSink sink(staging.pieces, staging.stems, comm.rank(), centre);
+        extract_share(comm, src, so, progress, sink, res);
 
-    // 6. Per surface: reduce the statistics on rank 0, then number the
-    // pieces, write the summary and move everything into place.
-    for (std::size_t i = 0; i < values.size(); ++i) {
-        DistSurface out;
-        out.value = values[i];
-        out.name = core::surface_name(req.labels, values[i]);
-        out.path = paths[i];
-        reduce_surface(comm, sink, i, out);
-        agreed(comm, [&] { report(progress, 1.0, "writing pieces", "isoscope mesh"); });
-        out.pieces = finish_surface(comm, staging, sink, i);
-        res.surfaces.push_back(std::move(out));
-    }
+        // 6. Per surface: reduce the statistics on rank 0, then number the
+        // pieces, write the summary and move everything into place.
+        for (std::size_t i = 0; i < values.size(); ++i) {
+            DistSurface out;
+            out.value = values[i];
+            out.name = core::surface_name(req.labels, values[i]);
+            out.path = paths[i];
+            reduce_surface(comm, sink, i, out);
+            agreed(comm, [&] { report(progress, 1.0, "writing pieces", "isoscope mesh"); });
+            out.pieces = finish_surface(comm, staging, sink, i);
+            res.surfaces.push_back(std::move(out));
+        }
     } catch (...) {
         remove_staging();
         throw;

@@ -38,7 +38,8 @@ int world_rank() {
 
 Runtime::Runtime(int* argc, char*** argv) {
     int provided = 0;
-    if (MPI_Init_thread(argc, argv, MPI_THREAD_FUNNELED, &provided) != MPI_SUCCESS) throw Error("MPI", "MPI_Init_thread failed");
+    if (MPI_Init_thread(argc, argv, MPI_THREAD_FUNNELED, &provided) != MPI_SUCCESS)
+        throw Error("MPI", "MPI_Init_thread failed");
     // Errors come back as codes (check() turns them into an abort with a message).
     MPI_Comm_set_errhandler(MPI_COMM_WORLD, MPI_ERRORS_RETURN);
 }
@@ -72,8 +73,9 @@ void Comm::agree(const std::string& error) const {
         check(MPI_Allgather(&len, 1, MPI_INT, lens.data(), 1, MPI_INT, MPI_COMM_WORLD), "MPI_Allgather (agreement)");
         for (int r = 0; r < size_; ++r) offs[r + 1] = offs[r] + lens[r];
         std::string all(std::size_t(offs[size_]), '\0');
-        check(MPI_Allgatherv(error.data(), len, MPI_CHAR, all.data(), lens.data(), offs.data(), MPI_CHAR, MPI_COMM_WORLD),
-              "MPI_Allgatherv (agreement)");
+        check(
+            MPI_Allgatherv(error.data(), len, MPI_CHAR, all.data(), lens.data(), offs.data(), MPI_CHAR, MPI_COMM_WORLD),
+            "MPI_Allgatherv (agreement)");
         std::vector<std::string> out;
         for (int r = 0; r < size_; ++r) out.push_back(all.substr(std::size_t(offs[r]), std::size_t(lens[r])));
         return out;
@@ -113,15 +115,17 @@ std::vector<double> Comm::allgatherv(std::span<const double> mine) const {
     check(MPI_Allgather(&n, 1, MPI_INT, counts.data(), 1, MPI_INT, MPI_COMM_WORLD), "MPI_Allgather");
     for (int r = 0; r < size_; ++r) offs[r + 1] = offs[r] + counts[r];
     std::vector<double> out(std::size_t(offs[size_]));
-    check(MPI_Allgatherv(mine.data(), n, MPI_DOUBLE, out.data(), counts.data(), offs.data(), MPI_DOUBLE, MPI_COMM_WORLD),
-          "MPI_Allgatherv");
+    check(
+        MPI_Allgatherv(mine.data(), n, MPI_DOUBLE, out.data(), counts.data(), offs.data(), MPI_DOUBLE, MPI_COMM_WORLD),
+        "MPI_Allgatherv");
     return out;
 }
 
 std::vector<std::string> Comm::gather(const std::string& mine, int root) const {
     // MPI-3 counts are ints; agreed, so that every rank stops together.
-    agree(mine.size() > std::size_t(1) << 30 ? "gathering to rank " + std::to_string(root) + ": more than 1 GiB from one rank"
-                                             : std::string());
+    agree(mine.size() > std::size_t(1) << 30
+              ? "gathering to rank " + std::to_string(root) + ": more than 1 GiB from one rank"
+              : std::string());
     const int n = int(mine.size());
     std::vector<int> counts(static_cast<std::size_t>(size_)), offs(std::size_t(size_) + 1, 0);
     check(MPI_Gather(&n, 1, MPI_INT, counts.data(), 1, MPI_INT, root, MPI_COMM_WORLD), "MPI_Gather");

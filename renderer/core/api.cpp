@@ -1,17 +1,12 @@
 #include "renderer/core/api.hpp"
 
-#include <algorithm>
-#include <cmath>
-#include <cstdio>
 #include <cstdlib>
-#include <map>
 #include <filesystem>
+#include <map>
 #include <sstream>
 
 #include "renderer/ao/reference.hpp"
-#include "renderer/frame/ao_settings.hpp"
 #include "renderer/core/image_metadata.hpp"
-#include "renderer/core/surface_name.hpp"
 #include "renderer/gl/context.hpp"
 
 namespace iso::core {
@@ -34,8 +29,8 @@ nlohmann::json describe(const Volume& v) {
     const auto sp = v.spacing();
     j["spacing"] = {sp.x, sp.y, sp.z};
     json m = json::array();
-    for (int r = 0; r < 4; ++r) m.push_back({v.index_to_lps[0][r], v.index_to_lps[1][r], v.index_to_lps[2][r],
-                                             v.index_to_lps[3][r]});
+    for (int r = 0; r < 4; ++r)
+        m.push_back({v.index_to_lps[0][r], v.index_to_lps[1][r], v.index_to_lps[2][r], v.index_to_lps[3][r]});
     j["index_to_lps"] = m;
     const auto range = v.value_range();
     j["range"] = {range.min, range.max};
@@ -55,8 +50,12 @@ nlohmann::json describe(const Volume& v) {
     if (!v.meta.series.empty()) {
         json s = json::array();
         for (const auto& si : v.meta.series)
-            s.push_back({{"uid", si.uid}, {"description", si.description}, {"modality", si.modality},
-                         {"number", si.number}, {"dims", si.dims}, {"files", si.files},
+            s.push_back({{"uid", si.uid},
+                         {"description", si.description},
+                         {"modality", si.modality},
+                         {"number", si.number},
+                         {"dims", si.dims},
+                         {"files", si.files},
                          {"warnings", si.warnings}});
         j["series"] = s;
         j["selected_series"] = v.meta.selected_series;
@@ -69,7 +68,8 @@ namespace {
 std::filesystem::path cache_folder(const std::string& requested) {
     if (requested == "-") return {};
     if (!requested.empty()) return requested;
-    if (const char* e = std::getenv("ISOSCOPE_CACHE_DIR"); e && *e) return std::string(e) == "-" ? std::filesystem::path() : e;
+    if (const char* e = std::getenv("ISOSCOPE_CACHE_DIR"); e && *e)
+        return std::string(e) == "-" ? std::filesystem::path() : e;
     if (const char* e = std::getenv("XDG_CACHE_HOME"); e && *e) return std::filesystem::path(e) / "isoscope";
     if (const char* e = std::getenv("HOME"); e && *e) return std::filesystem::path(e) / ".cache" / "isoscope";
     return {};
@@ -77,13 +77,17 @@ std::filesystem::path cache_folder(const std::string& requested) {
 
 // The Embree reference for this view, from the cache when the same input,
 // surfaces, camera, size, radius and ray count were traced before.
-Image ao_reference_cached(Scene& scene, const Camera& cam, const RenderOptions& ro, const std::map<std::string, std::string>& t,
-                          const RenderRequest& req, bool& hit) {
+Image ao_reference_cached(Scene& scene, const Camera& cam, const RenderOptions& ro,
+                          const std::map<std::string, std::string>& t, const RenderRequest& req, bool& hit) {
     std::ostringstream key;
     key.precision(17);
     key << "ao-reference v1 (Embree, Malley, rotated Hammersley, seed 1)\n"
-        << t.at("isoscope:input_sha256") << "\n" << (t.count("isoscope:iso") ? t.at("isoscope:iso") : "") << "\n"
-        << t.at("isoscope:camera") << "\n" << ro.width << "x" << ro.height << "\n" << req.look.cone.radius_mm << "\n" << req.look.ao_rays;
+        << t.at("isoscope:input_sha256") << "\n"
+        << (t.count("isoscope:iso") ? t.at("isoscope:iso") : "") << "\n"
+        << t.at("isoscope:camera") << "\n"
+        << ro.width << "x" << ro.height << "\n"
+        << req.look.cone.radius_mm << "\n"
+        << req.look.ao_rays;
     const auto dir = cache_folder(req.cache_dir);
     const auto file = dir.empty() ? std::filesystem::path() : dir / "ao" / (sha256_of_string(key.str()) + ".exr");
     std::error_code ec;
@@ -134,8 +138,10 @@ RenderOptions frame_options(const RenderRequest& req) {
     validate(req.look);
     const AoMethod method = req.look.ao;
     if (method == AoMethod::Reference && req.aov != Aov::Ao)
-        throw Error("ambient occlusion reference", "the ray-traced reference is written only as the raw AO term (the ao AOV)");
-    if (req.aov == Aov::Ao && method == AoMethod::Off) throw Error("ao AOV", "needs cone, disk or reference ambient occlusion");
+        throw Error("ambient occlusion reference",
+                    "the ray-traced reference is written only as the raw AO term (the ao AOV)");
+    if (req.aov == Aov::Ao && method == AoMethod::Off)
+        throw Error("ao AOV", "needs cone, disk or reference ambient occlusion");
     RenderOptions ro;
     ro.width = req.width;
     ro.height = req.height;
@@ -201,7 +207,8 @@ RenderOutput render_image(Scene& scene, const RenderRequest& req) {
     out.pick = std::move(r.pick);
     out.gl_renderer = r.gl_renderer;
     out.camera = cam;
-    if (req.look.ao == AoMethod::Reference) out.image = ao_reference_cached(scene, cam, ro, out.meta.text, req, out.ao_cache_hit);
+    if (req.look.ao == AoMethod::Reference)
+        out.image = ao_reference_cached(scene, cam, ro, out.meta.text, req, out.ao_cache_hit);
     return out;
 }
 

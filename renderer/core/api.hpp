@@ -40,9 +40,9 @@ nlohmann::json describe(const Volume& v);
 // the rest says what to draw it of, from where, at what size, and what else
 // to put on it or record.
 struct RenderRequest {
-    std::vector<double> isos;        // render_input: for volume inputs (meshes are drawn as they are)
-    std::string series;              // render_input: DICOM series choice
-    std::string view = "anterior";   // patient view
+    std::vector<double> isos;      // render_input: for volume inputs (meshes are drawn as they are)
+    std::string series;            // render_input: DICOM series choice
+    std::string view = "anterior"; // patient view
     // The camera to draw with instead of `view`'s (a session's, the 3D
     // view's): its eye, target, up and field of view are kept, its near and
     // far planes fitted to the visible surfaces (as the 3D view does).
@@ -53,9 +53,9 @@ struct RenderRequest {
     // (Embree ray tracing) only as the ao AOV, which writes the raw term
     // (1 = unoccluded) of any method.
     FrameLook look;
-    Aov aov = Aov::None;             // a buffer instead of the colour image
-    float scale = 1.0f;              // annotation scale (text, lines, glyphs)
-    bool annotations = true;         // scale bar and orientation letters
+    Aov aov = Aov::None;     // a buffer instead of the colour image
+    float scale = 1.0f;      // annotation scale (text, lines, glyphs)
+    bool annotations = true; // scale bar and orientation letters
     // 3D Slicer markups (LPS mm; io/markups.hpp) drawn over the colour image,
     // with annotations on or off, never on AOVs: glyphs, labels, lines with
     // their length, angles with their value; dimmed where a surface hides
@@ -63,7 +63,7 @@ struct RenderRequest {
     // files they came from, recorded with their SHA-256 in the metadata.
     std::vector<Markup> markups;
     std::vector<std::string> markups_files;
-    bool time_passes = false;        // real per-pass GPU times (glFinish after each pass)
+    bool time_passes = false; // real per-pass GPU times (glFinish after each pass)
     // Reference results are cached by a hash of everything they depend on
     // (input file contents, iso values, camera, size, radius, rays) under
     // this folder; empty: $ISOSCOPE_CACHE_DIR, else $XDG_CACHE_HOME/isoscope,
@@ -89,13 +89,13 @@ using iso::linear_from_hex;
 
 struct RenderOutput {
     Image image;
-    ImageMetadata meta;              // embedded in the exported file
+    ImageMetadata meta; // embedded in the exported file
     graph::FrameStats stats;
     std::string gl_renderer;
     Camera camera;
-    bool ao_cache_hit = false;       // the AO reference came from the cache
-    OitStats oit;                    // translucent surfaces (zero without)
-    PickList pick;                   // with RenderRequest::pick
+    bool ao_cache_hit = false; // the AO reference came from the cache
+    OitStats oit;              // translucent surfaces (zero without)
+    PickList pick;             // with RenderRequest::pick
 };
 
 // Renders the scene headlessly (its own EGL context, made on first use; the

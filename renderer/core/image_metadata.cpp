@@ -44,8 +44,9 @@ void add_markups(Text& t, const FrameRecord& f) {
         for (const auto& p : m.points) defined += p.status == PositionStatus::Defined;
         std::string value = markup_measurement_text(m);
         if (const auto deg = value.find("\xC2\xB0"); deg != std::string::npos) value.replace(deg, 2, " deg");
-        drawn += (drawn.empty() ? "" : "\n") + std::string(markup_type_name(m.type)) + (m.name.empty() ? "" : " '" + m.name + "'") +
-                 ": " + std::to_string(defined) + " defined point(s)" + (value.empty() ? "" : ", " + value);
+        drawn += (drawn.empty() ? "" : "\n") + std::string(markup_type_name(m.type)) +
+                 (m.name.empty() ? "" : " '" + m.name + "'") + ": " + std::to_string(defined) + " defined point(s)" +
+                 (value.empty() ? "" : ", " + value);
     }
     t["isoscope:markups_drawn"] = drawn;
 }
@@ -53,16 +54,18 @@ void add_markups(Text& t, const FrameRecord& f) {
 std::string iso_values_text(const Scene& scene) {
     std::string isos;
     for (const SurfaceId id : scene.surfaces())
-        if (scene.info(id).kind == SurfaceInfo::Kind::Iso) isos += (isos.empty() ? "" : ",") + value_text(scene.info(id).value);
+        if (scene.info(id).kind == SurfaceInfo::Kind::Iso)
+            isos += (isos.empty() ? "" : ",") + value_text(scene.info(id).value);
     return isos;
 }
 
 std::string camera_text(const Camera& cam) {
     std::ostringstream cs;
     cs.precision(9);
-    cs << "eye " << cam.eye.x << ' ' << cam.eye.y << ' ' << cam.eye.z << "; target " << cam.target.x << ' ' << cam.target.y << ' '
-       << cam.target.z << "; up " << cam.up.x << ' ' << cam.up.y << ' ' << cam.up.z << "; fov_y_degrees " << cam.fov_y_degrees
-       << "; near " << cam.near_plane << "; far " << cam.far_plane << "; depth reversed-Z [0,1]";
+    cs << "eye " << cam.eye.x << ' ' << cam.eye.y << ' ' << cam.eye.z << "; target " << cam.target.x << ' '
+       << cam.target.y << ' ' << cam.target.z << "; up " << cam.up.x << ' ' << cam.up.y << ' ' << cam.up.z
+       << "; fov_y_degrees " << cam.fov_y_degrees << "; near " << cam.near_plane << "; far " << cam.far_plane
+       << "; depth reversed-Z [0,1]";
     return cs.str();
 }
 
@@ -73,8 +76,8 @@ std::string surfaces_text(const Scene& scene) {
         const auto& si = scene.info(id);
         if (!si.visible) continue;
         char b[160];
-        std::snprintf(b, sizeof b, "%s%s: albedo %.6g %.6g %.6g, opacity %.6g", surfaces.empty() ? "" : "; ", si.name.c_str(),
-                      si.color.r, si.color.g, si.color.b, si.opacity);
+        std::snprintf(b, sizeof b, "%s%s: albedo %.6g %.6g %.6g, opacity %.6g", surfaces.empty() ? "" : "; ",
+                      si.name.c_str(), si.color.r, si.color.g, si.color.b, si.opacity);
         surfaces += b;
     }
     return surfaces;
@@ -87,11 +90,12 @@ void add_shading(Text& t, const FrameRecord& f) {
     if (!look.transparency) t["isoscope:transparency"] = "off: every surface drawn opaque, whatever its opacity";
     const auto& oit = f.result.oit;
     if (oit.fragments > 0) {
-        t["isoscope:transparency"] = "VOIT per-pixel fragment lists, front to back, epsilon " + std::to_string(look.oit_epsilon) + "; " +
-                                     std::to_string(oit.fragments) + " fragments" +
-                                     (oit.merged ? ", " + std::to_string(oit.merged) + " merged past the memory cap (error at most " +
-                                                       std::to_string(oit.merge_error_max) + " per channel)"
-                                                 : std::string());
+        t["isoscope:transparency"] =
+            "VOIT per-pixel fragment lists, front to back, epsilon " + std::to_string(look.oit_epsilon) + "; " +
+            std::to_string(oit.fragments) + " fragments" +
+            (oit.merged ? ", " + std::to_string(oit.merged) + " merged past the memory cap (error at most " +
+                              std::to_string(oit.merge_error_max) + " per channel)"
+                        : std::string());
     }
     if (req.aov != Aov::None && req.aov != Aov::Ao)
         t["isoscope:aov"] = std::string(req.aov == Aov::Depth    ? "depth (mm along the view axis)"

@@ -36,7 +36,8 @@ std::optional<VolumeSample> value_at(const Scene& scene, const glm::dvec3& lps) 
 glm::dvec3 parse_point(const std::string& what, const std::string& text) {
     double x = 0, y = 0, z = 0;
     char tail = 0;
-    if (std::sscanf(text.c_str(), "%lf,%lf,%lf%c", &x, &y, &z, &tail) != 3 || !std::isfinite(x) || !std::isfinite(y) || !std::isfinite(z))
+    if (std::sscanf(text.c_str(), "%lf,%lf,%lf%c", &x, &y, &z, &tail) != 3 || !std::isfinite(x) || !std::isfinite(y) ||
+        !std::isfinite(z))
         throw Error(what, "expected a point x,y,z in LPS mm, got '" + text + "'");
     return {x, y, z};
 }
@@ -62,7 +63,8 @@ nlohmann::json part_json(const SurfacePart& p) {
 
 } // namespace
 
-nlohmann::json measure_json(const Scene& scene, const std::vector<SurfaceMeasurement>& surfaces, const PointMeasurements& points) {
+nlohmann::json measure_json(const Scene& scene, const std::vector<SurfaceMeasurement>& surfaces,
+                            const PointMeasurements& points) {
     using nlohmann::json;
     json j;
     j["coordinates"] = "LPS mm";
@@ -95,7 +97,8 @@ nlohmann::json measure_json(const Scene& scene, const std::vector<SurfaceMeasure
     }
     j["surfaces"] = std::move(ss);
     json d = json::array(), a = json::array(), v = json::array();
-    for (const auto& p : points.distances) d.push_back({{"points", {vec(p[0]), vec(p[1])}}, {"distance_mm", distance_mm(p[0], p[1])}});
+    for (const auto& p : points.distances)
+        d.push_back({{"points", {vec(p[0]), vec(p[1])}}, {"distance_mm", distance_mm(p[0], p[1])}});
     for (const auto& p : points.angles)
         a.push_back({{"points", {vec(p[0]), vec(p[1]), vec(p[2])}}, {"angle_deg", angle_deg(p[0], p[1], p[2])}});
     const std::string_view unit = value_unit(scene);
@@ -134,7 +137,8 @@ MarkupsFile point_markups(const Scene& scene, const PointMeasurements& points) {
         Markup m;
         m.type = MarkupType::Angle;
         m.name = "angle " + std::to_string(i + 1);
-        for (int k = 0; k < 3; ++k) m.points.push_back(point(points.angles[i][std::size_t(k)], m.name + "-" + std::to_string(k + 1)));
+        for (int k = 0; k < 3; ++k)
+            m.points.push_back(point(points.angles[i][std::size_t(k)], m.name + "-" + std::to_string(k + 1)));
         if (auto c = computed_measurement(m)) m.measurements.push_back(*c);
         f.markups.push_back(std::move(m));
     }

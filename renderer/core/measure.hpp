@@ -21,7 +21,7 @@ struct SurfaceMeasurement {
     SurfaceId surface = 0;
     std::string name;
     SurfaceInfo::Kind kind = SurfaceInfo::Kind::Mesh;
-    double value = 0;       // iso value or label
+    double value = 0; // iso value or label
     SurfaceMeasures measures;
 };
 
@@ -47,7 +47,8 @@ struct PointMeasurements {
 // area_mm2, volume_ml, volume_kind, closed, boundary, components,
 // uncertainty, warnings), "distances", "angles", "values" (per point: point,
 // value, unit (value_unit; null without one or without a value), voxel).
-nlohmann::json measure_json(const Scene& scene, const std::vector<SurfaceMeasurement>& surfaces, const PointMeasurements& points);
+nlohmann::json measure_json(const Scene& scene, const std::vector<SurfaceMeasurement>& surfaces,
+                            const PointMeasurements& points);
 
 // The points as 3D Slicer markups (LPS): one Line per distance (with its
 // length), one Angle per angle (with its value), one point list for the

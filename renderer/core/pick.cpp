@@ -48,8 +48,8 @@ std::vector<double> column_major(const glm::dmat4& m) {
 
 void validate(const PickRequest& p, int width, int height) {
     if (p.x < 0 || p.y < 0 || p.x >= width || p.y >= height)
-        throw Error("pick", "pixel " + std::to_string(p.x) + "," + std::to_string(p.y) + " is outside the " + std::to_string(width) + "x" +
-                                std::to_string(height) + " image");
+        throw Error("pick", "pixel " + std::to_string(p.x) + "," + std::to_string(p.y) + " is outside the " +
+                                std::to_string(width) + "x" + std::to_string(height) + " image");
     if (!(p.threshold > 0.0 && p.threshold <= 1.0))
         throw Error("pick threshold", "expected a value in (0, 1], got " + std::to_string(p.threshold));
 }
@@ -113,16 +113,18 @@ PickResult resolve_pick(const Scene& scene, const Camera& camera, int width, int
         return x >= list.region.x && y >= list.region.y && x + w <= list.region.x + list.region.width &&
                y + h <= list.region.y + list.region.height;
     };
-    if (list.pixels.size() != std::size_t(std::max(list.region.width, 0)) * std::size_t(std::max(list.region.height, 0)) ||
+    if (list.pixels.size() !=
+            std::size_t(std::max(list.region.width, 0)) * std::size_t(std::max(list.region.height, 0)) ||
         !holds(p.x, p.y, 1, 1) ||
         (out.rect.width > 0 && out.rect.height > 0 && !holds(out.rect.x, out.rect.y, out.rect.width, out.rect.height)))
-        throw Error("pick", "the frame's pick lists (region " + std::to_string(list.region.x) + "," + std::to_string(list.region.y) + " " +
-                                std::to_string(list.region.width) + "x" + std::to_string(list.region.height) +
-                                ") do not cover pixel " + std::to_string(p.x) + "," + std::to_string(p.y) +
-                                (rect ? " and its rectangle" : ""));
+        throw Error("pick", "the frame's pick lists (region " + std::to_string(list.region.x) + "," +
+                                std::to_string(list.region.y) + " " + std::to_string(list.region.width) + "x" +
+                                std::to_string(list.region.height) + ") do not cover pixel " + std::to_string(p.x) +
+                                "," + std::to_string(p.y) + (rect ? " and its rectangle" : ""));
     out.complete = list.offered <= list.capacity;
     const auto at = [&](int x, int y) -> const std::vector<PickFragment>& {
-        return list.pixels[std::size_t(y - list.region.y) * std::size_t(list.region.width) + std::size_t(x - list.region.x)];
+        return list
+            .pixels[std::size_t(y - list.region.y) * std::size_t(list.region.width) + std::size_t(x - list.region.x)];
     };
     // The pixel's layers: down to the first opaque one (nothing behind it
     // reaches the pixel), or to the visible one unless all are asked for.
@@ -141,7 +143,8 @@ PickResult resolve_pick(const Scene& scene, const Camera& camera, int width, int
         l.share = double(f.transmittance) * double(f.alpha);
         l.accumulated_alpha = 1.0 - double(f.transmittance) * (1.0 - double(f.alpha));
         const Mesh& mesh = scene.mesh(f.object);
-        if (f.primitive >= mesh.triangles.size()) throw Error("pick", "triangle " + std::to_string(f.primitive) + " is not in " + info.name);
+        if (f.primitive >= mesh.triangles.size())
+            throw Error("pick", "triangle " + std::to_string(f.primitive) + " is not in " + info.name);
         const auto& tri = mesh.triangles[f.primitive];
         const glm::dvec3 a(mesh.positions[tri[0]]), b(mesh.positions[tri[1]]), c(mesh.positions[tri[2]]);
         if (const auto x = cross_triangle(ray, a, b, c)) {
@@ -157,8 +160,8 @@ PickResult resolve_pick(const Scene& scene, const Camera& camera, int width, int
         }
         glm::dvec3 n = glm::cross(b - a, c - a);
         if (!mesh.normals.empty())
-            n = l.barycentric.x * glm::dvec3(mesh.normals[tri[0]]) + l.barycentric.y * glm::dvec3(mesh.normals[tri[1]]) +
-                l.barycentric.z * glm::dvec3(mesh.normals[tri[2]]);
+            n = l.barycentric.x * glm::dvec3(mesh.normals[tri[0]]) +
+                l.barycentric.y * glm::dvec3(mesh.normals[tri[1]]) + l.barycentric.z * glm::dvec3(mesh.normals[tri[2]]);
         l.normal = glm::length(n) > 0 ? glm::normalize(n) : n;
         if (volume && info.kind != SurfaceInfo::Kind::Mesh)
             if (const auto s = sample_volume(*volume, l.lps)) {
@@ -223,8 +226,13 @@ nlohmann::json pick_json(const PickResult& r) {
     j["complete"] = r.complete;
     if (r.rect.width > 0 && r.rect.height > 0) {
         json tris = json::array();
-        for (const auto& t : r.triangles) tris.push_back({{"surface_id", t.surface}, {"triangle", t.triangle}, {"pixels", t.pixels}});
-        j["rect"] = {{"x", r.rect.x}, {"y", r.rect.y}, {"width", r.rect.width}, {"height", r.rect.height}, {"triangles", std::move(tris)}};
+        for (const auto& t : r.triangles)
+            tris.push_back({{"surface_id", t.surface}, {"triangle", t.triangle}, {"pixels", t.pixels}});
+        j["rect"] = {{"x", r.rect.x},
+                     {"y", r.rect.y},
+                     {"width", r.rect.width},
+                     {"height", r.rect.height},
+                     {"triangles", std::move(tris)}};
     }
     j["frame_ms"] = r.frame_ms;
     return j;

@@ -37,20 +37,20 @@ struct PickRequest {
 
 struct PickLayer {
     SurfaceId surface = 0;
-    std::string name;                  // "iso 500", a mesh file's name
+    std::string name; // "iso 500", a mesh file's name
     SurfaceInfo::Kind kind = SurfaceInfo::Kind::Mesh;
-    double surface_value = 0;          // the surface's iso value or label (Iso, Label surfaces)
-    std::uint32_t triangle = 0;        // index into the surface's mesh
-    glm::dvec3 lps{0.0};               // where the pixel's ray meets the triangle, LPS mm
-    glm::dvec3 normal{0.0};            // the surface's normal there (interpolated), LPS, unit
-    glm::dvec3 barycentric{0.0};       // of lps in the triangle
-    bool on_triangle = true;           // false: the ray passes just outside (an edge the rasterizer gave it); lps is on its plane
-    double depth_mm = 0;               // distance along the view axis
-    double alpha = 1;                  // the surface's opacity
-    double share = 0;                  // of the pixel's colour: transmittance in front x alpha
-    double accumulated_alpha = 0;      // 1 - transmittance behind this layer
-    std::optional<double> value;       // the volume's value there (trilinear, after rescale)
-    std::string unit;                  // value's unit (value_unit): "HU" for CT, else empty
+    double surface_value = 0;    // the surface's iso value or label (Iso, Label surfaces)
+    std::uint32_t triangle = 0;  // index into the surface's mesh
+    glm::dvec3 lps{0.0};         // where the pixel's ray meets the triangle, LPS mm
+    glm::dvec3 normal{0.0};      // the surface's normal there (interpolated), LPS, unit
+    glm::dvec3 barycentric{0.0}; // of lps in the triangle
+    bool on_triangle = true; // false: the ray passes just outside (an edge the rasterizer gave it); lps is on its plane
+    double depth_mm = 0;     // distance along the view axis
+    double alpha = 1;        // the surface's opacity
+    double share = 0;        // of the pixel's colour: transmittance in front x alpha
+    double accumulated_alpha = 0;                     // 1 - transmittance behind this layer
+    std::optional<double> value;                      // the volume's value there (trilinear, after rescale)
+    std::string unit;                                 // value's unit (value_unit): "HU" for CT, else empty
     std::optional<std::array<std::int64_t, 3>> voxel; // the nearest voxel
 };
 

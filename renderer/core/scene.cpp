@@ -93,12 +93,15 @@ const std::string& Scene::volume_source() const { return impl_->volume_source; }
 namespace {
 
 // Extraction is most of the work; post-processing shares the rest of the bar.
-void postprocess_all(std::vector<Mesh>& meshes, const PostProcessOptions& post, const ProgressFn& progress, double share) {
+void postprocess_all(std::vector<Mesh>& meshes, const PostProcessOptions& post, const ProgressFn& progress,
+                     double share) {
     for (std::size_t i = 0; i < meshes.size(); ++i) {
         const double base = share + (1.0 - share) * double(i) / double(meshes.size());
         ProgressFn pp;
         if (progress)
-            pp = [&](double f, std::string_view stage) { return progress(base + f * (1.0 - share) / double(meshes.size()), stage); };
+            pp = [&](double f, std::string_view stage) {
+                return progress(base + f * (1.0 - share) / double(meshes.size()), stage);
+            };
         auto warnings = meshes[i].warnings;
         meshes[i] = postprocess(meshes[i], post, pp);
         meshes[i].warnings = std::move(warnings);
@@ -108,21 +111,22 @@ void postprocess_all(std::vector<Mesh>& meshes, const PostProcessOptions& post, 
 void warn_outside_range(Mesh& m, double iso, const ValueRange& range) {
     if (iso > range.max || iso <= range.min) {
         char w[160];
-        std::snprintf(w, sizeof w, "iso value %g is outside the volume's value range [%g, %g]: the surface is empty", iso,
-                      range.min, range.max);
+        std::snprintf(w, sizeof w, "iso value %g is outside the volume's value range [%g, %g]: the surface is empty",
+                      iso, range.min, range.max);
         m.warnings.push_back(w);
     }
 }
 
 ExtractOptions with_share(ExtractOptions eo, const ProgressFn& progress, double share) {
-    if (progress) eo.progress = [progress, share](double f, std::string_view stage) { return progress(f * share, stage); };
+    if (progress)
+        eo.progress = [progress, share](double f, std::string_view stage) { return progress(f * share, stage); };
     return eo;
 }
 
 } // namespace
 
-std::vector<SurfaceId> Scene::add_isosurfaces(std::vector<double> isos, const ExtractOptions& extract, const PostProcessOptions& post,
-                                              ProgressFn progress) {
+std::vector<SurfaceId> Scene::add_isosurfaces(std::vector<double> isos, const ExtractOptions& extract,
+                                              const PostProcessOptions& post, ProgressFn progress) {
     const Volume& v = volume();
     if (isos.empty()) throw Error("isosurface extraction of " + impl_->volume_source, "no iso value given");
     std::sort(isos.begin(), isos.end());
@@ -144,7 +148,8 @@ std::vector<SurfaceId> Scene::add_isosurfaces(std::vector<double> isos, const Ex
     return add_extracted(std::move(meshes), SurfaceInfo::Kind::Iso, isos, post);
 }
 
-Mesh Scene::extract_isosurface(double iso, const ExtractOptions& extract, const PostProcessOptions& post, ProgressFn progress) const {
+Mesh Scene::extract_isosurface(double iso, const ExtractOptions& extract, const PostProcessOptions& post,
+                               ProgressFn progress) const {
     const Volume& v = volume();
     const bool pp = needs_postprocess(post);
     const double share = pp ? 0.6 : 1.0;
@@ -209,7 +214,9 @@ void Scene::remove_surface(SurfaceId id) {
     e.gpu_stale = true;
 }
 
-bool Scene::has_surface(SurfaceId id) const { return id != 0 && id <= impl_->surfaces.size() && !impl_->surfaces[id - 1].removed; }
+bool Scene::has_surface(SurfaceId id) const {
+    return id != 0 && id <= impl_->surfaces.size() && !impl_->surfaces[id - 1].removed;
+}
 
 std::vector<SurfaceId> Scene::add_label_surfaces(const std::vector<double>& labels, const ExtractOptions& extract,
                                                  const PostProcessOptions& post, ProgressFn progress) {
@@ -226,8 +233,8 @@ std::vector<SurfaceId> Scene::add_label_surfaces(const std::vector<double>& labe
     return add_extracted(std::move(meshes), SurfaceInfo::Kind::Label, values, post);
 }
 
-std::vector<SurfaceId> Scene::add_extracted(std::vector<Mesh> meshes, SurfaceInfo::Kind kind, const std::vector<double>& values,
-                                            const PostProcessOptions& post) {
+std::vector<SurfaceId> Scene::add_extracted(std::vector<Mesh> meshes, SurfaceInfo::Kind kind,
+                                            const std::vector<double>& values, const PostProcessOptions& post) {
     std::vector<SurfaceId> ids;
     const bool iso = kind == SurfaceInfo::Kind::Iso;
     for (std::size_t i = 0; i < meshes.size(); ++i) {
@@ -326,7 +333,9 @@ void Scene::release_gpu() {
 
 void Scene::export_mesh(SurfaceId id, const std::string& path) const { save_mesh(mesh(id), path); }
 
-void export_image(const Image& image, const ImageMetadata& meta, const std::string& path) { save_image(image, path, meta); }
+void export_image(const Image& image, const ImageMetadata& meta, const std::string& path) {
+    save_image(image, path, meta);
+}
 
 glm::vec3 surface_color(std::size_t index, std::size_t count) {
     // Outer surfaces (lower CT values) skin-toned, inner ones bone white; more get distinct hues.

@@ -33,7 +33,7 @@ using SurfaceId = std::uint32_t;
 
 struct SurfaceInfo {
     enum class Kind { Iso, Label, Mesh };
-    std::string name;      // "iso 500", "label 3", the mesh file's name
+    std::string name; // "iso 500", "label 3", the mesh file's name
     Kind kind = Kind::Mesh;
     double value = 0;      // iso value or label
     std::string source;    // the file or folder it came from
@@ -62,7 +62,7 @@ public:
     // does for a volume file; `source` names it (metadata, errors).
     void set_volume(Volume v, const std::string& source);
     bool has_volume() const;
-    const Volume& volume() const;           // throws without one
+    const Volume& volume() const; // throws without one
     const std::string& volume_source() const;
     // Isosurfaces of the volume, in increasing iso order, coloured skin to
     // bone; each gets an empty-surface warning when outside the value range.
@@ -107,7 +107,7 @@ public:
     SurfaceInfo& info(SurfaceId id);         // edit freely; the next render shows it
     const SurfaceInfo& info(SurfaceId id) const;
     const Mesh& mesh(SurfaceId id) const;
-    Bounds bounds() const;                   // of the visible surfaces
+    Bounds bounds() const; // of the visible surfaces
     // Every file or folder opened, in order (image metadata, cache keys).
     std::vector<std::string> sources() const;
 
@@ -125,8 +125,8 @@ public:
     void export_mesh(SurfaceId id, const std::string& path) const;
 
 private:
-    std::vector<SurfaceId> add_extracted(std::vector<Mesh> meshes, SurfaceInfo::Kind kind, const std::vector<double>& values,
-                                         const PostProcessOptions& post);
+    std::vector<SurfaceId> add_extracted(std::vector<Mesh> meshes, SurfaceInfo::Kind kind,
+                                         const std::vector<double>& values, const PostProcessOptions& post);
     struct Impl;
     std::unique_ptr<Impl> impl_;
 };

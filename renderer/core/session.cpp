@@ -57,10 +57,12 @@ public:
             fail("format", "not an isoscope session (expected \"format\": \"" + std::string(kFormat) + "\")");
         const json* version = member(root, "version");
         if (!version) fail("version", "missing");
-        if (!version->is_number_integer()) fail("version", "must be an integer, not a " + std::string(version->type_name()));
+        if (!version->is_number_integer())
+            fail("version", "must be an integer, not a " + std::string(version->type_name()));
         if (version->get<long long>() != kSessionVersion)
-            fail("version", std::to_string(version->get<long long>()) + " is not supported (this isoscope reads version " +
-                                std::to_string(kSessionVersion) + ")");
+            fail("version", std::to_string(version->get<long long>()) +
+                                " is not supported (this isoscope reads version " + std::to_string(kSessionVersion) +
+                                ")");
         Session s;
         const json& input = object(root, "input", "input", true);
         s.input = resolve(string(input, "path", "input.path", true));
@@ -70,7 +72,8 @@ public:
 
         if (const json* list = member(root, "surfaces"); list && !list->is_null()) {
             if (!list->is_array()) fail("surfaces", "must be an array, not a " + std::string(list->type_name()));
-            for (std::size_t i = 0; i < list->size(); ++i) s.surfaces.push_back(surface((*list)[i], "surfaces[" + std::to_string(i) + "]"));
+            for (std::size_t i = 0; i < list->size(); ++i)
+                s.surfaces.push_back(surface((*list)[i], "surfaces[" + std::to_string(i) + "]"));
         }
         if (const json* c = member(root, "camera"); c && !c->is_null()) s.camera = camera(*c);
         if (const json* w = member(root, "window_level"); w && !w->is_null()) {
@@ -143,7 +146,9 @@ private:
     }
 
     double number(const json& v, const std::string& field) const {
-        if (!v.is_number()) fail(field, "must be a number, not " + (v.is_null() ? std::string("null (NaN?)") : "a " + std::string(v.type_name())));
+        if (!v.is_number())
+            fail(field, "must be a number, not " +
+                            (v.is_null() ? std::string("null (NaN?)") : "a " + std::string(v.type_name())));
         const double d = v.get<double>();
         if (!std::isfinite(d)) fail(field, "is NaN or infinite");
         return d;
@@ -169,15 +174,21 @@ private:
         if (!item.is_object()) fail(where, "must be an object, not a " + std::string(item.type_name()));
         SessionSurface s;
         const std::string kind = string(item, "kind", where + ".kind", true);
-        if (kind == "iso") s.kind = SurfaceInfo::Kind::Iso;
-        else if (kind == "label") s.kind = SurfaceInfo::Kind::Label;
-        else if (kind == "mesh") s.kind = SurfaceInfo::Kind::Mesh;
-        else fail(where + ".kind", "'" + kind + "' is not iso, label or mesh");
-        if (s.kind != SurfaceInfo::Kind::Mesh) s.value = number(require(item, "value", where + ".value"), where + ".value");
+        if (kind == "iso")
+            s.kind = SurfaceInfo::Kind::Iso;
+        else if (kind == "label")
+            s.kind = SurfaceInfo::Kind::Label;
+        else if (kind == "mesh")
+            s.kind = SurfaceInfo::Kind::Mesh;
+        else
+            fail(where + ".kind", "'" + kind + "' is not iso, label or mesh");
+        if (s.kind != SurfaceInfo::Kind::Mesh)
+            s.value = number(require(item, "value", where + ".value"), where + ".value");
         s.name = string(item, "name", where + ".name", false);
         s.source = resolve(string(item, "source", where + ".source", false));
         if (const json* c = member(item, "color")) {
-            if (!c->is_string()) fail(where + ".color", "must be a string \"#rrggbb\", not a " + std::string(c->type_name()));
+            if (!c->is_string())
+                fail(where + ".color", "must be a string \"#rrggbb\", not a " + std::string(c->type_name()));
             s.color = c->get<std::string>();
             try {
                 linear_from_hex(s.color);
@@ -192,7 +203,8 @@ private:
         s.post.smooth = number_or(item, "smoothing", where + ".smoothing", 0.0);
         if (s.post.smooth < 0.0 || s.post.smooth > 1.0) fail(where + ".smoothing", "must be between 0 and 1");
         s.post.decimate = number_or(item, "decimate", where + ".decimate", 0.0);
-        if (s.post.decimate < 0.0 || s.post.decimate >= 1.0) fail(where + ".decimate", "must be at least 0 and below 1");
+        if (s.post.decimate < 0.0 || s.post.decimate >= 1.0)
+            fail(where + ".decimate", "must be at least 0 and below 1");
         s.post.keep_largest = boolean(item, "keep_largest", where + ".keep_largest", false);
         return s;
     }
@@ -204,7 +216,8 @@ private:
         cam.target = vec3(require(c, "target", "camera.target"), "camera.target");
         cam.up = vec3(require(c, "up", "camera.up"), "camera.up");
         cam.fov_y_degrees = number(require(c, "fov_y_degrees", "camera.fov_y_degrees"), "camera.fov_y_degrees");
-        if (!(cam.fov_y_degrees > 0.0 && cam.fov_y_degrees < 180.0)) fail("camera.fov_y_degrees", "must be between 0 and 180");
+        if (!(cam.fov_y_degrees > 0.0 && cam.fov_y_degrees < 180.0))
+            fail("camera.fov_y_degrees", "must be between 0 and 180");
         const glm::dvec3 forward = cam.target - cam.eye;
         if (!(glm::length(forward) > 0.0)) fail("camera", "eye and target are the same point");
         if (!(glm::length(glm::cross(forward, cam.up)) > 1e-12 * glm::length(forward) * glm::length(cam.up)))
@@ -217,8 +230,9 @@ private:
 
 } // namespace
 
-Session capture_session(const Scene& scene, const std::string& input, const std::string& series, const std::optional<Camera>& camera,
-                        const std::optional<WindowLevel>& window, const FrameLook& view, std::vector<Markup> markups) {
+Session capture_session(const Scene& scene, const std::string& input, const std::string& series,
+                        const std::optional<Camera>& camera, const std::optional<WindowLevel>& window,
+                        const FrameLook& view, std::vector<Markup> markups) {
     Session s;
     s.input = input.empty() ? std::string() : normal_absolute(input).string();
     s.series = series;
@@ -327,7 +341,8 @@ Session load_session(const std::string& path) {
     std::error_code ec;
     if (!fs::exists(s.input, ec)) throw Error(path, "input.path: '" + s.input + "' does not exist");
     if (!s.input_sha256.empty() && sha256_of_path(s.input) != s.input_sha256)
-        s.warnings.push_back(s.input + " changed since the session was saved (its SHA-256 differs): the surfaces may differ");
+        s.warnings.push_back(s.input +
+                             " changed since the session was saved (its SHA-256 differs): the surfaces may differ");
     return s;
 }
 
@@ -348,7 +363,8 @@ OpenedSession open_session(const Session& s, const ProgressFn& progress) {
     const std::size_t n = s.surfaces.size();
     const auto part = [&](double from, double to) -> ProgressFn {
         if (!progress) return {};
-        return [progress, from, to](double f, std::string_view stage) { return progress(from + f * (to - from), stage); };
+        return
+            [progress, from, to](double f, std::string_view stage) { return progress(from + f * (to - from), stage); };
     };
     LoadOptions lo;
     lo.series = s.series;
@@ -358,14 +374,17 @@ OpenedSession open_session(const Session& s, const ProgressFn& progress) {
     std::size_t next_mesh = 0;
     for (std::size_t i = 0; i < n; ++i) {
         const auto& ss = s.surfaces[i];
-        const auto where = "surface " + std::to_string(i + 1) + (ss.name.empty() ? std::string() : " ('" + ss.name + "')");
+        const auto where =
+            "surface " + std::to_string(i + 1) + (ss.name.empty() ? std::string() : " ('" + ss.name + "')");
         const ProgressFn p = part(0.3 + 0.7 * double(i) / double(n), 0.3 + 0.7 * double(i + 1) / double(n));
         std::vector<SurfaceId> ids;
         if (ss.kind == SurfaceInfo::Kind::Mesh) {
-            if (next_mesh >= meshes.size()) throw Error(s.input, where + ": a mesh surface, but the input is not a mesh file");
+            if (next_mesh >= meshes.size())
+                throw Error(s.input, where + ": a mesh surface, but the input is not a mesh file");
             ids = {meshes[next_mesh++]};
         } else if (!scene.has_volume()) {
-            throw Error(s.input, where + ": an " + std::string(kind_name(ss.kind)) + " surface, but the input is not a volume");
+            throw Error(s.input,
+                        where + ": an " + std::string(kind_name(ss.kind)) + " surface, but the input is not a volume");
         } else if (ss.kind == SurfaceInfo::Kind::Iso) {
             ids = {scene.add_isosurface(scene.extract_isosurface(ss.value, {}, ss.post, p), ss.value, ss.post)};
         } else {
@@ -396,7 +415,8 @@ OpenedSession open_session(const std::string& path, const ProgressFn& progress) 
     }
 }
 
-RenderRequest session_request(const Session& s, const std::string& session_file, RenderRequest frame, const SessionParts& take) {
+RenderRequest session_request(const Session& s, const std::string& session_file, RenderRequest frame,
+                              const SessionParts& take) {
     if (take.camera) frame.camera = s.camera;
     if (take.markups) frame.markups.insert(frame.markups.end(), s.markups.begin(), s.markups.end());
     if (take.ao) frame.look.ao = s.ao;

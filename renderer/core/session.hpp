@@ -32,9 +32,9 @@ constexpr int kSessionVersion = 1;
 
 struct SessionSurface {
     SurfaceInfo::Kind kind = SurfaceInfo::Kind::Iso;
-    double value = 0;             // iso value or label (mesh: unused)
+    double value = 0; // iso value or label (mesh: unused)
     std::string name;
-    std::string source;           // absolute path in memory
+    std::string source;            // absolute path in memory
     std::string color = "#e6e6e6"; // sRGB, as colour pickers give it
     float opacity = 1.0f;
     bool visible = true;
@@ -43,17 +43,17 @@ struct SessionSurface {
 };
 
 struct Session {
-    std::string input;        // absolute path of the file or folder opened
-    std::string input_sha256; // empty: not recorded (save_session fills it in)
-    std::string series;       // DICOM series (LoadOptions::series); empty: the only one
+    std::string input;                    // absolute path of the file or folder opened
+    std::string input_sha256;             // empty: not recorded (save_session fills it in)
+    std::string series;                   // DICOM series (LoadOptions::series); empty: the only one
     std::vector<SessionSurface> surfaces; // in the scene's order
     // The 3D view's camera: eye, target, up, field of view (near and far
     // are fitted to the surfaces when drawn). None: the anterior view.
     std::optional<Camera> camera;
     std::optional<WindowLevel> window; // the slice views' window/level
-    AoMethod ao = AoMethod::Cone;      // the 3D view's ambient occlusion: cone or off (the file's view.ao: true or false)
-    bool transparency = true;          // the 3D view's transparency on (off: every surface opaque)
-    std::vector<Markup> markups;       // LPS mm
+    AoMethod ao = AoMethod::Cone; // the 3D view's ambient occlusion: cone or off (the file's view.ao: true or false)
+    bool transparency = true;     // the 3D view's transparency on (off: every surface opaque)
+    std::vector<Markup> markups;  // LPS mm
     // Found while loading, not stored: e.g. the input changed since saving.
     std::vector<std::string> warnings;
 };
@@ -61,8 +61,9 @@ struct Session {
 // What the window shows, as a session (no file access: the SHA-256 is left
 // empty); each surface's post-processing is its SurfaceInfo::post; the 3D
 // view's AO (cone or off) and transparency toggle come from `view`.
-Session capture_session(const Scene& scene, const std::string& input, const std::string& series, const std::optional<Camera>& camera,
-                        const std::optional<WindowLevel>& window, const FrameLook& view, std::vector<Markup> markups);
+Session capture_session(const Scene& scene, const std::string& input, const std::string& series,
+                        const std::optional<Camera>& camera, const std::optional<WindowLevel>& window,
+                        const FrameLook& view, std::vector<Markup> markups);
 
 // The JSON of a session stored at `session_path` (paths below its folder
 // relative) and back. from_json checks every field and throws iso::Error
@@ -115,6 +116,7 @@ struct SessionParts {
 // `take` names from the session; `session_file` (may be empty) is recorded
 // in the image's metadata with its SHA-256. `isoscope render --session` and
 // the desktop app's File > Export image both build their request with it.
-RenderRequest session_request(const Session& s, const std::string& session_file, RenderRequest frame, const SessionParts& take = {});
+RenderRequest session_request(const Session& s, const std::string& session_file, RenderRequest frame,
+                              const SessionParts& take = {});
 
 } // namespace iso::core

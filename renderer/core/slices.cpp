@@ -71,7 +71,9 @@ float sample_index(const Volume& v, const glm::dvec3& index, Interp interp) {
         f[a] = i1[a] == i0[a] ? 0.0 : std::clamp(c - double(i0[a]), 0.0, 1.0);
     }
     if (interp == Interp::Nearest) return float(v.value(voxel[0], voxel[1], voxel[2]));
-    auto at = [&](int di, int dj, int dk) { return v.value(di ? i1[0] : i0[0], dj ? i1[1] : i0[1], dk ? i1[2] : i0[2]); };
+    auto at = [&](int di, int dj, int dk) {
+        return v.value(di ? i1[0] : i0[0], dj ? i1[1] : i0[1], dk ? i1[2] : i0[2]);
+    };
     // Only samples with weight are read, so a NaN neighbour with zero weight does not spread.
     auto row = [&](int dj, int dk) { return f[0] == 0 ? at(0, dj, dk) : lerp(at(0, dj, dk), at(1, dj, dk), f[0]); };
     auto plane = [&](int dk) { return f[1] == 0 ? row(0, dk) : lerp(row(0, dk), row(1, dk), f[1]); };
@@ -98,7 +100,8 @@ void reslice_dense_rows(const Volume& v, const IndexSteps& s, int width, int r0,
     // Neighbour offsets; 0 on an axis of one sample (its weight is 0 then).
     const std::int64_t ox = nx > 1 ? 1 : 0, oy = ny > 1 ? sy : 0, oz = nz > 1 ? sz : 0;
     const double lo = -0.5 - kIndexEps;
-    const double hx = double(nx) - 0.5 + kIndexEps, hy = double(ny) - 0.5 + kIndexEps, hz = double(nz) - 0.5 + kIndexEps;
+    const double hx = double(nx) - 0.5 + kIndexEps, hy = double(ny) - 0.5 + kIndexEps,
+                 hz = double(nz) - 0.5 + kIndexEps;
     const double mx = double(nx - 1), my = double(ny - 1), mz = double(nz - 1);
     const std::int64_t lx = std::max<std::int64_t>(nx - 2, 0), ly = std::max<std::int64_t>(ny - 2, 0),
                        lz = std::max<std::int64_t>(nz - 2, 0);
@@ -346,7 +349,7 @@ namespace {
 // open viewers use (e.g. the ctviewer project's); neither Radiopaedia's table
 // nor Slicer's presets have one.
 constexpr WindowPreset kCtPresets[] = {
-    {"brain", {40.0, 80.0}},  {"soft tissue", {40.0, 400.0}}, {"lung", {-600.0, 1500.0}},
+    {"brain", {40.0, 80.0}},   {"soft tissue", {40.0, 400.0}}, {"lung", {-600.0, 1500.0}},
     {"bone", {400.0, 1800.0}}, {"angio", {170.0, 600.0}},
 };
 
@@ -416,7 +419,8 @@ std::vector<SliceSegment> mesh_outline(const Mesh& m, const SliceGrid& g) {
     // Signed distances once per vertex; a triangle then only compares signs.
     std::vector<double> d(nv);
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nv, 1 << 14), [&](const tbb::blocked_range<std::size_t>& r) {
-        for (std::size_t i = r.begin(); i < r.end(); ++i) d[i] = glm::dot(glm::dvec3(m.positions[i]), g.normal) - g.offset_mm;
+        for (std::size_t i = r.begin(); i < r.end(); ++i)
+            d[i] = glm::dot(glm::dvec3(m.positions[i]), g.normal) - g.offset_mm;
     });
     const double s2 = g.pixel_mm * g.pixel_mm;
     auto to_pixel = [&](const glm::dvec3& p) {

@@ -115,10 +115,10 @@ double drag_zoom_factor(double dy_up, int height);
 // is the plane's centre.
 struct SliceGrid {
     int width = 0, height = 0;
-    glm::dvec3 corner{0.0};        // LPS of (0, 0): the top-left corner of pixel (0, 0)
-    glm::dvec3 dx{0.0}, dy{0.0};   // LPS per pixel: pixel_mm * right, -pixel_mm * up
+    glm::dvec3 corner{0.0};      // LPS of (0, 0): the top-left corner of pixel (0, 0)
+    glm::dvec3 dx{0.0}, dy{0.0}; // LPS per pixel: pixel_mm * right, -pixel_mm * up
     glm::dvec3 normal{0.0, 0.0, 1.0};
-    double offset_mm = 0;          // the plane: dot(p, normal) == offset_mm
+    double offset_mm = 0; // the plane: dot(p, normal) == offset_mm
     double pixel_mm = 1.0;
 };
 // Throws iso::Error("slice image", ...) for a size below 1 or beyond 16384,
@@ -130,8 +130,8 @@ SliceGrid slice_grid(const SlicePlane& p, int width, int height);
 glm::dvec3 pixel_to_lps(const SliceGrid& g, const glm::dvec2& pixel);
 
 struct SlicePoint {
-    glm::dvec2 pixel{0.0};   // continuous pixel coordinates of the point's projection onto the plane
-    double distance_mm = 0;  // signed distance from the plane along its normal
+    glm::dvec2 pixel{0.0};  // continuous pixel coordinates of the point's projection onto the plane
+    double distance_mm = 0; // signed distance from the plane along its normal
 };
 SlicePoint lps_to_pixel(const SliceGrid& g, const glm::dvec3& lps);
 

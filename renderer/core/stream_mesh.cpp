@@ -66,7 +66,8 @@ std::string surface_output_path(const std::string& out, double value, bool label
     if (surfaces <= 1) return out;
     namespace fs = std::filesystem;
     const fs::path p(out);
-    return (p.parent_path() / (p.stem().string() + surface_file_suffix(label, value) + p.extension().string())).string();
+    return (p.parent_path() / (p.stem().string() + surface_file_suffix(label, value) + p.extension().string()))
+        .string();
 }
 
 namespace {
@@ -77,7 +78,8 @@ namespace {
 StreamStats extract_summarized(VolumeStream& src, const StreamOptions& so, StreamMeshResult& r) {
     auto sink = make_mesh_sink(r.paths);
     const VolumeHeader& h = src.header();
-    const glm::dvec3 centre(h.index_to_lps * glm::dvec4(0.5 * glm::dvec3(h.dims[0] - 1, h.dims[1] - 1, h.dims[2] - 1), 1.0));
+    const glm::dvec3 centre(h.index_to_lps *
+                            glm::dvec4(0.5 * glm::dvec3(h.dims[0] - 1, h.dims[1] - 1, h.dims[2] - 1), 1.0));
     SummarizingSink summing(*sink, centre);
     StreamStats st = stream_extract(src, so, summing);
     r.stats = sink->stats();
@@ -90,7 +92,8 @@ StreamMeshResult stream_mesh(const StreamMeshRequest& req) {
     StreamMeshResult r;
     r.memory_budget = req.memory_budget ? req.memory_budget : default_memory_budget();
     if (!is_streamable_mesh_path(req.output))
-        throw Error(req.output, "streamed output must be .pvtp (pieces), .ply or .stl (a single .vtp or .obj needs the whole mesh in memory)");
+        throw Error(req.output, "streamed output must be .pvtp (pieces), .ply or .stl (a single .vtp or .obj needs the "
+                                "whole mesh in memory)");
     check_writable_destination(req.output); // before the long part
     // A format that cannot stream is loaded whole if it takes at most half the budget.
     auto src = open_volume_stream(req.input, r.memory_budget / 2);

@@ -39,24 +39,25 @@ nlohmann::json describe_header(const std::string& path);
 std::string surface_output_path(const std::string& out, double value, bool label, std::size_t surfaces);
 
 struct StreamMeshRequest {
-    std::string input, output;             // output: .pvtp, .ply or .stl
+    std::string input, output; // output: .pvtp, .ply or .stl
     std::vector<double> isos;
     bool labels = false;
     std::vector<double> label_values;
     ExtractOptions extract;
-    std::size_t memory_budget = 0;         // 0: default_memory_budget()
-    bool overlap = true;                   // StreamOptions::overlap
+    std::size_t memory_budget = 0; // 0: default_memory_budget()
+    bool overlap = true;           // StreamOptions::overlap
     ProgressFn progress;
 };
 
 struct StreamMeshResult {
     std::vector<std::string> names, paths; // per surface: "iso 500" / "label 3", file written
     std::vector<MeshStats> stats;
-    std::vector<SurfaceSummary> summaries; // per surface: connected components and the largest (renderer/surface/components.hpp)
+    std::vector<SurfaceSummary>
+        summaries; // per surface: connected components and the largest (renderer/surface/components.hpp)
     StreamStats stream;
     std::size_t memory_budget = 0;
-    std::vector<std::string> warnings;     // of the volume's header
-    std::size_t reader_peak_bytes = 0;     // OpenVDB read slab by slab: the reading child's peak resident memory
+    std::vector<std::string> warnings; // of the volume's header
+    std::size_t reader_peak_bytes = 0; // OpenVDB read slab by slab: the reading child's peak resident memory
 };
 
 // Streams the extraction to the output file(s). Throws iso::Error (or Cancelled);

@@ -49,8 +49,9 @@ std::string markup_measurement_text(const Markup& m) {
     // The file's value when it is in the units drawn; a disabled one is still a value Slicer computed.
     std::optional<double> value;
     for (const auto& meas : m.measurements) {
-        const bool units = line ? (meas.units.empty() || meas.units == "mm")
-                                : (meas.units.empty() || meas.units == "deg" || meas.units == "degree" || meas.units == "\xC2\xB0");
+        const bool units =
+            line ? (meas.units.empty() || meas.units == "mm")
+                 : (meas.units.empty() || meas.units == "deg" || meas.units == "degree" || meas.units == "\xC2\xB0");
         if (meas.name == (line ? "length" : "angle") && meas.value && units) {
             value = meas.value;
             break;
@@ -102,7 +103,8 @@ constexpr float kDegreeAdvance = 4.0f; // the hand-drawn degree sign: a 3x3 ring
 
 float text_width(const std::string& s, float size) {
     float w = 0;
-    for (auto& r : text_runs(s)) w += float(stb_easy_font_width(r.ascii.data())) + (r.degree_after ? kDegreeAdvance : 0.0f);
+    for (auto& r : text_runs(s))
+        w += float(stb_easy_font_width(r.ascii.data())) + (r.degree_after ? kDegreeAdvance : 0.0f);
     return w * size;
 }
 
@@ -139,7 +141,9 @@ struct Builder {
             }
             x += float(stb_easy_font_width(run.ascii.data()));
             if (run.degree_after) { // a ring at the top of the line, as the font would draw it
-                const auto r = [&](float x0, float y0, float x1, float y1) { rect(at + glm::vec2(x + x0, y0) * size, at + glm::vec2(x + x1, y1) * size, col); };
+                const auto r = [&](float x0, float y0, float x1, float y1) {
+                    rect(at + glm::vec2(x + x0, y0) * size, at + glm::vec2(x + x1, y1) * size, col);
+                };
                 r(0, 0, 3, 1);
                 r(0, 2, 3, 3);
                 r(0, 1, 1, 2);
@@ -209,8 +213,9 @@ struct MarkupPainter {
             for (const auto& pl : lines) {
                 float along = 0;
                 for (std::size_t i = 0; i + 1 < pl.size(); ++i)
-                    segment(pl[i], pl[i + 1], outline ? 4.0f * s : 2.0f * s, outline ? glm::vec4(0, 0, 0, 0.6f) : glm::vec4(rgb, 1.0f),
-                            outline ? 0.0f : hidden_opacity, along);
+                    segment(pl[i], pl[i + 1], outline ? 4.0f * s : 2.0f * s,
+                            outline ? glm::vec4(0, 0, 0, 0.6f) : glm::vec4(rgb, 1.0f), outline ? 0.0f : hidden_opacity,
+                            along);
             }
         }
     }
@@ -254,7 +259,8 @@ struct MarkupPainter {
         if (text.empty()) return;
         anchor_at(p);
         const float size = kTextSize * s;
-        b.shadowed_text(text, centre - glm::vec2(text_width(text, size), 7.0f * size) * 0.5f, size, glm::vec4(rgb, 1.0f));
+        b.shadowed_text(text, centre - glm::vec2(text_width(text, size), 7.0f * size) * 0.5f, size,
+                        glm::vec4(rgb, 1.0f));
         release();
     }
 
@@ -286,7 +292,8 @@ struct MarkupPainter {
                 std::vector<glm::dvec3> arc;
                 for (int k = 0; k <= 24; ++k) {
                     const double t = k / 24.0;
-                    arc.push_back(v + r * ((std::sin((1 - t) * th) * u / lu + std::sin(t * th) * w / lw) / std::sin(th)));
+                    arc.push_back(v +
+                                  r * ((std::sin((1 - t) * th) * u / lu + std::sin(t * th) * w / lw) / std::sin(th)));
                 }
                 lines.push_back(std::move(arc));
             }
@@ -302,7 +309,8 @@ struct MarkupPainter {
             }
         }
         // Control points: a glyph each (visible ones), labelled in point lists and curves.
-        const bool labelled = m.type == MarkupType::Fiducial || m.type == MarkupType::Curve || m.type == MarkupType::ClosedCurve;
+        const bool labelled =
+            m.type == MarkupType::Fiducial || m.type == MarkupType::Curve || m.type == MarkupType::ClosedCurve;
         for (std::size_t i = 0; i < pts.size(); ++i) {
             if (!defined(i) || !pts[i].visible) continue;
             if (const auto p = project(pts[i].position)) {
@@ -345,7 +353,8 @@ std::vector<OverlayVertex> build_overlay(const Annotations& a, const Camera& cam
         glm::vec2 px;
         if (project(l.at, px)) b.shadowed_text(l.text, px + glm::vec2(6, -6) * s, 1.6f * s);
     }
-    MarkupPainter markups{b, cam.view(), cam.projection(aspect), W, H, s, std::clamp(a.hidden_opacity, 0.0f, 1.0f), cam.near_plane};
+    MarkupPainter markups{
+        b, cam.view(), cam.projection(aspect), W, H, s, std::clamp(a.hidden_opacity, 0.0f, 1.0f), cam.near_plane};
     for (const auto& m : a.markups) markups.draw(m);
     if (a.orientation) {
         const glm::dvec3 f = cam.forward(), right = glm::normalize(glm::cross(f, cam.up)), up = glm::cross(right, f);

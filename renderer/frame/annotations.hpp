@@ -24,7 +24,7 @@ namespace iso {
 
 struct Annotations {
     struct Label {
-        glm::dvec3 at;  // LPS mm
+        glm::dvec3 at; // LPS mm
         std::string text;
     };
     struct Line {
@@ -47,8 +47,8 @@ struct Annotations {
 };
 
 struct OverlayVertex {
-    glm::vec2 pixel;  // from the image's top-left corner
-    glm::vec4 color;  // sRGB, straight alpha
+    glm::vec2 pixel; // from the image's top-left corner
+    glm::vec4 color; // sRGB, straight alpha
     // Markups only. The pixel (top-left origin) whose 3x3 block decides
     // whether this vertex's glyph or label is hidden; negative: each
     // fragment's own pixel decides (lines).

@@ -23,18 +23,21 @@ const std::vector<AoSetting<ConeAoSettings>>& cone_ao_settings() {
         {"strength", &S::strength, 0, 4, "ao-strength", "AO = 1 - strength * occlusion (cone AO)"},
         {"layers", &S::layers, 1, 8, "ao-layers", "Slicemap depth: 128 z-voxels per layer, 1..8 (cone AO)"},
         {"grid", &S::grid_scale, 0.125, 2, "ao-grid", "Slicemap texels per image pixel, 0.125..2 (cone AO)"},
-        {"jitter_sets", &S::jitter_sets, 1, 64, "ao-jitter", "Jitter distributions chosen per pixel by a screen hash (cone AO)"},
+        {"jitter_sets", &S::jitter_sets, 1, 64, "ao-jitter",
+         "Jitter distributions chosen per pixel by a screen hash (cone AO)"},
         {"ray_weight", &S::ray_weight, 0, 1, "ao-ray-weight",
          "Sphere occlusion: 0 occupied volume fraction, 1 blocked-ray fraction of a cutting plane (cone AO)"},
         {"axis_weight", &S::axis_weight, 0, 1, "ao-axis-weight",
-         "Also march each cone's axis as a ray; a cone whose axis is blocked counts as at least this blocked, 0 off, default 1 "
+         "Also march each cone's axis as a ray; a cone whose axis is blocked counts as at least this blocked, 0 off, "
+         "default 1 "
          "(cone AO)"},
         {"persistence", &S::persistence, 0, 1, "ao-persistence",
          "Sphere combination along a cone: 0 independent absorbers, 1 one solid (cone AO)"},
         {"attenuation", &S::attenuation, 0, 100, "", "Sphere occlusion /= 1 + attenuation (t / R)^2"},
         {"bias", &S::bias, 0, 16, "", "Tangent-plane offset in voxel footprints"},
         {"surface_voxels", &S::surface_voxels, 0, 1, "ao-surface-voxels",
-         "Also set the voxels next to every surface, so walls thinner than a voxel occlude; slower voxelization (cone AO)"},
+         "Also set the voxels next to every surface, so walls thinner than a voxel occlude; slower voxelization (cone "
+         "AO)"},
         {"resolution", &S::resolution, 0.25, 1, "ao-resolution",
          "Cone-pass pixels per image pixel, 0.25..1; below 1 a bilateral upsampling follows (cone AO)"},
         {"guard", &S::guard, 0, 0.5, "ao-guard",
@@ -54,14 +57,17 @@ const std::vector<AoSetting<DiskAoSettings>>& disk_ao_settings() {
         {"traversal_epsilon", &S::traversal_epsilon, 0, 1e4, "ao-disk-epsilon",
          "Traversal: open an element while distance^2 < epsilon x area, 0..10000 (disk AO; default 16)"},
         // The chapter's 1e-6 mm up to a tenth of a mm (a larger snap would flatten real geometry).
-        {"clip_epsilon", &S::clip_epsilon, 0, 0.1, "ao-disk-clip-epsilon", "Tangent-plane snap in mm, 0..0.1 (disk AO; default 1e-6)"},
+        {"clip_epsilon", &S::clip_epsilon, 0, 0.1, "ao-disk-clip-epsilon",
+         "Tangent-plane snap in mm, 0..0.1 (disk AO; default 1e-6)"},
         {"distance_attenuation", &S::distance_attenuation, 0, 100, "ao-disk-distance-k",
          "Distance attenuation 1/(1 + k d^2), k 0..100 (disk AO; default 0)"},
         {"triangle_attenuation", &S::triangle_attenuation, 0, 16, "ao-disk-triangle-t",
          "Triangle attenuation: emitter term^t, t 0..16 (disk AO; default 1)"},
         // Both weights together are the CLI's --ao-disk-blend MIN,MAX (app/cli/frame_options.cpp).
-        {"blend_min", &S::min_scale, 0, 1, "", "Convergence blend: weight of the smaller of the last two passes (disk AO; default 0.7)"},
-        {"blend_max", &S::max_scale, 0, 1, "", "Convergence blend: weight of the larger of the last two passes (disk AO; default 0.3)"},
+        {"blend_min", &S::min_scale, 0, 1, "",
+         "Convergence blend: weight of the smaller of the last two passes (disk AO; default 0.7)"},
+        {"blend_max", &S::max_scale, 0, 1, "",
+         "Convergence blend: weight of the larger of the last two passes (disk AO; default 0.3)"},
         // 0 lets a receiver see its own disk; beyond a tenth of R it floats visibly off the surface.
         {"receiver_offset", &S::receiver_offset, 0, 0.1, "ao-disk-offset",
          "Receiver raised along its normal by this x R against self-occlusion, 0..0.1 (disk AO; default 0.001)"},
@@ -80,12 +86,15 @@ namespace {
 template <class S> void validate_table(const S& s, const std::vector<AoSetting<S>>& table, const char* prefix) {
     for (const auto& t : table) {
         double v = 0;
-        if (const auto* d = std::get_if<double S::*>(&t.member)) v = s.**d;
-        else if (const auto* i = std::get_if<int S::*>(&t.member)) v = s.**i;
-        else continue; // a boolean has no range
+        if (const auto* d = std::get_if<double S::*>(&t.member))
+            v = s.**d;
+        else if (const auto* i = std::get_if<int S::*>(&t.member))
+            v = s.**i;
+        else
+            continue;                  // a boolean has no range
         if (!(v >= t.lo && v <= t.hi)) // also rejects NaN
-            throw Error(prefix + std::string(t.name),
-                        "value " + number_text(v) + " is out of range [" + number_text(t.lo) + ", " + number_text(t.hi) + "]");
+            throw Error(prefix + std::string(t.name), "value " + number_text(v) + " is out of range [" +
+                                                          number_text(t.lo) + ", " + number_text(t.hi) + "]");
     }
 }
 
@@ -94,9 +103,12 @@ template <class S> std::string table_text(const S& s, const std::vector<AoSettin
     for (const auto& t : table) {
         if (skip_radius && std::string(t.name) == "radius") continue; // the metadata's own isoscope:ao_radius_mm
         std::string value;
-        if (const auto* d = std::get_if<double S::*>(&t.member)) value = number_text(s.**d);
-        else if (const auto* i = std::get_if<int S::*>(&t.member)) value = std::to_string(s.**i);
-        else value = s.*std::get<bool S::*>(t.member) ? "on" : "off";
+        if (const auto* d = std::get_if<double S::*>(&t.member))
+            value = number_text(s.**d);
+        else if (const auto* i = std::get_if<int S::*>(&t.member))
+            value = std::to_string(s.**i);
+        else
+            value = s.*std::get<bool S::*>(t.member) ? "on" : "off";
         out += (out.empty() ? "" : "; ") + std::string(t.name) + " " + value;
     }
     return out;

@@ -17,14 +17,14 @@
 namespace iso {
 
 struct ConeAoSettings {
-    double radius_mm = 10.0;   // R_max: occluders farther than this do not count
-    int cones = 8;             // over the hemisphere, rotated to the normal
-    int spheres = 5;           // per cone, sized to its cross-section, up to R_max
-    int samples = 8;           // Poisson-disk columns per sphere
-    double strength = 1.0;     // AO = 1 - strength * occlusion
-    int layers = 2;            // slicemap z resolution: 128 bits per layer (1..8)
-    double grid_scale = 1.0;   // slicemap texels per image pixel (0.125..2)
-    int jitter_sets = 8;       // precomputed distributions, one per pixel by a screen hash
+    double radius_mm = 10.0; // R_max: occluders farther than this do not count
+    int cones = 8;           // over the hemisphere, rotated to the normal
+    int spheres = 5;         // per cone, sized to its cross-section, up to R_max
+    int samples = 8;         // Poisson-disk columns per sphere
+    double strength = 1.0;   // AO = 1 - strength * occlusion
+    int layers = 2;          // slicemap z resolution: 128 bits per layer (1..8)
+    double grid_scale = 1.0; // slicemap texels per image pixel (0.125..2)
+    int jitter_sets = 8;     // precomputed distributions, one per pixel by a screen hash
     // A sphere's occlusion: 0 = the occupied fraction of its volume (the
     // thesis), 1 = the fraction of rays crossing it that a plane cutting off
     // that volume blocks, averaged over the plane's orientation
@@ -44,8 +44,8 @@ struct ConeAoSettings {
     // solid (blocked = max o_i). Solids (bone, skin) occlude the same rays in
     // successive spheres, so the product over-darkens; see docs/ao.md.
     double persistence = 1.0;
-    double attenuation = 0.0;  // o_i /= 1 + attenuation * (t_i / R)^2
-    double bias = 1.0;         // tangent-plane offset, in voxel/texel footprints
+    double attenuation = 0.0; // o_i /= 1 + attenuation * (t_i / R)^2
+    double bias = 1.0;        // tangent-plane offset, in voxel/texel footprints
     // Surface voxels: after the solid (voxel centre inside) voxelization, a
     // second, OR-blended draw sets the voxels next to every surface on its
     // solid's side, so walls thinner than a voxel in z still occlude. Off by
@@ -61,7 +61,7 @@ struct ConeAoSettings {
     // as R needs at the scene's nearest depth), so occluders just off screen
     // still count. 0: none.
     double guard = 0.15;
-    bool temporal = true;      // accumulate new jitter sets while camera and scene are still
+    bool temporal = true; // accumulate new jitter sets while camera and scene are still
     bool operator==(const ConeAoSettings&) const = default;
 };
 
@@ -155,13 +155,14 @@ std::string settings_text(const DiskAoSettings& s);
 // 128 l + 32 c .. +31.
 struct SliceMap {
     int width = 0, height = 0, layers = 0;
-    double z_near = 0, z_far = 0;      // mm along the view axis
+    double z_near = 0, z_far = 0; // mm along the view axis
     glm::dmat4 view{1.0}, projection{1.0};
     std::vector<std::uint32_t> words;
     int bits() const { return 128 * layers; }
     double voxel_length() const { return (z_far - z_near) / bits(); }
     bool bit(int x, int y, int b) const {
-        const std::size_t w = (std::size_t(y) * std::size_t(width) + std::size_t(x)) * std::size_t(layers) * 4 + std::size_t(b / 32);
+        const std::size_t w =
+            (std::size_t(y) * std::size_t(width) + std::size_t(x)) * std::size_t(layers) * 4 + std::size_t(b / 32);
         return (words[w] >> (b % 32)) & 1u;
     }
     bool empty() const { return words.empty(); }

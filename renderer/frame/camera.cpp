@@ -42,8 +42,14 @@ void Camera::set_view(PatientView v, const Bounds& b) {
     case PatientView::Posterior: dir = {0, 1, 0}; break;
     case PatientView::Left: dir = {1, 0, 0}; break;
     case PatientView::Right: dir = {-1, 0, 0}; break;
-    case PatientView::Superior: dir = {0, 0, 1}; u = {0, -1, 0}; break;  // anterior up
-    case PatientView::Inferior: dir = {0, 0, -1}; u = {0, -1, 0}; break;
+    case PatientView::Superior:
+        dir = {0, 0, 1};
+        u = {0, -1, 0};
+        break; // anterior up
+    case PatientView::Inferior:
+        dir = {0, 0, -1};
+        u = {0, -1, 0};
+        break;
     }
     target = b.empty() ? glm::dvec3(0) : b.center();
     eye = target + dir;

@@ -19,7 +19,9 @@ struct Bounds {
     }
     glm::dvec3 center() const { return 0.5 * (min + max); }
     // Corner c = 0..7: bit 0 picks max.x, bit 1 max.y, bit 2 max.z.
-    glm::dvec3 corner(int c) const { return {(c & 1) ? max.x : min.x, (c & 2) ? max.y : min.y, (c & 4) ? max.z : min.z}; }
+    glm::dvec3 corner(int c) const {
+        return {(c & 1) ? max.x : min.x, (c & 2) ? max.y : min.y, (c & 4) ? max.z : min.z};
+    }
     double radius() const; // half the diagonal
 };
 
@@ -48,11 +50,11 @@ public:
     // Keeps position and direction; sets near/far planes around `b`.
     void fit_planes(const Bounds& b);
     void orbit(double yaw_degrees, double pitch_degrees); // about `target`
-    void pan(double dx, double dy);                        // in units of the view height at the target
-    void zoom(double factor);                              // > 1 moves closer
+    void pan(double dx, double dy);                       // in units of the view height at the target
+    void zoom(double factor);                             // > 1 moves closer
 
-    glm::dmat4 view() const;                      // LPS world -> eye (OpenGL: camera looks down -z)
-    glm::dmat4 projection(double aspect) const;   // eye -> clip, reversed Z in [0, 1]
+    glm::dmat4 view() const;                    // LPS world -> eye (OpenGL: camera looks down -z)
+    glm::dmat4 projection(double aspect) const; // eye -> clip, reversed Z in [0, 1]
     glm::dvec3 forward() const { return glm::normalize(target - eye); }
     // Linear eye depth (distance along the view axis) from a reversed-Z depth value.
     double linear_depth(double d) const;

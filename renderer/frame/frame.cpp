@@ -24,7 +24,8 @@ constexpr std::pair<AoMethod, const char*> kAoMethods[] = {
 
 // A range check whose error names the setting and shows the number as given.
 void check_range(const char* setting, double v, double lo, double hi) {
-    if (!(v >= lo && v <= hi)) throw Error(setting, "expected " + number_text(lo) + ".." + number_text(hi) + ", got " + number_text(v));
+    if (!(v >= lo && v <= hi))
+        throw Error(setting, "expected " + number_text(lo) + ".." + number_text(hi) + ", got " + number_text(v));
 }
 
 } // namespace

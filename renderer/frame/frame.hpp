@@ -32,7 +32,6 @@ struct SceneObject {
     bool visible = true, pickable = true;
 };
 
-
 enum class Aov { None, Depth, Normal, Id, Ao };
 Aov aov_from_name(const std::string& name); // "depth", "normal", "id", "ao"; throws iso::Error
 
@@ -42,7 +41,7 @@ Aov aov_from_name(const std::string& name); // "depth", "normal", "id", "ao"; th
 // on the CPU and writes only as the ao AOV (the GL renderer draws such a
 // frame without AO).
 enum class AoMethod { Off, Cone, Disk, Reference };
-const char* ao_method_name(AoMethod m);               // "off", "cone", "disk", "reference"
+const char* ao_method_name(AoMethod m);                // "off", "cone", "disk", "reference"
 AoMethod ao_method_from_name(const std::string& name); // throws iso::Error("ambient occlusion", ...)
 
 // How a frame shades its surfaces: the one description that the CLI's
@@ -51,7 +50,7 @@ AoMethod ao_method_from_name(const std::string& name); // throws iso::Error("amb
 // ao_rays, the 3D view ao_rays).
 struct FrameLook {
     glm::vec3 background{0.08f, 0.09f, 0.11f}; // linear RGB
-    bool transparent_background = false;        // colour images: alpha 0 where no surface is
+    bool transparent_background = false;       // colour images: alpha 0 where no surface is
     // Off: every surface is drawn opaque whatever its opacity (the desktop
     // app's transparency toggle); the VOIT passes then have nothing to do.
     bool transparency = true;
@@ -71,8 +70,8 @@ struct FrameLook {
     AoMethod ao = AoMethod::Off;
     ConeAoSettings cone;
     DiskAoSettings disk;
-    int ao_frames = 1;   // cone: still frames accumulated, each with new jitter sets (the 3D view: while nothing moves)
-    int ao_rays = 1024;  // reference: rays per pixel
+    int ao_frames = 1;  // cone: still frames accumulated, each with new jitter sets (the 3D view: while nothing moves)
+    int ao_rays = 1024; // reference: rays per pixel
     bool operator==(const FrameLook&) const = default;
 };
 
@@ -88,11 +87,11 @@ struct PickRegion {
 
 // One fragment of a picked pixel, as the frame rasterized it.
 struct PickFragment {
-    float depth = 0;              // reversed Z (larger is nearer)
-    std::uint32_t object = 0;     // 1-based object id
-    std::uint32_t primitive = 0;  // the triangle in the object's mesh
-    float alpha = 1;              // the object's opacity (1: opaque)
-    float transmittance = 1;      // of everything in front of it in this pixel
+    float depth = 0;             // reversed Z (larger is nearer)
+    std::uint32_t object = 0;    // 1-based object id
+    std::uint32_t primitive = 0; // the triangle in the object's mesh
+    float alpha = 1;             // the object's opacity (1: opaque)
+    float transmittance = 1;     // of everything in front of it in this pixel
 };
 
 // What a pick found: per pixel of the region (clipped to the image; row by
@@ -153,7 +152,7 @@ struct RenderHooks {
 
 // What the VOIT passes did this frame (all zero without translucent objects).
 struct OitStats {
-    std::uint64_t fragments = 0;  // translucent fragments in front of the opaque surfaces
+    std::uint64_t fragments = 0; // translucent fragments in front of the opaque surfaces
     // Fragments that found the pool full at its cap. They are merged per
     // pixel (order-independent: their opacity-weighted mean colour and their
     // total coverage 1 - prod(1 - alpha)) and composited behind the pixel's
@@ -168,21 +167,21 @@ struct OitStats {
     std::uint64_t overflowed = 0; // of them, found the pool full (the depth cut did not make room: the looser bound)
     std::uint64_t merged_pixels = 0;
     double merge_error_max = 0;
-    std::uint64_t capacity = 0;   // nodes the pool held
-    std::uint32_t max_list = 0;   // longest pixel list
-    std::uint64_t shaded = 0;     // fragments shaded (the rest were behind an opaque-enough front)
-    std::uint64_t lists = 0;      // pixels with a list
-    int redraws = 0;              // frames redrawn with a larger pool
+    std::uint64_t capacity = 0; // nodes the pool held
+    std::uint32_t max_list = 0; // longest pixel list
+    std::uint64_t shaded = 0;   // fragments shaded (the rest were behind an opaque-enough front)
+    std::uint64_t lists = 0;    // pixels with a list
+    int redraws = 0;            // frames redrawn with a larger pool
 };
 
 struct RenderResult {
-    Image image;                 // RGBA8 sRGB colour, or the AOV as floats
+    Image image; // RGBA8 sRGB colour, or the AOV as floats
     graph::FrameStats stats;
     std::string gl_renderer;
-    SliceMap slicemap;           // with RenderHooks::read_slicemap
-    bool voxelized = false;      // the slicemap was rebuilt this frame (else reused)
-    int ao_frames = 0;           // still frames accumulated into the AO so far
-    double ao_guard = 0;         // guard band used by the slicemap, fraction of the viewport per side
+    SliceMap slicemap;      // with RenderHooks::read_slicemap
+    bool voxelized = false; // the slicemap was rebuilt this frame (else reused)
+    int ao_frames = 0;      // still frames accumulated into the AO so far
+    double ao_guard = 0;    // guard band used by the slicemap, fraction of the viewport per side
     OitStats oit;
     std::vector<std::uint32_t> oit_lists; // with RenderHooks::read_oit_lists
     PickList pick;                        // with RenderOptions::pick
@@ -191,8 +190,8 @@ struct RenderResult {
     // an earlier frame); its size; with RenderHooks::read_disk, what it read.
     bool disk_built = false, disk_elements = false;
     std::size_t disk_nodes = 0, disk_triangles = 0;
-    double disk_build_ms = 0;             // CPU time of the hierarchy builds this frame
-    bool cancelled = false;               // RenderOptions::progress asked to stop: the image is incomplete
+    double disk_build_ms = 0; // CPU time of the hierarchy builds this frame
+    bool cancelled = false;   // RenderOptions::progress asked to stop: the image is incomplete
     std::vector<float> disk_terms;
     std::vector<glm::vec4> disk_receivers; // 2 per pixel: (point, AO), (normal, 0)
 };

@@ -90,9 +90,15 @@ HeadlessContext::HeadlessContext(bool debug) : impl_(std::make_unique<Impl>()) {
             eglTerminate(display);
             continue;
         }
-        const EGLint attribs[] = {EGL_CONTEXT_MAJOR_VERSION, 4, EGL_CONTEXT_MINOR_VERSION, 5,
-                                  EGL_CONTEXT_OPENGL_PROFILE_MASK, EGL_CONTEXT_OPENGL_CORE_PROFILE_BIT,
-                                  EGL_CONTEXT_OPENGL_DEBUG, debug ? EGL_TRUE : EGL_FALSE, EGL_NONE};
+        const EGLint attribs[] = {EGL_CONTEXT_MAJOR_VERSION,
+                                  4,
+                                  EGL_CONTEXT_MINOR_VERSION,
+                                  5,
+                                  EGL_CONTEXT_OPENGL_PROFILE_MASK,
+                                  EGL_CONTEXT_OPENGL_CORE_PROFILE_BIT,
+                                  EGL_CONTEXT_OPENGL_DEBUG,
+                                  debug ? EGL_TRUE : EGL_FALSE,
+                                  EGL_NONE};
         EGLContext ctx = eglCreateContext(display, EGL_NO_CONFIG_KHR, EGL_NO_CONTEXT, attribs);
         if (ctx == EGL_NO_CONTEXT) {
             tried += std::string(platform) + ": no GL 4.5 core context (" + egl_error_name(eglGetError()) + "); ";
@@ -150,7 +156,8 @@ ScopedCurrent::ScopedCurrent(HeadlessContext* ctx)
 }
 
 ScopedCurrent::~ScopedCurrent() {
-    if (context_ != EGL_NO_CONTEXT) eglMakeCurrent(display_, draw_, read_, context_);
+    if (context_ != EGL_NO_CONTEXT)
+        eglMakeCurrent(display_, draw_, read_, context_);
     else if (eglGetCurrentContext() != EGL_NO_CONTEXT)
         eglMakeCurrent(eglGetCurrentDisplay(), EGL_NO_SURFACE, EGL_NO_SURFACE, EGL_NO_CONTEXT);
 }
@@ -187,8 +194,11 @@ void DebugLog::record(unsigned type, unsigned id, unsigned severity, const std::
     const bool error = type == GL_DEBUG_TYPE_ERROR;
     const bool warning = type == GL_DEBUG_TYPE_UNDEFINED_BEHAVIOR || type == GL_DEBUG_TYPE_DEPRECATED_BEHAVIOR ||
                          type == GL_DEBUG_TYPE_PORTABILITY;
-    const std::string line =
-        std::string("GL ") + (error ? "error" : warning ? "warning" : "note") + " (id " + std::to_string(id) + "): " + text;
+    const std::string line = std::string("GL ") +
+                             (error     ? "error"
+                              : warning ? "warning"
+                                        : "note") +
+                             " (id " + std::to_string(id) + "): " + text;
     std::lock_guard lock(mutex_);
     errors_ += error;
     messages_.push_back(line);
@@ -204,7 +214,8 @@ DebugLog& debug_log() {
 namespace {
 void GLAPIENTRY on_debug_message(GLenum, GLenum type, GLuint id, GLenum severity, GLsizei length, const GLchar* message,
                                  const void*) {
-    debug_log().record(type, id, severity, length >= 0 ? std::string(message, std::size_t(length)) : std::string(message));
+    debug_log().record(type, id, severity,
+                       length >= 0 ? std::string(message, std::size_t(length)) : std::string(message));
 }
 } // namespace
 

@@ -15,7 +15,7 @@
 namespace iso::gl {
 
 struct ContextInfo {
-    std::string platform;  // "device" or "surfaceless"
+    std::string platform; // "device" or "surfaceless"
     std::string vendor, renderer, version, glsl;
     bool debug = false;
 };

@@ -50,7 +50,9 @@ Texture Texture::create(GLenum target, GLenum internal_format, int width, int he
     return t;
 }
 
-Texture Texture::create_2d(GLenum internal_format, int width, int height) { return create(GL_TEXTURE_2D, internal_format, width, height, 1); }
+Texture Texture::create_2d(GLenum internal_format, int width, int height) {
+    return create(GL_TEXTURE_2D, internal_format, width, height, 1);
+}
 
 Texture Texture::create_2d_array(GLenum internal_format, int width, int height, int layers) {
     return create(GL_TEXTURE_2D_ARRAY, internal_format, width, height, layers);
@@ -123,7 +125,9 @@ template <class GetIv, class GetLog> std::string info_log(GLuint id, GetIv get_i
 }
 
 GLenum stage_of(const std::string& name) {
-    auto ends = [&](const char* s) { return name.size() > std::strlen(s) && name.compare(name.size() - std::strlen(s), std::string::npos, s) == 0; };
+    auto ends = [&](const char* s) {
+        return name.size() > std::strlen(s) && name.compare(name.size() - std::strlen(s), std::string::npos, s) == 0;
+    };
     if (ends(".comp")) return GL_COMPUTE_SHADER;
     if (ends(".vert")) return GL_VERTEX_SHADER;
     if (ends(".frag")) return GL_FRAGMENT_SHADER;

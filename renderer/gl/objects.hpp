@@ -42,12 +42,24 @@ private:
     GLuint id_ = 0;
 };
 
-struct BufferTraits { static void destroy(GLuint id) { glDeleteBuffers(1, &id); } };
-struct TextureTraits { static void destroy(GLuint id) { glDeleteTextures(1, &id); } };
-struct FramebufferTraits { static void destroy(GLuint id) { glDeleteFramebuffers(1, &id); } };
-struct VertexArrayTraits { static void destroy(GLuint id) { glDeleteVertexArrays(1, &id); } };
-struct ProgramTraits { static void destroy(GLuint id) { glDeleteProgram(id); } };
-struct QueryTraits { static void destroy(GLuint id) { glDeleteQueries(1, &id); } };
+struct BufferTraits {
+    static void destroy(GLuint id) { glDeleteBuffers(1, &id); }
+};
+struct TextureTraits {
+    static void destroy(GLuint id) { glDeleteTextures(1, &id); }
+};
+struct FramebufferTraits {
+    static void destroy(GLuint id) { glDeleteFramebuffers(1, &id); }
+};
+struct VertexArrayTraits {
+    static void destroy(GLuint id) { glDeleteVertexArrays(1, &id); }
+};
+struct ProgramTraits {
+    static void destroy(GLuint id) { glDeleteProgram(id); }
+};
+struct QueryTraits {
+    static void destroy(GLuint id) { glDeleteQueries(1, &id); }
+};
 
 // A buffer with immutable storage (glNamedBufferStorage).
 class Buffer : public Object<BufferTraits> {

@@ -43,7 +43,8 @@ Batch gather_batch(const Volume& v, const ChunkIndex& index, const std::size_t* 
         ChunkGpu& ci = batch.info[b];
         for (int a = 0; a < 3; ++a) {
             const std::int64_t p0 = std::int64_t(c[a]) * C, p1 = std::min<std::int64_t>(p0 + C, v.dims[a] - 1);
-            const std::int64_t lo = std::max<std::int64_t>(p0 - 1, 0), hi = std::min<std::int64_t>(p1 + 1, v.dims[a] - 1);
+            const std::int64_t lo = std::max<std::int64_t>(p0 - 1, 0),
+                               hi = std::min<std::int64_t>(p1 + 1, v.dims[a] - 1);
             ci.p0[a] = int(p0);
             ci.np[a] = int(p1 - p0 + 1);
             ci.blo[a] = int(lo);
@@ -60,8 +61,10 @@ Batch gather_batch(const Volume& v, const ChunkIndex& index, const std::size_t* 
             for (int y = 0; y < ci.bn[1]; ++y)
                 for (int x = 0; x < ci.bn[0]; ++x) {
                     double s = v.value(ci.blo[0] + x, ci.blo[1] + y, ci.blo[2] + z);
-                    if (std::isnan(s)) s = index.nan_value();
-                    else if (std::isinf(s)) s = s > 0 ? index.highest() : index.lowest();
+                    if (std::isnan(s))
+                        s = index.nan_value();
+                    else if (std::isinf(s))
+                        s = s > 0 ? index.highest() : index.lowest();
                     batch.samples.push_back(float(s));
                 }
     }
@@ -191,7 +194,8 @@ void store_chunk(const BatchOutput& r, std::size_t b, const ExtractOptions& opt,
 } // namespace
 
 GpuExtractor::GpuExtractor(const Volume& volume, ExtractOptions opt)
-    : volume_(&volume), opt_(std::move(opt)), index_(volume, opt_.chunk_size, opt_.threads), gl_(std::make_unique<Gl>()) {
+    : volume_(&volume), opt_(std::move(opt)), index_(volume, opt_.chunk_size, opt_.threads),
+      gl_(std::make_unique<Gl>()) {
     for (int p = 0; p < kPasses; ++p)
         gl_->pass[p] = gl::Program::from_files({"iso/mc.comp"}, "#define PASS " + std::to_string(p + 1));
     const auto& t = mc::tables();

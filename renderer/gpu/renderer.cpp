@@ -21,7 +21,7 @@ namespace iso {
 
 namespace {
 
-constexpr std::size_t kOitMinNodes = 1 << 16;   // the pool never shrinks below this
+constexpr std::size_t kOitMinNodes = 1 << 16; // the pool never shrinks below this
 
 struct GpuMesh {
     gl::VertexArray vao;
@@ -160,14 +160,16 @@ RenderResult Renderer::render(const Camera& camera, const RenderOptions& opt, co
     for (std::size_t i = 0; i < im.meshes.size(); ++i) {
         const auto& m = im.meshes[i];
         if (!m.object.visible || m.count == 0) continue;
-        draws.push_back({m.vao.id(), m.count, std::uint32_t(i + 1), m.object.color, opt.look.transparency ? std::clamp(m.object.opacity, 0.0f, 1.0f) : 1.0f, m.bounds});
+        draws.push_back({m.vao.id(), m.count, std::uint32_t(i + 1), m.object.color,
+                         opt.look.transparency ? std::clamp(m.object.opacity, 0.0f, 1.0f) : 1.0f, m.bounds});
     }
     const Bounds b = bounds();
     // The VOIT pool: sized from the last frame's fragment count; a frame that
     // overflows it is drawn again with a pool large enough, up to the cap.
     const std::size_t cap_max = std::size_t(opt.look.oit_memory_mib * 1048576.0) / passes::kOitNodeBytes;
     // A first frame guesses two fragments per pixel.
-    const std::size_t first_guess = std::bit_ceil(std::max(kOitMinNodes, 2 * std::size_t(opt.width) * std::size_t(opt.height)));
+    const std::size_t first_guess =
+        std::bit_ceil(std::max(kOitMinNodes, 2 * std::size_t(opt.width) * std::size_t(opt.height)));
     std::size_t capacity = std::min(im.oit_next_capacity ? im.oit_next_capacity : first_guess, cap_max);
     passes::FrameContext ctx = passes::make_context(camera, opt, std::move(draws), b);
     ctx.hooks = hooks;
@@ -196,7 +198,9 @@ RenderResult Renderer::render(const Camera& camera, const RenderOptions& opt, co
         // Sizes are powers of two and shrink only when four times too large,
         // so a moving view keeps its pool instead of remaking it each frame.
         const std::size_t n = std::size_t(result.oit.fragments);
-        const auto fit = [&](std::size_t need) { return std::min(cap_max, std::max(kOitMinNodes, std::bit_ceil(need))); };
+        const auto fit = [&](std::size_t need) {
+            return std::min(cap_max, std::max(kOitMinNodes, std::bit_ceil(need)));
+        };
         if (n > capacity)
             im.oit_next_capacity = fit(n + n / 4);
         else if (n < capacity / 4)

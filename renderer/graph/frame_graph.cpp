@@ -25,7 +25,8 @@ std::size_t bytes_per_pixel(Format f) {
 }
 
 std::size_t bytes_of(const TextureDesc& d) {
-    return std::size_t(d.width) * std::size_t(d.height) * std::size_t(d.layers) * std::size_t(d.depth) * bytes_per_pixel(d.format);
+    return std::size_t(d.width) * std::size_t(d.height) * std::size_t(d.layers) * std::size_t(d.depth) *
+           bytes_per_pixel(d.format);
 }
 
 // ---- Builder -------------------------------------------------------------------
@@ -47,7 +48,8 @@ void FrameGraph::Builder::read_resource(std::uint32_t index, std::uint32_t versi
 std::uint32_t FrameGraph::Builder::write_resource(std::uint32_t index, std::uint32_t version, bool texture) {
     g_.check(index, version, texture, "FrameGraph::Builder::write");
     auto& r = g_.resources_[index];
-    if (version != r.version) throw Error("pass '" + g_.passes_[pass_].name + "'", "writes an old version of '" + r.name + "'");
+    if (version != r.version)
+        throw Error("pass '" + g_.passes_[pass_].name + "'", "writes an old version of '" + r.name + "'");
     ++r.version;
     g_.passes_[pass_].writes.push_back({index, r.version});
     return r.version;
@@ -78,7 +80,9 @@ BufferHandle FrameGraph::Builder::read(BufferHandle h) {
     return h;
 }
 
-TextureHandle FrameGraph::Builder::write(TextureHandle h) { return {h.index, write_resource(h.index, h.version, true)}; }
+TextureHandle FrameGraph::Builder::write(TextureHandle h) {
+    return {h.index, write_resource(h.index, h.version, true)};
+}
 
 BufferHandle FrameGraph::Builder::write(BufferHandle h) { return {h.index, write_resource(h.index, h.version, false)}; }
 
@@ -120,7 +124,8 @@ template <class Desc> void set_desc(auto& r, const Desc& d) {
 } // namespace
 
 // Imported (physical given) or history (physical from the pool's named store).
-template <class Desc> Handle<Desc> FrameGraph::declare(const std::string& name, const Desc& d, bool history, std::uint64_t physical) {
+template <class Desc>
+Handle<Desc> FrameGraph::declare(const std::string& name, const Desc& d, bool history, std::uint64_t physical) {
     Resource r;
     r.name = name;
     set_desc(r, d);
@@ -130,8 +135,12 @@ template <class Desc> Handle<Desc> FrameGraph::declare(const std::string& name, 
     return {add_resource(std::move(r)), 0};
 }
 
-TextureHandle FrameGraph::import(const std::string& name, const TextureDesc& d, std::uint64_t physical) { return declare(name, d, false, physical); }
-BufferHandle FrameGraph::import(const std::string& name, const BufferDesc& d, std::uint64_t physical) { return declare(name, d, false, physical); }
+TextureHandle FrameGraph::import(const std::string& name, const TextureDesc& d, std::uint64_t physical) {
+    return declare(name, d, false, physical);
+}
+BufferHandle FrameGraph::import(const std::string& name, const BufferDesc& d, std::uint64_t physical) {
+    return declare(name, d, false, physical);
+}
 TextureHandle FrameGraph::history(const std::string& name, const TextureDesc& d) { return declare(name, d, true, 0); }
 BufferHandle FrameGraph::history(const std::string& name, const BufferDesc& d) { return declare(name, d, true, 0); }
 

@@ -68,7 +68,7 @@ public:
 struct PassStats {
     std::string name;
     bool ran = false;
-    double ms = 0;               // wall time of execute (callers glFinish inside when timing GPU work)
+    double ms = 0;                 // wall time of execute (callers glFinish inside when timing GPU work)
     std::size_t bytes_created = 0; // physical resources created for this pass's first uses
 };
 
@@ -208,7 +208,8 @@ private:
         std::shared_ptr<void> keep_alive;
     };
     std::uint32_t add_resource(Resource r);
-    template <class Desc> Handle<Desc> declare(const std::string& name, const Desc& d, bool history, std::uint64_t physical);
+    template <class Desc>
+    Handle<Desc> declare(const std::string& name, const Desc& d, bool history, std::uint64_t physical);
     void check(std::uint32_t index, std::uint32_t version, bool texture, const char* what) const;
     void cull();
     bool compiled_ = false, executed_ = false;

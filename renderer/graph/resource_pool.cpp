@@ -8,7 +8,8 @@
 namespace iso::graph {
 
 namespace {
-bool same(const bool texture, const TextureDesc& t, const BufferDesc& b, const bool texture2, const TextureDesc& t2, const BufferDesc& b2) {
+bool same(const bool texture, const TextureDesc& t, const BufferDesc& b, const bool texture2, const TextureDesc& t2,
+          const BufferDesc& b2) {
     return texture == texture2 && (texture ? t == t2 : b == b2);
 }
 } // namespace
@@ -23,7 +24,8 @@ ResourcePool::~ResourcePool() {
 }
 
 std::uint64_t ResourcePool::make(const Entry& want, const std::string& name) {
-    const std::uint64_t id = want.texture ? backend_.create_texture(want.t, name) : backend_.create_buffer(want.b, name);
+    const std::uint64_t id =
+        want.texture ? backend_.create_texture(want.t, name) : backend_.create_buffer(want.b, name);
     ++stats_.created;
     stats_.live_bytes += want.texture ? bytes_of(want.t) : want.b.bytes;
     ++stats_.live;
@@ -80,7 +82,8 @@ std::uint64_t ResourcePool::acquire(const BufferDesc& d, const std::string& name
 
 void ResourcePool::release(std::uint64_t id) {
     const auto it = in_use_.find(id);
-    if (it == in_use_.end()) throw Error("ResourcePool::release", "resource " + std::to_string(id) + " was not acquired from this pool");
+    if (it == in_use_.end())
+        throw Error("ResourcePool::release", "resource " + std::to_string(id) + " was not acquired from this pool");
     Entry e = it->second;
     in_use_.erase(it);
     e.last_used = stats_.frames;

@@ -48,8 +48,8 @@ public:
 
     struct Stats {
         std::size_t created = 0, reused = 0, destroyed = 0; // cumulative
-        std::size_t live = 0, waiting = 0, history = 0;      // now
-        std::size_t live_bytes = 0;                           // all resources held now
+        std::size_t live = 0, waiting = 0, history = 0;     // now
+        std::size_t live_bytes = 0;                         // all resources held now
         std::uint64_t frames = 0;
     };
     const Stats& stats() const { return stats_; }

@@ -18,8 +18,9 @@ AmbientOcclusion ambient_occlusion(graph::FrameGraph& fg, const FrameContext& ct
         res.zrange = zrange(fg, ctx, gb, res.zrange);
         res.slicemap = voxelize(fg, ctx, plan, res.zrange, res.slicemap);
     }
-    const auto history = fg.history(plan->coarse ? "ao_coarse" : "ao_accum",
-                                    graph::TextureDesc{plan->ao_w, plan->ao_h, plan->coarse ? graph::Format::RGBA32F : graph::Format::R32F});
+    const auto history = fg.history(
+        plan->coarse ? "ao_coarse" : "ao_accum",
+        graph::TextureDesc{plan->ao_w, plan->ao_h, plan->coarse ? graph::Format::RGBA32F : graph::Format::R32F});
     AmbientOcclusion out;
     out.cones = cone_ao(fg, ctx, plan, gb, res, history);
     if (ctx.hooks.read_slicemap) read_slicemap(fg, ctx, plan, res);

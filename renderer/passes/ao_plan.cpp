@@ -71,7 +71,8 @@ AoPlan plan_ao(const FrameContext& ctx) {
     double scene_far = 0;
     const Bounds& sb = ctx.bounds;
     if (!sb.empty())
-        for (int c = 0; c < 8; ++c) scene_far = std::max(scene_far, -(ctx.camera.view() * glm::dvec4(sb.corner(c), 1.0)).z);
+        for (int c = 0; c < 8; ++c)
+            scene_far = std::max(scene_far, -(ctx.camera.view() * glm::dvec4(sb.corner(c), 1.0)).z);
     p.scene_far = float(scene_far);
     p.radius = float(st.radius_mm);
     p.near_margin = p.guard > 0 ? p.radius : 0.0f;
@@ -87,8 +88,8 @@ AoPlan plan_ao(const FrameContext& ctx) {
     // range), the geometry and which objects are visible.
     for (int c = 0; c < 4; ++c)
         for (int r = 0; r < 4; ++r) p.key.push_back(double(ctx.view_projection[c][r]));
-    p.key.insert(p.key.end(), {double(W), double(H), double(p.grid_w), double(p.grid_h), p.guard, double(st.layers), st.radius_mm,
-                               double(ctx.geometry_version), double(st.surface_voxels)});
+    p.key.insert(p.key.end(), {double(W), double(H), double(p.grid_w), double(p.grid_h), p.guard, double(st.layers),
+                               st.radius_mm, double(ctx.geometry_version), double(st.surface_voxels)});
     for (const auto& d : ctx.draws) p.key.push_back(double(d.id)); // which objects are visible
     p.slicemap_desc = graph::TextureDesc{p.grid_w, p.grid_h, graph::Format::RGBA32UI, st.layers, 1, true};
     const bool kept = ctx.pool && ctx.ao && ctx.pool->has_history("slicemap", p.slicemap_desc) &&

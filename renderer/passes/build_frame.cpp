@@ -10,7 +10,8 @@
 
 namespace iso::passes {
 
-FrameContext make_context(const Camera& camera, const RenderOptions& opt, std::vector<DrawItem> draws, const Bounds& bounds) {
+FrameContext make_context(const Camera& camera, const RenderOptions& opt, std::vector<DrawItem> draws,
+                          const Bounds& bounds) {
     // Translucent surfaces go to the VOIT lists, opaque ones to the G-buffer.
     std::vector<DrawItem> opaque, translucent;
     std::vector<glm::vec4> objects(1, glm::vec4(0.0f));
@@ -37,7 +38,8 @@ FrameContext make_context(const Camera& camera, const RenderOptions& opt, std::v
         for (int c = 0; c < 8; ++c) z = std::min(z, glm::dot(d.bounds.corner(c) - eye, forward));
         return d.bounds.empty() ? 1e300 : z;
     };
-    std::stable_sort(translucent.begin(), translucent.end(), [&](const DrawItem& a, const DrawItem& b) { return nearest(a) < nearest(b); });
+    std::stable_sort(translucent.begin(), translucent.end(),
+                     [&](const DrawItem& a, const DrawItem& b) { return nearest(a) < nearest(b); });
     double z0 = 1e300, z1 = -1e300;
     for (const auto& d : translucent)
         for (int c = 0; c < 8 && !d.bounds.empty(); ++c) {
@@ -66,8 +68,10 @@ void build_frame(graph::FrameGraph& fg, const FrameContext& ctx) {
     const RenderOptions& opt = ctx.opt;
     // The GL frame computes cone and disk AO; the reference is the core's (on the CPU).
     const AoMethod method = opt.look.ao;
-    if (method == AoMethod::Reference) throw Error("ambient occlusion", "the ray-traced reference is computed by the core, not in a GL frame");
-    if (opt.aov == Aov::Ao && method == AoMethod::Off) throw Error("ao AOV", "needs cone, disk or reference ambient occlusion");
+    if (method == AoMethod::Reference)
+        throw Error("ambient occlusion", "the ray-traced reference is computed by the core, not in a GL frame");
+    if (opt.aov == Aov::Ao && method == AoMethod::Off)
+        throw Error("ao AOV", "needs cone, disk or reference ambient occlusion");
     validate(opt.look);
     const bool lit_ao = method != AoMethod::Off;
     const bool disk = method == AoMethod::Disk;
@@ -82,7 +86,8 @@ void build_frame(graph::FrameGraph& fg, const FrameContext& ctx) {
     // (traced through the cone chain: the disk hierarchy holds the opaque
     // surfaces only).
     PickBuffers picked;
-    if (!ctx.translucent.empty()) color = voit(fg, ctx, gb, color, lit_ao && !opt.look.flat_shading ? &ao : nullptr, picked);
+    if (!ctx.translucent.empty())
+        color = voit(fg, ctx, gb, color, lit_ao && !opt.look.flat_shading ? &ao : nullptr, picked);
     if (ctx.pick) pick(fg, ctx, gb, picked);
     if (!opt.image) return; // nothing reads the colour image or an AOV: their passes are culled
     if (opt.annotations) color = overlay(fg, ctx, color, gb.depth);

@@ -44,19 +44,19 @@ constexpr std::size_t kOitNodeWords = 5, kOitNodeNextWord = 4, kOitNodeBytes = 4
 
 // A visible, non-empty mesh as the passes draw it.
 struct DrawItem {
-    std::uint32_t vao = 0;   // GL vertex array (positions at 0, normals at 1)
-    std::int32_t count = 0;  // indices
-    std::uint32_t id = 0;    // object id (1-based) written to the id AOV
-    glm::vec3 color{1.0f};   // linear albedo
+    std::uint32_t vao = 0;  // GL vertex array (positions at 0, normals at 1)
+    std::int32_t count = 0; // indices
+    std::uint32_t id = 0;   // object id (1-based) written to the id AOV
+    glm::vec3 color{1.0f};  // linear albedo
     float opacity = 1.0f;
-    Bounds bounds;           // LPS mm: orders the translucent draws near to far
+    Bounds bounds; // LPS mm: orders the translucent draws near to far
 };
 
 // What the AO passes keep between frames besides their history resources.
 struct AoHistory {
-    std::vector<double> view_key;   // what the slicemap was built for
-    ConeAoSettings settings;        // what the accumulated AO was traced with
-    int frames = 0;                 // still frames accumulated so far
+    std::vector<double> view_key; // what the slicemap was built for
+    ConeAoSettings settings;      // what the accumulated AO was traced with
+    int frames = 0;               // still frames accumulated so far
 };
 
 // A visible opaque surface as disk AO sees it: how to get its mesh (read
@@ -65,13 +65,13 @@ struct AoHistory {
 // cached (built on first use, dropped when the mesh is replaced).
 struct DiskSurface {
     std::uint32_t id = 0;
-    std::uint64_t version = 0;  // changes when the object's mesh changes
+    std::uint64_t version = 0; // changes when the object's mesh changes
     std::function<Mesh()> mesh;
     std::shared_ptr<const DiskHierarchy>* cache = nullptr;
 };
 
 struct FrameContext {
-    GlResources* gl = nullptr;          // null: declare only (compile without a GPU)
+    GlResources* gl = nullptr; // null: declare only (compile without a GPU)
     graph::ResourcePool* pool = nullptr;
     Camera camera;
     RenderOptions opt;
@@ -79,25 +79,26 @@ struct FrameContext {
     int width = 1, height = 1;
     glm::mat4 view_projection{1.0f};
     glm::mat3 world_to_view{1.0f};
-    std::vector<DrawItem> draws;        // opaque (opacity 1): the G-buffer and AO
-    std::vector<DrawItem> translucent;  // opacity < 1: the VOIT lists
-    std::vector<glm::vec4> objects;     // per object id (0 unused): linear albedo, opacity
-    std::size_t oit_capacity = 0;       // nodes of the VOIT pool this frame
-    bool oit_merge = false;             // the pool is at its cap: fragments that find it full are merged, not redrawn
-    bool oit_cut = false;               // at the cap, merge each pixel's farthest fragments (a depth cut) so the rest fit
-    std::optional<PickRegion> pick;     // clipped to the image; none when empty
-    glm::vec2 translucent_depth{0.0f};  // linear depth (mm) the translucent objects' bounds span, within near..far
-    Bounds bounds;                      // of the visible meshes
-    std::uint64_t geometry_version = 0; // changes when meshes are added
-    std::vector<OverlayVertex> overlay; // annotation triangles (empty: none)
-    AoHistory* ao = nullptr;            // required when the AO passes run
+    std::vector<DrawItem> draws;       // opaque (opacity 1): the G-buffer and AO
+    std::vector<DrawItem> translucent; // opacity < 1: the VOIT lists
+    std::vector<glm::vec4> objects;    // per object id (0 unused): linear albedo, opacity
+    std::size_t oit_capacity = 0;      // nodes of the VOIT pool this frame
+    bool oit_merge = false;            // the pool is at its cap: fragments that find it full are merged, not redrawn
+    bool oit_cut = false;           // at the cap, merge each pixel's farthest fragments (a depth cut) so the rest fit
+    std::optional<PickRegion> pick; // clipped to the image; none when empty
+    glm::vec2 translucent_depth{0.0f};      // linear depth (mm) the translucent objects' bounds span, within near..far
+    Bounds bounds;                          // of the visible meshes
+    std::uint64_t geometry_version = 0;     // changes when meshes are added
+    std::vector<OverlayVertex> overlay;     // annotation triangles (empty: none)
+    AoHistory* ao = nullptr;                // required when the AO passes run
     std::vector<DiskSurface> disk_surfaces; // the opaque draws' meshes, for disk AO
-    DiskState* disk = nullptr;          // required when the disk AO passes run
-    RenderResult* result = nullptr;     // what passes report back (image, AO state, slicemap)
+    DiskState* disk = nullptr;              // required when the disk AO passes run
+    RenderResult* result = nullptr;         // what passes report back (image, AO state, slicemap)
 };
 
 // Builds the context of a frame: matrices, bounds and the AO/overlay inputs.
-FrameContext make_context(const Camera& camera, const RenderOptions& opt, std::vector<DrawItem> draws, const Bounds& bounds);
+FrameContext make_context(const Camera& camera, const RenderOptions& opt, std::vector<DrawItem> draws,
+                          const Bounds& bounds);
 
 // A pass that only reads (a read-back, a presentation) and runs for that
 // side effect: `execute(const Reads&, const graph::Resources&)` gets the
@@ -106,7 +107,8 @@ struct Reads {
     std::vector<graph::TextureHandle> textures;
     std::vector<graph::BufferHandle> buffers;
 };
-template <class Execute> void side_effect_pass(graph::FrameGraph& fg, const char* name, const Reads& reads, Execute&& execute) {
+template <class Execute>
+void side_effect_pass(graph::FrameGraph& fg, const char* name, const Reads& reads, Execute&& execute) {
     fg.add_pass<Reads>(
         name,
         [&](graph::FrameGraph::Builder& b, Reads& d) {
@@ -134,13 +136,13 @@ std::size_t pick_capacity(const FrameContext& ctx);
 PickBuffers write_pick(graph::FrameGraph::Builder& b, const FrameContext& ctx, const PickBuffers& previous);
 // In its execute: binds them and the region to `prog` (the first writer
 // also clears them). The shader needs PICK_APPEND (pick_defines()).
-void bind_pick(GlResources& gl, const graph::Resources& r, const FrameContext& ctx, const PickBuffers& p, iso::gl::Program& prog,
-               bool first);
+void bind_pick(GlResources& gl, const graph::Resources& r, const FrameContext& ctx, const PickBuffers& p,
+               iso::gl::Program& prog, bool first);
 inline std::string pick_defines(const PickBuffers& p) { return p.valid() ? "#define PICK_APPEND 1\n" : ""; }
 
 struct GBuffer {
     graph::TextureHandle depth, normal, id, albedo;
-    graph::BufferHandle params; // the pass's own
+    graph::BufferHandle params;     // the pass's own
     graph::TextureHandle primitive; // with a pick: the nearest opaque surface's triangle (R32UI)
 };
 GBuffer gbuffer(graph::FrameGraph& fg, const FrameContext& ctx);
@@ -171,12 +173,13 @@ AoPlan plan_ao(const FrameContext& ctx);
 using AoPlanRef = std::shared_ptr<const AoPlan>;
 
 struct AoResources {
-    graph::BufferHandle zrange;       // history: the slicemap's linear z range
-    graph::TextureHandle slicemap;    // history: the solid voxelization
+    graph::BufferHandle zrange;    // history: the slicemap's linear z range
+    graph::TextureHandle slicemap; // history: the solid voxelization
 };
-graph::BufferHandle zrange(graph::FrameGraph& fg, const FrameContext& ctx, const GBuffer& gb, graph::BufferHandle range);
-graph::TextureHandle voxelize(graph::FrameGraph& fg, const FrameContext& ctx, const AoPlanRef& plan, graph::BufferHandle range,
-                              graph::TextureHandle slicemap);
+graph::BufferHandle zrange(graph::FrameGraph& fg, const FrameContext& ctx, const GBuffer& gb,
+                           graph::BufferHandle range);
+graph::TextureHandle voxelize(graph::FrameGraph& fg, const FrameContext& ctx, const AoPlanRef& plan,
+                              graph::BufferHandle range, graph::TextureHandle slicemap);
 // What the cone tracer reads besides the slicemap: this frame's cones and
 // jitter sets, and the parameters (the VOIT resolve traces with both).
 struct ConeTrace {
@@ -185,17 +188,17 @@ struct ConeTrace {
 };
 // Traces the cones into `target` (history: accumulates over still frames).
 ConeTrace cone_ao(graph::FrameGraph& fg, const FrameContext& ctx, const AoPlanRef& plan, const GBuffer& gb,
-                             const AoResources& in, graph::TextureHandle target);
-graph::TextureHandle ao_upsample(graph::FrameGraph& fg, const FrameContext& ctx, const AoPlanRef& plan, const GBuffer& gb,
-                                 graph::TextureHandle coarse);
+                  const AoResources& in, graph::TextureHandle target);
+graph::TextureHandle ao_upsample(graph::FrameGraph& fg, const FrameContext& ctx, const AoPlanRef& plan,
+                                 const GBuffer& gb, graph::TextureHandle coarse);
 void read_slicemap(graph::FrameGraph& fg, const FrameContext& ctx, const AoPlanRef& plan, const AoResources& in);
 // The AO chain's outputs: the full-resolution AO image (1 = unoccluded),
 // and what tracing more points needs (the VOIT resolve's translucent AO).
 struct AmbientOcclusion {
     graph::TextureHandle ao;
-    AoResources tracer;          // slicemap and its z range
-    ConeTrace cones;             // pattern and parameters
-    int layers = 1;              // the slicemap's, for the tracer's LAYERS
+    AoResources tracer; // slicemap and its z range
+    ConeTrace cones;    // pattern and parameters
+    int layers = 1;     // the slicemap's, for the tracer's LAYERS
 };
 // Declares the AO chain (zrange, voxelize when stale, cone_ao, ao_upsample
 // when coarser).
@@ -212,9 +215,11 @@ AmbientOcclusion ambient_occlusion(graph::FrameGraph& fg, const FrameContext& ct
 graph::TextureHandle disk_ambient_occlusion(graph::FrameGraph& fg, const FrameContext& ctx, const GBuffer& gb);
 
 // Deferred lighting; `ao` invalid: no AO.
-graph::TextureHandle lighting(graph::FrameGraph& fg, const FrameContext& ctx, const GBuffer& gb, graph::TextureHandle ao);
+graph::TextureHandle lighting(graph::FrameGraph& fg, const FrameContext& ctx, const GBuffer& gb,
+                              graph::TextureHandle ao);
 // Annotations over `color`; markups are dimmed where the G-buffer's `depth` is in front of them.
-graph::TextureHandle overlay(graph::FrameGraph& fg, const FrameContext& ctx, graph::TextureHandle color, graph::TextureHandle depth);
+graph::TextureHandle overlay(graph::FrameGraph& fg, const FrameContext& ctx, graph::TextureHandle color,
+                             graph::TextureHandle depth);
 // VOIT (docs/voit.md): the translucent fragments' lists, then their
 // front-to-back composite over `color`; returns the composited colour.
 // `ao` non-null: each shaded fragment traces its own AO through that chain.

@@ -50,7 +50,8 @@ void build_and_upload(const FrameContext& ctx) {
     DiskHierarchy joined;
     if (parts.size() > 1) joined = concatenate(parts);
     const DiskHierarchy& h = parts.size() == 1 ? *parts[0] : joined; // none: empty
-    ctx.result->disk_build_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+    ctx.result->disk_build_ms =
+        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
     // Parents by level, deepest first (the parent passes run bottom-up), and
     // the leaves below each node (the parents' fallback weights when their
     // leaves have no area; fill_parent_terms).
@@ -68,7 +69,8 @@ void build_and_upload(const FrameContext& ctx) {
             leaf_count[i] = 1.0f;
             continue;
         }
-        for (int c = node.links.y; c < node.links.x; c = h.nodes[std::size_t(c)].links.x) leaf_count[i] += leaf_count[std::size_t(c)];
+        for (int c = node.links.y; c < node.links.x; c = h.nodes[std::size_t(c)].links.x)
+            leaf_count[i] += leaf_count[std::size_t(c)];
     }
     S.nodes = h.nodes.size();
     S.triangles = h.triangles.size() / 3;
@@ -115,8 +117,8 @@ void bind_hierarchy(const DiskState& S) {
 GLuint groups(std::size_t n) { return GLuint((n + 63) / 64); }
 
 // Every level's parents from their children, deepest first.
-void update_parents(GlResources& gl, const graph::Resources& r, graph::BufferHandle params, DiskParams p, const DiskState& S,
-                    const gl::Buffer& terms) {
+void update_parents(GlResources& gl, const graph::Resources& r, graph::BufferHandle params, DiskParams p,
+                    const DiskState& S, const gl::Buffer& terms) {
     auto& prog = gl.program({"ao/disk_parent.comp"});
     prog.use();
     S.node_buf.bind_base(GL_SHADER_STORAGE_BUFFER, 0);
@@ -228,7 +230,8 @@ void run_gather(const FrameContext& ctx, const GatherData& d, const graph::Resou
         ctx.result->disk_receivers = receivers.read_all<glm::vec4>();
         ctx.result->disk_terms.assign(S.nodes, 1.0f);
         if (S.nodes && modulated)
-            glGetNamedBufferSubData(S.terms[S.final_terms].id(), 0, GLsizeiptr(S.nodes * sizeof(float)), ctx.result->disk_terms.data());
+            glGetNamedBufferSubData(S.terms[S.final_terms].id(), 0, GLsizeiptr(S.nodes * sizeof(float)),
+                                    ctx.result->disk_terms.data());
     }
 }
 
@@ -237,9 +240,10 @@ graph::BufferHandle add_build_pass(graph::FrameGraph& fg, const FrameContext& ct
     struct Data {
         graph::BufferHandle token;
     };
-    return fg.add_pass<Data>(
-                 "disk_build", [&](graph::FrameGraph::Builder& b, Data& d) { d.token = b.write(hierarchy); },
-                 [&ctx](const Data&, const graph::Resources&) { build_and_upload(ctx); })
+    return fg
+        .add_pass<Data>(
+            "disk_build", [&](graph::FrameGraph::Builder& b, Data& d) { d.token = b.write(hierarchy); },
+            [&ctx](const Data&, const graph::Resources&) { build_and_upload(ctx); })
         .token;
 }
 
@@ -249,31 +253,33 @@ graph::BufferHandle add_elements_pass(graph::FrameGraph& fg, const FrameContext&
     struct Data {
         graph::BufferHandle hierarchy, token, params;
     };
-    return fg.add_pass<Data>(
-                 "disk_elements",
-                 [&](graph::FrameGraph::Builder& b, Data& d) {
-                     d.hierarchy = b.read(hierarchy);
-                     d.token = b.write(terms);
-                     d.params = params_buffer<DiskParams>(b, "disk_element_params");
-                 },
-                 [&ctx](const Data& d, const graph::Resources& r) { run_element_passes(ctx, r, d.params); })
+    return fg
+        .add_pass<Data>(
+            "disk_elements",
+            [&](graph::FrameGraph::Builder& b, Data& d) {
+                d.hierarchy = b.read(hierarchy);
+                d.token = b.write(terms);
+                d.params = params_buffer<DiskParams>(b, "disk_element_params");
+            },
+            [&ctx](const Data& d, const graph::Resources& r) { run_element_passes(ctx, r, d.params); })
         .token;
 }
 
 // disk_gather: reads depth, normal and both tokens, writes the AO image.
 graph::TextureHandle add_gather_pass(graph::FrameGraph& fg, const FrameContext& ctx, const GBuffer& gb,
                                      graph::BufferHandle hierarchy, graph::BufferHandle terms) {
-    return fg.add_pass<GatherData>(
-                 "disk_gather",
-                 [&](graph::FrameGraph::Builder& b, GatherData& d) {
-                     d.depth = b.read(gb.depth);
-                     d.normal = b.read(gb.normal);
-                     d.hierarchy = b.read(hierarchy);
-                     d.terms = b.read(terms);
-                     d.ao = b.write(b.create("disk_ao", graph::TextureDesc{ctx.width, ctx.height, graph::Format::R32F}));
-                     d.params = params_buffer<DiskParams>(b, "disk_gather_params");
-                 },
-                 [&ctx](const GatherData& d, const graph::Resources& r) { run_gather(ctx, d, r); })
+    return fg
+        .add_pass<GatherData>(
+            "disk_gather",
+            [&](graph::FrameGraph::Builder& b, GatherData& d) {
+                d.depth = b.read(gb.depth);
+                d.normal = b.read(gb.normal);
+                d.hierarchy = b.read(hierarchy);
+                d.terms = b.read(terms);
+                d.ao = b.write(b.create("disk_ao", graph::TextureDesc{ctx.width, ctx.height, graph::Format::R32F}));
+                d.params = params_buffer<DiskParams>(b, "disk_gather_params");
+            },
+            [&ctx](const GatherData& d, const graph::Resources& r) { run_gather(ctx, d, r); })
         .ao;
 }
 

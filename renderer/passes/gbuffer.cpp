@@ -58,9 +58,11 @@ GBuffer gbuffer(graph::FrameGraph& fg, const FrameContext& ctx) {
             glEnable(GL_DEPTH_TEST);
             glDepthFunc(GL_GREATER);
             glDisable(GL_CULL_FACE); // open surfaces show both sides
-            auto& prog = gl.program({"render/gbuffer.vert", "render/gbuffer.frag"},
-                                    gbuffer_defines() +
-                                        (d.primitive.valid() ? "#define GB_PRIMITIVE " + std::to_string(std::size(kGBufferLayout)) + "\n" : ""));
+            auto& prog = gl.program(
+                {"render/gbuffer.vert", "render/gbuffer.frag"},
+                gbuffer_defines() + (d.primitive.valid()
+                                         ? "#define GB_PRIMITIVE " + std::to_string(std::size(kGBufferLayout)) + "\n"
+                                         : ""));
             prog.use();
             bind_params(gl, r, d.params, GBufferParams{ctx.view_projection});
             const GLint id_loc = prog.uniform("object_id"), albedo_loc = prog.uniform("albedo");

@@ -12,10 +12,10 @@
 namespace iso::passes {
 
 struct GBufferChannel {
-    const char* name;                         // resource name; GLSL define GB_<NAME>
+    const char* name; // resource name; GLSL define GB_<NAME>
     graph::Format format;
-    Aov aov;                                  // the AOV that reads it (None: no AOV)
-    graph::TextureHandle GBuffer::*handle;    // where the pass returns it
+    Aov aov;                               // the AOV that reads it (None: no AOV)
+    graph::TextureHandle GBuffer::*handle; // where the pass returns it
 };
 
 inline const GBufferChannel kGBufferLayout[] = {

@@ -22,9 +22,9 @@ std::uint64_t GlResources::create_texture(const graph::TextureDesc& d, const std
     const bool array = d.array || d.layers > 1;
     if (array && d.depth > 1)
         throw Error("GlResources::create_texture", "'" + name + "' asks for both layers and depth");
-    gl::Texture t = d.depth > 1    ? gl::Texture::create_3d(gl_format(d.format), d.width, d.height, d.depth)
-                    : array         ? gl::Texture::create_2d_array(gl_format(d.format), d.width, d.height, d.layers)
-                                   : gl::Texture::create_2d(gl_format(d.format), d.width, d.height);
+    gl::Texture t = d.depth > 1 ? gl::Texture::create_3d(gl_format(d.format), d.width, d.height, d.depth)
+                    : array     ? gl::Texture::create_2d_array(gl_format(d.format), d.width, d.height, d.layers)
+                                : gl::Texture::create_2d(gl_format(d.format), d.width, d.height);
     glObjectLabel(GL_TEXTURE, t.id(), GLsizei(name.size()), name.c_str());
     const auto id = next_++;
     textures_.emplace(id, std::move(t));

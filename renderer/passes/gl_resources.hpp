@@ -63,7 +63,8 @@ private:
 template <class P> graph::BufferHandle params_buffer(graph::FrameGraph::Builder& b, const char* name) {
     return b.write(b.create(name, graph::BufferDesc{sizeof(P)}));
 }
-template <class P> void bind_params(const GlResources& gl, const graph::Resources& r, graph::BufferHandle h, const P& p) {
+template <class P>
+void bind_params(const GlResources& gl, const graph::Resources& r, graph::BufferHandle h, const P& p) {
     const GLuint buf = gl.buffer(r, h);
     glNamedBufferSubData(buf, 0, sizeof(P), &p);
     glBindBufferBase(GL_UNIFORM_BUFFER, P::binding, buf);

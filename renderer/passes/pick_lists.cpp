@@ -51,8 +51,8 @@ PickBuffers write_pick(graph::FrameGraph::Builder& b, const FrameContext& ctx, c
     return p;
 }
 
-void bind_pick(GlResources& gl, const graph::Resources& r, const FrameContext& ctx, const PickBuffers& p, iso::gl::Program& prog,
-               bool first) {
+void bind_pick(GlResources& gl, const graph::Resources& r, const FrameContext& ctx, const PickBuffers& p,
+               iso::gl::Program& prog, bool first) {
     if (!p.valid()) return;
     if (first) {
         const GLuint counters[2] = {0, GLuint(pick_capacity(ctx))};
@@ -93,38 +93,40 @@ void pick(graph::FrameGraph& fg, const FrameContext& ctx, const GBuffer& gb, con
             glDispatchCompute(GLuint((region_pixels(ctx) + 63) / 64), 1, 1);
             glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT);
         });
-    side_effect_pass(fg, "read_pick", {{}, {sorted.lists.counters, sorted.lists.entries, sorted.lists.heads}},
-                     [&ctx](const Reads& d, const graph::Resources& r) {
-                         GlResources& gl = *ctx.gl;
-                         GLuint counters[2];
-                         glGetNamedBufferSubData(gl.buffer(r, d.buffers[0]), 0, sizeof counters, counters);
-                         const std::size_t px = region_pixels(ctx), stored = std::min<std::size_t>(counters[0], counters[1]);
-                         std::vector<std::uint32_t> heads(px), entries(stored * kEntryWords);
-                         glGetNamedBufferSubData(gl.buffer(r, d.buffers[2]), 0, GLsizeiptr(px * 4), heads.data());
-                         if (stored) glGetNamedBufferSubData(gl.buffer(r, d.buffers[1]), 0, GLsizeiptr(entries.size() * 4), entries.data());
-                         PickList& out = ctx.result->pick;
-                         out.region = *ctx.pick;
-                         out.offered = counters[0];
-                         out.capacity = counters[1];
-                         out.pixels.assign(px, {});
-                         const int w = ctx.pick->width, h = ctx.pick->height;
-                         for (int y = 0; y < h; ++y)
-                             for (int x = 0; x < w; ++x) {
-                                 // GL rows go up from the region's bottom; the result's go down from its top.
-                                 auto& list = out.pixels[std::size_t(h - 1 - y) * std::size_t(w) + std::size_t(x)];
-                                 for (std::uint32_t i = heads[std::size_t(y) * std::size_t(w) + std::size_t(x)]; i < stored && list.size() < stored;
-                                      i = entries[i * kEntryWords + 4]) {
-                                     const std::uint32_t* e = &entries[i * kEntryWords];
-                                     PickFragment f;
-                                     std::memcpy(&f.depth, &e[0], 4);
-                                     f.object = e[1];
-                                     f.primitive = e[2];
-                                     std::memcpy(&f.alpha, &e[3], 4);
-                                     std::memcpy(&f.transmittance, &e[5], 4);
-                                     list.push_back(f);
-                                 }
-                             }
-                     });
+    side_effect_pass(
+        fg, "read_pick", {{}, {sorted.lists.counters, sorted.lists.entries, sorted.lists.heads}},
+        [&ctx](const Reads& d, const graph::Resources& r) {
+            GlResources& gl = *ctx.gl;
+            GLuint counters[2];
+            glGetNamedBufferSubData(gl.buffer(r, d.buffers[0]), 0, sizeof counters, counters);
+            const std::size_t px = region_pixels(ctx), stored = std::min<std::size_t>(counters[0], counters[1]);
+            std::vector<std::uint32_t> heads(px), entries(stored * kEntryWords);
+            glGetNamedBufferSubData(gl.buffer(r, d.buffers[2]), 0, GLsizeiptr(px * 4), heads.data());
+            if (stored)
+                glGetNamedBufferSubData(gl.buffer(r, d.buffers[1]), 0, GLsizeiptr(entries.size() * 4), entries.data());
+            PickList& out = ctx.result->pick;
+            out.region = *ctx.pick;
+            out.offered = counters[0];
+            out.capacity = counters[1];
+            out.pixels.assign(px, {});
+            const int w = ctx.pick->width, h = ctx.pick->height;
+            for (int y = 0; y < h; ++y)
+                for (int x = 0; x < w; ++x) {
+                    // GL rows go up from the region's bottom; the result's go down from its top.
+                    auto& list = out.pixels[std::size_t(h - 1 - y) * std::size_t(w) + std::size_t(x)];
+                    for (std::uint32_t i = heads[std::size_t(y) * std::size_t(w) + std::size_t(x)];
+                         i < stored && list.size() < stored; i = entries[i * kEntryWords + 4]) {
+                        const std::uint32_t* e = &entries[i * kEntryWords];
+                        PickFragment f;
+                        std::memcpy(&f.depth, &e[0], 4);
+                        f.object = e[1];
+                        f.primitive = e[2];
+                        std::memcpy(&f.alpha, &e[3], 4);
+                        std::memcpy(&f.transmittance, &e[5], 4);
+                        list.push_back(f);
+                    }
+                }
+        });
 }
 
 } // namespace iso::passes

@@ -13,7 +13,8 @@ namespace {
 template <class V> void flip_rows(V& v, int width, int height, int channels) {
     const std::ptrdiff_t row = std::ptrdiff_t(width) * channels;
     for (int y = 0; y < height / 2; ++y)
-        std::swap_ranges(v.begin() + y * row, v.begin() + (y + 1) * row, v.begin() + std::ptrdiff_t(height - 1 - y) * row);
+        std::swap_ranges(v.begin() + y * row, v.begin() + (y + 1) * row,
+                         v.begin() + std::ptrdiff_t(height - 1 - y) * row);
 }
 
 void read_texture(const FrameContext& ctx, GLuint tex, Image& img) {
@@ -35,7 +36,8 @@ void read_texture(const FrameContext& ctx, GLuint tex, Image& img) {
         img.floats.resize(n);
         glGetTextureImage(tex, 0, GL_DEPTH_COMPONENT, GL_FLOAT, GLsizei(n * 4), img.floats.data());
         // Distance along the view axis in mm; background (depth 0) is +infinity.
-        for (auto& z : img.floats) z = z > 0.0f ? float(ctx.camera.linear_depth(z)) : std::numeric_limits<float>::infinity();
+        for (auto& z : img.floats)
+            z = z > 0.0f ? float(ctx.camera.linear_depth(z)) : std::numeric_limits<float>::infinity();
         break;
     case Aov::Normal: {
         std::vector<float> rgba(n * 4);

@@ -51,12 +51,14 @@ inline glm::mat3x4 mat3(const glm::mat3& m) {
 namespace iso::passes {
 
 // The structs.
-#define ISO_BLOCK_BEGIN(block, binding_point)                                                                                     \
-    struct alignas(16) block {                                                                                                    \
-        static constexpr unsigned binding = binding_point;                                                                        \
+#define ISO_BLOCK_BEGIN(block, binding_point)                                                                          \
+    struct alignas(16) block {                                                                                         \
+        static constexpr unsigned binding = binding_point;                                                             \
         static constexpr const char* name = #block;
 #define ISO_MEMBER(type, member) alignas(ISO_STD140_ALIGN_##type) ISO_STD140_TYPE_##type member{};
-#define ISO_BLOCK_END(block) };
+#define ISO_BLOCK_END(block)                                                                                           \
+    }                                                                                                                  \
+    ;
 #include "shaders/render/gbuffer_params.glsl"
 #include "shaders/render/lighting_params.glsl"
 #include "shaders/render/overlay_params.glsl"
@@ -71,14 +73,14 @@ namespace iso::passes {
 #undef ISO_BLOCK_END
 
 // Their members' offsets, for the tests: members(static_cast<const B*>(nullptr)).
-#define ISO_BLOCK_BEGIN(block, binding_point)                                                                                     \
-    inline std::vector<std140::Member> members(const block*) {                                                                    \
-        using B = block;                                                                                                          \
+#define ISO_BLOCK_BEGIN(block, binding_point)                                                                          \
+    inline std::vector<std140::Member> members(const block*) {                                                         \
+        using B = block;                                                                                               \
         return {
 #define ISO_MEMBER(type, member) {#member, offsetof(B, member), sizeof(B::member)},
-#define ISO_BLOCK_END(block)                                                                                                      \
-    }                                                                                                                             \
-    ;                                                                                                                             \
+#define ISO_BLOCK_END(block)                                                                                           \
+    }                                                                                                                  \
+    ;                                                                                                                  \
     }
 #include "shaders/render/gbuffer_params.glsl"
 #include "shaders/render/lighting_params.glsl"

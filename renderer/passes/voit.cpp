@@ -100,31 +100,34 @@ graph::TextureHandle depth_cut(graph::FrameGraph& fg, const FrameContext& ctx, c
         graph::BufferHandle histogram, params, gbuffer_params;
     };
     const int W = ctx.width, H = ctx.height;
-    return fg.add_pass<Data>(
-                 "oit_depth_cut",
-                 [&](graph::FrameGraph::Builder& b, Data& d) {
-                     d.depth = b.read(gb.depth);
-                     d.histogram = b.write(b.create("oit_histogram", graph::BufferDesc{std::size_t(W) * std::size_t(H) * kBins * 4}));
-                     d.cut = b.write(b.create("oit_cut", {W, H, graph::Format::R32UI}));
-                     d.params = params_buffer<OitParams>(b, "oit_cut_params");
-                     d.gbuffer_params = params_buffer<GBufferParams>(b, "oit_cut_gbuffer_params");
-                 },
-                 [&ctx, W, H](const Data& d, const graph::Resources& r) {
-                     GlResources& gl = *ctx.gl;
-                     const GLuint zero = 0, histogram = gl.buffer(r, d.histogram);
-                     glClearNamedBufferData(histogram, GL_R32UI, GL_RED_INTEGER, GL_UNSIGNED_INT, &zero);
-                     auto& prog = gl.program({"render/gbuffer.vert", "render/oit_fragments.frag"}, "#define OIT_HISTOGRAM 1\n");
-                     prog.use();
-                     bind_params(gl, r, d.gbuffer_params, GBufferParams{ctx.view_projection});
-                     bind_params(gl, r, d.params, oit_params(ctx));
-                     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 4, histogram);
-                     draw_translucent(gl, ctx, gl.texture(r, d.depth), prog);
-                     std::vector<std::uint32_t> counts(std::size_t(W) * std::size_t(H) * kBins);
-                     glGetNamedBufferSubData(histogram, 0, GLsizeiptr(counts.size() * 4), counts.data());
-                     const auto cuts = depth_cuts(counts, ctx.oit_capacity);
-                     glTextureSubImage2D(gl.texture(r, d.cut), 0, 0, 0, W, H, GL_RED_INTEGER, GL_UNSIGNED_INT, cuts.data());
-                     glMemoryBarrier(GL_SHADER_IMAGE_ACCESS_BARRIER_BIT | GL_TEXTURE_UPDATE_BARRIER_BIT);
-                 })
+    return fg
+        .add_pass<Data>(
+            "oit_depth_cut",
+            [&](graph::FrameGraph::Builder& b, Data& d) {
+                d.depth = b.read(gb.depth);
+                d.histogram =
+                    b.write(b.create("oit_histogram", graph::BufferDesc{std::size_t(W) * std::size_t(H) * kBins * 4}));
+                d.cut = b.write(b.create("oit_cut", {W, H, graph::Format::R32UI}));
+                d.params = params_buffer<OitParams>(b, "oit_cut_params");
+                d.gbuffer_params = params_buffer<GBufferParams>(b, "oit_cut_gbuffer_params");
+            },
+            [&ctx, W, H](const Data& d, const graph::Resources& r) {
+                GlResources& gl = *ctx.gl;
+                const GLuint zero = 0, histogram = gl.buffer(r, d.histogram);
+                glClearNamedBufferData(histogram, GL_R32UI, GL_RED_INTEGER, GL_UNSIGNED_INT, &zero);
+                auto& prog =
+                    gl.program({"render/gbuffer.vert", "render/oit_fragments.frag"}, "#define OIT_HISTOGRAM 1\n");
+                prog.use();
+                bind_params(gl, r, d.gbuffer_params, GBufferParams{ctx.view_projection});
+                bind_params(gl, r, d.params, oit_params(ctx));
+                glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 4, histogram);
+                draw_translucent(gl, ctx, gl.texture(r, d.depth), prog);
+                std::vector<std::uint32_t> counts(std::size_t(W) * std::size_t(H) * kBins);
+                glGetNamedBufferSubData(histogram, 0, GLsizeiptr(counts.size() * 4), counts.data());
+                const auto cuts = depth_cuts(counts, ctx.oit_capacity);
+                glTextureSubImage2D(gl.texture(r, d.cut), 0, 0, 0, W, H, GL_RED_INTEGER, GL_UNSIGNED_INT, cuts.data());
+                glMemoryBarrier(GL_SHADER_IMAGE_ACCESS_BARRIER_BIT | GL_TEXTURE_UPDATE_BARRIER_BIT);
+            })
         .cut;
 }
 
@@ -137,9 +140,10 @@ struct Lists {
 
 std::string merge_define(const FrameContext& ctx) { return ctx.oit_merge ? "#define OIT_MERGE 1\n" : ""; }
 constexpr std::size_t kCountersBytes = 3 * 4; // OitCounters in oit_common.glsl
-constexpr std::size_t kTailBytes = 12 * 4; // OitTail in oit_common.glsl
+constexpr std::size_t kTailBytes = 12 * 4;    // OitTail in oit_common.glsl
 
-Lists fragment_lists(graph::FrameGraph& fg, const FrameContext& ctx, const GBuffer& gb, graph::TextureHandle cut, const PickBuffers& pick) {
+Lists fragment_lists(graph::FrameGraph& fg, const FrameContext& ctx, const GBuffer& gb, graph::TextureHandle cut,
+                     const PickBuffers& pick) {
     const int W = ctx.width, H = ctx.height;
     const std::size_t object_bytes = ctx.objects.size() * sizeof(glm::vec4);
     const std::size_t node_bytes = std::max<std::size_t>(ctx.oit_capacity, 1) * kOitNodeBytes;
@@ -155,7 +159,9 @@ Lists fragment_lists(graph::FrameGraph& fg, const FrameContext& ctx, const GBuff
             d.objects = b.write(b.create("oit_objects", graph::BufferDesc{object_bytes}));
             d.params = params_buffer<OitParams>(b, "oit_params");
             d.gbuffer_params = params_buffer<GBufferParams>(b, "oit_gbuffer_params");
-            if (ctx.oit_merge) d.tails = b.write(b.create("oit_tails", graph::BufferDesc{std::size_t(W) * std::size_t(H) * kTailBytes}));
+            if (ctx.oit_merge)
+                d.tails =
+                    b.write(b.create("oit_tails", graph::BufferDesc{std::size_t(W) * std::size_t(H) * kTailBytes}));
         },
         [&ctx](const Lists& d, const graph::Resources& r) {
             GlResources& gl = *ctx.gl;
@@ -164,13 +170,16 @@ Lists fragment_lists(graph::FrameGraph& fg, const FrameContext& ctx, const GBuff
             glClearTexImage(heads, 0, GL_RED_INTEGER, GL_UNSIGNED_INT, &end);
             const GLuint zero = 0;
             glClearNamedBufferData(gl.buffer(r, d.counters), GL_R32UI, GL_RED_INTEGER, GL_UNSIGNED_INT, &zero);
-            glNamedBufferSubData(gl.buffer(r, d.objects), 0, GLsizeiptr(ctx.objects.size() * sizeof(glm::vec4)), ctx.objects.data());
+            glNamedBufferSubData(gl.buffer(r, d.objects), 0, GLsizeiptr(ctx.objects.size() * sizeof(glm::vec4)),
+                                 ctx.objects.data());
             if (d.tails.valid()) {
-                glClearNamedBufferData(gl.buffer(r, d.tails), GL_R32UI, GL_RED_INTEGER, GL_UNSIGNED_INT, &zero); // the empty tail
+                glClearNamedBufferData(gl.buffer(r, d.tails), GL_R32UI, GL_RED_INTEGER, GL_UNSIGNED_INT,
+                                       &zero); // the empty tail
                 glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 3, gl.buffer(r, d.tails));
             }
-            auto& prog = gl.program({"render/gbuffer.vert", "render/oit_fragments.frag"},
-                                    merge_define(ctx) + (d.cut.valid() ? "#define OIT_CUT 1\n" : "") + pick_defines(d.pick));
+            auto& prog =
+                gl.program({"render/gbuffer.vert", "render/oit_fragments.frag"},
+                           merge_define(ctx) + (d.cut.valid() ? "#define OIT_CUT 1\n" : "") + pick_defines(d.pick));
             prog.use();
             bind_pick(gl, r, ctx, d.pick, prog, true);
             bind_params(gl, r, d.gbuffer_params, GBufferParams{ctx.view_projection});
@@ -189,11 +198,13 @@ Lists fragment_lists(graph::FrameGraph& fg, const FrameContext& ctx, const GBuff
 // Tests: every pixel's list length, counted on the CPU from the read-back
 // head image and node pool.
 void read_lists(graph::FrameGraph& fg, const FrameContext& ctx, const Lists& lists) {
-    side_effect_pass(fg, "read_oit_lists", {{lists.heads}, {lists.nodes}}, [&ctx](const Reads& d, const graph::Resources& r) {
+    side_effect_pass(
+        fg, "read_oit_lists", {{lists.heads}, {lists.nodes}}, [&ctx](const Reads& d, const graph::Resources& r) {
             GlResources& gl = *ctx.gl;
             const int W = ctx.width, H = ctx.height;
             std::vector<std::uint32_t> heads(std::size_t(W) * std::size_t(H));
-            glGetTextureImage(gl.texture(r, d.textures[0]), 0, GL_RED_INTEGER, GL_UNSIGNED_INT, GLsizei(heads.size() * 4), heads.data());
+            glGetTextureImage(gl.texture(r, d.textures[0]), 0, GL_RED_INTEGER, GL_UNSIGNED_INT,
+                              GLsizei(heads.size() * 4), heads.data());
             std::vector<std::uint32_t> nodes(r.desc(d.buffers[0]).bytes / 4);
             glGetNamedBufferSubData(gl.buffer(r, d.buffers[0]), 0, GLsizeiptr(nodes.size() * 4), nodes.data());
             auto& out = ctx.result->oit_lists;
@@ -202,7 +213,9 @@ void read_lists(graph::FrameGraph& fg, const FrameContext& ctx, const Lists& lis
             for (int y = 0; y < H; ++y)
                 for (int x = 0; x < W; ++x) {
                     std::uint32_t n = 0;
-                    for (std::uint32_t i = heads[std::size_t(y) * W + x]; i != 0xFFFFFFFFu && i < capacity && n <= capacity; i = nodes[i * kOitNodeWords + kOitNodeNextWord])
+                    for (std::uint32_t i = heads[std::size_t(y) * W + x];
+                         i != 0xFFFFFFFFu && i < capacity && n <= capacity;
+                         i = nodes[i * kOitNodeWords + kOitNodeNextWord])
                         ++n;
                     out[std::size_t(H - 1 - y) * W + x] = n; // GL rows are bottom-up
                 }
@@ -262,36 +275,38 @@ void clear_stats(GlResources& gl, const graph::Resources& r, const ListInputs& i
 }
 
 // The resolve in one pass: sort, shade (no AO), composite.
-graph::TextureHandle resolve(graph::FrameGraph& fg, const FrameContext& ctx, const Lists& lists, graph::TextureHandle color) {
+graph::TextureHandle resolve(graph::FrameGraph& fg, const FrameContext& ctx, const Lists& lists,
+                             graph::TextureHandle color) {
     struct Data {
         ListInputs in;
         graph::TextureHandle color;
         graph::BufferHandle params;
     };
-    return fg.add_pass<Data>(
-                 "oit_resolve",
-                 [&](graph::FrameGraph::Builder& b, Data& d) {
-                     d.in = list_inputs(b, lists, b.create("oit_stats", graph::BufferDesc{kStatsBytes}), false);
-                     d.color = b.write(b.read(color));
-                     d.params = params_buffer<OitParams>(b, "oit_resolve_params");
-                 },
-                 [&ctx](const Data& d, const graph::Resources& r) {
-                     GlResources& gl = *ctx.gl;
-                     clear_stats(gl, r, d.in);
-                     gl.program({"render/oit_resolve.comp"}, merge_define(ctx)).use();
-                     bind_params(gl, r, d.params, oit_params(ctx));
-                     bind_lists(gl, r, d.in, GL_READ_ONLY);
-                     glBindImageTexture(1, gl.texture(r, d.color), 0, GL_FALSE, 0, GL_READ_WRITE, GL_RGBA8);
-                     glDispatchCompute(GLuint((ctx.width + 7) / 8), GLuint((ctx.height + 7) / 8), 1);
-                     glMemoryBarrier(GL_ALL_BARRIER_BITS);
-                     report(ctx, gl.buffer(r, d.in.counters), gl.buffer(r, d.in.stats));
-                 })
+    return fg
+        .add_pass<Data>(
+            "oit_resolve",
+            [&](graph::FrameGraph::Builder& b, Data& d) {
+                d.in = list_inputs(b, lists, b.create("oit_stats", graph::BufferDesc{kStatsBytes}), false);
+                d.color = b.write(b.read(color));
+                d.params = params_buffer<OitParams>(b, "oit_resolve_params");
+            },
+            [&ctx](const Data& d, const graph::Resources& r) {
+                GlResources& gl = *ctx.gl;
+                clear_stats(gl, r, d.in);
+                gl.program({"render/oit_resolve.comp"}, merge_define(ctx)).use();
+                bind_params(gl, r, d.params, oit_params(ctx));
+                bind_lists(gl, r, d.in, GL_READ_ONLY);
+                glBindImageTexture(1, gl.texture(r, d.color), 0, GL_FALSE, 0, GL_READ_WRITE, GL_RGBA8);
+                glDispatchCompute(GLuint((ctx.width + 7) / 8), GLuint((ctx.height + 7) / 8), 1);
+                glMemoryBarrier(GL_ALL_BARRIER_BITS);
+                report(ctx, gl.buffer(r, d.in.counters), gl.buffer(r, d.in.stats));
+            })
         .color;
 }
 
 // With translucent AO: sort (and list what will be shaded), trace, composite.
-graph::TextureHandle resolve_with_ao(graph::FrameGraph& fg, const FrameContext& ctx, const Lists& lists, graph::TextureHandle color,
-                                     const AmbientOcclusion& ao) {
+graph::TextureHandle resolve_with_ao(graph::FrameGraph& fg, const FrameContext& ctx, const Lists& lists,
+                                     graph::TextureHandle color, const AmbientOcclusion& ao) {
     struct Sorted {
         ListInputs in;
         graph::BufferHandle params, trace;
@@ -356,28 +371,29 @@ graph::TextureHandle resolve_with_ao(graph::FrameGraph& fg, const FrameContext& 
         graph::TextureHandle color;
         graph::BufferHandle ao, params;
     };
-    return fg.add_pass<Composite>(
-                 "oit_resolve",
-                 [&](graph::FrameGraph::Builder& b, Composite& d) {
-                     Lists sorted_lists = lists;
-                     sorted_lists.heads = sorted.in.heads;
-                     sorted_lists.nodes = sorted.in.nodes;
-                     d.in = list_inputs(b, sorted_lists, b.read(sorted.in.stats), false);
-                     d.ao = b.read(traced.ao);
-                     d.color = b.write(b.read(color));
-                     d.params = params_buffer<OitParams>(b, "oit_resolve_params");
-                 },
-                 [&ctx](const Composite& d, const graph::Resources& r) {
-                     GlResources& gl = *ctx.gl;
-                     gl.program({"render/oit_resolve.comp"}, "#define OIT_SORTED 1\n" + merge_define(ctx)).use();
-                     bind_params(gl, r, d.params, oit_params(ctx));
-                     bind_lists(gl, r, d.in, GL_READ_ONLY);
-                     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 4, gl.buffer(r, d.ao));
-                     glBindImageTexture(1, gl.texture(r, d.color), 0, GL_FALSE, 0, GL_READ_WRITE, GL_RGBA8);
-                     glDispatchCompute(GLuint((ctx.width + 7) / 8), GLuint((ctx.height + 7) / 8), 1);
-                     glMemoryBarrier(GL_ALL_BARRIER_BITS);
-                     report(ctx, gl.buffer(r, d.in.counters), gl.buffer(r, d.in.stats));
-                 })
+    return fg
+        .add_pass<Composite>(
+            "oit_resolve",
+            [&](graph::FrameGraph::Builder& b, Composite& d) {
+                Lists sorted_lists = lists;
+                sorted_lists.heads = sorted.in.heads;
+                sorted_lists.nodes = sorted.in.nodes;
+                d.in = list_inputs(b, sorted_lists, b.read(sorted.in.stats), false);
+                d.ao = b.read(traced.ao);
+                d.color = b.write(b.read(color));
+                d.params = params_buffer<OitParams>(b, "oit_resolve_params");
+            },
+            [&ctx](const Composite& d, const graph::Resources& r) {
+                GlResources& gl = *ctx.gl;
+                gl.program({"render/oit_resolve.comp"}, "#define OIT_SORTED 1\n" + merge_define(ctx)).use();
+                bind_params(gl, r, d.params, oit_params(ctx));
+                bind_lists(gl, r, d.in, GL_READ_ONLY);
+                glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 4, gl.buffer(r, d.ao));
+                glBindImageTexture(1, gl.texture(r, d.color), 0, GL_FALSE, 0, GL_READ_WRITE, GL_RGBA8);
+                glDispatchCompute(GLuint((ctx.width + 7) / 8), GLuint((ctx.height + 7) / 8), 1);
+                glMemoryBarrier(GL_ALL_BARRIER_BITS);
+                report(ctx, gl.buffer(r, d.in.counters), gl.buffer(r, d.in.stats));
+            })
         .color;
 }
 
@@ -385,7 +401,8 @@ graph::TextureHandle resolve_with_ao(graph::FrameGraph& fg, const FrameContext& 
 
 graph::TextureHandle voit(graph::FrameGraph& fg, const FrameContext& ctx, const GBuffer& gb, graph::TextureHandle color,
                           const AmbientOcclusion* ao, PickBuffers& pick) {
-    const Lists lists = fragment_lists(fg, ctx, gb, ctx.oit_cut ? depth_cut(fg, ctx, gb) : graph::TextureHandle{}, pick);
+    const Lists lists =
+        fragment_lists(fg, ctx, gb, ctx.oit_cut ? depth_cut(fg, ctx, gb) : graph::TextureHandle{}, pick);
     pick = lists.pick;
     if (ctx.hooks.read_oit_lists) read_lists(fg, ctx, lists);
     return ao ? resolve_with_ao(fg, ctx, lists, color, *ao) : resolve(fg, ctx, lists, color);

@@ -39,7 +39,6 @@ constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 constexpr std::uint32_t kNone = ~std::uint32_t(0);
 constexpr const char* kWhere = "surface measure";
 
-
 bool finite(const glm::dvec3& p) { return std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z); }
 
 // a + (b - a) t that ignores b at t == 0 (and a at t == 1), so a NaN sample
@@ -265,7 +264,8 @@ EdgeBuckets bucket_edges(const std::vector<Triangle>& W, std::size_t nv) {
             const auto& w = W[t];
             if (collapsed(w)) continue;
             for (int k = 0; k < 3; ++k)
-                std::atomic_ref<std::uint32_t>(off[std::min(w[k], w[(k + 1) % 3]) + 1]).fetch_add(1, std::memory_order_relaxed);
+                std::atomic_ref<std::uint32_t>(off[std::min(w[k], w[(k + 1) % 3]) + 1])
+                    .fetch_add(1, std::memory_order_relaxed);
         }
     });
     std::partial_sum(off.begin(), off.end(), off.begin());
@@ -278,7 +278,8 @@ EdgeBuckets bucket_edges(const std::vector<Triangle>& W, std::size_t nv) {
             for (int k = 0; k < 3; ++k) {
                 const std::uint32_t a = w[k], b = w[(k + 1) % 3];
                 const std::uint32_t l = std::min(a, b), u = std::max(a, b);
-                const std::uint32_t slot = std::atomic_ref<std::uint32_t>(cursor[l]).fetch_add(1, std::memory_order_relaxed);
+                const std::uint32_t slot =
+                    std::atomic_ref<std::uint32_t>(cursor[l]).fetch_add(1, std::memory_order_relaxed);
                 e.entries[slot] = (u << 1) | std::uint32_t(a < b);
             }
         }
@@ -359,8 +360,8 @@ struct Accum {
 // Step 4: area and volume per component. The triangles ordered by component
 // (counting sort), summed by fixed blocks in parallel, the blocks' partial
 // sums added in order (deterministic whatever the thread count).
-std::vector<Accum> component_sums(const std::vector<glm::vec3>& P, const std::vector<Triangle>& W, const Components& comps,
-                                  const std::vector<glm::dvec3>& ref) {
+std::vector<Accum> component_sums(const std::vector<glm::vec3>& P, const std::vector<Triangle>& W,
+                                  const Components& comps, const std::vector<glm::dvec3>& ref) {
     const std::size_t nt = W.size();
     const std::uint32_t ncomp = comps.count;
     std::vector<std::uint32_t> first(ncomp + 1, 0);
@@ -389,7 +390,10 @@ std::vector<Accum> component_sums(const std::vector<glm::vec3>& P, const std::ve
             if (out_p.empty() || out_p.back().comp != c) out_p.push_back({c, {}});
             Accum& a = out_p.back().a;
             ++a.triangles;
-            if (collapsed(w)) { ++a.degenerate; continue; }
+            if (collapsed(w)) {
+                ++a.degenerate;
+                continue;
+            }
             const glm::dvec3 p0 = glm::dvec3(P[w[0]]) - ref[c], p1 = glm::dvec3(P[w[1]]) - ref[c],
                              p2 = glm::dvec3(P[w[2]]) - ref[c];
             const double area = 0.5 * glm::length(glm::cross(p1 - p0, p2 - p0));
@@ -433,9 +437,10 @@ BoundaryLoops boundary_loops(const std::vector<glm::vec3>& P, const std::vector<
     std::unordered_map<std::uint32_t, std::size_t> next_out; // vertex -> first possibly unused outgoing edge
     auto outgoing = [&](std::uint32_t v) -> std::size_t {
         auto it = next_out.find(v);
-        std::size_t i = it != next_out.end()
-                            ? it->second
-                            : std::size_t(std::lower_bound(chain.begin(), chain.end(), BoundaryEdge{v, 0}) - chain.begin());
+        std::size_t i =
+            it != next_out.end()
+                ? it->second
+                : std::size_t(std::lower_bound(chain.begin(), chain.end(), BoundaryEdge{v, 0}) - chain.begin());
         while (i < ne && chain[i].from == v && done[i]) ++i;
         next_out[v] = i;
         return i < ne && chain[i].from == v ? i : ne;
@@ -452,7 +457,10 @@ BoundaryLoops boundary_loops(const std::vector<glm::vec3>& P, const std::vector<
             const std::uint32_t x = chain[cur].to;
             if (x == start) break;
             cur = outgoing(x);
-            if (cur == ne) { out.open_chain = true; break; }
+            if (cur == ne) {
+                out.open_chain = true;
+                break;
+            }
         }
         const std::uint32_t c = comps.of(start);
         const glm::dvec3 r = ref[c];
@@ -531,7 +539,8 @@ void add_totals(SurfaceMeasures& m) {
         m.area_mm2 += s.area_mm2;
         m.boundary_loops += s.boundary_loops;
         m.boundary_length_mm += s.boundary_length_mm;
-        if (s.volume_kind == VolumeKind::Undefined) m.volume_kind = VolumeKind::Undefined;
+        if (s.volume_kind == VolumeKind::Undefined)
+            m.volume_kind = VolumeKind::Undefined;
         else if (s.volume_kind == VolumeKind::LowerBound && m.volume_kind == VolumeKind::Enclosed)
             m.volume_kind = VolumeKind::LowerBound;
         if (s.volume_kind != VolumeKind::Undefined) m.volume_ml += s.volume_ml;
@@ -549,15 +558,16 @@ void add_topology_warnings(SurfaceMeasures& m, bool open_chain) {
                              " edges are used twice in the same direction: the triangles are not consistently "
                              "oriented, so the volume is undefined");
     if (m.non_manifold_edges)
-        m.warnings.push_back(std::to_string(m.non_manifold_edges) + " edges are shared by three or more triangles (non-manifold)");
+        m.warnings.push_back(std::to_string(m.non_manifold_edges) +
+                             " edges are shared by three or more triangles (non-manifold)");
     if (m.boundary_edges && m.volume_kind == VolumeKind::LowerBound)
         m.warnings.push_back("the surface is open (" + std::to_string(m.boundary_edges) + " boundary edges in " +
                              std::to_string(m.boundary_loops) +
                              " loops): its volume is a lower bound, with the loops capped");
-    if (open_chain)
-        m.warnings.push_back("some boundary edges do not form closed loops");
+    if (open_chain) m.warnings.push_back("some boundary edges do not form closed loops");
     if (m.degenerate_triangles)
-        m.warnings.push_back(std::to_string(m.degenerate_triangles) + " degenerate triangles (zero area) count as zero");
+        m.warnings.push_back(std::to_string(m.degenerate_triangles) +
+                             " degenerate triangles (zero area) count as zero");
 }
 
 Analysis analyse(const Mesh& mesh) {
@@ -735,7 +745,7 @@ void compare_coarse_grid(const Volume& v, double iso, int g, const MeasureOption
     const Mesh cm = extract_isosurface(coarse, iso, eo);
     const Analysis co = analyse(cm);
     const double k = 3.0 / (r * r - 1.0); // Fs / (r^p - 1), Fs = 3, p = 2
-    if (u.grids == 1) { // Richardson, p = 2, from the first coarse grid
+    if (u.grids == 1) {                   // Richardson, p = 2, from the first coarse grid
         fine.area_extrapolated_mm2 = fine.area_mm2 + (fine.area_mm2 - co.m.area_mm2) / (r * r - 1.0);
         if (fine.volume_kind != VolumeKind::Undefined)
             fine.volume_extrapolated_ml = fine.volume_ml + (fine.volume_ml - co.m.volume_ml) / (r * r - 1.0);
@@ -764,10 +774,10 @@ void add_edge_fraction_spread(const Volume& v, const Mesh& surface, const std::v
     if (result.edge_fraction_spread < kResolvedEdgeSpread) {
         char buf[64];
         std::snprintf(buf, sizeof buf, "%.2f", result.edge_fraction_spread);
-        result.warnings.push_back(std::string("the edge is sharper than the voxel grid resolves (edge fraction spread ") +
-                                  buf +
-                                  ", below 0.8): the area is biased upward by more than its uncertainty (balls: "
-                                  "1.6 % at a blur of 0.25 voxel, 11 % for a binary mask)");
+        result.warnings.push_back(
+            std::string("the edge is sharper than the voxel grid resolves (edge fraction spread ") + buf +
+            ", below 0.8): the area is biased upward by more than its uncertainty (balls: "
+            "1.6 % at a blur of 0.25 voxel, 11 % for a binary mask)");
     }
 }
 
@@ -786,7 +796,8 @@ double angle_deg(const glm::dvec3& a, const glm::dvec3& vertex, const glm::dvec3
     if (!finite(a) || !finite(vertex) || !finite(c)) throw Error("angle", "a point is not finite");
     const glm::dvec3 u = a - vertex, w = c - vertex;
     if (glm::length(u) < 1e-9 || glm::length(w) < 1e-9)
-        throw Error("angle", "an end point coincides with the vertex (the middle point), so the angle has no direction");
+        throw Error("angle",
+                    "an end point coincides with the vertex (the middle point), so the angle has no direction");
     return *angle_degrees(a, vertex, c);
 }
 
@@ -810,7 +821,9 @@ std::optional<VolumeSample> sample_volume(const Volume& v, const glm::dvec3& lps
         i1[a] = std::min(i0[a] + 1, v.dims[a] - 1);
         f[a] = i1[a] == i0[a] ? 0.0 : std::clamp(c - double(i0[a]), 0.0, 1.0);
     }
-    auto at = [&](int di, int dj, int dk) { return v.value(di ? i1[0] : i0[0], dj ? i1[1] : i0[1], dk ? i1[2] : i0[2]); };
+    auto at = [&](int di, int dj, int dk) {
+        return v.value(di ? i1[0] : i0[0], dj ? i1[1] : i0[1], dk ? i1[2] : i0[2]);
+    };
     // Only the samples with weight are read, so a NaN neighbour with zero weight does not spread.
     auto row = [&](int dj, int dk) { return f[0] == 0 ? at(0, dj, dk) : lerp(at(0, dj, dk), at(1, dj, dk), f[0]); };
     auto plane = [&](int dk) { return f[1] == 0 ? row(0, dk) : lerp(row(0, dk), row(1, dk), f[1]); };
@@ -866,7 +879,8 @@ Volume resample_extent(const Volume& v, std::array<std::int64_t, 3> m, glm::dvec
     for (int a = 0; a < 3; ++a)
         for (std::int64_t I = 0; I < m[a]; ++I) {
             const double x = std::min(double(I) * ratio[a], double(v.dims[a] - 1));
-            const std::int64_t i0 = std::min<std::int64_t>(std::int64_t(std::floor(x)), std::max<std::int64_t>(v.dims[a] - 2, 0));
+            const std::int64_t i0 =
+                std::min<std::int64_t>(std::int64_t(std::floor(x)), std::max<std::int64_t>(v.dims[a] - 2, 0));
             const std::int64_t i1 = std::min(i0 + 1, v.dims[a] - 1);
             ax[a].i0.push_back(i0);
             ax[a].i1.push_back(i1);
@@ -891,7 +905,9 @@ Volume resample_extent(const Volume& v, std::array<std::int64_t, 3> m, glm::dvec
                     auto row = [&](std::int64_t j, std::int64_t k) {
                         return fx == 0 ? get(i0, j, k) : lerp(get(i0, j, k), get(i1, j, k), fx);
                     };
-                    auto plane = [&](std::int64_t k) { return fy == 0 ? row(j0, k) : lerp(row(j0, k), row(j1, k), fy); };
+                    auto plane = [&](std::int64_t k) {
+                        return fy == 0 ? row(j0, k) : lerp(row(j0, k), row(j1, k), fy);
+                    };
                     dst[I] = float(fz == 0 ? plane(k0) : lerp(plane(k0), plane(k1), fz));
                 }
             }
@@ -900,8 +916,10 @@ Volume resample_extent(const Volume& v, std::array<std::int64_t, 3> m, glm::dvec
     if (v.is_sparse()) {
         const auto& g = *v.sparse_grid();
         resample([&] {
-            return [&g, &clean, acc = g.grid->getConstAccessor()](std::int64_t i, std::int64_t j, std::int64_t k) mutable {
-                return clean(double(acc.getValue(openvdb::Coord(int(i) + g.offset.x(), int(j) + g.offset.y(), int(k) + g.offset.z()))));
+            return [&g, &clean, acc = g.grid->getConstAccessor()](std::int64_t i, std::int64_t j,
+                                                                  std::int64_t k) mutable {
+                return clean(double(
+                    acc.getValue(openvdb::Coord(int(i) + g.offset.x(), int(j) + g.offset.y(), int(k) + g.offset.z()))));
             };
         });
     } else {
@@ -912,8 +930,10 @@ Volume resample_extent(const Volume& v, std::array<std::int64_t, 3> m, glm::dvec
             resample([&] {
                 return [&](std::int64_t i, std::int64_t j, std::int64_t k) {
                     const double x = double(src[i + sx * j + sxy * k]);
-                    if constexpr (std::is_floating_point_v<T>) return clean(x);
-                    else return x;
+                    if constexpr (std::is_floating_point_v<T>)
+                        return clean(x);
+                    else
+                        return x;
                 };
             });
         });

@@ -41,10 +41,10 @@ struct VolumeSample {
     // Trilinear interpolation of the stored samples (values are stored after
     // rescale: Hounsfield units for CT). NaN when a sample it uses is NaN.
     double value = 0;
-    glm::dvec3 index{0.0};                     // continuous index (i, j, k) of the point
+    glm::dvec3 index{0.0};                      // continuous index (i, j, k) of the point
     std::array<std::int64_t, 3> voxel{0, 0, 0}; // the nearest voxel (its centre is nearest)
-    glm::dvec3 voxel_lps{0.0};                 // that voxel's centre, LPS mm
-    double voxel_value = 0;                    // that voxel's stored value
+    glm::dvec3 voxel_lps{0.0};                  // that voxel's centre, LPS mm
+    double voxel_value = 0;                     // that voxel's stored value
     // The point lies in the outer half voxel of the grid, beyond the last
     // voxel centres: interpolation used the border samples for the missing
     // neighbours (the value is then extrapolated as constant across that rim).
@@ -83,9 +83,9 @@ inline constexpr double kNoUncertainty = std::numeric_limits<double>::quiet_NaN(
 struct SurfacePart {
     std::size_t triangles = 0;
     double area_mm2 = 0;
-    double volume_ml = 0;   // 1 mL = 1000 mm^3; read with volume_kind
+    double volume_ml = 0; // 1 mL = 1000 mm^3; read with volume_kind
     VolumeKind volume_kind = VolumeKind::Enclosed;
-    bool closed = true;     // no boundary edges (volume_kind == Enclosed)
+    bool closed = true; // no boundary edges (volume_kind == Enclosed)
     std::size_t boundary_edges = 0, boundary_loops = 0;
     double boundary_length_mm = 0;
     glm::dvec3 bounds_min{0.0}, bounds_max{0.0};
@@ -100,7 +100,7 @@ struct SurfaceMeasures {
     std::size_t vertices = 0;             // distinct positions used by triangles
     std::size_t degenerate_triangles = 0; // zero area (repeated or collinear vertices): area 0, volume 0
     double area_mm2 = 0;
-    double volume_ml = 0;                 // sum over components; read with volume_kind
+    double volume_ml = 0; // sum over components; read with volume_kind
     // The weakest of the components': Undefined if any is, else LowerBound if any is open.
     VolumeKind volume_kind = VolumeKind::Enclosed;
     bool closed = true;
@@ -149,7 +149,7 @@ struct SurfaceMeasures {
     // measure_surface). Below kResolvedEdgeSpread a warning says the area is
     // biased upward (staircase) by more than the uncertainty covers.
     double edge_fraction_spread = kNoUncertainty;
-    std::vector<std::string> warnings;    // misoriented or non-manifold edges, no uncertainty, sharp edges, ...
+    std::vector<std::string> warnings; // misoriented or non-manifold edges, no uncertainty, sharp edges, ...
 };
 
 // See SurfaceMeasures::edge_fraction_spread: 0.8 is reached at an edge blur
@@ -183,8 +183,7 @@ SurfaceMeasures measure_surface(const Mesh& m, const MeasureOptions& opt = {});
 // ratio below 1.3), the uncertainty stays NaN with a warning.
 // About 5x the time of measure_surface, 3x the extraction's (docs/measure.md).
 // Note: measure_isosurface(v, iso, {}) is ambiguous; leave the options out.
-SurfaceMeasures measure_isosurface(const Volume& v, double iso, const Mesh& surface,
-                                   const MeasureOptions& opt = {});
+SurfaceMeasures measure_isosurface(const Volume& v, double iso, const Mesh& surface, const MeasureOptions& opt = {});
 // Extracts the isosurface too.
 SurfaceMeasures measure_isosurface(const Volume& v, double iso, const MeasureOptions& opt = {});
 

@@ -24,7 +24,8 @@ std::array<int, 3> chunk_counts(const std::array<std::int64_t, 3>& dims, int C) 
     return n;
 }
 
-void add_triangle(const glm::dvec3& o, const glm::vec3& p0, const glm::vec3& p1, const glm::vec3& p2, ComponentStats& c) {
+void add_triangle(const glm::dvec3& o, const glm::vec3& p0, const glm::vec3& p1, const glm::vec3& p2,
+                  ComponentStats& c) {
     const TriangleTerms t = triangle_terms(o, p0, p1, p2);
     c.area += t.area;
     c.volume += t.det / 6.0;
@@ -64,8 +65,9 @@ bool key_leaves_range(std::uint64_t key, ChunkRange range, const std::array<std:
     for (int i = 0; i < ncand[0]; ++i)
         for (int j = 0; j < ncand[1]; ++j)
             for (int k = 0; k < ncand[2]; ++k) {
-                const std::size_t id = std::size_t(cand[0][i]) +
-                                       std::size_t(counts[0]) * (std::size_t(cand[1][j]) + std::size_t(counts[1]) * cand[2][k]);
+                const std::size_t id =
+                    std::size_t(cand[0][i]) +
+                    std::size_t(counts[0]) * (std::size_t(cand[1][j]) + std::size_t(counts[1]) * cand[2][k]);
                 if (id < range.first || id >= range.last) return true;
             }
     return false;
@@ -77,7 +79,10 @@ SurfacePiece weld_piece(const ChunkedSurface& s, ChunkRange range, const std::ar
     range.last = std::min(range.last, s.chunks.size());
     bool normals = false;
     for (std::size_t id = range.first; id < range.last; ++id)
-        if (!s.chunks[id].positions.empty()) { normals = !s.chunks[id].normals.empty(); break; }
+        if (!s.chunks[id].positions.empty()) {
+            normals = !s.chunks[id].normals.empty();
+            break;
+        }
     // Border vertices: the first chunk (lowest id) to hold a key keeps it, as weld() does.
     std::unordered_map<std::uint64_t, std::uint32_t> seen;
     std::vector<std::uint32_t> remap;
@@ -231,7 +236,8 @@ SurfaceSummary merge_summaries(std::span<const PieceSummary> pieces) {
     for (std::size_t i = 1; i < seam.size(); ++i) {
         if (seam[i].key != seam[i - 1].key) continue;
         --out.vertices; // held by one more piece
-        if (seam[i].comp != kNoComponent && seam[i - 1].comp != kNoComponent) sets.unite(seam[i].comp, seam[i - 1].comp);
+        if (seam[i].comp != kNoComponent && seam[i - 1].comp != kNoComponent)
+            sets.unite(seam[i].comp, seam[i - 1].comp);
     }
     std::vector<ComponentStats> merged(base.back());
     for (std::size_t i = 0; i < pieces.size(); ++i)

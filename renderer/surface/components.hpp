@@ -72,7 +72,7 @@ struct ComponentStats {
 struct PieceSummary {
     std::size_t triangles = 0, vertices = 0;
     double area = 0, volume = 0;
-    glm::dvec3 origin{0.0};                 // of `volume` and the components' volumes
+    glm::dvec3 origin{0.0};                                 // of `volume` and the components' volumes
     glm::dvec3 bounds_min{INFINITY}, bounds_max{-INFINITY}; // of the piece's vertices
     std::vector<ComponentStats> components;
     // (global key, component index) of every seam vertex, sorted by key.

@@ -37,7 +37,6 @@ template <class V> void advise_huge_pages(V& v) {
     if (hi > lo) ::madvise(reinterpret_cast<void*>(lo), hi - lo, MADV_HUGEPAGE);
 }
 
-
 struct ChunkGeom {
     std::array<std::int64_t, 3> p0, p1; // first and last sample (inclusive) of the chunk
 };
@@ -70,10 +69,10 @@ const CaseFromColumns kCases;
 
 // Per-thread scratch.
 struct Scratch {
-    std::vector<std::byte> block;     // samples of the chunk plus a one-sample halo
-    std::vector<std::uint8_t> inside; // per chunk sample
-    std::vector<std::uint8_t> cols;   // column codes of one cell row
-    std::vector<std::uint32_t> slots; // per chunk sample x 3: vertex on the +x/+y/+z edge
+    std::vector<std::byte> block;       // samples of the chunk plus a one-sample halo
+    std::vector<std::uint8_t> inside;   // per chunk sample
+    std::vector<std::uint8_t> cols;     // column codes of one cell row
+    std::vector<std::uint32_t> slots;   // per chunk sample x 3: vertex on the +x/+y/+z edge
     std::vector<std::uint32_t> touched; // slots written for the current chunk (reset afterwards)
     ChunkMesh staging;                  // grows once per thread; chunks get exact-size copies
     std::size_t bytes() const {
@@ -89,9 +88,9 @@ struct Scratch {
 struct Frame {
     std::array<std::int64_t, 3> dims;
     int C;
-    glm::dmat4 m;         // index -> LPS
-    glm::dmat3 normal_m;  // inverse transpose of the linear part
-    bool flip;            // affine mirrors space: reverse the winding
+    glm::dmat4 m;        // index -> LPS
+    glm::dmat3 normal_m; // inverse transpose of the linear part
+    bool flip;           // affine mirrors space: reverse the winding
     bool normals;
     bool keep_keys;
 };
@@ -170,7 +169,10 @@ glm::dvec3 gradient(const Block<T>& b, const Frame& f, const Cls& cls, std::int6
             lo[a] -= 1;
             hi[a] += 1;
         }
-        if (f.dims[a] < 2) { g[a] = 0; continue; }
+        if (f.dims[a] < 2) {
+            g[a] = 0;
+            continue;
+        }
         g[a] = scale * (cls.value(double(b.at(hi[0], hi[1], hi[2]))) - cls.value(double(b.at(lo[0], lo[1], lo[2]))));
     }
     return g;
@@ -213,7 +215,8 @@ void run_chunk(const Block<T>& b, const ChunkGeom& g, const Frame& f, const Cls&
     for (std::int64_t z = 0; z < nz; ++z)
         for (std::int64_t y = 0; y < ny; ++y) {
             std::uint8_t* in = s.inside.data() + nx * (y + ny * z);
-            const T* row = b.data + (g.p0[0] - b.lo[0]) + b.n[0] * ((g.p0[1] + y - b.lo[1]) + b.n[1] * (g.p0[2] + z - b.lo[2]));
+            const T* row =
+                b.data + (g.p0[0] - b.lo[0]) + b.n[0] * ((g.p0[1] + y - b.lo[1]) + b.n[1] * (g.p0[2] + z - b.lo[2]));
             for (std::int64_t x = 0; x < nx; ++x) in[x] = cls.inside(double(row[x])) ? 1 : 0;
         }
     // Slots stay kNone between chunks: only the ones written are reset.
@@ -327,14 +330,13 @@ ChunkIndex::ChunkIndex(const Volume& v, int chunk_size, int threads) : chunk_siz
     // Only floating-point samples can be NaN or Inf; skip the scan otherwise.
     const bool floating = v.is_sparse() || v.type == VoxelType::F32 || v.type == VoxelType::F64;
     const auto r = floating ? v.value_range() : ValueRange{};
-    const bool any_finite = r.min <= r.max && (r.nan_count + r.inf_count) < std::size_t(std::max<std::int64_t>(v.voxel_count(), 1));
+    const bool any_finite =
+        r.min <= r.max && (r.nan_count + r.inf_count) < std::size_t(std::max<std::int64_t>(v.voxel_count(), 1));
     lowest_ = any_finite ? r.min : 0.0;
     highest_ = any_finite ? r.max : 0.0;
     nan_value_ = lowest_ - std::max(1.0, std::abs(lowest_) * 1e-3);
     if (n == 0) return;
-    in_arena(threads, [&] {
-        tbb::parallel_for(std::size_t(0), n, [&](std::size_t id) { summarize(v, id); });
-    });
+    in_arena(threads, [&] { tbb::parallel_for(std::size_t(0), n, [&](std::size_t id) { summarize(v, id); }); });
 }
 
 void ChunkIndex::summarize(const Volume& v, std::size_t id) {
@@ -346,9 +348,10 @@ void ChunkIndex::summarize(const Volume& v, std::size_t id) {
         for (std::int64_t z = g.p0[2]; z <= g.p1[2]; ++z)
             for (std::int64_t y = g.p0[1]; y <= g.p1[1]; ++y)
                 for (std::int64_t x = g.p0[0]; x <= g.p1[0]; ++x) {
-                    const double s = substitute(double(acc.getValue(openvdb::Coord(
-                                                    int(x) + sg.offset.x(), int(y) + sg.offset.y(), int(z) + sg.offset.z()))),
-                                                *this);
+                    const double s =
+                        substitute(double(acc.getValue(openvdb::Coord(int(x) + sg.offset.x(), int(y) + sg.offset.y(),
+                                                                      int(z) + sg.offset.z()))),
+                                   *this);
                     lo = std::min(lo, s);
                     hi = std::max(hi, s);
                 }
@@ -400,7 +403,8 @@ std::vector<std::size_t> ChunkIndex::chunks_touching(const IndexBox& box) const 
     for (int z = c0[2]; z <= c1[2]; ++z)
         for (int y = c0[1]; y <= c1[1]; ++y)
             for (int x = c0[0]; x <= c1[0]; ++x)
-                ids.push_back(std::size_t(x) + std::size_t(counts_[0]) * (std::size_t(y) + std::size_t(counts_[1]) * z));
+                ids.push_back(std::size_t(x) +
+                              std::size_t(counts_[0]) * (std::size_t(y) + std::size_t(counts_[1]) * z));
     return ids;
 }
 
@@ -410,9 +414,10 @@ void ChunkIndex::refresh(const Volume& v, std::span<const std::size_t> ids) {
     for (auto id : ids) summarize(v, id);
 }
 
-ChunkIndex::ChunkIndex(std::array<std::int64_t, 3> dims, int chunk_size, std::vector<double> min, std::vector<double> max,
-                       double lowest, double highest)
-    : chunk_size_(chunk_size), dims_(dims), min_(std::move(min)), max_(std::move(max)), lowest_(lowest), highest_(highest) {
+ChunkIndex::ChunkIndex(std::array<std::int64_t, 3> dims, int chunk_size, std::vector<double> min,
+                       std::vector<double> max, double lowest, double highest)
+    : chunk_size_(chunk_size), dims_(dims), min_(std::move(min)), max_(std::move(max)), lowest_(lowest),
+      highest_(highest) {
     if (chunk_size < 1) throw Error("ChunkIndex", "chunk size must be at least 1");
     for (int a = 0; a < 3; ++a) {
         if (dims[a] < 1) throw Error("ChunkIndex", "dimensions must be positive");
@@ -481,14 +486,17 @@ void ChunkSummaries::add(const VolumeWindow& w) {
                 const double s = get(x);
                 const auto cr = chunk_range(x, 0);
                 std::uint8_t fl = 0;
-                if (std::isnan(s)) fl = kNaN;
-                else if (std::isinf(s)) fl = s > 0 ? kPosInf : kNegInf;
+                if (std::isnan(s))
+                    fl = kNaN;
+                else if (std::isinf(s))
+                    fl = s > 0 ? kPosInf : kNegInf;
                 else {
                     lo = std::min(lo, s);
                     hi = std::max(hi, s);
                 }
                 for (int c = cr[0]; c <= cr[1]; ++c) {
-                    if (fl) rflag[std::size_t(c)] |= fl;
+                    if (fl)
+                        rflag[std::size_t(c)] |= fl;
                     else {
                         rmin[std::size_t(c)] = std::min(rmin[std::size_t(c)], s);
                         rmax[std::size_t(c)] = std::max(rmax[std::size_t(c)], s);
@@ -513,7 +521,8 @@ void ChunkSummaries::add(const VolumeWindow& w) {
                     });
                 }
                 for (int cz = zr[0]; cz <= zr[1]; ++cz) {
-                    const std::size_t base = std::size_t(counts[0]) * (std::size_t(cy) + std::size_t(counts[1]) * std::size_t(cz));
+                    const std::size_t base =
+                        std::size_t(counts[0]) * (std::size_t(cy) + std::size_t(counts[1]) * std::size_t(cz));
                     for (int cx = 0; cx < counts[0]; ++cx) {
                         finite_min[base + cx] = std::min(finite_min[base + cx], rmin[std::size_t(cx)]);
                         finite_max[base + cx] = std::max(finite_max[base + cx], rmax[std::size_t(cx)]);
@@ -529,7 +538,8 @@ void ChunkSummaries::add(const VolumeWindow& w) {
 }
 
 void ChunkSummaries::merge(const ChunkSummaries& o) {
-    if (o.dims != dims || o.chunk_size != chunk_size) throw Error("ChunkIndex", "summaries of another volume or chunk size");
+    if (o.dims != dims || o.chunk_size != chunk_size)
+        throw Error("ChunkIndex", "summaries of another volume or chunk size");
     for (std::size_t i = 0; i < flags.size(); ++i) {
         finite_min[i] = std::min(finite_min[i], o.finite_min[i]);
         finite_max[i] = std::max(finite_max[i], o.finite_max[i]);
@@ -549,9 +559,18 @@ ChunkIndex ChunkSummaries::finish() const {
     std::vector<double> mn(flags.size()), mx(flags.size());
     for (std::size_t i = 0; i < flags.size(); ++i) {
         double a = finite_min[i], b = finite_max[i];
-        if (flags[i] & kNaN) { a = std::min(a, nan_value); b = std::max(b, nan_value); }
-        if (flags[i] & kNegInf) { a = std::min(a, lo); b = std::max(b, lo); }
-        if (flags[i] & kPosInf) { a = std::min(a, hi); b = std::max(b, hi); }
+        if (flags[i] & kNaN) {
+            a = std::min(a, nan_value);
+            b = std::max(b, nan_value);
+        }
+        if (flags[i] & kNegInf) {
+            a = std::min(a, lo);
+            b = std::max(b, lo);
+        }
+        if (flags[i] & kPosInf) {
+            a = std::min(a, hi);
+            b = std::max(b, hi);
+        }
         // The in-memory summary substitutes in the sample type: round as it does.
         dispatch_voxel_type(type, [&](auto tag) {
             using T = decltype(tag);
@@ -603,7 +622,8 @@ Extractor::Extractor(const VolumeWindow& w, ExtractOptions opt, std::shared_ptr<
     opt_.chunk_size = index->chunk_size();
     const std::size_t sample = w.slab->is_sparse() ? sizeof(float) : voxel_size(w.slab->type);
     int threads = effective_threads(opt_.threads);
-    while (threads > 1 && std::size_t(threads) * scratch_estimate(opt_.chunk_size, sample) > opt_.memory_budget) --threads;
+    while (threads > 1 && std::size_t(threads) * scratch_estimate(opt_.chunk_size, sample) > opt_.memory_budget)
+        --threads;
     opt_.threads = threads;
     index_ = std::move(index);
 }
@@ -614,7 +634,8 @@ Extractor::Extractor(const Volume& volume, ExtractOptions opt, std::shared_ptr<c
     const std::size_t sample = volume.is_sparse() ? sizeof(float) : voxel_size(volume.type);
     // Fit the per-thread scratch into the budget: fewer threads first, then smaller chunks.
     int threads = effective_threads(opt_.threads);
-    while (threads > 1 && std::size_t(threads) * scratch_estimate(opt_.chunk_size, sample) > opt_.memory_budget) --threads;
+    while (threads > 1 && std::size_t(threads) * scratch_estimate(opt_.chunk_size, sample) > opt_.memory_budget)
+        --threads;
     while (opt_.chunk_size > 4 && scratch_estimate(opt_.chunk_size, sample) > opt_.memory_budget) opt_.chunk_size /= 2;
     opt_.threads = threads;
     if (index && index->chunk_size() == opt_.chunk_size && index->dims() == volume.dims)
@@ -626,8 +647,8 @@ Extractor::Extractor(const Volume& volume, ExtractOptions opt, std::shared_ptr<c
 namespace {
 
 // Extracts `ids` for every surface in `out` (one per iso).
-void run_chunks(const VolumeWindow& w, const ChunkIndex& idx, const ExtractOptions& opt, std::span<const std::size_t> ids,
-                std::span<ChunkedSurface> out, ExtractStats* stats) {
+void run_chunks(const VolumeWindow& w, const ChunkIndex& idx, const ExtractOptions& opt,
+                std::span<const std::size_t> ids, std::span<ChunkedSurface> out, ExtractStats* stats) {
     const Volume& v = *w.slab;
     const Frame f = make_frame(w, idx.chunk_size(), opt.normals, opt.keep_keys);
     tbb::enumerable_thread_specific<Scratch> scratch;
@@ -681,7 +702,10 @@ void run_chunks(const VolumeWindow& w, const ChunkIndex& idx, const ExtractOptio
         stats->chunks_total = idx.chunk_count();
         for (auto id : ids)
             for (auto& s : out)
-                if (idx.active(id, s.iso)) { ++stats->chunks_visited; break; }
+                if (idx.active(id, s.iso)) {
+                    ++stats->chunks_visited;
+                    break;
+                }
     }
 }
 
@@ -717,7 +741,10 @@ std::vector<ChunkedSurface> Extractor::extract(std::span<const double> isos, Ext
     ids.reserve(idx.chunk_count());
     for (std::size_t id = 0; id < idx.chunk_count(); ++id)
         for (double iso : isos)
-            if (idx.active(id, iso)) { ids.push_back(id); break; }
+            if (idx.active(id, iso)) {
+                ids.push_back(id);
+                break;
+            }
     run_chunks(window_, idx, opt_, ids, out, stats);
     if (stats) stats->chunks_total = idx.chunk_count();
     return out;
@@ -738,14 +765,18 @@ std::vector<ChunkedSurface> Extractor::extract_chunks(std::span<const double> is
     std::vector<std::size_t> active;
     active.reserve(ids.size());
     for (auto id : ids) {
-        if (id >= idx.chunk_count()) throw Error("extract", "chunk id " + std::to_string(id) + " is outside the volume");
+        if (id >= idx.chunk_count())
+            throw Error("extract", "chunk id " + std::to_string(id) + " is outside the volume");
         const auto ks = layer_samples(window_.dims, idx.chunk_size(), idx.coords(id)[2]);
         if (ks[0] < window_.k0 || ks[1] > k_last)
             throw Error("extract", "chunk " + std::to_string(id) + " needs slices " + std::to_string(ks[0]) + ".." +
-                                       std::to_string(ks[1]) + ", the window holds " + std::to_string(window_.k0) + ".." +
-                                       std::to_string(k_last));
+                                       std::to_string(ks[1]) + ", the window holds " + std::to_string(window_.k0) +
+                                       ".." + std::to_string(k_last));
         for (double iso : isos)
-            if (idx.active(id, iso)) { active.push_back(id); break; }
+            if (idx.active(id, iso)) {
+                active.push_back(id);
+                break;
+            }
     }
     run_chunks(window_, idx, opt_, active, out, stats);
     if (stats) stats->chunks_total = idx.chunk_count();
@@ -757,7 +788,8 @@ ChunkedSurface Extractor::extract(double iso, ExtractStats* stats) const {
     return std::move(extract(std::span<const double>(isos, 1), stats)[0]);
 }
 
-std::vector<std::size_t> Extractor::update(const IndexBox& box, std::span<ChunkedSurface> surfaces, ExtractStats* stats) {
+std::vector<std::size_t> Extractor::update(const IndexBox& box, std::span<ChunkedSurface> surfaces,
+                                           ExtractStats* stats) {
     if (window_.slab->dims != window_.dims) throw Error("extract", "update() needs the whole volume, not a window");
     auto ids = index_->chunks_touching(box);
     // Copy on write: extractors sharing the old index keep it as it was.
@@ -765,7 +797,8 @@ std::vector<std::size_t> Extractor::update(const IndexBox& box, std::span<Chunke
     fresh->refresh(*volume_, ids);
     index_ = std::move(fresh);
     for (auto& s : surfaces)
-        if (s.chunks.size() != index_->chunk_count()) throw Error("extract", "surface does not belong to this extractor");
+        if (s.chunks.size() != index_->chunk_count())
+            throw Error("extract", "surface does not belong to this extractor");
     run_chunks(window_, *index_, opt_, ids, surfaces, stats);
     return ids;
 }
@@ -837,7 +870,10 @@ Mesh weld(const ChunkedSurface& s, int threads, WeldMap* map) {
     });
     // 3. Duplicates take the index of the first of their run.
     for (std::size_t i = 1, first = 0; i < border.size(); ++i) {
-        if (border[i].key != border[first].key) { first = i; continue; }
+        if (border[i].key != border[first].key) {
+            first = i;
+            continue;
+        }
         remap[border[i].chunk][border[i].local] = remap[border[first].chunk][border[first].local];
     }
     in_arena(threads, [&] {
@@ -902,8 +938,8 @@ std::vector<double> distinct_labels(const Volume& v, std::size_t limit) {
     });
     std::sort(out.begin(), out.end());
     if (out.size() > limit)
-        throw Error(v.meta.source, "has more than " + std::to_string(limit) +
-                                       " distinct values: it does not look like a label map");
+        throw Error(v.meta.source,
+                    "has more than " + std::to_string(limit) + " distinct values: it does not look like a label map");
     return out;
 }
 
@@ -950,7 +986,8 @@ std::vector<ChunkedSurface> label_chunks(const VolumeWindow& w, const ChunkIndex
                             for (std::int64_t xx = g.p0[0]; xx <= g.p1[0]; ++xx) present.insert(double(b.at(xx, y, z)));
                     if (present.size() < 2) return 0; // uniform chunk: no boundary inside it
                     for (auto l : candidates)
-                        if (present.count(labels[l])) run_chunk(b, g, f, LabelClassifier{labels[l]}, sc, surfaces[l].chunks[id]);
+                        if (present.count(labels[l]))
+                            run_chunk(b, g, f, LabelClassifier{labels[l]}, sc, surfaces[l].chunks[id]);
                     return 0;
                 });
             }
@@ -974,7 +1011,8 @@ std::vector<ChunkedSurface> extract_label_chunks(const VolumeWindow& w, const Ch
     return label_chunks(w, index, o, labels, ids);
 }
 
-std::vector<LabelSurface> extract_labels(const Volume& v, std::span<const double> wanted, const ExtractOptions& opt_in) {
+std::vector<LabelSurface> extract_labels(const Volume& v, std::span<const double> wanted,
+                                         const ExtractOptions& opt_in) {
     std::vector<double> labels(wanted.begin(), wanted.end());
     if (labels.empty()) labels = distinct_labels(v);
     std::sort(labels.begin(), labels.end());

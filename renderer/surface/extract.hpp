@@ -61,9 +61,9 @@ namespace iso {
 inline constexpr double kEdgeMargin = 1.0 / 128.0;
 
 struct ExtractOptions {
-    int chunk_size = 32;   // cells per chunk side; see docs/isosurface.md for the sweep behind it
-    bool normals = true;   // gradient normals (else none)
-    int threads = 0;       // 0: as many as TBB allows
+    int chunk_size = 32; // cells per chunk side; see docs/isosurface.md for the sweep behind it
+    bool normals = true; // gradient normals (else none)
+    int threads = 0;     // 0: as many as TBB allows
     // Working memory beyond the input volume and the output mesh: per-thread
     // scratch plus the per-chunk staging of the result. Extraction reduces its
     // thread count (and, if needed, the chunk size) to stay under it.
@@ -108,11 +108,11 @@ struct ChunkSummaries {
     ChunkSummaries(std::array<std::int64_t, 3> dims, int chunk_size, VoxelType type);
     std::array<std::int64_t, 3> dims{0, 0, 0};
     int chunk_size = 0;
-    VoxelType type = VoxelType::F32;       // of the samples (F32 for sparse volumes)
+    VoxelType type = VoxelType::F32; // of the samples (F32 for sparse volumes)
     std::array<int, 3> counts{0, 0, 0};
     std::vector<double> finite_min, finite_max; // +max / lowest where a chunk has no finite sample yet
     std::vector<std::uint8_t> flags;
-    double lowest = 0, highest = 0;        // finite range of every sample added (lowest > highest: none yet)
+    double lowest = 0, highest = 0; // finite range of every sample added (lowest > highest: none yet)
     // Adds the samples of a slab (window.dims/chunk size must match).
     void add(const VolumeWindow& w);
     // Combines summaries of other samples of the same volume.
@@ -140,7 +140,8 @@ public:
     std::array<int, 3> counts() const { return counts_; }
     std::size_t chunk_count() const { return min_.size(); }
     std::array<int, 3> coords(std::size_t id) const {
-        return {int(id % counts_[0]), int((id / counts_[0]) % counts_[1]), int(id / (std::size_t(counts_[0]) * counts_[1]))};
+        return {int(id % counts_[0]), int((id / counts_[0]) % counts_[1]),
+                int(id / (std::size_t(counts_[0]) * counts_[1]))};
     }
     // Can chunk `id` hold a surface at `iso`?  (Some sample >= iso and some < iso.)
     bool active(std::size_t id, double iso) const { return max_[id] >= iso && min_[id] < iso; }

@@ -11,7 +11,8 @@ std::vector<std::uint32_t> chunk_weights(const ChunkIndex& index, std::span<cons
     std::vector<std::uint32_t> w(index.chunk_count(), 0);
     for (std::size_t id = 0; id < w.size(); ++id)
         for (double v : values)
-            w[id] += labels ? (index.active(id, v) || index.active(id, std::nextafter(v, HUGE_VAL))) : index.active(id, v);
+            w[id] +=
+                labels ? (index.active(id, v) || index.active(id, std::nextafter(v, HUGE_VAL))) : index.active(id, v);
     return w;
 }
 
@@ -29,7 +30,8 @@ std::vector<ChunkRange> partition_weights(std::span<const std::uint32_t> weights
         if (r == nranks - 1) {
             id = weights.size();
         } else {
-            const std::uint64_t target = (std::uint64_t(r + 1) * total * 2 + std::uint64_t(nranks)) / (2 * std::uint64_t(nranks));
+            const std::uint64_t target =
+                (std::uint64_t(r + 1) * total * 2 + std::uint64_t(nranks)) / (2 * std::uint64_t(nranks));
             while (run < target && id < weights.size()) run += weights[id++];
         }
         out[r].last = id;
@@ -41,7 +43,8 @@ std::vector<ChunkRange> partition_weights(std::span<const std::uint32_t> weights
     return out;
 }
 
-std::vector<ChunkRange> partition_chunks(const ChunkIndex& index, std::span<const double> values, int nranks, bool labels) {
+std::vector<ChunkRange> partition_chunks(const ChunkIndex& index, std::span<const double> values, int nranks,
+                                         bool labels) {
     const auto w = chunk_weights(index, values, labels);
     return partition_weights(w, nranks);
 }

@@ -19,7 +19,6 @@
 
 namespace iso {
 
-
 bool needs_postprocess(const PostProcessOptions& o) { return o.smooth > 0.0 || o.decimate > 0.0 || o.keep_largest; }
 
 Mesh postprocess(const Mesh& in, const PostProcessOptions& o, const ProgressFn& progress) {
@@ -83,7 +82,7 @@ Mesh postprocess(const Mesh& in, const PostProcessOptions& o, const ProgressFn& 
     vtkNew<vtkPolyDataNormals> n;
     n->SetInputData(pd);
     n->SplittingOff();
-    n->ConsistencyOff();      // keep the extractor's outward orientation
+    n->ConsistencyOff(); // keep the extractor's outward orientation
     n->AutoOrientNormalsOff();
     n->ComputeCellNormalsOff();
     n->Update();

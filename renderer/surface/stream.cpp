@@ -71,16 +71,17 @@ std::shared_ptr<const ChunkIndex> index_pass(VolumeStream& src, StreamOptions& o
     const StreamPlan pre = plan_stream(h, opt, nullptr);
     const auto t = Clock::now();
     std::vector<double> found;
-    auto index = build_chunk_index(src, pre.chunk_size, opt.memory_budget, detail::progress_part(opt.progress, 0.0, share),
-                                   find_labels ? &found : nullptr);
+    auto index = build_chunk_index(src, pre.chunk_size, opt.memory_budget,
+                                   detail::progress_part(opt.progress, 0.0, share), find_labels ? &found : nullptr);
     if (find_labels) opt.label_values = found;
     st.index_pass = true;
     st.index_seconds = seconds_since(t);
     st.read_seconds += st.index_seconds;
     // The index pass held its index, a read buffer and slabs of as many slices as fit.
     const detail::IndexPassSlabs ip = detail::index_pass_slabs(h, index->chunk_count(), opt.memory_budget);
-    st.peak_bytes = std::max(st.peak_bytes, ip.fixed + src.resident_bytes() +
-                                                std::min<std::size_t>(std::size_t(ip.per), std::size_t(h.dims[2])) * ip.slice);
+    st.peak_bytes =
+        std::max(st.peak_bytes, ip.fixed + src.resident_bytes() +
+                                    std::min<std::size_t>(std::size_t(ip.per), std::size_t(h.dims[2])) * ip.slice);
     return index;
 }
 

@@ -28,10 +28,10 @@
 namespace iso {
 
 struct StreamOptions {
-    std::vector<double> isos;            // one surface each ...
-    bool labels = false;                 // ... or label surfaces:
-    std::vector<double> label_values;    //   these labels (empty: every non-zero value, found in the index pass)
-    ExtractOptions extract;              // chunk size (shrunk to fit), normals, threads; its memory_budget is set from below
+    std::vector<double> isos;         // one surface each ...
+    bool labels = false;              // ... or label surfaces:
+    std::vector<double> label_values; //   these labels (empty: every non-zero value, found in the index pass)
+    ExtractOptions extract; // chunk size (shrunk to fit), normals, threads; its memory_budget is set from below
     std::size_t memory_budget = std::size_t(256) << 20;
     // The chunks to extract, [first_chunk, last_chunk) in global ids (MPI
     // ranks pass their own range); the default is the whole volume.
@@ -83,8 +83,8 @@ struct StreamStats {
     // reader or the writer.
     double read_seconds = 0, extract_seconds = 0, write_seconds = 0;
     double index_seconds = 0, weld_seconds = 0, wait_seconds = 0;
-    std::size_t source_restarts = 0;       // gzip streams rewound (VolumeStream::restarts())
-    std::vector<double> values;            // the iso values or labels, one per surface
+    std::size_t source_restarts = 0; // gzip streams rewound (VolumeStream::restarts())
+    std::vector<double> values;      // the iso values or labels, one per surface
     std::vector<std::string> warnings;
 };
 

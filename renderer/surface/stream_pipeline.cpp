@@ -25,8 +25,10 @@ SlabPipeline::SlabPipeline(SlabSteps& steps, const SlabSchedule& schedule, std::
     : steps_(steps), schedule_(schedule), begin_slab_(std::move(begin_slab)) {}
 
 void SlabPipeline::run(bool overlap) {
-    if (overlap) run_overlapped();
-    else run_serial();
+    if (overlap)
+        run_overlapped();
+    else
+        run_serial();
 }
 
 const SlabJob* SlabPipeline::begin(std::size_t i) {

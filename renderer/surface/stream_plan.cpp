@@ -130,8 +130,9 @@ std::vector<std::size_t> active_per_layer(const ChunkIndex* index, const StreamO
 // estimated output fit with `in_flight` of each held at once: with overlap,
 // two slabs' samples (one extracted, the next read) and two slabs' output
 // (one welded and written, the next extracted).
-void choose_layers(StreamPlan& p, const VolumeHeader& h, const StreamOptions& opt, const std::vector<std::size_t>& active,
-                   int max_layers, std::size_t per_chunk, std::size_t in_flight) {
+void choose_layers(StreamPlan& p, const VolumeHeader& h, const StreamOptions& opt,
+                   const std::vector<std::size_t>& active, int max_layers, std::size_t per_chunk,
+                   std::size_t in_flight) {
     const int layers = int(active.size());
     int best = 1;
     bool fits = false;

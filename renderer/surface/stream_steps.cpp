@@ -178,7 +178,8 @@ void SlabSteps::add_seams(MeshPiece& mp, const Piece& piece, const WeldMap& map,
                     const int x = c[0] + dx, y = c[1] + dy, z = c[2] + dz;
                     if (x < 0 || y < 0 || z < 0 || x >= counts[0] || y >= counts[1] || z >= counts[2]) continue;
                     const std::size_t nid =
-                        std::size_t(x) + std::size_t(counts[0]) * (std::size_t(y) + std::size_t(counts[1]) * std::size_t(z));
+                        std::size_t(x) +
+                        std::size_t(counts[0]) * (std::size_t(y) + std::size_t(counts[1]) * std::size_t(z));
                     lower |= nid < j.a;
                     upper |= nid >= j.b;
                 }

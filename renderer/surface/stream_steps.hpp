@@ -33,8 +33,10 @@ public:
     void transient(std::size_t n) { add(n), sub(n); }
     // Something counted as `was` bytes now holds `now`.
     void change(std::size_t was, std::size_t now) {
-        if (now > was) add(now - was);
-        else sub(was - now);
+        if (now > was)
+            add(now - was);
+        else
+            sub(was - now);
     }
     std::size_t peak() const { return peak_.load(); }
 
@@ -44,17 +46,17 @@ private:
 
 // A slab of the plan with active chunks.
 struct SlabJob {
-    std::size_t piece = 0;                // piece number (slab of the plan)
-    std::size_t a = 0, b = 0;             // its chunk ids [a, b)
-    std::vector<std::size_t> ids;         // its active chunks
-    std::int64_t k0 = 0, k1 = 0;          // its samples, halo included
-    double f0 = 0, f1 = 0;                // its share of the progress
+    std::size_t piece = 0;        // piece number (slab of the plan)
+    std::size_t a = 0, b = 0;     // its chunk ids [a, b)
+    std::vector<std::size_t> ids; // its active chunks
+    std::int64_t k0 = 0, k1 = 0;  // its samples, halo included
+    double f0 = 0, f1 = 0;        // its share of the progress
 };
 
 // The slabs with active chunks, in order (the others are skipped unread).
 struct SlabSchedule {
     std::vector<SlabJob> jobs;
-    std::vector<std::size_t> job_of;      // per slab of the plan: its job, or kSkipped
+    std::vector<std::size_t> job_of; // per slab of the plan: its job, or kSkipped
     static constexpr std::size_t kSkipped = std::size_t(-1);
     // The job of slab i of the plan, or null for a slab skipped unread.
     const SlabJob* job(std::size_t i) const { return job_of[i] == kSkipped ? nullptr : &jobs[job_of[i]]; }

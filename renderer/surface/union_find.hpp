@@ -32,8 +32,10 @@ public:
     void unite(std::uint32_t a, std::uint32_t b) {
         a = find(a);
         b = find(b);
-        if (a < b) parent_[b] = a;
-        else if (b < a) parent_[a] = b;
+        if (a < b)
+            parent_[b] = a;
+        else if (b < a)
+            parent_[a] = b;
     }
 
 private:

@@ -71,8 +71,8 @@ struct Args {
 struct Scene {
     std::string name, input, view;
     std::vector<double> isos;
-    double radius = 10;      // mm (CT scenes) or scene units (the bunny)
-    double radius_mm = 10;   // the --radii entry it came from (names the plot)
+    double radius = 10;    // mm (CT scenes) or scene units (the bunny)
+    double radius_mm = 10; // the --radii entry it came from (names the plot)
     std::vector<Mesh> meshes;
     double size = 1; // bounding-box diagonal
 };
@@ -132,7 +132,8 @@ void mark_pareto(std::vector<Row>& rows) {
     for (auto& r : rows) {
         r.pareto = true;
         for (const auto& o : rows)
-            if (&o != &r && o.ao_ms <= r.ao_ms && o.err.rmse <= r.err.rmse && (o.ao_ms < r.ao_ms || o.err.rmse < r.err.rmse)) {
+            if (&o != &r && o.ao_ms <= r.ao_ms && o.err.rmse <= r.err.rmse &&
+                (o.ao_ms < r.ao_ms || o.err.rmse < r.err.rmse)) {
                 r.pareto = false;
                 break;
             }
@@ -201,7 +202,8 @@ struct ConeConfig {
 
 std::string describe(const ConeConfig& c) {
     std::ostringstream s;
-    s << c.cones << "c " << c.spheres << "s " << c.samples << "p grid " << c.grid << " L" << c.layers << " pers " << c.persistence;
+    s << c.cones << "c " << c.spheres << "s " << c.samples << "p grid " << c.grid << " L" << c.layers << " pers "
+      << c.persistence;
     if (c.bias != 1.0) s << " bias " << c.bias;
     if (c.resolution != 1.0) s << " res " << c.resolution;
     if (c.strength != 1.0) s << " strength " << c.strength;
@@ -243,7 +245,9 @@ std::vector<std::string> write_plot(const std::string& csv_path, const std::stri
     for (int ln = 2; std::getline(in, line); ++ln) {
         if (line.empty()) continue;
         const std::vector<std::string> f = split(line);
-        if (f.size() < 12) throw Error(csv_path, "line " + std::to_string(ln) + ": expected 12 fields, got " + std::to_string(f.size()));
+        if (f.size() < 12)
+            throw Error(csv_path,
+                        "line " + std::to_string(ln) + ": expected 12 fields, got " + std::to_string(f.size()));
         std::string group = f[0], file = f[0];
         if (f.size() > 13 && !f[13].empty()) {
             const double r = std::stod(f[13]);
@@ -251,13 +255,15 @@ std::vector<std::string> write_plot(const std::string& csv_path, const std::stri
             file += "_R" + fmt(r, r < 1 ? 4 : 0);
         }
         P q{group, f[2], std::stoi(f[1]), std::stod(f[4]), std::stod(f[8])};
-        if (!std::isfinite(q.ms) || !std::isfinite(q.rmse)) throw Error(csv_path, "line " + std::to_string(ln) + ": non-finite time or RMSE");
+        if (!std::isfinite(q.ms) || !std::isfinite(q.rmse))
+            throw Error(csv_path, "line " + std::to_string(ln) + ": non-finite time or RMSE");
         if (std::find(groups.begin(), groups.end(), group) == groups.end()) groups.push_back(group);
         group_file[group] = file;
         if (std::find(sizes.begin(), sizes.end(), q.size) == sizes.end()) sizes.push_back(q.size);
         if (f.size() > 12 && renderer_name.empty()) renderer_name = f[12];
         if (q.method == "none" && (!none_rmse.count(group) || q.size == sizes.front())) none_rmse[group] = q.rmse;
-        const bool drawn = q.ms > 0 && q.method != "none" && q.method != "voxel-ref" && q.method != "cone-vs-voxel" && q.method != "cone-still";
+        const bool drawn = q.ms > 0 && q.method != "none" && q.method != "voxel-ref" && q.method != "cone-vs-voxel" &&
+                           q.method != "cone-still";
         if (drawn && std::find(methods.begin(), methods.end(), q.method) == methods.end()) methods.push_back(q.method);
         pts.push_back(q);
     }
@@ -308,14 +314,17 @@ std::vector<std::string> write_plot(const std::string& csv_path, const std::stri
                 const int pt = si == 0 ? filled[c] : open[c];
                 const std::string lc = std::string("'") + (si == 0 ? dark[c] : light[c]) + "'";
                 const std::string label = methods[mi] == "vtkSSAOPass" ? "SSAO" : methods[mi];
-                gp << (first ? "" : ", ") << "'" << dat << "' index " << b << " with points pt " << pt << " ps 1.2 lc rgb " << lc << " title '"
-                   << label << " " << sizes[si] << "', '" << dat << "' index " << b + 1 << " with lines lc rgb " << lc << " notitle";
+                gp << (first ? "" : ", ") << "'" << dat << "' index " << b << " with points pt " << pt
+                   << " ps 1.2 lc rgb " << lc << " title '" << label << " " << sizes[si] << "', '" << dat << "' index "
+                   << b + 1 << " with lines lc rgb " << lc << " notitle";
                 first = false;
             }
-        if (none_rmse.count(g)) gp << (first ? "" : ", ") << none_rmse.at(g) << " with lines dt 2 lc rgb 'gray40' title 'no AO'";
+        if (none_rmse.count(g))
+            gp << (first ? "" : ", ") << none_rmse.at(g) << " with lines dt 2 lc rgb 'gray40' title 'no AO'";
         gp << "\n";
     };
-    const std::string common = "set logscale x\nset grid\nset key bottom left\nset xlabel 'AO time per frame, ms'\nset ylabel 'RMSE'\nset yrange [0:*]\n";
+    const std::string common = "set logscale x\nset grid\nset key bottom left\nset xlabel 'AO time per frame, ms'\nset "
+                               "ylabel 'RMSE'\nset yrange [0:*]\n";
     const std::string title = "Ambient occlusion: run time against RMSE (Embree reference), " +
                               (renderer_name.empty() ? std::string("renderer not recorded") : renderer_name);
     std::vector<std::string> written;
@@ -331,17 +340,21 @@ std::vector<std::string> write_plot(const std::string& csv_path, const std::stri
     // All panels: up to 4 per row.
     const int cols = int(std::min<size_t>(groups.size(), 4)), rows_n = int((groups.size() + 3) / 4);
     run_gnuplot(png_path, [&](std::ostream& gp) {
-        gp << "set terminal pngcairo size " << 520 * cols + 80 << "," << 620 * rows_n << " font ',10'\nset output '" << png_path << "'\n"
-           << "set multiplot layout " << rows_n << "," << cols << " title '" << title << "'\n" << common;
+        gp << "set terminal pngcairo size " << 520 * cols + 80 << "," << 620 * rows_n << " font ',10'\nset output '"
+           << png_path << "'\n"
+           << "set multiplot layout " << rows_n << "," << cols << " title '" << title << "'\n"
+           << common;
         for (const auto& g : groups) panel(gp, g);
         gp << "unset multiplot\n";
     });
     // One file per scene and radius.
     for (const auto& g : groups) {
-        const std::string png = (fs::path(png_path).parent_path() / (fs::path(png_path).stem().string() + "_" + group_file[g] + ".png")).string();
+        const std::string png =
+            (fs::path(png_path).parent_path() / (fs::path(png_path).stem().string() + "_" + group_file[g] + ".png"))
+                .string();
         run_gnuplot(png, [&](std::ostream& gp) {
-            gp << "set terminal pngcairo size 640,560 font ',10'\nset output '" << png << "'\n" << common << "set label 1 '" << renderer_name
-               << "' at graph 0.02, graph 0.97 font ',8'\n";
+            gp << "set terminal pngcairo size 640,560 font ',10'\nset output '" << png << "'\n"
+               << common << "set label 1 '" << renderer_name << "' at graph 0.02, graph 0.97 font ',8'\n";
             panel(gp, g);
         });
     }
@@ -354,26 +367,38 @@ int main(int argc, char** argv) {
     for (int i = 1; i < argc; ++i) {
         std::string s = argv[i];
         auto next = [&]() -> std::string { return i + 1 < argc ? argv[++i] : ""; };
-        if (s == "--out") a.out = next();
-        else if (s == "--quick") a.quick = true;
+        if (s == "--out")
+            a.out = next();
+        else if (s == "--quick")
+            a.quick = true;
         else if (s == "--sizes") {
             a.sizes.clear();
             for (auto& t : split(next())) a.sizes.push_back(std::stoi(t));
-        } else if (s == "--scenes") a.scenes = split(next());
+        } else if (s == "--scenes")
+            a.scenes = split(next());
         else if (s == "--radii") {
             a.radii.clear();
             for (auto& t : split(next())) a.radii.push_back(std::stod(t));
-        }
-        else if (s == "--rays") a.rays = std::stoi(next());
-        else if (s == "--reps") a.reps = std::stoi(next());
-        else if (s == "--ssao") a.ssao = next();
-        else if (s == "--data") a.data = next();
-        else if (s == "--voxel-ref") a.voxel_ref_each = true;
-        else if (s == "--disk") a.disk = next();
-        else if (s == "--replot") a.replot = next();
-        else if (s == "--config") a.configs.push_back(next()); // cones,spheres,samples,grid,layers,persistence[,bias[,frames[,resolution[,strength[,ray_weight[,surface_voxels[,axis_weight]]]]]]]
+        } else if (s == "--rays")
+            a.rays = std::stoi(next());
+        else if (s == "--reps")
+            a.reps = std::stoi(next());
+        else if (s == "--ssao")
+            a.ssao = next();
+        else if (s == "--data")
+            a.data = next();
+        else if (s == "--voxel-ref")
+            a.voxel_ref_each = true;
+        else if (s == "--disk")
+            a.disk = next();
+        else if (s == "--replot")
+            a.replot = next();
+        else if (s == "--config")
+            a.configs.push_back(
+                next()); // cones,spheres,samples,grid,layers,persistence[,bias[,frames[,resolution[,strength[,ray_weight[,surface_voxels[,axis_weight]]]]]]]
         else {
-            std::cerr << "usage: ao_bench [--quick] [--out DIR] [--sizes 512,1024] [--scenes ct-skin,ct-bone,bunny,thin] [--radii 10,20] [--rays N] "
+            std::cerr << "usage: ao_bench [--quick] [--out DIR] [--sizes 512,1024] [--scenes "
+                         "ct-skin,ct-bone,bunny,thin] [--radii 10,20] [--rays N] "
                          "[--reps N] [--ssao PATH|none] [--config C ...] [--voxel-ref] [--replot CSV]\n";
             return 2;
         }
@@ -438,12 +463,14 @@ int main(int argc, char** argv) {
                 k.ray_weight = 0.5;
                 k.surface = -1;
                 k.axis = ConeAoSettings{}.axis_weight;
-                const int got = std::sscanf(c.c_str(), "%d,%d,%d,%lf,%d,%lf,%lf,%d,%lf,%lf,%lf,%d,%lf", &k.cones, &k.spheres, &k.samples, &k.grid,
-                                            &k.layers, &k.persistence, &k.bias, &k.frames, &k.resolution, &k.strength, &k.ray_weight,
-                                            &k.surface, &k.axis);
+                const int got = std::sscanf(c.c_str(), "%d,%d,%d,%lf,%d,%lf,%lf,%d,%lf,%lf,%lf,%d,%lf", &k.cones,
+                                            &k.spheres, &k.samples, &k.grid, &k.layers, &k.persistence, &k.bias,
+                                            &k.frames, &k.resolution, &k.strength, &k.ray_weight, &k.surface, &k.axis);
                 if (got < 6 || k.frames < 1)
-                    throw Error("--config",
-                                "expected cones,spheres,samples,grid,layers,persistence[,bias[,frames[,resolution[,strength[,ray_weight[,surface_voxels[,axis_weight]]]]]]], got '" + c + "'");
+                    throw Error("--config", "expected "
+                                            "cones,spheres,samples,grid,layers,persistence[,bias[,frames[,resolution[,"
+                                            "strength[,ray_weight[,surface_voxels[,axis_weight]]]]]]], got '" +
+                                                c + "'");
                 configs.push_back(k);
             }
         }
@@ -452,318 +479,345 @@ int main(int argc, char** argv) {
         for (const auto& scene_name : a.scenes) {
             Scene sc = make_scene(scene_name, a);
             for (const double radius_mm : a.radii)
-            for (int S : a.sizes) {
-                sc.radius_mm = radius_mm;
-                // CT scenes: mm; the bunny (units of ~metres/10): a tenth of its size per 10 mm.
-                sc.radius = sc.name == "bunny" ? 0.1 * sc.size * radius_mm / 10.0 : radius_mm;
-                // picture names: the radius appears only when it is not the target's 10
-                const std::string stem_r = radius_mm == 10.0 ? "" : "_R" + fmt(radius_mm, 0);
-                std::cerr << "[ao_bench] " << sc.name << " R " << sc.radius << " " << S << "x" << S << ": reference (" << a.rays << " rays)\n";
-                // The reference through the core API: same camera as the CLI, cached.
-                core::RenderRequest rq;
-                rq.isos = sc.isos;
-                rq.view = sc.view;
-                rq.width = rq.height = S;
-                rq.aov = Aov::Ao;
-                rq.look.ao = AoMethod::Reference;
-                rq.look.cone.radius_mm = sc.radius;
-                rq.look.ao_rays = a.rays;
-                const auto ref = core::render_input(sc.input, rq);
-                const Camera cam = ref.camera;
-                renderer_name = ref.gl_renderer;
+                for (int S : a.sizes) {
+                    sc.radius_mm = radius_mm;
+                    // CT scenes: mm; the bunny (units of ~metres/10): a tenth of its size per 10 mm.
+                    sc.radius = sc.name == "bunny" ? 0.1 * sc.size * radius_mm / 10.0 : radius_mm;
+                    // picture names: the radius appears only when it is not the target's 10
+                    const std::string stem_r = radius_mm == 10.0 ? "" : "_R" + fmt(radius_mm, 0);
+                    std::cerr << "[ao_bench] " << sc.name << " R " << sc.radius << " " << S << "x" << S
+                              << ": reference (" << a.rays << " rays)\n";
+                    // The reference through the core API: same camera as the CLI, cached.
+                    core::RenderRequest rq;
+                    rq.isos = sc.isos;
+                    rq.view = sc.view;
+                    rq.width = rq.height = S;
+                    rq.aov = Aov::Ao;
+                    rq.look.ao = AoMethod::Reference;
+                    rq.look.cone.radius_mm = sc.radius;
+                    rq.look.ao_rays = a.rays;
+                    const auto ref = core::render_input(sc.input, rq);
+                    const Camera cam = ref.camera;
+                    renderer_name = ref.gl_renderer;
 
-                Renderer ren;
-                for (const auto& m : sc.meshes) ren.add(m, {});
-                std::vector<Row> rows;
-                auto add_row = [&](const std::string& method, const std::string& params, double ao_ms, double frame_ms, const Image& img) {
-                    Row r{sc.name, method, params, S, sc.radius, ao_ms, frame_ms, ao_error(img, ref.image, a.rays)};
-                    rows.push_back(r);
-                };
-                {
-                    Image ones = ref.image;
-                    for (auto& v : ones.floats)
-                        if (std::isfinite(v)) v = 1.0f;
-                    add_row("none", "AO = 1", 0, 0, ones);
-                }
-                // Cone AO sweep.
-                for (const auto& c : configs) {
-                    RenderOptions ro;
-                    RenderHooks hooks;
-                    ro.width = ro.height = S;
-                    ro.aov = Aov::Ao;
-                    ro.look.ao = AoMethod::Cone;
-                    ro.look.cone.radius_mm = sc.radius;
-                    ro.look.cone.cones = c.cones;
-                    ro.look.cone.spheres = c.spheres;
-                    ro.look.cone.samples = c.samples;
-                    ro.look.cone.grid_scale = c.grid;
-                    ro.look.cone.layers = c.layers;
-                    ro.look.cone.persistence = c.persistence;
-                    ro.look.cone.bias = c.bias;
-                    ro.look.cone.resolution = c.resolution;
-                    ro.look.cone.strength = c.strength;
-                    ro.look.cone.ray_weight = c.ray_weight;
-                    if (c.surface >= 0) ro.look.cone.surface_voxels = c.surface != 0;
-                    ro.look.cone.axis_weight = c.axis;
-                    ro.look.cone.temporal = c.frames > 1;
-                    ro.time_passes = true;
-                    Image img;
-                    std::vector<double> ao_ms, frame_ms;
-                    std::map<std::string, std::vector<double>> pass_ms;
-                    for (int rep = 0; rep < a.reps + 1; ++rep) {
-                        hooks.ao_force_voxelize = true;
-                        for (int f = 1; f < c.frames; ++f) { // earlier still frames (not timed)
-                            ren.render(cam, ro, hooks);
-                            hooks.ao_force_voxelize = false;
-                        }
-                        auto r = ren.render(cam, ro, hooks);
-                        double ao = 0, total = 0;
-                        for (const auto& p : r.stats.passes) {
-                            if (!p.ran) continue;
-                            total += p.ms;
-                            if (p.name == "zrange" || p.name == "voxelize" || p.name == "cone_ao" || p.name == "ao_upsample") {
-                                ao += p.ms;
-                                if (rep > 0) pass_ms[p.name].push_back(p.ms);
-                            }
-                        }
-                        if (rep > 0) { // the first frame compiles shaders
-                            ao_ms.push_back(ao);
-                            frame_ms.push_back(total);
-                        }
-                        img = std::move(r.image);
-                    }
-                    std::cerr << "[ao_bench]   " << describe(c) << ":";
-                    for (auto& [name, v] : pass_ms) std::cerr << " " << name << " " << fmt(bench::median(v), 1) << " ms";
-                    std::cerr << "\n";
-                    add_row("cone", describe(c), bench::median(ao_ms), bench::median(frame_ms), img);
-                }
-                // Default settings, still camera, temporal accumulation of 8 frames.
-                if (a.configs.empty()) {
-                    RenderOptions ro;
-                    RenderHooks hooks;
-                    ro.width = ro.height = S;
-                    ro.aov = Aov::Ao;
-                    ro.look.ao = AoMethod::Cone;
-                    ro.look.cone.radius_mm = sc.radius;
-                    ro.time_passes = true;
-                    Image img;
-                    double ao_sum = 0;
-                    const int frames = 8;
-                    ren.render(cam, ro, hooks); // warm-up; then a new view starts the accumulation
-                    hooks.ao_force_voxelize = true;
-                    for (int f = 0; f < frames; ++f) {
-                        auto r = ren.render(cam, ro, hooks);
-                        hooks.ao_force_voxelize = false;
-                        for (const auto& p : r.stats.passes)
-                            if (p.ran && (p.name == "zrange" || p.name == "voxelize" || p.name == "cone_ao" || p.name == "ao_upsample"))
-                                ao_sum += p.ms;
-                        img = std::move(r.image);
-                    }
-                    add_row("cone-still", "default; 8 still frames accumulated (time: all 8)", ao_sum, 0, img);
-                    const std::string stem = a.out + "/" + sc.name + "_" + std::to_string(S) + stem_r;
-                    save_grey(ref.image, stem + "_reference.png");
-                    save_grey(img, stem + "_cone.png");
-                    save_diff(img, ref.image, stem + "_cone_minus_reference.png");
-                }
-                // ---- Disk AO (docs/ao.md, "Disk AO on the GPU") ----
-                // Default settings, then a small sweep of the element passes and
-                // the traversal epsilon. Each timed frame starts from scratch
-                // (the meshes replaced, so the hierarchy is rebuilt): AO ms =
-                // disk_build (CPU build + upload) + disk_elements + disk_gather;
-                // the split goes into the parameters column. A new view of the
-                // same scene costs the gather alone.
-                if (a.disk != "none") {
-                    struct DiskConfig {
-                        int passes;
-                        double epsilon, t = 1.0, min_scale = 0.7;
+                    Renderer ren;
+                    for (const auto& m : sc.meshes) ren.add(m, {});
+                    std::vector<Row> rows;
+                    auto add_row = [&](const std::string& method, const std::string& params, double ao_ms,
+                                       double frame_ms, const Image& img) {
+                        Row r{sc.name, method, params, S, sc.radius, ao_ms, frame_ms, ao_error(img, ref.image, a.rays)};
+                        rows.push_back(r);
                     };
-                    // Default (no element passes, epsilon 16); epsilon 8 (the
-                    // chapter's) and 32; two element passes as the CPU
-                    // benchmark measured best (t = 0.1, min 1) and as the
-                    // chapter gives them (t = 1, 0.7 / 0.3).
-                    const DiskAoSettings defaults;
-                    std::vector<DiskConfig> dcs{{defaults.passes, defaults.traversal_epsilon}};
-                    if (a.disk == "sweep") dcs.insert(dcs.end(), {{0, 8.0}, {0, 32.0}, {2, 16.0, 0.1, 1.0}, {2, 8.0}});
-                    for (const auto& dc : dcs) {
-                        RenderOptions ro;
-                        ro.width = ro.height = S;
-                        ro.aov = Aov::Ao;
-                        ro.look.ao = AoMethod::Disk;
-                        ro.look.cone.radius_mm = sc.radius;
-                        ro.look.disk.passes = dc.passes;
-                        ro.look.disk.traversal_epsilon = dc.epsilon;
-                        ro.look.disk.triangle_attenuation = dc.t;
-                        ro.look.disk.min_scale = dc.min_scale;
-                        ro.look.disk.max_scale = 1.0 - dc.min_scale;
-                        ro.time_passes = true;
-                        Image img;
-                        std::map<std::string, std::vector<double>> ms;
-                        for (int rep = 0; rep < a.reps + 1; ++rep) {
-                            for (std::size_t m = 0; m < sc.meshes.size(); ++m) ren.replace(std::uint32_t(m + 1), sc.meshes[m]);
-                            auto r = ren.render(cam, ro);
-                            if (rep > 0) { // the first frame compiles shaders
-                                double total = 0;
-                                for (const auto& p : r.stats.passes)
-                                    if (p.ran && p.name.rfind("disk_", 0) == 0) {
-                                        ms[p.name].push_back(p.ms);
-                                        total += p.ms;
-                                    }
-                                ms["build"].push_back(r.disk_build_ms);
-                                ms["total"].push_back(total);
-                            }
-                            img = std::move(r.image);
-                        }
-                        const double build = bench::median(ms["build"]);
-                        const double upload = std::max(0.0, bench::median(ms["disk_build"]) - build);
-                        std::ostringstream params;
-                        params << "passes " << dc.passes << " eps " << dc.epsilon;
-                        if (dc.passes > 0) params << " t " << dc.t << " min " << dc.min_scale;
-                        params << " (build " << fmt(build, 1) << " + upload " << fmt(upload, 1)
-                               << " + elements " << fmt(bench::median(ms["disk_elements"]), 1) << " + gather "
-                               << fmt(bench::median(ms["disk_gather"]), 1) << " ms)";
-                        std::cerr << "[ao_bench]   disk " << params.str() << "\n";
-                        add_row("disk", params.str(), bench::median(ms["total"]), 0, img);
-                        if (dc.passes == defaults.passes && dc.epsilon == defaults.traversal_epsilon) {
-                            const std::string stem = a.out + "/" + sc.name + "_" + std::to_string(S) + stem_r;
-                            save_grey(img, stem + "_disk.png");
-                            save_diff(img, ref.image, stem + "_disk_minus_reference.png");
-                        }
+                    {
+                        Image ones = ref.image;
+                        for (auto& v : ones.floats)
+                            if (std::isfinite(v)) v = 1.0f;
+                        add_row("none", "AO = 1", 0, 0, ones);
                     }
-                }
-                // The voxel-grid reference (default grid, or each --config's
-                // grid, layers and bias with --voxel-ref), on every 4th pixel.
-                {
-                    std::vector<ConeConfig> vcs;
-                    if (a.configs.empty()) vcs.push_back(ConeConfig{8, 5, 8, 1.0, 2, 1.0, 1, 1, 0.5, 1, 0.5});
-                    else if (a.voxel_ref_each) vcs = configs;
-                    for (const auto& vc : vcs) {
+                    // Cone AO sweep.
+                    for (const auto& c : configs) {
                         RenderOptions ro;
                         RenderHooks hooks;
                         ro.width = ro.height = S;
                         ro.aov = Aov::Ao;
                         ro.look.ao = AoMethod::Cone;
                         ro.look.cone.radius_mm = sc.radius;
-                        ro.look.cone.grid_scale = vc.grid;
-                        ro.look.cone.layers = vc.layers;
-                        ro.look.cone.bias = vc.bias;
-                        if (vc.surface >= 0) ro.look.cone.surface_voxels = vc.surface != 0;
-                        hooks.ao_force_voxelize = true;
-                        hooks.read_slicemap = true;
-                        auto r = ren.render(cam, ro, hooks);
-                        RenderOptions d;
-                        d.width = d.height = S;
-                        d.aov = Aov::Depth;
-                        const Image depth = ren.render(cam, d).image;
-                        d.aov = Aov::Normal;
-                        const Image normal = ren.render(cam, d).image;
-                        AoReferenceOptions vo;
-                        vo.radius_mm = sc.radius;
-                        vo.rays = std::min(a.rays, 256);
-                        const double t0 = bench::now_s();
-                        const Image vox = voxel_ao_image(r.slicemap, cam, depth, normal, vo, vc.bias, a.quick ? 2 : 4);
-                        const double t1 = bench::now_s();
-                        if (a.configs.empty()) {
-                            add_row("voxel-ref", "rays through the default slicemap (every 4th px, CPU)", 0, (t1 - t0) * 1e3, vox);
-                            // Cone error alone: cone (default) against the voxel reference.
-                            Row cr{sc.name, "cone-vs-voxel", "default cone AO against the voxel reference", S, sc.radius, 0, 0,
-                                   ao_error(r.image, vox, vo.rays)};
-                            rows.push_back(cr);
-                        } else {
-                            std::ostringstream pr;
-                            pr << "grid " << vc.grid << " L" << vc.layers << " bias " << vc.bias << " (every 4th px, CPU)";
-                            add_row("voxel-ref", pr.str(), 0, (t1 - t0) * 1e3, vox);
-                        }
-                    }
-                }
-                // VTK's SSAO, same meshes and camera, under Xvfb.
-                if (a.ssao != "none" && fs::exists(a.ssao)) {
-                    std::vector<std::string> files;
-                    for (std::size_t m = 0; m < sc.meshes.size(); ++m) {
-                        files.push_back(a.out + "/" + sc.name + "_" + std::to_string(m) + ".ply");
-                        if (!fs::exists(files.back())) save_mesh(sc.meshes[m], files.back());
-                    }
-                    auto v3 = [](const glm::dvec3& v) {
-                        std::ostringstream s;
-                        s.precision(17);
-                        s << v.x << "," << v.y << "," << v.z;
-                        return s.str();
-                    };
-                    struct SsaoRun {
-                        double radius, bias;
-                        int kernel;
-                        std::string label;
-                    };
-                    std::vector<SsaoRun> runs;
-                    for (int k : kernels) runs.push_back({sc.radius, 0.001 * sc.size, k, "radius R"});
-                    runs.push_back({0.1 * sc.size, 0.001 * sc.size, 32, "radius 0.1 x scene (Kitware's advice)"});
-                    for (const auto& run : runs) {
-                        std::ostringstream cmd;
-                        cmd.precision(17);
-                        const std::string out_exr = a.out + "/ssao_" + sc.name + stem_r + ".exr";
-                        cmd << "xvfb-run -a -s '-screen 0 " << std::max(S + 64, 1280) << "x" << std::max(S + 64, 1024) << "x24' " << a.ssao;
-                        for (const auto& f : files) cmd << " --mesh " << f;
-                        cmd << " --eye " << v3(cam.eye) << " --target " << v3(cam.target) << " --up " << v3(cam.up) << " --fov "
-                            << cam.fov_y_degrees << " --near " << cam.near_plane << " --far " << cam.far_plane << " --size " << S << "x" << S
-                            << " --radius " << run.radius << " --bias " << run.bias << " --kernel " << run.kernel << " --frames "
-                            << std::max(5, a.reps * 2) << " --out " << out_exr << " 2>/dev/null";
-                        const std::string line = bench::capture(cmd.str());
-                        try {
-                            const auto j = nlohmann::json::parse(line.substr(line.find('{')));
-                            const Image img = load_image(out_exr);
-                            if (run.kernel == 32 && run.label == "radius R") {
-                                const std::string stem = a.out + "/" + sc.name + "_" + std::to_string(S) + stem_r;
-                                save_grey(img, stem + "_ssao.png");
-                                save_diff(img, ref.image, stem + "_ssao_minus_reference.png");
+                        ro.look.cone.cones = c.cones;
+                        ro.look.cone.spheres = c.spheres;
+                        ro.look.cone.samples = c.samples;
+                        ro.look.cone.grid_scale = c.grid;
+                        ro.look.cone.layers = c.layers;
+                        ro.look.cone.persistence = c.persistence;
+                        ro.look.cone.bias = c.bias;
+                        ro.look.cone.resolution = c.resolution;
+                        ro.look.cone.strength = c.strength;
+                        ro.look.cone.ray_weight = c.ray_weight;
+                        if (c.surface >= 0) ro.look.cone.surface_voxels = c.surface != 0;
+                        ro.look.cone.axis_weight = c.axis;
+                        ro.look.cone.temporal = c.frames > 1;
+                        ro.time_passes = true;
+                        Image img;
+                        std::vector<double> ao_ms, frame_ms;
+                        std::map<std::string, std::vector<double>> pass_ms;
+                        for (int rep = 0; rep < a.reps + 1; ++rep) {
+                            hooks.ao_force_voxelize = true;
+                            for (int f = 1; f < c.frames; ++f) { // earlier still frames (not timed)
+                                ren.render(cam, ro, hooks);
+                                hooks.ao_force_voxelize = false;
                             }
-                            const double ms = j.at("ms_median").get<double>(), plain = j.at("ms_plain_median").get<double>();
-                            add_row("vtkSSAOPass", "kernel " + std::to_string(run.kernel) + ", " + run.label + " " + fmt(run.radius, 4) +
-                                                       ", bias " + fmt(run.bias, 5),
-                                    std::max(0.0, ms - plain), ms, img);
-                        } catch (const std::exception& e) {
-                            std::cerr << "[ao_bench] ssao_peer failed (" << e.what() << "): " << line << "\n";
+                            auto r = ren.render(cam, ro, hooks);
+                            double ao = 0, total = 0;
+                            for (const auto& p : r.stats.passes) {
+                                if (!p.ran) continue;
+                                total += p.ms;
+                                if (p.name == "zrange" || p.name == "voxelize" || p.name == "cone_ao" ||
+                                    p.name == "ao_upsample") {
+                                    ao += p.ms;
+                                    if (rep > 0) pass_ms[p.name].push_back(p.ms);
+                                }
+                            }
+                            if (rep > 0) { // the first frame compiles shaders
+                                ao_ms.push_back(ao);
+                                frame_ms.push_back(total);
+                            }
+                            img = std::move(r.image);
+                        }
+                        std::cerr << "[ao_bench]   " << describe(c) << ":";
+                        for (auto& [name, v] : pass_ms)
+                            std::cerr << " " << name << " " << fmt(bench::median(v), 1) << " ms";
+                        std::cerr << "\n";
+                        add_row("cone", describe(c), bench::median(ao_ms), bench::median(frame_ms), img);
+                    }
+                    // Default settings, still camera, temporal accumulation of 8 frames.
+                    if (a.configs.empty()) {
+                        RenderOptions ro;
+                        RenderHooks hooks;
+                        ro.width = ro.height = S;
+                        ro.aov = Aov::Ao;
+                        ro.look.ao = AoMethod::Cone;
+                        ro.look.cone.radius_mm = sc.radius;
+                        ro.time_passes = true;
+                        Image img;
+                        double ao_sum = 0;
+                        const int frames = 8;
+                        ren.render(cam, ro, hooks); // warm-up; then a new view starts the accumulation
+                        hooks.ao_force_voxelize = true;
+                        for (int f = 0; f < frames; ++f) {
+                            auto r = ren.render(cam, ro, hooks);
+                            hooks.ao_force_voxelize = false;
+                            for (const auto& p : r.stats.passes)
+                                if (p.ran && (p.name == "zrange" || p.name == "voxelize" || p.name == "cone_ao" ||
+                                              p.name == "ao_upsample"))
+                                    ao_sum += p.ms;
+                            img = std::move(r.image);
+                        }
+                        add_row("cone-still", "default; 8 still frames accumulated (time: all 8)", ao_sum, 0, img);
+                        const std::string stem = a.out + "/" + sc.name + "_" + std::to_string(S) + stem_r;
+                        save_grey(ref.image, stem + "_reference.png");
+                        save_grey(img, stem + "_cone.png");
+                        save_diff(img, ref.image, stem + "_cone_minus_reference.png");
+                    }
+                    // ---- Disk AO (docs/ao.md, "Disk AO on the GPU") ----
+                    // Default settings, then a small sweep of the element passes and
+                    // the traversal epsilon. Each timed frame starts from scratch
+                    // (the meshes replaced, so the hierarchy is rebuilt): AO ms =
+                    // disk_build (CPU build + upload) + disk_elements + disk_gather;
+                    // the split goes into the parameters column. A new view of the
+                    // same scene costs the gather alone.
+                    if (a.disk != "none") {
+                        struct DiskConfig {
+                            int passes;
+                            double epsilon, t = 1.0, min_scale = 0.7;
+                        };
+                        // Default (no element passes, epsilon 16); epsilon 8 (the
+                        // chapter's) and 32; two element passes as the CPU
+                        // benchmark measured best (t = 0.1, min 1) and as the
+                        // chapter gives them (t = 1, 0.7 / 0.3).
+                        const DiskAoSettings defaults;
+                        std::vector<DiskConfig> dcs{{defaults.passes, defaults.traversal_epsilon}};
+                        if (a.disk == "sweep")
+                            dcs.insert(dcs.end(), {{0, 8.0}, {0, 32.0}, {2, 16.0, 0.1, 1.0}, {2, 8.0}});
+                        for (const auto& dc : dcs) {
+                            RenderOptions ro;
+                            ro.width = ro.height = S;
+                            ro.aov = Aov::Ao;
+                            ro.look.ao = AoMethod::Disk;
+                            ro.look.cone.radius_mm = sc.radius;
+                            ro.look.disk.passes = dc.passes;
+                            ro.look.disk.traversal_epsilon = dc.epsilon;
+                            ro.look.disk.triangle_attenuation = dc.t;
+                            ro.look.disk.min_scale = dc.min_scale;
+                            ro.look.disk.max_scale = 1.0 - dc.min_scale;
+                            ro.time_passes = true;
+                            Image img;
+                            std::map<std::string, std::vector<double>> ms;
+                            for (int rep = 0; rep < a.reps + 1; ++rep) {
+                                for (std::size_t m = 0; m < sc.meshes.size(); ++m)
+                                    ren.replace(std::uint32_t(m + 1), sc.meshes[m]);
+                                auto r = ren.render(cam, ro);
+                                if (rep > 0) { // the first frame compiles shaders
+                                    double total = 0;
+                                    for (const auto& p : r.stats.passes)
+                                        if (p.ran && p.name.rfind("disk_", 0) == 0) {
+                                            ms[p.name].push_back(p.ms);
+                                            total += p.ms;
+                                        }
+                                    ms["build"].push_back(r.disk_build_ms);
+                                    ms["total"].push_back(total);
+                                }
+                                img = std::move(r.image);
+                            }
+                            const double build = bench::median(ms["build"]);
+                            const double upload = std::max(0.0, bench::median(ms["disk_build"]) - build);
+                            std::ostringstream params;
+                            params << "passes " << dc.passes << " eps " << dc.epsilon;
+                            if (dc.passes > 0) params << " t " << dc.t << " min " << dc.min_scale;
+                            params << " (build " << fmt(build, 1) << " + upload " << fmt(upload, 1) << " + elements "
+                                   << fmt(bench::median(ms["disk_elements"]), 1) << " + gather "
+                                   << fmt(bench::median(ms["disk_gather"]), 1) << " ms)";
+                            std::cerr << "[ao_bench]   disk " << params.str() << "\n";
+                            add_row("disk", params.str(), bench::median(ms["total"]), 0, img);
+                            if (dc.passes == defaults.passes && dc.epsilon == defaults.traversal_epsilon) {
+                                const std::string stem = a.out + "/" + sc.name + "_" + std::to_string(S) + stem_r;
+                                save_grey(img, stem + "_disk.png");
+                                save_diff(img, ref.image, stem + "_disk_minus_reference.png");
+                            }
                         }
                     }
-                } else if (a.ssao != "none") {
-                    std::cerr << "[ao_bench] no ssao_peer at " << a.ssao << ": VTK's SSAO not measured\n";
+                    // The voxel-grid reference (default grid, or each --config's
+                    // grid, layers and bias with --voxel-ref), on every 4th pixel.
+                    {
+                        std::vector<ConeConfig> vcs;
+                        if (a.configs.empty())
+                            vcs.push_back(ConeConfig{8, 5, 8, 1.0, 2, 1.0, 1, 1, 0.5, 1, 0.5});
+                        else if (a.voxel_ref_each)
+                            vcs = configs;
+                        for (const auto& vc : vcs) {
+                            RenderOptions ro;
+                            RenderHooks hooks;
+                            ro.width = ro.height = S;
+                            ro.aov = Aov::Ao;
+                            ro.look.ao = AoMethod::Cone;
+                            ro.look.cone.radius_mm = sc.radius;
+                            ro.look.cone.grid_scale = vc.grid;
+                            ro.look.cone.layers = vc.layers;
+                            ro.look.cone.bias = vc.bias;
+                            if (vc.surface >= 0) ro.look.cone.surface_voxels = vc.surface != 0;
+                            hooks.ao_force_voxelize = true;
+                            hooks.read_slicemap = true;
+                            auto r = ren.render(cam, ro, hooks);
+                            RenderOptions d;
+                            d.width = d.height = S;
+                            d.aov = Aov::Depth;
+                            const Image depth = ren.render(cam, d).image;
+                            d.aov = Aov::Normal;
+                            const Image normal = ren.render(cam, d).image;
+                            AoReferenceOptions vo;
+                            vo.radius_mm = sc.radius;
+                            vo.rays = std::min(a.rays, 256);
+                            const double t0 = bench::now_s();
+                            const Image vox =
+                                voxel_ao_image(r.slicemap, cam, depth, normal, vo, vc.bias, a.quick ? 2 : 4);
+                            const double t1 = bench::now_s();
+                            if (a.configs.empty()) {
+                                add_row("voxel-ref", "rays through the default slicemap (every 4th px, CPU)", 0,
+                                        (t1 - t0) * 1e3, vox);
+                                // Cone error alone: cone (default) against the voxel reference.
+                                Row cr{sc.name,
+                                       "cone-vs-voxel",
+                                       "default cone AO against the voxel reference",
+                                       S,
+                                       sc.radius,
+                                       0,
+                                       0,
+                                       ao_error(r.image, vox, vo.rays)};
+                                rows.push_back(cr);
+                            } else {
+                                std::ostringstream pr;
+                                pr << "grid " << vc.grid << " L" << vc.layers << " bias " << vc.bias
+                                   << " (every 4th px, CPU)";
+                                add_row("voxel-ref", pr.str(), 0, (t1 - t0) * 1e3, vox);
+                            }
+                        }
+                    }
+                    // VTK's SSAO, same meshes and camera, under Xvfb.
+                    if (a.ssao != "none" && fs::exists(a.ssao)) {
+                        std::vector<std::string> files;
+                        for (std::size_t m = 0; m < sc.meshes.size(); ++m) {
+                            files.push_back(a.out + "/" + sc.name + "_" + std::to_string(m) + ".ply");
+                            if (!fs::exists(files.back())) save_mesh(sc.meshes[m], files.back());
+                        }
+                        auto v3 = [](const glm::dvec3& v) {
+                            std::ostringstream s;
+                            s.precision(17);
+                            s << v.x << "," << v.y << "," << v.z;
+                            return s.str();
+                        };
+                        struct SsaoRun {
+                            double radius, bias;
+                            int kernel;
+                            std::string label;
+                        };
+                        std::vector<SsaoRun> runs;
+                        for (int k : kernels) runs.push_back({sc.radius, 0.001 * sc.size, k, "radius R"});
+                        runs.push_back({0.1 * sc.size, 0.001 * sc.size, 32, "radius 0.1 x scene (Kitware's advice)"});
+                        for (const auto& run : runs) {
+                            std::ostringstream cmd;
+                            cmd.precision(17);
+                            const std::string out_exr = a.out + "/ssao_" + sc.name + stem_r + ".exr";
+                            cmd << "xvfb-run -a -s '-screen 0 " << std::max(S + 64, 1280) << "x"
+                                << std::max(S + 64, 1024) << "x24' " << a.ssao;
+                            for (const auto& f : files) cmd << " --mesh " << f;
+                            cmd << " --eye " << v3(cam.eye) << " --target " << v3(cam.target) << " --up " << v3(cam.up)
+                                << " --fov " << cam.fov_y_degrees << " --near " << cam.near_plane << " --far "
+                                << cam.far_plane << " --size " << S << "x" << S << " --radius " << run.radius
+                                << " --bias " << run.bias << " --kernel " << run.kernel << " --frames "
+                                << std::max(5, a.reps * 2) << " --out " << out_exr << " 2>/dev/null";
+                            const std::string line = bench::capture(cmd.str());
+                            try {
+                                const auto j = nlohmann::json::parse(line.substr(line.find('{')));
+                                const Image img = load_image(out_exr);
+                                if (run.kernel == 32 && run.label == "radius R") {
+                                    const std::string stem = a.out + "/" + sc.name + "_" + std::to_string(S) + stem_r;
+                                    save_grey(img, stem + "_ssao.png");
+                                    save_diff(img, ref.image, stem + "_ssao_minus_reference.png");
+                                }
+                                const double ms = j.at("ms_median").get<double>(),
+                                             plain = j.at("ms_plain_median").get<double>();
+                                add_row("vtkSSAOPass",
+                                        "kernel " + std::to_string(run.kernel) + ", " + run.label + " " +
+                                            fmt(run.radius, 4) + ", bias " + fmt(run.bias, 5),
+                                        std::max(0.0, ms - plain), ms, img);
+                            } catch (const std::exception& e) {
+                                std::cerr << "[ao_bench] ssao_peer failed (" << e.what() << "): " << line << "\n";
+                            }
+                        }
+                    } else if (a.ssao != "none") {
+                        std::cerr << "[ao_bench] no ssao_peer at " << a.ssao << ": VTK's SSAO not measured\n";
+                    }
+                    // Pareto over the methods that give a per-frame AO (not the references, not the CPU voxel tracer).
+                    std::vector<Row> contenders;
+                    for (const auto& r : rows)
+                        if (r.method == "cone" || r.method == "vtkSSAOPass" || r.method == "none")
+                            contenders.push_back(r);
+                    mark_pareto(contenders);
+                    for (auto& r : rows)
+                        for (const auto& c : contenders)
+                            if (c.method == r.method && c.params == r.params) r.pareto = c.pareto;
+                    std::cout << "\n### " << sc.name << ", " << S << "x" << S << ", R = " << fmt(sc.radius, 4)
+                              << " (reference: " << a.rays << " rays/px, own noise RMS "
+                              << fmt(rows[0].err.reference_noise_rms, 4) << "; " << rows[0].err.pixels
+                              << " foreground px)\n\n";
+                    std::cout << "| method | parameters | AO ms | frame ms | bias | MAE | RMSE | p95 | p99 | Pareto |\n"
+                              << "|---|---|---:|---:|---:|---:|---:|---:|---:|:-:|\n";
+                    for (const auto& r : rows)
+                        std::cout << "| " << r.method << " | " << r.params << " | " << fmt(r.ao_ms, 1) << " | "
+                                  << fmt(r.frame_ms, 1) << " | " << fmt(r.err.bias) << " | " << fmt(r.err.mae) << " | "
+                                  << fmt(r.err.rmse) << " | " << fmt(r.err.p95) << " | " << fmt(r.err.p99) << " | "
+                                  << (r.pareto ? "*" : "") << " |\n";
+                    std::cout.flush();
+                    all.insert(all.end(), rows.begin(), rows.end());
                 }
-                // Pareto over the methods that give a per-frame AO (not the references, not the CPU voxel tracer).
-                std::vector<Row> contenders;
-                for (const auto& r : rows)
-                    if (r.method == "cone" || r.method == "vtkSSAOPass" || r.method == "none") contenders.push_back(r);
-                mark_pareto(contenders);
-                for (auto& r : rows)
-                    for (const auto& c : contenders)
-                        if (c.method == r.method && c.params == r.params) r.pareto = c.pareto;
-                std::cout << "\n### " << sc.name << ", " << S << "x" << S << ", R = " << fmt(sc.radius, 4) << " (reference: " << a.rays
-                          << " rays/px, own noise RMS " << fmt(rows[0].err.reference_noise_rms, 4) << "; " << rows[0].err.pixels
-                          << " foreground px)\n\n";
-                std::cout << "| method | parameters | AO ms | frame ms | bias | MAE | RMSE | p95 | p99 | Pareto |\n"
-                          << "|---|---|---:|---:|---:|---:|---:|---:|---:|:-:|\n";
-                for (const auto& r : rows)
-                    std::cout << "| " << r.method << " | " << r.params << " | " << fmt(r.ao_ms, 1) << " | " << fmt(r.frame_ms, 1) << " | "
-                              << fmt(r.err.bias) << " | " << fmt(r.err.mae) << " | " << fmt(r.err.rmse) << " | " << fmt(r.err.p95) << " | "
-                              << fmt(r.err.p99) << " | " << (r.pareto ? "*" : "") << " |\n";
-                std::cout.flush();
-                all.insert(all.end(), rows.begin(), rows.end());
-            }
         }
-        std::cout << "\nrenderer: " << renderer_name << "; AO ms: zrange + voxelize + cone_ao (+ ao_upsample) passes (cone), frame with SSAO minus "
+        std::cout << "\nrenderer: " << renderer_name
+                  << "; AO ms: zrange + voxelize + cone_ao (+ ao_upsample) passes (cone), frame with SSAO minus "
                      "frame without (vtkSSAOPass); glFinish after each pass; median of "
                   << a.reps << " frames\n";
         std::ofstream csv(a.out + "/ao.csv");
         csv << "scene,size,method,params,ao_ms,frame_ms,bias,mae,rmse,p95,p99,pareto,renderer,radius\n";
         for (const auto& r : all)
-            csv << r.scene << "," << r.size << "," << r.method << "," << no_commas(r.params) << "," << r.ao_ms << "," << r.frame_ms << ","
-                << r.err.bias << "," << r.err.mae << "," << r.err.rmse << "," << r.err.p95 << "," << r.err.p99 << "," << r.pareto << "," << no_commas(renderer_name)
-                << "," << r.radius << "\n";
+            csv << r.scene << "," << r.size << "," << r.method << "," << no_commas(r.params) << "," << r.ao_ms << ","
+                << r.frame_ms << "," << r.err.bias << "," << r.err.mae << "," << r.err.rmse << "," << r.err.p95 << ","
+                << r.err.p99 << "," << r.pareto << "," << no_commas(renderer_name) << "," << r.radius << "\n";
         // Closed before gnuplot reads it: an open stream holds the last rows in its buffer
         // (a small run plotted nothing, a large one lost its last rows).
         csv.close();
         if (!csv) throw Error(a.out + "/ao.csv", "could not write the results");
         if (std::system("command -v gnuplot >/dev/null 2>&1") == 0) {
-            for (const auto& f : write_plot(a.out + "/ao.csv", a.out + "/ao_time_rmse.png")) std::cerr << "[ao_bench] wrote " << f << "\n";
-        }
-        else std::cerr << "[ao_bench] gnuplot not found: no plot\n";
+            for (const auto& f : write_plot(a.out + "/ao.csv", a.out + "/ao_time_rmse.png"))
+                std::cerr << "[ao_bench] wrote " << f << "\n";
+        } else
+            std::cerr << "[ao_bench] gnuplot not found: no plot\n";
     } catch (const std::exception& e) {
         std::cerr << "ao_bench: " << e.what() << "\n";
         return 1;

@@ -27,13 +27,15 @@ inline Volume ct_phantom(std::array<std::int64_t, 3> dims, glm::dvec3 spacing = 
     const glm::dvec3 c = ext * 0.5;
     const glm::dvec3 body = ext * glm::dvec3(0.42, 0.36, 0.46); // semi-axes
     // Vessels: a few tubes wandering along z.
-    struct Tube { double x0, y0, ax, ay, fx, fy, r; };
+    struct Tube {
+        double x0, y0, ax, ay, fx, fy, r;
+    };
     std::mt19937 rng(seed);
     std::uniform_real_distribution<double> u(0.0, 1.0);
     std::vector<Tube> tubes;
     for (int i = 0; i < 12; ++i)
-        tubes.push_back({c.x + (u(rng) - 0.5) * body.x, c.y + (u(rng) - 0.5) * body.y, 5 + 15 * u(rng),
-                         5 + 15 * u(rng), 0.01 + 0.03 * u(rng), 0.01 + 0.03 * u(rng), 1.5 + 4 * u(rng)});
+        tubes.push_back({c.x + (u(rng) - 0.5) * body.x, c.y + (u(rng) - 0.5) * body.y, 5 + 15 * u(rng), 5 + 15 * u(rng),
+                         0.01 + 0.03 * u(rng), 0.01 + 0.03 * u(rng), 1.5 + 4 * u(rng)});
     auto s = v.as<std::int16_t>();
     tbb::parallel_for(std::int64_t(0), dims[2], [&](std::int64_t k) {
         std::mt19937 r(seed * 7919u + unsigned(k));
@@ -65,9 +67,10 @@ inline Volume ct_phantom(std::array<std::int64_t, 3> dims, glm::dvec3 spacing = 
 // seconds to make; benchmark children share the copy).
 inline Volume cached_ct_phantom(std::array<std::int64_t, 3> size) {
     namespace fs = std::filesystem;
-    const std::string cache = (fs::temp_directory_path() / ("isoscope-phantom-" + std::to_string(size[0]) + "x" +
-                                                            std::to_string(size[1]) + "x" + std::to_string(size[2]) + ".raw"))
-                                  .string();
+    const std::string cache =
+        (fs::temp_directory_path() / ("isoscope-phantom-" + std::to_string(size[0]) + "x" + std::to_string(size[1]) +
+                                      "x" + std::to_string(size[2]) + ".raw"))
+            .string();
     auto v = Volume::dense(size, VoxelType::I16, make_affine({0.7, 0.7, 1.0}, {0, 0, 0}));
     std::ifstream in(cache, std::ios::binary);
     if (in && fs::file_size(cache) == v.bytes().size()) {
@@ -76,7 +79,8 @@ inline Volume cached_ct_phantom(std::array<std::int64_t, 3> size) {
     }
     v = ct_phantom(size);
     const std::string tmp = cache + ".tmp" + std::to_string(::getpid());
-    std::ofstream(tmp, std::ios::binary).write(reinterpret_cast<const char*>(v.bytes().data()), std::streamsize(v.bytes().size()));
+    std::ofstream(tmp, std::ios::binary)
+        .write(reinterpret_cast<const char*>(v.bytes().data()), std::streamsize(v.bytes().size()));
     fs::rename(tmp, cache);
     return v;
 }

@@ -47,7 +47,7 @@ std::vector<std::string> split(const std::string& s, char sep) {
 struct Config {
     std::string text;
     DiskAoSettings s;
-    bool sided = false;  // disk_occlusion_sided with the receiver's geometric normal
+    bool sided = false; // disk_occlusion_sided with the receiver's geometric normal
 };
 
 // "passes=2,t=1,k=0,min=0.7,eps=8,off=0.001,sided=1": k relative to 1 / R^2
@@ -59,16 +59,23 @@ Config parse(const std::string& text, double R) {
         if (eq == std::string::npos) throw Error("disk_ao_cpu_bench", "bad setting '" + kv + "'");
         const std::string k = kv.substr(0, eq);
         const double v = std::stod(kv.substr(eq + 1));
-        if (k == "passes") c.s.passes = static_cast<int>(v);
-        else if (k == "t") c.s.triangle_attenuation = v;
-        else if (k == "k") c.s.distance_attenuation = v / (R * R);
+        if (k == "passes")
+            c.s.passes = static_cast<int>(v);
+        else if (k == "t")
+            c.s.triangle_attenuation = v;
+        else if (k == "k")
+            c.s.distance_attenuation = v / (R * R);
         else if (k == "min") {
             c.s.min_scale = v;
             c.s.max_scale = 1.0 - v;
-        } else if (k == "eps") c.s.traversal_epsilon = v;
-        else if (k == "off") c.s.receiver_offset = v;
-        else if (k == "sided") c.sided = v != 0;
-        else throw Error("disk_ao_cpu_bench", "unknown setting '" + k + "'");
+        } else if (k == "eps")
+            c.s.traversal_epsilon = v;
+        else if (k == "off")
+            c.s.receiver_offset = v;
+        else if (k == "sided")
+            c.sided = v != 0;
+        else
+            throw Error("disk_ao_cpu_bench", "unknown setting '" + k + "'");
     }
     return c;
 }
@@ -81,32 +88,42 @@ int main(int argc, char** argv) try {
     bool verbose = false;
     double radius_scale = 1.0;
     bool surface_points = false;
-    std::string configs =
-        "passes=1;passes=2;passes=3;passes=4;passes=2,t=0.5;passes=2,t=2;passes=2,k=1;passes=2,k=4;passes=2,min=1;passes=2,min=0.5";
+    std::string configs = "passes=1;passes=2;passes=3;passes=4;passes=2,t=0.5;passes=2,t=2;passes=2,k=1;passes=2,k=4;"
+                          "passes=2,min=1;passes=2,min=0.5";
     for (int i = 1; i < argc; ++i) {
         const std::string a = argv[i];
         const auto next = [&]() -> std::string {
             if (i + 1 >= argc) throw Error("disk_ao_cpu_bench", a + " needs a value");
             return argv[++i];
         };
-        if (a == "--scenes") scenes = split(next(), ',');
-        else if (a == "--samples") samples = std::stoi(next());
-        else if (a == "--rays") rays = std::stoi(next());
-        else if (a == "--configs") configs = next();
-        else if (a == "--verbose") verbose = true;
-        else if (a == "--radius-scale") radius_scale = std::stod(next());
-        else if (a == "--surface-points") surface_points = true;
-        else throw Error("disk_ao_cpu_bench", "unknown option '" + a + "'");
+        if (a == "--scenes")
+            scenes = split(next(), ',');
+        else if (a == "--samples")
+            samples = std::stoi(next());
+        else if (a == "--rays")
+            rays = std::stoi(next());
+        else if (a == "--configs")
+            configs = next();
+        else if (a == "--verbose")
+            verbose = true;
+        else if (a == "--radius-scale")
+            radius_scale = std::stod(next());
+        else if (a == "--surface-points")
+            surface_points = true;
+        else
+            throw Error("disk_ao_cpu_bench", "unknown option '" + a + "'");
     }
     const std::string data = ISOSCOPE_DATA_DIR;
-    std::printf("| scene | setting | RMSE | RMSE, normal with winding | bias | max abs | element passes s | gather us/point |\n"
-                "|---|---|---|---|---|---|---|---|\n");
+    std::printf(
+        "| scene | setting | RMSE | RMSE, normal with winding | bias | max abs | element passes s | gather us/point |\n"
+        "|---|---|---|---|---|---|---|---|\n");
     for (const auto& name : scenes) {
         std::vector<Mesh> meshes;
         if (name == "ct-skin" || name == "ct-bone") {
             core::Scene scene;
             scene.open(data + "/headsq.nhdr");
-            for (const auto id : scene.add_isosurfaces({name == "ct-skin" ? 500.0 : 1150.0})) meshes.push_back(scene.mesh(id));
+            for (const auto id : scene.add_isosurfaces({name == "ct-skin" ? 500.0 : 1150.0}))
+                meshes.push_back(scene.mesh(id));
         } else if (name == "bunny") {
             meshes.push_back(core::open_mesh(data + "/bunny.vtp"));
         } else {
@@ -132,8 +149,9 @@ int main(int argc, char** argv) try {
                 for (std::size_t v = 0; v < m.normals.size(); ++v)
                     if (glm::dot(fn[v], glm::dvec3(m.normals[v])) < 0) ++against;
                 const MeshStats st = mesh_stats(m);
-                std::fprintf(stderr, "[disk_ao_cpu_bench] %s: %zu of %zu vertex normals against the winding; signed volume %g\n",
-                             name.c_str(), against, m.normals.size(), st.volume);
+                std::fprintf(
+                    stderr, "[disk_ao_cpu_bench] %s: %zu of %zu vertex normals against the winding; signed volume %g\n",
+                    name.c_str(), against, m.normals.size(), st.volume);
             }
 
         double t0 = bench::now_s();
@@ -143,13 +161,14 @@ int main(int argc, char** argv) try {
         for (const auto& p : parts) ptrs.push_back(&p);
         const DiskHierarchy h = parts.size() == 1 ? parts[0] : concatenate(ptrs);
         const double build_s = bench::now_s() - t0;
-        std::fprintf(stderr, "[disk_ao_cpu_bench] %s: %zu triangles, %zu vertices, %zu nodes, %d levels, build %.3f s, R %.4g\n",
-                     name.c_str(), tris, verts, h.nodes.size(), h.levels, build_s, R);
+        std::fprintf(
+            stderr, "[disk_ao_cpu_bench] %s: %zu triangles, %zu vertices, %zu nodes, %d levels, build %.3f s, R %.4g\n",
+            name.c_str(), tris, verts, h.nodes.size(), h.levels, build_s, R);
 
         // Sample of vertices (all meshes' vertices in concatenation order).
         std::vector<glm::dvec3> ps, ns;
-        std::vector<char> consistent;  // vertex normal on the side of its triangles' winding
-        std::vector<glm::dvec3> fns;   // the receiver's geometric normal (triangle / area-weighted triangles)
+        std::vector<char> consistent; // vertex normal on the side of its triangles' winding
+        std::vector<glm::dvec3> fns;  // the receiver's geometric normal (triangle / area-weighted triangles)
         std::vector<glm::dvec3> face_sum;
         for (const auto& m : meshes) {
             const std::size_t base = face_sum.size();
@@ -177,7 +196,13 @@ int main(int argc, char** argv) try {
             std::size_t base = 0;
             for (const auto& m : meshes) {
                 for (const auto& t : m.triangles) {
-                    Tri q{glm::dvec3(m.positions[t[0]]), glm::dvec3(m.positions[t[1]]), glm::dvec3(m.positions[t[2]]), {}, {}, {}, base + t[0]};
+                    Tri q{glm::dvec3(m.positions[t[0]]),
+                          glm::dvec3(m.positions[t[1]]),
+                          glm::dvec3(m.positions[t[2]]),
+                          {},
+                          {},
+                          {},
+                          base + t[0]};
                     const auto nrm = [&](std::uint32_t v) {
                         const std::int32_t leaf = h.vertex_node[base + v];
                         return glm::dvec3(glm::vec3(h.nodes[static_cast<std::size_t>(leaf)].normal_bound));
@@ -193,7 +218,8 @@ int main(int argc, char** argv) try {
             }
             std::uniform_real_distribution<double> u01(0.0, 1.0);
             while (static_cast<int>(ps.size()) < samples) {
-                const auto k = static_cast<std::size_t>(std::lower_bound(cdf.begin(), cdf.end(), u01(rng) * total) - cdf.begin());
+                const auto k =
+                    static_cast<std::size_t>(std::lower_bound(cdf.begin(), cdf.end(), u01(rng) * total) - cdf.begin());
                 const Tri& q = tris_all[std::min(k, tris_all.size() - 1)];
                 double r1 = u01(rng), r2 = u01(rng);
                 if (r1 + r2 > 1) {
@@ -262,22 +288,27 @@ int main(int argc, char** argv) try {
                     for (const auto& t : m.triangles) {
                         const glm::dvec3 a(m.positions[t[0]]), b2(m.positions[t[1]]), c2(m.positions[t[2]]);
                         if (glm::length((a + b2 + c2) / 3.0 - ps[worst_i]) > R) continue;
-                        const double f = clipped_triangle_form_factor(ps[worst_i] + 1e-3 * R * ns[worst_i], ns[worst_i], a, b2, c2);
+                        const double f =
+                            clipped_triangle_form_factor(ps[worst_i] + 1e-3 * R * ns[worst_i], ns[worst_i], a, b2, c2);
                         (f > 0 ? front : back) += f;
                     }
                 DiskAoSettings tri = c.s;
                 tri.traversal_epsilon = 1e30;
-                std::fprintf(stderr, "[disk_ao_cpu_bench]   worst: front-facing form factors within R %.3f, back-facing %.3f; "
-                             "all-triangle traversal %.3f, first pass %.3f\n", front, back,
-                             disk_occlusion(h, ps[worst_i], ns[worst_i], {}, tri, R), disk_occlusion(h, ps[worst_i], ns[worst_i], {}, c.s, R));
+                std::fprintf(stderr,
+                             "[disk_ao_cpu_bench]   worst: front-facing form factors within R %.3f, back-facing %.3f; "
+                             "all-triangle traversal %.3f, first pass %.3f\n",
+                             front, back, disk_occlusion(h, ps[worst_i], ns[worst_i], {}, tri, R),
+                             disk_occlusion(h, ps[worst_i], ns[worst_i], {}, c.s, R));
             }
             if (verbose)
-                std::fprintf(stderr, "[disk_ao_cpu_bench]   worst at (%g %g %g) n (%.3f %.3f %.3f), geometric normal with it: %d: disk %.3f, Embree %.3f\n",
-                             ps[worst_i].x, ps[worst_i].y, ps[worst_i].z, ns[worst_i].x, ns[worst_i].y, ns[worst_i].z, int(consistent[worst_i]),
-                             ao[worst_i], ref[worst_i]);
+                std::fprintf(stderr,
+                             "[disk_ao_cpu_bench]   worst at (%g %g %g) n (%.3f %.3f %.3f), geometric normal with it: "
+                             "%d: disk %.3f, Embree %.3f\n",
+                             ps[worst_i].x, ps[worst_i].y, ps[worst_i].z, ns[worst_i].x, ns[worst_i].y, ns[worst_i].z,
+                             int(consistent[worst_i]), ao[worst_i], ref[worst_i]);
             std::printf("| %s | %s | %.4f | %.4f | %+.4f | %.3f | %.2f | %.0f |\n", name.c_str(), text.c_str(),
-                        std::sqrt(se / ps.size()), std::sqrt(se_c / std::max<std::size_t>(n_c, 1)), bias / ps.size(), worst,
-                        pass_s, gather_us);
+                        std::sqrt(se / ps.size()), std::sqrt(se_c / std::max<std::size_t>(n_c, 1)), bias / ps.size(),
+                        worst, pass_s, gather_us);
             std::fflush(stdout);
         }
     }

@@ -103,11 +103,15 @@ int main(int argc, char** argv) {
     std::string input = std::string(ISOSCOPE_DATA_DIR) + "/headsq.nhdr";
     for (int i = 1; i < argc; ++i) {
         const std::string a = argv[i];
-        if (a == "--steps" && i + 1 < argc) steps = std::max(8, std::atoi(argv[++i]));
-        else if (a == "--csv" && i + 1 < argc) csv = argv[++i];
-        else if (a == "--input" && i + 1 < argc) input = argv[++i];
+        if (a == "--steps" && i + 1 < argc)
+            steps = std::max(8, std::atoi(argv[++i]));
+        else if (a == "--csv" && i + 1 < argc)
+            csv = argv[++i];
+        else if (a == "--input" && i + 1 < argc)
+            input = argv[++i];
         else {
-            std::printf("usage: gui_frame_bench [--steps N] [--csv FILE] [--input VOLUME]  (under xvfb-run or a display)\n");
+            std::printf(
+                "usage: gui_frame_bench [--steps N] [--csv FILE] [--input VOLUME]  (under xvfb-run or a display)\n");
             return a == "--help" ? 0 : 2;
         }
     }
@@ -139,14 +143,16 @@ int main(int argc, char** argv) {
     std::string renderer = "?";
     {
         v->makeCurrent();
-        const auto* s = reinterpret_cast<const char*>(QOpenGLContext::currentContext()->functions()->glGetString(GL_RENDERER));
+        const auto* s =
+            reinterpret_cast<const char*>(QOpenGLContext::currentContext()->functions()->glGetString(GL_RENDERER));
         if (s) renderer = s;
         v->doneCurrent();
     }
     std::size_t triangles = 0;
     for (auto id : ids) triangles += w.scene().mesh(id).triangles.size();
     const QSize size = v->image_size();
-    std::printf("gui_frame_bench: %s, skin 500 + bone 1150 (%zu triangles), 3D view %d x %d, %d steps of %.1f degrees, GL: %s\n\n",
+    std::printf("gui_frame_bench: %s, skin 500 + bone 1150 (%zu triangles), 3D view %d x %d, %d steps of %.1f degrees, "
+                "GL: %s\n\n",
                 input.c_str(), triangles, size.width(), size.height(), steps, 360.0 / steps, renderer.c_str());
 
     struct Case {
@@ -181,20 +187,21 @@ int main(int argc, char** argv) {
     };
     std::vector<Row> rows;
     for (const auto& c : cases)
-        rows.push_back({c.ao, c.translucent, median(c.ms), quantile(c.ms, 0.95), *std::min_element(c.ms.begin(), c.ms.end()),
-                        *std::max_element(c.ms.begin(), c.ms.end())});
+        rows.push_back({c.ao, c.translucent, median(c.ms), quantile(c.ms, 0.95),
+                        *std::min_element(c.ms.begin(), c.ms.end()), *std::max_element(c.ms.begin(), c.ms.end())});
 
     std::printf("| AO | skin | frames | median ms | p95 ms | min ms | max ms | median fps |\n");
     std::printf("|---|---|---:|---:|---:|---:|---:|---:|\n");
     for (const auto& r : rows)
-        std::printf("| %s | %s | %d | %.1f | %.1f | %.1f | %.1f | %.1f |\n", r.ao ? "on" : "off", r.translucent ? "0.3" : "opaque", steps,
-                    r.median, r.p95, r.min, r.max, 1000.0 / r.median);
+        std::printf("| %s | %s | %d | %.1f | %.1f | %.1f | %.1f | %.1f |\n", r.ao ? "on" : "off",
+                    r.translucent ? "0.3" : "opaque", steps, r.median, r.p95, r.min, r.max, 1000.0 / r.median);
 
     std::string out = "ao,skin_opacity,width,height,triangles,frames,median_ms,p95_ms,min_ms,max_ms,gl_renderer\n";
     for (const auto& r : rows) {
         char line[512];
-        std::snprintf(line, sizeof line, "%d,%.1f,%d,%d,%zu,%d,%.3f,%.3f,%.3f,%.3f,\"%s\"\n", r.ao ? 1 : 0, r.translucent ? 0.3 : 1.0,
-                      size.width(), size.height(), triangles, steps, r.median, r.p95, r.min, r.max, renderer.c_str());
+        std::snprintf(line, sizeof line, "%d,%.1f,%d,%d,%zu,%d,%.3f,%.3f,%.3f,%.3f,\"%s\"\n", r.ao ? 1 : 0,
+                      r.translucent ? 0.3 : 1.0, size.width(), size.height(), triangles, steps, r.median, r.p95, r.min,
+                      r.max, renderer.c_str());
         out += line;
     }
     try {

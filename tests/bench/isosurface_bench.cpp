@@ -64,7 +64,6 @@ Volume load_data(const std::string& data, const std::array<std::int64_t, 3>& siz
     return cached_ct_phantom(size);
 }
 
-
 // Child: one method, several repetitions, one RESULT line.
 int run_one(const Args& a) {
     tbb::global_control gc(tbb::global_control::max_allowed_parallelism, std::size_t(a.threads));
@@ -134,7 +133,8 @@ int run_one(const Args& a) {
             verts = std::size_t(fe->GetOutput()->GetNumberOfPoints());
         } else if (a.one == "vdb") {
             openvdb::tools::Dense<const std::int16_t, openvdb::tools::LayoutXYZ> dense(
-                openvdb::CoordBBox(openvdb::Coord(0), openvdb::Coord(int(v.dims[0]) - 1, int(v.dims[1]) - 1, int(v.dims[2]) - 1)),
+                openvdb::CoordBBox(openvdb::Coord(0),
+                                   openvdb::Coord(int(v.dims[0]) - 1, int(v.dims[1]) - 1, int(v.dims[2]) - 1)),
                 v.as<std::int16_t>().data());
             auto grid = openvdb::FloatGrid::create(-1024.0f);
             openvdb::tools::copyFromDense(dense, *grid, 0.0f);
@@ -194,8 +194,9 @@ int run_incremental(const Args& a) {
         redone = x.update(box, one).size();
         inc.push_back(now_s() - t0);
     }
-    std::cout << std::setprecision(6) << "RESULT full_ms=" << 1e3 * median(full) << " full_weld_ms=" << 1e3 * median(full_weld)
-              << " inc_ms=" << 1e3 * median(inc) << " redone=" << redone << " chunks=" << x.index().chunk_count() << "\n";
+    std::cout << std::setprecision(6) << "RESULT full_ms=" << 1e3 * median(full)
+              << " full_weld_ms=" << 1e3 * median(full_weld) << " inc_ms=" << 1e3 * median(inc) << " redone=" << redone
+              << " chunks=" << x.index().chunk_count() << "\n";
     return 0;
 }
 
@@ -219,17 +220,25 @@ int main(int argc, char** argv) {
     for (int i = 1; i < argc; ++i) {
         std::string s = argv[i];
         auto next = [&]() -> std::string { return i + 1 < argc ? argv[++i] : ""; };
-        if (s == "--out") a.out = next();
-        else if (s == "--reps") a.reps = std::stoi(next());
-        else if (s == "--quick") a.quick = true;
+        if (s == "--out")
+            a.out = next();
+        else if (s == "--reps")
+            a.reps = std::stoi(next());
+        else if (s == "--quick")
+            a.quick = true;
         else if (s == "--size") {
             const std::string v = next();
             std::sscanf(v.c_str(), "%ldx%ldx%ld", &a.size[0], &a.size[1], &a.size[2]);
-        } else if (s == "--one") a.one = next();
-        else if (s == "--data") a.data = next();
-        else if (s == "--iso") a.iso = std::stod(next());
-        else if (s == "--threads") a.threads = std::stoi(next());
-        else if (s == "--chunk") a.chunk = std::stoi(next());
+        } else if (s == "--one")
+            a.one = next();
+        else if (s == "--data")
+            a.data = next();
+        else if (s == "--iso")
+            a.iso = std::stod(next());
+        else if (s == "--threads")
+            a.threads = std::stoi(next());
+        else if (s == "--chunk")
+            a.chunk = std::stoi(next());
         else {
             std::cerr << "usage: isosurface_bench [--out DIR] [--size WxHxD] [--reps N] [--quick]\n";
             return 2;
@@ -246,7 +255,8 @@ int main(int argc, char** argv) {
     // Driver.
     fs::create_directories(a.out);
     const std::string self = fs::canonical("/proc/self/exe").string();
-    const std::string size = std::to_string(a.size[0]) + "x" + std::to_string(a.size[1]) + "x" + std::to_string(a.size[2]);
+    const std::string size =
+        std::to_string(a.size[0]) + "x" + std::to_string(a.size[1]) + "x" + std::to_string(a.size[2]);
     auto child = [&](const std::string& method, const std::string& data, double iso, int threads, int chunk) {
         std::ostringstream cmd;
         cmd << self << " --one " << method << " --data '" << data << "' --iso " << iso << " --threads " << threads
@@ -259,7 +269,10 @@ int main(int argc, char** argv) {
     csv << "table,data,iso,method,threads,chunk,ms,tris,extra_mb\n";
 
     const std::string bundled = std::string(ISOSCOPE_DATA_DIR) + "/headsq.nhdr";
-    struct Case { std::string name, data; double iso; };
+    struct Case {
+        std::string name, data;
+        double iso;
+    };
     std::vector<Case> cases = {{"headsq skin (64x64x93)", bundled, 500.0},
                                {"headsq bone (64x64x93)", bundled, 1150.0},
                                {"phantom skin (" + size + ")", "phantom", -500.0},
@@ -269,22 +282,26 @@ int main(int argc, char** argv) {
 
     std::cout << "## Extraction: ours vs vtkFlyingEdges3D vs OpenVDB volumeToMesh (normals on; median of " << a.reps
               << " runs; extra = peak RSS beyond the loaded volume)\n\n";
-    std::cout << "| data | threads | ours ms | FE ms | VDB ms | FE/ours | ours tris | FE tris | VDB tris | ours extra MiB | FE extra MiB | VDB extra MiB |\n";
+    std::cout << "| data | threads | ours ms | FE ms | VDB ms | FE/ours | ours tris | FE tris | VDB tris | ours extra "
+                 "MiB | FE extra MiB | VDB extra MiB |\n";
     std::cout << "|---|---|---|---|---|---|---|---|---|---|---|---|\n";
     for (const auto& c : cases) {
         for (int t : {1, 2}) {
             const auto o = child("ours", c.data, c.iso, t, 32);
             const auto f = child("fe", c.data, c.iso, t, 32);
             const auto d = a.quick ? std::map<std::string, double>{} : child("vdb", c.data, c.iso, t, 32);
-            std::cout << std::fixed << std::setprecision(1) << "| " << c.name << " | " << t << " | " << o.at("ms") << " | "
-                      << f.at("ms") << " | " << (d.count("ms") ? d.at("ms") : 0.0) << " | " << std::setprecision(2)
-                      << f.at("ms") / o.at("ms") << "x | " << std::setprecision(0) << o.at("tris") << " | " << f.at("tris")
-                      << " | " << (d.count("tris") ? d.at("tris") : 0.0) << " | " << std::setprecision(1)
-                      << o.at("extra_mb") << " | " << f.at("extra_mb") << " | "
+            std::cout << std::fixed << std::setprecision(1) << "| " << c.name << " | " << t << " | " << o.at("ms")
+                      << " | " << f.at("ms") << " | " << (d.count("ms") ? d.at("ms") : 0.0) << " | "
+                      << std::setprecision(2) << f.at("ms") / o.at("ms") << "x | " << std::setprecision(0)
+                      << o.at("tris") << " | " << f.at("tris") << " | " << (d.count("tris") ? d.at("tris") : 0.0)
+                      << " | " << std::setprecision(1) << o.at("extra_mb") << " | " << f.at("extra_mb") << " | "
                       << (d.count("extra_mb") ? d.at("extra_mb") : 0.0) << " |\n";
-            const std::string label = c.name.substr(0, c.name.find(' ', c.name.find(' ') + 1)) + ", " + std::to_string(t) + " thr";
-            dat << '"' << label << "\" " << o.at("ms") << ' ' << f.at("ms") << ' ' << (d.count("ms") ? d.at("ms") : 0.0) << "\n";
-            for (auto& [m, r] : std::vector<std::pair<std::string, std::map<std::string, double>>>{{"ours", o}, {"fe", f}, {"vdb", d}})
+            const std::string label =
+                c.name.substr(0, c.name.find(' ', c.name.find(' ') + 1)) + ", " + std::to_string(t) + " thr";
+            dat << '"' << label << "\" " << o.at("ms") << ' ' << f.at("ms") << ' ' << (d.count("ms") ? d.at("ms") : 0.0)
+                << "\n";
+            for (auto& [m, r] :
+                 std::vector<std::pair<std::string, std::map<std::string, double>>>{{"ours", o}, {"fe", f}, {"vdb", d}})
                 if (r.count("ms"))
                     csv << "methods," << c.name << "," << c.iso << "," << m << "," << t << ",32," << r.at("ms") << ","
                         << r.at("tris") << "," << r.at("extra_mb") << "\n";
@@ -292,7 +309,8 @@ int main(int argc, char** argv) {
         }
     }
 
-    std::cout << "\n## Where our time goes (2 threads, chunk 32)\n\n| data | index ms | extract ms | weld ms | chunks visited |\n|---|---|---|---|---|\n";
+    std::cout << "\n## Where our time goes (2 threads, chunk 32)\n\n| data | index ms | extract ms | weld ms | chunks "
+                 "visited |\n|---|---|---|---|---|\n";
     for (const auto& c : cases) {
         const auto o = child("ours", c.data, c.iso, 2, 32);
         std::cout << std::fixed << std::setprecision(1) << "| " << c.name << " | " << o.at("index_ms") << " | "
@@ -300,34 +318,44 @@ int main(int argc, char** argv) {
                   << " / " << o.at("chunks") << " |\n";
     }
 
-    std::cout << "\n## GPU compute path (same chunks; GL renderer printed on stderr)\n\n| data | total ms | index ms | GPU passes + read-back ms | weld ms | tris |\n|---|---|---|---|---|---|\n";
+    std::cout << "\n## GPU compute path (same chunks; GL renderer printed on stderr)\n\n| data | total ms | index ms | "
+                 "GPU passes + read-back ms | weld ms | tris |\n|---|---|---|---|---|---|\n";
     for (const auto& c : cases) {
         const auto o = child("gpu", c.data, c.iso, 2, 32);
-        if (!o.count("ms")) { std::cout << "| " << c.name << " | (no GL context) | | | | |\n"; continue; }
-        std::cout << std::fixed << std::setprecision(1) << "| " << c.name << " | " << o.at("ms") << " | " << o.at("index_ms")
-                  << " | " << o.at("extract_ms") << " | " << o.at("weld_ms") << " | " << std::setprecision(0) << o.at("tris") << " |\n";
+        if (!o.count("ms")) {
+            std::cout << "| " << c.name << " | (no GL context) | | | | |\n";
+            continue;
+        }
+        std::cout << std::fixed << std::setprecision(1) << "| " << c.name << " | " << o.at("ms") << " | "
+                  << o.at("index_ms") << " | " << o.at("extract_ms") << " | " << o.at("weld_ms") << " | "
+                  << std::setprecision(0) << o.at("tris") << " |\n";
         csv << "gpu," << c.name << "," << c.iso << ",gpu,2,32," << o.at("ms") << "," << o.at("tris") << ",0\n";
         std::cout.flush();
     }
 
-    std::cout << "\n## Chunk size sweep (phantom skin, 2 threads)\n\n| chunk | ms | extract-only ms | scratch MiB | extra MiB |\n|---|---|---|---|---|\n";
+    std::cout << "\n## Chunk size sweep (phantom skin, 2 threads)\n\n| chunk | ms | extract-only ms | scratch MiB | "
+                 "extra MiB |\n|---|---|---|---|---|\n";
     for (int cs : {8, 16, 24, 32, 48, 64, 96, 128}) {
         const auto o = child("ours", "phantom", -500.0, 2, cs);
-        std::cout << std::fixed << std::setprecision(1) << "| " << cs << " | " << o.at("ms") << " | " << o.at("extract_ms")
-                  << " | " << o.at("scratch_mb") << " | " << o.at("extra_mb") << " |\n";
-        csv << "chunks,phantom,-500,ours,2," << cs << "," << o.at("ms") << "," << o.at("tris") << "," << o.at("extra_mb") << "\n";
+        std::cout << std::fixed << std::setprecision(1) << "| " << cs << " | " << o.at("ms") << " | "
+                  << o.at("extract_ms") << " | " << o.at("scratch_mb") << " | " << o.at("extra_mb") << " |\n";
+        csv << "chunks,phantom,-500,ours,2," << cs << "," << o.at("ms") << "," << o.at("tris") << ","
+            << o.at("extra_mb") << "\n";
         std::cout.flush();
     }
 
-    std::cout << "\n## Incremental re-extraction after a 32^3 edit (phantom skin)\n\n| threads | full (chunks) ms | full + weld ms | incremental ms | speed-up vs full + weld | chunks redone |\n|---|---|---|---|---|---|\n";
+    std::cout
+        << "\n## Incremental re-extraction after a 32^3 edit (phantom skin)\n\n| threads | full (chunks) ms | full + "
+           "weld ms | incremental ms | speed-up vs full + weld | chunks redone |\n|---|---|---|---|---|---|\n";
     for (int t : {1, 2}) {
         std::ostringstream cmd;
         cmd << self << " --one incremental --data phantom --iso -500 --threads " << t << " --chunk 32 --size " << size
             << " --reps " << a.reps;
         const auto r = parse(capture(cmd.str()));
-        std::cout << std::fixed << std::setprecision(1) << "| " << t << " | " << r.at("full_ms") << " | " << r.at("full_weld_ms")
-                  << " | " << std::setprecision(2) << r.at("inc_ms") << " | " << std::setprecision(0)
-                  << r.at("full_weld_ms") / r.at("inc_ms") << "x | " << r.at("redone") << " / " << r.at("chunks") << " |\n";
+        std::cout << std::fixed << std::setprecision(1) << "| " << t << " | " << r.at("full_ms") << " | "
+                  << r.at("full_weld_ms") << " | " << std::setprecision(2) << r.at("inc_ms") << " | "
+                  << std::setprecision(0) << r.at("full_weld_ms") / r.at("inc_ms") << "x | " << r.at("redone") << " / "
+                  << r.at("chunks") << " |\n";
         csv << "incremental,phantom,-500,ours," << t << ",32," << r.at("inc_ms") << ",0,0\n";
     }
     csv.close();
@@ -337,13 +365,19 @@ int main(int argc, char** argv) {
     if (std::system("command -v gnuplot >/dev/null 2>&1") == 0) {
         std::ofstream gp(a.out + "/isosurface.gp");
         gp << "set datafile separator ','\nset terminal pngcairo size 900,500 noenhanced\nset key left top\n"
-           << "set output '" << a.out << "/isosurface_chunks.png'\nset title 'Chunk size sweep (phantom skin, 2 threads)'\n"
+           << "set output '" << a.out
+           << "/isosurface_chunks.png'\nset title 'Chunk size sweep (phantom skin, 2 threads)'\n"
            << "set xlabel 'chunk size (cells per side)'\nset ylabel 'ms'\nset logscale x 2\n"
            << "plot '< grep ^chunks " << a.out << "/isosurface.csv' using 6:7 with linespoints title 'ours'\n";
-        gp << "set output '" << a.out << "/isosurface_methods.png'\nunset logscale x\nset title 'Isosurface extraction time, normals on (lower is better)'\n"
+        gp << "set output '" << a.out
+           << "/isosurface_methods.png'\nunset logscale x\nset title 'Isosurface extraction time, normals on (lower is "
+              "better)'\n"
            << "set style data histograms\nset style histogram clustered gap 1\nset style fill solid 0.8 border -1\n"
-           << "set xtics rotate by -25 font ',9'\nset xlabel ''\nset ylabel 'ms'\nset datafile separator whitespace\nset key left top\n"
-           << "plot '" << a.out << "/isosurface_methods.dat' using 2:xtic(1) title 'ours (chunked MC)', '' using 3 title 'vtkFlyingEdges3D', "
+           << "set xtics rotate by -25 font ',9'\nset xlabel ''\nset ylabel 'ms'\nset datafile separator "
+              "whitespace\nset key left top\n"
+           << "plot '" << a.out
+           << "/isosurface_methods.dat' using 2:xtic(1) title 'ours (chunked MC)', '' using 3 title "
+              "'vtkFlyingEdges3D', "
            << "'' using 4 title 'OpenVDB volumeToMesh'\n";
         gp.close();
         if (std::system(("gnuplot " + a.out + "/isosurface.gp").c_str()) != 0) std::cerr << "gnuplot failed\n";

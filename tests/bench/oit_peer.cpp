@@ -40,12 +40,18 @@ int main(int argc, char** argv) {
         const std::string v = argv[++i];
         bool ok = true;
         if (!sc.option(a, v, ok)) {
-            if (a == "--mode") ok = (mode = v, v == "wboit" || v == "peel");
-            else if (a == "--peels") peels = std::stoi(v);
-            else if (a == "--frames") frames = std::stoi(v);
-            else if (a == "--warmup") warmup = std::stoi(v);
-            else if (a == "--out") out = v;
-            else ok = false;
+            if (a == "--mode")
+                ok = (mode = v, v == "wboit" || v == "peel");
+            else if (a == "--peels")
+                peels = std::stoi(v);
+            else if (a == "--frames")
+                frames = std::stoi(v);
+            else if (a == "--warmup")
+                warmup = std::stoi(v);
+            else if (a == "--out")
+                out = v;
+            else
+                ok = false;
         }
         if (!ok) {
             std::cerr << "oit_peer: bad option " << a << " " << v << "\n";
@@ -90,12 +96,14 @@ int main(int argc, char** argv) {
             for (int x = 0; x < W; ++x) {
                 const std::size_t src = (std::size_t(y) * std::size_t(W) + std::size_t(x)) * 3; // bottom-up
                 const std::size_t dst = (std::size_t(H - 1 - y) * std::size_t(W) + std::size_t(x)) * 4;
-                for (int c = 0; c < 3; ++c) img.bytes[dst + std::size_t(c)] = rgb->GetValue(vtkIdType(src + std::size_t(c)));
+                for (int c = 0; c < 3; ++c)
+                    img.bytes[dst + std::size_t(c)] = rgb->GetValue(vtkIdType(src + std::size_t(c)));
                 img.bytes[dst + 3] = 255;
             }
         iso::save_image(img, out);
         const std::string renderer = iso::vtk_peer::renderer_name(win);
-        std::printf("{\"ms_median\": %.4f, \"ms_p25\": %.4f, \"ms_p75\": %.4f, \"renderer\": \"%s\", \"mode\": \"%s\", \"peels\": %d}\n",
+        std::printf("{\"ms_median\": %.4f, \"ms_p25\": %.4f, \"ms_p75\": %.4f, \"renderer\": \"%s\", \"mode\": \"%s\", "
+                    "\"peels\": %d}\n",
                     quantile(ms, 0.5), quantile(ms, 0.25), quantile(ms, 0.75), renderer.c_str(), mode.c_str(), peels);
     } catch (const std::exception& e) {
         std::cerr << "oit_peer: " << e.what() << "\n";

@@ -105,8 +105,9 @@ std::vector<Hit> ray_cast(const std::vector<RefTriangle>& tris, const Ray& ray) 
         if (t <= 0) continue;
         hits.push_back({t, tr.surface, tr.index, ray.origin + t * ray.dir});
     }
-    std::sort(hits.begin(), hits.end(),
-              [](const Hit& x, const Hit& y) { return std::tie(x.t, x.surface, x.triangle) < std::tie(y.t, y.surface, y.triangle); });
+    std::sort(hits.begin(), hits.end(), [](const Hit& x, const Hit& y) {
+        return std::tie(x.t, x.surface, x.triangle) < std::tie(y.t, y.surface, y.triangle);
+    });
     return hits;
 }
 
@@ -170,7 +171,7 @@ struct PickRow {
     int x = 0, y = 0;
     std::vector<Hit> ref;
     std::optional<Hit> ref_visible;
-    std::vector<double> a, b, c; // ms per repetition
+    std::vector<double> a, b, c;                 // ms per repetition
     std::vector<double> click_only, click_image; // a click's frame without and with an image output (d, e)
     OurPick ours;
     std::optional<double> api_ms, api_frame_ms;
@@ -178,7 +179,7 @@ struct PickRow {
     int api_surface = -1;
     std::optional<std::uint32_t> api_triangle;
     // VTK
-    double cp_ms = 0, sel_ms = 0;            // medians over the repetitions
+    double cp_ms = 0, sel_ms = 0; // medians over the repetitions
     std::vector<double> cp_all, sel_all;
     int cp_surface = -1, sel_surface = -1;
     long long cp_cell = -1, sel_cell = -1;
@@ -225,8 +226,10 @@ std::string fmt_ms(double v) {
 
 std::string fmt_dist(double d) {
     char b[32];
-    if (d < 1e-3) std::snprintf(b, sizeof b, "%.1e", d);
-    else std::snprintf(b, sizeof b, "%.3f", d);
+    if (d < 1e-3)
+        std::snprintf(b, sizeof b, "%.1e", d);
+    else
+        std::snprintf(b, sizeof b, "%.3f", d);
     return b;
 }
 
@@ -241,19 +244,27 @@ int main(int argc, char** argv) {
             return argv[++i];
         };
         try {
-            if (s == "--out") a.out = next();
-            else if (s == "--picks") a.picks = std::stoi(next());
-            else if (s == "--reps") a.reps = std::stoi(next());
-            else if (s == "--api-picks") a.api_picks = std::stoi(next());
-            else if (s == "--pass-frames") a.pass_frames = std::stoi(next());
-            else if (s == "--seed") a.seed = unsigned(std::stoul(next()));
-            else if (s == "--peer") a.peer = next();
+            if (s == "--out")
+                a.out = next();
+            else if (s == "--picks")
+                a.picks = std::stoi(next());
+            else if (s == "--reps")
+                a.reps = std::stoi(next());
+            else if (s == "--api-picks")
+                a.api_picks = std::stoi(next());
+            else if (s == "--pass-frames")
+                a.pass_frames = std::stoi(next());
+            else if (s == "--seed")
+                a.seed = unsigned(std::stoul(next()));
+            else if (s == "--peer")
+                a.peer = next();
             else if (s == "--sizes") {
                 a.sizes.clear();
                 std::stringstream ss(next());
                 for (std::string t; std::getline(ss, t, ',');) a.sizes.push_back(std::stoi(t));
             } else {
-                std::cerr << "usage: pick_bench [--out DIR] [--sizes 512,1024] [--picks 20] [--reps 3] [--api-picks 5] [--pass-frames 8] [--seed 13] [--peer PATH]\n";
+                std::cerr << "usage: pick_bench [--out DIR] [--sizes 512,1024] [--picks 20] [--reps 3] [--api-picks 5] "
+                             "[--pass-frames 8] [--seed 13] [--peer PATH]\n";
                 return 2;
             }
         } catch (const std::exception& e) {
@@ -282,14 +293,16 @@ int main(int argc, char** argv) {
             scene.export_mesh(ids[i], files.back());
             written.push_back(load_mesh(files.back()));
             const Mesh& m = scene.mesh(ids[i]);
-            same_as_ours = same_as_ours && written.back().positions == m.positions && written.back().triangles == m.triangles;
+            same_as_ours =
+                same_as_ours && written.back().positions == m.positions && written.back().triangles == m.triangles;
             triangles += m.triangles.size();
         }
         std::vector<RefTriangle> ref_tris;
         for (std::size_t s = 0; s < written.size(); ++s)
             for (std::size_t k = 0; k < written[s].triangles.size(); ++k) {
                 const auto& t = written[s].triangles[k];
-                const glm::dvec3 p0(written[s].positions[t[0]]), p1(written[s].positions[t[1]]), p2(written[s].positions[t[2]]);
+                const glm::dvec3 p0(written[s].positions[t[0]]), p1(written[s].positions[t[1]]),
+                    p2(written[s].positions[t[2]]);
                 ref_tris.push_back({p0, p1 - p0, p2 - p0, int(s), std::uint32_t(k)});
             }
 
@@ -387,12 +400,15 @@ int main(int argc, char** argv) {
                 }
             // Toggling: in blocks of frames all without or all with a pick (a new pixel each, as hover picking would),
             // the first frame of a block follows a frame of the other kind; the rest follow their own kind.
-            std::vector<double> steady_a, steady_b, toggle_a, toggle_b, created_toggle_a, created_toggle_b, created_steady;
+            std::vector<double> steady_a, steady_b, toggle_a, toggle_b, created_toggle_a, created_toggle_b,
+                created_steady;
             for (int block = 0; block < 2 * a.block_pairs; ++block) {
                 const bool with = block % 2 == 1;
                 for (int k = 0; k < a.block_frames; ++k) {
                     RenderOptions o = plain;
-                    if (with) o.pick = PickRegion{rows[std::size_t(k) % rows.size()].x, rows[std::size_t(k) % rows.size()].y, 1, 1};
+                    if (with)
+                        o.pick = PickRegion{rows[std::size_t(k) % rows.size()].x, rows[std::size_t(k) % rows.size()].y,
+                                            1, 1};
                     const double t0 = bench::now_s();
                     RenderResult r = scene.render(cam, o);
                     glFinish();
@@ -400,8 +416,11 @@ int main(int argc, char** argv) {
                     const double ms = 1000.0 * (bench::now_s() - t0);
                     const double created = double(r.stats.physical_resources);
                     if (block == 0) continue; // the first block follows the A/B loop's last frame
-                    if (k == 0) (with ? toggle_b : toggle_a).push_back(ms), (with ? created_toggle_b : created_toggle_a).push_back(created);
-                    else (with ? steady_b : steady_a).push_back(ms), created_steady.push_back(created);
+                    if (k == 0)
+                        (with ? toggle_b : toggle_a).push_back(ms),
+                            (with ? created_toggle_b : created_toggle_a).push_back(created);
+                    else
+                        (with ? steady_b : steady_a).push_back(ms), created_steady.push_back(created);
                 }
             }
             // Where the pick's cost goes: per-pass times (glFinish after each pass), frames without and with a pick, alternating.
@@ -411,7 +430,9 @@ int main(int argc, char** argv) {
                 for (const bool with : {false, true}) {
                     RenderOptions o = plain;
                     o.time_passes = true;
-                    if (with) o.pick = PickRegion{rows[std::size_t(k) % rows.size()].x, rows[std::size_t(k) % rows.size()].y, 1, 1};
+                    if (with)
+                        o.pick = PickRegion{rows[std::size_t(k) % rows.size()].x, rows[std::size_t(k) % rows.size()].y,
+                                            1, 1};
                     const RenderResult r = scene.render(cam, o);
                     glFinish();
                     for (const auto& ps : r.stats.passes) {
@@ -447,12 +468,15 @@ int main(int argc, char** argv) {
             std::ostringstream cmd;
             cmd.precision(17);
             const std::string peer_log = a.out + "/pick_peer_" + std::to_string(S) + ".log";
-            cmd << "xvfb-run -a -s '-screen 0 " << std::max(S + 64, 1280) << "x" << std::max(S + 64, 1024) << "x24' " << a.peer;
+            cmd << "xvfb-run -a -s '-screen 0 " << std::max(S + 64, 1280) << "x" << std::max(S + 64, 1024) << "x24' "
+                << a.peer;
             for (std::size_t i = 0; i < files.size(); ++i)
-                cmd << " --mesh " << files[i] << " --color " << v3(glm::dvec3(scene.info(ids[i]).color)) << " --opacity " << opacity[i];
-            cmd << " --eye " << v3(cam.eye) << " --target " << v3(cam.target) << " --up " << v3(cam.up) << " --fov " << cam.fov_y_degrees
-                << " --near " << cam.near_plane << " --far " << cam.far_plane << " --size " << S << "x" << S << " --background "
-                << v3(glm::dvec3(plain.look.background)) << " --reps " << a.reps << " --frames 10";
+                cmd << " --mesh " << files[i] << " --color " << v3(glm::dvec3(scene.info(ids[i]).color))
+                    << " --opacity " << opacity[i];
+            cmd << " --eye " << v3(cam.eye) << " --target " << v3(cam.target) << " --up " << v3(cam.up) << " --fov "
+                << cam.fov_y_degrees << " --near " << cam.near_plane << " --far " << cam.far_plane << " --size " << S
+                << "x" << S << " --background " << v3(glm::dvec3(plain.look.background)) << " --reps " << a.reps
+                << " --frames 10";
             for (const auto& r : rows) cmd << " --pixel " << r.x << "," << r.y;
             cmd << " 2>" << peer_log;
             const std::string line = bench::capture(cmd.str());
@@ -465,11 +489,13 @@ int main(int argc, char** argv) {
                 locator_ms = j.at("locator_build_ms").get<std::vector<double>>();
                 vtk_renderer = j.at("renderer").get<std::string>();
                 const auto& picks = j.at("picks");
-                if (picks.size() != rows.size()) throw Error("pick_bench", "pick_peer answered a different number of picks");
+                if (picks.size() != rows.size())
+                    throw Error("pick_bench", "pick_peer answered a different number of picks");
                 for (std::size_t i = 0; i < rows.size(); ++i) {
                     PickRow& r = rows[i];
                     const auto& p = picks[i];
-                    if (p.at("x").get<int>() != r.x || p.at("y").get<int>() != r.y) throw Error("pick_bench", "pick_peer's pixels differ");
+                    if (p.at("x").get<int>() != r.x || p.at("y").get<int>() != r.y)
+                        throw Error("pick_bench", "pick_peer's pixels differ");
                     const Ray ray = cam.pixel_ray(r.x + 0.5, r.y + 0.5, S, S);
                     const auto& cp = p.at("cell_picker");
                     r.cp_ms = cp.at("ms").get<double>();
@@ -486,11 +512,13 @@ int main(int argc, char** argv) {
                     r.sel_surface = hs.at("actor").get<int>();
                     r.sel_cell = hs.at("cell").get<long long>();
                     if (r.sel_surface >= 0 && r.sel_cell >= 0)
-                        r.sel_point = ray_on_triangle(written[std::size_t(r.sel_surface)], std::uint32_t(r.sel_cell), ray);
+                        r.sel_point =
+                            ray_on_triangle(written[std::size_t(r.sel_surface)], std::uint32_t(r.sel_cell), ray);
                 }
                 have_vtk = true;
             } catch (const std::exception& e) {
-                std::cerr << "[pick_bench] pick_peer failed (" << e.what() << "): " << line.substr(0, 300) << " (see " << peer_log << ")\n";
+                std::cerr << "[pick_bench] pick_peer failed (" << e.what() << "): " << line.substr(0, 300) << " (see "
+                          << peer_log << ")\n";
             }
 
             // ---- latency table ----
@@ -510,7 +538,8 @@ int main(int argc, char** argv) {
             sum.latency.push_back({"ours: frame, no pick (a)", stat(va)});
             sum.latency.push_back({"ours: frame with the pick riding on it, to the result (b)", stat(vb)});
             sum.latency.push_back({"ours: the pick's added cost, (b) - (a) of each pair", stat(vc)});
-            sum.latency.push_back({"ours: a click in the 3D view: a frame that only picks, to the result (d)", stat(vd)});
+            sum.latency.push_back(
+                {"ours: a click in the 3D view: a frame that only picks, to the result (d)", stat(vd)});
             sum.latency.push_back({"ours: the same click reading the colour image back, as before (e)", stat(ve)});
             sum.latency.push_back({"ours: core::pick (API; uploads the scene, a pick-only frame)", stat(vapi)});
             if (have_vtk) {
@@ -518,34 +547,41 @@ int main(int argc, char** argv) {
                 sum.latency.push_back({"VTK: vtkHardwareSelector::Select, 1 px, cells", stat(vsel)});
                 sum.latency.push_back({"VTK: vtkCellPicker::Pick (vtkCellLocator built once)", stat(vcp)});
             }
-            std::printf("\n### Latency, %dx%d: %zu triangles, %zu picks x %d repetitions\n\n", S, S, triangles, rows.size(), a.reps);
+            std::printf("\n### Latency, %dx%d: %zu triangles, %zu picks x %d repetitions\n\n", S, S, triangles,
+                        rows.size(), a.reps);
             std::printf("| method | samples | ms, median | p25 | p75 |\n|---|---:|---:|---:|---:|\n");
             for (const auto& [name, st] : sum.latency)
-                if (st.n) std::printf("| %s | %zu | %s | %s | %s |\n", name.c_str(), st.n, fmt_ms(st.median).c_str(), fmt_ms(st.p25).c_str(),
-                                      fmt_ms(st.p75).c_str());
+                if (st.n)
+                    std::printf("| %s | %zu | %s | %s | %s |\n", name.c_str(), st.n, fmt_ms(st.median).c_str(),
+                                fmt_ms(st.p25).c_str(), fmt_ms(st.p75).c_str());
             std::printf("\ncore::pick's own frame_ms (its pick-only frame): median %.1f ms\n", stat(vapi_frame).median);
             if (have_vtk)
                 std::printf("VTK: vtkCellLocator builds %.1f ms (skin) and %.1f ms (bone), once, before the picks\n",
                             locator_ms.size() > 0 ? locator_ms[0] : 0.0, locator_ms.size() > 1 ? locator_ms[1] : 0.0);
 
             if (!steady_a.empty() && !steady_b.empty()) {
-                std::printf("\nIn blocks of %d frames (%d blocks each, alternating): a frame after one of the same kind, and the first after "
-                            "one of the other kind (ms, median):\n\n", a.block_frames, a.block_pairs);
-                std::printf("| frame | after the same kind | first after the other kind | GPU resources created, first frame |\n|---|---:|---:|---:|\n");
-                std::printf("| no pick | %s | %s | %.0f |\n", fmt_ms(bench::median(steady_a)).c_str(), fmt_ms(bench::median(toggle_a)).c_str(),
-                            bench::median(created_toggle_a));
-                std::printf("| with a pick | %s | %s | %.0f |\n", fmt_ms(bench::median(steady_b)).c_str(), fmt_ms(bench::median(toggle_b)).c_str(),
-                            bench::median(created_toggle_b));
-                std::printf("\nsteady frames create %.0f resources (median); a pick in a run of picking frames adds %.2f ms\n",
-                            bench::median(created_steady), bench::median(steady_b) - bench::median(steady_a));
+                std::printf("\nIn blocks of %d frames (%d blocks each, alternating): a frame after one of the same "
+                            "kind, and the first after "
+                            "one of the other kind (ms, median):\n\n",
+                            a.block_frames, a.block_pairs);
+                std::printf("| frame | after the same kind | first after the other kind | GPU resources created, first "
+                            "frame |\n|---|---:|---:|---:|\n");
+                std::printf("| no pick | %s | %s | %.0f |\n", fmt_ms(bench::median(steady_a)).c_str(),
+                            fmt_ms(bench::median(toggle_a)).c_str(), bench::median(created_toggle_a));
+                std::printf("| with a pick | %s | %s | %.0f |\n", fmt_ms(bench::median(steady_b)).c_str(),
+                            fmt_ms(bench::median(toggle_b)).c_str(), bench::median(created_toggle_b));
+                std::printf(
+                    "\nsteady frames create %.0f resources (median); a pick in a run of picking frames adds %.2f ms\n",
+                    bench::median(created_steady), bench::median(steady_b) - bench::median(steady_a));
                 csv << S << ",-1,-1,steady_frame_no_pick," << bench::median(steady_a) << ",,,,,,,,,\n";
                 csv << S << ",-1,-1,steady_frame_with_pick," << bench::median(steady_b) << ",,,,,,,,,\n";
                 csv << S << ",-1,-1,toggle_frame_no_pick," << bench::median(toggle_a) << ",,,,,,,,,\n";
                 csv << S << ",-1,-1,toggle_frame_with_pick," << bench::median(toggle_b) << ",,,,,,,,,\n";
             }
             if (!pass_order.empty()) {
-                std::printf("\nPer pass (time_passes: glFinish after each pass), median of %d frames without and %d with a pick:\n\n", a.pass_frames,
-                            a.pass_frames);
+                std::printf("\nPer pass (time_passes: glFinish after each pass), median of %d frames without and %d "
+                            "with a pick:\n\n",
+                            a.pass_frames, a.pass_frames);
                 std::printf("| pass | ms, no pick | ms, with a pick |\n|---|---:|---:|\n");
                 double sum0 = 0, sum1 = 0;
                 for (const auto& name : pass_order) {
@@ -553,13 +589,16 @@ int main(int argc, char** argv) {
                     const double m0 = bench::median(v0), m1 = bench::median(v1);
                     sum0 += m0;
                     sum1 += m1;
-                    std::printf("| %s | %s | %s |\n", name.c_str(), v0.empty() ? "-" : fmt_ms(m0).c_str(), v1.empty() ? "-" : fmt_ms(m1).c_str());
+                    std::printf("| %s | %s | %s |\n", name.c_str(), v0.empty() ? "-" : fmt_ms(m0).c_str(),
+                                v1.empty() ? "-" : fmt_ms(m1).c_str());
                 }
                 std::printf("| sum of medians | %.2f | %.2f |\n", sum0, sum1);
                 for (const auto& name : pass_order) {
                     const auto& [v0, v1] = pass_ms[name];
-                    if (!v0.empty()) csv << S << ",-1,-1,pass_no_pick:" << name << "," << bench::median(v0) << ",,,,,,,,,\n";
-                    if (!v1.empty()) csv << S << ",-1,-1,pass_with_pick:" << name << "," << bench::median(v1) << ",,,,,,,,,\n";
+                    if (!v0.empty())
+                        csv << S << ",-1,-1,pass_no_pick:" << name << "," << bench::median(v0) << ",,,,,,,,,\n";
+                    if (!v1.empty())
+                        csv << S << ",-1,-1,pass_with_pick:" << name << "," << bench::median(v1) << ",,,,,,,,,\n";
                 }
             }
             // ---- agreement ----
@@ -574,7 +613,8 @@ int main(int argc, char** argv) {
                 ag_api{"ours, core::pick visible layer", "reference, visible crossing (same rule)"},
                 ag_cp{"vtkCellPicker point", "reference, first crossing"},
                 ag_sel{"vtkHardwareSelector cell (ray meets it)", "reference, first crossing"};
-            const auto tally = [](Agree& g, int surface, std::optional<std::uint32_t> tri, std::optional<glm::dvec3> p, const Hit* ref) {
+            const auto tally = [](Agree& g, int surface, std::optional<std::uint32_t> tri, std::optional<glm::dvec3> p,
+                                  const Hit* ref) {
                 g.returns[surface >= 0 && surface < 2 ? std::size_t(surface) : 2]++;
                 if (!ref || !p) return;
                 ++g.compared;
@@ -593,45 +633,56 @@ int main(int argc, char** argv) {
                       fl ? std::optional<glm::dvec3>(fl->lps) : std::nullopt, first);
                 if (r.api_ms) tally(ag_api, r.api_surface, r.api_triangle, r.api_lps, ref_vis);
                 if (have_vtk) {
-                    tally(ag_cp, r.cp_point ? r.cp_surface : -1, r.cp_cell >= 0 ? std::optional<std::uint32_t>(std::uint32_t(r.cp_cell)) : std::nullopt,
+                    tally(ag_cp, r.cp_point ? r.cp_surface : -1,
+                          r.cp_cell >= 0 ? std::optional<std::uint32_t>(std::uint32_t(r.cp_cell)) : std::nullopt,
                           r.cp_point, first);
-                    tally(ag_sel, r.sel_surface, r.sel_cell >= 0 ? std::optional<std::uint32_t>(std::uint32_t(r.sel_cell)) : std::nullopt,
+                    tally(ag_sel, r.sel_surface,
+                          r.sel_cell >= 0 ? std::optional<std::uint32_t>(std::uint32_t(r.sel_cell)) : std::nullopt,
                           r.sel_point, first);
                     if (vis && r.cp_point) ours_vs_vtk.push_back(glm::length(vis->lps - *r.cp_point));
                 }
             }
-            std::printf("\n### What each returns, %dx%d, against a double-precision ray cast of the written meshes\n\n", S, S);
-            std::printf("| method | against | skin / bone / none | same triangle | max distance mm | median distance mm |\n"
-                        "|---|---|---:|---:|---:|---:|\n");
+            std::printf("\n### What each returns, %dx%d, against a double-precision ray cast of the written meshes\n\n",
+                        S, S);
+            std::printf(
+                "| method | against | skin / bone / none | same triangle | max distance mm | median distance mm |\n"
+                "|---|---|---:|---:|---:|---:|\n");
             for (const Agree* g : {&ag_vis, &ag_first, &ag_api, &ag_cp, &ag_sel}) {
                 if (g->returns[0] + g->returns[1] + g->returns[2] == 0) continue;
                 const Stat d = stat(g->dist);
-                std::printf("| %s | %s | %d / %d / %d | %d of %d | %s | %s |\n", g->name.c_str(), g->against.c_str(), g->returns[0], g->returns[1],
-                            g->returns[2], g->same_triangle, g->compared,
+                std::printf("| %s | %s | %d / %d / %d | %d of %d | %s | %s |\n", g->name.c_str(), g->against.c_str(),
+                            g->returns[0], g->returns[1], g->returns[2], g->same_triangle, g->compared,
                             d.n ? fmt_dist(d.max).c_str() : "-", d.n ? fmt_dist(d.median).c_str() : "-");
             }
             if (!ours_vs_vtk.empty()) {
                 const Stat d = stat(ours_vs_vtk);
-                std::printf("\nours (visible layer) to vtkCellPicker's point: median %.2f mm, min %.2f, max %.2f (different surfaces: see below)\n",
+                std::printf("\nours (visible layer) to vtkCellPicker's point: median %.2f mm, min %.2f, max %.2f "
+                            "(different surfaces: see below)\n",
                             d.median, d.min, d.max);
             }
             // ---- per pick ----
             std::printf("\n#### Per pick, %dx%d\n\n", S, S);
-            std::printf("| pixel | reference: first, visible | ours, visible: LPS mm | Δ ref | ours first Δ ref | vtkCellPicker: LPS mm | Δ ref "
-                        "first | ours to VTK mm | selector: surface, Δ ref first | ms (b) | (c) | selector | cell picker |\n"
-                        "|---|---|---|---:|---:|---|---:|---:|---|---:|---:|---:|---:|\n");
+            std::printf(
+                "| pixel | reference: first, visible | ours, visible: LPS mm | Δ ref | ours first Δ ref | "
+                "vtkCellPicker: LPS mm | Δ ref "
+                "first | ours to VTK mm | selector: surface, Δ ref first | ms (b) | (c) | selector | cell picker |\n"
+                "|---|---|---|---:|---:|---|---:|---:|---|---:|---:|---:|---:|\n");
             for (const auto& r : rows) {
                 const Hit* first = r.ref.empty() ? nullptr : &r.ref.front();
                 const Layer* vis = r.ours.visible ? &r.ours.layers[*r.ours.visible] : nullptr;
                 const Layer* fl = r.ours.layers.empty() ? nullptr : &r.ours.layers.front();
-                std::printf("| %d,%d | %s, %s | %s %s | %s | %s | ", r.x, r.y, first ? surface_name(first->surface).c_str() : "none",
-                            r.ref_visible ? surface_name(r.ref_visible->surface).c_str() : "none", vis ? surface_name(vis->surface).c_str() : "none",
-                            vis ? fmt_lps(vis->lps).c_str() : "", vis && r.ref_visible ? fmt_dist(glm::length(vis->lps - r.ref_visible->lps)).c_str() : "-",
+                std::printf("| %d,%d | %s, %s | %s %s | %s | %s | ", r.x, r.y,
+                            first ? surface_name(first->surface).c_str() : "none",
+                            r.ref_visible ? surface_name(r.ref_visible->surface).c_str() : "none",
+                            vis ? surface_name(vis->surface).c_str() : "none", vis ? fmt_lps(vis->lps).c_str() : "",
+                            vis && r.ref_visible ? fmt_dist(glm::length(vis->lps - r.ref_visible->lps)).c_str() : "-",
                             fl && first ? fmt_dist(glm::length(fl->lps - first->lps)).c_str() : "-");
                 if (have_vtk)
-                    std::printf("%s %s | %s | %s | %s, %s | ", surface_name(r.cp_point ? r.cp_surface : -1).c_str(), r.cp_point ? fmt_lps(*r.cp_point).c_str() : "",
+                    std::printf("%s %s | %s | %s | %s, %s | ", surface_name(r.cp_point ? r.cp_surface : -1).c_str(),
+                                r.cp_point ? fmt_lps(*r.cp_point).c_str() : "",
                                 r.cp_point && first ? fmt_dist(glm::length(*r.cp_point - first->lps)).c_str() : "-",
-                                r.cp_point && vis ? fmt_dist(glm::length(*r.cp_point - vis->lps)).c_str() : "-", surface_name(r.sel_surface).c_str(),
+                                r.cp_point && vis ? fmt_dist(glm::length(*r.cp_point - vis->lps)).c_str() : "-",
+                                surface_name(r.sel_surface).c_str(),
                                 r.sel_point && first ? fmt_dist(glm::length(*r.sel_point - first->lps)).c_str() : "-");
                 else
                     std::printf("- | - | - | - | ");
@@ -647,11 +698,15 @@ int main(int argc, char** argv) {
                 csv << "," << (surface >= -1 ? surface_name(surface) : "") << ",";
                 if (tri) csv << *tri;
                 csv << ",";
-                if (p) csv << p->x << "," << p->y << "," << p->z;
-                else csv << ",,";
+                if (p)
+                    csv << p->x << "," << p->y << "," << p->z;
+                else
+                    csv << ",,";
                 csv << "," << against << ",";
-                if (ref) csv << surface_name(ref->surface) << "," << ref->triangle << ",";
-                else csv << ",,";
+                if (ref)
+                    csv << surface_name(ref->surface) << "," << ref->triangle << ",";
+                else
+                    csv << ",,";
                 if (ref && p) csv << glm::length(*p - ref->lps);
                 csv << "\n";
             };
@@ -662,17 +717,22 @@ int main(int argc, char** argv) {
                 const Layer* fl = r.ours.layers.empty() ? nullptr : &r.ours.layers.front();
                 row_out(r, "ours_frame", bench::median(r.a), -2, std::nullopt, std::nullopt, "", nullptr);
                 row_out(r, "ours_frame_with_pick", bench::median(r.b), vis ? vis->surface : -1,
-                        vis ? std::optional<std::uint32_t>(vis->triangle) : std::nullopt, vis ? std::optional<glm::dvec3>(vis->lps) : std::nullopt,
-                        "visible", ref_vis);
+                        vis ? std::optional<std::uint32_t>(vis->triangle) : std::nullopt,
+                        vis ? std::optional<glm::dvec3>(vis->lps) : std::nullopt, "visible", ref_vis);
                 row_out(r, "ours_pick_added", bench::median(r.c), -2, std::nullopt, std::nullopt, "", nullptr);
-                row_out(r, "ours_first_layer", std::nullopt, fl ? fl->surface : -1, fl ? std::optional<std::uint32_t>(fl->triangle) : std::nullopt,
+                row_out(r, "ours_first_layer", std::nullopt, fl ? fl->surface : -1,
+                        fl ? std::optional<std::uint32_t>(fl->triangle) : std::nullopt,
                         fl ? std::optional<glm::dvec3>(fl->lps) : std::nullopt, "first", first);
-                if (r.api_ms) row_out(r, "ours_core_pick", *r.api_ms, r.api_surface, r.api_triangle, r.api_lps, "visible", ref_vis);
+                if (r.api_ms)
+                    row_out(r, "ours_core_pick", *r.api_ms, r.api_surface, r.api_triangle, r.api_lps, "visible",
+                            ref_vis);
                 if (have_vtk) {
                     row_out(r, "vtk_hardware_selector", r.sel_ms, r.sel_surface,
-                            r.sel_cell >= 0 ? std::optional<std::uint32_t>(std::uint32_t(r.sel_cell)) : std::nullopt, r.sel_point, "first", first);
+                            r.sel_cell >= 0 ? std::optional<std::uint32_t>(std::uint32_t(r.sel_cell)) : std::nullopt,
+                            r.sel_point, "first", first);
                     row_out(r, "vtk_cell_picker", r.cp_ms, r.cp_point ? r.cp_surface : -1,
-                            r.cp_cell >= 0 ? std::optional<std::uint32_t>(std::uint32_t(r.cp_cell)) : std::nullopt, r.cp_point, "first", first);
+                            r.cp_cell >= 0 ? std::optional<std::uint32_t>(std::uint32_t(r.cp_cell)) : std::nullopt,
+                            r.cp_point, "first", first);
                 }
             }
             if (have_vtk) csv << S << ",-1,-1,vtk_frame," << bench::median(vtk_frames) << ",,,,,,,,,\n";
@@ -680,32 +740,36 @@ int main(int argc, char** argv) {
         }
         csv.close();
         std::printf("\nmeshes: %zu triangles, written and read back %s; ours: %s; VTK: %s; %.0f s in all\n", triangles,
-                    same_as_ours ? "bit-identical" : "DIFFERENT (the reference uses the written ones)", gl_renderer.c_str(), vtk_renderer.c_str(),
-                    bench::now_s() - t_start);
+                    same_as_ours ? "bit-identical" : "DIFFERENT (the reference uses the written ones)",
+                    gl_renderer.c_str(), vtk_renderer.c_str(), bench::now_s() - t_start);
 
         // ---- plot: one group of bars per method, one bar per image size (median, IQR bars), log scale ----
-        const char* const short_names[] = {"ours: frame (a)", "ours: frame + pick (b)", "ours: pick added (c)", "ours: core::pick",
-                                           "VTK: frame", "VTK: HW selector", "VTK: cell picker"};
+        const char* const short_names[] = {
+            "ours: frame (a)", "ours: frame + pick (b)", "ours: pick added (c)", "ours: core::pick",
+            "VTK: frame",      "VTK: HW selector",       "VTK: cell picker"};
         std::ofstream gp(a.out + "/pick_latency.gp");
         gp << "set terminal pngcairo size 900,560\nset output '" << a.out << "/pick_latency.png'\n"
            << "set title 'Pick latency, head CT (skin 0.3 over bone); " << gl_renderer << "' noenhanced\n"
-           << "set logscale y\nset yrange [0.05:*]\nset ylabel 'ms (median; bars: p25-p75; values below 0.05 drawn at 0.05)'\n"
+           << "set logscale y\nset yrange [0.05:*]\nset ylabel 'ms (median; bars: p25-p75; values below 0.05 drawn at "
+              "0.05)'\n"
            << "set style data histogram\nset style histogram errorbars gap 1 lw 1\nset style fill solid 0.7 border -1\n"
            << "set xtics rotate by -25 noenhanced\nset grid ytics\nset key top left\nplot";
         for (std::size_t i = 0; i < summaries.size(); ++i)
-            gp << (i ? "," : "") << " '-' using 2:3:4" << (i ? "" : ":xtic(1)") << " title '" << summaries[i].size << "x" << summaries[i].size << "'";
+            gp << (i ? "," : "") << " '-' using 2:3:4" << (i ? "" : ":xtic(1)") << " title '" << summaries[i].size
+               << "x" << summaries[i].size << "'";
         gp << "\n";
         for (const auto& sm : summaries) {
             for (std::size_t k = 0; k < sm.latency.size() && k < 7; ++k) {
                 const Stat& st = sm.latency[k].second;
                 const auto c = [](double v) { return std::max(v, 0.05); };
-                gp << "\"" << short_names[k] << "\" " << (st.n ? c(st.median) : 0.05) << " " << (st.n ? c(st.p25) : 0.05) << " "
-                   << (st.n ? c(st.p75) : 0.05) << "\n";
+                gp << "\"" << short_names[k] << "\" " << (st.n ? c(st.median) : 0.05) << " "
+                   << (st.n ? c(st.p25) : 0.05) << " " << (st.n ? c(st.p75) : 0.05) << "\n";
             }
             gp << "e\n";
         }
         gp.close();
-        if (std::system(("gnuplot " + a.out + "/pick_latency.gp").c_str()) == 0) std::printf("\nwrote %s/pick_latency.png\n", a.out.c_str());
+        if (std::system(("gnuplot " + a.out + "/pick_latency.gp").c_str()) == 0)
+            std::printf("\nwrote %s/pick_latency.png\n", a.out.c_str());
     } catch (const std::exception& e) {
         std::cerr << "pick_bench: " << e.what() << "\n";
         return 1;

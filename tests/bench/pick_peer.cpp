@@ -61,7 +61,9 @@ namespace {
 using iso::vtk_peer::quantile;
 using clock_type = std::chrono::steady_clock;
 
-double ms_since(clock_type::time_point t0) { return std::chrono::duration<double, std::milli>(clock_type::now() - t0).count(); }
+double ms_since(clock_type::time_point t0) {
+    return std::chrono::duration<double, std::milli>(clock_type::now() - t0).count();
+}
 
 } // namespace
 
@@ -82,10 +84,14 @@ int main(int argc, char** argv) {
                 std::array<int, 2> p{};
                 ok = std::sscanf(v.c_str(), "%d,%d", &p[0], &p[1]) == 2;
                 pixels.push_back(p);
-            } else if (a == "--reps") ok = (reps = std::stoi(v)) > 0;
-            else if (a == "--frames") ok = (frames = std::stoi(v)) > 0;
-            else if (a == "--warmup") warmup = std::stoi(v);
-            else ok = false;
+            } else if (a == "--reps")
+                ok = (reps = std::stoi(v)) > 0;
+            else if (a == "--frames")
+                ok = (frames = std::stoi(v)) > 0;
+            else if (a == "--warmup")
+                warmup = std::stoi(v);
+            else
+                ok = false;
         }
         if (!ok) {
             std::cerr << "pick_peer: bad option " << a << " " << v << "\n";
@@ -163,8 +169,10 @@ int main(int argc, char** argv) {
                     if (sel && sel->GetNumberOfNodes() > 0) {
                         vtkSelectionNode* node = sel->GetNode(0);
                         vtkInformation* props = node->GetProperties();
-                        if (props->Has(vtkSelectionNode::PROP())) hs["actor"] = actor_index(props->Get(vtkSelectionNode::PROP()));
-                        if (auto* ids = vtkIdTypeArray::SafeDownCast(node->GetSelectionList()); ids && ids->GetNumberOfTuples() > 0) {
+                        if (props->Has(vtkSelectionNode::PROP()))
+                            hs["actor"] = actor_index(props->Get(vtkSelectionNode::PROP()));
+                        if (auto* ids = vtkIdTypeArray::SafeDownCast(node->GetSelectionList());
+                            ids && ids->GetNumberOfTuples() > 0) {
                             hs["cell"] = ids->GetValue(0);
                             hs["cells"] = ids->GetNumberOfTuples();
                         }

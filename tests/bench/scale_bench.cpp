@@ -61,9 +61,7 @@ void set_vtk_threads(int n); // vtk_threads.cpp
 namespace {
 
 std::atomic<bool> g_stop{false};
-extern "C" void on_sigint(int) {
-    g_stop = true;
-}
+extern "C" void on_sigint(int) { g_stop = true; }
 
 constexpr const char* kDefaultIsoscopeArgs =
     "mesh {in} --iso {iso} --memory {memory} --stream --threads {threads} -o {out}/surface.pvtp";

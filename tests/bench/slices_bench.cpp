@@ -40,13 +40,13 @@ template <class F> double median_ms(int runs, F f) {
 }
 
 void reslice_table(bool big) {
-    const std::array<std::int64_t, 3> dims = big ? std::array<std::int64_t, 3>{512, 512, 400}
-                                                 : std::array<std::int64_t, 3>{256, 256, 200};
+    const std::array<std::int64_t, 3> dims =
+        big ? std::array<std::int64_t, 3>{512, 512, 400} : std::array<std::int64_t, 3>{256, 256, 200};
     Volume v = Volume::dense(dims, VoxelType::I16, oblique_affine(dims, big ? 0.7 : 1.4, kCentre));
     auto s = v.as<std::int16_t>();
     for (std::size_t i = 0; i < s.size(); ++i) s[i] = std::int16_t((i * 2654435761u) >> 20);
-    std::printf("reslice 512x512 from %lldx%lldx%lld int16 (oblique), median of 15, %d TBB threads:\n", (long long)dims[0],
-                (long long)dims[1], (long long)dims[2], tbb::this_task_arena::max_concurrency());
+    std::printf("reslice 512x512 from %lldx%lldx%lld int16 (oblique), median of 15, %d TBB threads:\n",
+                (long long)dims[0], (long long)dims[1], (long long)dims[2], tbb::this_task_arena::max_concurrency());
     SliceImage img;
     for (auto p : default_planes(v)) {
         zoom_to_fit(p, 512, 512);
@@ -74,7 +74,8 @@ void reslice_table(bool big) {
         zoom_to_fit(p, 512, 512);
         const SliceGrid g = slice_grid(p, 512, 512);
         const double ms = median_ms(5, [&] { reslice(sparse, g, Interp::Linear, img); });
-        std::printf("  sparse 256x256x200 (all active) %-8s linear %7.2f ms\n", slice_orientation_name(p.orientation), ms);
+        std::printf("  sparse 256x256x200 (all active) %-8s linear %7.2f ms\n", slice_orientation_name(p.orientation),
+                    ms);
     }
 }
 
@@ -86,8 +87,8 @@ void outline_row() {
     const SliceGrid g = slice_grid(p, 512, 512);
     std::size_t n = 0;
     const double ms = median_ms(9, [&] { n = mesh_outline(sphere, g).size(); });
-    std::printf("outline of %zu triangles: %zu segments, median of 9 %.2f ms (%d TBB threads)\n", sphere.triangles.size(), n,
-                ms, tbb::this_task_arena::max_concurrency());
+    std::printf("outline of %zu triangles: %zu segments, median of 9 %.2f ms (%d TBB threads)\n",
+                sphere.triangles.size(), n, ms, tbb::this_task_arena::max_concurrency());
 }
 
 } // namespace

@@ -99,7 +99,8 @@ void run_case(const Case& c, const Args& a, std::vector<Row>& rows) {
             Mesh m = s.extract_isosurface(iso);
             t1 = now_s();
             r.cached.push_back(t1 - t0);
-            if (m.triangles.size() != m0.triangles.size()) throw Error("slider_bench", "cached and fresh extraction differ");
+            if (m.triangles.size() != m0.triangles.size())
+                throw Error("slider_bench", "cached and fresh extraction differ");
             r.tris = m.triangles.size();
             // Swap and the first frame that shows it.
             t0 = now_s();
@@ -131,7 +132,8 @@ void run_case(const Case& c, const Args& a, std::vector<Row>& rows) {
 
 std::array<std::int64_t, 3> parse_size(const std::string& s) {
     std::array<std::int64_t, 3> d{};
-    if (std::sscanf(s.c_str(), "%ldx%ldx%ld", &d[0], &d[1], &d[2]) != 3) throw Error("--size", "expected WxHxD, got " + s);
+    if (std::sscanf(s.c_str(), "%ldx%ldx%ld", &d[0], &d[1], &d[2]) != 3)
+        throw Error("--size", "expected WxHxD, got " + s);
     return d;
 }
 
@@ -146,13 +148,20 @@ int main(int argc, char** argv) {
                 if (i + 1 >= argc) throw Error(k, "needs a value");
                 return argv[++i];
             };
-            if (k == "--size") a.size = parse_size(next());
-            else if (k == "--reps") a.reps = std::stoi(next());
-            else if (k == "--width") a.width = std::stoi(next());
-            else if (k == "--height") a.height = std::stoi(next());
-            else if (k == "--steps") a.steps = std::stoi(next());
-            else if (k == "--ao") a.ao = next() != "off";
-            else throw Error(k, "unknown option (--size, --reps, --width, --height, --steps, --ao)");
+            if (k == "--size")
+                a.size = parse_size(next());
+            else if (k == "--reps")
+                a.reps = std::stoi(next());
+            else if (k == "--width")
+                a.width = std::stoi(next());
+            else if (k == "--height")
+                a.height = std::stoi(next());
+            else if (k == "--steps")
+                a.steps = std::stoi(next());
+            else if (k == "--ao")
+                a.ao = next() != "off";
+            else
+                throw Error(k, "unknown option (--size, --reps, --width, --height, --steps, --ao)");
         }
         const int threads = tbb::info::default_concurrency();
         set_vtk_threads(threads);
@@ -172,20 +181,22 @@ int main(int argc, char** argv) {
             std::cerr << c.name << "...\n";
             run_case(c, a, rows);
         }
-        std::cout << "## Slider change to new surface on screen (" << threads << " threads, " << a.width << "x" << a.height
-                  << ", AO " << (a.ao ? "on" : "off") << ", GL: " << ctx.info().renderer << "; median over " << a.reps << " x "
-                  << a.steps << " values, ms)\n\n"
-                  << "| data | iso values | tris | chunks visited | extract, cached index | extract, no cached index "
-                     "(index + range scan) | swap | first frame | total, cached | total, not cached | vtkFlyingEdges3D |\n"
-                  << "|---|---|---|---|---|---|---|---|---|---|---|\n";
+        std::cout
+            << "## Slider change to new surface on screen (" << threads << " threads, " << a.width << "x" << a.height
+            << ", AO " << (a.ao ? "on" : "off") << ", GL: " << ctx.info().renderer << "; median over " << a.reps
+            << " x " << a.steps << " values, ms)\n\n"
+            << "| data | iso values | tris | chunks visited | extract, cached index | extract, no cached index "
+               "(index + range scan) | swap | first frame | total, cached | total, not cached | vtkFlyingEdges3D |\n"
+            << "|---|---|---|---|---|---|---|---|---|---|---|\n";
         std::cout << std::fixed << std::setprecision(1);
         for (const auto& r : rows) {
-            const double cached = 1e3 * median(r.cached), uncached = 1e3 * median(r.uncached), swap = 1e3 * median(r.swap),
-                         frame = 1e3 * median(r.frame);
-            std::cout << "| " << r.name << " | " << r.iso << " | " << r.tris << " | " << r.visited << " / " << r.chunks << " | "
-                      << cached << " | " << uncached << " (" << 1e3 * median(r.index) << " + " << 1e3 * median(r.range) << ") | "
-                      << std::setprecision(2) << swap << std::setprecision(1) << " | " << frame << " | " << cached + swap + frame
-                      << " | " << uncached + swap + frame << " | " << 1e3 * median(r.fe) << " |\n";
+            const double cached = 1e3 * median(r.cached), uncached = 1e3 * median(r.uncached),
+                         swap = 1e3 * median(r.swap), frame = 1e3 * median(r.frame);
+            std::cout << "| " << r.name << " | " << r.iso << " | " << r.tris << " | " << r.visited << " / " << r.chunks
+                      << " | " << cached << " | " << uncached << " (" << 1e3 * median(r.index) << " + "
+                      << 1e3 * median(r.range) << ") | " << std::setprecision(2) << swap << std::setprecision(1)
+                      << " | " << frame << " | " << cached + swap + frame << " | " << uncached + swap + frame << " | "
+                      << 1e3 * median(r.fe) << " |\n";
         }
         return 0;
     } catch (const std::exception& e) {

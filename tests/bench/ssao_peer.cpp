@@ -56,25 +56,39 @@ int main(int argc, char** argv) {
             return 2;
         }
         const std::string v = argv[++i];
-        if (a == "--mesh") meshes.push_back(v);
-        else if (a == "--eye") have_eye = vec3(v, eye);
-        else if (a == "--target") have_target = vec3(v, target);
-        else if (a == "--up") have_up = vec3(v, up);
-        else if (a == "--fov") fov = std::stod(v);
-        else if (a == "--near") near_plane = std::stod(v);
-        else if (a == "--far") far_plane = std::stod(v);
+        if (a == "--mesh")
+            meshes.push_back(v);
+        else if (a == "--eye")
+            have_eye = vec3(v, eye);
+        else if (a == "--target")
+            have_target = vec3(v, target);
+        else if (a == "--up")
+            have_up = vec3(v, up);
+        else if (a == "--fov")
+            fov = std::stod(v);
+        else if (a == "--near")
+            near_plane = std::stod(v);
+        else if (a == "--far")
+            far_plane = std::stod(v);
         else if (a == "--size") {
             if (std::sscanf(v.c_str(), "%dx%d", &W, &H) != 2 || W < 1 || H < 1) {
                 std::cerr << "ssao_peer: --size: expected WxH, got '" << v << "'\n";
                 return 2;
             }
-        } else if (a == "--radius") radius = std::stod(v);
-        else if (a == "--bias") bias = std::stod(v);
-        else if (a == "--kernel") kernel = std::stoi(v);
-        else if (a == "--blur") blur = std::stoi(v);
-        else if (a == "--frames") frames = std::stoi(v);
-        else if (a == "--warmup") warmup = std::stoi(v);
-        else if (a == "--out") out = v;
+        } else if (a == "--radius")
+            radius = std::stod(v);
+        else if (a == "--bias")
+            bias = std::stod(v);
+        else if (a == "--kernel")
+            kernel = std::stoi(v);
+        else if (a == "--blur")
+            blur = std::stoi(v);
+        else if (a == "--frames")
+            frames = std::stoi(v);
+        else if (a == "--warmup")
+            warmup = std::stoi(v);
+        else if (a == "--out")
+            out = v;
         else {
             std::cerr << "ssao_peer: unknown option " << a << "\n";
             return 2;
@@ -157,7 +171,8 @@ int main(int argc, char** argv) {
         win->Render();
         win->WaitForCompletion();
         int* sz = win->GetSize();
-        if (sz[0] != W || sz[1] != H) throw iso::Error("ssao_peer", "window is " + std::to_string(sz[0]) + "x" + std::to_string(sz[1]));
+        if (sz[0] != W || sz[1] != H)
+            throw iso::Error("ssao_peer", "window is " + std::to_string(sz[0]) + "x" + std::to_string(sz[1]));
         vtkNew<vtkFloatArray> rgba;
         win->GetRGBAPixelData(0, 0, W - 1, H - 1, 0, rgba, 0);
         std::vector<float> z(std::size_t(W) * std::size_t(H));
@@ -172,14 +187,16 @@ int main(int argc, char** argv) {
             for (int x = 0; x < W; ++x) {
                 const std::size_t src = std::size_t(y) * std::size_t(W) + std::size_t(x); // bottom-up
                 const std::size_t dst = std::size_t(H - 1 - y) * std::size_t(W) + std::size_t(x);
-                img.floats[dst] = z[src] >= 1.0f ? std::numeric_limits<float>::quiet_NaN() : rgba->GetValue(vtkIdType(src * 4));
+                img.floats[dst] =
+                    z[src] >= 1.0f ? std::numeric_limits<float>::quiet_NaN() : rgba->GetValue(vtkIdType(src * 4));
             }
         iso::save_image(img, out);
         const std::string renderer = iso::vtk_peer::renderer_name(win);
-        std::printf("{\"ms_median\": %.4f, \"ms_p25\": %.4f, \"ms_p75\": %.4f, \"ms_plain_median\": %.4f, \"renderer\": \"%s\", "
+        std::printf("{\"ms_median\": %.4f, \"ms_p25\": %.4f, \"ms_p75\": %.4f, \"ms_plain_median\": %.4f, "
+                    "\"renderer\": \"%s\", "
                     "\"width\": %d, \"height\": %d, \"kernel\": %d, \"radius\": %.9g, \"bias\": %.9g, \"blur\": %d}\n",
-                    quantile(with), quantile(with, 0.25), quantile(with, 0.75), quantile(without), renderer.c_str(), W, H, kernel, radius, bias,
-                    blur);
+                    quantile(with), quantile(with, 0.25), quantile(with, 0.75), quantile(without), renderer.c_str(), W,
+                    H, kernel, radius, bias, blur);
     } catch (const std::exception& e) {
         std::cerr << "ssao_peer: " << e.what() << "\n";
         return 2;

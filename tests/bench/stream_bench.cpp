@@ -34,7 +34,8 @@ int main(int argc, char** argv) {
         } else if (std::strcmp(argv[i], "--budget-mib") == 0 && i + 1 < argc) {
             budget_mib = std::size_t(std::atoll(argv[++i]));
         } else {
-            std::fprintf(stderr, "stream_bench: unknown argument '%s' (usage: stream_bench [--slices N] [--budget-mib M])\n",
+            std::fprintf(stderr,
+                         "stream_bench: unknown argument '%s' (usage: stream_bench [--slices N] [--budget-mib M])\n",
                          argv[i]);
             return 2;
         }
@@ -59,12 +60,13 @@ int main(int argc, char** argv) {
     const Mesh ref = extract_isosurface(load_volume(in), 500.0);
     const double tm = bench::now_s() - t0;
     const double hwm_mem = double(bench::peak_rss()) / 1048576.0;
-    std::printf("%.2f GiB int16, iso 500: streamed (budget %zu MiB) %.1f s [index+read %.1f s, extract %.1f s, write %.1f s], "
-                "%zu slabs of %d layers (chunk %d), engine peak %.1f MiB, VmHWM %.1f MiB (base %.1f MiB); "
-                "in memory (load + extract, no write) %.1f s, VmHWM %.1f MiB; %zu triangles (in memory %zu)\n",
-                double(slices) / 2048.0, budget_mib, ts, st.read_seconds, st.extract_seconds, st.write_seconds, st.plan.slabs,
-                st.plan.layers_per_slab, st.plan.chunk_size, double(st.peak_bytes) / 1048576.0, hwm_stream, base_mib, tm,
-                hwm_mem, std::size_t(ms.triangles), ref.triangles.size());
+    std::printf(
+        "%.2f GiB int16, iso 500: streamed (budget %zu MiB) %.1f s [index+read %.1f s, extract %.1f s, write %.1f s], "
+        "%zu slabs of %d layers (chunk %d), engine peak %.1f MiB, VmHWM %.1f MiB (base %.1f MiB); "
+        "in memory (load + extract, no write) %.1f s, VmHWM %.1f MiB; %zu triangles (in memory %zu)\n",
+        double(slices) / 2048.0, budget_mib, ts, st.read_seconds, st.extract_seconds, st.write_seconds, st.plan.slabs,
+        st.plan.layers_per_slab, st.plan.chunk_size, double(st.peak_bytes) / 1048576.0, hwm_stream, base_mib, tm,
+        hwm_mem, std::size_t(ms.triangles), ref.triangles.size());
     std::error_code ec;
     fs::remove_all(dir, ec);
     if (std::size_t(ms.triangles) != ref.triangles.size()) {

@@ -57,7 +57,8 @@ Mesh sphere(double r) {
     auto v = Volume::dense({n, n, n}, VoxelType::F32, make_affine(glm::dvec3(step), origin));
     for (int k = 0; k < n; ++k)
         for (int j = 0; j < n; ++j)
-            for (int i = 0; i < n; ++i) v.as<float>()[v.linear_index(i, j, k)] = float(r - glm::length(origin + step * glm::dvec3(i, j, k)));
+            for (int i = 0; i < n; ++i)
+                v.as<float>()[v.linear_index(i, j, k)] = float(r - glm::length(origin + step * glm::dvec3(i, j, k)));
     return extract_isosurface(v, 0.0, {});
 }
 
@@ -133,16 +134,21 @@ int main(int argc, char** argv) {
             return argv[++i];
         };
         try {
-            if (s == "--out") a.out = next();
-            else if (s == "--size") a.size = std::stoi(next());
-            else if (s == "--frames") a.frames = std::stoi(next());
-            else if (s == "--peer") a.peer = next();
+            if (s == "--out")
+                a.out = next();
+            else if (s == "--size")
+                a.size = std::stoi(next());
+            else if (s == "--frames")
+                a.frames = std::stoi(next());
+            else if (s == "--peer")
+                a.peer = next();
             else if (s == "--scenes") {
                 a.scenes.clear();
                 std::stringstream ss(next());
                 for (std::string t; std::getline(ss, t, ',');) a.scenes.push_back(t);
             } else {
-                std::cerr << "usage: voit_bench [--out DIR] [--size N] [--frames N] [--scenes ct,shells] [--peer PATH]\n";
+                std::cerr
+                    << "usage: voit_bench [--out DIR] [--size N] [--frames N] [--scenes ct,shells] [--peer PATH]\n";
                 return 2;
             }
         } catch (const std::exception& e) {
@@ -214,47 +220,57 @@ int main(int argc, char** argv) {
                 std::string label, mode;
                 int peels;
             };
-            for (const Peer& p : {Peer{"VTK weighted blended OIT", "wboit", 0}, Peer{"VTK dual depth peeling, 4 peels", "peel", 4},
-                                  Peer{"VTK dual depth peeling, 100 peels (converged)", "peel", 100}}) {
+            for (const Peer& p :
+                 {Peer{"VTK weighted blended OIT", "wboit", 0}, Peer{"VTK dual depth peeling, 4 peels", "peel", 4},
+                  Peer{"VTK dual depth peeling, 100 peels (converged)", "peel", 100}}) {
                 std::ostringstream cmd;
                 cmd.precision(17);
                 const std::string png = a.out + "/voit_" + name + "_" + p.mode + std::to_string(p.peels) + ".png";
-                cmd << "xvfb-run -a -s '-screen 0 " << std::max(S + 64, 1280) << "x" << std::max(S + 64, 1024) << "x24' " << a.peer;
+                cmd << "xvfb-run -a -s '-screen 0 " << std::max(S + 64, 1280) << "x" << std::max(S + 64, 1024)
+                    << "x24' " << a.peer;
                 for (std::size_t i = 0; i < files.size(); ++i)
-                    cmd << " --mesh " << files[i] << " --color " << v3(glm::dvec3(sc.colors[i])) << " --opacity " << sc.opacity[i];
-                cmd << " --eye " << v3(cam.eye) << " --target " << v3(cam.target) << " --up " << v3(cam.up) << " --fov " << cam.fov_y_degrees
-                    << " --near " << cam.near_plane << " --far " << cam.far_plane << " --size " << S << "x" << S << " --background " << v3(bg)
-                    << " --mode " << p.mode << " --peels " << p.peels << " --frames " << std::max(3, a.frames / 2) << " --out " << png
-                    << " 2>/dev/null";
+                    cmd << " --mesh " << files[i] << " --color " << v3(glm::dvec3(sc.colors[i])) << " --opacity "
+                        << sc.opacity[i];
+                cmd << " --eye " << v3(cam.eye) << " --target " << v3(cam.target) << " --up " << v3(cam.up) << " --fov "
+                    << cam.fov_y_degrees << " --near " << cam.near_plane << " --far " << cam.far_plane << " --size "
+                    << S << "x" << S << " --background " << v3(bg) << " --mode " << p.mode << " --peels " << p.peels
+                    << " --frames " << std::max(3, a.frames / 2) << " --out " << png << " 2>/dev/null";
                 const std::string line = bench::capture(cmd.str());
                 try {
                     const auto j = nlohmann::json::parse(line.substr(line.find('{')));
                     Row row{p.label, j.at("ms_median").get<double>()};
-                    errors(load_image(png), ref, [](std::uint8_t v, double lin) { return std::abs(v / 255.0 - lin); }, row);
+                    errors(
+                        load_image(png), ref, [](std::uint8_t v, double lin) { return std::abs(v / 255.0 - lin); },
+                        row);
                     rows.push_back(row);
                 } catch (const std::exception& e) {
                     std::cerr << "[voit_bench] oit_peer failed (" << e.what() << "): " << line << "\n";
                 }
             }
-            std::printf("\n### %s, %dx%d: %zu triangles, %zu foreground px, mean depth complexity %.1f, max %zu\n\n", sc.description.c_str(), S, S,
-                        triangles, fg, fg ? double(hits) / double(fg) : 0.0, deepest);
-            std::printf("| method | ms/frame | OIT memory MiB | RGB RMSE | max error | px off > 0.01 |\n|---|---:|---:|---:|---:|---:|\n");
+            std::printf("\n### %s, %dx%d: %zu triangles, %zu foreground px, mean depth complexity %.1f, max %zu\n\n",
+                        sc.description.c_str(), S, S, triangles, fg, fg ? double(hits) / double(fg) : 0.0, deepest);
+            std::printf("| method | ms/frame | OIT memory MiB | RGB RMSE | max error | px off > 0.01 "
+                        "|\n|---|---:|---:|---:|---:|---:|\n");
             for (const auto& row : rows) {
                 char mib[32] = "-";
                 if (row.mib >= 0) std::snprintf(mib, sizeof mib, "%.1f", row.mib);
-                std::printf("| %s | %.1f | %s | %.4f | %.4f | %.3f %% |\n", row.method.c_str(), row.ms, mib, row.rmse, row.max, 100 * row.off);
-                csv << name << ",\"" << row.method << "\"," << row.ms << "," << row.mib << "," << row.rmse << "," << row.max << "," << row.off
-                    << "\n";
+                std::printf("| %s | %.1f | %s | %.4f | %.4f | %.3f %% |\n", row.method.c_str(), row.ms, mib, row.rmse,
+                            row.max, 100 * row.off);
+                csv << name << ",\"" << row.method << "\"," << row.ms << "," << row.mib << "," << row.rmse << ","
+                    << row.max << "," << row.off << "\n";
             }
-            std::printf("\nours: %llu fragments, %llu shaded, longest list %u, pool %llu nodes\n", (unsigned long long)r.oit.fragments,
-                        (unsigned long long)r.oit.shaded, r.oit.max_list, (unsigned long long)r.oit.capacity);
+            std::printf("\nours: %llu fragments, %llu shaded, longest list %u, pool %llu nodes\n",
+                        (unsigned long long)r.oit.fragments, (unsigned long long)r.oit.shaded, r.oit.max_list,
+                        (unsigned long long)r.oit.capacity);
             all.emplace_back(name, rows);
         }
         csv.close();
         // Time against error, one panel per scene (log-log).
         std::ofstream gp(a.out + "/voit.gp");
-        gp << "set terminal pngcairo size " << 520 * int(all.size()) << ",440\nset output '" << a.out << "/voit_time_rmse.png'\n"
-           << "set multiplot layout 1," << all.size() << "\nset logscale xy\nset xlabel 'ms per frame (llvmpipe)'\nset ylabel 'RGB RMSE vs exact'\n"
+        gp << "set terminal pngcairo size " << 520 * int(all.size()) << ",440\nset output '" << a.out
+           << "/voit_time_rmse.png'\n"
+           << "set multiplot layout 1," << all.size()
+           << "\nset logscale xy\nset xlabel 'ms per frame (llvmpipe)'\nset ylabel 'RGB RMSE vs exact'\n"
            << "set key bottom left\nset grid\n";
         for (const auto& [name, rows] : all) {
             gp << "set title '" << name << "'\nplot";
@@ -265,7 +281,8 @@ int main(int argc, char** argv) {
         }
         gp << "unset multiplot\n";
         gp.close();
-        if (std::system(("gnuplot " + a.out + "/voit.gp").c_str()) == 0) std::printf("\nwrote %s/voit_time_rmse.png\n", a.out.c_str());
+        if (std::system(("gnuplot " + a.out + "/voit.gp").c_str()) == 0)
+            std::printf("\nwrote %s/voit_time_rmse.png\n", a.out.c_str());
     } catch (const std::exception& e) {
         std::cerr << "voit_bench: " << e.what() << "\n";
         return 1;

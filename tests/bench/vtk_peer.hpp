@@ -32,7 +32,9 @@ inline double quantile(std::vector<double> v, double q = 0.5) {
     return v.empty() ? 0.0 : v[std::min(v.size() - 1, std::size_t(q * double(v.size())))];
 }
 
-inline bool vec3(const std::string& s, double out[3]) { return std::sscanf(s.c_str(), "%lf,%lf,%lf", &out[0], &out[1], &out[2]) == 3; }
+inline bool vec3(const std::string& s, double out[3]) {
+    return std::sscanf(s.c_str(), "%lf,%lf,%lf", &out[0], &out[1], &out[2]) == 3;
+}
 
 // "OpenGL renderer string" of the window's context, or "unknown".
 inline std::string renderer_name(vtkRenderWindow* win) {
@@ -65,18 +67,30 @@ struct Scene {
     // whether the value was good.
     bool option(const std::string& a, const std::string& v, bool& ok) {
         ok = true;
-        if (a == "--mesh") surfaces.push_back({v});
-        else if (a == "--color") ok = !surfaces.empty() && vec3(v, surfaces.back().color);
-        else if (a == "--opacity") ok = !surfaces.empty() && (surfaces.back().opacity = std::stod(v), true);
-        else if (a == "--eye") ok = vec3(v, eye);
-        else if (a == "--target") ok = vec3(v, target);
-        else if (a == "--up") ok = vec3(v, up);
-        else if (a == "--background") ok = vec3(v, background);
-        else if (a == "--fov") fov = std::stod(v);
-        else if (a == "--near") near_plane = std::stod(v);
-        else if (a == "--far") far_plane = std::stod(v);
-        else if (a == "--size") ok = std::sscanf(v.c_str(), "%dx%d", &W, &H) == 2 && W > 0 && H > 0;
-        else return false;
+        if (a == "--mesh")
+            surfaces.push_back({v});
+        else if (a == "--color")
+            ok = !surfaces.empty() && vec3(v, surfaces.back().color);
+        else if (a == "--opacity")
+            ok = !surfaces.empty() && (surfaces.back().opacity = std::stod(v), true);
+        else if (a == "--eye")
+            ok = vec3(v, eye);
+        else if (a == "--target")
+            ok = vec3(v, target);
+        else if (a == "--up")
+            ok = vec3(v, up);
+        else if (a == "--background")
+            ok = vec3(v, background);
+        else if (a == "--fov")
+            fov = std::stod(v);
+        else if (a == "--near")
+            near_plane = std::stod(v);
+        else if (a == "--far")
+            far_plane = std::stod(v);
+        else if (a == "--size")
+            ok = std::sscanf(v.c_str(), "%dx%d", &W, &H) == 2 && W > 0 && H > 0;
+        else
+            return false;
         return true;
     }
 };
@@ -134,7 +148,8 @@ inline std::vector<double> timed_frames(View& v, const Scene& sc, int warmup, in
         if (f >= warmup) ms.push_back(std::chrono::duration<double, std::milli>(clock::now() - t0).count());
     }
     const int* sz = v.win->GetSize();
-    if (sz[0] != sc.W || sz[1] != sc.H) throw iso::Error(who, "window is " + std::to_string(sz[0]) + "x" + std::to_string(sz[1]));
+    if (sz[0] != sc.W || sz[1] != sc.H)
+        throw iso::Error(who, "window is " + std::to_string(sz[0]) + "x" + std::to_string(sz[1]));
     return ms;
 }
 

@@ -75,7 +75,8 @@ int main(int argc, char** argv) {
     for (const char* f : {"stl", "ply", "obj", "vtp"}) iso::save_mesh(m, (dir(f) / (std::string("a.") + f)).string());
     {
         std::ofstream f(out / "stl" / "ascii.stl");
-        f << "solid t\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 1 0 0\nvertex 0 1 0\nendloop\nendfacet\nendsolid t\n";
+        f << "solid t\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 1 0 0\nvertex 0 1 "
+             "0\nendloop\nendfacet\nendsolid t\n";
         std::ofstream p(out / "ply" / "ascii.ply");
         p << "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
              "element face 1\nproperty list uchar int vertex_indices\nend_header\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n";

@@ -36,7 +36,6 @@ namespace {
 
 Mesh box(glm::vec3 lo, glm::vec3 hi) { return test::flat_box_mesh(lo, hi); }
 
-
 RenderOptions ao_options(int size, double radius) {
     RenderOptions o;
     o.width = o.height = size;
@@ -78,7 +77,8 @@ TEST_F(SliceMap, TwoBoxesGiveExactBitPatterns) {
                 return true;
             };
             const bool in_a = inside({-20, -20}, {0, 20}, -20, 0, 1), in_b = inside({0, -20}, {20, 20}, -10, 20, 1);
-            const bool near_a = inside({-20, -20}, {0, 20}, -20, 0, -1), near_b = inside({0, -20}, {20, 20}, -10, 20, -1);
+            const bool near_a = inside({-20, -20}, {0, 20}, -20, 0, -1),
+                       near_b = inside({0, -20}, {20, 20}, -10, 20, -1);
             int lo = -1, hi = -1;
             if (in_a && !near_b) {
                 lo = voxel_at(sm, 480), hi = voxel_at(sm, 500);
@@ -135,7 +135,8 @@ TEST_F(SliceMap, NestedSphericalShellsXorToTheirGap) {
                 const double z = sm.z_near + (b + 0.5) * dz; // voxel centre
                 const bool in_gap = (z > o0 && z < i0) || (z > i1 && z < o1);
                 // The meshes are within 0.1 mm of the spheres: skip voxels that close to a boundary.
-                const double margin = std::min({std::abs(z - o0), std::abs(z - i0), std::abs(z - i1), std::abs(z - o1)});
+                const double margin =
+                    std::min({std::abs(z - o0), std::abs(z - i0), std::abs(z - i1), std::abs(z - o1)});
                 if (margin < 0.15) continue;
                 ASSERT_EQ(sm.bit(x, y, b), in_gap) << "texel " << x << "," << y << " bit " << b << " depth " << z;
             }
@@ -189,14 +190,16 @@ TEST_F(ConeAo, SphereOcclusionByAHalfSpaceIsItsVolumeFraction) {
                 if (std::abs(depth.floats[std::size_t(row) * 256 + std::size_t(x)] - 300.0f) > 0.01f) continue;
                 const float v = float_at(img, x, row);
                 if (weight == 0) {
-                    EXPECT_NEAR(v, expected, 0.12) << "pixel " << x << "," << row << " at " << dist << " mm from the wall";
+                    EXPECT_NEAR(v, expected, 0.12)
+                        << "pixel " << x << "," << row << " at " << dist << " mm from the wall";
                 }
                 sum += v;
                 ++n;
             }
             ASSERT_GT(n, 100);
             // Averaged over the jitter sets, the Poisson estimate is within 0.03 of the volume fraction.
-            EXPECT_NEAR(sum / n, expected, weight == 0 ? 0.03 : 0.05) << dist << " mm from the wall, ray weight " << weight;
+            EXPECT_NEAR(sum / n, expected, weight == 0 ? 0.03 : 0.05)
+                << dist << " mm from the wall, ray weight " << weight;
             ++tested;
         }
         EXPECT_GE(tested, 6);
@@ -211,7 +214,8 @@ TEST_F(ConeAo, CtSkinAndBunnyAgainstTheEmbreeReference) {
     };
     // Bounds: the benchmark measures 0.040 (skin) and 0.023 (bunny) RMSE at 512x512 with 1024 rays; at
     // 256x256 with 512 rays the reference's own noise adds ~0.01.
-    const Case cases[] = {{test::data("headsq.nhdr"), "left", {500}, 10.0, 0.06}, {test::data("bunny.vtp"), "anterior", {}, 0.05, 0.04}};
+    const Case cases[] = {{test::data("headsq.nhdr"), "left", {500}, 10.0, 0.06},
+                          {test::data("bunny.vtp"), "anterior", {}, 0.05, 0.04}};
     for (const auto& k : cases) {
         core::RenderRequest rq;
         rq.isos = k.isos;
@@ -265,7 +269,8 @@ TEST_F(ConeAo, CoarseConePassIsUpsampledAlongSurfacesNotAcrossEdges) {
         const auto full = core::render_input(k.input, rq);
         rq.look.cone.resolution = 0.5;
         const auto half = core::render_input(k.input, rq);
-        const auto ef = ao_error(full.image, ref.image, rq.look.ao_rays), eh = ao_error(half.image, ref.image, rq.look.ao_rays);
+        const auto ef = ao_error(full.image, ref.image, rq.look.ao_rays),
+                   eh = ao_error(half.image, ref.image, rq.look.ao_rays);
         EXPECT_LE(eh.rmse, ef.rmse + 0.005) << k.input << ": full " << ef.rmse << ", half " << eh.rmse;
         std::size_t nan_mismatch = 0;
         for (std::size_t i = 0; i < full.image.floats.size(); ++i)
@@ -376,8 +381,8 @@ TEST_F(ConeAo, GuardBandKeepsOccludersJustOffScreen) {
     shifted.eye.x += 30;
     shifted.target.x += 30;
     const double in_view = strip_error(shifted, 0.0, &used);
-    std::cout << "strip error (cone - reference): no guard " << without << ", guard " << guard_used << ": " << with << ", wall in view " << in_view
-              << "\n";
+    std::cout << "strip error (cone - reference): no guard " << without << ", guard " << guard_used << ": " << with
+              << ", wall in view " << in_view << "\n";
     EXPECT_GT(without, in_view + 0.1) << "no guard band: the off-screen wall is missed";
     EXPECT_NEAR(with, in_view, 0.03) << "guard band " << guard_used << ": the strip as if the wall were in view";
     // A scene wholly in view needs no guard band.
@@ -494,8 +499,8 @@ TEST_F(ConeAoStress, ThinSheetAndDeepCavityAgainstTheReference) {
     // Floor, a 0.3 mm sheet standing on it (thinner than a voxel), and a 10 x 10 x 40 mm well built
     // from boxes that share faces.
     std::vector<Mesh> meshes = {box({-100, -100, -10}, {100, 100, 0}), box({-40, -30, 0}, {-39.7f, 30, 25}),
-                                box({20, -5, -50}, {25, 5, 0}),  box({35, -5, -50}, {40, 5, 0}),
-                                box({20, -10, -50}, {40, -5, 0}), box({20, 5, -50}, {40, 10, 0}),
+                                box({20, -5, -50}, {25, 5, 0}),        box({35, -5, -50}, {40, 5, 0}),
+                                box({20, -10, -50}, {40, -5, 0}),      box({20, 5, -50}, {40, 10, 0}),
                                 box({20, -10, -60}, {40, 10, -50})};
     // The floor has a hole where the well is: cut it into pieces around x 20..40, y -10..10.
     meshes[0] = box({-100, -100, -10}, {20, 100, 0});
@@ -542,12 +547,14 @@ TEST_F(ConeAoStress, ThinSheetAndDeepCavityAgainstTheReference) {
             const float D = depth.floats[i];
             if (!std::isfinite(cone.floats[i]) || !std::isfinite(ref.floats[i])) continue;
             const double wx = ((x + 0.5) / S * 2 - 1) * th * D, wy = (1 - (y + 0.5) / S * 2) * th * D;
-            if (std::abs(D - 300.0f) < 0.01f && wx > 22 && wx < 38 && std::abs(wy) < 3) { // the well's floor, 50 mm down
+            if (std::abs(D - 300.0f) < 0.01f && wx > 22 && wx < 38 &&
+                std::abs(wy) < 3) { // the well's floor, 50 mm down
                 well_cone += cone.floats[i];
                 well_ref += ref.floats[i];
                 ++well;
             }
-            if (std::abs(D - 250.0f) < 0.01f && std::abs(wy) < 25 && wx > -50 && wx < -29.7 && std::abs(wx + 39.85) > 0.5) {
+            if (std::abs(D - 250.0f) < 0.01f && std::abs(wy) < 25 && wx > -50 && wx < -29.7 &&
+                std::abs(wx + 39.85) > 0.5) {
                 sheet_cone += cone.floats[i]; // the floor within R of the thin sheet
                 sheet_ref += ref.floats[i];
                 ++sheet;

@@ -38,7 +38,8 @@ RenderOptions ao_options(int size, double radius, bool surface) {
     o.look.ao = AoMethod::Cone;
     o.look.cone.radius_mm = radius;
     o.look.cone.surface_voxels = surface;
-    o.look.cone.guard = 0; // no guard band: the slicemap is the view's grid and its range starts at the nearest visible depth
+    o.look.cone.guard =
+        0; // no guard band: the slicemap is the view's grid and its range starts at the nearest visible depth
     return o;
 }
 
@@ -61,8 +62,8 @@ TEST_F(ConeAoThin, SheetThinnerThanAVoxelSetsExactlyItsVoxel) {
     // floor at z = -70..-60 (the far bound): 256 voxels over 230..320, 0.35 mm each.
     const float t = 0.02f;
     Renderer ren;
-    ren.add(box({-40, -30, -t}, {0, 30, 0}), {});   // the sheet
-    ren.add(box({20, -5, 0}, {30, 5, 20}), {});     // nearest depth 230
+    ren.add(box({-40, -30, -t}, {0, 30, 0}), {});         // the sheet
+    ren.add(box({20, -5, 0}, {30, 5, 20}), {});           // nearest depth 230
     ren.add(box({-100, -100, -70}, {100, 100, -60}), {}); // floor: far bound
     const Camera cam = test::looking({0, 0, 250}, {0, 0, 0}, {0, 1, 0});
     for (const bool surface : {false, true}) {
@@ -87,7 +88,8 @@ TEST_F(ConeAoThin, SheetThinnerThanAVoxelSetsExactlyItsVoxel) {
                 for (int b = solid0; b < solid1; ++b) want.insert(b); // a voxel centre between the faces (rare)
                 if (surface) want.insert({front, back});
                 const std::set<int> got = bits_of(sm, x, y, floor_voxel);
-                ASSERT_EQ(got, want) << "texel " << x << "," << y << " surface voxels " << surface << " front voxel " << front;
+                ASSERT_EQ(got, want) << "texel " << x << "," << y << " surface voxels " << surface << " front voxel "
+                                     << front;
                 ++checked;
             }
         EXPECT_GT(checked, 200);
@@ -158,7 +160,7 @@ TEST_F(ConeAoThin, TiltedSheetThinnerThanAVoxelKeepsItsVoxelsInEveryColumn) {
     for (auto& n : sheet.normals) n = tilt * n;
     Renderer ren;
     ren.add(sheet, {});
-    ren.add(box({40, -5, -50}, {50, 5, 30}), {});           // nearest visible depth 220
+    ren.add(box({40, -5, -50}, {50, 5, 30}), {});         // nearest visible depth 220
     ren.add(box({-100, -100, -70}, {100, 100, -60}), {}); // floor: far bound
     const Camera cam = test::looking({0, 0, 250}, {0, 0, 0}, {0, 1, 0});
     const glm::dvec3 n = glm::dvec3(tilt * glm::vec3(0, 0, 1));
@@ -185,7 +187,8 @@ TEST_F(ConeAoThin, TiltedSheetThinnerThanAVoxelKeepsItsVoxelsInEveryColumn) {
                 kept += !bits.empty();
                 for (int b : bits) {
                     const double zc = sm.z_near + (b + 0.5) * dz;
-                    ASSERT_LE(std::abs(zc - depth), spread) << "texel " << x << "," << y << " bit " << b << " surface " << surface;
+                    ASSERT_LE(std::abs(zc - depth), spread)
+                        << "texel " << x << "," << y << " bit " << b << " surface " << surface;
                 }
             }
         ASSERT_GT(columns, 500);
@@ -202,7 +205,9 @@ TEST_F(ConeAoThin, ThinStructurePhantomAgainstTheEmbreeReference) {
     // The vessel tree (radii 3.5 .. 0.45 mm) and thin bone shells of
     // thin_phantom.hpp at iso 150, R = 10 mm, seen from the front, 256x256,
     // 512-ray reference (own noise RMS ~0.01).
-    const std::string file = (std::filesystem::temp_directory_path() / ("isoscope-thin-phantom-" + std::to_string(::getpid()) + ".nrrd")).string();
+    const std::string file =
+        (std::filesystem::temp_directory_path() / ("isoscope-thin-phantom-" + std::to_string(::getpid()) + ".nrrd"))
+            .string();
     bench::write_thin_phantom(file);
     core::RenderRequest rq;
     rq.isos = {150};
@@ -239,15 +244,18 @@ TEST_F(ConeAoThin, ThinStructurePhantomAgainstTheEmbreeReference) {
     EXPECT_LE(e_disk.rmse, 0.045) << "disk: bias " << e_disk.bias << " p95 " << e_disk.p95;
     EXPECT_LE(std::abs(e_disk.bias), 0.02);
     EXPECT_LT(e_disk.rmse, e_axis.rmse);
-    const auto e = ao_error(cone.image, ref.image, rq.look.ao_rays), e_surface = ao_error(surface.image, ref.image, rq.look.ao_rays),
+    const auto e = ao_error(cone.image, ref.image, rq.look.ao_rays),
+               e_surface = ao_error(surface.image, ref.image, rq.look.ao_rays),
                e_rw1 = ao_error(rw1.image, ref.image, rq.look.ao_rays);
     Image ones = ref.image;
     for (auto& v : ones.floats)
         if (std::isfinite(v)) v = 1;
     const auto e_none = ao_error(ones, ref.image);
-    std::printf("thin phantom 256x256: cone without axis probes RMSE %.4f bias %+.4f p95 %.4f; surface voxels RMSE %.4f bias %+.4f; ray weight 1 "
+    std::printf("thin phantom 256x256: cone without axis probes RMSE %.4f bias %+.4f p95 %.4f; surface voxels RMSE "
+                "%.4f bias %+.4f; ray weight 1 "
                 "RMSE %.4f bias %+.4f; axis probes RMSE %.4f bias %+.4f; no AO %.4f\n",
-                e.rmse, e.bias, e.p95, e_surface.rmse, e_surface.bias, e_rw1.rmse, e_rw1.bias, e_axis.rmse, e_axis.bias, e_none.rmse);
+                e.rmse, e.bias, e.p95, e_surface.rmse, e_surface.bias, e_rw1.rmse, e_rw1.bias, e_axis.rmse, e_axis.bias,
+                e_none.rmse);
     EXPECT_GT(e.pixels, 3000u);
     // Bounds: measured 0.082 (bias +0.035) without axis probes, 0.081 with surface voxels, 0.073 (bias
     // +0.011) with ray weight 1, no AO 0.193 (this machine's llvmpipe; the renders are deterministic, the

@@ -52,8 +52,9 @@ struct KernelCase {
     std::string what;
 
     void pack(std::vector<glm::vec4>& out) const {
-        out.insert(out.end(), {glm::vec4(p, eps), glm::vec4(n, area), glm::vec4(v0, k), glm::vec4(v1, t), glm::vec4(v2, e),
-                               glm::vec4(c, d2), glm::vec4(m, o0), glm::vec4(o1, min_scale, max_scale, 0.0f)});
+        out.insert(out.end(),
+                   {glm::vec4(p, eps), glm::vec4(n, area), glm::vec4(v0, k), glm::vec4(v1, t), glm::vec4(v2, e),
+                    glm::vec4(c, d2), glm::vec4(m, o0), glm::vec4(o1, min_scale, max_scale, 0.0f)});
     }
 };
 
@@ -106,9 +107,10 @@ std::vector<KernelCase> kernel_cases() {
     // Degenerate triangles: collinear, repeated vertices, a vertex at p, an
     // edge through p, all three at p, a triangle in the plane.
     const std::vector<std::array<V, 3>> degenerate = {
-        {V(0, 0, 1), V(1, 1, 2), V(2, 2, 3)},    {V(1, 0, 1), V(1, 0, 1), V(0, 1, 1)},  {V(1, 0, 1), V(1, 0, 1), V(1, 0, 1)},
-        {V(0, 0, 0), V(1, 0, 1), V(0, 1, 1)},    {V(-1, 0, 0), V(1, 0, 0), V(0, 1, 1)}, {V(0, 0, 0), V(0, 0, 0), V(0, 0, 0)},
-        {V(1, 0, 0), V(0, 1, 0), V(-1, -1, 0)},  {V(0, 0, 2), V(0, 0, 1), V(1, 1, 1)},
+        {V(0, 0, 1), V(1, 1, 2), V(2, 2, 3)},   {V(1, 0, 1), V(1, 0, 1), V(0, 1, 1)},
+        {V(1, 0, 1), V(1, 0, 1), V(1, 0, 1)},   {V(0, 0, 0), V(1, 0, 1), V(0, 1, 1)},
+        {V(-1, 0, 0), V(1, 0, 0), V(0, 1, 1)},  {V(0, 0, 0), V(0, 0, 0), V(0, 0, 0)},
+        {V(1, 0, 0), V(0, 1, 0), V(-1, -1, 0)}, {V(0, 0, 2), V(0, 0, 1), V(1, 1, 1)},
     };
     for (std::size_t i = 0; i < degenerate.size(); ++i) {
         KernelCase k;
@@ -129,21 +131,65 @@ std::vector<KernelCase> kernel_cases() {
         cases.push_back(k);
     };
     special("disk at p", [](KernelCase& k) { k.c = k.p; });
-    special("disk on the axis", [](KernelCase& k) { k.c = V(0, 0, 2); k.area = 3.0f; });
-    special("disk back-facing", [](KernelCase& k) { k.c = V(0, 0, 2); k.m = V(0, 0, 1); });
-    special("disk below", [](KernelCase& k) { k.c = V(0.5f, 0, -2); k.m = V(0, 0, 1); });
-    special("disk zero area", [](KernelCase& k) { k.c = V(0, 1, 2); k.area = 0.0f; });
-    special("disk negative area", [](KernelCase& k) { k.c = V(0, 1, 2); k.area = -1.0f; });
+    special("disk on the axis", [](KernelCase& k) {
+        k.c = V(0, 0, 2);
+        k.area = 3.0f;
+    });
+    special("disk back-facing", [](KernelCase& k) {
+        k.c = V(0, 0, 2);
+        k.m = V(0, 0, 1);
+    });
+    special("disk below", [](KernelCase& k) {
+        k.c = V(0.5f, 0, -2);
+        k.m = V(0, 0, 1);
+    });
+    special("disk zero area", [](KernelCase& k) {
+        k.c = V(0, 1, 2);
+        k.area = 0.0f;
+    });
+    special("disk negative area", [](KernelCase& k) {
+        k.c = V(0, 1, 2);
+        k.area = -1.0f;
+    });
     special("e = 0, t = 1", [](KernelCase& k) { k.e = 0.0f; });
-    special("e = 0, t = 0", [](KernelCase& k) { k.e = 0.0f; k.t = 0.0f; });
-    special("e = 0.4, t = 2.5", [](KernelCase& k) { k.e = 0.4f; k.t = 2.5f; });
-    special("e = 1.5 clamped", [](KernelCase& k) { k.e = 1.5f; k.t = 3.0f; });
-    special("e = -1 clamped", [](KernelCase& k) { k.e = -1.0f; k.t = 3.0f; });
-    special("t negative", [](KernelCase& k) { k.e = 0.5f; k.t = -2.0f; });
-    special("k = 0.5, d2 = 3", [](KernelCase& k) { k.k = 0.5f; k.d2 = 3.0f; });
-    special("k negative", [](KernelCase& k) { k.k = -1.0f; k.d2 = 3.0f; });
-    special("blend", [](KernelCase& k) { k.o0 = 0.2f; k.o1 = 0.9f; });
-    special("blend 0.5 / 0.5", [](KernelCase& k) { k.o0 = 0.9f; k.o1 = 0.1f; k.min_scale = 0.5f; k.max_scale = 0.5f; });
+    special("e = 0, t = 0", [](KernelCase& k) {
+        k.e = 0.0f;
+        k.t = 0.0f;
+    });
+    special("e = 0.4, t = 2.5", [](KernelCase& k) {
+        k.e = 0.4f;
+        k.t = 2.5f;
+    });
+    special("e = 1.5 clamped", [](KernelCase& k) {
+        k.e = 1.5f;
+        k.t = 3.0f;
+    });
+    special("e = -1 clamped", [](KernelCase& k) {
+        k.e = -1.0f;
+        k.t = 3.0f;
+    });
+    special("t negative", [](KernelCase& k) {
+        k.e = 0.5f;
+        k.t = -2.0f;
+    });
+    special("k = 0.5, d2 = 3", [](KernelCase& k) {
+        k.k = 0.5f;
+        k.d2 = 3.0f;
+    });
+    special("k negative", [](KernelCase& k) {
+        k.k = -1.0f;
+        k.d2 = 3.0f;
+    });
+    special("blend", [](KernelCase& k) {
+        k.o0 = 0.2f;
+        k.o1 = 0.9f;
+    });
+    special("blend 0.5 / 0.5", [](KernelCase& k) {
+        k.o0 = 0.9f;
+        k.o1 = 0.1f;
+        k.min_scale = 0.5f;
+        k.max_scale = 0.5f;
+    });
 
     // Random receivers (tilted, off the origin) and triangles around them.
     std::mt19937 rng(15);
@@ -211,7 +257,8 @@ TEST_F(DiskAo, GlslKernelsMatchTheCppFloatTemplates) {
         ASSERT_EQ(int(o[0].w), cq.count);
         (cq.count == 4 ? quads : cq.count == 3 ? triangles : invisible)++;
         for (int j = 0; j < 4; ++j) {
-            const float scale = std::max({glm::length(k.p), glm::length(k.v0), glm::length(k.v1), glm::length(k.v2), 1.0f});
+            const float scale =
+                std::max({glm::length(k.p), glm::length(k.v0), glm::length(k.v1), glm::length(k.v2), 1.0f});
             const float err = glm::length(glm::vec3(o[j]) - cq.q[j]);
             worst_point = std::max(worst_point, double(err / scale));
             EXPECT_LE(err, 1e-6f + 4e-6f * scale) << "point " << j;
@@ -235,20 +282,23 @@ TEST_F(DiskAo, GlslKernelsMatchTheCppFloatTemplates) {
         };
         for (std::size_t j = 0; j < std::size(pairs); ++j) {
             EXPECT_TRUE(std::isfinite(pairs[j].first)) << "term " << j;
-            EXPECT_TRUE(near(pairs[j].first, pairs[j].second)) << "term " << j << ": GPU " << pairs[j].first << ", CPU " << pairs[j].second;
+            EXPECT_TRUE(near(pairs[j].first, pairs[j].second))
+                << "term " << j << ": GPU " << pairs[j].first << ", CPU " << pairs[j].second;
             if (j < 3 || j == 9) worst_ff = std::max(worst_ff, double(std::abs(pairs[j].first - pairs[j].second)));
         }
         // Exact decisions: the snapped heights are 0 on both sides or on neither.
         const float gpu_s[3] = {o[5].z, o[5].w, o[6].x};
         const V verts[3] = {k.v0, k.v1, k.v2};
-        for (int j = 0; j < 3; ++j) EXPECT_EQ(gpu_s[j] == 0.0f, snapped_plane_distance<float>(k.p, k.n, verts[j], k.eps) == 0.0f);
+        for (int j = 0; j < 3; ++j)
+            EXPECT_EQ(gpu_s[j] == 0.0f, snapped_plane_distance<float>(k.p, k.n, verts[j], k.eps) == 0.0f);
     }
     // Every kind of outcome was exercised.
     EXPECT_GT(quads, 20);
     EXPECT_GT(triangles, 20);
     EXPECT_GT(invisible, 20);
-    std::cout << "[disk kernels] " << cases.size() << " cases (" << quads << " quads, " << triangles << " triangles, " << invisible
-              << " invisible): worst |GPU - CPU| form factor " << worst_ff << ", point " << worst_point << " (relative)\n";
+    std::cout << "[disk kernels] " << cases.size() << " cases (" << quads << " quads, " << triangles << " triangles, "
+              << invisible << " invisible): worst |GPU - CPU| form factor " << worst_ff << ", point " << worst_point
+              << " (relative)\n";
 }
 
 namespace {
@@ -312,7 +362,8 @@ TEST_F(DiskAo, ElementTermsAndGatherMatchTheCpuHierarchy) {
     auto summarize = [](std::vector<double> err, const std::string& what) {
         std::sort(err.begin(), err.end());
         const double p99 = err[std::min(err.size() - 1, std::size_t(0.99 * double(err.size())))];
-        std::cout << "[disk GPU vs CPU] " << what << ": " << err.size() << " values, p99 " << p99 << ", max " << err.back() << "\n";
+        std::cout << "[disk GPU vs CPU] " << what << ": " << err.size() << " values, p99 " << p99 << ", max "
+                  << err.back() << "\n";
         EXPECT_LE(p99, 1e-5) << what;
         EXPECT_LE(err.back(), 0.02) << what;
     };
@@ -355,8 +406,8 @@ TEST_F(DiskAo, ElementTermsAndGatherMatchTheCpuHierarchy) {
             if (!std::isfinite(pa.w)) continue;
             ASSERT_TRUE(nb.w == 1.0f || nb.w == -1.0f) << nb.w;
             const glm::dvec3 n = glm::dvec3(glm::vec3(nb));
-            const double cpu =
-                1.0 - disk_occlusion_sided(h, glm::dvec3(glm::vec3(pa)), n, double(nb.w) * n, r.disk_terms, o.look.disk, radius);
+            const double cpu = 1.0 - disk_occlusion_sided(h, glm::dvec3(glm::vec3(pa)), n, double(nb.w) * n,
+                                                          r.disk_terms, o.look.disk, radius);
             px_err.push_back(std::abs(double(pa.w) - cpu));
             dark += cpu < 0.8;
             // The AO image holds the same value (its rows top-down).
@@ -402,8 +453,8 @@ TEST_F(DiskAo, CtSkinAndBunnyAgainstTheEmbreeReference) {
             if (p.name == "disk_gather") gather_ms = p.ms;
             if (p.name == "disk_elements") element_ms = p.ms;
         }
-        std::cout << "[disk vs Embree] " << k.input << ": RMSE " << e.rmse << " bias " << e.bias << " p95 " << e.p95 << " (elements "
-                  << element_ms << " ms, gather " << gather_ms << " ms)\n";
+        std::cout << "[disk vs Embree] " << k.input << ": RMSE " << e.rmse << " bias " << e.bias << " p95 " << e.p95
+                  << " (elements " << element_ms << " ms, gather " << gather_ms << " ms)\n";
         EXPECT_GT(e.pixels, 5000u);
         EXPECT_LE(e.rmse, k.max_rmse) << k.input << ": bias " << e.bias << " MAE " << e.mae << " p95 " << e.p95;
         EXPECT_LE(std::abs(e.bias), k.max_bias) << k.input;
@@ -412,7 +463,8 @@ TEST_F(DiskAo, CtSkinAndBunnyAgainstTheEmbreeReference) {
             if (std::isfinite(v)) v = 1;
         EXPECT_GT(ao_error(ones, ref.image).rmse, 1.5 * e.rmse) << k.input;
         EXPECT_NE(disk.meta.text.at("isoscope:ao").find("disk"), std::string::npos);
-        EXPECT_NE(disk.meta.text.at("isoscope:ao_parameters").find("passes 0; traversal_epsilon 16"), std::string::npos);
+        EXPECT_NE(disk.meta.text.at("isoscope:ao_parameters").find("passes 0; traversal_epsilon 16"),
+                  std::string::npos);
     }
 }
 

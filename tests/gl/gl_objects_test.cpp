@@ -94,7 +94,8 @@ TEST_F(GlFixture, FailsATestThatLeavesAGlError) {
     glBindTexture(bogus_target, 0);
     EXPECT_EQ(gl::debug_log().errors(), 1u);
     ASSERT_FALSE(gl::debug_log().messages().empty());
-    EXPECT_NE(gl::debug_log().messages().back().find("GL error"), std::string::npos) << gl::debug_log().messages().back();
+    EXPECT_NE(gl::debug_log().messages().back().find("GL error"), std::string::npos)
+        << gl::debug_log().messages().back();
     EXPECT_EQ(glGetError(), GLenum(GL_INVALID_ENUM)); // taken: only the debug log still has it
     {
         FixtureProbe probe;

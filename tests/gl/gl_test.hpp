@@ -39,9 +39,9 @@ inline gl::HeadlessContext& gl_context() {
 
 // GL errors recorded since the last call, by both channels.
 struct GlErrors {
-    std::size_t debug_errors = 0;       // GL_KHR_debug messages of type ERROR
-    std::string debug_messages;         // the last few messages, one a line
-    std::string get_error_codes;        // glGetError() codes, e.g. "0x500 "
+    std::size_t debug_errors = 0; // GL_KHR_debug messages of type ERROR
+    std::string debug_messages;   // the last few messages, one a line
+    std::string get_error_codes;  // glGetError() codes, e.g. "0x500 "
     bool any() const { return debug_errors > 0 || !get_error_codes.empty(); }
 };
 

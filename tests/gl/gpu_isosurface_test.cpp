@@ -85,7 +85,8 @@ TEST_F(GpuIsosurface, SameAsCpuOnObliqueSphere) {
     for (std::int64_t k = 0; k < 21; ++k)
         for (std::int64_t j = 0; j < 27; ++j)
             for (std::int64_t i = 0; i < 30; ++i)
-                v.as<float>()[v.linear_index(i, j, k)] = float(11.0 - glm::length(v.index_to_world({double(i), double(j), double(k)}) - c));
+                v.as<float>()[v.linear_index(i, j, k)] =
+                    float(11.0 - glm::length(v.index_to_world({double(i), double(j), double(k)}) - c));
     ExtractOptions opt{.chunk_size = 7, .keep_keys = true};
     const auto cpu = Extractor(v, opt).extract(0.25);
     GpuExtractStats st;
@@ -135,11 +136,11 @@ TEST_F(GpuIsosurface, SameAsCpuAtTies) {
     for (std::int64_t k = 0; k < 17; ++k)
         for (std::int64_t j = 0; j < 18; ++j)
             for (std::int64_t i = 0; i < 21; ++i) {
-                std::int16_t x = std::int16_t(499 + (i + 2 * j + k) % 3); // three-level checkerboard
-                if (i >= 12) x = (i + j + k) % 2 ? 500 : 499;           // two-level
-                if (k >= 12) x = 100;                                    // background...
+                std::int16_t x = std::int16_t(499 + (i + 2 * j + k) % 3);             // three-level checkerboard
+                if (i >= 12) x = (i + j + k) % 2 ? 500 : 499;                         // two-level
+                if (k >= 12) x = 100;                                                 // background...
                 if (k >= 12 && i >= 3 && i < 8 && j >= 2 && j < 9 && k < 16) x = 500; // ...a plateau
-                if (k == 14 && i == 15 && j == 10) x = 500;             // ...a single voxel
+                if (k == 14 && i == 15 && j == 10) x = 500;                           // ...a single voxel
                 s[v.linear_index(i, j, k)] = x;
             }
     for (double iso : {500.0, 501.0}) {

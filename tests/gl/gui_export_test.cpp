@@ -55,7 +55,6 @@ template <class T> T* wait_for_child(QWidget& w, const char* name) {
     return found;
 }
 
-
 // Seconds since the test began, per step (stdout: where the time goes under Xvfb and llvmpipe).
 void step(const QElapsedTimer& t, const char* what) { std::printf("%6.2f s  %s\n", t.elapsed() / 1000.0, what); }
 
@@ -93,7 +92,8 @@ TEST(GuiExport, ExportSaveOpenSessionAndSurfaces) {
     PostProcessOptions largest;
     largest.keep_largest = true;
     w.surfaces_panel()->set_post(ids[1], largest);
-    ASSERT_TRUE(wait_until([&] { return !w.surfaces_panel()->reextracting() && w.scene().info(ids[1]).post.keep_largest; }, 60000));
+    ASSERT_TRUE(wait_until(
+        [&] { return !w.surfaces_panel()->reextracting() && w.scene().info(ids[1]).post.keep_largest; }, 60000));
     step(clock, "opened headsq, added skin and bone");
     // Skin at 0.3 through the core (the Surfaces panel is another part's).
     w.scene().info(ids[0]).opacity = 0.3f;
@@ -139,7 +139,8 @@ TEST(GuiExport, ExportSaveOpenSessionAndSurfaces) {
     EXPECT_TRUE(dialog->findChild<QLabel*>("problem")->isVisible());
     file->setText(QString::fromStdString(image));
     QTest::mouseClick(ok, Qt::LeftButton);
-    ASSERT_TRUE(wait_until([&] { return !w.busy() && w.findChild<gui::ExportDialog*>("export_dialog") == nullptr; }, 120000));
+    ASSERT_TRUE(
+        wait_until([&] { return !w.busy() && w.findChild<gui::ExportDialog*>("export_dialog") == nullptr; }, 120000));
     ASSERT_TRUE(fs::exists(image)) << w.statusBar()->currentMessage().toStdString();
     step(clock, "exported through the dialog");
     const auto out = test::output_dir("gui_export");
@@ -164,7 +165,8 @@ TEST(GuiExport, ExportSaveOpenSessionAndSurfaces) {
 
     // ---- exactly what `isoscope render --session` writes for it
     const std::string cli_image = dir / "cli.png";
-    const auto r = test::run_command(test::cli() + " render --session " + beside + " --size 360x270 -o " + cli_image, true);
+    const auto r =
+        test::run_command(test::cli() + " render --session " + beside + " --size 360x270 -o " + cli_image, true);
     ASSERT_EQ(r.exit_code, 0) << r.out;
     step(clock, "isoscope render --session");
     fs::copy_file(cli_image, out / "cli.png", fs::copy_options::overwrite_existing);
@@ -222,7 +224,8 @@ TEST(GuiExport, ExportSaveOpenSessionAndSurfaces) {
     const std::string ply = dir / "bone.ply";
     mesh_file->setText(QString::fromStdString(ply));
     QTest::mouseClick(sd->findChild<QDialogButtonBox*>()->button(QDialogButtonBox::Ok), Qt::LeftButton);
-    ASSERT_TRUE(wait_until([&] { return !w.busy() && fs::exists(ply); }, 60000)) << w.statusBar()->currentMessage().toStdString();
+    ASSERT_TRUE(wait_until([&] { return !w.busy() && fs::exists(ply); }, 60000))
+        << w.statusBar()->currentMessage().toStdString();
     EXPECT_EQ(core::open_mesh(ply).triangles.size(), w.scene().mesh(ids[1]).triangles.size());
     step(clock, "saved the bone as PLY");
 
@@ -266,7 +269,8 @@ TEST(GuiExport, ExportSaveOpenSessionAndSurfaces) {
     ASSERT_EQ(w2.markups().size(), 1u);
     EXPECT_EQ(w2.markups()[0].name, "ruler");
     for (int p = 0; p < 2; ++p)
-        for (int k = 0; k < 3; ++k) EXPECT_NEAR(w2.markups()[0].points[p].position[k], ruler.points[p].position[k], 1e-9);
+        for (int k = 0; k < 3; ++k)
+            EXPECT_NEAR(w2.markups()[0].points[p].position[k], ruler.points[p].position[k], 1e-9);
     EXPECT_EQ(w2.session_path().toStdString(), session);
     EXPECT_TRUE(core::same_state(w2.current_session(), w.current_session()));
     screenshot(w2, "reopened.png");

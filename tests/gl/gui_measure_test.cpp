@@ -78,8 +78,8 @@ TEST_F(GuiMeasure, RulerAndAngleOnTheAxialView) {
     const QString dist_text = table->item(0, gui::MeasurementsPanel::Value)->text();
     const QString angle_text = table->item(1, gui::MeasurementsPanel::Value)->text();
     std::printf("panel: %s %s, %s %s (core: %.4f mm, %.4f deg)\n", table->item(0, 0)->text().toStdString().c_str(),
-                dist_text.toStdString().c_str(), table->item(1, 0)->text().toStdString().c_str(), angle_text.toStdString().c_str(),
-                distance, angle);
+                dist_text.toStdString().c_str(), table->item(1, 0)->text().toStdString().c_str(),
+                angle_text.toStdString().c_str(), distance, angle);
     EXPECT_TRUE(dist_text.endsWith(" mm")) << dist_text.toStdString();
     EXPECT_NEAR(parse_value(dist_text), distance, kPrinted);
     EXPECT_TRUE(angle_text.endsWith(QChar(0x00B0))) << angle_text.toStdString();

@@ -44,7 +44,8 @@ struct Readout {
 inline std::optional<Readout> parse_readout(const std::string& s) {
     Readout r;
     char name[128] = {};
-    if (std::sscanf(s.c_str(), "LPS (%lf, %lf, %lf) mm, value %lf, surface %127[^\n]", &r.lps.x, &r.lps.y, &r.lps.z, &r.value, name) != 5)
+    if (std::sscanf(s.c_str(), "LPS (%lf, %lf, %lf) mm, value %lf, surface %127[^\n]", &r.lps.x, &r.lps.y, &r.lps.z,
+                    &r.value, name) != 5)
         return std::nullopt;
     r.surface = name;
     return r;
@@ -58,7 +59,8 @@ inline QTableWidget* panel_table(gui::MainWindow& w) { return w.measurements_pan
 // (QTest::mouseMove also moves the X server's pointer, whose motion events
 // arrive later, spread over time).
 inline void hover(QWidget* w, QPoint at) {
-    QMouseEvent e(QEvent::MouseMove, QPointF(at), w->mapToGlobal(QPointF(at)), Qt::NoButton, Qt::NoButton, Qt::NoModifier);
+    QMouseEvent e(QEvent::MouseMove, QPointF(at), w->mapToGlobal(QPointF(at)), Qt::NoButton, Qt::NoButton,
+                  Qt::NoModifier);
     QCoreApplication::sendEvent(w, &e);
 }
 
@@ -121,7 +123,9 @@ inline QPoint axial_pixel(gui::MainWindow& w, int dx, int dy) {
 }
 
 // The ruler's two clicks and the angle's three (arm, vertex, arm) on the axial view.
-inline std::vector<QPoint> ruler_pixels(gui::MainWindow& w) { return {axial_pixel(w, -60, 10), axial_pixel(w, 55, 10)}; }
+inline std::vector<QPoint> ruler_pixels(gui::MainWindow& w) {
+    return {axial_pixel(w, -60, 10), axial_pixel(w, 55, 10)};
+}
 inline std::vector<QPoint> angle_pixels(gui::MainWindow& w) {
     return {axial_pixel(w, -40, -50), axial_pixel(w, 0, -10), axial_pixel(w, 45, -70)};
 }
@@ -131,7 +135,8 @@ inline void click_on_axial(gui::MainWindow& w, gui::MeasureTools::Tool tool, con
     auto* tools = w.measure_tools();
     (tool == gui::MeasureTools::Tool::Ruler ? tools->ruler_action() : tools->angle_action())->trigger();
     ASSERT_EQ(tools->tool(), tool);
-    for (const QPoint& p : pixels) QTest::mouseClick(w.slice_view(core::SliceOrientation::Axial), Qt::LeftButton, {}, p);
+    for (const QPoint& p : pixels)
+        QTest::mouseClick(w.slice_view(core::SliceOrientation::Axial), Qt::LeftButton, {}, p);
 }
 
 // The tests' fixture: an application, settings in a temporary folder, and
@@ -149,11 +154,13 @@ protected:
 
 private:
     TempDir dir_;
-    std::unique_ptr<QApplication> app_;       // before the window: it goes last
+    std::unique_ptr<QApplication> app_; // before the window: it goes last
     std::unique_ptr<gui::MainWindow> window_;
 };
 
 // The LPS point of a pixel of a slice view's grid.
-inline glm::dvec3 lps_of(const core::SliceGrid& grid, QPoint p) { return core::pixel_to_lps(grid, {double(p.x()), double(p.y())}); }
+inline glm::dvec3 lps_of(const core::SliceGrid& grid, QPoint p) {
+    return core::pixel_to_lps(grid, {double(p.x()), double(p.y())});
+}
 
 } // namespace iso::test

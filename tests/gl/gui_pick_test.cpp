@@ -83,7 +83,8 @@ TEST_F(GuiPick, HoverPicksAreThrottledAndFollowThePointer) {
     }
     const double seconds = t.elapsed() / 1000.0;
     const int picks = tools->hover_picks() - moving;
-    std::printf("hover: %d picks in %.2f s of moving, interval now %d ms\n", picks, seconds, tools->hover_interval_ms());
+    std::printf("hover: %d picks in %.2f s of moving, interval now %d ms\n", picks, seconds,
+                tools->hover_interval_ms());
     EXPECT_GE(picks, 2) << "the readout does not follow a moving pointer";
     EXPECT_LE(picks, int(seconds * 1000 / 80) + 1) << "hover picks are not throttled";
 }
@@ -159,8 +160,8 @@ TEST_F(GuiPick, PicksLeaveTheAoAccumulationAlone) {
     std::vector<double> ms;
     for (int k = 0; k < 5; ++k) ms.push_back(viewer->pick_at(QPointF(at) + QPointF(0.5, 0.5)).frame_ms);
     std::sort(ms.begin(), ms.end());
-    std::printf("3D view pick at %dx%d: median %.1f ms, min %.1f, max %.1f of 5\n", size.width(), size.height(), ms[2], ms[0],
-                ms[4]);
+    std::printf("3D view pick at %dx%d: median %.1f ms, min %.1f, max %.1f of 5\n", size.width(), size.height(), ms[2],
+                ms[0], ms[4]);
     if (viewer->options().look.ao != AoMethod::Off) {
         ASSERT_TRUE(wait_until([&] { return viewer->converged(); }, 120000)) << "the AO did not converge";
         const int ao_frames = viewer->ao_frames(), drawn = viewer->frames();

@@ -38,9 +38,7 @@ using namespace iso;
 namespace {
 using test::wait_until;
 
-template <class T> T* child(QWidget* row, const char* name) {
-    return row ? row->findChild<T*>(name) : nullptr;
-}
+template <class T> T* child(QWidget* row, const char* name) { return row ? row->findChild<T*>(name) : nullptr; }
 
 void add_through_panel(gui::MainWindow& w, double iso) {
     auto* panel = w.surfaces_panel();
@@ -56,7 +54,8 @@ void add_through_panel(gui::MainWindow& w, double iso) {
 // A frame drawn after now, without error.
 void expect_new_frame(gui::MainWindow& w, int frames_before) {
     ASSERT_NE(w.viewer(), nullptr);
-    ASSERT_TRUE(wait_until([&] { return w.viewer()->frames() > frames_before || !w.viewer()->error().empty(); }, 60000));
+    ASSERT_TRUE(
+        wait_until([&] { return w.viewer()->frames() > frames_before || !w.viewer()->error().empty(); }, 60000));
     EXPECT_TRUE(w.viewer()->error().empty()) << w.viewer()->error();
 }
 
@@ -175,7 +174,8 @@ TEST(GuiSurfaces, AddOpacitySliderLargestRemoveAndCancel) {
         const Mesh fresh = extract_isosurface(v, 600);
         const Mesh& shown = w.scene().mesh(skin);
         EXPECT_EQ(shown.triangles.size(), fresh.triangles.size());
-        EXPECT_NEAR(measure_surface(shown).area_mm2, measure_surface(fresh).area_mm2, 1e-6 * measure_surface(fresh).area_mm2);
+        EXPECT_NEAR(measure_surface(shown).area_mm2, measure_surface(fresh).area_mm2,
+                    1e-6 * measure_surface(fresh).area_mm2);
     }
     expect_new_frame(w, frames);
 
@@ -226,7 +226,8 @@ TEST(GuiSurfaces, AddOpacitySliderLargestRemoveAndCancel) {
         slider->setValue(at500 + 300);
         ASSERT_TRUE(panel->reextracting(skin));
         w.open_path(QString::fromStdString(headsq));
-        ASSERT_TRUE(wait_until([&] { return &w.scene() != old_scene && !w.busy(); }, 60000)) << "the load did not finish";
+        ASSERT_TRUE(wait_until([&] { return &w.scene() != old_scene && !w.busy(); }, 60000))
+            << "the load did not finish";
         EXPECT_FALSE(panel->reextracting());
         EXPECT_EQ(panel->row(skin), nullptr);
         EXPECT_TRUE(w.scene().surfaces().empty());

@@ -48,7 +48,8 @@ inline double lit_fraction(const QImage& img) {
 // programs under xvfb-run when it is installed; ./setup.sh installs it).
 inline const char* missing_display() {
     const char* d = std::getenv("DISPLAY");
-    return d && *d ? nullptr : "no X display (DISPLAY unset): run under xvfb-run, as CTest does (./setup.sh installs it)";
+    return d && *d ? nullptr
+                   : "no X display (DISPLAY unset): run under xvfb-run, as CTest does (./setup.sh installs it)";
 }
 
 // First in every test that opens windows: skips, saying why, without a display.

@@ -72,8 +72,9 @@ void drag(QWidget* target, Qt::MouseButton button, QPointF from, QPointF to, int
     };
     send(QEvent::MouseButtonPress, from, button);
     for (int i = 1; i <= steps; ++i) {
-        QMouseEvent e(QEvent::MouseMove, from + (to - from) * (double(i) / steps), target->mapToGlobal(from + (to - from) * (double(i) / steps)),
-                      Qt::NoButton, button, Qt::NoModifier);
+        QMouseEvent e(QEvent::MouseMove, from + (to - from) * (double(i) / steps),
+                      target->mapToGlobal(from + (to - from) * (double(i) / steps)), Qt::NoButton, button,
+                      Qt::NoModifier);
         QCoreApplication::sendEvent(target, &e);
     }
     send(QEvent::MouseButtonRelease, to, Qt::NoButton);
@@ -93,8 +94,8 @@ struct Readout {
 std::optional<Readout> parse_status(const gui::MainWindow& w) {
     const std::string msg = w.statusBar()->currentMessage().toStdString();
     Readout r;
-    if (std::sscanf(msg.c_str(), "LPS (%lf, %lf, %lf) mm, value %lf, voxel (%ld, %ld, %ld)", &r.lps.x, &r.lps.y, &r.lps.z, &r.value,
-                    &r.i, &r.j, &r.k) != 7)
+    if (std::sscanf(msg.c_str(), "LPS (%lf, %lf, %lf) mm, value %lf, voxel (%ld, %ld, %ld)", &r.lps.x, &r.lps.y,
+                    &r.lps.z, &r.value, &r.i, &r.j, &r.k) != 7)
         return std::nullopt;
     return r;
 }
@@ -138,8 +139,8 @@ void check_drawn(const gui::MainWindow& w, const gui::SliceView* view, const cha
             const auto s = sample_volume(v, core::pixel_to_lps(g, {c + 0.5, r + 0.5}));
             const int want = s ? core::window_grey(s->value, w.window_level()) : 0;
             // 1 grey level: the image is resliced in float32.
-            ASSERT_NEAR(int(img.constScanLine(r)[c]), want, 1) << core::slice_orientation_name(view->orientation()) << ", " << when
-                                                               << ": pixel (" << c << ", " << r << ")";
+            ASSERT_NEAR(int(img.constScanLine(r)[c]), want, 1) << core::slice_orientation_name(view->orientation())
+                                                               << ", " << when << ": pixel (" << c << ", " << r << ")";
             ++checked;
             inside += s.has_value();
         }
@@ -200,12 +201,15 @@ TEST(GuiViews, TwoSeriesFolderShowsTheChooser) {
         EXPECT_EQ(table->item(r, C::Modality)->text().toStdString(), "CT");
         EXPECT_EQ(table->item(r, C::Description)->text().toStdString(), s.description);
         EXPECT_EQ(table->item(r, C::Number)->text().toInt(), s.number);
-        EXPECT_EQ(table->item(r, C::Dimensions)->text(), QString("%1 x %2 x %3").arg(s.dims[0]).arg(s.dims[1]).arg(s.dims[2]));
+        EXPECT_EQ(table->item(r, C::Dimensions)->text(),
+                  QString("%1 x %2 x %3").arg(s.dims[0]).arg(s.dims[1]).arg(s.dims[2]));
         EXPECT_EQ(table->item(r, C::Slices)->text().toULongLong(), s.files);
-        for (const auto& warn : s.warnings) EXPECT_TRUE(table->item(r, C::Warnings)->text().contains(QString::fromStdString(warn)));
+        for (const auto& warn : s.warnings)
+            EXPECT_TRUE(table->item(r, C::Warnings)->text().contains(QString::fromStdString(warn)));
     }
     EXPECT_EQ(table->item(0, C::Warnings)->text(), "none");
-    EXPECT_TRUE(table->item(1, C::Warnings)->text().contains("missing slice")) << table->item(1, C::Warnings)->text().toStdString();
+    EXPECT_TRUE(table->item(1, C::Warnings)->text().contains("missing slice"))
+        << table->item(1, C::Warnings)->text().toStdString();
     EXPECT_EQ(table->item(1, C::Dimensions)->text(), "20 x 10 x 6"); // the missing slice is filled in
     EXPECT_EQ(table->item(1, C::Slices)->text(), "5");
     QTest::qWait(100);
@@ -304,8 +308,9 @@ TEST(GuiViews, ObliqueVolumeSliceClicksPanZoomAndWindow) {
         EXPECT_NEAR(g1.offset_mm, g0.offset_mm, 1e-9);
         EXPECT_EQ(g1.pixel_mm, g0.pixel_mm);
         for (const glm::dvec2& q : {glm::dvec2(10.5, 20.5), glm::dvec2(mid.x(), mid.y())})
-            EXPECT_NEAR(glm::length(core::pixel_to_lps(g1, q + glm::dvec2(delta.x(), delta.y())) - core::pixel_to_lps(g0, q)), 0.0,
-                        1e-9);
+            EXPECT_NEAR(
+                glm::length(core::pixel_to_lps(g1, q + glm::dvec2(delta.x(), delta.y())) - core::pixel_to_lps(g0, q)),
+                0.0, 1e-9);
         check_drawn(w, view, "panned");
         check_click(w, view, mid + QPoint(-13, 9), "panned");
 
@@ -316,8 +321,9 @@ TEST(GuiViews, ObliqueVolumeSliceClicksPanZoomAndWindow) {
         drag(view, Qt::RightButton, press, press - QPointF(0, up));
         const core::SliceGrid g3 = view->grid();
         EXPECT_NEAR(g2.pixel_mm / g3.pixel_mm, core::drag_zoom_factor(up, view->height()), 1e-9);
-        EXPECT_NEAR(glm::length(core::pixel_to_lps(g3, {press.x(), press.y()}) - core::pixel_to_lps(g2, {press.x(), press.y()})), 0.0,
-                    1e-9);
+        EXPECT_NEAR(glm::length(core::pixel_to_lps(g3, {press.x(), press.y()}) -
+                                core::pixel_to_lps(g2, {press.x(), press.y()})),
+                    0.0, 1e-9);
         EXPECT_NEAR(g3.offset_mm, g2.offset_mm, 1e-9);
         check_drawn(w, view, "zoomed");
         check_click(w, view, mid + QPoint(6, 14), "zoomed");
@@ -349,8 +355,9 @@ TEST(GuiViews, ThreeDViewMouseAndToolBar) {
     const auto app = test::make_app("gui_views_test", dir / "config");
     // A CT-like ball (1000 inside, 0 outside) on the oblique grid: its 500 surface is a sphere.
     const std::array<std::int64_t, 3> dims{48, 40, 34};
-    const Volume ball = test::sample_field(dims, test::oblique_affine(dims, 1.0, kCentre),
-                                           [](const glm::dvec3& p) { return test::ct_edge(14.0 - glm::length(p - kCentre), 1.0); });
+    const Volume ball = test::sample_field(dims, test::oblique_affine(dims, 1.0, kCentre), [](const glm::dvec3& p) {
+        return test::ct_edge(14.0 - glm::length(p - kCentre), 1.0);
+    });
     const std::string file = dir / "ball.nrrd";
     save_volume(ball, file);
 
@@ -390,8 +397,8 @@ TEST(GuiViews, ThreeDViewMouseAndToolBar) {
         EXPECT_NEAR(glm::length(c.target - want.target), 0.0, 1e-9) << what;
         EXPECT_NEAR(glm::length(c.up - want.up), 0.0, 1e-9) << what;
     };
-    for (auto pv : {PatientView::Anterior, PatientView::Posterior, PatientView::Left, PatientView::Right, PatientView::Superior,
-                    PatientView::Inferior}) {
+    for (auto pv : {PatientView::Anterior, PatientView::Posterior, PatientView::Left, PatientView::Right,
+                    PatientView::Superior, PatientView::Inferior}) {
         bar->view_action(pv)->trigger();
         expect_camera(w.scene().camera(pv, aspect), patient_view_name(pv));
     }
@@ -431,14 +438,16 @@ TEST(GuiViews, ThreeDViewMouseAndToolBar) {
     const double up = double(viewer->height() / 4);
     drag(viewer, Qt::RightButton, mid, mid - QPointF(0, up), 4);
     c1 = viewer->camera();
-    EXPECT_NEAR(glm::length(c0.eye - c0.target) / glm::length(c1.eye - c1.target), core::drag_zoom_factor(up, viewer->height()), 1e-6);
+    EXPECT_NEAR(glm::length(c0.eye - c0.target) / glm::length(c1.eye - c1.target),
+                core::drag_zoom_factor(up, viewer->height()), 1e-6);
     EXPECT_NEAR(glm::length(c1.target - c0.target), 0.0, 1e-9);
     drag(viewer, Qt::RightButton, mid, mid + QPointF(0, up), 4);
     EXPECT_NEAR(glm::length(viewer->camera().eye - viewer->camera().target), glm::length(c0.eye - c0.target), 1e-6);
 
     // ---- the wheel zooms (one notch forward: closer)
     c0 = viewer->camera();
-    QWheelEvent wheel(mid, viewer->mapToGlobal(mid), QPoint(), QPoint(0, 120), Qt::NoButton, Qt::NoModifier, Qt::NoScrollPhase, false);
+    QWheelEvent wheel(mid, viewer->mapToGlobal(mid), QPoint(), QPoint(0, 120), Qt::NoButton, Qt::NoModifier,
+                      Qt::NoScrollPhase, false);
     QCoreApplication::sendEvent(viewer, &wheel);
     EXPECT_LT(glm::length(viewer->camera().eye - viewer->camera().target), glm::length(c0.eye - c0.target));
     EXPECT_EQ(clicks, 1);
@@ -461,7 +470,8 @@ TEST(GuiViews, ThreeDViewMouseAndToolBar) {
         EXPECT_FALSE(viewer->converged());
         send(QEvent::MouseButtonRelease, mid + QPointF(30, 0), Qt::LeftButton, Qt::NoButton);
         EXPECT_FALSE(viewer->dragging());
-        ASSERT_TRUE(wait_until([&] { return viewer->converged(); }, 60000)) << "the AO did not come back after the drag";
+        ASSERT_TRUE(wait_until([&] { return viewer->converged(); }, 60000))
+            << "the AO did not come back after the drag";
         EXPECT_EQ(viewer->ao_frames(), viewer->options().look.ao_frames);
         EXPECT_EQ(clicks, 1);
     }

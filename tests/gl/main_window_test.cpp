@@ -70,8 +70,10 @@ TEST(MainWindow, OpenSlicesClickSurfaceAndBrokenFile) {
     }
 
     // Remembered among the recent files.
-    EXPECT_TRUE(QSettings().value("recent_files").toStringList().contains(
-        QString::fromStdString(std::filesystem::absolute(headsq).string())));
+    EXPECT_TRUE(QSettings()
+                    .value("recent_files")
+                    .toStringList()
+                    .contains(QString::fromStdString(std::filesystem::absolute(headsq).string())));
 
     // ---- Cancel on a load: the window stops waiting at once and keeps what it shows
     {
@@ -101,7 +103,9 @@ TEST(MainWindow, OpenSlicesClickSurfaceAndBrokenFile) {
     const std::string msg = w.statusBar()->currentMessage().toStdString();
     double x = 0, y = 0, z = 0, value = 0;
     long i = -1, j = -1, k = -1;
-    ASSERT_EQ(std::sscanf(msg.c_str(), "LPS (%lf, %lf, %lf) mm, value %lf, voxel (%ld, %ld, %ld)", &x, &y, &z, &value, &i, &j, &k), 7)
+    ASSERT_EQ(std::sscanf(msg.c_str(), "LPS (%lf, %lf, %lf) mm, value %lf, voxel (%ld, %ld, %ld)", &x, &y, &z, &value,
+                          &i, &j, &k),
+              7)
         << msg;
     EXPECT_NEAR(x, lps.x, 0.005);
     EXPECT_NEAR(y, lps.y, 0.005);

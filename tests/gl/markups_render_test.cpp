@@ -19,9 +19,9 @@
 
 using namespace iso;
 using MarkupsRender = test::GlTest;
-using iso::test::TempDir;
 using iso::test::Rgb;
 using iso::test::rgb_at;
+using iso::test::TempDir;
 
 namespace {
 
@@ -35,7 +35,9 @@ Mesh wall() {
     return m;
 }
 
-bool near_colour(Rgb a, Rgb b, int tol) { return std::abs(a.r - b.r) <= tol && std::abs(a.g - b.g) <= tol && std::abs(a.b - b.b) <= tol; }
+bool near_colour(Rgb a, Rgb b, int tol) {
+    return std::abs(a.r - b.r) <= tol && std::abs(a.g - b.g) <= tol && std::abs(a.b - b.b) <= tol;
+}
 
 // Where the camera sees an LPS point: pixels from the image's top-left
 // corner, from the camera's axes and field of view.
@@ -96,7 +98,8 @@ struct Stage {
 std::size_t count(const Image& img, Rgb colour, glm::dvec2 c, int half, int tol = 2) {
     std::size_t n = 0;
     for (int y = std::max(0, int(c.y) - half); y <= std::min(img.height - 1, int(c.y) + half); ++y)
-        for (int x = std::max(0, int(c.x) - half); x <= std::min(img.width - 1, int(c.x) + half); ++x) n += near_colour(rgb_at(img, x, y), colour, tol);
+        for (int x = std::max(0, int(c.x) - half); x <= std::min(img.width - 1, int(c.x) + half); ++x)
+            n += near_colour(rgb_at(img, x, y), colour, tol);
     return n;
 }
 
@@ -187,7 +190,8 @@ TEST_F(MarkupsRender, LengthAndAngleLabelsAreWritten) {
     const glm::dvec2 mid = st.px({0, -10, 20});
     std::size_t text = 0;
     for (int y = int(mid.y) - 24; y < int(mid.y) - 4; ++y)
-        for (int x = int(mid.x) - 30; x <= int(mid.x) + 30; ++x) text += near_colour(rgb_at(img, x, y), {0, 255, 255}, 2);
+        for (int x = int(mid.x) - 30; x <= int(mid.x) + 30; ++x)
+            text += near_colour(rgb_at(img, x, y), {0, 255, 255}, 2);
     EXPECT_GT(text, 40u) << "\"42.3 mm\" above the line";
     // The angle: text pixels below the vertex (away from both arms, which open upwards).
     const glm::dvec2 v = st.px({0, -10, -30});
@@ -204,7 +208,9 @@ TEST_F(MarkupsRender, ScaleTwoDoublesGlyphsAndLines) {
     Stage st;
     const glm::dvec3 p(-20, -20, 20);
     st.ann.markups = {fiducial(p, {0, 1, 0}), polyline(MarkupType::Line, {{-30, -20, -20}, {30, -20, -20}}, {1, 0, 1})};
-    auto covered = [&](float scale, Rgb colour, glm::dvec2 c, int half) { return double(count(st.render(scale), colour, c, half)); };
+    auto covered = [&](float scale, Rgb colour, glm::dvec2 c, int half) {
+        return double(count(st.render(scale), colour, c, half));
+    };
     const glm::dvec2 glyph = st.px(p), line = st.px({0, -20, -20});
     const double g1 = covered(1, {0, 255, 0}, glyph, 20), g2 = covered(2, {0, 255, 0}, glyph, 20);
     ASSERT_GT(g1, 30.0);
@@ -214,7 +220,8 @@ TEST_F(MarkupsRender, ScaleTwoDoublesGlyphsAndLines) {
         const Image img = st.render(scale);
         std::size_t n = 0;
         for (int y = int(line.y) - 4; y <= int(line.y) + 4; ++y) // the length label is above, farther out
-            for (int x = int(line.x) - 20; x < int(line.x) + 20; ++x) n += near_colour(rgb_at(img, x, y), {255, 0, 255}, 2);
+            for (int x = int(line.x) - 20; x < int(line.x) + 20; ++x)
+                n += near_colour(rgb_at(img, x, y), {255, 0, 255}, 2);
         return double(n);
     };
     const double l1 = band(1), l2 = band(2);
@@ -230,7 +237,8 @@ TEST(MarkupsCli, RenderDrawsAndRecordsTheMarkups) {
     const std::string base = test::cli() + " render " + test::data("headsq.nhdr") + " --iso 500 --size 160x160 ";
     const auto r = test::run_command(base + "--markups " + file + " -o " + (dir / "out.png"), true);
     ASSERT_EQ(r.exit_code, 0) << r.out;
-    EXPECT_NE(r.out.find("converted from RAS"), std::string::npos) << "the reader's warning, naming the file: " << r.out;
+    EXPECT_NE(r.out.find("converted from RAS"), std::string::npos)
+        << "the reader's warning, naming the file: " << r.out;
     ImageMetadata meta;
     const Image img = load_image(dir / "out.png", &meta);
     EXPECT_NE(meta.text["isoscope:markups"].find("slicer-line-ras.mrk.json"), std::string::npos);
@@ -243,27 +251,33 @@ TEST(MarkupsCli, RenderDrawsAndRecordsTheMarkups) {
     std::size_t changed = 0;
     for (std::size_t i = 0; i < img.bytes.size(); ++i) changed += img.bytes[i] != bare.bytes[i];
     EXPECT_GT(changed, 100u);
-    ASSERT_EQ(test::run_command(base + "--no-annotations --markups " + file + " -o " + (dir / "only.png"), true).exit_code, 0);
+    ASSERT_EQ(
+        test::run_command(base + "--no-annotations --markups " + file + " -o " + (dir / "only.png"), true).exit_code,
+        0);
     ASSERT_EQ(test::run_command(base + "--no-annotations -o " + (dir / "none.png"), true).exit_code, 0);
     EXPECT_NE(load_image(dir / "only.png").bytes, load_image(dir / "none.png").bytes);
     // Repeatable: both files are recorded.
-    const auto two = test::run_command(base + "--markups " + file + " --markups " + test::data("markups/slicer-points-lps.mrk.json") + " -o " +
-                                           (dir / "two.png"),
-                                       true);
+    const auto two =
+        test::run_command(base + "--markups " + file + " --markups " +
+                              test::data("markups/slicer-points-lps.mrk.json") + " -o " + (dir / "two.png"),
+                          true);
     ASSERT_EQ(two.exit_code, 0) << two.out;
     ImageMetadata meta2;
     load_image(dir / "two.png", &meta2);
     EXPECT_NE(meta2.text["isoscope:markups"].find("slicer-points-lps.mrk.json"), std::string::npos);
-    EXPECT_NE(meta2.text["isoscope:markups_drawn"].find("Fiducial: 2 defined point(s)"), std::string::npos) << meta2.text["isoscope:markups_drawn"];
+    EXPECT_NE(meta2.text["isoscope:markups_drawn"].find("Fiducial: 2 defined point(s)"), std::string::npos)
+        << meta2.text["isoscope:markups_drawn"];
 }
 
 TEST(MarkupsCli, MissingOrMalformedMarkupsFailNamingTheFile) {
     TempDir dir;
     const std::string base = test::cli() + " render " + test::data("headsq.nhdr") + " --iso 500 --size 64x64 ";
     {
-        std::ofstream(dir / "broken.mrk.json") << "{\"@schema\": \"https://raw.githubusercontent.com/slicer/slicer/master/Modules/Loadable/"
-                                                  "Markups/Resources/Schema/markups-schema-v1.0.3.json#\", \"markups\": [ {\"type\": ";
-        std::ofstream(dir / "angle.mrk.json") << R"({"@schema": "markups-schema-v1.0.3.json", "markups": [{"type": "Angle",
+        std::ofstream(dir / "broken.mrk.json")
+            << "{\"@schema\": \"https://raw.githubusercontent.com/slicer/slicer/master/Modules/Loadable/"
+               "Markups/Resources/Schema/markups-schema-v1.0.3.json#\", \"markups\": [ {\"type\": ";
+        std::ofstream(dir / "angle.mrk.json")
+            << R"({"@schema": "markups-schema-v1.0.3.json", "markups": [{"type": "Angle",
             "controlPoints": [{"position": [0, 0, 0]}, {"position": [1, 0, 0]}]}]})";
     }
     for (const std::string name : {"missing.mrk.json", "broken.mrk.json", "angle.mrk.json"}) {
@@ -273,7 +287,9 @@ TEST(MarkupsCli, MissingOrMalformedMarkupsFailNamingTheFile) {
         EXPECT_FALSE(std::filesystem::exists(dir / "x.png")) << name;
     }
     // Markups go on the colour image only.
-    const auto aov = test::run_command(base + "--aov depth --markups " + test::data("markups/slicer-line-ras.mrk.json") + " -o " + (dir / "d.exr"), true);
+    const auto aov = test::run_command(base + "--aov depth --markups " +
+                                           test::data("markups/slicer-line-ras.mrk.json") + " -o " + (dir / "d.exr"),
+                                       true);
     EXPECT_EQ(aov.exit_code, 1);
     EXPECT_NE(aov.out.find("--markups"), std::string::npos) << aov.out;
 }

@@ -67,8 +67,8 @@ TEST_F(BundledHeadImage, AnteriorViewHasTheFaceUpright) {
 
     const test::HeadLandmarks lm = test::head_landmarks(core::open_volume(test::data("headsq.nhdr")).index_to_lps);
     const Pixel le = project(out, lm.left_eye), re = project(out, lm.right_eye), chin = project(out, lm.chin);
-    SCOPED_TRACE("nose (" + std::to_string(nose.x) + ", " + std::to_string(nose.y) + "), eyes rows " + std::to_string(re.y) + " / " +
-                 std::to_string(le.y) + ", chin row " + std::to_string(chin.y));
+    SCOPED_TRACE("nose (" + std::to_string(nose.x) + ", " + std::to_string(nose.y) + "), eyes rows " +
+                 std::to_string(re.y) + " / " + std::to_string(le.y) + ", chin row " + std::to_string(chin.y));
     std::printf("nose pixel (%.0f, %.0f); eye rows %.1f / %.1f; chin row %.1f\n", nose.x, nose.y, re.y, le.y, chin.y);
     // Landmarks fall on the head (the projection is the render's own).
     for (const Pixel& p : {le, re, chin}) {

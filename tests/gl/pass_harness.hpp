@@ -27,7 +27,8 @@ namespace iso::test {
 // y = 0; `format` and `type` as glTextureSubImage2D takes them, e.g.
 // GL_DEPTH_COMPONENT, GL_FLOAT), rows tightly packed: width x height texels.
 template <class T>
-gl::Texture texture_2d(GLenum internal_format, int width, int height, GLenum format, GLenum type, const std::vector<T>& texels) {
+gl::Texture texture_2d(GLenum internal_format, int width, int height, GLenum format, GLenum type,
+                       const std::vector<T>& texels) {
     auto t = gl::Texture::create_2d(internal_format, width, height);
     glPixelStorei(GL_UNPACK_ALIGNMENT, 1);
     glTextureSubImage2D(t.id(), 0, 0, 0, width, height, format, type, texels.data());
@@ -52,8 +53,12 @@ public:
 
     // Uniforms by name. A name the program lacks fails the test: a typo, or a
     // uniform the compiler removed, would otherwise be ignored silently.
-    ComputePass& set(const char* name, int v) { return uniform(name, [&](GLint l) { glProgramUniform1i(program_.id(), l, v); }); }
-    ComputePass& set(const char* name, float v) { return uniform(name, [&](GLint l) { glProgramUniform1f(program_.id(), l, v); }); }
+    ComputePass& set(const char* name, int v) {
+        return uniform(name, [&](GLint l) { glProgramUniform1i(program_.id(), l, v); });
+    }
+    ComputePass& set(const char* name, float v) {
+        return uniform(name, [&](GLint l) { glProgramUniform1f(program_.id(), l, v); });
+    }
     ComputePass& set(const char* name, glm::ivec2 v) {
         return uniform(name, [&](GLint l) { glProgramUniform2i(program_.id(), l, v.x, v.y); });
     }

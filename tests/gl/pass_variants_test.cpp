@@ -44,7 +44,8 @@ TEST_F(PassVariants, AoForEveryLayerCountAndResolution) {
                 o.look.cone.radius_mm = 8;
                 o.look.cone.layers = layers;
                 o.look.cone.resolution = resolution;
-                SCOPED_TRACE("layers " + std::to_string(layers) + ", resolution " + std::to_string(resolution) + (zoomed ? ", zoomed" : ""));
+                SCOPED_TRACE("layers " + std::to_string(layers) + ", resolution " + std::to_string(resolution) +
+                             (zoomed ? ", zoomed" : ""));
                 const auto r = ren.render(cam, o);
                 EXPECT_EQ(zoomed, r.ao_guard > 0);
                 std::size_t on = 0, occluded = 0;

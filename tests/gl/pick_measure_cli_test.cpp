@@ -35,7 +35,9 @@ double trilinear(const Volume& v, const glm::dvec3& lps) {
     for (int k = 0; k < 2; ++k)
         for (int j = 0; j < 2; ++j)
             for (int i = 0; i < 2; ++i) {
-                const auto at = [&](int d, int o) { return std::clamp<std::int64_t>(std::int64_t(f[d]) + o, 0, v.dims[std::size_t(d)] - 1); };
+                const auto at = [&](int d, int o) {
+                    return std::clamp<std::int64_t>(std::int64_t(f[d]) + o, 0, v.dims[std::size_t(d)] - 1);
+                };
                 const double w = (i ? t.x : 1 - t.x) * (j ? t.y : 1 - t.y) * (k ? t.z : 1 - t.z);
                 sum += w * v.value(at(0, i), at(1, j), at(2, k));
             }
@@ -80,7 +82,8 @@ TEST(PickCore, ThroughSkinTheVisiblePickIsTheBoneAndPositionsAreExact) {
     const auto req = request();
     int bone_seen = 0, checked = 0;
     // Pixels across the forehead and cheeks: skin, then bone.
-    for (const auto& [x, y] : std::vector<std::pair<int, int>>{{128, 70}, {110, 80}, {150, 80}, {96, 120}, {160, 120}}) {
+    for (const auto& [x, y] :
+         std::vector<std::pair<int, int>>{{128, 70}, {110, 80}, {150, 80}, {96, 120}, {160, 120}}) {
         core::PickRequest p;
         p.x = x;
         p.y = y;
@@ -104,7 +107,8 @@ TEST(PickCore, ThroughSkinTheVisiblePickIsTheBoneAndPositionsAreExact) {
             const auto t = ray_cast(one, ray);
             if (!l.on_triangle) continue; // the rasterizer gave an edge pixel to this neighbour
             ASSERT_TRUE(t);
-            EXPECT_NEAR(glm::length(ray.origin + *t * ray.dir - l.lps), 0.0, 1e-3) << l.name << " triangle " << l.triangle;
+            EXPECT_NEAR(glm::length(ray.origin + *t * ray.dir - l.lps), 0.0, 1e-3)
+                << l.name << " triangle " << l.triangle;
             EXPECT_NEAR(t_layer, *t, 1e-3);
             ++checked;
             // The value there: trilinear in the volume, computed here.
@@ -126,15 +130,17 @@ TEST(PickCore, ThroughSkinTheVisiblePickIsTheBoneAndPositionsAreExact) {
 }
 
 TEST(PickCore, TheCliPrintsTheIssuesJson) {
-    const auto r = test::run_command(test::cli() + " pick " + test::data("headsq.nhdr") +
-                                         " --iso 500 --iso 1150 --opacity 0.3 --size 256x256 --at 128,70 --rect 120,60,16,16 --all-layers --json",
-                                     false);
+    const auto r = test::run_command(
+        test::cli() + " pick " + test::data("headsq.nhdr") +
+            " --iso 500 --iso 1150 --opacity 0.3 --size 256x256 --at 128,70 --rect 120,60,16,16 --all-layers --json",
+        false);
     ASSERT_EQ(r.exit_code, 0) << r.out;
     const auto j = nlohmann::json::parse(r.out);
     ASSERT_TRUE(j["visible"].is_number());
     const auto& layers = j["layers"];
     ASSERT_GE(layers.size(), 2u);
-    for (const char* key : {"surface", "iso", "lps", "normal", "triangle", "depth_mm", "alpha", "share", "value", "unit", "voxel"})
+    for (const char* key :
+         {"surface", "iso", "lps", "normal", "triangle", "depth_mm", "alpha", "share", "value", "unit", "voxel"})
         EXPECT_TRUE(layers[0].contains(key)) << key;
     // headsq says no modality: a value, with no unit, and no "hu" key.
     EXPECT_TRUE(layers[0]["value"].is_number());
@@ -145,7 +151,8 @@ TEST(PickCore, TheCliPrintsTheIssuesJson) {
     EXPECT_EQ(j["projection"].size(), 16u);
     EXPECT_GT(j["rect"]["triangles"].size(), 10u);
     // Off the image: a clear error naming the pixel.
-    const auto off = test::run_command(test::cli() + " pick " + test::data("headsq.nhdr") + " --iso 500 --size 64x64 --at 64,3", true);
+    const auto off = test::run_command(
+        test::cli() + " pick " + test::data("headsq.nhdr") + " --iso 500 --size 64x64 --at 64,3", true);
     EXPECT_EQ(off.exit_code, 1);
     EXPECT_NE(off.out.find("64,3 is outside the 64x64 image"), std::string::npos) << off.out;
     const auto bad = test::run_command(test::cli() + " pick " + test::data("headsq.nhdr") + " --iso 500 --at 3", true);
@@ -205,9 +212,10 @@ TEST(PickCore, ACtPickIsInHuAndTheSliceReadoutAgrees) {
 TEST(MeasureCli, SurfacesPointsAndSlicerMarkups) {
     TempDir dir;
     const std::string out = dir / "m.mrk.json";
-    const auto r = test::run_command(test::cli() + " measure " + test::data("headsq.nhdr") +
-                                         " --iso 1150 --distance 0,0,0 30,40,0 --angle 10,0,0 0,0,0 0,0,10 --hu -98.9,20,-12 --json -o " + out,
-                                     false);
+    const auto r = test::run_command(
+        test::cli() + " measure " + test::data("headsq.nhdr") +
+            " --iso 1150 --distance 0,0,0 30,40,0 --angle 10,0,0 0,0,0 0,0,10 --hu -98.9,20,-12 --json -o " + out,
+        false);
     ASSERT_EQ(r.exit_code, 0) << r.out;
     const auto j = nlohmann::json::parse(r.out);
     ASSERT_EQ(j["surfaces"].size(), 1u);
@@ -241,7 +249,8 @@ TEST(MeasureCli, SurfacesPointsAndSlicerMarkups) {
     EXPECT_EQ(f.markups[2].type, MarkupType::Fiducial);
     // A bad point names the flag and writes nothing.
     const std::string bad_out = dir / "bad.mrk.json";
-    const auto bad = test::run_command(test::cli() + " measure " + test::data("headsq.nhdr") + " --iso 1150 --distance 0,0 1,1,1 -o " + bad_out, true);
+    const auto bad = test::run_command(
+        test::cli() + " measure " + test::data("headsq.nhdr") + " --iso 1150 --distance 0,0 1,1,1 -o " + bad_out, true);
     EXPECT_EQ(bad.exit_code, 1);
     EXPECT_NE(bad.out.find("--distance: expected a point x,y,z in LPS mm, got '0,0'"), std::string::npos) << bad.out;
     EXPECT_FALSE(fs::exists(bad_out));

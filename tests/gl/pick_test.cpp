@@ -35,7 +35,8 @@ std::vector<CpuHit> ray_cast(const std::vector<const Mesh*>& meshes, const Ray& 
     for (std::size_t o = 0; o < meshes.size(); ++o)
         for (std::size_t k = 0; k < meshes[o]->triangles.size(); ++k) {
             const auto& tri = meshes[o]->triangles[k];
-            const glm::dvec3 a(meshes[o]->positions[tri[0]]), b(meshes[o]->positions[tri[1]]), c(meshes[o]->positions[tri[2]]);
+            const glm::dvec3 a(meshes[o]->positions[tri[0]]), b(meshes[o]->positions[tri[1]]),
+                c(meshes[o]->positions[tri[2]]);
             const glm::dvec3 e1 = b - a, e2 = c - a, p = glm::cross(ray.dir, e2);
             const double det = glm::dot(e1, p);
             if (std::abs(det) < 1e-300) continue;

@@ -31,7 +31,8 @@ std::string render(const std::string& args) {
 
 TEST(RenderCli, PngWithMetadataAndAnnotations) {
     TempDir dir;
-    const std::string out = render(test::data("headsq.nhdr") + " --iso 500 --iso 1150 --size 200x150 --stats -o " + (dir / "a.png"));
+    const std::string out =
+        render(test::data("headsq.nhdr") + " --iso 500 --iso 1150 --size 200x150 --stats -o " + (dir / "a.png"));
     EXPECT_NE(out.find("gbuffer"), std::string::npos) << out;
     EXPECT_NE(out.find("overlay"), std::string::npos) << out;
     ImageMetadata meta;
@@ -48,7 +49,7 @@ TEST(RenderCli, PngWithMetadataAndAnnotations) {
     ASSERT_EQ(proj.size(), 16u);
     // Anterior view: the view matrix's third row is the camera's back direction, +y... i.e. the
     // camera looks along +y (towards posterior), so the eye-space z axis is -y in LPS.
-    EXPECT_NEAR(view[1 + 4 * 0], 0.0, 1e-6); // column-major: element (row 1, col 0)
+    EXPECT_NEAR(view[1 + 4 * 0], 0.0, 1e-6);  // column-major: element (row 1, col 0)
     EXPECT_NEAR(view[2 + 4 * 1], -1.0, 1e-6); // row 2 (eye z) of column 1 (world y)
     EXPECT_LT(proj[11], 0.0);                 // perspective: clip.w = -z_eye
 }
@@ -73,7 +74,8 @@ TEST(RenderCli, AovsAreFloatExrWithMetadata) {
     render(test::data("headsq.nhdr") + " --iso 500 --size 96x96 --aov id -o " + (dir / "i.exr"));
     EXPECT_EQ(load_image(dir / "i.exr").floats[48 * 96 + 48], 1.0f);
     // A float AOV cannot go to PNG; the error names the file.
-    const auto bad = test::run_command(test::cli() + " render " + test::data("headsq.nhdr") + " --iso 500 --aov depth -o " + (dir / "d.png"), true);
+    const auto bad = test::run_command(
+        test::cli() + " render " + test::data("headsq.nhdr") + " --iso 500 --aov depth -o " + (dir / "d.png"), true);
     EXPECT_EQ(bad.exit_code, 1);
     EXPECT_NE(bad.out.find("d.png"), std::string::npos) << bad.out;
 }
@@ -88,8 +90,8 @@ TEST(RenderCli, TransparentBackgroundAndScaledAnnotations) {
     // The same view at 2x with --scale 2: annotations cover about 4x the pixels.
     auto annotated = [&](int w, int h, float s) {
         const std::string p = dir / ("s" + std::to_string(w) + ".png");
-        render(test::data("headsq.nhdr") + " --iso 500 --size " + std::to_string(w) + "x" + std::to_string(h) + " --scale " +
-               std::to_string(s) + " -o " + p);
+        render(test::data("headsq.nhdr") + " --iso 500 --size " + std::to_string(w) + "x" + std::to_string(h) +
+               " --scale " + std::to_string(s) + " -o " + p);
         const Image a = load_image(p);
         std::size_t bright = 0; // the annotation colour (near white-yellow) on the background
         for (int y = 0; y < a.height; ++y)
@@ -128,7 +130,8 @@ TEST(RenderCli, MeshFilesRenderToo) {
 
 TEST(RenderCli, ReferenceAoOfTheBundledCt) {
     TempDir dir;
-    render(test::data("headsq.nhdr") + " --iso 500 --size 64x48 --view left --aov ao --ao reference --ao-radius 10 --ao-rays 256 --ao-cache " +
+    render(test::data("headsq.nhdr") +
+           " --iso 500 --size 64x48 --view left --aov ao --ao reference --ao-radius 10 --ao-rays 256 --ao-cache " +
            (dir / "cache") + " -o " + (dir / "ao.exr"));
     ImageMetadata meta;
     const Image ao = load_image(dir / "ao.exr", &meta);
@@ -149,7 +152,8 @@ TEST(RenderCli, ReferenceAoOfTheBundledCt) {
 
 TEST(RenderCli, ReferenceAoIsCachedByItsInputs) {
     TempDir dir;
-    const std::string args = test::data("headsq.nhdr") + " --iso 500 --size 48x40 --view left --aov ao --ao reference --ao-rays 64 --ao-cache " +
+    const std::string args = test::data("headsq.nhdr") +
+                             " --iso 500 --size 48x40 --view left --aov ao --ao reference --ao-rays 64 --ao-cache " +
                              (dir / "cache");
     render(args + " -o " + (dir / "a.exr"));
     std::size_t entries = 0;
@@ -175,7 +179,8 @@ TEST(RenderCli, ReferenceAoIsCachedByItsInputs) {
 
 TEST(RenderCli, ConeAoAsAnAovAndInTheColourImage) {
     TempDir dir;
-    render(test::data("headsq.nhdr") + " --iso 500 --size 96x80 --view left --aov ao --ao cone --ao-radius 8 --ao-cones 6 --ao-frames 3 -o " +
+    render(test::data("headsq.nhdr") +
+           " --iso 500 --size 96x80 --view left --aov ao --ao cone --ao-radius 8 --ao-cones 6 --ao-frames 3 -o " +
            (dir / "ao.exr"));
     ImageMetadata meta;
     const Image ao = load_image(dir / "ao.exr", &meta);
@@ -196,16 +201,18 @@ TEST(RenderCli, ConeAoAsAnAovAndInTheColourImage) {
     EXPECT_GT(fg, 500u);
     EXPECT_GT(occluded, 10u);
     // In the colour image AO darkens: the mean brightness of the surface drops.
-    render(test::data("headsq.nhdr") + " --iso 500 --size 96x80 --view left --no-annotations --ao cone -o " + (dir / "on.png"));
+    render(test::data("headsq.nhdr") + " --iso 500 --size 96x80 --view left --no-annotations --ao cone -o " +
+           (dir / "on.png"));
     render(test::data("headsq.nhdr") + " --iso 500 --size 96x80 --view left --no-annotations -o " + (dir / "off.png"));
     const Image on = load_image(dir / "on.png"), off = load_image(dir / "off.png");
     ASSERT_EQ(on.bytes.size(), off.bytes.size());
     EXPECT_NE(on.bytes, off.bytes);
     // Bad values are refused with the option's name.
-    for (const std::string bad : {" --ao cones", " --ao reference", " --aov ao", " --ao cone --ao-cones 0", " --ao cone --ao-layers 9",
-                                  " --ao cone --ao-resolution 0.1", " --ao cone --ao-resolution 2"}) {
-        const auto r = test::run_command(test::cli() + " render " + test::data("headsq.nhdr") + " --iso 500 --size 32x32" + bad + " -o " +
-                                             (dir / "x.exr"),
+    for (const std::string bad :
+         {" --ao cones", " --ao reference", " --aov ao", " --ao cone --ao-cones 0", " --ao cone --ao-layers 9",
+          " --ao cone --ao-resolution 0.1", " --ao cone --ao-resolution 2"}) {
+        const auto r = test::run_command(test::cli() + " render " + test::data("headsq.nhdr") +
+                                             " --iso 500 --size 32x32" + bad + " -o " + (dir / "x.exr"),
                                          true);
         EXPECT_NE(r.exit_code, 0) << bad;
         EXPECT_NE(r.out.find("--ao"), std::string::npos) << bad << ": " << r.out;
@@ -219,8 +226,10 @@ TEST(RenderCli, ConeAoAsAnAovAndInTheColourImage) {
 // the colour image; bad tunables are refused naming the flag.
 TEST(RenderCli, DiskAoAsAnAovAndInTheColourImage) {
     TempDir dir;
-    render(test::data("headsq.nhdr") + " --iso 500 --size 96x80 --view left --aov ao --ao disk --ao-radius 8 --ao-disk-passes 3 " +
-           "--ao-disk-epsilon 6 --ao-disk-distance-k 0.01 --ao-disk-triangle-t 1.5 --ao-disk-blend 0.6,0.4 -o " + (dir / "ao.exr"));
+    render(test::data("headsq.nhdr") +
+           " --iso 500 --size 96x80 --view left --aov ao --ao disk --ao-radius 8 --ao-disk-passes 3 " +
+           "--ao-disk-epsilon 6 --ao-disk-distance-k 0.01 --ao-disk-triangle-t 1.5 --ao-disk-blend 0.6,0.4 -o " +
+           (dir / "ao.exr"));
     ImageMetadata meta;
     const Image ao = load_image(dir / "ao.exr", &meta);
     ASSERT_TRUE(ao.is_float);
@@ -228,8 +237,8 @@ TEST(RenderCli, DiskAoAsAnAovAndInTheColourImage) {
     EXPECT_EQ(meta.text["isoscope:ao_radius_mm"], "8");
     EXPECT_NE(meta.text["isoscope:ao"].find("disk"), std::string::npos);
     const std::string params = meta.text["isoscope:ao_parameters"];
-    for (const char* p : {"passes 3", "traversal_epsilon 6", "clip_epsilon 1e-06", "distance_attenuation 0.01", "triangle_attenuation 1.5",
-                          "blend_min 0.6", "blend_max 0.4"})
+    for (const char* p : {"passes 3", "traversal_epsilon 6", "clip_epsilon 1e-06", "distance_attenuation 0.01",
+                          "triangle_attenuation 1.5", "blend_min 0.6", "blend_max 0.4"})
         EXPECT_NE(params.find(p), std::string::npos) << p << " in " << params;
     std::size_t fg = 0, occluded = 0;
     for (float v : ao.floats) {
@@ -243,16 +252,18 @@ TEST(RenderCli, DiskAoAsAnAovAndInTheColourImage) {
     EXPECT_GT(fg, 500u);
     EXPECT_GT(occluded, 10u);
     EXPECT_TRUE(std::isnan(ao.floats[0])) << "the corner is background";
-    render(test::data("headsq.nhdr") + " --iso 500 --size 96x80 --view left --no-annotations --ao disk -o " + (dir / "on.png"));
+    render(test::data("headsq.nhdr") + " --iso 500 --size 96x80 --view left --no-annotations --ao disk -o " +
+           (dir / "on.png"));
     render(test::data("headsq.nhdr") + " --iso 500 --size 96x80 --view left --no-annotations -o " + (dir / "off.png"));
     const Image on = load_image(dir / "on.png"), off = load_image(dir / "off.png");
     ASSERT_EQ(on.bytes.size(), off.bytes.size());
     EXPECT_NE(on.bytes, off.bytes);
-    for (const std::string bad : {" --ao disks", " --ao disk --ao-disk-passes -1", " --ao disk --ao-disk-passes 17",
-                                  " --ao disk --ao-disk-epsilon -1", " --ao disk --ao-disk-triangle-t 20", " --ao disk --ao-disk-blend 0.7",
-                                  " --ao disk --ao-disk-blend 2,0.3", " --ao disk --ao-disk-distance-k -0.5"}) {
-        const auto r = test::run_command(test::cli() + " render " + test::data("headsq.nhdr") + " --iso 500 --size 32x32" + bad + " -o " +
-                                             (dir / "x.exr"),
+    for (const std::string bad :
+         {" --ao disks", " --ao disk --ao-disk-passes -1", " --ao disk --ao-disk-passes 17",
+          " --ao disk --ao-disk-epsilon -1", " --ao disk --ao-disk-triangle-t 20", " --ao disk --ao-disk-blend 0.7",
+          " --ao disk --ao-disk-blend 2,0.3", " --ao disk --ao-disk-distance-k -0.5"}) {
+        const auto r = test::run_command(test::cli() + " render " + test::data("headsq.nhdr") +
+                                             " --iso 500 --size 32x32" + bad + " -o " + (dir / "x.exr"),
                                          true);
         EXPECT_NE(r.exit_code, 0) << bad;
         EXPECT_NE(r.out.find("--ao"), std::string::npos) << bad << ": " << r.out;

@@ -21,10 +21,7 @@ using Render = test::GlTest;
 using test::float_at;
 using test::sphere_mesh;
 
-namespace {
-
-
-} // namespace
+namespace {} // namespace
 
 TEST_F(Render, DepthAndNormalAovsMatchTheAnalyticSphere) {
     const glm::dvec3 c(10, -20, 30);
@@ -139,8 +136,8 @@ TEST_F(Render, DegenerateAndEmptyScenes) {
         const double s = linear <= 0.0031308 ? 12.92 * linear : 1.055 * std::pow(linear, 1 / 2.4) - 0.055;
         return int(std::lround(255 * s));
     };
-    const std::array<int, 4> background{srgb8(opt.look.background.r), srgb8(opt.look.background.g), srgb8(opt.look.background.b),
-                                        opt.look.transparent_background ? 0 : 255};
+    const std::array<int, 4> background{srgb8(opt.look.background.r), srgb8(opt.look.background.g),
+                                        srgb8(opt.look.background.b), opt.look.transparent_background ? 0 : 255};
     ASSERT_EQ(background, (std::array<int, 4>{80, 85, 93, 255}));
     std::size_t other = 0;
     for (std::size_t p = 0; p < img.bytes.size() / 4; ++p) {

@@ -13,8 +13,8 @@
 #include "tests/support/test_util.hpp"
 
 using namespace iso;
-using iso::test::TempDir;
 using iso::test::differing;
+using iso::test::TempDir;
 
 namespace {
 
@@ -48,7 +48,6 @@ core::Session head_session() {
     s.markups = {m};
     return s;
 }
-
 
 } // namespace
 
@@ -119,7 +118,8 @@ TEST(SessionRender, EqualsRenderImageOfTheSameStateAndTheCli) {
     EXPECT_NE(meta.text["isoscope:markups_drawn"].find("Line"), std::string::npos);
 
     // --no-markups leaves them out; --view replaces the session's camera.
-    const auto r2 = test::run_command(test::cli() + " render --session " + file + " --size 320x240 --no-markups --view anterior -o " + out, true);
+    const auto r2 = test::run_command(
+        test::cli() + " render --session " + file + " --size 320x240 --no-markups --view anterior -o " + out, true);
     ASSERT_EQ(r2.exit_code, 0) << r2.out;
     core::RenderRequest plain = anterior;
     plain.markups.clear();

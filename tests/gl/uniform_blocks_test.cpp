@@ -46,19 +46,24 @@ template <class P> void expect_block_matches(const gl::Program& prog, const std:
 } // namespace
 
 TEST_F(UniformBlocks, CppStructsMatchTheLinkedPrograms) {
-    expect_block_matches<GBufferParams>(gl::Program::from_files({"render/gbuffer.vert", "render/gbuffer.frag"}, gbuffer_defines()),
-                                        "gbuffer");
-    expect_block_matches<LightingParams>(gl::Program::from_files({"render/fullscreen.vert", "render/lighting.frag"}), "lighting");
-    expect_block_matches<OverlayParams>(gl::Program::from_files({"render/overlay.vert", "render/overlay.frag"}), "overlay");
+    expect_block_matches<GBufferParams>(
+        gl::Program::from_files({"render/gbuffer.vert", "render/gbuffer.frag"}, gbuffer_defines()), "gbuffer");
+    expect_block_matches<LightingParams>(gl::Program::from_files({"render/fullscreen.vert", "render/lighting.frag"}),
+                                         "lighting");
+    expect_block_matches<OverlayParams>(gl::Program::from_files({"render/overlay.vert", "render/overlay.frag"}),
+                                        "overlay");
     expect_block_matches<ZRangeParams>(gl::Program::from_files({"ao/zrange.comp"}), "zrange");
     expect_block_matches<UpsampleParams>(gl::Program::from_files({"ao/ao_upsample.comp"}), "ao_upsample");
-    for (const char* disk : {"ao/disk_gather.comp", "ao/disk_element.comp", "ao/disk_parent.comp", "ao/disk_blend.comp"})
+    for (const char* disk :
+         {"ao/disk_gather.comp", "ao/disk_element.comp", "ao/disk_parent.comp", "ao/disk_blend.comp"})
         expect_block_matches<DiskParams>(gl::Program::from_files({disk}), disk);
     for (int layers : {1, 8}) {
         const std::string d = "#define LAYERS " + std::to_string(layers) + "\n";
-        expect_block_matches<VoxelizeParams>(gl::Program::from_files({"ao/slicemap.vert", "ao/slicemap.frag"}, d), "voxelize " + d);
+        expect_block_matches<VoxelizeParams>(gl::Program::from_files({"ao/slicemap.vert", "ao/slicemap.frag"}, d),
+                                             "voxelize " + d);
         expect_block_matches<ConeParams>(gl::Program::from_files({"ao/cone.comp"}, d), "cone " + d);
-        expect_block_matches<ConeParams>(gl::Program::from_files({"ao/cone.comp"}, d + "#define COARSE 1\n"), "cone coarse " + d);
+        expect_block_matches<ConeParams>(gl::Program::from_files({"ao/cone.comp"}, d + "#define COARSE 1\n"),
+                                         "cone coarse " + d);
     }
 }
 

@@ -14,16 +14,19 @@ TEST(Viewer, WindowShowsWhatRenderWritesAndMakesNoGlObjectsWhenStill) {
     // camera framing: the window's pixels must match the headless render of
     // the same view and size (both through llvmpipe here; tolerance as for
     // the golden image: 1 % of pixels off by more than 24/255, mean 2/255).
-    if (test::run_command("command -v xvfb-run").exit_code != 0) GTEST_SKIP() << "xvfb-run is not installed (./setup.sh)";
+    if (test::run_command("command -v xvfb-run").exit_code != 0)
+        GTEST_SKIP() << "xvfb-run is not installed (./setup.sh)";
     test::TempDir dir;
     const std::string shot = dir / "shot.png", rendered = dir / "render.png";
-    const auto r = test::run_command("xvfb-run -a -s '-screen 0 1024x768x24' " + test::cli() + " view " + test::data("headsq.nhdr") +
+    const auto r = test::run_command("xvfb-run -a -s '-screen 0 1024x768x24' " + test::cli() + " view " +
+                                         test::data("headsq.nhdr") +
                                          " --iso 500 --iso 1150 --view left --ao-frames 8 --screenshot " + shot,
                                      true);
     ASSERT_EQ(r.exit_code, 0) << r.out;
-    const auto h = test::run_command(test::cli() + " render " + test::data("headsq.nhdr") +
-                                         " --iso 500 --iso 1150 --view left --ao cone --ao-frames 8 --size 800x600 -o " + rendered,
-                                     true);
+    const auto h =
+        test::run_command(test::cli() + " render " + test::data("headsq.nhdr") +
+                              " --iso 500 --iso 1150 --view left --ao cone --ao-frames 8 --size 800x600 -o " + rendered,
+                          true);
     ASSERT_EQ(h.exit_code, 0) << h.out;
     Image img = load_image(shot);
     ASSERT_EQ(img.width, 800);
@@ -39,7 +42,8 @@ TEST(Viewer, WindowShowsWhatRenderWritesAndMakesNoGlObjectsWhenStill) {
         return out;
     };
     const auto c = test::compare_images(rgb(img), rgb(ref), 24);
-    EXPECT_TRUE(c.within({24, 0.01, 2.0})) << "mean " << c.mean << ", " << 100 * c.off_fraction() << " % off, largest " << c.max_diff;
+    EXPECT_TRUE(c.within({24, 0.01, 2.0}))
+        << "mean " << c.mean << ", " << 100 * c.off_fraction() << " % off, largest " << c.max_diff;
     // The picture is the head, not an empty window: a tenth of it differs from the background.
     std::size_t head = 0;
     for (std::size_t p = 0; p < std::size_t(img.width) * std::size_t(img.height); ++p)
@@ -56,13 +60,15 @@ TEST(Viewer, WindowShowsWhatRenderWritesAndMakesNoGlObjectsWhenStill) {
 }
 
 TEST(Viewer, AmbientOcclusionConvergesWhileStillAndCanBeOff) {
-    if (test::run_command("command -v xvfb-run").exit_code != 0) GTEST_SKIP() << "xvfb-run is not installed (./setup.sh)";
+    if (test::run_command("command -v xvfb-run").exit_code != 0)
+        GTEST_SKIP() << "xvfb-run is not installed (./setup.sh)";
     test::TempDir dir;
     auto shot = [&](const std::string& name, const std::string& ao) {
         const std::string path = dir / name;
-        const auto r = test::run_command("xvfb-run -a -s '-screen 0 1024x768x24' " + test::cli() + " view " + test::data("headsq.nhdr") +
-                                             " --iso 500 --view left " + ao + " --screenshot " + path,
-                                         true);
+        const auto r =
+            test::run_command("xvfb-run -a -s '-screen 0 1024x768x24' " + test::cli() + " view " +
+                                  test::data("headsq.nhdr") + " --iso 500 --view left " + ao + " --screenshot " + path,
+                              true);
         EXPECT_EQ(r.exit_code, 0) << r.out;
         return load_image(path);
     };
@@ -76,14 +82,16 @@ TEST(Viewer, AmbientOcclusionConvergesWhileStillAndCanBeOff) {
     const std::size_t n = std::size_t(on.width) * std::size_t(on.height);
     for (std::size_t p = 0; p < n; ++p) {
         int d = 0;
-        for (int c = 0; c < 3; ++c) d = std::max(d, int(off.bytes[p * on.channels + c]) - int(on.bytes[p * on.channels + c]));
+        for (int c = 0; c < 3; ++c)
+            d = std::max(d, int(off.bytes[p * on.channels + c]) - int(on.bytes[p * on.channels + c]));
         differ += d > 8;
         darkest = std::max(darkest, d);
     }
     EXPECT_GT(differ, n / 200) << "AO on and off look the same";
     EXPECT_GT(darkest, 50) << "no crease is darkened";
     // Bad AO settings are refused before a window opens.
-    const auto bad = test::run_command(test::cli() + " view " + test::data("headsq.nhdr") + " --iso 500 --ao-cones 0", true);
+    const auto bad =
+        test::run_command(test::cli() + " view " + test::data("headsq.nhdr") + " --iso 500 --ao-cones 0", true);
     EXPECT_NE(bad.exit_code, 0);
     EXPECT_NE(bad.out.find("--ao-cones"), std::string::npos) << bad.out;
 }

@@ -132,8 +132,10 @@ TEST_F(Voit, SortsOneTwoManyAndVeryManyLayers) {
         const auto c = compare(layers, anterior(box(20)), 16, &r);
         EXPECT_GT(c.foreground, 50u);
         EXPECT_LE(c.max, 2.0 / 255.0) << "rmse " << c.rmse;
-        std::printf("%d layers: foreground %zu, rmse %.5f, max %.5f, max list %u, fragments %llu, shaded %llu, redraws %d\n", n, c.foreground,
-                    c.rmse, c.max, r.oit.max_list, (unsigned long long)r.oit.fragments, (unsigned long long)r.oit.shaded, r.oit.redraws);
+        std::printf(
+            "%d layers: foreground %zu, rmse %.5f, max %.5f, max list %u, fragments %llu, shaded %llu, redraws %d\n", n,
+            c.foreground, c.rmse, c.max, r.oit.max_list, (unsigned long long)r.oit.fragments,
+            (unsigned long long)r.oit.shaded, r.oit.redraws);
         EXPECT_EQ(r.oit.max_list, std::uint32_t(n));
         EXPECT_EQ(r.oit.merged, 0u);
         if (n == 1000) {
@@ -144,14 +146,16 @@ TEST_F(Voit, SortsOneTwoManyAndVeryManyLayers) {
 
 TEST_F(Voit, CoplanarLayersAlphaZeroAndTheNearPlane) {
     // Two coplanar plates: the tie goes to the object added first, on both sides.
-    std::vector<Layer> layers{{plate(0, 10), {0.9f, 0.1f, 0.1f}, 0.5f}, {plate(0, 10), {0.1f, 0.1f, 0.9f}, 0.5f},
+    std::vector<Layer> layers{{plate(0, 10), {0.9f, 0.1f, 0.1f}, 0.5f},
+                              {plate(0, 10), {0.1f, 0.1f, 0.9f}, 0.5f},
                               {plate(-5, 6), {0.0f, 1.0f, 0.0f}, 0.0f}}; // alpha 0: as if absent
     const Camera cam = anterior(box(10));
     auto c = compare(layers, cam, 32);
     EXPECT_LE(c.max, 2.0 / 255.0);
     // A plate reaching through the near plane: the part in front is clipped on both sides.
     Camera near_cut = cam;
-    near_cut.near_plane = glm::length(cam.eye - cam.target) - 3.0; // the plane at y = -3 lies in front of the near plane
+    near_cut.near_plane =
+        glm::length(cam.eye - cam.target) - 3.0; // the plane at y = -3 lies in front of the near plane
     std::vector<Layer> tilted{{plate(0, 10), {0.9f, 0.6f, 0.2f}, 0.6f}};
     tilted[0].mesh.positions[0].y = -30; // one corner far in front: the plate crosses the near plane
     tilted[0].mesh.positions[3].y = -30;
@@ -168,7 +172,8 @@ TEST_F(Voit, PastTheCapFragmentsAreMergedWithinTheirStatedBound) {
         const float f = float(i % 7) / 6.0f; // colours vary along depth: the order matters
         layers.push_back({plate(-20.0 + 0.2 * i, 10), {f, 0.5f, 1.0f - f}, 0.02f});
     }
-    std::shuffle(layers.begin(), layers.end(), std::mt19937(3)); // added out of depth order: the renderer orders the draws
+    std::shuffle(layers.begin(), layers.end(),
+                 std::mt19937(3)); // added out of depth order: the renderer orders the draws
     Renderer ren;
     const std::vector<ReferenceSurface> ref = add_layers(ren, layers);
     RenderOptions o;
@@ -181,11 +186,13 @@ TEST_F(Voit, PastTheCapFragmentsAreMergedWithinTheirStatedBound) {
     EXPECT_EQ(r.oit.capacity, (std::size_t(1) << 20) / 20);
     EXPECT_GT(r.oit.merged, 0u);
     EXPECT_LE(r.oit.fragments - r.oit.merged, r.oit.capacity) << "what is stored fits";
-    EXPECT_GT(r.oit.fragments - r.oit.merged, r.oit.capacity / 2) << "and fills the pool to a fair part (whole depth bins)";
+    EXPECT_GT(r.oit.fragments - r.oit.merged, r.oit.capacity / 2)
+        << "and fills the pool to a fair part (whole depth bins)";
     EXPECT_EQ(r.oit.overflowed, 0u) << "the depth cut made room: nothing found the pool full";
     EXPECT_GE(r.oit.redraws, 1) << "the frame that found the cap too small was drawn again with the cut";
     EXPECT_GT(r.oit.merged_pixels, 1000u);
-    EXPECT_LE(ren.pool().stats().live_bytes, std::size_t(8) << 20) << "the pool stays within the cap plus the frame's images";
+    EXPECT_LE(ren.pool().stats().live_bytes, std::size_t(8) << 20)
+        << "the pool stays within the cap plus the frame's images";
     // The bound: the transmittance reaching the merged layers times their
     // coverage; about 0.98^26 x (1 - 0.98^174) where 26 layers are kept.
     EXPECT_GT(r.oit.merge_error_max, 0.3);
@@ -203,7 +210,8 @@ TEST_F(Voit, PastTheCapFragmentsAreMergedWithinTheirStatedBound) {
         ++n;
     }
     std::printf("merged %llu fragments in %llu pixels, stated bound %.3f; linear error max %.4f, mean %.4f\n",
-                (unsigned long long)r.oit.merged, (unsigned long long)r.oit.merged_pixels, r.oit.merge_error_max, worst, sum / double(3 * n));
+                (unsigned long long)r.oit.merged, (unsigned long long)r.oit.merged_pixels, r.oit.merge_error_max, worst,
+                sum / double(3 * n));
     EXPECT_LE(worst, r.oit.merge_error_max + 0.01) << "within the stated bound (plus 8-bit output)";
     // The nearest layers are stored, and only the merged ones' order among
     // themselves is lost: far better than the bound.
@@ -235,7 +243,7 @@ TEST_F(Voit, TranslucentFragmentsGetTheirOwnAo) {
     const Mesh ball = sphere_mesh(glm::dvec3(0), 4.0, 0.5);
     Mesh near_ball = ball;
     for (auto& p : near_ball.positions) p += glm::vec3(0, -5.5f, 0); // 1.5 mm in front of the slab
-    const Mesh backdrop = plate(25, 40);                              // opaque: the same z range in both frames
+    const Mesh backdrop = plate(25, 40);                             // opaque: the same z range in both frames
     const Camera cam = anterior(box(16));
     auto render = [&](float slab_opacity, bool ao, Aov aov = Aov::None) {
         Renderer ren;
@@ -266,9 +274,11 @@ TEST_F(Voit, TranslucentFragmentsGetTheirOwnAo) {
     int lo[2] = {255, 255}, hi[2] = {0, 0}; // red channel, with and without AO
     std::size_t n = 0;
     for (std::size_t p = 0; p < std::size_t(96 * 96); ++p) {
-        if (ids.image.floats[p * std::size_t(ids.image.channels)] != 1.0f) continue; // slab pixels (object 1) not hidden by the ball
+        if (ids.image.floats[p * std::size_t(ids.image.channels)] != 1.0f)
+            continue; // slab pixels (object 1) not hidden by the ball
         for (int k = 0; k < 3; ++k) {
-            const double a = opaque.image.bytes[p * 4 + std::size_t(k)], b = translucent.image.bytes[p * 4 + std::size_t(k)];
+            const double a = opaque.image.bytes[p * 4 + std::size_t(k)],
+                         b = translucent.image.bytes[p * 4 + std::size_t(k)];
             sum += std::abs(a - b);
         }
         int i = 0;
@@ -281,8 +291,8 @@ TEST_F(Voit, TranslucentFragmentsGetTheirOwnAo) {
     }
     ASSERT_GT(n, 2000u);
     const double mean = sum / double(3 * n) / 255.0;
-    std::printf("slab pixels %zu: mean |opaque - translucent| %.4f; red range with AO %d..%d, without %d..%d\n", n, mean, lo[0], hi[0],
-                lo[1], hi[1]);
+    std::printf("slab pixels %zu: mean |opaque - translucent| %.4f; red range with AO %d..%d, without %d..%d\n", n,
+                mean, lo[0], hi[0], lo[1], hi[1]);
     EXPECT_LE(mean, 2.0 / 255.0);
     EXPECT_LE(hi[1] - lo[1], 2) << "without AO the face is evenly lit";
     EXPECT_GE(hi[0] - lo[0], 8) << "the ball occludes the slab around it (AO 1 to 0 spans 14 levels here)";

@@ -36,8 +36,8 @@ constexpr float kNear = 1.0f, kFar = 17.0f;
 // (d = 1/16, the farthest, and 15/16, the nearest); columns 0..3 alone range
 // from 7/16 (2.125) to 3/16 (4.25).
 const std::vector<float> kDepth = {
-    0.0f,      7 / 16.0f, 0.25f,     0.0f,      1 / 16.0f,  //
-    3 / 16.0f, 0.0f,      5 / 16.0f, 0.25f,     0.0f,       //
+    0.0f,      7 / 16.0f, 0.25f,     0.0f,      1 / 16.0f, //
+    3 / 16.0f, 0.0f,      5 / 16.0f, 0.25f,     0.0f,      //
     0.0f,      0.25f,     0.0f,      7 / 16.0f, 15 / 16.0f,
 };
 
@@ -51,9 +51,7 @@ std::uint32_t bits(float x) { return std::bit_cast<std::uint32_t>(x); }
 // and must be skipped), the buffer initialised as the z-range pass does.
 Range run_zrange(const gl::Texture& depth, glm::ivec2 size) {
     test::ComputePass pass({"ao/zrange.comp"});
-    pass.texture(0, depth)
-        .storage<std::uint32_t>(0, {0x7F800000u, 0u})
-        .params(passes::ZRangeParams{size, kNear, kFar});
+    pass.texture(0, depth).storage<std::uint32_t>(0, {0x7F800000u, 0u}).params(passes::ZRangeParams{size, kNear, kFar});
     pass.dispatch(GLuint(depth.width() + 15) / 16, GLuint(depth.height() + 15) / 16);
     const auto out = pass.read<std::uint32_t>(0);
     EXPECT_EQ(out.size(), 2u);
@@ -69,7 +67,8 @@ TEST_F(ZRange, HandDerivedDepthsMatchTheCameraProjection) {
     cam.near_plane = kNear;
     cam.far_plane = kFar;
     const glm::dmat4 proj = cam.projection(5.0 / 3.0);
-    const std::pair<double, double> pairs[] = {{1 / 16.0, 8.5}, {3 / 16.0, 4.25}, {7 / 16.0, 2.125}, {15 / 16.0, 1.0625}};
+    const std::pair<double, double> pairs[] = {
+        {1 / 16.0, 8.5}, {3 / 16.0, 4.25}, {7 / 16.0, 2.125}, {15 / 16.0, 1.0625}};
     for (const auto& [d, z] : pairs) {
         const glm::dvec4 clip = proj * glm::dvec4(0.3, -0.2, -z, 1.0); // eye space looks down -z
         EXPECT_EQ(clip.z / clip.w, d) << "z " << z;

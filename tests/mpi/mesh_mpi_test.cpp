@@ -37,7 +37,8 @@ namespace {
 
 // mpirun refuses to run as root unless told; only then is it told.
 std::string mpirun(int n) {
-    std::string cmd = std::string("timeout 60 ") + ISOSCOPE_MPIRUN + " --oversubscribe --bind-to none -np " + std::to_string(n);
+    std::string cmd =
+        std::string("timeout 60 ") + ISOSCOPE_MPIRUN + " --oversubscribe --bind-to none -np " + std::to_string(n);
     if (::getuid() == 0) cmd += " --allow-run-as-root";
     return cmd + " ";
 }
@@ -142,7 +143,8 @@ void expect_same_surface(const std::string& pvtp, const Mesh& ref, int pieces, c
     const ReadBack got = read_pvtp(pvtp);
     EXPECT_EQ(got.pieces, pieces) << "one piece per non-empty slab";
     EXPECT_EQ(got.raw.triangles.size(), ref.triangles.size());
-    EXPECT_EQ(got.welded.positions.size(), ref.positions.size()) << "welding the seams by exact position gives the single-process vertices";
+    EXPECT_EQ(got.welded.positions.size(), ref.positions.size())
+        << "welding the seams by exact position gives the single-process vertices";
     // Same vertices: the extraction is deterministic per edge, so positions are
     // bit-identical (tolerance 0 is tighter than the 1e-6 voxel asked).
     EXPECT_TRUE(positions(got.welded) == positions(ref)) << "vertex positions differ from the single process";
@@ -177,7 +179,8 @@ TEST(MpiMesh, OneTwoAndFourRanksEqualTheSingleProcess) {
     for (int n : {1, 2, 4}) {
         SCOPED_TRACE(n);
         const std::string out = dir / ("n" + std::to_string(n) + ".pvtp");
-        const auto r = test::run_command(mpirun(n) + test::cli() + " mesh " + in + " --iso 500 --chunk 8 --json -o " + out);
+        const auto r =
+            test::run_command(mpirun(n) + test::cli() + " mesh " + in + " --iso 500 --chunk 8 --json -o " + out);
         ASSERT_EQ(r.exit_code, 0) << r.out;
         const auto s = parse(r.out);
         ASSERT_EQ(s.size(), 1u) << "rank 0 alone prints the summary: " << r.out;
@@ -193,7 +196,8 @@ TEST(MpiMesh, OneTwoAndFourRanksEqualTheSingleProcess) {
         save_volume(phantom({160, 120, 40}), wide, false);
         const Mesh wref = reference(wide, "--iso 500", dir / "wide.vtp");
         const std::string out = dir / "small.pvtp";
-        const auto r = test::run_command(mpirun(2) + test::cli() + " mesh " + wide + " --iso 500 --chunk 8 --memory 1 --json -o " + out);
+        const auto r = test::run_command(mpirun(2) + test::cli() + " mesh " + wide +
+                                         " --iso 500 --chunk 8 --memory 1 --json -o " + out);
         ASSERT_EQ(r.exit_code, 0) << r.out;
         EXPECT_GT(slabs_read(r.out), 2) << "several slabs on some rank: " << r.out;
         const auto s = parse(r.out);
@@ -218,14 +222,16 @@ TEST(MpiMesh, OverlappedAndSerialRanksEqualTheSingleProcess) {
     const Mesh wref = reference(wide, "--iso 500", dir / "wide.vtp");
     const std::string budget = " --chunk 8 --memory 3";
     {
-        const auto r = test::run_command(test::cli() + " mesh " + wide + " --iso 500 --stream" + budget + " --json -o " + (dir / "one.ply"));
+        const auto r = test::run_command(test::cli() + " mesh " + wide + " --iso 500 --stream" + budget +
+                                         " --json -o " + (dir / "one.ply"));
         ASSERT_EQ(r.exit_code, 0) << r.out;
         EXPECT_EQ(nlohmann::json::parse(r.out)["streaming"]["overlapped"], true) << r.out;
     }
     for (const char* mode : {"", " --no-overlap"}) {
         SCOPED_TRACE(*mode ? "serial" : "overlapped");
         const std::string out = dir / (*mode ? "off.pvtp" : "on.pvtp");
-        const auto r = test::run_command(mpirun(2) + test::cli() + " mesh " + wide + " --iso 500" + budget + mode + " --json -o " + out);
+        const auto r = test::run_command(mpirun(2) + test::cli() + " mesh " + wide + " --iso 500" + budget + mode +
+                                         " --json -o " + out);
         ASSERT_EQ(r.exit_code, 0) << r.out;
         const auto s = parse(r.out);
         ASSERT_EQ(s.size(), 1u) << r.out;
@@ -248,8 +254,8 @@ TEST(MpiMesh, RanksThatOwnOnlyEmptyChunksTakePartAndWriteNothing) {
     for (std::int64_t k = 0; k < d[2]; ++k)
         for (std::int64_t j = 0; j < d[1]; ++j)
             for (std::int64_t i = 0; i < d[0]; ++i)
-                s[v.linear_index(i, j, k)] =
-                    std::int16_t(std::clamp(500.0 + 200.0 * (2.5 - glm::length(glm::dvec3(i, j, k) - glm::dvec3(20))), 0.0, 1000.0));
+                s[v.linear_index(i, j, k)] = std::int16_t(
+                    std::clamp(500.0 + 200.0 * (2.5 - glm::length(glm::dvec3(i, j, k) - glm::dvec3(20))), 0.0, 1000.0));
     save_volume(v, in, false);
     const Mesh ref = reference(in, "--iso 500", dir / "ref.vtp");
     ASSERT_GT(ref.triangles.size(), 20u);
@@ -277,8 +283,8 @@ TEST(MpiMesh, SeveralIsoValuesGoToOnePvtpEach) {
     TempDir dir;
     const std::string in = dir / "phantom.nii";
     save_volume(phantom({40, 30, 36}), in, false);
-    const auto r =
-        test::run_command(mpirun(2) + test::cli() + " mesh " + in + " --iso 300 --iso 700 --chunk 8 --json -o " + (dir / "s.pvtp"));
+    const auto r = test::run_command(mpirun(2) + test::cli() + " mesh " + in +
+                                     " --iso 300 --iso 700 --chunk 8 --json -o " + (dir / "s.pvtp"));
     ASSERT_EQ(r.exit_code, 0) << r.out;
     const auto sums = parse(r.out);
     ASSERT_EQ(sums.size(), 2u) << r.out;
@@ -299,7 +305,8 @@ TEST(MpiMesh, FailuresAreErrorsNotHangs) {
         const fs::path raw = fs::path(dir / "phantom.raw");
         ASSERT_TRUE(fs::exists(raw));
         fs::resize_file(raw, fs::file_size(raw) - 40 * 30 * 2 * 3);
-        const auto r = test::run_command(mpirun(4) + test::cli() + " mesh " + in + " --iso 500 -o " + (dir / "t.pvtp"), true);
+        const auto r =
+            test::run_command(mpirun(4) + test::cli() + " mesh " + in + " --iso 500 -o " + (dir / "t.pvtp"), true);
         EXPECT_NE(r.exit_code, 0) << r.out;
         EXPECT_NE(r.exit_code, 124) << "the job hung: " << r.out;
         EXPECT_NE(r.out.find("rank 0"), std::string::npos) << r.out;
@@ -323,7 +330,8 @@ TEST(MpiMesh, FailuresAreErrorsNotHangs) {
         f.seekp(size - 60);
         f.write(tail.data(), 20);
         f.close();
-        const auto r = test::run_command(mpirun(4) + test::cli() + " mesh " + gz + " --iso 500 --chunk 8 -o " + (dir / "d.pvtp"), true);
+        const auto r = test::run_command(
+            mpirun(4) + test::cli() + " mesh " + gz + " --iso 500 --chunk 8 -o " + (dir / "d.pvtp"), true);
         EXPECT_NE(r.exit_code, 0) << r.out;
         EXPECT_NE(r.exit_code, 124) << "the job hung: " << r.out;
         EXPECT_NE(r.out.find("isoscope: error: rank 3: "), std::string::npos) << r.out;
@@ -339,7 +347,8 @@ TEST(MpiMesh, FailuresAreErrorsNotHangs) {
         save_volume(phantom({40, 30, 36}), in, false);
         fs::create_directories(dir / "mine");
         std::ofstream(dir / "mine/notes.txt") << "keep me";
-        const auto r = test::run_command(mpirun(3) + test::cli() + " mesh " + in + " --iso 500 --chunk 8 -o " + (dir / "mine.pvtp"), true);
+        const auto r = test::run_command(
+            mpirun(3) + test::cli() + " mesh " + in + " --iso 500 --chunk 8 -o " + (dir / "mine.pvtp"), true);
         EXPECT_NE(r.exit_code, 0) << r.out;
         EXPECT_NE(r.exit_code, 124) << "the job hung: " << r.out;
         EXPECT_NE(r.out.find("rank 0"), std::string::npos) << r.out;
@@ -349,13 +358,15 @@ TEST(MpiMesh, FailuresAreErrorsNotHangs) {
     }
     // Another format than .pvtp under mpirun: a clear error, not N files.
     {
-        const auto r = test::run_command(mpirun(2) + test::cli() + " mesh " + in + " --iso 500 -o " + (dir / "x.stl"), true);
+        const auto r =
+            test::run_command(mpirun(2) + test::cli() + " mesh " + in + " --iso 500 -o " + (dir / "x.stl"), true);
         EXPECT_NE(r.exit_code, 0) << r.out;
         EXPECT_NE(r.out.find(".pvtp"), std::string::npos) << r.out;
         EXPECT_FALSE(fs::exists(dir / "x.stl"));
     }
     for (const auto& e : fs::directory_iterator(dir.path()))
-        EXPECT_EQ(e.path().filename().string().find(".isoscope-partial"), std::string::npos) << "staging left: " << e.path();
+        EXPECT_EQ(e.path().filename().string().find(".isoscope-partial"), std::string::npos)
+            << "staging left: " << e.path();
 }
 
 TEST(MpiMesh, LabelSurfacesEqualTheSingleProcess) {
@@ -363,7 +374,8 @@ TEST(MpiMesh, LabelSurfacesEqualTheSingleProcess) {
     TempDir dir;
     const std::string in = dir / "labels.nii";
     const std::array<std::int64_t, 3> d{36, 30, 40};
-    Volume v = Volume::dense(d, VoxelType::U8, make_affine(glm::dvec3(0.9, 1.0, 1.2), glm::dvec3(3, -2, 1), glm::dmat3(1.0)));
+    Volume v =
+        Volume::dense(d, VoxelType::U8, make_affine(glm::dvec3(0.9, 1.0, 1.2), glm::dvec3(3, -2, 1), glm::dmat3(1.0)));
     auto s = v.as<std::uint8_t>();
     for (std::int64_t k = 0; k < d[2]; ++k)
         for (std::int64_t j = 0; j < d[1]; ++j)
@@ -379,7 +391,8 @@ TEST(MpiMesh, LabelSurfacesEqualTheSingleProcess) {
     for (int n : {2, 4}) {
         SCOPED_TRACE(n);
         const std::string out = dir / ("l" + std::to_string(n) + ".pvtp");
-        const auto r = test::run_command(mpirun(n) + test::cli() + " mesh " + in + " --labels --chunk 8 --json -o " + out);
+        const auto r =
+            test::run_command(mpirun(n) + test::cli() + " mesh " + in + " --labels --chunk 8 --json -o " + out);
         ASSERT_EQ(r.exit_code, 0) << r.out;
         const auto sums = parse(r.out);
         ASSERT_EQ(sums.size(), 3u) << "labels 1, 2 and 7 found across ranks: " << r.out;
@@ -390,7 +403,8 @@ TEST(MpiMesh, LabelSurfacesEqualTheSingleProcess) {
             const Mesh ref = reference(in, "--labels --label " + std::to_string(label), dir / ("ref" + tag + ".vtp"));
             ASSERT_GT(ref.triangles.size(), 50u);
             const ReadBack got = read_pvtp(dir / ("l" + std::to_string(n) + tag + ".pvtp"));
-            expect_same_surface(dir / ("l" + std::to_string(n) + tag + ".pvtp"), ref, got.pieces, sums[std::size_t(i++)]);
+            expect_same_surface(dir / ("l" + std::to_string(n) + tag + ".pvtp"), ref, got.pieces,
+                                sums[std::size_t(i++)]);
             EXPECT_GE(got.pieces, 1);
             EXPECT_LE(got.pieces, n);
         }
@@ -404,7 +418,8 @@ TEST(MpiMesh, FloatVolumeWithNaNAndInfEqualsTheSingleProcess) {
     TempDir dir;
     const std::string in = dir / "float.nrrd";
     const std::array<std::int64_t, 3> d{30, 28, 40};
-    Volume v = Volume::dense(d, VoxelType::F32, make_affine(glm::dvec3(1.0, 0.9, 1.1), glm::dvec3(0.0), glm::dmat3(1.0)));
+    Volume v =
+        Volume::dense(d, VoxelType::F32, make_affine(glm::dvec3(1.0, 0.9, 1.1), glm::dvec3(0.0), glm::dmat3(1.0)));
     auto s = v.as<float>();
     for (std::int64_t k = 0; k < d[2]; ++k)
         for (std::int64_t j = 0; j < d[1]; ++j)
@@ -420,7 +435,8 @@ TEST(MpiMesh, FloatVolumeWithNaNAndInfEqualsTheSingleProcess) {
     for (int n : {2, 4}) {
         SCOPED_TRACE(n);
         const std::string out = dir / ("f" + std::to_string(n) + ".pvtp");
-        const auto r = test::run_command(mpirun(n) + test::cli() + " mesh " + in + " --iso 0.5 --chunk 6 --json -o " + out);
+        const auto r =
+            test::run_command(mpirun(n) + test::cli() + " mesh " + in + " --iso 0.5 --chunk 6 --json -o " + out);
         ASSERT_EQ(r.exit_code, 0) << r.out;
         const auto sums = parse(r.out);
         ASSERT_EQ(sums.size(), 1u) << r.out;
@@ -445,7 +461,8 @@ TEST(MpiMesh, OpenVdbSlabsOnTwoRanksEqualTheSingleProcess) {
     const Mesh ref = reference(in, "--iso 500", dir / "ref.vtp");
     ASSERT_GT(ref.triangles.size(), 2000u);
     const std::string out = dir / "v.pvtp";
-    const auto r = test::run_command(mpirun(2) + test::cli() + " mesh " + in + " --iso 500 --chunk 8 --memory 3 --json -o " + out);
+    const auto r =
+        test::run_command(mpirun(2) + test::cli() + " mesh " + in + " --iso 500 --chunk 8 --memory 3 --json -o " + out);
     ASSERT_EQ(r.exit_code, 0) << r.out;
     EXPECT_GT(slabs_read(r.out), 2) << "several slabs: " << r.out;
     const auto s = parse(r.out);

@@ -19,7 +19,8 @@ inline std::string write_big_ball(const std::filesystem::path& dir, int nz, doub
     {
         std::ofstream h(dir / "big.nhdr");
         h << "NRRD0004\ntype: short\ndimension: 3\nspace: left-posterior-superior\nsizes: 512 512 " << nz
-          << "\nspace directions: (0.5,0,0) (0,0.5,0) (0,0," << dz << ")\nkinds: domain domain domain\nendian: little\n"
+          << "\nspace directions: (0.5,0,0) (0,0.5,0) (0,0," << dz
+          << ")\nkinds: domain domain domain\nendian: little\n"
              "encoding: raw\nspace origin: (0,0,0)\ndata file: big.raw\n";
     }
     std::ofstream d(dir / "big.raw", std::ios::binary);

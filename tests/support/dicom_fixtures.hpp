@@ -39,12 +39,12 @@ inline glm::dmat3 rot_z(double deg) {
 struct SeriesSpec {
     int nx = 16, ny = 12, nz = 8;
     glm::dvec3 spacing{0.7, 0.8, 2.5};
-    glm::dmat3 rot{1.0};           // columns: row direction, column direction, slice normal
+    glm::dmat3 rot{1.0};            // columns: row direction, column direction, slice normal
     glm::dvec3 origin{-10, 20, 30}; // IPP of slice k = 0
     bool ct = true;                 // CT generator with rescale; else MR (no rescale)
     double slope = 1, intercept = -1024;
     std::string description = "test series";
-    std::string image_type;      // e.g. "ORIGINAL/PRIMARY/LOCALIZER"
+    std::string image_type; // e.g. "ORIGINAL/PRIMARY/LOCALIZER"
     std::string pattern = "%s/IM-%04d.dcm";
     int series_number = 0;
 };
@@ -69,8 +69,10 @@ inline void write_series(const std::string& dir, const SeriesSpec& s) {
     vtkNew<vtkDICOMWriter> w;
     vtkNew<vtkDICOMCTGenerator> ct;
     vtkNew<vtkDICOMMRGenerator> mr;
-    if (s.ct) w->SetGenerator(ct);
-    else w->SetGenerator(mr);
+    if (s.ct)
+        w->SetGenerator(ct);
+    else
+        w->SetGenerator(mr);
     if (s.series_number) {
         vtkNew<vtkDICOMMetaData> md;
         md->Set(DC::SeriesNumber, s.series_number);

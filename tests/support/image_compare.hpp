@@ -21,17 +21,17 @@
 namespace iso::test {
 
 struct ImageTolerance {
-    int off_threshold = 0;         // 0..255: a channel differing by more makes its pixel off
-    double max_off_fraction = 0;   // of all pixels
-    double max_mean = 0;           // mean |difference| over all channel values, 0..255
+    int off_threshold = 0;       // 0..255: a channel differing by more makes its pixel off
+    double max_off_fraction = 0; // of all pixels
+    double max_mean = 0;         // mean |difference| over all channel values, 0..255
 };
 
 struct ImageComparison {
-    bool same_shape = false;       // width, height and channels
+    bool same_shape = false; // width, height and channels
     std::size_t pixels = 0, off = 0;
-    double mean = 0;               // mean |difference| over all channel values
-    int max_diff = 0;              // largest channel difference
-    Image diff;                    // RGBA8, |difference| x 8, alpha 255 (same shape only)
+    double mean = 0;  // mean |difference| over all channel values
+    int max_diff = 0; // largest channel difference
+    Image diff;       // RGBA8, |difference| x 8, alpha 255 (same shape only)
     double off_fraction() const { return pixels ? double(off) / double(pixels) : 0.0; }
     bool within(const ImageTolerance& t) const {
         return same_shape && off_fraction() <= t.max_off_fraction && mean <= t.max_mean;
@@ -92,7 +92,8 @@ inline ::testing::AssertionResult matches_golden(const Image& actual, const std:
     if (c.within(tol)) return ::testing::AssertionSuccess();
     const std::string stem = fs::path(golden_path).stem().string();
     fs::create_directories(failure_dir);
-    const std::string actual_path = failure_dir + "/" + stem + "_actual.png", diff_path = failure_dir + "/" + stem + "_diff.png";
+    const std::string actual_path = failure_dir + "/" + stem + "_actual.png",
+                      diff_path = failure_dir + "/" + stem + "_diff.png";
     save_image(actual, actual_path);
     std::ostringstream os;
     os << "image differs from " << golden_path << ": ";

@@ -28,7 +28,8 @@ inline glm::dvec3 phantom_spacing(double scale) { return glm::dvec3(0.7, 1.0, 1.
 inline glm::dmat4 oblique_affine(std::array<std::int64_t, 3> dims, double scale, const glm::dvec3& centre) {
     const glm::dmat3 rot = phantom_rotation();
     const glm::dvec3 sp = phantom_spacing(scale);
-    const glm::dvec3 half(0.5 * double(dims[0] - 1) * sp.x, 0.5 * double(dims[1] - 1) * sp.y, 0.5 * double(dims[2] - 1) * sp.z);
+    const glm::dvec3 half(0.5 * double(dims[0] - 1) * sp.x, 0.5 * double(dims[1] - 1) * sp.y,
+                          0.5 * double(dims[2] - 1) * sp.z);
     return make_affine(sp, centre - rot * half, rot);
 }
 

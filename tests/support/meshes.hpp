@@ -20,7 +20,8 @@ namespace iso::test {
 
 // The faces of an axis-aligned box as quads, outward by the right-hand rule,
 // over corner indices (bit 0: x, bit 1: y, bit 2: z at hi).
-inline constexpr int kBoxQuads[6][4] = {{0, 2, 3, 1}, {4, 5, 7, 6}, {0, 1, 5, 4}, {2, 6, 7, 3}, {0, 4, 6, 2}, {1, 3, 7, 5}};
+inline constexpr int kBoxQuads[6][4] = {{0, 2, 3, 1}, {4, 5, 7, 6}, {0, 1, 5, 4},
+                                        {2, 6, 7, 3}, {0, 4, 6, 2}, {1, 3, 7, 5}};
 
 // A closed axis-aligned box: 8 shared corners, 12 outward triangles, no normals.
 inline Mesh box_mesh(glm::dvec3 lo, glm::dvec3 hi) {
@@ -60,7 +61,8 @@ inline Mesh sphere_mesh(glm::dvec3 c, double r, double voxel = 1.0) {
     for (int k = 0; k < n; ++k)
         for (int j = 0; j < n; ++j)
             for (int i = 0; i < n; ++i)
-                v.as<float>()[v.linear_index(i, j, k)] = float(r - glm::length(origin + voxel * glm::dvec3(i, j, k) - c));
+                v.as<float>()[v.linear_index(i, j, k)] =
+                    float(r - glm::length(origin + voxel * glm::dvec3(i, j, k) - c));
     return extract_isosurface(v, 0.0, {});
 }
 
@@ -76,7 +78,8 @@ inline Mesh uv_sphere(const glm::dvec3& c, double r, int stacks, int slices) {
         const double z = 2 * i == stacks ? 0.0 : std::cos(th);
         for (int j = 0; j < slices; ++j) {
             const double ph = 2 * kPi * double(j) / double(slices);
-            m.positions.emplace_back(glm::vec3(c + r * glm::dvec3(std::sin(th) * std::cos(ph), std::sin(th) * std::sin(ph), z)));
+            m.positions.emplace_back(
+                glm::vec3(c + r * glm::dvec3(std::sin(th) * std::cos(ph), std::sin(th) * std::sin(ph), z)));
         }
     }
     m.positions.emplace_back(glm::vec3(c - glm::dvec3(0, 0, r))); // south pole

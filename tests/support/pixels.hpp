@@ -24,7 +24,9 @@ struct Rgb {
 };
 
 // The first three channels of an 8-bit image.
-inline Rgb rgb_at(const Image& img, int x, int y) { return {byte_at(img, x, y, 0), byte_at(img, x, y, 1), byte_at(img, x, y, 2)}; }
+inline Rgb rgb_at(const Image& img, int x, int y) {
+    return {byte_at(img, x, y, 0), byte_at(img, x, y, 1), byte_at(img, x, y, 2)};
+}
 
 // How many bytes of two 8-bit images differ; SIZE_MAX when their shapes differ.
 inline std::size_t differing(const Image& a, const Image& b) {

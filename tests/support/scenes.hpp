@@ -29,7 +29,8 @@ inline Camera anterior(const Bounds& b) {
 }
 
 // A camera at `eye` looking at `target`, clipping at 1 and 2000 mm unless told.
-inline Camera looking(glm::dvec3 eye, glm::dvec3 target, glm::dvec3 up, double near_plane = 1, double far_plane = 2000) {
+inline Camera looking(glm::dvec3 eye, glm::dvec3 target, glm::dvec3 up, double near_plane = 1,
+                      double far_plane = 2000) {
     Camera c;
     c.eye = eye;
     c.target = target;

@@ -23,13 +23,18 @@ class TempDir {
 public:
     TempDir() {
         const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-        std::string name = std::string("isoscope-") + (info ? std::string(info->test_suite_name()) + "-" + info->name() : "t");
-        for (auto& c : name) if (c == '/') c = '_';
+        std::string name =
+            std::string("isoscope-") + (info ? std::string(info->test_suite_name()) + "-" + info->name() : "t");
+        for (auto& c : name)
+            if (c == '/') c = '_';
         path_ = std::filesystem::temp_directory_path() / (name + "-" + std::to_string(::getpid()));
         std::filesystem::remove_all(path_);
         std::filesystem::create_directories(path_);
     }
-    ~TempDir() { std::error_code ec; std::filesystem::remove_all(path_, ec); }
+    ~TempDir() {
+        std::error_code ec;
+        std::filesystem::remove_all(path_, ec);
+    }
     std::string operator/(const std::string& rel) const { return (path_ / rel).string(); }
     const std::filesystem::path& path() const { return path_; }
 

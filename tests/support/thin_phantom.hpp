@@ -38,10 +38,10 @@ struct ThinPhantomOptions {
     std::array<std::int64_t, 3> dims{160, 160, 120};
     glm::dvec3 spacing{0.7, 0.7, 1.0};
     unsigned seed = 15;
-    double root_radius = 3.5;  // mm (an internal carotid / a large cerebral artery)
-    double min_radius = 0.35;  // mm: branches stop below this (sub-voxel: the iso-150 tube is ~0.9 mm wide)
-    double ramp = 0.85;        // mm: partial-volume edge width (about one voxel)
-    bool bone = true;          // the thin shells, plate and air cells behind and beside the tree
+    double root_radius = 3.5; // mm (an internal carotid / a large cerebral artery)
+    double min_radius = 0.35; // mm: branches stop below this (sub-voxel: the iso-150 tube is ~0.9 mm wide)
+    double ramp = 0.85;       // mm: partial-volume edge width (about one voxel)
+    bool bone = true;         // the thin shells, plate and air cells behind and beside the tree
 };
 
 // One straight piece of a vessel: a capsule whose radius goes linearly from r0 to r1.
@@ -71,7 +71,8 @@ inline void grow(std::vector<VesselSegment>& out, std::mt19937& g, glm::dvec3 p,
         // bend a little, and stay inside the field of view (a soft pull towards the centre)
         glm::dvec3 bend(uniform01(g) - 0.5, uniform01(g) - 0.5, uniform01(g) - 0.5);
         const glm::dvec3 to_c = (ext * 0.5 - p) / ext;
-        dir = glm::normalize(dir + 0.35 * bend + 0.8 * glm::dvec3(to_c.x, to_c.y * 2.0, 0.0) * std::max(0.0, glm::length(to_c) - 0.25));
+        dir = glm::normalize(dir + 0.35 * bend +
+                             0.8 * glm::dvec3(to_c.x, to_c.y * 2.0, 0.0) * std::max(0.0, glm::length(to_c) - 0.25));
         const glm::dvec3 q = p + dir * (len / pieces);
         const double ra = r + (r_end - r) * i / pieces, rb = r + (r_end - r) * (i + 1) / pieces;
         out.push_back({p, q, ra, rb, hu});
@@ -110,12 +111,12 @@ inline std::vector<VesselSegment> thin_phantom_vessels(const ThinPhantomOptions&
     // The root enters near the top (high k: superior in LPS) and runs down
     // (towards low k) close in front of the bone shells, plus two trunks from
     // the sides.
-    thin_detail::grow(v, g, {ext.x * 0.45, ext.y * 0.55, ext.z * 0.95}, glm::normalize(glm::dvec3(0.1, 0.05, -1.0)), o.root_radius, o,
-                      ext, 0);
-    thin_detail::grow(v, g, {ext.x * 0.8, ext.y * 0.6, ext.z * 0.7}, glm::normalize(glm::dvec3(-1.0, 0.1, -0.3)), o.root_radius * 0.7,
-                      o, ext, 1);
-    thin_detail::grow(v, g, {ext.x * 0.15, ext.y * 0.6, ext.z * 0.55}, glm::normalize(glm::dvec3(1.0, 0.2, 0.2)), o.root_radius * 0.6,
-                      o, ext, 1);
+    thin_detail::grow(v, g, {ext.x * 0.45, ext.y * 0.55, ext.z * 0.95}, glm::normalize(glm::dvec3(0.1, 0.05, -1.0)),
+                      o.root_radius, o, ext, 0);
+    thin_detail::grow(v, g, {ext.x * 0.8, ext.y * 0.6, ext.z * 0.7}, glm::normalize(glm::dvec3(-1.0, 0.1, -0.3)),
+                      o.root_radius * 0.7, o, ext, 1);
+    thin_detail::grow(v, g, {ext.x * 0.15, ext.y * 0.6, ext.z * 0.55}, glm::normalize(glm::dvec3(1.0, 0.2, 0.2)),
+                      o.root_radius * 0.6, o, ext, 1);
     return v;
 }
 
@@ -150,13 +151,16 @@ inline Volume thin_phantom(const ThinPhantomOptions& o = {}) {
                 const double rho = glm::length(q);
                 const double edge = (rho - 1.0) * std::min(semi.x, semi.y); // ~mm outside the body
                 const double body = pv(edge), tissue = pv(edge + 4.0);
-                const double noise = (thin_detail::uniform01(g) + thin_detail::uniform01(g) + thin_detail::uniform01(g) - 1.5) * 10.0;
-                hu[std::size_t(i + o.dims[0] * (j + o.dims[1] * k))] = -1000.0 + body * 910.0 + tissue * 130.0 + body * noise;
+                const double noise =
+                    (thin_detail::uniform01(g) + thin_detail::uniform01(g) + thin_detail::uniform01(g) - 1.5) * 10.0;
+                hu[std::size_t(i + o.dims[0] * (j + o.dims[1] * k))] =
+                    -1000.0 + body * 910.0 + tissue * 130.0 + body * noise;
             }
     // Solids: max over the background of (its HU blended by partial volume).
     auto stamp = [&](const glm::dvec3& lo, const glm::dvec3& hi, auto&& f) { // f(p) -> (HU, fraction)
         const glm::ivec3 a = glm::max(glm::ivec3(glm::floor(lo / sp)), glm::ivec3(0));
-        const glm::ivec3 b = glm::min(glm::ivec3(glm::ceil(hi / sp)), glm::ivec3(o.dims[0] - 1, o.dims[1] - 1, o.dims[2] - 1));
+        const glm::ivec3 b =
+            glm::min(glm::ivec3(glm::ceil(hi / sp)), glm::ivec3(o.dims[0] - 1, o.dims[1] - 1, o.dims[2] - 1));
         for (int k = a.z; k <= b.z; ++k)
             for (int j = a.y; j <= b.y; ++j)
                 for (int i = a.x; i <= b.x; ++i) {
@@ -169,13 +173,18 @@ inline Volume thin_phantom(const ThinPhantomOptions& o = {}) {
     if (o.bone) {
         // Two thin shells (skull-base-like caps of spheres) behind the tree
         // (posterior: high j) and a 1 mm plate across the bottom, tilted.
-        struct Shell { glm::dvec3 centre; double radius, thickness, hu; };
-        const Shell shells[] = {{{c.x, c.y - 40.0, c.z}, 90.0, 1.2, 900.0}, {{c.x + 10.0, c.y - 20.0, c.z - 10.0}, 50.0, 2.0, 1100.0}};
+        struct Shell {
+            glm::dvec3 centre;
+            double radius, thickness, hu;
+        };
+        const Shell shells[] = {{{c.x, c.y - 40.0, c.z}, 90.0, 1.2, 900.0},
+                                {{c.x + 10.0, c.y - 20.0, c.z - 10.0}, 50.0, 2.0, 1100.0}};
         for (const auto& s : shells) {
             stamp(glm::dvec3(0), ext, [&](const glm::dvec3& p) {
                 const double d = std::abs(glm::length(p - s.centre) - s.radius) - 0.5 * s.thickness;
                 // only the posterior part of the sphere, within the body
-                const bool keep = p.y > c.y + 8.0 && glm::length((glm::dvec2(p.x, p.y) - glm::dvec2(c.x, c.y)) / semi) < 0.92;
+                const bool keep =
+                    p.y > c.y + 8.0 && glm::length((glm::dvec2(p.x, p.y) - glm::dvec2(c.x, c.y)) / semi) < 0.92;
                 return std::pair<double, double>{s.hu, keep ? pv(d) : 0.0};
             });
         }
@@ -192,8 +201,10 @@ inline Volume thin_phantom(const ThinPhantomOptions& o = {}) {
         const glm::dvec3 lo(c.x - 32.0, c.y - 2.0, ext.z * 0.3), hi(c.x - 7.0, c.y + 12.0, ext.z * 0.3 + 20.0);
         stamp(lo - 1.0, hi + 1.0, [&](const glm::dvec3& p) {
             const glm::dvec3 q = p - lo;
-            auto wall = [](double x) { return std::abs(x - 5.0 * std::round(x / 5.0)); }; // distance to the nearest cell wall plane
-            double d = std::min({wall(q.x), wall(q.z), hi.y - p.y}) - 0.4;        // walls along x and z, and the back wall
+            auto wall = [](double x) {
+                return std::abs(x - 5.0 * std::round(x / 5.0));
+            };                                                             // distance to the nearest cell wall plane
+            double d = std::min({wall(q.x), wall(q.z), hi.y - p.y}) - 0.4; // walls along x and z, and the back wall
             const double outside = std::max({lo.x - p.x, p.x - hi.x, lo.y - p.y, p.y - hi.y, lo.z - p.z, p.z - hi.z});
             d = std::max(d, outside);
             return std::pair<double, double>{750.0, pv(d)};

@@ -35,7 +35,8 @@ void collect(const RTCFilterFunctionNArguments* args) {
     // Embree's accessors take non-const pointers; they only read here.
     auto* ray = const_cast<RTCRayN*>(args->ray);
     auto* hit = const_cast<RTCHitN*>(args->hit);
-    ctx->hits->push_back({RTCRayN_tfar(ray, args->N, 0), RTCHitN_geomID(hit, args->N, 0), RTCHitN_primID(hit, args->N, 0)});
+    ctx->hits->push_back(
+        {RTCRayN_tfar(ray, args->N, 0), RTCHitN_geomID(hit, args->N, 0), RTCHitN_primID(hit, args->N, 0)});
     args->valid[0] = 0; // reject: the ray goes on to the next surface
 }
 
@@ -50,8 +51,8 @@ struct Scene {
 
 } // namespace
 
-TransparencyImage transparency_reference(const std::vector<ReferenceSurface>& surfaces, const Camera& camera, int width, int height,
-                                         const glm::dvec3& background, int threads) {
+TransparencyImage transparency_reference(const std::vector<ReferenceSurface>& surfaces, const Camera& camera, int width,
+                                         int height, const glm::dvec3& background, int threads) {
     if (width < 1 || height < 1) throw Error("transparency_reference", "empty image");
     Scene s;
     s.device = rtcNewDevice(nullptr);
@@ -64,11 +65,11 @@ TransparencyImage transparency_reference(const std::vector<ReferenceSurface>& su
         const Mesh* m = surfaces[si].mesh;
         if (!m || m->triangles.empty()) continue;
         RTCGeometry g = rtcNewGeometry(s.device, RTC_GEOMETRY_TYPE_TRIANGLE);
-        auto* v = static_cast<float*>(
-            rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 3 * sizeof(float), m->positions.size()));
+        auto* v = static_cast<float*>(rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
+                                                              3 * sizeof(float), m->positions.size()));
         std::memcpy(v, m->positions.data(), m->positions.size() * 3 * sizeof(float));
-        auto* idx = static_cast<unsigned*>(
-            rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, 3 * sizeof(unsigned), m->triangles.size()));
+        auto* idx = static_cast<unsigned*>(rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3,
+                                                                   3 * sizeof(unsigned), m->triangles.size()));
         std::memcpy(idx, m->triangles.data(), m->triangles.size() * 3 * sizeof(unsigned));
         rtcCommitGeometry(g);
         const unsigned id = rtcAttachGeometry(s.scene, g);
@@ -86,7 +87,6 @@ TransparencyImage transparency_reference(const std::vector<ReferenceSurface>& su
     out.linear.assign(n, background);
     out.foreground.assign(n, 0);
     out.hits.assign(n, 0);
-    const double aspect = double(width) / double(height);
     const glm::dvec3 forward = camera.forward();
     tbb::task_arena arena(threads > 0 ? threads : tbb::task_arena::automatic);
     arena.execute([&] {
@@ -126,7 +126,8 @@ TransparencyImage transparency_reference(const std::vector<ReferenceSurface>& su
                 // triangles of one crossing: keep one hit per surface there.
                 hits.erase(std::unique(hits.begin(), hits.end(),
                                        [](const Hit& p, const Hit& q) {
-                                           return p.geom == q.geom && std::abs(double(p.t) - double(q.t)) <= 1e-6 * std::max(1.0, double(p.t));
+                                           return p.geom == q.geom && std::abs(double(p.t) - double(q.t)) <=
+                                                                          1e-6 * std::max(1.0, double(p.t));
                                        }),
                            hits.end());
                 const std::size_t i = std::size_t(py) * std::size_t(width) + std::size_t(px);

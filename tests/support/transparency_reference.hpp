@@ -23,19 +23,19 @@ namespace iso {
 
 struct ReferenceSurface {
     const Mesh* mesh = nullptr;
-    glm::vec3 color{1.0f};   // linear albedo
+    glm::vec3 color{1.0f}; // linear albedo
     float opacity = 1.0f;
 };
 
 struct TransparencyImage {
     int width = 0, height = 0;
-    std::vector<glm::dvec3> linear;      // composited linear RGB, rows top to bottom
+    std::vector<glm::dvec3> linear;       // composited linear RGB, rows top to bottom
     std::vector<std::uint8_t> foreground; // 1 where the ray hit any surface
-    std::vector<std::uint32_t> hits;     // surfaces crossed per pixel (depth complexity)
+    std::vector<std::uint32_t> hits;      // surfaces crossed per pixel (depth complexity)
 };
 
-TransparencyImage transparency_reference(const std::vector<ReferenceSurface>& surfaces, const Camera& camera, int width, int height,
-                                         const glm::dvec3& background_linear, int threads = 0);
+TransparencyImage transparency_reference(const std::vector<ReferenceSurface>& surfaces, const Camera& camera, int width,
+                                         int height, const glm::dvec3& background_linear, int threads = 0);
 
 // sRGB encoding of a linear value (the renderer's, in double).
 double srgb_encode(double linear);

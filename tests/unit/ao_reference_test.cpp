@@ -62,8 +62,8 @@ TEST(AoReference, WallMatchesTheClosedForm) {
 TEST(AoReference, ClosedBoxIsFullyOccludedAndRadiusLimits) {
     Mesh scene;
     // A room 20 mm high, the point on its floor.
-    add_box(scene, {-100, -100, -1}, {100, 100, 0});   // floor
-    add_box(scene, {-100, -100, 20}, {100, 100, 21});   // ceiling
+    add_box(scene, {-100, -100, -1}, {100, 100, 0});  // floor
+    add_box(scene, {-100, -100, 20}, {100, 100, 21}); // ceiling
     add_box(scene, {-101, -100, -1}, {-100, 100, 21});
     add_box(scene, {100, -100, -1}, {101, 100, 21});
     add_box(scene, {-100, -101, -1}, {100, -100, 21});

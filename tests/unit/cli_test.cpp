@@ -24,7 +24,8 @@ TEST(Cli, InfoJsonHasTheDocumentedKeys) {
     // towards inferior (datasets/README.md).
     const double expected[4][4] = {{-3.2, 0, 0, 0}, {0, 3.2, 0, 0}, {0, 0, -1.5, 0}, {0, 0, 0, 1}};
     for (int r = 0; r < 4; ++r)
-        for (int c = 0; c < 4; ++c) EXPECT_NEAR(j["index_to_lps"][r][c].get<double>(), expected[r][c], 1e-12) << r << "," << c;
+        for (int c = 0; c < 4; ++c)
+            EXPECT_NEAR(j["index_to_lps"][r][c].get<double>(), expected[r][c], 1e-12) << r << "," << c;
     EXPECT_EQ(j["range"].size(), 2u);
     EXPECT_GT(j["memory_bytes"].get<double>(), 0);
 }
@@ -49,7 +50,8 @@ TEST(Cli, ErrorsNameTheFileAndExitNonZero) {
 
 TEST(Cli, MeshWritesSkinAndBoneInLps) {
     TempDir dir;
-    const auto r = test::run_command(test::cli() + " mesh " + test::data("headsq.nhdr") + " --iso 500 --iso 1150 -o " + (dir / "head.stl"));
+    const auto r = test::run_command(test::cli() + " mesh " + test::data("headsq.nhdr") + " --iso 500 --iso 1150 -o " +
+                                     (dir / "head.stl"));
     ASSERT_EQ(r.exit_code, 0) << r.out;
     const Mesh skin = load_mesh(dir / "head-iso500.stl"), bone = load_mesh(dir / "head-iso1150.stl");
     const auto s = mesh_stats(skin), b = mesh_stats(bone);
@@ -68,18 +70,20 @@ TEST(Cli, MeshWritesSkinAndBoneInLps) {
         EXPECT_LE(m.bounds_max.z, 1e-3);
     }
     // Post-processing options reach the mesh.
-    const auto d = test::run_command(test::cli() + " mesh " + test::data("headsq.nhdr") + " --iso 500 --decimate 0.5 --smooth 0.3 --largest -o " +
-                                     (dir / "dec.ply"));
+    const auto d = test::run_command(test::cli() + " mesh " + test::data("headsq.nhdr") +
+                                     " --iso 500 --decimate 0.5 --smooth 0.3 --largest -o " + (dir / "dec.ply"));
     ASSERT_EQ(d.exit_code, 0) << d.out;
     EXPECT_LT(mesh_stats(load_mesh(dir / "dec.ply")).triangles, s.triangles * 0.6);
     // An iso value outside the range: empty mesh, reported.
-    const auto e = test::run_command(test::cli() + " mesh " + test::data("headsq.nhdr") + " --iso 99999 -o " + (dir / "e.obj"), true);
+    const auto e = test::run_command(
+        test::cli() + " mesh " + test::data("headsq.nhdr") + " --iso 99999 -o " + (dir / "e.obj"), true);
     EXPECT_EQ(e.exit_code, 0) << e.out;
     EXPECT_NE(e.out.find("outside the volume's value range"), std::string::npos) << e.out;
 }
 
 TEST(Cli, MeshRefusesBadOutputBeforeWorking) {
-    const auto r = test::run_command(test::cli() + " mesh " + test::data("headsq.nhdr") + " --iso 500 -o /no/such/dir/x.stl", true);
+    const auto r = test::run_command(
+        test::cli() + " mesh " + test::data("headsq.nhdr") + " --iso 500 -o /no/such/dir/x.stl", true);
     EXPECT_EQ(r.exit_code, 1);
     EXPECT_NE(r.out.find("does not exist"), std::string::npos) << r.out;
 }
@@ -113,7 +117,8 @@ TEST(Cli, MeshJsonOpenSurfaceVolumeIsMeasuresLowerBound) {
     EXPECT_EQ(a["volume_kind"], b["volume_kind"]);
     ASSERT_TRUE(a["volume_ml"].is_number());
     EXPECT_EQ(a["volume_ml"].get<double>(), b["volume_ml"].get<double>());
-    EXPECT_NEAR(a["volume_mm3"].get<double>(), 1000.0 * b["volume_ml"].get<double>(), 1e-9 * a["volume_mm3"].get<double>());
+    EXPECT_NEAR(a["volume_mm3"].get<double>(), 1000.0 * b["volume_ml"].get<double>(),
+                1e-9 * a["volume_mm3"].get<double>());
     EXPECT_EQ(a["triangles"], b["triangles"]);
     EXPECT_EQ(a["area_mm2"].get<double>(), b["area_mm2"].get<double>());
     EXPECT_EQ(a["components"]["count"].get<std::size_t>(), b["components"].size());
@@ -123,7 +128,9 @@ TEST(Cli, MeshJsonOpenSurfaceVolumeIsMeasuresLowerBound) {
     // The text summary says the same: open, a lower bound, never a plain volume.
     const auto t = test::run_command(test::cli() + " mesh " + in + " --iso 500 -o " + (dir / "skin.stl"));
     ASSERT_EQ(t.exit_code, 0) << t.out;
-    EXPECT_NE(t.out.find("iso 500: " + std::to_string(a["triangles"].get<std::size_t>()) + " triangles"), std::string::npos) << t.out;
+    EXPECT_NE(t.out.find("iso 500: " + std::to_string(a["triangles"].get<std::size_t>()) + " triangles"),
+              std::string::npos)
+        << t.out;
     EXPECT_NE(t.out.find(", open, volume >= "), std::string::npos) << t.out;
     EXPECT_NE(t.out.find("(lower bound"), std::string::npos) << t.out;
 }

@@ -69,7 +69,10 @@ std::size_t count_components(const Mesh& m) {
             stack.pop_back();
             for (auto v : m.triangles[t])
                 for (auto u : tris_of[v])
-                    if (!seen[u]) { seen[u] = 1; stack.push_back(u); }
+                    if (!seen[u]) {
+                        seen[u] = 1;
+                        stack.push_back(u);
+                    }
         }
     }
     return n;
@@ -382,7 +385,8 @@ TEST(Components, SingleProcessStreamingReportsTheWholeMeshStatistics) {
         EXPECT_NEAR(got.area, ms.area, 1e-9 * ms.area);
         EXPECT_NEAR(got.volume, ms.volume, 1e-9 * std::abs(ms.volume));
         EXPECT_EQ(got.components, count_components(whole));
-        EXPECT_EQ(got.boundary_edges, measure_surface(whole).boundary_edges) << "edges on the slab seams are not the boundary";
+        EXPECT_EQ(got.boundary_edges, measure_surface(whole).boundary_edges)
+            << "edges on the slab seams are not the boundary";
         EXPECT_EQ(got.largest.triangles, ref.largest.triangles);
         EXPECT_NEAR(got.largest.area, ref.largest.area, 1e-9 * ref.largest.area);
         EXPECT_NEAR(got.largest.volume, ref.largest.volume, 1e-9 * std::abs(ref.largest.volume));

@@ -37,11 +37,11 @@
 #include "tests/support/test_util.hpp"
 
 using namespace iso;
-using iso::test::TempDir;
 using iso::test::pattern;
 using iso::test::rot_x;
 using iso::test::rot_z;
 using iso::test::SeriesSpec;
+using iso::test::TempDir;
 using iso::test::write_series;
 namespace fs = std::filesystem;
 
@@ -112,7 +112,9 @@ glm::dmat4 expected_affine(const std::vector<Header>& hs, int steps) {
     return m;
 }
 
-void expect_affine_near(const glm::dmat4& a, const glm::dmat4& b, double tol = kMm) { test::expect_affine_near(a, b, tol); }
+void expect_affine_near(const glm::dmat4& a, const glm::dmat4& b, double tol = kMm) {
+    test::expect_affine_near(a, b, tol);
+}
 
 // Raw stored pixel values of an uncompressed 16-bit file: the PixelData value is
 // the last rows*cols*2 bytes of the files vtkDICOMWriter writes.
@@ -245,8 +247,10 @@ TEST(Dicom, PerSliceRescaleIsAppliedPerSlice) {
         fs::create_directories(dir);
         for (size_t k = 0; k < hs.size(); ++k) {
             const std::string dst = dir + "/" + fs::path(hs[k].file).filename().string();
-            if (k == 5) rewrite(hs[k].file, dst, [&](vtkDICOMMetaData* md) { set_ds(md, DC::RescaleSlope, {slope}); });
-            else fs::copy_file(hs[k].file, dst);
+            if (k == 5)
+                rewrite(hs[k].file, dst, [&](vtkDICOMMetaData* md) { set_ds(md, DC::RescaleSlope, {slope}); });
+            else
+                fs::copy_file(hs[k].file, dst);
         }
         return load_volume(dir);
     };
@@ -375,8 +379,9 @@ TEST(Dicom, GantryTiltIsDetectedAndAffineIsSheared) {
         const double z = glm::dot(hs[k].ipp - hs[0].ipp, glm::cross(hs[k].row, hs[k].col));
         glm::dvec3 ipp = hs[k].ipp + hs[k].col * (z * std::tan(tilt * M_PI / 180));
         ipps.push_back(ipp);
-        rewrite(hs[k].file, tmp / ("tilt/T" + std::to_string(k) + ".dcm"),
-                [&](vtkDICOMMetaData* md) { set_ds(md, DC::ImagePositionPatient, {ipp.x, ipp.y, ipp.z}); });
+        rewrite(hs[k].file, tmp / ("tilt/T" + std::to_string(k) + ".dcm"), [&](vtkDICOMMetaData* md) {
+            set_ds(md, DC::ImagePositionPatient, {ipp.x, ipp.y, ipp.z});
+        });
     }
     const Volume v = load_volume(tmp / "tilt");
     ASSERT_EQ(v.dims[2], 8);
@@ -513,9 +518,8 @@ TEST(Dicom, DuplicateFileIsReadOnceButConflictingImagesAreAnError) {
     EXPECT_EQ(v.dims[2], 8);
     EXPECT_TRUE(any_warning(v, "duplicate")) << all_warnings(v);
 
-    rewrite(hs[2].file, dir + "/copy/other.dcm", [&](vtkDICOMMetaData* md) {
-        md->Set(DC::SOPInstanceUID, std::string("1.2.826.0.1.3680043.2.1125.99.2"));
-    });
+    rewrite(hs[2].file, dir + "/copy/other.dcm",
+            [&](vtkDICOMMetaData* md) { md->Set(DC::SOPInstanceUID, std::string("1.2.826.0.1.3680043.2.1125.99.2")); });
     const std::string msg = error_of([&] { load_volume(dir); });
     EXPECT_NE(msg.find("same position"), std::string::npos) << msg;
 }
@@ -590,8 +594,11 @@ TEST(Dicom, CorruptCompressedPixelDataIsAnError) {
     fs::create_directories(tmp / "jpeg");
     for (size_t k = 0; k < hs.size(); ++k) {
         const std::string dst = tmp / ("jpeg/" + fs::path(hs[k].file).filename().string());
-        if (k == 2) rewrite(hs[k].file, dst, [](vtkDICOMMetaData*) {}, "1.2.840.10008.1.2.4.50");
-        else fs::copy_file(hs[k].file, dst);
+        if (k == 2)
+            rewrite(
+                hs[k].file, dst, [](vtkDICOMMetaData*) {}, "1.2.840.10008.1.2.4.50");
+        else
+            fs::copy_file(hs[k].file, dst);
     }
     const std::string e = error_of([&] { load_volume(tmp / "jpeg"); });
     EXPECT_NE(e.find(fs::path(hs[2].file).filename().string()), std::string::npos) << e;
@@ -607,8 +614,10 @@ TEST(Dicom, BadGeometryGivesClearErrors) {
         fs::create_directories(dir);
         for (size_t k = 0; k < hs.size(); ++k) {
             const std::string dst = dir + "/" + fs::path(hs[k].file).filename().string();
-            if (k == 4) rewrite(hs[k].file, dst, edit);
-            else fs::copy_file(hs[k].file, dst);
+            if (k == 4)
+                rewrite(hs[k].file, dst, edit);
+            else
+                fs::copy_file(hs[k].file, dst);
         }
         return error_of([&] { load_volume(dir); });
     };

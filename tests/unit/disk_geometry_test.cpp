@@ -156,14 +156,14 @@ TEST(DiskGeometry, ClipAllTwentySevenSignCases) {
         ASSERT_EQ(r.count, expected_count);
         ASSERT_EQ(r.visible, above > 0);
         if (!r.visible) {
-            for (const V& q : r.q) EXPECT_EQ(q, f.p);  // all four equal
+            for (const V& q : r.q) EXPECT_EQ(q, f.p); // all four equal
             EXPECT_EQ(clipped_triangle_form_factor(f.p, f.n, v[0], v[1], v[2]), 0.0);
             continue;
         }
         ++visible_cases;
         quads += r.count == 4;
         if (r.count == 3) {
-            EXPECT_EQ(r.q[3], r.q[2]);  // a triangle repeats its last point
+            EXPECT_EQ(r.q[3], r.q[2]); // a triangle repeats its last point
         }
 
         // Kept vertices exactly, dropped ones absent, new points on the plane.
@@ -207,8 +207,8 @@ TEST(DiskGeometry, ClipAllTwentySevenSignCases) {
         EXPECT_NEAR(ff, ref, 1e-4 * std::abs(ref) + 1e-6);
     }
     EXPECT_EQ(cases, 27);
-    EXPECT_EQ(visible_cases, 19);  // 27 minus the 2^3 patterns with no vertex above
-    EXPECT_EQ(quads, 3);           // two above, one below
+    EXPECT_EQ(visible_cases, 19); // 27 minus the 2^3 patterns with no vertex above
+    EXPECT_EQ(quads, 3);          // two above, one below
 }
 
 // Hand-checked outputs of named cases (vertex order and the intersection
@@ -222,8 +222,8 @@ TEST(DiskGeometry, ClipNamedCases) {
         ASSERT_EQ(r.count, 4);
         EXPECT_EQ(r.q[0], v0);
         EXPECT_EQ(r.q[1], v1);
-        EXPECT_NEAR(glm::distance(r.q[2], V(2 - 1.5, 1.5, 0)), 0.0, 1e-15);  // t = 3/4 along v1->v2
-        EXPECT_NEAR(glm::distance(r.q[3], V(0, 1, 0)), 0.0, 1e-15);          // t = 1/2 along v2->v0
+        EXPECT_NEAR(glm::distance(r.q[2], V(2 - 1.5, 1.5, 0)), 0.0, 1e-15); // t = 3/4 along v1->v2
+        EXPECT_NEAR(glm::distance(r.q[3], V(0, 1, 0)), 0.0, 1e-15);         // t = 1/2 along v2->v0
     }
     // One above, one on, one below: above, on, and the point on v2->v0.
     {
@@ -270,7 +270,7 @@ TEST(DiskGeometry, EpsilonSnapRemovesSlivers) {
     EXPECT_EQ(clipped_triangle_form_factor(p, n, v0, w1, w2), 0.0);
     const V u0(0.5, 0.5, -1e-12), u1(1.5, 0.5, 1), u2(0.5, 1.5, 1);
     const auto r = clip_to_tangent_plane(p, n, u0, u1, u2);
-    EXPECT_EQ(r.count, 3);  // u0 is on the plane: the whole triangle, no cut
+    EXPECT_EQ(r.count, 3); // u0 is on the plane: the whole triangle, no cut
     EXPECT_EQ(r.q[0], u0);
 }
 
@@ -280,17 +280,18 @@ TEST(DiskGeometry, DegenerateTriangles) {
     const V a = f.at(0.5, 0.2, 0.8), b = f.at(1.5, 0.9, -0.6);
     const V mid = 0.5 * (a + b);
     const std::array<std::array<V, 3>, 5> tris = {{
-        {a, b, mid},                           // collinear, crossing the plane
-        {a, mid, f.at(0.75, 0.395, 0.45)},     // a sliver (2 % as wide as long), above
-        {a, a, b},                             // repeated vertex
-        {a, a, a},                             // a point
-        {f.at(0.5, 0.2, 0.8), f.at(0.7, 0.2, 0.8), f.at(0.9, 0.2, 0.8)},  // collinear, above
+        {a, b, mid},                                                     // collinear, crossing the plane
+        {a, mid, f.at(0.75, 0.395, 0.45)},                               // a sliver (2 % as wide as long), above
+        {a, a, b},                                                       // repeated vertex
+        {a, a, a},                                                       // a point
+        {f.at(0.5, 0.2, 0.8), f.at(0.7, 0.2, 0.8), f.at(0.9, 0.2, 0.8)}, // collinear, above
     }};
     for (const auto& t : tris) {
         const auto r = clip_to_tangent_plane(f.p, f.n, t[0], t[1], t[2]);
         for (const V& q : r.q) EXPECT_TRUE(std::isfinite(q.x) && std::isfinite(q.y) && std::isfinite(q.z));
-        EXPECT_NEAR(glm::length(vector_area(r.q, 4)), tri_area(t[0], t[1], t[2]) * visible_fraction(
-            {height(f, t[0]), height(f, t[1]), height(f, t[2])}), 1e-6);
+        EXPECT_NEAR(glm::length(vector_area(r.q, 4)),
+                    tri_area(t[0], t[1], t[2]) * visible_fraction({height(f, t[0]), height(f, t[1]), height(f, t[2])}),
+                    1e-6);
         const double ff = clipped_triangle_form_factor(f.p, f.n, t[0], t[1], t[2]);
         EXPECT_TRUE(std::isfinite(ff));
         // Zero area in exact arithmetic (all but the sliver):
@@ -309,11 +310,12 @@ TEST(DiskGeometry, DegenerateTriangles) {
     EXPECT_TRUE(std::isfinite(fv));
     EXPECT_LE(std::abs(fv), 1.0);
     // An edge whose line passes through p (p between its endpoints).
-    const double fe = polygon_form_factor(f.p, f.n, std::array<V, 3>{f.at(-1, 0, 0), f.at(1, 0, 0), f.at(0, 1, 1)}.data(), 3);
+    const double fe =
+        polygon_form_factor(f.p, f.n, std::array<V, 3>{f.at(-1, 0, 0), f.at(1, 0, 0), f.at(0, 1, 1)}.data(), 3);
     EXPECT_TRUE(std::isfinite(fe));
     // The zero normal and a zero-area disk.
     EXPECT_EQ(disk_form_factor(f.p, V(0.0), f.at(0, 0, 1), -f.n, 1.0), 0.0);
-    EXPECT_EQ(disk_form_factor(f.p, f.n, f.p, -f.n, 1.0), 0.0);  // the disk at p
+    EXPECT_EQ(disk_form_factor(f.p, f.n, f.p, -f.n, 1.0), 0.0); // the disk at p
     EXPECT_EQ(disk_form_factor(f.p, f.n, f.at(0, 0, 1), -f.n, 0.0), 0.0);
 }
 
@@ -326,7 +328,7 @@ TEST(DiskGeometry, PolygonFormFactorOfDiskOnAxis) {
     for (double h : {0.05, 0.3, 1.0, 4.0, 50.0}) {
         for (double R : {0.1, 1.0, 7.0}) {
             const int sides = 256;
-            const auto q = regular_polygon(p + h * n, -n, R, sides);  // front faces p
+            const auto q = regular_polygon(p + h * n, -n, R, sides); // front faces p
             const double F = polygon_ff(p, n, q);
             const double rin = R * std::cos(kPi / sides);
             const double lo = rin * rin / (h * h + rin * rin), hi = R * R / (h * h + R * R);
@@ -346,7 +348,7 @@ TEST(DiskGeometry, PolygonFormFactorOfRectangles) {
     const Frame f;
     for (double a : {0.1, 0.5, 1.0, 3.0}) {
         for (double h : {0.2, 1.0, 2.5}) {
-            const V q[4] = {f.at(-a, -a, h), f.at(-a, a, h), f.at(a, a, h), f.at(a, -a, h)};  // normal -n: faces p
+            const V q[4] = {f.at(-a, -a, h), f.at(-a, a, h), f.at(a, a, h), f.at(a, -a, h)}; // normal -n: faces p
             const double X = a / h, s = std::sqrt(1 + X * X);
             const double closed = 4 / kPi * X / s * std::atan(X / s);
             EXPECT_NEAR(polygon_form_factor(f.p, f.n, q, 4), closed, 1e-14) << a << " " << h;
@@ -380,8 +382,8 @@ TEST(DiskGeometry, ClippedFormFactorMatchesNumericalIntegration) {
     const Frame f;
     const std::array<std::array<V, 3>, 4> tris = {{
         {f.at(0.5, -1.0, -0.7), f.at(1.8, 0.2, 1.2), f.at(-0.4, 1.5, 0.9)},
-        {f.at(-2.0, 0.5, 2.0), f.at(2.0, 0.3, 2.0), f.at(0.1, 1.0, -1.5)},   // one below
-        {f.at(-0.3, 0.4, 0.6), f.at(0.6, 0.5, -0.2), f.at(0.1, 1.2, -0.9)},  // one above
+        {f.at(-2.0, 0.5, 2.0), f.at(2.0, 0.3, 2.0), f.at(0.1, 1.0, -1.5)},  // one below
+        {f.at(-0.3, 0.4, 0.6), f.at(0.6, 0.5, -0.2), f.at(0.1, 1.2, -0.9)}, // one above
         {f.at(0.2, -0.6, 0.3), f.at(0.9, 0.7, -0.4), f.at(-0.8, 0.4, 0.05)},
     }};
     for (const auto& t : tris) {
@@ -409,7 +411,8 @@ TEST(DiskGeometry, AdditivityAndReciprocity) {
     const V a = f.at(0.5, -1.0, -0.7), b = f.at(1.8, 0.2, 1.2), c = f.at(-0.4, 1.5, 0.9);
     const V m = 0.5 * (b + c);
     EXPECT_NEAR(clipped_triangle_form_factor(f.p, f.n, a, b, c),
-                clipped_triangle_form_factor(f.p, f.n, a, b, m) + clipped_triangle_form_factor(f.p, f.n, a, m, c), 1e-14);
+                clipped_triangle_form_factor(f.p, f.n, a, b, m) + clipped_triangle_form_factor(f.p, f.n, a, m, c),
+                1e-14);
 
     // Reciprocity, integrating the receiver's point form factor over its own
     // area (midpoint rule, 200 x 200).
@@ -426,14 +429,14 @@ TEST(DiskGeometry, AdditivityAndReciprocity) {
     // Two unit squares facing each other at distance 1: F = 0.19982 (closed
     // form for directly opposed rectangles, X = Y = 1).
     {
-        const V lower[4] = {V(0, 0, 0), V(1, 0, 0), V(1, 1, 0), V(0, 1, 0)};  // front +z
-        const V upper[4] = {V(0, 0, 1), V(0, 1, 1), V(1, 1, 1), V(1, 0, 1)};  // front -z
+        const V lower[4] = {V(0, 0, 0), V(1, 0, 0), V(1, 1, 0), V(0, 1, 0)}; // front +z
+        const V upper[4] = {V(0, 0, 1), V(0, 1, 1), V(1, 1, 1), V(1, 0, 1)}; // front -z
         const double X = 1, Y = 1;
-        const double closed = 2 / (kPi * X * Y) *
-                              (0.5 * std::log((1 + X * X) * (1 + Y * Y) / (1 + X * X + Y * Y)) +
-                               X * std::sqrt(1 + Y * Y) * std::atan(X / std::sqrt(1 + Y * Y)) +
-                               Y * std::sqrt(1 + X * X) * std::atan(Y / std::sqrt(1 + X * X)) - X * std::atan(X) -
-                               Y * std::atan(Y));
+        const double closed =
+            2 / (kPi * X * Y) *
+            (0.5 * std::log((1 + X * X) * (1 + Y * Y) / (1 + X * X + Y * Y)) +
+             X * std::sqrt(1 + Y * Y) * std::atan(X / std::sqrt(1 + Y * Y)) +
+             Y * std::sqrt(1 + X * X) * std::atan(Y / std::sqrt(1 + X * X)) - X * std::atan(X) - Y * std::atan(Y));
         const double f12 = integrate_over_square(V(0, 0, 0), V(1, 0, 0), V(0, 1, 0), V(0, 0, 1), upper);
         const double f21 = integrate_over_square(V(0, 0, 1), V(1, 0, 0), V(0, 1, 0), V(0, 0, -1), lower);
         EXPECT_NEAR(closed, 0.19982, 1e-5);
@@ -442,8 +445,8 @@ TEST(DiskGeometry, AdditivityAndReciprocity) {
     }
     // Perpendicular, not touching: a floor square and a wall square.
     {
-        const V floor_sq[4] = {V(0, 0, 0), V(1, 0, 0), V(1, 1, 0), V(0, 1, 0)};              // front +z, area 1
-        const V wall[4] = {V(1.2, 0, 0.2), V(1.2, 0, 1.7), V(1.2, 1, 1.7), V(1.2, 1, 0.2)};  // front -x, area 1.5
+        const V floor_sq[4] = {V(0, 0, 0), V(1, 0, 0), V(1, 1, 0), V(0, 1, 0)};             // front +z, area 1
+        const V wall[4] = {V(1.2, 0, 0.2), V(1.2, 0, 1.7), V(1.2, 1, 1.7), V(1.2, 1, 0.2)}; // front -x, area 1.5
         const double a1f12 = integrate_over_square(V(0, 0, 0), V(1, 0, 0), V(0, 1, 0), V(0, 0, 1), wall);
         const double a2f21 = integrate_over_square(V(1.2, 0, 0.2), V(0, 1, 0), V(0, 0, 1.5), V(-1, 0, 0), floor_sq);
         EXPECT_GT(a1f12, 0.05);
@@ -462,8 +465,8 @@ TEST(DiskGeometry, DiskFormFactor) {
             EXPECT_NEAR(F, R * R / (h * h + R * R), 1e-15);
         }
 
-    const V dir = glm::normalize(f.at(0.6, -0.3, 1.0) - f.p);         // off the normal
-    const V m = glm::normalize(-dir + 0.5 * f.t - 0.2 * f.b);         // tilted emitter
+    const V dir = glm::normalize(f.at(0.6, -0.3, 1.0) - f.p); // off the normal
+    const V m = glm::normalize(-dir + 0.5 * f.t - 0.2 * f.b); // tilted emitter
     const double R = 1.0;
     double last = 1e9;
     for (double d : {3.0, 10.0, 30.0, 100.0, 300.0}) {
@@ -473,29 +476,29 @@ TEST(DiskGeometry, DiskFormFactor) {
         const double exact = polygon_ff(f.p, f.n, q);
         const double approx = disk_form_factor(f.p, f.n, c, m, area);
         const double err = std::abs(approx / exact - 1);
-        EXPECT_LT(err, 1.5 * (R / d) * (R / d)) << d;  // measured 0.88 (R/d)^2
+        EXPECT_LT(err, 1.5 * (R / d) * (R / d)) << d; // measured 0.88 (R/d)^2
         EXPECT_LT(err, last) << d;
         last = err;
     }
     EXPECT_LT(last, 1e-4);
 
-    EXPECT_EQ(disk_form_factor(f.p, f.n, f.at(0, 0, 1), f.n, 1.0), 0.0);    // its back faces p
-    EXPECT_EQ(disk_form_factor(f.p, f.n, f.at(0, 0, -1), f.n, 1.0), 0.0);   // below the plane
-    EXPECT_NEAR(disk_form_factor(f.p, f.n, f.at(1, 0, 0), -f.t, 1.0), 0.0, 1e-15);  // in the plane (cos_r = 0)
+    EXPECT_EQ(disk_form_factor(f.p, f.n, f.at(0, 0, 1), f.n, 1.0), 0.0);           // its back faces p
+    EXPECT_EQ(disk_form_factor(f.p, f.n, f.at(0, 0, -1), f.n, 1.0), 0.0);          // below the plane
+    EXPECT_NEAR(disk_form_factor(f.p, f.n, f.at(1, 0, 0), -f.t, 1.0), 0.0, 1e-15); // in the plane (cos_r = 0)
 }
 
 TEST(DiskGeometry, Attenuations) {
     EXPECT_EQ(distance_attenuation(0.0, 0.5), 1.0);
     EXPECT_DOUBLE_EQ(distance_attenuation(4.0, 0.5), 1.0 / 3.0);
-    EXPECT_EQ(distance_attenuation(123.0), 1.0);  // default k = 0
-    EXPECT_EQ(distance_attenuation(4.0, -1.0), 1.0);  // k < 0 taken as 0
+    EXPECT_EQ(distance_attenuation(123.0), 1.0);     // default k = 0
+    EXPECT_EQ(distance_attenuation(4.0, -1.0), 1.0); // k < 0 taken as 0
 
     EXPECT_DOUBLE_EQ(triangle_attenuation(0.25, 0.5), 0.5);
     EXPECT_DOUBLE_EQ(triangle_attenuation(0.25, 2.0), 0.0625);
-    EXPECT_EQ(triangle_attenuation(0.6), 0.6);  // default t = 1: Bunnell's modulation
+    EXPECT_EQ(triangle_attenuation(0.6), 0.6); // default t = 1: Bunnell's modulation
     EXPECT_EQ(triangle_attenuation(0.0, 0.0), 1.0);
     EXPECT_EQ(triangle_attenuation(0.0, 2.0), 0.0);
-    EXPECT_EQ(triangle_attenuation(1.5, 2.0), 1.0);  // clamped to [0, 1]
+    EXPECT_EQ(triangle_attenuation(1.5, 2.0), 1.0); // clamped to [0, 1]
     EXPECT_EQ(triangle_attenuation(-0.5, 2.0), 0.0);
 
     EXPECT_EQ(DiskAoSettings{}.clip_epsilon, 1e-6);
@@ -520,8 +523,8 @@ TEST(DiskGeometry, ConvergeBlendOnTwoCycle) {
     }
     EXPECT_DOUBLE_EQ(converge_blend(0.2, 0.9), 0.7 * 0.2 + 0.3 * 0.9);
     EXPECT_EQ(converge_blend(0.2, 0.9), converge_blend(0.9, 0.2));
-    EXPECT_EQ(converge_blend(0.45, 0.45), 0.45);  // a converged value is kept
-    EXPECT_DOUBLE_EQ(converge_blend(0.2, 0.9, 1.0, 0.0), 0.2);  // pure minimum
+    EXPECT_EQ(converge_blend(0.45, 0.45), 0.45);               // a converged value is kept
+    EXPECT_DOUBLE_EQ(converge_blend(0.2, 0.9, 1.0, 0.0), 0.2); // pure minimum
 }
 
 // The float instantiation (what the GLSL port computes) agrees with double.

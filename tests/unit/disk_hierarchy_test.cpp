@@ -119,14 +119,16 @@ void check_structure(const DiskHierarchy& h, const std::vector<const Mesh*>& mes
         if (node.links.y < 0) {
             ++leaves;
             EXPECT_EQ(skip, i + 1);
-            for (std::int32_t t = node.links.z; t < node.links.z + node.links.w; ++t) ++owner_seen[static_cast<std::size_t>(t)];
+            for (std::int32_t t = node.links.z; t < node.links.z + node.links.w; ++t)
+                ++owner_seen[static_cast<std::size_t>(t)];
             // A leaf's bound holds its disk and its triangles.
             const double r = std::sqrt(node.centre_area.w / kPi);
             EXPECT_LE(r, node.normal_bound.w * (1 + 1e-6) + 1e-12);
             for (std::int32_t t = node.links.z; t < node.links.z + node.links.w; ++t)
                 for (int k = 0; k < 3; ++k)
-                    EXPECT_LE(glm::length(xyz(h.triangles[static_cast<std::size_t>(3 * t + k)]) - xyz(node.centre_area)),
-                              node.normal_bound.w * (1 + 1e-6) + 1e-9);
+                    EXPECT_LE(
+                        glm::length(xyz(h.triangles[static_cast<std::size_t>(3 * t + k)]) - xyz(node.centre_area)),
+                        node.normal_bound.w * (1 + 1e-6) + 1e-9);
             continue;
         }
         // Parent: children chained by skip from i + 1 exactly to skip, 2-4 of them,
@@ -170,7 +172,8 @@ void check_structure(const DiskHierarchy& h, const std::vector<const Mesh*>& mes
         for (const auto& t : m->triangles) {
             std::array<float, 9> a{};
             for (int k = 0; k < 3; ++k)
-                for (int d = 0; d < 3; ++d) a[static_cast<std::size_t>(3 * k + d)] = m->positions[t[static_cast<std::size_t>(k)]][d];
+                for (int d = 0; d < 3; ++d)
+                    a[static_cast<std::size_t>(3 * k + d)] = m->positions[t[static_cast<std::size_t>(k)]][d];
             expected.push_back(a);
             mesh_area += triangle_area(*m, t);
         }
@@ -195,7 +198,8 @@ void check_structure(const DiskHierarchy& h, const std::vector<const Mesh*>& mes
     for (std::size_t t = 0; t < h.triangles.size() / 3; ++t) {
         std::array<float, 9> a{};
         for (int k = 0; k < 3; ++k)
-            for (int d = 0; d < 3; ++d) a[static_cast<std::size_t>(3 * k + d)] = h.triangles[3 * t + static_cast<std::size_t>(k)][d];
+            for (int d = 0; d < 3; ++d)
+                a[static_cast<std::size_t>(3 * k + d)] = h.triangles[3 * t + static_cast<std::size_t>(k)][d];
         stored.push_back(a);
     }
     std::sort(stored.begin(), stored.end());
@@ -259,13 +263,13 @@ TEST(DiskHierarchyBuild, ClosedBoxRootNormalCancels) {
     const Mesh m = box(1.0, 4, false);
     const DiskHierarchy h = build_disk_hierarchy(m);
     check_structure(h, {&m});
-    EXPECT_EQ(glm::vec3(h.nodes[0].normal_bound), glm::vec3(0.0f));  // opposite faces cancel exactly
+    EXPECT_EQ(glm::vec3(h.nodes[0].normal_bound), glm::vec3(0.0f)); // opposite faces cancel exactly
     EXPECT_NEAR(h.nodes[0].centre_area.w, 24.0, 1e-4);
 }
 
 TEST(DiskHierarchyBuild, MeshWithoutNormalsGetsFaceNormals) {
     Mesh m;
-    add_grid(m, V(0), V(0, 1, 0), V(0, 0, 1), 3, 3);  // front +x
+    add_grid(m, V(0), V(0, 1, 0), V(0, 0, 1), 3, 3); // front +x
     m.normals.clear();
     const DiskHierarchy h = build_disk_hierarchy(m);
     for (const auto& node : h.nodes) EXPECT_NEAR(node.normal_bound.x, 1.0f, 1e-6);
@@ -379,7 +383,7 @@ namespace {
 
 DiskAoSettings all_triangles() {
     DiskAoSettings s;
-    s.traversal_epsilon = 1e30;  // always near: every leaf as its triangles
+    s.traversal_epsilon = 1e30; // always near: every leaf as its triangles
     s.receiver_offset = 0.0;
     return s;
 }
@@ -389,7 +393,8 @@ DiskAoSettings all_triangles() {
 double brute_force(const Mesh& m, const V& p, const V& n) {
     double sum = 0.0;
     for (const auto& t : m.triangles)
-        sum += std::max(clipped_triangle_form_factor(p, n, V(m.positions[t[0]]), V(m.positions[t[1]]), V(m.positions[t[2]])), 0.0);
+        sum += std::max(
+            clipped_triangle_form_factor(p, n, V(m.positions[t[0]]), V(m.positions[t[1]]), V(m.positions[t[2]])), 0.0);
     return std::min(sum, 1.0);
 }
 
@@ -433,7 +438,7 @@ TEST(DiskOcclusion, SquareAboveCentreMatchesClosedForm) {
     s.traversal_epsilon = 16.0;
     const double ours = disk_occlusion(h, p, n, {}, s, 100.0);
     std::printf("square: epsilon 16 %.5f\n", ours);
-    EXPECT_NEAR(ours, exact, 0.015);  // measured 0.012 low
+    EXPECT_NEAR(ours, exact, 0.015); // measured 0.012 low
     EXPECT_GT(ours, chapter);
     std::printf("square: exact %.5f, epsilon 8 %.5f\n", exact, chapter);
     EXPECT_NEAR(chapter, exact, 0.03);
@@ -453,7 +458,7 @@ TEST(DiskOcclusion, FarFieldIsTheDiskApproximation) {
     const double exact = centred_square_ff(0.5, d);
     const double got = disk_occlusion(h, V(0, 0, d), V(0, 0, -1), {}, s, 100.0);
     EXPECT_NEAR(got, exact, 1.5 * (1.0 / kPi) / (d * d) * exact);
-    EXPECT_NEAR(got, 1.0 / (kPi * d * d + 1.0), 1e-6);  // exactly the root disk
+    EXPECT_NEAR(got, 1.0 / (kPi * d * d + 1.0), 1e-6); // exactly the root disk
 }
 
 // The radius: elements count by their centre's distance (triangles: their
@@ -471,8 +476,9 @@ TEST(DiskOcclusion, RadiusLimitsOccluders) {
     const V p(0, 0, 5), n(0, 0, -1);
     const double full = disk_occlusion(h, p, n, {}, s, 1000.0);
     EXPECT_GT(full, 0.01);
-    EXPECT_NEAR(disk_occlusion(h, p, n, {}, s, std::sqrt(25.0 + 0.5) + 1e-3), full, 2e-3 * full);  // just inside (corners)
-    EXPECT_EQ(disk_occlusion(h, p, n, {}, s, 5.0 - 1e-3), 0.0);                              // just outside (centre)
+    EXPECT_NEAR(disk_occlusion(h, p, n, {}, s, std::sqrt(25.0 + 0.5) + 1e-3), full,
+                2e-3 * full);                                   // just inside (corners)
+    EXPECT_EQ(disk_occlusion(h, p, n, {}, s, 5.0 - 1e-3), 0.0); // just outside (centre)
     double last = 0.0;
     for (double r = 5.0; r <= 5.06; r += 0.002) {
         const double o = disk_occlusion(h, p, n, {}, s, r);
@@ -488,7 +494,8 @@ TEST(DiskOcclusion, RadiusLimitsOccluders) {
     const double r = 0.45;
     for (const auto& t : m.triangles) {
         const V a(m.positions[t[0]]), b(m.positions[t[1]]), c(m.positions[t[2]]);
-        if (glm::length((a + b + c) / 3.0 - q) <= r) inside += std::max(clipped_triangle_form_factor(q, n, a, b, c), 0.0);
+        if (glm::length((a + b + c) / 3.0 - q) <= r)
+            inside += std::max(clipped_triangle_form_factor(q, n, a, b, c), 0.0);
     }
     EXPECT_NEAR(disk_occlusion(h, q, n, {}, tri, r), inside, 2e-5);
     EXPECT_LT(inside, all - 0.05);
@@ -610,7 +617,8 @@ TEST(DiskElementPasses, ClosedBoxConvergence) {
             const V p(m.positions[v]), n(m.normals[v]);
             const auto leaf = static_cast<std::size_t>(h.vertex_node[v]);
             const double exact = reference.at(p, n, opt);
-            std::printf("R %.2f at (%.1f %.1f %.1f): Embree %.3f; passes' leaf AO", R, target.x, target.y, target.z, exact);
+            std::printf("R %.2f at (%.1f %.1f %.1f): Embree %.3f; passes' leaf AO", R, target.x, target.y, target.z,
+                        exact);
             for (const auto& t : per_pass) std::printf(" %.3f", t[leaf]);
             std::printf("; blended + gather:");
             std::vector<double> finals;
@@ -663,15 +671,15 @@ TEST(DiskOcclusion, SidedReceiverInsideTheSolid) {
     for (const double R : {10.0, 0.75})
         for (const V& target : {V(0, 0, -1), V(0.9, 0, -1), V(0.9, 0.9, -1)}) {
             const std::size_t v = nearest_vertex(m, target);
-            const V p(m.positions[v]), face(0, 0, -1), n(0, 0, 1);  // floor: outward -z, receiver normal into the box
+            const V p(m.positions[v]), face(0, 0, -1), n(0, 0, 1); // floor: outward -z, receiver normal into the box
             AoReferenceOptions opt;
             opt.radius_mm = R;
             opt.rays = 4096;
             const double exact = reference.at(p, n, opt);
             const double front = 1.0 - disk_occlusion(h, p, n, {}, s, R);
             const double sided = 1.0 - disk_occlusion_sided(h, p, n, face, {}, s, R);
-            std::printf("outward box, R %.2f at (%.1f %.1f %.1f): Embree %.3f, front faces %.3f, sided %.3f\n", R, target.x,
-                        target.y, target.z, exact, front, sided);
+            std::printf("outward box, R %.2f at (%.1f %.1f %.1f): Embree %.3f, front faces %.3f, sided %.3f\n", R,
+                        target.x, target.y, target.z, exact, front, sided);
             EXPECT_EQ(front, 1.0);
             EXPECT_NEAR(sided, exact, 0.03);
         }

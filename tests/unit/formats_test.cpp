@@ -22,9 +22,9 @@
 #include "tests/support/test_util.hpp"
 
 using namespace iso;
-using iso::test::TempDir;
 using iso::test::expect_affine_near;
 using iso::test::read_file;
+using iso::test::TempDir;
 using iso::test::write_file;
 namespace fs = std::filesystem;
 
@@ -61,7 +61,6 @@ void expect_same_samples(const Volume& a, const Volume& b) {
     ASSERT_EQ(a.bytes().size(), b.bytes().size());
     EXPECT_EQ(std::memcmp(a.bytes().data(), b.bytes().data(), a.bytes().size()), 0);
 }
-
 
 // Expects load_volume(path) to throw an Error naming the file and containing `reason`.
 void expect_error(const std::string& path, const std::string& reason) {
@@ -113,7 +112,8 @@ TEST(Formats, BundledMrMetaImage) {
 TEST(Formats, NrrdRoundTripsRawGzipDetached) {
     TempDir dir;
     const Volume v = ramp({13, 11, 7}, VoxelType::I16, oblique({0.7, 0.8, 2.5}, {-100, 20, 35}, true));
-    for (const auto& [name, gz] : std::vector<std::pair<std::string, bool>>{{"a.nrrd", true}, {"b.nrrd", false}, {"c.nhdr", true}, {"d.nhdr", false}}) {
+    for (const auto& [name, gz] : std::vector<std::pair<std::string, bool>>{
+             {"a.nrrd", true}, {"b.nrrd", false}, {"c.nhdr", true}, {"d.nhdr", false}}) {
         save_volume(v, dir / name, gz);
         const Volume w = load_volume(dir / name);
         expect_same_samples(v, w);
@@ -132,11 +132,15 @@ TEST(Formats, NrrdSpacesAreConvertedToLps) {
     TempDir dir;
     // 2 x 2 x 2 int8 data, RAS space: x and y flip.
     std::string body(8, '\x01');
-    write_file(dir / "ras.nrrd", "NRRD0004\ntype: int8\ndimension: 3\nspace: right-anterior-superior\nsizes: 2 2 2\n"
-                                 "space directions: (1,0,0) (0,2,0) (0,0,3)\nspace origin: (10,20,30)\nencoding: raw\n\n" + body);
+    write_file(dir / "ras.nrrd",
+               "NRRD0004\ntype: int8\ndimension: 3\nspace: right-anterior-superior\nsizes: 2 2 2\n"
+               "space directions: (1,0,0) (0,2,0) (0,0,3)\nspace origin: (10,20,30)\nencoding: raw\n\n" +
+                   body);
     const Volume v = load_volume(dir / "ras.nrrd");
-    expect_affine_near(v.index_to_lps, glm::dmat4(glm::dvec4(-1, 0, 0, 0), glm::dvec4(0, -2, 0, 0), glm::dvec4(0, 0, 3, 0),
-                                                  glm::dvec4(-10, -20, 30, 1)), 1e-12);
+    expect_affine_near(v.index_to_lps,
+                       glm::dmat4(glm::dvec4(-1, 0, 0, 0), glm::dvec4(0, -2, 0, 0), glm::dvec4(0, 0, 3, 0),
+                                  glm::dvec4(-10, -20, 30, 1)),
+                       1e-12);
 }
 
 TEST(Formats, NiftiRoundTrips) {
@@ -182,10 +186,11 @@ TEST(Formats, ObliqueNiftiUsesSformWithRasToLpsFlip) {
     TempDir dir;
     // A rotated, anisotropic sform, and a different qform that must be ignored.
     const std::array<float, 12> srow = {0.6f, -0.5f, 0.9f, -20.f, 0.4f, 0.8f, -0.3f, 15.f, -0.2f, 0.3f, 2.1f, 40.f};
-    write_nifti_raw(dir / "oblique.nii.gz", srow, NIFTI_XFORM_SCANNER_ANAT, NIFTI_XFORM_SCANNER_ANAT, 0.1f, 0.2f, 0.3f, 1.f,
-                    {1, 2, 3}, {1, 1, 1});
+    write_nifti_raw(dir / "oblique.nii.gz", srow, NIFTI_XFORM_SCANNER_ANAT, NIFTI_XFORM_SCANNER_ANAT, 0.1f, 0.2f, 0.3f,
+                    1.f, {1, 2, 3}, {1, 1, 1});
     // sform rows are not orthogonal here: check_affine would reject it. Make them orthogonal.
-    const glm::dmat3 rot = glm::dmat3(glm::rotate(glm::dmat4(1.0), glm::radians(33.0), glm::normalize(glm::dvec3(1, 2, 3))));
+    const glm::dmat3 rot =
+        glm::dmat3(glm::rotate(glm::dmat4(1.0), glm::radians(33.0), glm::normalize(glm::dvec3(1, 2, 3))));
     const glm::dvec3 sp(0.6, 0.8, 2.1);
     std::array<float, 12> s2{};
     for (int r = 0; r < 3; ++r)
@@ -193,8 +198,8 @@ TEST(Formats, ObliqueNiftiUsesSformWithRasToLpsFlip) {
     s2[3] = -20.f;
     s2[7] = 15.f;
     s2[11] = 40.f;
-    write_nifti_raw(dir / "oblique.nii.gz", s2, NIFTI_XFORM_SCANNER_ANAT, NIFTI_XFORM_ALIGNED_ANAT, 0.1f, 0.2f, 0.3f, 1.f,
-                    {1, 2, 3}, {1, 1, 1});
+    write_nifti_raw(dir / "oblique.nii.gz", s2, NIFTI_XFORM_SCANNER_ANAT, NIFTI_XFORM_ALIGNED_ANAT, 0.1f, 0.2f, 0.3f,
+                    1.f, {1, 2, 3}, {1, 1, 1});
     const Volume v = load_volume(dir / "oblique.nii.gz");
     // Independent computation: LPS = diag(-1,-1,1) * srow (the float values as stored).
     glm::dmat4 expected(1.0);
@@ -237,7 +242,8 @@ TEST(Formats, VtiWithDirectionMatrix) {
     img->SetDimensions(5, 6, 7);
     img->SetSpacing(0.5, 0.75, 2.0);
     img->SetOrigin(10, -5, 3);
-    const glm::dmat3 rot = glm::dmat3(glm::rotate(glm::dmat4(1.0), glm::radians(20.0), glm::normalize(glm::dvec3(0, 1, 1))));
+    const glm::dmat3 rot =
+        glm::dmat3(glm::rotate(glm::dmat4(1.0), glm::radians(20.0), glm::normalize(glm::dvec3(0, 1, 1))));
     double dm[9];
     for (int r = 0; r < 3; ++r)
         for (int c = 0; c < 3; ++c) dm[r * 3 + c] = rot[c][r];
@@ -310,8 +316,9 @@ TEST(Formats, BadInputGivesClearErrors) {
         write_file(dir / "cut.nrrd", all.substr(0, all.size() / 2));
     }
     expect_error(dir / "cut.nrrd", "");
-    write_file(dir / "cut.mha", "ObjectType = Image\nNDims = 3\nDimSize = 16 16 16\nElementType = MET_SHORT\nElementDataFile = LOCAL\n" +
-                                    std::string(100, '\0'));
+    write_file(dir / "cut.mha",
+               "ObjectType = Image\nNDims = 3\nDimSize = 16 16 16\nElementType = MET_SHORT\nElementDataFile = LOCAL\n" +
+                   std::string(100, '\0'));
     expect_error(dir / "cut.mha", "truncated");
     // Truncated gzip NIfTI.
     save_volume(v, dir / "full.nii.gz");
@@ -322,31 +329,46 @@ TEST(Formats, BadInputGivesClearErrors) {
     expect_error(dir / "cut.nii.gz", "");
     // Header/data size mismatch in a detached MetaImage.
     write_file(dir / "small.raw", std::string(10, '\0'));
-    write_file(dir / "mismatch.mhd", "NDims = 3\nDimSize = 8 8 8\nElementType = MET_UCHAR\nElementDataFile = small.raw\n");
+    write_file(dir / "mismatch.mhd",
+               "NDims = 3\nDimSize = 8 8 8\nElementType = MET_UCHAR\nElementDataFile = small.raw\n");
     expect_error(dir / "mismatch.mhd", "truncated");
     // Dimensions whose product overflows.
-    write_file(dir / "huge.mha", "NDims = 3\nDimSize = 2147483648 2147483648 2147483648\nElementType = MET_FLOAT\nElementDataFile = LOCAL\n");
+    write_file(
+        dir / "huge.mha",
+        "NDims = 3\nDimSize = 2147483648 2147483648 2147483648\nElementType = MET_FLOAT\nElementDataFile = LOCAL\n");
     expect_error(dir / "huge.mha", "overflow");
-    write_file(dir / "huge.nrrd", "NRRD0004\ntype: float\ndimension: 3\nsizes: 2147483648 2147483648 2147483648\nencoding: raw\n\n");
+    write_file(dir / "huge.nrrd",
+               "NRRD0004\ntype: float\ndimension: 3\nsizes: 2147483648 2147483648 2147483648\nencoding: raw\n\n");
     expect_error(dir / "huge.nrrd", "");
     // Unsupported voxel types.
-    write_file(dir / "rgb.mha", "NDims = 3\nDimSize = 2 2 2\nElementType = MET_UCHAR\nElementNumberOfChannels = 3\nElementDataFile = LOCAL\n" +
-                                    std::string(24, '\0'));
+    write_file(
+        dir / "rgb.mha",
+        "NDims = 3\nDimSize = 2 2 2\nElementType = MET_UCHAR\nElementNumberOfChannels = 3\nElementDataFile = LOCAL\n" +
+            std::string(24, '\0'));
     expect_error(dir / "rgb.mha", "scalar");
-    write_file(dir / "i64.nrrd", "NRRD0004\ntype: int64\ndimension: 3\nsizes: 2 2 2\nendian: little\nencoding: raw\n\n" + std::string(64, '\0'));
+    write_file(dir / "i64.nrrd",
+               "NRRD0004\ntype: int64\ndimension: 3\nsizes: 2 2 2\nendian: little\nencoding: raw\n\n" +
+                   std::string(64, '\0'));
     expect_error(dir / "i64.nrrd", "unsupported voxel type");
     // Zero and negative spacing, non-orthogonal directions.
-    write_file(dir / "zero.mha", "NDims = 3\nDimSize = 2 2 2\nElementSpacing = 1 0 1\nElementType = MET_UCHAR\nElementDataFile = LOCAL\n" +
-                                     std::string(8, '\0'));
+    write_file(
+        dir / "zero.mha",
+        "NDims = 3\nDimSize = 2 2 2\nElementSpacing = 1 0 1\nElementType = MET_UCHAR\nElementDataFile = LOCAL\n" +
+            std::string(8, '\0'));
     expect_error(dir / "zero.mha", "spacing");
-    write_file(dir / "neg.mha", "NDims = 3\nDimSize = 2 2 2\nElementSpacing = 1 -2 1\nElementType = MET_UCHAR\nElementDataFile = LOCAL\n" +
-                                    std::string(8, '\0'));
+    write_file(
+        dir / "neg.mha",
+        "NDims = 3\nDimSize = 2 2 2\nElementSpacing = 1 -2 1\nElementType = MET_UCHAR\nElementDataFile = LOCAL\n" +
+            std::string(8, '\0'));
     expect_error(dir / "neg.mha", "spacing");
     write_file(dir / "skew.nrrd", "NRRD0004\ntype: uint8\ndimension: 3\nspace: left-posterior-superior\nsizes: 2 2 2\n"
-                                  "space directions: (1,0,0) (0.5,1,0) (0,0,1)\nencoding: raw\n\n" + std::string(8, '\0'));
+                                  "space directions: (1,0,0) (0.5,1,0) (0,0,1)\nencoding: raw\n\n" +
+                                      std::string(8, '\0'));
     expect_error(dir / "skew.nrrd", "not orthogonal");
-    write_file(dir / "zerodir.nrrd", "NRRD0004\ntype: uint8\ndimension: 3\nspace: left-posterior-superior\nsizes: 2 2 2\n"
-                                     "space directions: (1,0,0) (0,0,0) (0,0,1)\nencoding: raw\n\n" + std::string(8, '\0'));
+    write_file(dir / "zerodir.nrrd",
+               "NRRD0004\ntype: uint8\ndimension: 3\nspace: left-posterior-superior\nsizes: 2 2 2\n"
+               "space directions: (1,0,0) (0,0,0) (0,0,1)\nencoding: raw\n\n" +
+                   std::string(8, '\0'));
     expect_error(dir / "zerodir.nrrd", "spacing");
 }
 

@@ -46,23 +46,29 @@ TEST(FrameGraph, TransientResourcesAreReusedWhenLifetimesDoNotOverlap) {
     // a (t1) -> b reads t1, makes t2 -> c reads t2, makes t3 -> d reads t3 (side effect).
     FrameGraph g;
     std::vector<std::uint64_t> ids;
-    struct T { TextureHandle t; };
-    const auto& a = g.add_pass<T>("a", [&](FrameGraph::Builder& b, T& d) { d.t = b.write(b.create("t1", kColor)); },
-                                  [&](const T& d, const Resources& r) { ids.push_back(r.get(d.t)); });
-    const auto& bb = g.add_pass<T>("b",
+    struct T {
+        TextureHandle t;
+    };
+    const auto& a = g.add_pass<T>(
+        "a", [&](FrameGraph::Builder& b, T& d) { d.t = b.write(b.create("t1", kColor)); },
+        [&](const T& d, const Resources& r) { ids.push_back(r.get(d.t)); });
+    const auto& bb = g.add_pass<T>(
+        "b",
         [&](FrameGraph::Builder& b, T& d) {
             b.read(a.t);
             d.t = b.write(b.create("t2", kColor));
         },
         [&](const T& d, const Resources& r) { ids.push_back(r.get(d.t)); });
-    const auto& c = g.add_pass<T>("c",
+    const auto& c = g.add_pass<T>(
+        "c",
         [&](FrameGraph::Builder& b, T& d) {
             b.read(bb.t);
             d.t = b.write(b.create("t3", kColor));
         },
         [&](const T& d, const Resources& r) { ids.push_back(r.get(d.t)); });
     struct E {};
-    g.add_pass<E>("d",
+    g.add_pass<E>(
+        "d",
         [&](FrameGraph::Builder& b, E&) {
             b.read(c.t);
             b.side_effect();
@@ -85,9 +91,12 @@ TEST(FrameGraph, ImportedResourcesAreNeverCreatedOrDestroyed) {
     FrameGraph g;
     const auto target = g.import("window", kColor, 777);
     std::uint64_t seen = 0;
-    struct W { TextureHandle out; };
-    const auto& w = g.add_pass<W>("draw", [&](FrameGraph::Builder& b, W& d) { d.out = b.write(target); },
-                                  [&](const W& d, const Resources& r) { seen = r.get(d.out); });
+    struct W {
+        TextureHandle out;
+    };
+    const auto& w = g.add_pass<W>(
+        "draw", [&](FrameGraph::Builder& b, W& d) { d.out = b.write(target); },
+        [&](const W& d, const Resources& r) { seen = r.get(d.out); });
     g.request(w.out);
     RecordingBackend be;
     ResourcePool pool(be);
@@ -99,24 +108,29 @@ TEST(FrameGraph, ImportedResourcesAreNeverCreatedOrDestroyed) {
 
 TEST(FrameGraph, MisuseIsReported) {
     FrameGraph g;
-    struct T { TextureHandle t; };
+    struct T {
+        TextureHandle t;
+    };
     // Reading a resource nobody wrote.
-    EXPECT_THROW(g.add_pass<T>("bad read",
-                               [&](FrameGraph::Builder& b, T& d) {
-                                   d.t = b.create("x", kColor);
-                                   b.read(d.t);
-                               },
-                               [](const T&, const Resources&) {}),
+    EXPECT_THROW(g.add_pass<T>(
+                     "bad read",
+                     [&](FrameGraph::Builder& b, T& d) {
+                         d.t = b.create("x", kColor);
+                         b.read(d.t);
+                     },
+                     [](const T&, const Resources&) {}),
                  iso::Error);
     // Writing an old version.
     FrameGraph g2;
-    const auto& a = g2.add_pass<T>("a", [&](FrameGraph::Builder& b, T& d) { d.t = b.create("x", kColor); },
-                                   [](const T&, const Resources&) {});
+    const auto& a = g2.add_pass<T>(
+        "a", [&](FrameGraph::Builder& b, T& d) { d.t = b.create("x", kColor); }, [](const T&, const Resources&) {});
     const auto first = a.t;
-    g2.add_pass<T>("b", [&](FrameGraph::Builder& b, T& d) { d.t = b.write(first); }, [](const T&, const Resources&) {});
-    EXPECT_THROW(g2.add_pass<T>("c", [&](FrameGraph::Builder& b, T& d) { d.t = b.write(first); },
-                                [](const T&, const Resources&) {}),
-                 iso::Error);
+    g2.add_pass<T>(
+        "b", [&](FrameGraph::Builder& b, T& d) { d.t = b.write(first); }, [](const T&, const Resources&) {});
+    EXPECT_THROW(
+        g2.add_pass<T>(
+            "c", [&](FrameGraph::Builder& b, T& d) { d.t = b.write(first); }, [](const T&, const Resources&) {}),
+        iso::Error);
     try {
         g2.request(TextureHandle{});
         ADD_FAILURE() << "an invalid handle was accepted";
@@ -137,10 +151,21 @@ namespace {
 // One frame: "make" creates a texture of `desc` that "use" reads (a side effect).
 FrameStats one_frame(ResourcePool& pool, const TextureDesc& desc, std::uint64_t* seen = nullptr) {
     FrameGraph g;
-    struct T { TextureHandle t; };
-    const auto& a = g.add_pass<T>("make", [&](FrameGraph::Builder& b, T& d) { d.t = b.write(b.create("t", desc)); },
-                                  [&](const T& d, const Resources& r) { if (seen) *seen = r.get(d.t); });
-    g.add_pass<T>("use", [&](FrameGraph::Builder& b, T& d) { d.t = b.read(a.t); b.side_effect(); }, [](const T&, const Resources&) {});
+    struct T {
+        TextureHandle t;
+    };
+    const auto& a = g.add_pass<T>(
+        "make", [&](FrameGraph::Builder& b, T& d) { d.t = b.write(b.create("t", desc)); },
+        [&](const T& d, const Resources& r) {
+            if (seen) *seen = r.get(d.t);
+        });
+    g.add_pass<T>(
+        "use",
+        [&](FrameGraph::Builder& b, T& d) {
+            d.t = b.read(a.t);
+            b.side_effect();
+        },
+        [](const T&, const Resources&) {});
     return g.execute(pool);
 }
 
@@ -185,9 +210,19 @@ TEST(ResourcePool, HistoryPersistsAndSaysWhenItIsFresh) {
     auto frame_in = [](ResourcePool& in, const TextureDesc& d, bool* fresh, std::uint64_t* id) {
         FrameGraph g;
         const auto h = g.history("accum", d);
-        struct T { TextureHandle t; };
-        g.add_pass<T>("accumulate", [&](FrameGraph::Builder& b, T& t) { t.t = b.write(b.read(h)); b.side_effect(); },
-                      [&](const T& t, const Resources& r) { *fresh = r.fresh(t.t); *id = r.get(t.t); });
+        struct T {
+            TextureHandle t;
+        };
+        g.add_pass<T>(
+            "accumulate",
+            [&](FrameGraph::Builder& b, T& t) {
+                t.t = b.write(b.read(h));
+                b.side_effect();
+            },
+            [&](const T& t, const Resources& r) {
+                *fresh = r.fresh(t.t);
+                *id = r.get(t.t);
+            });
         g.execute(in);
     };
     auto frame = [&](const TextureDesc& d, bool* fresh, std::uint64_t* id) { frame_in(pool, d, fresh, id); };
@@ -230,14 +265,23 @@ TEST(ResourcePool, HistoryPersistsAndSaysWhenItIsFresh) {
 
 TEST(FrameGraph, CompileCullsWithoutRunningAnything) {
     FrameGraph g;
-    struct T { TextureHandle t; };
+    struct T {
+        TextureHandle t;
+    };
     int runs = 0;
-    const auto& a = g.add_pass<T>("a", [&](FrameGraph::Builder& b, T& d) { d.t = b.write(b.create("x", kColor)); },
-                                  [&](const T&, const Resources&) { ++runs; });
-    g.add_pass<T>("orphan", [&](FrameGraph::Builder& b, T& d) { d.t = b.write(b.create("y", kColor)); },
-                  [&](const T&, const Resources&) { ++runs; });
-    g.add_pass<T>("sink", [&](FrameGraph::Builder& b, T& d) { d.t = b.read(a.t); b.side_effect(); },
-                  [&](const T&, const Resources&) { ++runs; });
+    const auto& a = g.add_pass<T>(
+        "a", [&](FrameGraph::Builder& b, T& d) { d.t = b.write(b.create("x", kColor)); },
+        [&](const T&, const Resources&) { ++runs; });
+    g.add_pass<T>(
+        "orphan", [&](FrameGraph::Builder& b, T& d) { d.t = b.write(b.create("y", kColor)); },
+        [&](const T&, const Resources&) { ++runs; });
+    g.add_pass<T>(
+        "sink",
+        [&](FrameGraph::Builder& b, T& d) {
+            d.t = b.read(a.t);
+            b.side_effect();
+        },
+        [&](const T&, const Resources&) { ++runs; });
     g.compile();
     EXPECT_EQ(g.running_passes(), (std::vector<std::string>{"a", "sink"}));
     EXPECT_FALSE(g.will_run("orphan"));

@@ -34,7 +34,8 @@ Compiled compile(const RenderOptions& opt, const RenderHooks& hooks = {}, float 
     Camera cam;
     cam.set_view(PatientView::Anterior, b);
     cam.fit(b, double(opt.width) / opt.height);
-    passes::FrameContext ctx = passes::make_context(cam, opt, {{0, 36, 1, glm::vec3(1), 1.0f}, {0, 36, 2, glm::vec3(1), second_opacity}}, b);
+    passes::FrameContext ctx =
+        passes::make_context(cam, opt, {{0, 36, 1, glm::vec3(1), 1.0f}, {0, 36, 2, glm::vec3(1), second_opacity}}, b);
     ctx.hooks = hooks;
     ctx.pool = &pool;
     ctx.ao = &history;
@@ -63,10 +64,12 @@ TEST(Frame, OpaqueColourWithoutAoRunsGbufferLightingReadback) {
 TEST(Frame, AoOnRunsTheConeChainBeforeLighting) {
     RenderOptions o = options();
     o.look.ao = AoMethod::Cone;
-    EXPECT_EQ(compile(o).running, (Passes{"gbuffer", "zrange", "voxelize", "cone_ao", "ao_upsample", "lighting", "readback"}));
+    EXPECT_EQ(compile(o).running,
+              (Passes{"gbuffer", "zrange", "voxelize", "cone_ao", "ao_upsample", "lighting", "readback"}));
     o.look.cone.resolution = 1.0; // traced at full size: no upsampling
     EXPECT_EQ(compile(o).running, (Passes{"gbuffer", "zrange", "voxelize", "cone_ao", "lighting", "readback"}));
-    EXPECT_EQ(compile(o, {.read_slicemap = true}).running, (Passes{"gbuffer", "zrange", "voxelize", "cone_ao", "read_slicemap", "lighting", "readback"}));
+    EXPECT_EQ(compile(o, {.read_slicemap = true}).running,
+              (Passes{"gbuffer", "zrange", "voxelize", "cone_ao", "read_slicemap", "lighting", "readback"}));
 }
 
 // Disk AO (docs/ao.md, "Disk AO on the GPU"): its chain replaces the cone
@@ -79,7 +82,8 @@ TEST(Frame, DiskAoRunsItsOwnChainInsteadOfTheCones) {
     // Default: no element passes (passes = 0).
     EXPECT_EQ(compile(o).running, (Passes{"gbuffer", "disk_build", "disk_gather", "lighting", "readback"}));
     o.look.disk.passes = 2;
-    EXPECT_EQ(compile(o).running, (Passes{"gbuffer", "disk_build", "disk_elements", "disk_gather", "lighting", "readback"}));
+    EXPECT_EQ(compile(o).running,
+              (Passes{"gbuffer", "disk_build", "disk_elements", "disk_gather", "lighting", "readback"}));
     o.aov = Aov::Depth;
     EXPECT_EQ(compile(o).running, (Passes{"gbuffer", "readback"}));
     o.aov = Aov::Ao; // the raw term, without lighting
@@ -87,7 +91,8 @@ TEST(Frame, DiskAoRunsItsOwnChainInsteadOfTheCones) {
     o.aov = Aov::None;
     o.look.disk.passes = -1;
     o.look.ao = AoMethod::Cone;
-    EXPECT_EQ(compile(o).running, (Passes{"gbuffer", "zrange", "voxelize", "cone_ao", "ao_upsample", "lighting", "readback"}))
+    EXPECT_EQ(compile(o).running,
+              (Passes{"gbuffer", "zrange", "voxelize", "cone_ao", "ao_upsample", "lighting", "readback"}))
         << "cone AO: the disk settings are not checked";
     o.look.ao = AoMethod::Disk;
     try {
@@ -146,16 +151,19 @@ TEST(Frame, BadAoSettingsAreRefusedOnlyWhenAoIsAskedFor) {
 
 TEST(Frame, TranslucentObjectsAddTheListPassesAndAovsCullThem) {
     RenderOptions o = options();
-    EXPECT_EQ(compile(o, {}, 0.4f).running, (Passes{"gbuffer", "lighting", "oit_fragments", "oit_resolve", "readback"}));
+    EXPECT_EQ(compile(o, {}, 0.4f).running,
+              (Passes{"gbuffer", "lighting", "oit_fragments", "oit_resolve", "readback"}));
     EXPECT_EQ(compile(o, {.read_oit_lists = true}, 0.4f).running,
               (Passes{"gbuffer", "lighting", "oit_fragments", "read_oit_lists", "oit_resolve", "readback"}));
     o.look.ao = AoMethod::Cone; // AO of the opaque surfaces still runs under the glass
     EXPECT_EQ(compile(o, {}, 0.4f).running,
-              (Passes{"gbuffer", "zrange", "voxelize", "cone_ao", "ao_upsample", "lighting", "oit_fragments", "oit_sort", "oit_ao", "oit_resolve", "readback"}));
+              (Passes{"gbuffer", "zrange", "voxelize", "cone_ao", "ao_upsample", "lighting", "oit_fragments",
+                      "oit_sort", "oit_ao", "oit_resolve", "readback"}));
     o.aov = Aov::Depth; // the AOVs describe the opaque surfaces: no list is built
     EXPECT_EQ(compile(o, {}, 0.4f).running, (Passes{"gbuffer", "readback"}));
     o = options();
-    EXPECT_EQ(compile(o, {}, 1.0f).running, (Passes{"gbuffer", "lighting", "readback"})) << "all opaque: no list passes";
+    EXPECT_EQ(compile(o, {}, 1.0f).running, (Passes{"gbuffer", "lighting", "readback"}))
+        << "all opaque: no list passes";
 }
 
 TEST(Frame, APickOnlyFrameRunsNoLightingResolveOrReadback) {
@@ -171,5 +179,6 @@ TEST(Frame, APickOnlyFrameRunsNoLightingResolveOrReadback) {
     Annotations ann;
     o.annotations = &ann;
     EXPECT_EQ(compile(o, {}, 0.4f).running, (Passes{"gbuffer", "oit_fragments", "pick_resolve", "read_pick"}));
-    EXPECT_EQ(compile(o, {}, 1.0f).running, (Passes{"gbuffer", "pick_resolve", "read_pick"})) << "all opaque: no list pass";
+    EXPECT_EQ(compile(o, {}, 1.0f).running, (Passes{"gbuffer", "pick_resolve", "read_pick"}))
+        << "all opaque: no list pass";
 }

@@ -30,12 +30,16 @@ class UpdateGolden {
 public:
     explicit UpdateGolden(std::optional<std::string> value) {
         if (const char* old = std::getenv("ISOSCOPE_UPDATE_GOLDEN")) old_ = old;
-        if (value) ::setenv("ISOSCOPE_UPDATE_GOLDEN", value->c_str(), 1);
-        else ::unsetenv("ISOSCOPE_UPDATE_GOLDEN");
+        if (value)
+            ::setenv("ISOSCOPE_UPDATE_GOLDEN", value->c_str(), 1);
+        else
+            ::unsetenv("ISOSCOPE_UPDATE_GOLDEN");
     }
     ~UpdateGolden() {
-        if (old_) ::setenv("ISOSCOPE_UPDATE_GOLDEN", old_->c_str(), 1);
-        else ::unsetenv("ISOSCOPE_UPDATE_GOLDEN");
+        if (old_)
+            ::setenv("ISOSCOPE_UPDATE_GOLDEN", old_->c_str(), 1);
+        else
+            ::unsetenv("ISOSCOPE_UPDATE_GOLDEN");
     }
 
 private:
@@ -104,8 +108,10 @@ TEST(ImageCompare, FailureWritesActualAndDiffAndReportsTheFigures) {
     EXPECT_EQ(diff.bytes[0], 255) << "40 x 8, clamped";
     EXPECT_EQ(diff.bytes[4 * 4], 0) << "the fifth pixel is equal";
     // A missing golden and a wrong size are failures that say so.
-    EXPECT_NE(std::string(test::matches_golden(a, dir / "none.png", kTol, failures).message()).find("missing"), std::string::npos);
-    EXPECT_NE(std::string(test::matches_golden(grey(5, 5, 50), golden, kTol, failures).message()).find("5x5x4 against 20x10x4"),
+    EXPECT_NE(std::string(test::matches_golden(a, dir / "none.png", kTol, failures).message()).find("missing"),
+              std::string::npos);
+    EXPECT_NE(std::string(test::matches_golden(grey(5, 5, 50), golden, kTol, failures).message())
+                  .find("5x5x4 against 20x10x4"),
               std::string::npos);
 }
 

@@ -34,8 +34,6 @@ using iso::test::sample_field;
 
 namespace {
 
-
-
 // Distance field of a sphere (inside = larger values, as in CT): value = r - |p - c|.
 Volume sphere(std::array<std::int64_t, 3> dims, const glm::dmat4& affine, glm::dvec3 c, double r) {
     return sample_field(dims, affine, [&](glm::dvec3 p) { return r - glm::length(p - c); });
@@ -219,7 +217,8 @@ TEST(Isosurface, OneInsideCornerGivesOneHandComputedTriangle) {
     ASSERT_EQ(m.triangles.size(), 1u);
     ASSERT_EQ(m.positions.size(), 3u);
     const glm::dvec3 corner(10, -20, 5);
-    const glm::dvec3 on_i(10.25, -20, 5), on_j(10, -18.5, 5), on_k(10, -20, 5.75); // index (0.5,0,0), (0,0.75,0), (0,0,0.25)
+    const glm::dvec3 on_i(10.25, -20, 5), on_j(10, -18.5, 5),
+        on_k(10, -20, 5.75); // index (0.5,0,0), (0,0.75,0), (0,0,0.25)
     const int a = vertex_at(m, on_i), b = vertex_at(m, on_j), c = vertex_at(m, on_k);
     ASSERT_TRUE(a >= 0 && b >= 0 && c >= 0) << "vertices at the hand-computed positions";
     // Facing away from the corner: (on_j - on_i) x (on_k - on_i) = (1.125, 0.1875, 0.375),
@@ -243,7 +242,8 @@ TEST(Isosurface, TwoAdjacentInsideCornersGiveAHandComputedQuad) {
     const Mesh m = extract_isosurface(one_cell({100, 100, -20, -20, -20, -20, -20, -20}), 40.0);
     ASSERT_EQ(m.triangles.size(), 2u);
     ASSERT_EQ(m.positions.size(), 4u);
-    const glm::dvec3 quad[4] = {{10, -19, 5}, {10.5, -19, 5}, {10.5, -20, 6.5}, {10, -20, 6.5}}; // index (0,.5,0) (1,.5,0) (1,0,.5) (0,0,.5)
+    const glm::dvec3 quad[4] = {
+        {10, -19, 5}, {10.5, -19, 5}, {10.5, -20, 6.5}, {10, -20, 6.5}}; // index (0,.5,0) (1,.5,0) (1,0,.5) (0,0,.5)
     for (const auto& p : quad) EXPECT_GE(vertex_at(m, p), 0) << p.x << " " << p.y << " " << p.z;
     // Both triangles face away from the inside edge (y = -20, z = 5): along
     // (0, 1.5, 1) / |(0, 1.5, 1)|, perpendicular to the rectangle.
@@ -441,7 +441,8 @@ TEST(Isosurface, LabelMapOneSurfacePerLabelInOnePass) {
     // surface is that box (faces half a sample out) with every edge chamfered
     // by a right prism of cross-section 1/8 and each corner giving back 1/12:
     // V = 5*14*12 - (4*(5+14+12))/8 + 8/12.
-    EXPECT_NEAR(plain_sums(surfaces[1].mesh).volume_mm3, 5.0 * 14.0 * 12.0 - 4.0 * (5 + 14 + 12) / 8.0 + 8.0 / 12.0, 1e-9);
+    EXPECT_NEAR(plain_sums(surfaces[1].mesh).volume_mm3, 5.0 * 14.0 * 12.0 - 4.0 * (5 + 14 + 12) / 8.0 + 8.0 / 12.0,
+                1e-9);
 }
 
 #include "renderer/surface/postprocess.hpp"
@@ -449,7 +450,8 @@ TEST(Isosurface, LabelMapOneSurfacePerLabelInOnePass) {
 TEST(Postprocess, SmoothDecimateKeepLargest) {
     // Two spheres of different sizes.
     auto v = sample_field({48, 32, 32}, glm::dmat4(1.0), [](glm::dvec3 p) {
-        return std::max(10.0 - glm::length(p - glm::dvec3(15, 15.5, 15.5)), 5.0 - glm::length(p - glm::dvec3(38, 15.5, 15.5)));
+        return std::max(10.0 - glm::length(p - glm::dvec3(15, 15.5, 15.5)),
+                        5.0 - glm::length(p - glm::dvec3(38, 15.5, 15.5)));
     });
     const Mesh m = extract_isosurface(v, 0.0, {});
     const auto base = plain_sums(m);

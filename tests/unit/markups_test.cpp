@@ -14,13 +14,12 @@
 #include "tests/support/test_util.hpp"
 
 using namespace iso;
-using iso::test::TempDir;
 using iso::test::read_file;
+using iso::test::TempDir;
 using iso::test::write_file;
 namespace fs = std::filesystem;
 
 namespace {
-
 
 MarkupControlPoint point(const std::string& label, glm::dvec3 p) {
     MarkupControlPoint c;
@@ -268,13 +267,15 @@ TEST(Markups, AcceptsWhatSlicerAccepts) {
     TempDir dir;
     // Any markups-schema-v1.x.y.json, any case, with or without '#'; the
     // coordinate system defaults to LPS; units may be a UCUM coded entry.
-    for (const char* schema : {"https://raw.githubusercontent.com/slicer/slicer/main/modules/loadable/markups/resources/"
-                               "schema/markups-schema-v1.0.3.json#",
-                               "https://raw.githubusercontent.com/slicer/slicer/master/Modules/Loadable/Markups/"
-                               "Resources/Schema/markups-schema-v1.0.0.json#",
-                               "MARKUPS-SCHEMA-V1.12.7.JSON"}) {
-        write_file(dir / "s.mrk.json", std::string(R"({"@schema": ")") + schema +
-                                      R"(", "markups": [{"type": "Line", "coordinateUnits": ["mm", "UCUM", "millimeter"],
+    for (const char* schema :
+         {"https://raw.githubusercontent.com/slicer/slicer/main/modules/loadable/markups/resources/"
+          "schema/markups-schema-v1.0.3.json#",
+          "https://raw.githubusercontent.com/slicer/slicer/master/Modules/Loadable/Markups/"
+          "Resources/Schema/markups-schema-v1.0.0.json#",
+          "MARKUPS-SCHEMA-V1.12.7.JSON"}) {
+        write_file(dir / "s.mrk.json",
+                   std::string(R"({"@schema": ")") + schema +
+                       R"(", "markups": [{"type": "Line", "coordinateUnits": ["mm", "UCUM", "millimeter"],
                                          "controlPoints": [{"position": [0, 0, 0]}, {"position": [3, 4, 0]}]}]})");
         const MarkupsFile f = load_markups(dir / "s.mrk.json");
         ASSERT_EQ(f.markups.size(), 1u) << schema;
@@ -282,9 +283,12 @@ TEST(Markups, AcceptsWhatSlicerAccepts) {
         EXPECT_EQ(f.markups[0].points[1].status, PositionStatus::Defined) << schema;
     }
     // Curves are read as their control points; every markup of a file is read.
-    write_file(dir / "c.mrk.json",
-          file_with(R"({"type": "Curve", "coordinateSystem": "RAS", "controlPoints": [{"position": [1, 2, 3]}, {"position": [4, 5, 6]},
-                        {"position": [7, 8, 9]}]}, {"type": "ClosedCurve", "controlPoints": []}, )" + kLine));
+    write_file(
+        dir / "c.mrk.json",
+        file_with(
+            R"({"type": "Curve", "coordinateSystem": "RAS", "controlPoints": [{"position": [1, 2, 3]}, {"position": [4, 5, 6]},
+                        {"position": [7, 8, 9]}]}, {"type": "ClosedCurve", "controlPoints": []}, )" +
+            kLine));
     const MarkupsFile c = load_markups(dir / "c.mrk.json");
     ASSERT_EQ(c.markups.size(), 3u);
     EXPECT_EQ(c.markups[0].type, MarkupType::Curve);
@@ -311,7 +315,8 @@ TEST(Markups, BadInputNamesFileAndReason) {
     bad("noschema.mrk.json", R"({"markups": []})", "no \"@schema\"");
     bad("schema.mrk.json", R"({"@schema": "https://example.org/other-schema-v1.0.3.json", "markups": []})",
         "not a Slicer markups schema");
-    bad("schema2.mrk.json", R"({"@schema": "markups-schema-v2.0.0.json#", "markups": []})", "not a Slicer markups schema");
+    bad("schema2.mrk.json", R"({"@schema": "markups-schema-v2.0.0.json#", "markups": []})",
+        "not a Slicer markups schema");
     bad("schema3.mrk.json", R"({"@schema": 103, "markups": []})", "\"@schema\" must be a string");
     bad("nomarkups.mrk.json", R"({"@schema": "markups-schema-v1.0.3.json"})", "no \"markups\"");
     bad("nolist.mrk.json", R"({"@schema": "markups-schema-v1.0.3.json", "markups": {}})", "must be an array");
@@ -323,34 +328,46 @@ TEST(Markups, BadInputNamesFileAndReason) {
     bad("typenum.mrk.json", file_with(R"({"type": 3})"), "\"type\" must be a string");
     // Point counts.
     bad("line3.mrk.json",
-        file_with(R"({"type": "Line", "controlPoints": [{"position": [0,0,0]}, {"position": [1,0,0]}, {"position": [2,0,0]}]})"),
+        file_with(
+            R"({"type": "Line", "controlPoints": [{"position": [0,0,0]}, {"position": [1,0,0]}, {"position": [2,0,0]}]})"),
         "a Line needs 2 control points, the file has 3");
     bad("line0.mrk.json", file_with(R"({"type": "Line"})"), "a Line needs 2 control points, the file has 0");
-    bad("angle2.mrk.json", file_with(R"({"type": "Angle", "controlPoints": [{"position": [0,0,0]}, {"position": [1,0,0]}]})"),
+    bad("angle2.mrk.json",
+        file_with(R"({"type": "Angle", "controlPoints": [{"position": [0,0,0]}, {"position": [1,0,0]}]})"),
         "an Angle needs 3 control points, the file has 2");
     // Coordinates: units, system, non-finite, wrong shapes and types.
-    bad("um.mrk.json", file_with(R"({"type": "Fiducial", "coordinateUnits": "um"})"), "coordinate units 'um' are not supported");
-    bad("dcm.mrk.json", file_with(R"({"type": "Fiducial", "coordinateUnits": ["mm", "DCM", "millimeter"]})"), "not UCUM");
+    bad("um.mrk.json", file_with(R"({"type": "Fiducial", "coordinateUnits": "um"})"),
+        "coordinate units 'um' are not supported");
+    bad("dcm.mrk.json", file_with(R"({"type": "Fiducial", "coordinateUnits": ["mm", "DCM", "millimeter"]})"),
+        "not UCUM");
     bad("xyz.mrk.json", file_with(R"({"type": "Fiducial", "coordinateSystem": "XYZ"})"), "neither LPS nor RAS");
-    bad("overflow.mrk.json", file_with(R"({"type": "Fiducial", "controlPoints": [{"position": [1e999, 0, 0]}]})"), "overflow");
-    bad("nan.mrk.json", file_with(R"({"type": "Fiducial", "controlPoints": [{"position": [NaN, 0, 0]}]})"), "not valid JSON");
+    bad("overflow.mrk.json", file_with(R"({"type": "Fiducial", "controlPoints": [{"position": [1e999, 0, 0]}]})"),
+        "overflow");
+    bad("nan.mrk.json", file_with(R"({"type": "Fiducial", "controlPoints": [{"position": [NaN, 0, 0]}]})"),
+        "not valid JSON");
     bad("short.mrk.json", file_with(R"({"type": "Fiducial", "controlPoints": [{"position": [1, 2]}]})"),
         "control point 1: \"position\" must be an array of 3 numbers");
-    bad("strpos.mrk.json", file_with(R"({"type": "Fiducial", "controlPoints": [{"position": "1 2 3"}]})"), "must be an array of 3");
+    bad("strpos.mrk.json", file_with(R"({"type": "Fiducial", "controlPoints": [{"position": "1 2 3"}]})"),
+        "must be an array of 3");
     bad("nopos.mrk.json", file_with(R"({"type": "Fiducial", "controlPoints": [{"label": "F-1"}]})"), "no \"position\"");
-    bad("strnum.mrk.json", file_with(R"({"type": "Fiducial", "controlPoints": [{"position": [1, "2", 3]}]})"), "must be a number");
-    bad("status.mrk.json", file_with(R"({"type": "Fiducial", "controlPoints": [{"position": [1, 2, 3], "positionStatus": "maybe"}]})"),
+    bad("strnum.mrk.json", file_with(R"({"type": "Fiducial", "controlPoints": [{"position": [1, "2", 3]}]})"),
+        "must be a number");
+    bad("status.mrk.json",
+        file_with(R"({"type": "Fiducial", "controlPoints": [{"position": [1, 2, 3], "positionStatus": "maybe"}]})"),
         "position status 'maybe'");
-    bad("orient.mrk.json", file_with(R"({"type": "Fiducial", "controlPoints": [{"position": [1, 2, 3], "orientation": [1, 0]}]})"),
+    bad("orient.mrk.json",
+        file_with(R"({"type": "Fiducial", "controlPoints": [{"position": [1, 2, 3], "orientation": [1, 0]}]})"),
         "\"orientation\" must be an array of 9 numbers");
     bad("locked.mrk.json", file_with(R"({"type": "Fiducial", "locked": "yes"})"), "\"locked\" must be true or false");
     bad("label.mrk.json", file_with(R"({"type": "Fiducial", "controlPoints": [{"position": [1, 2, 3], "label": 7}]})"),
         "\"label\" must be a string");
     bad("points.mrk.json", file_with(R"({"type": "Fiducial", "controlPoints": {"position": [1, 2, 3]}})"),
         "\"controlPoints\" must be an array");
-    bad("pointnum.mrk.json", file_with(R"({"type": "Fiducial", "controlPoints": [5]})"), "control point 1: must be an object");
+    bad("pointnum.mrk.json", file_with(R"({"type": "Fiducial", "controlPoints": [5]})"),
+        "control point 1: must be an object");
     // Measurements and display.
-    bad("measname.mrk.json", file_with(R"({"type": "Fiducial", "measurements": [{"value": 1}]})"), "measurement 1: no \"name\"");
+    bad("measname.mrk.json", file_with(R"({"type": "Fiducial", "measurements": [{"value": 1}]})"),
+        "measurement 1: no \"name\"");
     bad("measval.mrk.json", file_with(R"({"type": "Fiducial", "measurements": [{"name": "x", "value": "1"}]})"),
         "\"value\" must be a number");
     bad("color.mrk.json", file_with(R"({"type": "Fiducial", "display": {"color": [0.5, 1.5, 0]}})"), "outside [0, 1]");
@@ -396,5 +413,6 @@ TEST(Markups, WriterRefusesWhatSlicerCannotRead) {
     save_markups(sample(), dir / "keep.mrk.json");
     EXPECT_EQ(load_markups(dir / "keep.mrk.json").markups.size(), 3u);
     for (const auto& e : fs::directory_iterator(dir.path()))
-        EXPECT_EQ(e.path().filename().string().rfind(".isoscope-tmp", 0), std::string::npos) << e.path(); // no temporary left
+        EXPECT_EQ(e.path().filename().string().rfind(".isoscope-tmp", 0), std::string::npos)
+            << e.path(); // no temporary left
 }

@@ -37,7 +37,6 @@ double cap_ml(double r, double d) {
     return kPi * h * h * (3.0 * r - h) / 3.0 / 1000.0;
 }
 
-
 // An axis-aligned box [lo, hi] as 8 vertices and 12 outward triangles.
 Mesh box(glm::dvec3 lo, glm::dvec3 hi) { return test::box_mesh(lo, hi); }
 
@@ -197,7 +196,8 @@ Volume random_hu(std::array<std::int64_t, 3> dims) {
 
 // Trilinear interpolation written out as the eight weighted corners.
 double trilinear_by_hand(const Volume& v, glm::dvec3 x) {
-    const std::int64_t i = std::int64_t(std::floor(x.x)), j = std::int64_t(std::floor(x.y)), k = std::int64_t(std::floor(x.z));
+    const std::int64_t i = std::int64_t(std::floor(x.x)), j = std::int64_t(std::floor(x.y)),
+                       k = std::int64_t(std::floor(x.z));
     const double fx = x.x - double(i), fy = x.y - double(j), fz = x.z - double(k);
     double sum = 0;
     for (int c = 0; c < 8; ++c) {
@@ -254,8 +254,8 @@ TEST(MeasureValue, LinearFieldIsReproducedExactlyInLps) {
 TEST(MeasureValue, OutsideTheGridIsNoValueAndTheOuterHalfVoxelIsClamped) {
     const Volume v = random_hu({6, 5, 4});
     // Beyond the voxels' extent ([-0.5, n - 0.5] in index): nothing.
-    for (const glm::dvec3& x : {glm::dvec3(-0.51, 2, 2), glm::dvec3(5.51, 2, 2), glm::dvec3(2, -3, 2), glm::dvec3(2, 2, 3.6),
-                               glm::dvec3(1e6, 0, 0)})
+    for (const glm::dvec3& x : {glm::dvec3(-0.51, 2, 2), glm::dvec3(5.51, 2, 2), glm::dvec3(2, -3, 2),
+                                glm::dvec3(2, 2, 3.6), glm::dvec3(1e6, 0, 0)})
         EXPECT_FALSE(sample_volume(v, v.index_to_world(x))) << x.x << " " << x.y << " " << x.z;
     // In the outer half voxel: clamped to the border samples.
     const auto s = sample_volume(v, v.index_to_world({-0.4, 2.4, 3.3}));
@@ -285,15 +285,16 @@ TEST(MeasureValue, SparseVolumesAnswerAsDense) {
     const openvdb::Coord offset(100, -50, 7); // our index (0,0,0) is the grid's `offset`
     for (int k = 0; k < 5; ++k)
         for (int j = 0; j < 6; ++j)
-            for (int i = 0; i < 7; ++i)
-                acc.setValue(openvdb::Coord(i, j, k) + offset, float(dense.value(i, j, k)));
+            for (int i = 0; i < 7; ++i) acc.setValue(openvdb::Coord(i, j, k) + offset, float(dense.value(i, j, k)));
     auto sg = std::make_shared<SparseGrid>();
     sg->grid = grid;
     sg->offset = offset;
     const Volume sparse = Volume::sparse(sg, dense.dims, dense.index_to_lps);
     ASSERT_TRUE(sparse.is_sparse());
-    for (const glm::dvec3& x : {glm::dvec3(0.3, 4.9, 2.2), glm::dvec3(6, 5, 4), glm::dvec3(-0.3, 0, 0), glm::dvec3(3.5, 2.5, 1.5)}) {
-        const auto a = sample_volume(dense, dense.index_to_world(x)), b = sample_volume(sparse, sparse.index_to_world(x));
+    for (const glm::dvec3& x :
+         {glm::dvec3(0.3, 4.9, 2.2), glm::dvec3(6, 5, 4), glm::dvec3(-0.3, 0, 0), glm::dvec3(3.5, 2.5, 1.5)}) {
+        const auto a = sample_volume(dense, dense.index_to_world(x)),
+                   b = sample_volume(sparse, sparse.index_to_world(x));
         ASSERT_TRUE(a && b);
         EXPECT_NEAR(a->value, b->value, 1e-9);
         EXPECT_EQ(a->voxel, b->voxel);
@@ -404,7 +405,8 @@ TEST(MeasureSurface, DegenerateTrianglesGiveNoNaN) {
     // position (distinct indices), one with three collinear vertices.
     m.triangles.push_back({0, 0, 7});
     const auto n = std::uint32_t(m.positions.size());
-    m.positions.insert(m.positions.end(), {glm::vec3(0.5f, 0.5f, 0.5f), glm::vec3(0.5f, 0.5f, 0.5f), glm::vec3(0.5f, 0.5f, 0.5f)});
+    m.positions.insert(m.positions.end(),
+                       {glm::vec3(0.5f, 0.5f, 0.5f), glm::vec3(0.5f, 0.5f, 0.5f), glm::vec3(0.5f, 0.5f, 0.5f)});
     m.triangles.push_back({n, n + 1, n + 2});
     m.positions.insert(m.positions.end(), {glm::vec3(5, 5, 5), glm::vec3(6, 6, 6), glm::vec3(7, 7, 7)});
     m.triangles.push_back({n + 3, n + 4, n + 5});
@@ -510,8 +512,9 @@ TEST(MeasureIsosurface, ExtrapolatedBallVolumeIsWithinHalfAPercentAtTenVoxels) {
     const auto b = ball_case(1.0, r, {0.31, 0.17, 0.43});
     const auto s = measure_isosurface(b.v, kBallIso);
     const double plain = rel(s.volume_ml, ball_ml(r)), ex = rel(s.volume_extrapolated_ml, ball_ml(r));
-    std::printf("ball r = 10 at 1 mm: volume %+.3f %%, extrapolated %+.3f %%; area %+.3f %%, extrapolated %+.3f %%\n", 100 * plain, 100 * ex,
-                100 * rel(s.area_mm2, ball_area(r)), 100 * rel(s.area_extrapolated_mm2, ball_area(r)));
+    std::printf("ball r = 10 at 1 mm: volume %+.3f %%, extrapolated %+.3f %%; area %+.3f %%, extrapolated %+.3f %%\n",
+                100 * plain, 100 * ex, 100 * rel(s.area_mm2, ball_area(r)),
+                100 * rel(s.area_extrapolated_mm2, ball_area(r)));
     EXPECT_GT(std::abs(plain), 0.005) << "marching cubes alone misses 0.5 % here";
     EXPECT_LT(std::abs(ex), 0.005);
     EXPECT_LT(std::abs(ex), 0.5 * std::abs(plain));
@@ -659,7 +662,8 @@ TEST(MeasureIsosurface, CoarseGridSpansTheSameExtent) {
     EXPECT_DOUBLE_EQ(ratio.y, 7.0 / 4.0);
     EXPECT_DOUBLE_EQ(ratio.z, 2.0);
     // First and last samples keep their positions and values.
-    for (const auto& [ci, fi] : std::vector<std::pair<glm::dvec3, glm::dvec3>>{{{0, 0, 0}, {0, 0, 0}}, {{4, 4, 1}, {8, 7, 2}}}) {
+    for (const auto& [ci, fi] :
+         std::vector<std::pair<glm::dvec3, glm::dvec3>>{{{0, 0, 0}, {0, 0, 0}}, {{4, 4, 1}, {8, 7, 2}}}) {
         EXPECT_NEAR(glm::length(c.index_to_world(ci) - v.index_to_world(fi)), 0.0, 1e-9);
         EXPECT_NEAR(c.value(std::int64_t(ci.x), std::int64_t(ci.y), std::int64_t(ci.z)),
                     v.value(std::int64_t(fi.x), std::int64_t(fi.y), std::int64_t(fi.z)), 1e-3);

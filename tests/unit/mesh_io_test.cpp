@@ -10,8 +10,8 @@
 #include "tests/support/test_util.hpp"
 
 using namespace iso;
-using iso::test::TempDir;
 using iso::test::read_file;
+using iso::test::TempDir;
 using iso::test::write_file;
 namespace fs = std::filesystem;
 
@@ -35,7 +35,6 @@ Mesh cube() {
     q(1, 3, 7, 5); // x = 1
     return m;
 }
-
 
 } // namespace
 
@@ -114,12 +113,14 @@ TEST(MeshIo, SpaceTagIsWrittenAndRasIsConverted) {
     const Mesh r = load_mesh(dir / "ras.obj");
     EXPECT_EQ(r.positions[0], glm::vec3(-1, -2, 3));
     EXPECT_FALSE(r.warnings.empty());
-    write_file(dir / "ras.stl", "solid SPACE=RAS\nfacet normal 0 0 1\nouter loop\nvertex 1 2 3\nvertex 4 5 6\nvertex 7 8 10\n"
-                           "endloop\nendfacet\nendsolid\n");
+    write_file(dir / "ras.stl",
+               "solid SPACE=RAS\nfacet normal 0 0 1\nouter loop\nvertex 1 2 3\nvertex 4 5 6\nvertex 7 8 10\n"
+               "endloop\nendfacet\nendsolid\n");
     EXPECT_EQ(load_mesh(dir / "ras.stl").positions[0], glm::vec3(-1, -2, 3));
-    write_file(dir / "ras.ply", "ply\nformat ascii 1.0\ncomment SPACE=RAS\nelement vertex 3\nproperty float x\nproperty float y\n"
-                           "property float z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n"
-                           "1 2 3\n4 5 6\n7 8 10\n3 0 1 2\n");
+    write_file(dir / "ras.ply",
+               "ply\nformat ascii 1.0\ncomment SPACE=RAS\nelement vertex 3\nproperty float x\nproperty float y\n"
+               "property float z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n"
+               "1 2 3\n4 5 6\n7 8 10\n3 0 1 2\n");
     EXPECT_EQ(load_mesh(dir / "ras.ply").positions[0], glm::vec3(-1, -2, 3));
     write_file(dir / "lps.obj", "v 1 2 3\nv 4 5 6\nv 7 8 10\nf 1 2 3\n");
     EXPECT_EQ(load_mesh(dir / "lps.obj").positions[0], glm::vec3(1, 2, 3)); // untagged: LPS
@@ -152,7 +153,7 @@ TEST(MeshIo, BadInput) {
     write_file(dir / "noend.ply", "ply\nformat ascii 1.0\nelement vertex 3\n");
     expect_error(dir / "noend.ply", "end_header");
     write_file(dir / "huge.ply", "ply\nformat binary_little_endian 1.0\nelement vertex 4000000000\nproperty float x\n"
-                            "element face 1\nproperty list uchar int vertex_indices\nend_header\n");
+                                 "element face 1\nproperty list uchar int vertex_indices\nend_header\n");
     expect_error(dir / "huge.ply", "truncated");
     write_file(dir / "nan.obj", "v nan 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
     expect_error(dir / "nan.obj", "NaN");
@@ -161,7 +162,8 @@ TEST(MeshIo, BadInput) {
     // A mangled array format: VTK would read it as appended data and trust its
     // compression header (a division by zero the fuzz smoke found).
     {
-        std::string v = read_file(ISOSCOPE_SOURCE_DIR "/tests/fuzz/regressions/vtp/crash-vtp-crash-4eaf944ab1554cf45e1a8a8200df37f552b003a3");
+        std::string v = read_file(
+            ISOSCOPE_SOURCE_DIR "/tests/fuzz/regressions/vtp/crash-vtp-crash-4eaf944ab1554cf45e1a8a8200df37f552b003a3");
         ASSERT_FALSE(v.empty());
         write_file(dir / "format.vtp", v);
         expect_error(dir / "format.vtp", "format 'appe' is not ascii, binary or appended");

@@ -51,7 +51,8 @@ TEST_P(BundledHeadOrientation, NoseIsAnteriorBelowTheEyesAndAboveTheChin) {
     const test::HeadLandmarks lm = test::head_landmarks(h.index_to_lps);
     const glm::dvec3 nose = h.nose;
     const double eye_level = 0.5 * (lm.right_eye.z + lm.left_eye.z);
-    SCOPED_TRACE("nose at LPS (" + std::to_string(nose.x) + ", " + std::to_string(nose.y) + ", " + std::to_string(nose.z) + ")");
+    SCOPED_TRACE("nose at LPS (" + std::to_string(nose.x) + ", " + std::to_string(nose.y) + ", " +
+                 std::to_string(nose.z) + ")");
 
     // Anterior: nearer the front (smaller y) than the eyes and the chin.
     EXPECT_LT(nose.y, lm.right_eye.y - 5.0);
@@ -85,4 +86,7 @@ TEST_P(BundledHeadOrientation, AffineIsTheRotationTheHeaderStates) {
 }
 
 INSTANTIATE_TEST_SUITE_P(BothHeaders, BundledHeadOrientation, ::testing::Values("headsq.nhdr", "headsq.mhd"),
-                         [](const auto& info) { return std::string(info.param).substr(7) == "nhdr" ? std::string("Nrrd") : std::string("MetaImage"); });
+                         [](const auto& info) {
+                             return std::string(info.param).substr(7) == "nhdr" ? std::string("Nrrd")
+                                                                                : std::string("MetaImage");
+                         });

@@ -115,13 +115,15 @@ TEST(Overlay, OnlyDefinedVisiblePointsAreDrawnAndCarryTheirDepth) {
 TEST(Overlay, LineVerticesCarryTheirEndsDepthAndDashDistance) {
     const Camera cam = front_camera();
     // From 300 mm deep to 400 mm deep, across the image.
-    const auto v = build_overlay(markups_only({markup(MarkupType::Line, {{-20, 0, 0}, {20, 100, 0}})}), cam, 200, 200, 1.0f);
+    const auto v =
+        build_overlay(markups_only({markup(MarkupType::Line, {{-20, 0, 0}, {20, 100, 0}})}), cam, 200, 200, 1.0f);
     float max_along = 0;
     std::size_t line_vertices = 0;
     for (const auto& x : v) {
         if (x.anchor.x >= 0) continue; // glyphs and the label
         ++line_vertices;
-        EXPECT_TRUE(std::abs(x.inv_depth - 1.0f / 300.0f) < 1e-7f || std::abs(x.inv_depth - 1.0f / 400.0f) < 1e-7f) << x.inv_depth;
+        EXPECT_TRUE(std::abs(x.inv_depth - 1.0f / 300.0f) < 1e-7f || std::abs(x.inv_depth - 1.0f / 400.0f) < 1e-7f)
+            << x.inv_depth;
         max_along = std::max(max_along, x.along);
     }
     EXPECT_EQ(line_vertices, 12u) << "outline and colour, two triangles each";
@@ -142,7 +144,8 @@ TEST(Overlay, LabelsThatAreNotAsciiAndTheScale) {
     m.points[0].label.clear();
     auto extent = [&](float s) {
         float e = 0;
-        for (const auto& x : build_overlay(markups_only({m}), cam, 200, 200, s)) e = std::max(e, glm::length(x.pixel - glm::vec2(100)));
+        for (const auto& x : build_overlay(markups_only({m}), cam, 200, 200, s))
+            e = std::max(e, glm::length(x.pixel - glm::vec2(100)));
         return e;
     };
     EXPECT_NEAR(extent(2.0f) / extent(1.0f), 2.0, 1e-5);
@@ -164,6 +167,7 @@ TEST(Overlay, TheHeadExampleShowsTheDocumentedValues) {
     for (std::size_t i = 0; i < 4; ++i) {
         EXPECT_EQ(g.markups[i].name, f.markups[i].name);
         ASSERT_EQ(g.markups[i].points.size(), f.markups[i].points.size());
-        for (std::size_t k = 0; k < f.markups[i].points.size(); ++k) EXPECT_EQ(g.markups[i].points[k].position, f.markups[i].points[k].position);
+        for (std::size_t k = 0; k < f.markups[i].points.size(); ++k)
+            EXPECT_EQ(g.markups[i].points[k].position, f.markups[i].points[k].position);
     }
 }

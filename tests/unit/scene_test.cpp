@@ -95,7 +95,8 @@ TEST(Scene, ErrorsNameTheOperationAndTheFile) {
         } catch (const Error& e) {
             EXPECT_NE(std::string(e.what()).find(where), std::string::npos) << e.what();
             EXPECT_NE(std::string(e.what()).find(what), std::string::npos) << e.what();
-            EXPECT_EQ(std::string(e.what()).find("--"), std::string::npos) << "no command-line flags in core errors: " << e.what();
+            EXPECT_EQ(std::string(e.what()).find("--"), std::string::npos)
+                << "no command-line flags in core errors: " << e.what();
         }
     };
     expect_error([&] { s.add_isosurfaces({500}); }, "Scene::volume", "no volume");

@@ -18,8 +18,8 @@
 #include "tests/support/test_util.hpp"
 
 using namespace iso;
-using iso::test::TempDir;
 using iso::test::read_file;
+using iso::test::TempDir;
 using iso::test::write_file;
 namespace fs = std::filesystem;
 
@@ -185,21 +185,31 @@ TEST(Session, RefusalsNameTheFileAndTheField) {
         {edited([](auto& j) { j["version"] = 2; }), "version: 2 is not supported"},
         {edited([](auto& j) { j["version"] = "1"; }), "version: must be an integer"},
         {edited([](auto& j) { j.erase("input"); }), "input: missing"},
-        {edited([](auto& j) { j["input"]["path"] = "/no/such/dir/headsq.nhdr"; }), "input.path: '/no/such/dir/headsq.nhdr' does not exist"},
+        {edited([](auto& j) { j["input"]["path"] = "/no/such/dir/headsq.nhdr"; }),
+         "input.path: '/no/such/dir/headsq.nhdr' does not exist"},
         {edited([](auto& j) { j["surfaces"][1]["color"] = "red"; }), "surfaces[1].color: expected #rrggbb"},
         {edited([](auto& j) { j["surfaces"][0]["opacity"] = 1.5; }), "surfaces[0].opacity: must be between 0 and 1"},
-        {edited([](auto& j) { j["surfaces"][0]["kind"] = "blob"; }), "surfaces[0].kind: 'blob' is not iso, label or mesh"},
+        {edited([](auto& j) { j["surfaces"][0]["kind"] = "blob"; }),
+         "surfaces[0].kind: 'blob' is not iso, label or mesh"},
         {edited([](auto& j) { j["surfaces"][0].erase("value"); }), "surfaces[0].value: missing"},
         {edited([](auto& j) { j["surfaces"][0]["smoothing"] = -1; }), "surfaces[0].smoothing: must be between 0 and 1"},
         // JSON has no NaN: writers put null (nlohmann does) or an overflowing number.
         {edited([](auto& j) { j["camera"]["eye"][1] = nullptr; }), "camera.eye: must be a number, not null"},
-        {edited([](auto& j) { j["camera"]["target"] = {1, 2}; }), "camera.target: must be an array of 3 numbers"},
+        {edited([](auto& j) {
+             j["camera"]["target"] = {1, 2};
+         }),
+         "camera.target: must be an array of 3 numbers"},
         {edited([](auto& j) { j["camera"]["fov_y_degrees"] = 0; }), "camera.fov_y_degrees: must be between 0 and 180"},
-        {edited([](auto& j) { j["camera"]["up"] = j["camera"]["target"]; j["camera"]["eye"] = {0, 0, 0}; }), "camera.up: is zero or along"},
+        {edited([](auto& j) {
+             j["camera"]["up"] = j["camera"]["target"];
+             j["camera"]["eye"] = {0, 0, 0};
+         }),
+         "camera.up: is zero or along"},
         {edited([](auto& j) { j["window_level"]["width"] = 0; }), "window_level.width: must be positive"},
         {edited([](auto& j) { j["view"]["ao"] = "yes"; }), "view.ao: must be true or false"},
         {edited([](auto& j) { j["view"]["transparency"] = 0; }), "view.transparency: must be true or false"},
-        {edited([](auto& j) { j["markups"]["markups"][0]["controlPoints"].erase(1); }), "markups: markup 1 (Line 'ruler'): a Line needs 2"},
+        {edited([](auto& j) { j["markups"]["markups"][0]["controlPoints"].erase(1); }),
+         "markups: markup 1 (Line 'ruler'): a Line needs 2"},
     };
     for (const auto& c : cases) {
         const std::string msg = load_error(dir, c.text);
@@ -291,7 +301,8 @@ TEST(Session, OpensItsSceneAndCapturesItBack) {
         ADD_FAILURE() << "no error";
     } catch (const Error& e) {
         EXPECT_EQ(e.where(), dir / "mesh.json");
-        EXPECT_NE(std::string(e.what()).find(s.input + ": surface 1 ('skin'): a mesh surface"), std::string::npos) << e.what();
+        EXPECT_NE(std::string(e.what()).find(s.input + ": surface 1 ('skin'): a mesh surface"), std::string::npos)
+            << e.what();
     }
 }
 

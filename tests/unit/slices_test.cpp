@@ -58,9 +58,10 @@ struct Convention {
 Convention convention(SliceOrientation o) {
     const glm::dvec3 left(1, 0, 0), anterior(0, -1, 0), posterior(0, 1, 0), superior(0, 0, 1);
     switch (o) {
-    case SliceOrientation::Axial: return {left, anterior};       // from the feet: patient's right on the image's left
-    case SliceOrientation::Coronal: return {left, superior};     // from the front
-    case SliceOrientation::Sagittal: return {posterior, superior}; // from the patient's left: anterior on the image's left
+    case SliceOrientation::Axial: return {left, anterior};   // from the feet: patient's right on the image's left
+    case SliceOrientation::Coronal: return {left, superior}; // from the front
+    case SliceOrientation::Sagittal:
+        return {posterior, superior}; // from the patient's left: anterior on the image's left
     }
     return {};
 }
@@ -135,8 +136,8 @@ TEST(SlicePlanes, DefaultPlanesFitTheObliqueVolumesBoundingBox) {
     // The box of the voxels' extent, from the 8 corners, here.
     glm::dvec3 lo(1e300), hi(-1e300);
     for (int c = 0; c < 8; ++c) {
-        const glm::dvec3 p = v.index_to_world({c & 1 ? v.dims[0] - 0.5 : -0.5, c & 2 ? v.dims[1] - 0.5 : -0.5,
-                                               c & 4 ? v.dims[2] - 0.5 : -0.5});
+        const glm::dvec3 p = v.index_to_world(
+            {c & 1 ? v.dims[0] - 0.5 : -0.5, c & 2 ? v.dims[1] - 0.5 : -0.5, c & 4 ? v.dims[2] - 0.5 : -0.5});
         lo = glm::min(lo, p);
         hi = glm::max(hi, p);
     }
@@ -355,9 +356,10 @@ TEST(SlicePixels, PatientLeftIsOnTheImagesRightInAxialAndCoronal) {
         EXPECT_GT(sw, 10) << slice_orientation_name(p.orientation);
         return glm::ivec2(sx > 0 ? 1 : -1, sy > 0 ? 1 : -1);
     };
-    for (auto& p : planes) p.center = kCentre + glm::dot(ball - kCentre, p.normal) * p.normal; // view centred on the grid
-    EXPECT_EQ(quadrant(planes[0]), glm::ivec2(1, 1));  // axial: left on the right, anterior up
-    EXPECT_EQ(quadrant(planes[1]), glm::ivec2(1, 1));  // coronal: left on the right, superior up
+    for (auto& p : planes)
+        p.center = kCentre + glm::dot(ball - kCentre, p.normal) * p.normal; // view centred on the grid
+    EXPECT_EQ(quadrant(planes[0]), glm::ivec2(1, 1));                       // axial: left on the right, anterior up
+    EXPECT_EQ(quadrant(planes[1]), glm::ivec2(1, 1));                       // coronal: left on the right, superior up
     EXPECT_EQ(quadrant(planes[2]), glm::ivec2(-1, 1)); // sagittal: anterior on the left, superior up
 }
 
@@ -383,7 +385,8 @@ TEST(SlicePixels, AClickGivesTheCoreApisPointValueAndVoxel) {
         for (int n = 0; n < 300; ++n) {
             const glm::dvec2 click(ux(rng), uy(rng));
             const glm::dvec3 lps = pixel_to_lps(g, click);
-            ASSERT_NEAR(glm::length(lps - expected_lps(p.orientation, p.center, p.pixel_mm, w, h, click.x - 0.5, click.y - 0.5)),
+            ASSERT_NEAR(glm::length(lps - expected_lps(p.orientation, p.center, p.pixel_mm, w, h, click.x - 0.5,
+                                                       click.y - 0.5)),
                         0.0, 1e-9);
             const auto mine = sample_at_pixel(v, g, click);
             const auto core = value_at(scene, lps);
@@ -403,7 +406,8 @@ TEST(SlicePixels, AClickGivesTheCoreApisPointValueAndVoxel) {
             }
             EXPECT_NEAR(mine->voxel_value, field(mine->voxel_lps), 1e-4);
             // The voxel is the nearest one: its centre is within half a voxel on every axis.
-            const glm::dvec3 d = glm::abs(index_of(v, lps) - glm::dvec3(mine->voxel[0], mine->voxel[1], mine->voxel[2]));
+            const glm::dvec3 d =
+                glm::abs(index_of(v, lps) - glm::dvec3(mine->voxel[0], mine->voxel[1], mine->voxel[2]));
             EXPECT_LE(std::max({d.x, d.y, d.z}), 0.5 + 1e-9);
         }
     }
@@ -440,7 +444,8 @@ TEST(SliceReslice, EveryPixelIsTheFieldAtItsCentreOnTheObliqueGrid) {
                 case Where::Rim: {
                     // The outer half voxel: the border samples extend as constants, i.e. the field at the clamped index.
                     ++rim;
-                    const glm::dvec3 clamped = glm::clamp(idx, glm::dvec3(0.0), glm::dvec3(v.dims[0] - 1, v.dims[1] - 1, v.dims[2] - 1));
+                    const glm::dvec3 clamped =
+                        glm::clamp(idx, glm::dvec3(0.0), glm::dvec3(v.dims[0] - 1, v.dims[1] - 1, v.dims[2] - 1));
                     ASSERT_NEAR(got, field(v.index_to_world(clamped)), 1e-4) << c << "," << r;
                     break;
                 }
@@ -483,7 +488,8 @@ TEST(SliceReslice, ShearedGridsAndEveryVoxelType) {
     a[2] = {0.0, 0.9, 2.0, 0.0}; // 24 degree tilt
     a[3] = {-5.0, 3.0, 11.0, 1.0};
     const std::array<std::int64_t, 3> dims{21, 18, 9};
-    for (VoxelType t : {VoxelType::U8, VoxelType::I16, VoxelType::U16, VoxelType::I32, VoxelType::F32, VoxelType::F64}) {
+    for (VoxelType t :
+         {VoxelType::U8, VoxelType::I16, VoxelType::U16, VoxelType::I32, VoxelType::F32, VoxelType::F64}) {
         Volume v = Volume::dense(dims, t, a);
         // Integer-valued linear field in the index (so every type stores it exactly).
         dispatch_voxel_type(t, [&](auto z) {
@@ -538,10 +544,10 @@ TEST(SliceReslice, NanVoxelsSpreadOnlyWhereTheyHaveWeight) {
             }
         }
     // The NaN voxel's own centre and the pixels between it and its neighbours are NaN; one voxel away is not.
-    EXPECT_TRUE(std::isnan(img.at(4, 2)));  // (2, 1)
-    EXPECT_TRUE(std::isnan(img.at(5, 2)));  // (2.5, 1)
-    EXPECT_EQ(img.at(6, 2), 10.0f);         // (3, 1): the NaN has weight 0
-    EXPECT_EQ(img.at(2, 2), 10.0f);         // (1, 1)
+    EXPECT_TRUE(std::isnan(img.at(4, 2))); // (2, 1)
+    EXPECT_TRUE(std::isnan(img.at(5, 2))); // (2.5, 1)
+    EXPECT_EQ(img.at(6, 2), 10.0f);        // (3, 1): the NaN has weight 0
+    EXPECT_EQ(img.at(2, 2), 10.0f);        // (1, 1)
 }
 
 TEST(SliceReslice, SparseVolumesResliceAsDense) {
@@ -651,7 +657,8 @@ TEST(SliceOutline, ASpheresOutlineThroughItsCentreIsOneClosedLoopAtItsRadius) {
     double longest = 0; // the longest edge: the chord error bound
     for (const auto& t : sphere.triangles)
         for (int k = 0; k < 3; ++k)
-            longest = std::max(longest, glm::length(glm::dvec3(sphere.positions[t[k]]) - glm::dvec3(sphere.positions[t[(k + 1) % 3]])));
+            longest = std::max(longest, glm::length(glm::dvec3(sphere.positions[t[k]]) -
+                                                    glm::dvec3(sphere.positions[t[(k + 1) % 3]])));
     const double inner = std::sqrt(R * R - 0.25 * longest * longest) - 1e-4;
 
     for (const double h : {0.0, 0.37 * R, -0.81 * R}) {
@@ -704,7 +711,7 @@ TEST(SliceOutline, FacesInThePlaneAndDegenerateTriangles) {
     ASSERT_EQ(loops.lengths.size(), 1u);
     double length = 0;
     for (const auto& s : top) length += glm::length(s.b - s.a) * 0.5;
-    EXPECT_NEAR(length, 8.0, 1e-5); // the square's perimeter
+    EXPECT_NEAR(length, 8.0, 1e-5);  // the square's perimeter
     p.origin = p.center = {1, 1, 0}; // the bottom face: the solid is above, nothing crosses
     EXPECT_TRUE(mesh_outline(cube, slice_grid(p, 16, 16)).empty());
     p.origin = p.center = {1, 1, 1};

@@ -17,8 +17,8 @@
 #include "tests/support/test_util.hpp"
 
 using namespace iso;
-using iso::test::TempDir;
 using iso::test::read_file;
+using iso::test::TempDir;
 namespace fs = std::filesystem;
 
 namespace {
@@ -33,11 +33,13 @@ std::vector<std::array<float, 3>> sorted_positions(const Mesh& m) {
 TEST(StreamCli, MeshStreamEqualsInMemory) {
     TempDir dir;
     const std::string in = test::data("headsq.nhdr");
-    const auto ref = test::run_command(test::cli() + " mesh " + in + " --iso 500 --iso 1150 --json -o " + (dir / "ref.ply"));
+    const auto ref =
+        test::run_command(test::cli() + " mesh " + in + " --iso 500 --iso 1150 --json -o " + (dir / "ref.ply"));
     ASSERT_EQ(ref.exit_code, 0) << ref.out;
     // 2 MiB with 16-cell chunks: several slabs (the volume is 0.7 MiB, so --stream forces streaming).
-    const auto r = test::run_command(test::cli() + " mesh " + in + " --iso 500 --iso 1150 --stream --memory 2 --chunk 16 --json -o " +
-                                     (dir / "s.ply"));
+    const auto r =
+        test::run_command(test::cli() + " mesh " + in +
+                          " --iso 500 --iso 1150 --stream --memory 2 --chunk 16 --json -o " + (dir / "s.ply"));
     ASSERT_EQ(r.exit_code, 0) << r.out;
     const auto jr = nlohmann::json::parse(ref.out), js = nlohmann::json::parse(r.out);
     EXPECT_EQ(jr["route"], "in memory");
@@ -69,13 +71,17 @@ TEST(StreamCli, MeshStreamEqualsInMemory) {
         EXPECT_EQ(js["surfaces"][i]["path"], (dir / ("s-iso" + v + ".ply")));
     }
     // A budget below the volume's size streams without --stream; .pvtp pieces.
-    const auto p = test::run_command(test::cli() + " mesh " + in + " --iso 500 --memory 0.5 --chunk 8 -o " + (dir / "p.pvtp"), true);
+    const auto p = test::run_command(
+        test::cli() + " mesh " + in + " --iso 500 --memory 0.5 --chunk 8 -o " + (dir / "p.pvtp"), true);
     ASSERT_EQ(p.exit_code, 0) << p.out;
     EXPECT_NE(p.out.find("streamed:"), std::string::npos) << p.out;
     EXPECT_NE(p.out.find("peak memory"), std::string::npos) << p.out;
-    EXPECT_NE(p.out.find("iso 500: " + std::to_string(jr["surfaces"][0]["triangles"].get<std::size_t>()) + " triangles, "),
-              std::string::npos) << p.out;
-    EXPECT_NE(p.out.find(", open, volume not known"), std::string::npos) << "no volume for an open surface streamed: " << p.out;
+    EXPECT_NE(
+        p.out.find("iso 500: " + std::to_string(jr["surfaces"][0]["triangles"].get<std::size_t>()) + " triangles, "),
+        std::string::npos)
+        << p.out;
+    EXPECT_NE(p.out.find(", open, volume not known"), std::string::npos)
+        << "no volume for an open surface streamed: " << p.out;
     EXPECT_TRUE(fs::exists(dir / "p.pvtp"));
     EXPECT_TRUE(fs::exists(dir / "p_0.vtp"));
 }
@@ -84,7 +90,8 @@ TEST(StreamCli, PostProcessingAndBadInputAreClearErrors) {
     TempDir dir;
     const std::string in = test::data("headsq.nhdr");
     for (const char* flag : {"--smooth 0.5", "--decimate 0.5", "--largest"}) {
-        const auto r = test::run_command(test::cli() + " mesh " + in + " --iso 500 --stream " + flag + " -o " + (dir / "x.stl"), true);
+        const auto r = test::run_command(
+            test::cli() + " mesh " + in + " --iso 500 --stream " + flag + " -o " + (dir / "x.stl"), true);
         EXPECT_EQ(r.exit_code, 1) << flag;
         EXPECT_NE(r.out.find(std::string(flag).substr(0, std::string(flag).find(' '))), std::string::npos) << r.out;
         EXPECT_FALSE(fs::exists(dir / "x.stl"));
@@ -92,12 +99,14 @@ TEST(StreamCli, PostProcessingAndBadInputAreClearErrors) {
     // A truncated raw file: the error names it, nothing is written.
     {
         std::ofstream h(dir / "cut.nhdr");
-        h << "NRRD0004\ntype: short\ndimension: 3\nsizes: 64 64 93\nencoding: raw\nendian: little\ndata file: cut.raw\n";
+        h << "NRRD0004\ntype: short\ndimension: 3\nsizes: 64 64 93\nencoding: raw\nendian: little\ndata file: "
+             "cut.raw\n";
         std::ofstream d(dir / "cut.raw", std::ios::binary);
         std::vector<char> bytes(64 * 64 * 50 * 2, 0);
         d.write(bytes.data(), std::streamsize(bytes.size()));
     }
-    const auto t = test::run_command(test::cli() + " mesh " + (dir / "cut.nhdr") + " --iso 500 --stream -o " + (dir / "x.ply"), true);
+    const auto t = test::run_command(
+        test::cli() + " mesh " + (dir / "cut.nhdr") + " --iso 500 --stream -o " + (dir / "x.ply"), true);
     EXPECT_EQ(t.exit_code, 1);
     EXPECT_NE(t.out.find("cut.nhdr"), std::string::npos) << t.out;
     EXPECT_NE(t.out.find("truncated"), std::string::npos) << t.out;
@@ -120,7 +129,8 @@ TEST(StreamCli, InfoReadsOnlyTheHeader) {
         ASSERT_NE(at, std::string::npos);
         const auto eol = text.find('\n', at);
         const std::string data_name = text.substr(at + 10, eol - at - 10);
-        const fs::path data_path = fs::path(test::data("headsq.nhdr")).parent_path() / data_name.substr(data_name.find_first_not_of(' '));
+        const fs::path data_path =
+            fs::path(test::data("headsq.nhdr")).parent_path() / data_name.substr(data_name.find_first_not_of(' '));
         fs::copy_file(data_path, dir / data_path.filename());
     }
     for (const std::string args : {" --header-only --json", " --memory 0.1 --json"}) {
@@ -158,10 +168,12 @@ TEST(StreamCli, OpenVdbHeaderAndSlabs) {
     EXPECT_EQ(jh["grid"], "density");
     EXPECT_GT(jh["topology_bytes"].get<double>(), 0.0);
     EXPECT_LT(jh["topology_bytes"].get<double>(), jh["memory_bytes"].get<double>());
-    const auto ref = test::run_command(test::cli() + " mesh " + (dir / "h.vdb") + " --iso 500 --json -o " + (dir / "ref.ply"));
+    const auto ref =
+        test::run_command(test::cli() + " mesh " + (dir / "h.vdb") + " --iso 500 --json -o " + (dir / "ref.ply"));
     ASSERT_EQ(ref.exit_code, 0) << ref.out;
     EXPECT_EQ(nlohmann::json::parse(ref.out)["route"], "in memory");
-    const auto r = test::run_command(test::cli() + " mesh " + (dir / "h.vdb") + " --iso 500 --memory 2.8 --chunk 8 --json -o " + (dir / "s.ply"));
+    const auto r = test::run_command(test::cli() + " mesh " + (dir / "h.vdb") +
+                                     " --iso 500 --memory 2.8 --chunk 8 --json -o " + (dir / "s.ply"));
     ASSERT_EQ(r.exit_code, 0) << r.out;
     const auto js = nlohmann::json::parse(r.out);
     EXPECT_EQ(js["route"], "streamed");
@@ -189,7 +201,8 @@ TEST(StreamCli, NoOverlapWritesTheSameFiles) {
         ASSERT_EQ(off.exit_code, 0) << off.out;
         EXPECT_EQ(nlohmann::json::parse(on.out)["streaming"]["overlapped"], true) << on.out;
         EXPECT_EQ(nlohmann::json::parse(off.out)["streaming"]["overlapped"], false) << off.out;
-        const std::string a = read_file(dir / ("on" + std::string(ext))), b = read_file(dir / ("off" + std::string(ext)));
+        const std::string a = read_file(dir / ("on" + std::string(ext))),
+                          b = read_file(dir / ("off" + std::string(ext)));
         EXPECT_GT(a.size(), 100000u);
         EXPECT_TRUE(a == b) << "the files differ";
     }
@@ -203,23 +216,27 @@ TEST(StreamCli, MeshJsonStreamedEqualsInMemory) {
     TempDir dir;
     {
         const std::array<std::int64_t, 3> d{40, 36, 44};
-        Volume v = Volume::dense(d, VoxelType::I16, make_affine(glm::dvec3(0.9, 1.0, 1.1), glm::dvec3(5, -3, 2), glm::dmat3(1.0)));
+        Volume v = Volume::dense(d, VoxelType::I16,
+                                 make_affine(glm::dvec3(0.9, 1.0, 1.1), glm::dvec3(5, -3, 2), glm::dmat3(1.0)));
         auto s = v.as<std::int16_t>();
         for (std::int64_t k = 0; k < d[2]; ++k)
             for (std::int64_t j = 0; j < d[1]; ++j)
                 for (std::int64_t i = 0; i < d[0]; ++i)
                     s[v.linear_index(i, j, k)] = std::int16_t(
-                        std::clamp(500.0 + 100.0 * (13.5 - glm::length(glm::dvec3(i, j, k) - glm::dvec3(19, 18, 21))), 0.0, 1000.0));
+                        std::clamp(500.0 + 100.0 * (13.5 - glm::length(glm::dvec3(i, j, k) - glm::dvec3(19, 18, 21))),
+                                   0.0, 1000.0));
         save_volume(v, dir / "ball.nhdr", false);
     }
     const std::string ball = dir / "ball.nhdr";
     const auto mem = test::run_command(test::cli() + " mesh " + ball + " --iso 500 --json -o " + (dir / "m.ply"));
-    const auto str = test::run_command(test::cli() + " mesh " + ball + " --iso 500 --json --stream --memory 0.3 --chunk 8 -o " + (dir / "s.ply"));
+    const auto str = test::run_command(test::cli() + " mesh " + ball +
+                                       " --iso 500 --json --stream --memory 0.3 --chunk 8 -o " + (dir / "s.ply"));
     const auto mea = test::run_command(test::cli() + " measure " + ball + " --iso 500 --json");
     ASSERT_EQ(mem.exit_code, 0) << mem.out;
     ASSERT_EQ(str.exit_code, 0) << str.out;
     ASSERT_EQ(mea.exit_code, 0) << mea.out;
-    const auto jm = nlohmann::json::parse(mem.out), js = nlohmann::json::parse(str.out), jq = nlohmann::json::parse(mea.out);
+    const auto jm = nlohmann::json::parse(mem.out), js = nlohmann::json::parse(str.out),
+               jq = nlohmann::json::parse(mea.out);
     EXPECT_EQ(js["route"], "streamed");
     ASSERT_TRUE(js["streaming"].is_object());
     EXPECT_GT(js["streaming"]["slabs_read"].get<int>(), 1) << "several slabs";
@@ -227,17 +244,23 @@ TEST(StreamCli, MeshJsonStreamedEqualsInMemory) {
     const auto& b = js["surfaces"][0];
     EXPECT_EQ(a["closed"], true);
     EXPECT_EQ(a["volume_kind"], "enclosed");
-    EXPECT_EQ(a["volume_ml"].get<double>(), jq["surfaces"][0]["volume_ml"].get<double>()) << "measure's enclosed volume";
-    EXPECT_NEAR(a["volume_ml"].get<double>(), 4.0 / 3.0 * M_PI * std::pow(13.5, 3) * 0.99 / 1000.0, 0.02 * a["volume_ml"].get<double>());
-    for (const char* key : {"triangles", "vertices", "closed", "boundary_edges", "volume_kind"}) EXPECT_EQ(b[key], a[key]) << key;
+    EXPECT_EQ(a["volume_ml"].get<double>(), jq["surfaces"][0]["volume_ml"].get<double>())
+        << "measure's enclosed volume";
+    EXPECT_NEAR(a["volume_ml"].get<double>(), 4.0 / 3.0 * M_PI * std::pow(13.5, 3) * 0.99 / 1000.0,
+                0.02 * a["volume_ml"].get<double>());
+    for (const char* key : {"triangles", "vertices", "closed", "boundary_edges", "volume_kind"})
+        EXPECT_EQ(b[key], a[key]) << key;
     EXPECT_EQ(b["components"]["count"], a["components"]["count"]);
     EXPECT_EQ(b["components"]["largest"]["triangles"], a["components"]["largest"]["triangles"]);
-    for (const char* key : {"area_mm2", "volume_ml"}) EXPECT_NEAR(b[key].get<double>(), a[key].get<double>(), 1e-9 * a[key].get<double>()) << key;
-    EXPECT_NEAR(b["components"]["largest"]["volume_ml"].get<double>(), a["volume_ml"].get<double>(), 1e-9 * a["volume_ml"].get<double>());
+    for (const char* key : {"area_mm2", "volume_ml"})
+        EXPECT_NEAR(b[key].get<double>(), a[key].get<double>(), 1e-9 * a[key].get<double>()) << key;
+    EXPECT_NEAR(b["components"]["largest"]["volume_ml"].get<double>(), a["volume_ml"].get<double>(),
+                1e-9 * a["volume_ml"].get<double>());
     // The skin, open at the neck: the same counts, no volume where streamed.
     const std::string in = test::data("headsq.nhdr");
     const auto om = test::run_command(test::cli() + " mesh " + in + " --iso 500 --json -o " + (dir / "om.ply"));
-    const auto os = test::run_command(test::cli() + " mesh " + in + " --iso 500 --json --stream --memory 2 --chunk 16 -o " + (dir / "os.ply"));
+    const auto os = test::run_command(test::cli() + " mesh " + in +
+                                      " --iso 500 --json --stream --memory 2 --chunk 16 -o " + (dir / "os.ply"));
     ASSERT_EQ(om.exit_code, 0) << om.out;
     ASSERT_EQ(os.exit_code, 0) << os.out;
     const auto jom = nlohmann::json::parse(om.out), jos = nlohmann::json::parse(os.out);

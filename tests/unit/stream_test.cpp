@@ -48,9 +48,9 @@
 namespace iso {
 namespace {
 namespace fs = std::filesystem;
-using test::TempDir;
 using test::files_in;
 using test::read_file;
+using test::TempDir;
 
 // A wobbly ball (values fall off from the centre), in int16, with integer
 // values so that iso values equal to samples (ties) occur; or float32.
@@ -76,7 +76,8 @@ Volume ball(std::array<std::int64_t, 3> d, VoxelType t, const glm::dmat4& m, glm
 
 glm::dmat4 oblique(glm::dvec3 spacing, glm::dvec3 origin, bool mirror) {
     const double a = 0.4;
-    glm::dmat3 r(glm::dvec3(std::cos(a), std::sin(a), 0), glm::dvec3(-std::sin(a), std::cos(a), 0), glm::dvec3(0, 0, 1));
+    glm::dmat3 r(glm::dvec3(std::cos(a), std::sin(a), 0), glm::dvec3(-std::sin(a), std::cos(a), 0),
+                 glm::dvec3(0, 0, 1));
     if (mirror) r[2] = -r[2];
     return make_affine(spacing, origin, r);
 }
@@ -170,7 +171,8 @@ Mesh in_memory(const std::string& path, double iso, int chunk) {
     return extract_isosurface(load_volume(path), iso, eo);
 }
 
-StreamStats stream_to(const std::string& path, double iso, int chunk, std::size_t budget, CollectSink& sink, bool overlap = true) {
+StreamStats stream_to(const std::string& path, double iso, int chunk, std::size_t budget, CollectSink& sink,
+                      bool overlap = true) {
     auto src = open_volume_stream(path);
     StreamOptions so;
     so.overlap = overlap;
@@ -239,9 +241,18 @@ TEST(Stream, NiftiRescaleAndByteOrderMatchTheReader) {
     // at their NIfTI-1 offsets); the reader (nifti_clib) swaps and rescales.
     const int nx = 6, ny = 5, nz = 4;
     std::vector<char> hdr(352, 0);
-    auto put32 = [&](int off, std::uint32_t x) { for (int b = 0; b < 4; ++b) hdr[std::size_t(off + b)] = char((x >> (24 - 8 * b)) & 0xff); };
-    auto put16 = [&](int off, std::uint16_t x) { hdr[std::size_t(off)] = char(x >> 8); hdr[std::size_t(off + 1)] = char(x & 0xff); };
-    auto putf = [&](int off, float f) { std::uint32_t u; std::memcpy(&u, &f, 4); put32(off, u); };
+    auto put32 = [&](int off, std::uint32_t x) {
+        for (int b = 0; b < 4; ++b) hdr[std::size_t(off + b)] = char((x >> (24 - 8 * b)) & 0xff);
+    };
+    auto put16 = [&](int off, std::uint16_t x) {
+        hdr[std::size_t(off)] = char(x >> 8);
+        hdr[std::size_t(off + 1)] = char(x & 0xff);
+    };
+    auto putf = [&](int off, float f) {
+        std::uint32_t u;
+        std::memcpy(&u, &f, 4);
+        put32(off, u);
+    };
     put32(0, 348);
     const std::uint16_t dim[8] = {3, nx, ny, nz, 1, 1, 1, 1};
     for (int i = 0; i < 8; ++i) put16(40 + 2 * i, dim[i]);
@@ -268,7 +279,8 @@ TEST(Stream, NiftiRescaleAndByteOrderMatchTheReader) {
     const Volume s = src->read_slab(1, 3);
     for (int k = 1; k <= 3; ++k)
         for (int j = 0; j < ny; ++j)
-            for (int i = 0; i < nx; ++i) ASSERT_EQ(s.value(i, j, k - 1), ref.value(i, j, k)) << i << " " << j << " " << k;
+            for (int i = 0; i < nx; ++i)
+                ASSERT_EQ(s.value(i, j, k - 1), ref.value(i, j, k)) << i << " " << j << " " << k;
 }
 
 // ---- streaming == in memory ----------------------------------------------------
@@ -284,8 +296,9 @@ TEST(Stream, EqualsInMemoryForBudgetsAndChunkSizes) {
             // Budgets from one chunk layer per slab to the whole volume in one slab.
             std::set<int> heights;
             // Budgets above the fixed costs for one, two, several chunk layers and the whole volume per slab.
-            const std::vector<std::size_t> extras = chunk == 8 ? std::vector<std::size_t>{450 << 10, 700 << 10, 1500 << 10, 64 << 20}
-                                                               : std::vector<std::size_t>{700 << 10, 1400 << 10, 2100 << 10, 64 << 20};
+            const std::vector<std::size_t> extras =
+                chunk == 8 ? std::vector<std::size_t>{450 << 10, 700 << 10, 1500 << 10, 64 << 20}
+                           : std::vector<std::size_t>{700 << 10, 1400 << 10, 2100 << 10, 64 << 20};
             for (std::size_t extra : extras)
                 for (bool overlap : {false, true}) {
                     const std::size_t budget = budget_over_fixed(dir / "v.nrrd", chunk, extra);
@@ -295,9 +308,10 @@ TEST(Stream, EqualsInMemoryForBudgetsAndChunkSizes) {
                     EXPECT_TRUE(st.plan.fits);
                     EXPECT_LE(st.peak_bytes, budget);
                     EXPECT_TRUE(sink.finished);
-                    expect_same_surface(ref, sink.meshes[0], "chunk " + std::to_string(chunk) + " iso " + std::to_string(iso) +
-                                                                 " layers/slab " + std::to_string(st.plan.layers_per_slab) +
-                                                                 (st.plan.overlap ? " overlapped" : ""));
+                    expect_same_surface(ref, sink.meshes[0],
+                                        "chunk " + std::to_string(chunk) + " iso " + std::to_string(iso) +
+                                            " layers/slab " + std::to_string(st.plan.layers_per_slab) +
+                                            (st.plan.overlap ? " overlapped" : ""));
                 }
             std::string hs;
             for (int hgt : heights) hs += " " + std::to_string(hgt);
@@ -324,7 +338,8 @@ TEST(Stream, FloatWithNanObliqueMirroredGzipAndMetaImage) {
         f << std::setprecision(17) << "TransformMatrix =";
         for (int a = 0; a < 3; ++a)
             for (int k = 0; k < 3; ++k) f << " " << m[a][k] / sp[a];
-        f << "\nOffset = " << m[3][0] << " " << m[3][1] << " " << m[3][2] << "\nElementSpacing = " << sp.x << " " << sp.y << " " << sp.z;
+        f << "\nOffset = " << m[3][0] << " " << m[3][1] << " " << m[3][2] << "\nElementSpacing = " << sp.x << " "
+          << sp.y << " " << sp.z;
         f << "\nDimSize = 30 28 45\nElementType = MET_FLOAT\nElementDataFile = LOCAL\n";
         f.write(reinterpret_cast<const char*>(v.bytes().data()), std::streamsize(v.bytes().size()));
     }
@@ -333,11 +348,13 @@ TEST(Stream, FloatWithNanObliqueMirroredGzipAndMetaImage) {
             const Mesh ref = in_memory(dir / name, iso, 8);
             ASSERT_GT(ref.triangles.size(), 500u);
             CollectSink sink;
-            const auto st = stream_to(dir / name, iso, 8, budget_over_fixed(dir / name, 8, std::size_t(100) << 10), sink);
+            const auto st =
+                stream_to(dir / name, iso, 8, budget_over_fixed(dir / name, 8, std::size_t(100) << 10), sink);
             EXPECT_GT(st.plan.slabs, 3u);
             EXPECT_TRUE(st.index_pass);
             expect_same_surface(ref, sink.meshes[0], std::string(name) + " iso " + std::to_string(iso));
-            if (std::string(name) == "f.nrrd") { // gzip: one restart after the index pass; slab halos come from the kept slices
+            if (std::string(name) ==
+                "f.nrrd") { // gzip: one restart after the index pass; slab halos come from the kept slices
                 EXPECT_EQ(st.source_restarts, 1u);
             }
         }
@@ -384,17 +401,23 @@ TEST(Stream, VdbIsReadSlabBySlab) {
     EXPECT_TRUE(src->streaming());
     ASSERT_EQ(src->header().dims, whole.dims);
     EXPECT_GT(src->resident_bytes(), 0u); // the topology the child holds
-    for (auto [k0, k1] : {std::pair<std::int64_t, std::int64_t>{7, 19}, {0, 0}, {0, whole.dims[2] - 1}, {whole.dims[2] - 3, whole.dims[2] - 1}}) {
+    for (auto [k0, k1] : {std::pair<std::int64_t, std::int64_t>{7, 19},
+                          {0, 0},
+                          {0, whole.dims[2] - 1},
+                          {whole.dims[2] - 3, whole.dims[2] - 1}}) {
         const Volume slab = src->read_slab(k0, k1);
         ASSERT_EQ(slab.dims[2], k1 - k0 + 1);
         EXPECT_TRUE(slab.is_sparse());
         for (int c = 0; c < 4; ++c)
             for (int r = 0; r < 4; ++r)
-                EXPECT_DOUBLE_EQ(slab.index_to_lps[c][r], (whole.index_to_lps * glm::translate(glm::dmat4(1.0), glm::dvec3(0, 0, double(k0))))[c][r]);
+                EXPECT_DOUBLE_EQ(
+                    slab.index_to_lps[c][r],
+                    (whole.index_to_lps * glm::translate(glm::dmat4(1.0), glm::dvec3(0, 0, double(k0))))[c][r]);
         std::size_t differ = 0;
         for (std::int64_t k = 0; k < slab.dims[2]; ++k)
             for (std::int64_t j = 0; j < whole.dims[1]; ++j)
-                for (std::int64_t i = 0; i < whole.dims[0]; ++i) differ += slab.value(i, j, k) != whole.value(i, j, k + k0);
+                for (std::int64_t i = 0; i < whole.dims[0]; ++i)
+                    differ += slab.value(i, j, k) != whole.value(i, j, k + k0);
         EXPECT_EQ(differ, 0u) << "slab " << k0 << ".." << k1;
     }
     EXPECT_THROW(src->read_slab(5, whole.dims[2]), Error);
@@ -407,7 +430,8 @@ TEST(Stream, VdbIsReadSlabBySlab) {
     // The engine's fixed costs, the child's topology and two layers of slab
     // as this stream's header prices them (the leaves the reader holds).
     so.memory_budget = std::size_t(1) << 40;
-    so.memory_budget = plan_stream(src->header(), so).fixed_bytes + src->resident_bytes() + std::size_t(src->header().slab_memory_bytes(19)) + (std::size_t(64) << 10);
+    so.memory_budget = plan_stream(src->header(), so).fixed_bytes + src->resident_bytes() +
+                       std::size_t(src->header().slab_memory_bytes(19)) + (std::size_t(64) << 10);
     CollectSink sink;
     const auto st = stream_extract(*src, so, sink);
     EXPECT_GT(st.plan.slabs, 1u);
@@ -451,9 +475,11 @@ TEST(Stream, VdbSlabReadsOnlyItsLeaves) {
     EXPECT_EQ(a.value(3, 4, 5), v.value(3, 4, 105));
     EXPECT_EQ(b.value(250, 251, 252), v.value(250, 251, 252));
     ASSERT_GT(thin, 0u);
-    std::cout << "grid " << (h.grid_bytes >> 20) << " MiB, topology " << (h.topology_bytes >> 10) << " KiB; reading child peak: slab of 8 slices "
-              << (thin >> 20) << " MiB, every slice " << (all >> 20) << " MiB\n";
-    EXPECT_GT(all, thin + (std::size_t(40) << 20)) << "thin slab child " << (thin >> 20) << " MiB, whole grid child " << (all >> 20) << " MiB";
+    std::cout << "grid " << (h.grid_bytes >> 20) << " MiB, topology " << (h.topology_bytes >> 10)
+              << " KiB; reading child peak: slab of 8 slices " << (thin >> 20) << " MiB, every slice " << (all >> 20)
+              << " MiB\n";
+    EXPECT_GT(all, thin + (std::size_t(40) << 20))
+        << "thin slab child " << (thin >> 20) << " MiB, whole grid child " << (all >> 20) << " MiB";
     // Cut the file in half: the header may still be read (or not), a slab must not.
     const auto size = fs::file_size(dir / "big.vdb");
     fs::resize_file(dir / "big.vdb", size / 2);
@@ -475,7 +501,8 @@ TEST(Stream, EmptySlabsAreSkippedAndRangesOfChunksWork) {
     const Mesh ref = in_memory(dir / "v.nrrd", 820.0, 8);
     ASSERT_GT(ref.triangles.size(), 100u);
     CollectSink sink;
-    const auto st = stream_to(dir / "v.nrrd", 820.0, 8, budget_over_fixed(dir / "v.nrrd", 8, std::size_t(30) << 10), sink);
+    const auto st =
+        stream_to(dir / "v.nrrd", 820.0, 8, budget_over_fixed(dir / "v.nrrd", 8, std::size_t(30) << 10), sink);
     EXPECT_GT(st.slabs_skipped, st.plan.slabs / 2);
     EXPECT_EQ(st.slabs_read + st.slabs_skipped, st.plan.slabs);
     expect_same_surface(ref, sink.meshes[0], "skipping");
@@ -558,7 +585,8 @@ TEST(Stream, LabelSurfacesEqualInMemory) {
     for (std::int64_t k = 0; k < 48; ++k)
         for (std::int64_t j = 0; j < 22; ++j)
             for (std::int64_t i = 0; i < 26; ++i) {
-                const double r = std::sqrt((i - 12.5) * (i - 12.5) + (j - 10.5) * (j - 10.5) + (k - 20.0) * (k - 20.0) * 0.5);
+                const double r =
+                    std::sqrt((i - 12.5) * (i - 12.5) + (j - 10.5) * (j - 10.5) + (k - 20.0) * (k - 20.0) * 0.5);
                 std::uint8_t l = r < 6 ? 2 : r < 10 ? 1 : 0;
                 if (i > 18 && j < 6) l = 7;
                 s[v.linear_index(i, j, k)] = l;
@@ -577,7 +605,8 @@ TEST(Stream, LabelSurfacesEqualInMemory) {
     const auto st = stream_extract(*src, so, sink);
     EXPECT_GT(st.plan.slabs, 2u);
     ASSERT_EQ(st.values, (std::vector<double>{1, 2, 7}));
-    for (std::size_t l = 0; l < 3; ++l) expect_same_surface(ref[l].mesh, sink.meshes[l], "label " + std::to_string(ref[l].label));
+    for (std::size_t l = 0; l < 3; ++l)
+        expect_same_surface(ref[l].mesh, sink.meshes[l], "label " + std::to_string(ref[l].label));
 }
 
 TEST(Stream, ChunkIndexFromSlabsEqualsTheInMemoryIndex) {
@@ -684,7 +713,8 @@ TEST(Stream, TruncatedAndMalformedFilesAreErrorsAndNothingIsWritten) {
     cut("full.nii", "cut.nii", 1000);
     cut("gz.nrrd", "cutgz.nrrd", 200);
     {
-        std::ofstream(dir / "bad.mha") << "NDims = 3\nDimSize = 4 4\nElementType = MET_SHORT\nElementDataFile = LOCAL\n";
+        std::ofstream(dir / "bad.mha")
+            << "NDims = 3\nDimSize = 4 4\nElementType = MET_SHORT\nElementDataFile = LOCAL\n";
         std::ofstream(dir / "bad.nrrd") << "NRRD0004\ntype: nonsense\ndimension: 3\nsizes: 2 2 2\nencoding: raw\n\n";
     }
     for (const char* name : {"cut.nrrd", "cut.nii", "bad.mha", "bad.nrrd"}) {
@@ -795,8 +825,8 @@ Volume tube(std::array<std::int64_t, 3> d) {
         for (std::int64_t j = 0; j < d[1]; ++j)
             for (std::int64_t i = 0; i < d[0]; ++i) {
                 const double x = i - 0.5 * double(d[0] - 1), y = j - 0.5 * double(d[1] - 1);
-                s[v.linear_index(i, j, k)] =
-                    std::int16_t(std::round(1000.0 - 40.0 * std::sqrt(x * x + y * y) + 40.0 * std::sin(0.5 * i) * std::cos(0.3 * j + 0.2 * k)));
+                s[v.linear_index(i, j, k)] = std::int16_t(std::round(
+                    1000.0 - 40.0 * std::sqrt(x * x + y * y) + 40.0 * std::sin(0.5 * i) * std::cos(0.3 * j + 0.2 * k)));
             }
     return v;
 }
@@ -821,7 +851,8 @@ TEST(Stream, OverlapGivesTheSamePiecesAsSerial) {
     for (std::int64_t k = 0; k < 64; ++k)
         for (std::int64_t j = 0; j < 22; ++j)
             for (std::int64_t i = 0; i < 26; ++i) {
-                const double r = std::sqrt((i - 12.5) * (i - 12.5) + (j - 10.5) * (j - 10.5) + (k - 30.0) * (k - 30.0) * 0.4);
+                const double r =
+                    std::sqrt((i - 12.5) * (i - 12.5) + (j - 10.5) * (j - 10.5) + (k - 30.0) * (k - 30.0) * 0.4);
                 ls[l.linear_index(i, j, k)] = r < 6 ? 2 : r < 10 ? 1 : (i > 18 && j < 6) ? 7 : 0;
             }
     save_volume(l, dir / "l.nii");
@@ -837,7 +868,8 @@ TEST(Stream, OverlapGivesTheSamePiecesAsSerial) {
                                      {"l.nii", {}, true}};
     std::size_t overlapped = 0, shrunk = 0;
     for (const auto& c : cases) {
-        for (std::size_t extra : {std::size_t(800) << 10, std::size_t(1600) << 10, std::size_t(2400) << 10, std::size_t(3200) << 10}) {
+        for (std::size_t extra :
+             {std::size_t(800) << 10, std::size_t(1600) << 10, std::size_t(2400) << 10, std::size_t(3200) << 10}) {
             const std::string what = c.name + " extra " + std::to_string(extra >> 10) + " KiB";
             SCOPED_TRACE(what);
             StreamOptions so;
@@ -856,7 +888,8 @@ TEST(Stream, OverlapGivesTheSamePiecesAsSerial) {
             overlapped += st_on.plan.overlap;
             if (st_on.plan.overlap) {
                 // The planner's own sum for two slabs and two outputs in flight.
-                EXPECT_LE(st_on.plan.fixed_bytes + 2 * (st_on.plan.slab_bytes + st_on.plan.output_estimate), so.memory_budget);
+                EXPECT_LE(st_on.plan.fixed_bytes + 2 * (st_on.plan.slab_bytes + st_on.plan.output_estimate),
+                          so.memory_budget);
             }
             // Serial, same plan: the same pieces.
             StreamOptions same = so;
@@ -1075,7 +1108,8 @@ std::size_t status_kib(const char* key) {
 // accounting and the growth of resident memory against the budget plus the
 // stated constant; returns the plan. `index`: given (no index pass, whose
 // slabs as large as the budget would otherwise make the peak).
-StreamPlan check_memory_bound(const TempDir& dir, std::size_t budget_mib, std::shared_ptr<const ChunkIndex> index = {}) {
+StreamPlan check_memory_bound(const TempDir& dir, std::size_t budget_mib,
+                              std::shared_ptr<const ChunkIndex> index = {}) {
     const std::size_t budget = budget_mib << 20;
     // Peak resident memory from here on: reset the high-water mark (Linux: clear_refs 5).
     { std::ofstream("/proc/self/clear_refs") << "5"; }
@@ -1097,11 +1131,12 @@ StreamPlan check_memory_bound(const TempDir& dir, std::size_t budget_mib, std::s
     // growth (allocator arenas of the TBB threads and of the reader and
     // writer threads, VTK/zlib buffers, stdio buffers).
     const double grown_mib = double(hwm_kib - std::min(hwm_kib, base_kib)) / 1024.0;
-    std::printf("128 MiB int16 volume, budget %zu MiB: engine peak %.1f MiB, VmHWM grew %.1f MiB over %.1f MiB; %zu slabs of %d layers, chunk %d%s, "
+    std::printf("128 MiB int16 volume, budget %zu MiB: engine peak %.1f MiB, VmHWM grew %.1f MiB over %.1f MiB; %zu "
+                "slabs of %d layers, chunk %d%s, "
                 "read %.2f s, extract %.2f s, weld %.2f s, write %.2f s, %zu triangles\n",
-                budget_mib, double(st.peak_bytes) / 1048576.0, grown_mib, double(base_kib) / 1024.0, st.plan.slabs, st.plan.layers_per_slab,
-                st.plan.chunk_size, st.plan.overlap ? ", overlapped" : "", st.read_seconds, st.extract_seconds, st.weld_seconds,
-                st.write_seconds, std::size_t(ms.triangles));
+                budget_mib, double(st.peak_bytes) / 1048576.0, grown_mib, double(base_kib) / 1024.0, st.plan.slabs,
+                st.plan.layers_per_slab, st.plan.chunk_size, st.plan.overlap ? ", overlapped" : "", st.read_seconds,
+                st.extract_seconds, st.weld_seconds, st.write_seconds, std::size_t(ms.triangles));
     // Under AddressSanitizer freed memory sits in its quarantine (256 MiB by
     // default) and every allocation has red zones: resident memory says
     // nothing about the engine there, so only the engine's accounting is checked.

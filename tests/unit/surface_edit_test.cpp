@@ -26,8 +26,10 @@ Volume two_balls() {
     for (std::int64_t k = 0; k < 96; ++k)
         for (std::int64_t j = 0; j < 96; ++j)
             for (std::int64_t i = 0; i < 96; ++i) {
-                const double a = 12.0 - std::sqrt((i - 25.0) * (i - 25.0) + (j - 30.0) * (j - 30.0) + (k - 28.0) * (k - 28.0));
-                const double b = 9.0 - std::sqrt((i - 70.0) * (i - 70.0) + (j - 64.0) * (j - 64.0) + (k - 66.0) * (k - 66.0));
+                const double a =
+                    12.0 - std::sqrt((i - 25.0) * (i - 25.0) + (j - 30.0) * (j - 30.0) + (k - 28.0) * (k - 28.0));
+                const double b =
+                    9.0 - std::sqrt((i - 70.0) * (i - 70.0) + (j - 64.0) * (j - 64.0) + (k - 66.0) * (k - 66.0));
                 s[v.linear_index(i, j, k)] = float(std::max(a, b));
             }
     return v;

@@ -62,11 +62,11 @@ constexpr double kOnFace = kMargin / 4;
 struct Report {
     std::size_t triangles = 0, vertices = 0;
     std::size_t repeated_index = 0, zero_area = 0, duplicate_positions = 0;
-    std::size_t interior_edges_not_two = 0;  // interior edge used by != 2 triangles
-    std::size_t edges_over_two = 0;          // any edge used by > 2 triangles (pinches)
-    std::size_t border_edges_not_one = 0;    // border edge used by != 1 triangle
-    std::size_t misoriented = 0;             // interior edge used twice in the same direction
-    std::size_t nonmanifold_vertices = 0;    // link is not one cycle/path
+    std::size_t interior_edges_not_two = 0; // interior edge used by != 2 triangles
+    std::size_t edges_over_two = 0;         // any edge used by > 2 triangles (pinches)
+    std::size_t border_edges_not_one = 0;   // border edge used by != 1 triangle
+    std::size_t misoriented = 0;            // interior edge used twice in the same direction
+    std::size_t nonmanifold_vertices = 0;   // link is not one cycle/path
     std::size_t border_edges = 0;
     bool ok() const {
         return repeated_index + zero_area + duplicate_positions + interior_edges_not_two + border_edges_not_one +
@@ -78,9 +78,10 @@ struct Report {
 std::ostream& operator<<(std::ostream& o, const Report& r) {
     return o << "triangles " << r.triangles << ", vertices " << r.vertices << ", repeated index " << r.repeated_index
              << ", zero area " << r.zero_area << ", duplicate positions " << r.duplicate_positions
-             << ", interior edges not shared by 2 " << r.interior_edges_not_two << " (of which > 2: " << r.edges_over_two
-             << "), border edges not used once " << r.border_edges_not_one << " (border edges " << r.border_edges
-             << "), misoriented " << r.misoriented << ", non-manifold vertices " << r.nonmanifold_vertices;
+             << ", interior edges not shared by 2 " << r.interior_edges_not_two
+             << " (of which > 2: " << r.edges_over_two << "), border edges not used once " << r.border_edges_not_one
+             << " (border edges " << r.border_edges << "), misoriented " << r.misoriented << ", non-manifold vertices "
+             << r.nonmanifold_vertices;
 }
 
 // Bit mask of the volume faces a vertex lies on: bit 2a (index 0), bit 2a+1 (index dims-1).
@@ -108,7 +109,7 @@ Report check(const Mesh& m, const Volume& v) {
     }
     const auto faces = face_masks(m, v);
     std::map<std::pair<std::uint32_t, std::uint32_t>, std::array<int, 2>> edges; // (lo, hi) -> uses lo->hi, hi->lo
-    std::vector<std::array<std::uint32_t, 3>> link;                                 // (vertex, a, b)
+    std::vector<std::array<std::uint32_t, 3>> link;                              // (vertex, a, b)
     for (const auto& t : m.triangles) {
         if (t[0] == t[1] || t[1] == t[2] || t[0] == t[2]) {
             ++r.repeated_index;
@@ -130,8 +131,10 @@ Report check(const Mesh& m, const Volume& v) {
             ++r.border_edges;
             if (n != 1) ++r.border_edges_not_one;
         } else {
-            if (n != 2) ++r.interior_edges_not_two;
-            else if (uses[0] != 1) ++r.misoriented;
+            if (n != 2)
+                ++r.interior_edges_not_two;
+            else if (uses[0] != 1)
+                ++r.misoriented;
         }
     }
     // Vertex links: union-find over the link vertices of each vertex.
@@ -305,8 +308,8 @@ TEST(Ties, SingleVoxels) {
     at(v, 8, 3, 3) = 10;
     at(v, 9, 4, 3) = 10; // edge-adjacent to (8,3,3) across a face diagonal
     at(v, 4, 8, 8) = 10;
-    at(v, 5, 9, 9) = 10; // corner-adjacent
-    at(v, 0, 0, 0) = 10; // on a volume corner: open
+    at(v, 5, 9, 9) = 10;  // corner-adjacent
+    at(v, 0, 0, 0) = 10;  // on a volume corner: open
     at(v, 11, 5, 6) = 10; // on a volume face
     expect_manifold_and_chunk_invariant(v, 10, "single voxels", 40);
 }
@@ -430,10 +433,11 @@ TEST(Ties, BundledCtAt500And1150) {
         std::printf("headsq iso %g: %zu components (%zu with area < 0.01 mm2)\n", iso, meas.components.size(), tiny);
         std::printf("headsq iso %g: %zu triangles, %zu vertices, area %.2f mm2, volume %.1f mm3, %zu ties, "
                     "edges used > 2 times %zu, interior edges not 2 %zu, non-manifold vertices %zu, zero-area %zu, "
-                    "extract %.1f ms (median of 5); Flying Edges %zu triangles; %zu vertices on samples; margin moved %zu of %zu vertices (%zu on tie edges), "
+                    "extract %.1f ms (median of 5); Flying Edges %zu triangles; %zu vertices on samples; margin moved "
+                    "%zu of %zu vertices (%zu on tie edges), "
                     "max %.5f voxel along the edge, %.4f mm\n",
                     iso, m.triangles.size(), m.positions.size(), s.area, s.volume_mm3, ties, r.edges_over_two,
-                    r.interior_edges_not_two, r.nonmanifold_vertices, r.zero_area, ms[2], fe_tris, on_sample, moved, total, moved_ties,
-                    worst, worst_mm);
+                    r.interior_edges_not_two, r.nonmanifold_vertices, r.zero_area, ms[2], fe_tris, on_sample, moved,
+                    total, moved_ties, worst, worst_mm);
     }
 }

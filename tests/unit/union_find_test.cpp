@@ -16,7 +16,8 @@ using namespace iso;
 namespace {
 
 // Per vertex, the smallest vertex reachable from it (breadth-first over the edges).
-std::vector<std::uint32_t> smallest_reachable(std::size_t n, const std::vector<std::pair<std::uint32_t, std::uint32_t>>& edges) {
+std::vector<std::uint32_t> smallest_reachable(std::size_t n,
+                                              const std::vector<std::pair<std::uint32_t, std::uint32_t>>& edges) {
     std::vector<std::vector<std::uint32_t>> next(n);
     for (const auto& [a, b] : edges) {
         next[a].push_back(b);
