@@ -6,7 +6,7 @@
 // frameSwapped signal, i.e. what a user dragging the mouse waits for. Four
 // cases: ambient occlusion on/off x skin translucent (opacity 0.3) or opaque,
 // at the view's size in the window. Each rotation frame is the first frame
-// of a new camera (AO accumulation restarts on every change: still_frames is
+// of a new camera (AO accumulation restarts on every change: the look's ao_frames is
 // 1 here so no extra still frame slips between two steps). The cases take
 // turns in three blocks each, so a shared machine's changing load reaches
 // them alike.
