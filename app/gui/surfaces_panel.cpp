@@ -49,7 +49,8 @@ QString unit_suffix(const core::Scene* scene) {
 }
 
 bool same_post(const PostProcessOptions& a, const PostProcessOptions& b) {
-    return a.smooth == b.smooth && a.decimate == b.decimate && a.keep_largest == b.keep_largest;
+    return a.smooth == b.smooth && a.decimate == b.decimate && a.keep_largest == b.keep_largest &&
+           a.keep_at == b.keep_at;
 }
 
 } // namespace

@@ -19,9 +19,11 @@ std::vector<SurfaceMeasurement> measure_surfaces(const Scene& scene, const std::
         m.value = info.value;
         // Isosurfaces of the volume get the uncertainty from coarser grids;
         // label surfaces and meshes are measured as they are.
-        if (info.kind == SurfaceInfo::Kind::Iso && scene.has_volume())
-            m.measures = measure_isosurface(scene.volume(), info.value, scene.mesh(id));
-        else
+        if (info.kind == SurfaceInfo::Kind::Iso && scene.has_volume()) {
+            MeasureOptions opt;
+            opt.components_only = info.post.keep_largest || info.post.keep_at;
+            m.measures = measure_isosurface(scene.volume(), info.value, scene.mesh(id), opt);
+        } else
             m.measures = measure_surface(scene.mesh(id));
         out.push_back(std::move(m));
     }
