@@ -48,32 +48,48 @@ SurfacePoint surface_at(const Scene& scene, const glm::dvec3& lps) {
     return best;
 }
 
-IsolatedComponent isolate_component(Scene& scene, SurfaceId surface, const glm::dvec3& at) {
+ComponentPlan plan_component(const Scene& scene, SurfaceId surface, const glm::dvec3& at) {
     if (!finite(at)) throw Error("isolate", "the point is not finite");
     const Mesh& parent = surface_mesh(scene, surface, "isolate");
-    const SurfaceInfo info = scene.info(surface); // a copy: adding a surface may move the scene's entries
+    const SurfaceInfo& info = scene.info(surface);
     const auto comps = triangle_components(parent);
     const NearestPoint n = nearest_point(TriangleBvh(parent), at);
-    IsolatedComponent out;
-    out.from = surface;
-    out.component = comps[n.triangle];
+    ComponentPlan plan;
+    plan.from = surface;
+    plan.component = comps[n.triangle];
     for (std::uint32_t c : comps)
         if (c != std::numeric_limits<std::uint32_t>::max())
-            out.components = std::max<std::size_t>(out.components, c + 1);
-    Mesh part = component_mesh(parent, comps, comps[n.triangle]);
+            plan.components = std::max<std::size_t>(plan.components, c + 1);
+    plan.mesh = component_mesh(parent, comps, comps[n.triangle]);
     // Recorded with the surface's post-processing, so that a session (or a
     // moved iso value) makes the same component again from the volume.
-    SurfaceInfo made = info;
-    made.post.keep_at = n.point;
-    made.name = info.name + " component " + std::to_string(out.component + 1);
+    plan.info = info;
+    plan.info.post.keep_at = n.point;
+    plan.info.name = info.name + " component " + std::to_string(plan.component + 1);
     std::size_t isolated = 0;
     for (const SurfaceId id : scene.surfaces()) isolated += scene.info(id).post.keep_at.has_value();
-    made.color = component_color(isolated);
-    made.opacity = 1.0f;
-    made.visible = made.pickable = true;
-    out.surface = scene.add_mesh(std::move(part), made);
-    out.measured = measure_surfaces(scene, {out.surface}).front();
+    plan.info.color = component_color(isolated);
+    plan.info.opacity = 1.0f;
+    plan.info.visible = plan.info.pickable = true;
+    plan.measures = measure_surface_mesh(scene, plan.info, plan.mesh);
+    return plan;
+}
+
+IsolatedComponent add_component(Scene& scene, ComponentPlan plan) {
+    IsolatedComponent out;
+    out.from = plan.from;
+    out.component = plan.component;
+    out.components = plan.components;
+    out.measured.name = plan.info.name;
+    out.measured.kind = plan.info.kind;
+    out.measured.value = plan.info.value;
+    out.measured.measures = std::move(plan.measures);
+    out.surface = out.measured.surface = scene.add_mesh(std::move(plan.mesh), std::move(plan.info));
     return out;
+}
+
+IsolatedComponent isolate_component(Scene& scene, SurfaceId surface, const glm::dvec3& at) {
+    return add_component(scene, plan_component(scene, surface, at));
 }
 
 SurfaceGap surface_gap(const Scene& scene, SurfaceId a, SurfaceId b, const std::optional<glm::dvec3>& at_a,

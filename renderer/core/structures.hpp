@@ -49,6 +49,20 @@ struct IsolatedComponent {
 // or empty one.
 IsolatedComponent isolate_component(Scene& scene, SurfaceId surface, const glm::dvec3& at);
 
+// isolate_component in two steps, for a caller that works off its GUI
+// thread: plan_component only reads the scene (the surface's mesh and the
+// volume) and does the work (components, measurement); add_component puts
+// the planned surface into the scene.
+struct ComponentPlan {
+    SurfaceId from = 0;
+    std::size_t component = 0, components = 0;
+    Mesh mesh;
+    SurfaceInfo info;
+    SurfaceMeasures measures;
+};
+ComponentPlan plan_component(const Scene& scene, SurfaceId surface, const glm::dvec3& at);
+IsolatedComponent add_component(Scene& scene, ComponentPlan plan);
+
 // The shortest distance between two surfaces, or between the components of
 // them nearest to two points (`at_a`, `at_b`; none: the whole surface).
 struct SurfaceGap {
