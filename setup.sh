@@ -20,8 +20,8 @@ PACKAGES=(
   libgtest-dev libgmock-dev libbenchmark-dev
   clang libclang-rt-14-dev
   xvfb xauth glslang-tools
-  # benchmark plots; stb_easy_font for overlay text
-  gnuplot-nox libstb-dev
+  # benchmark plots
+  gnuplot-nox
   # overlay text: FreeType rasterises DejaVu Sans, which fontconfig finds
   libfreetype-dev libfontconfig-dev fonts-dejavu-core
   # NIfTI reference library, CLI parsing, JSON output, zlib
