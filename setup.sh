@@ -20,8 +20,10 @@ PACKAGES=(
   libgtest-dev libgmock-dev libbenchmark-dev
   clang libclang-rt-14-dev
   xvfb xauth glslang-tools
-  # benchmark plots; stb_easy_font for overlay text
-  gnuplot-nox libstb-dev
+  # benchmark plots
+  gnuplot-nox
+  # overlay text: FreeType rasterises DejaVu Sans, which fontconfig finds
+  libfreetype-dev libfontconfig-dev fonts-dejavu-core
   # NIfTI reference library, CLI parsing, JSON output, zlib
   libnifti2-dev libcli11-dev nlohmann-json3-dev zlib1g-dev libssl-dev
   # MPI-distributed extraction (ISOSCOPE_MPI; VTK's MPI modules come with libvtk9-dev)

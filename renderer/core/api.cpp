@@ -205,6 +205,7 @@ RenderOutput render_image(Scene& scene, const RenderRequest& req) {
     out.stats = std::move(r.stats);
     out.oit = r.oit;
     out.pick = std::move(r.pick);
+    out.labels = std::move(r.labels);
     out.gl_renderer = r.gl_renderer;
     out.camera = cam;
     if (req.look.ao == AoMethod::Reference)

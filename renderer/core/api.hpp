@@ -93,9 +93,10 @@ struct RenderOutput {
     graph::FrameStats stats;
     std::string gl_renderer;
     Camera camera;
-    bool ao_cache_hit = false; // the AO reference came from the cache
-    OitStats oit;              // translucent surfaces (zero without)
-    PickList pick;             // with RenderRequest::pick
+    bool ao_cache_hit = false;    // the AO reference came from the cache
+    OitStats oit;                 // translucent surfaces (zero without)
+    PickList pick;                // with RenderRequest::pick
+    std::vector<LabelBox> labels; // the overlay's labels as placed and drawn (docs/text.md)
 };
 
 // Renders the scene headlessly (its own EGL context, made on first use; the

@@ -8,7 +8,9 @@
 
 #include <glm/glm.hpp>
 
-#include <stb/stb_easy_font.h>
+#include "renderer/text/contrast.hpp"
+#include "renderer/text/font.hpp"
+#include "renderer/text/placement.hpp"
 
 namespace iso {
 
@@ -76,37 +78,9 @@ glm::vec3 markup_color(const Markup& m, int point) {
 
 namespace {
 
-// Text as stb_easy_font draws it: printable ASCII, the degree sign drawn
-// by hand. Other bytes (UTF-8 in Slicer's labels) would index its tables
-// out of bounds; each other character becomes one '?'.
-struct TextRun {
-    std::string ascii;
-    bool degree_after = false; // a degree sign follows this run
-};
-std::vector<TextRun> text_runs(const std::string& s) {
-    std::vector<TextRun> runs(1);
-    for (std::size_t i = 0; i < s.size(); ++i) {
-        const auto c = static_cast<unsigned char>(s[i]);
-        if (c == 0xC2 && i + 1 < s.size() && static_cast<unsigned char>(s[i + 1]) == 0xB0) {
-            runs.back().degree_after = true;
-            runs.emplace_back();
-            ++i;
-        } else if (c >= 32 && c < 127) {
-            runs.back().ascii += char(c);
-        } else if (c < 0x80 || c >= 0xC0) { // a control character, or the first byte of a UTF-8 sequence
-            runs.back().ascii += '?';
-        }
-    }
-    return runs;
-}
-constexpr float kDegreeAdvance = 4.0f; // the hand-drawn degree sign: a 3x3 ring and a gap
-
-float text_width(const std::string& s, float size) {
-    float w = 0;
-    for (auto& r : text_runs(s))
-        w += float(stb_easy_font_width(r.ascii.data())) + (r.degree_after ? kDegreeAdvance : 0.0f);
-    return w * size;
-}
+// The colour of the text that is not a markup's: plain labels, the
+// orientation letters, the scale bar's length.
+const glm::vec3 kTextColor(1.0f, 1.0f, 0.92f);
 
 struct Builder {
     std::vector<OverlayVertex>& out;
@@ -127,48 +101,52 @@ struct Builder {
         const glm::vec2 n = glm::vec2(-d.y, d.x) / l * (w * 0.5f);
         quad(a + n, b + n, b - n, a - n, col);
     }
-    // stb_easy_font: quads of 4 vertices (x, y, z, color) per glyph stroke, 10 px tall at scale 1.
-    void text(const std::string& s, glm::vec2 at, float size, glm::vec4 col) {
-        thread_local std::vector<char> buf(1 << 17);
-        float x = 0;
-        for (auto& run : text_runs(s)) {
-            const int quads = stb_easy_font_print(x, 0, run.ascii.data(), nullptr, buf.data(), int(buf.size()));
-            const float* v = reinterpret_cast<const float*>(buf.data());
-            for (int q = 0; q < quads; ++q) {
-                glm::vec2 p[4];
-                for (int k = 0; k < 4; ++k) p[k] = at + glm::vec2(v[(q * 4 + k) * 4], v[(q * 4 + k) * 4 + 1]) * size;
-                quad(p[0], p[1], p[2], p[3], col);
-            }
-            x += float(stb_easy_font_width(run.ascii.data()));
-            if (run.degree_after) { // a ring at the top of the line, as the font would draw it
-                const auto r = [&](float x0, float y0, float x1, float y1) {
-                    rect(at + glm::vec2(x + x0, y0) * size, at + glm::vec2(x + x1, y1) * size, col);
-                };
-                r(0, 0, 3, 1);
-                r(0, 2, 3, 3);
-                r(0, 1, 1, 2);
-                r(2, 1, 3, 2);
-                x += kDegreeAdvance;
-            }
-        }
-    }
-    // Text with a dark shadow; a markup's shadow vanishes when it is hidden.
-    void shadowed_text(const std::string& s, glm::vec2 at, float size, glm::vec4 col = {1, 1, 0.92f, 1}) {
-        const float keep = hidden_alpha;
-        hidden_alpha = 0.0f;
-        text(s, at + glm::vec2(size * 0.6f), size, {0, 0, 0, 0.75f});
-        hidden_alpha = keep;
-        text(s, at, size, col);
+    // A glyph's bitmap at `pixel`, texel for pixel, with the atlas channel
+    // `channel` (0: coverage, 1: halo) as its alpha; always on top, never dimmed.
+    void glyph_quad(glm::ivec2 pixel, glm::ivec2 texel, glm::ivec2 size, glm::vec4 col, float channel) {
+        const glm::vec2 p0(pixel), p1(pixel + size), t0(texel), t1(texel + size);
+        const auto v = [&](glm::vec2 p, glm::vec2 t) {
+            return OverlayVertex{p, col, glm::vec2(-1.0f), 0.0f, -1.0f, 1.0f, t, channel};
+        };
+        const OverlayVertex q[4] = {v(p0, t0), v({p1.x, p0.y}, {t1.x, t0.y}), v(p1, t1), v({p0.x, p1.y}, {t0.x, t1.y})};
+        out.insert(out.end(), {q[0], q[1], q[2], q[0], q[2], q[3]});
     }
 };
 
-// Draws markups into a Builder: every vertex carries the depth of the 3D
-// point it draws, so the overlay pass can dim what a surface hides.
+// How far a box of this size reaches from its centre along the unit direction `dir`.
+float reach(glm::vec2 size, glm::vec2 dir) { return 0.5f * (std::abs(dir.x) * size.x + std::abs(dir.y) * size.y); }
+
+// A label on its way into the image: laid out when added, placed among the
+// others once all are known (text::place_labels), then drawn.
+struct PendingLabel {
+    std::string text;
+    text::TextLayout layout;
+    glm::vec3 color;
+    glm::vec2 anchor, centre; // the point it labels; its box's centre at its default place
+    bool fixed = false;
+    glm::vec2 size() const { return glm::vec2(layout.hi - layout.lo); }
+};
+
+struct LabelSet {
+    std::vector<PendingLabel> labels;
+    std::vector<text::Box> obstacles; // the markups' glyphs, the scale bar: labels keep off them
+
+    // Laid out at `px` pixels per em; the caller sets its default centre from its size.
+    PendingLabel& add(const std::string& s, float px, glm::vec3 rgb, glm::vec2 anchor) {
+        labels.push_back({s, text::layout_text(s, *text::overlay_font(px)), rgb, anchor, anchor});
+        return labels.back();
+    }
+};
+
+// Draws markups into a Builder: every vertex of their lines and glyphs
+// carries the depth of the 3D point it draws, so the overlay pass can dim
+// what a surface hides; their labels go to the LabelSet.
 struct MarkupPainter {
     Builder& b;
+    LabelSet& labels;
     glm::dmat4 view, proj;
     int W, H;
-    float s, hidden_opacity;
+    float s, hidden_opacity, label_px;
     double near_plane;
 
     // A point in the image: pixel from the top-left corner, and depth along the view axis (mm).
@@ -219,7 +197,7 @@ struct MarkupPainter {
             }
         }
     }
-    // Glyphs and labels are hidden or not as a whole, by their point's pixel.
+    // A glyph is hidden or not as a whole, by its point's pixel.
     void anchor_at(const Projected& p) {
         b.anchor = p.px;
         b.inv_depth = float(1.0 / p.depth);
@@ -247,21 +225,14 @@ struct MarkupPainter {
         b.hidden_alpha = hidden_opacity;
         cross(0.0f, glm::vec4(rgb, 1.0f));
         release();
+        labels.obstacles.push_back({c - (L + s), c + (L + s)});
     }
-    static constexpr float kTextSize = 1.6f; // times the scale: 16 px lines at scale 1, as the other labels
-    // How far a label's box reaches from its centre along the unit direction `dir`.
-    float box_reach(const std::string& text, glm::vec2 dir) const {
-        const float size = kTextSize * s;
-        return 0.5f * (std::abs(dir.x) * text_width(text, size) + std::abs(dir.y) * 7.0f * size);
-    }
-    // Text centred on `centre` (pixels), hidden with the point `p`.
-    void label(const std::string& text, const Projected& p, glm::vec2 centre, glm::vec3 rgb) {
+    // A label of `text` for the point `p`, its box's centre `clear` pixels
+    // beyond its edge along the unit direction `dir` from the point.
+    void label(const std::string& text, const Projected& p, glm::vec2 dir, float clear, glm::vec3 rgb) {
         if (text.empty()) return;
-        anchor_at(p);
-        const float size = kTextSize * s;
-        b.shadowed_text(text, centre - glm::vec2(text_width(text, size), 7.0f * size) * 0.5f, size,
-                        glm::vec4(rgb, 1.0f));
-        release();
+        PendingLabel& l = labels.add(text, label_px, rgb, p.px);
+        l.centre = p.px + dir * (clear + reach(l.size(), dir));
     }
 
     void draw(const Markup& m) {
@@ -278,7 +249,7 @@ struct MarkupPainter {
                 if (glm::length(dir) < 1e-3f) dir = {1, 0};
                 glm::vec2 n = glm::normalize(glm::vec2(-dir.y, dir.x));
                 if (n.y > 0) n = -n;
-                label(value, *mid, mid->px + n * (6.0f * s + box_reach(value, n)), line_rgb);
+                label(value, *mid, n, 6.0f * s, line_rgb);
             }
         }
         if (m.type == MarkupType::Angle && defined(0) && defined(1) && defined(2)) {
@@ -305,7 +276,7 @@ struct MarkupPainter {
                 if (pa && glm::length(pa->px - pv->px) > 1e-3f) bis += glm::normalize(pa->px - pv->px);
                 if (pc && glm::length(pc->px - pv->px) > 1e-3f) bis += glm::normalize(pc->px - pv->px);
                 bis = glm::length(bis) > 1e-3f ? -glm::normalize(bis) : glm::vec2(0.0f, -1.0f);
-                label(value, *pv, pv->px + bis * (10.0f * s + box_reach(value, bis)), line_rgb);
+                label(value, *pv, bis, 10.0f * s, line_rgb);
             }
         }
         // Control points: a glyph each (visible ones), labelled in point lists and curves.
@@ -316,19 +287,118 @@ struct MarkupPainter {
             if (const auto p = project(pts[i].position)) {
                 const glm::vec3 rgb = markup_color(m, int(i));
                 glyph(*p, rgb);
-                if (labelled && !pts[i].label.empty())
-                    label(pts[i].label, *p, p->px + glm::vec2(10.0f * s + box_reach(pts[i].label, {1, 0}), 0.0f), rgb);
+                if (labelled && !pts[i].label.empty()) label(pts[i].label, *p, {1, 0}, 10.0f * s, rgb);
             }
         }
     }
 };
 
+// A thin line in the label's colour over an outline in its halo's, from
+// near the anchor to the edge of the label's box.
+void leader_line(Builder& b, const LabelBox& l, float s) {
+    const glm::vec2 lo(l.lo), hi(l.hi), c = 0.5f * (lo + hi), half = 0.5f * (hi - lo), d = l.anchor - c;
+    // Where the segment from the box's centre to the anchor leaves the box.
+    const float t =
+        std::min(std::abs(d.x) > 0 ? half.x / std::abs(d.x) : 1e9f, std::abs(d.y) > 0 ? half.y / std::abs(d.y) : 1e9f);
+    if (t >= 1.0f) return; // the anchor is inside the box
+    const glm::vec2 edge = c + d * t, u = glm::normalize(l.anchor - edge);
+    const float len = glm::length(l.anchor - edge), skip = std::min(3.0f * s, 0.5f * len);
+    const glm::vec2 end = l.anchor - u * skip; // stops short of the anchor, clear of its glyph's centre
+    b.line(edge, end, 3.25f * s, glm::vec4(l.halo, 1.0f));
+    b.line(edge, end, 1.25f * s, glm::vec4(l.color, 1.0f));
+}
+
+// A placed label's glyphs: the halo of all of them first, then their text,
+// so that no glyph's halo covers its neighbour's text; and what was drawn,
+// in the label's box.
+void draw_label(Builder& b, const PendingLabel& p, const text::GlyphAtlas& atlas, LabelBox& l) {
+    const glm::ivec2 origin = l.lo - p.layout.lo, size = l.hi - l.lo;
+    l.coverage.assign(std::size_t(size.x) * size.y, 0);
+    l.halo_alpha.assign(l.coverage.size(), 0);
+    for (const float channel : {1.0f, 0.0f})
+        for (const auto& g : p.layout.glyphs) {
+            const text::GlyphBitmap& bm = *g.bitmap;
+            const glm::ivec2 at = origin + g.pen + bm.offset;
+            b.glyph_quad(at, atlas.texel(&bm), {bm.width, bm.height}, glm::vec4(channel > 0 ? l.halo : l.color, 1.0f),
+                         channel);
+            const auto& src = channel > 0 ? bm.halo : bm.coverage;
+            auto& dst = channel > 0 ? l.halo_alpha : l.coverage;
+            for (int y = 0; y < bm.height; ++y)
+                for (int x = 0; x < bm.width; ++x) {
+                    auto& d = dst[std::size_t(at.y - l.lo.y + y) * size.x + std::size_t(at.x - l.lo.x + x)];
+                    d = std::max(d, src[std::size_t(y) * bm.width + x]);
+                }
+        }
+}
+
+// Places the labels (text::place_labels), draws leader lines to those moved
+// away from their default place, then the labels over everything else.
+std::vector<LabelBox> draw_labels(Builder& b, const LabelSet& set, int W, int H, float s, text::AtlasImage& image) {
+    std::vector<text::LabelRequest> req;
+    for (const auto& l : set.labels) req.push_back({l.size(), l.anchor, l.centre, l.fixed});
+    const auto placed = text::place_labels(req, set.obstacles, glm::vec2(W, H), 2.0f * s);
+    std::vector<LabelBox> out(set.labels.size());
+    text::GlyphAtlas atlas;
+    for (std::size_t i = 0; i < out.size(); ++i) {
+        const PendingLabel& p = set.labels[i];
+        LabelBox& l = out[i];
+        l.text = p.text;
+        l.lo = glm::ivec2(glm::round(placed[i].box.lo)); // whole pixels: glyphs land texel for pixel
+        l.hi = l.lo + (p.layout.hi - p.layout.lo);
+        l.anchor = p.fixed ? glm::vec2(l.lo + l.hi) * 0.5f : p.anchor;
+        l.moved = placed[i].moved;
+        l.fixed = p.fixed;
+        l.color = p.color;
+        l.halo = text::halo_color(p.color);
+        if (l.moved) leader_line(b, l, s);
+        for (const auto& g : p.layout.glyphs) atlas.add(g.bitmap);
+    }
+    image = atlas.pack();
+    for (std::size_t i = 0; i < out.size(); ++i) draw_label(b, set.labels[i], atlas, out[i]);
+    return out;
+}
+
+// The patient directions at the middle of each edge, fixed in place.
+void orientation_letters(LabelSet& set, const Camera& cam, int W, int H, float px, float s) {
+    const glm::dvec3 f = cam.forward(), right = glm::normalize(glm::cross(f, cam.up)), up = glm::cross(right, f);
+    const float margin = 5.0f * s;
+    const auto letter = [&](const glm::dvec3& dir, glm::vec2 edge, glm::vec2 inward) {
+        PendingLabel& l = set.add(orientation_letter(dir), px, kTextColor, edge);
+        l.centre = edge + inward * (margin + reach(l.size(), inward));
+        l.fixed = true;
+    };
+    letter(right, {float(W), H * 0.5f}, {-1, 0});
+    letter(-right, {0.0f, H * 0.5f}, {1, 0});
+    letter(up, {W * 0.5f, 0.0f}, {0, 1});
+    letter(-up, {W * 0.5f, float(H)}, {0, -1});
+}
+
+// A bar of a round length in the bottom-left corner, its length above it.
+void scale_bar(Builder& b, LabelSet& set, const Camera& cam, int W, int H, float px, float s) {
+    const double mm = scale_bar_mm(cam, W, H);
+    const double dist = glm::length(cam.target - cam.eye);
+    const double px_per_mm = double(H) / (2.0 * dist * std::tan(glm::radians(cam.fov_y_degrees) * 0.5));
+    const float len = float(mm * px_per_mm), x0 = 16 * s, y0 = H - 20 * s;
+    const glm::vec2 lo{x0 - s, y0 - 4 * s - s}, hi{x0 + len + s, y0 + s};
+    b.rect(lo, hi, {0, 0, 0, 0.75f});
+    b.rect({x0, y0 - 4 * s}, {x0 + len, y0}, glm::vec4(kTextColor, 1.0f));
+    set.obstacles.push_back({lo, hi});
+    char txt[32];
+    std::snprintf(txt, sizeof txt, "%g mm", mm);
+    PendingLabel& l = set.add(txt, px, kTextColor, {x0, lo.y});
+    // The text's left edge over the bar's, its box just above the bar.
+    l.centre = glm::vec2(x0 + float(l.layout.lo.x), lo.y - s) + glm::vec2(0.5f, -0.5f) * l.size();
+    l.fixed = true;
+}
+
 } // namespace
 
-std::vector<OverlayVertex> build_overlay(const Annotations& a, const Camera& cam, int W, int H, float scale) {
-    std::vector<OverlayVertex> out;
-    Builder b{out};
+Overlay build_overlay(const Annotations& a, const Camera& cam, int W, int H, float scale) {
+    Overlay out;
+    Builder b{out.vertices};
+    LabelSet labels;
     const float s = std::max(scale, 0.1f);
+    const float label_px = a.label_pt * a.dpi / 72.0f * s, orientation_px = a.orientation_pt * a.dpi / 72.0f * s;
     const double aspect = double(W) / double(H);
     const glm::dmat4 vp = cam.projection(aspect) * cam.view();
     auto project = [&](const glm::dvec3& p, glm::vec2& px) {
@@ -347,36 +417,23 @@ std::vector<OverlayVertex> build_overlay(const Annotations& a, const Camera& cam
         if (project(p, px)) {
             b.rect(px - 4.0f * s, px + 4.0f * s, {0, 0, 0, 0.8f});
             b.rect(px - 3.0f * s, px + 3.0f * s, line_color);
+            labels.obstacles.push_back({px - 4.0f * s, px + 4.0f * s});
         }
     }
+    // Fixed labels first: the others are placed around them.
+    if (a.orientation) orientation_letters(labels, cam, W, H, orientation_px, s);
+    if (a.scale_bar) scale_bar(b, labels, cam, W, H, label_px, s);
     for (const auto& l : a.labels) {
         glm::vec2 px;
-        if (project(l.at, px)) b.shadowed_text(l.text, px + glm::vec2(6, -6) * s, 1.6f * s);
+        if (!project(l.at, px) || l.text.empty()) continue;
+        PendingLabel& p = labels.add(l.text, label_px, kTextColor, px);
+        p.centre = px + glm::vec2(6.0f, -6.0f) * s + glm::vec2(0.5f, -0.5f) * p.size(); // above right
     }
     MarkupPainter markups{
-        b, cam.view(), cam.projection(aspect), W, H, s, std::clamp(a.hidden_opacity, 0.0f, 1.0f), cam.near_plane};
+        b,        labels,        cam.view(), cam.projection(aspect), W, H, s, std::clamp(a.hidden_opacity, 0.0f, 1.0f),
+        label_px, cam.near_plane};
     for (const auto& m : a.markups) markups.draw(m);
-    if (a.orientation) {
-        const glm::dvec3 f = cam.forward(), right = glm::normalize(glm::cross(f, cam.up)), up = glm::cross(right, f);
-        const float size = 2.4f * s, h = 10 * size, margin = 8 * s;
-        const std::string r = orientation_letter(right), l = orientation_letter(-right), t = orientation_letter(up),
-                          bo = orientation_letter(-up);
-        b.shadowed_text(r, {W - margin - text_width(r, size), H * 0.5f - h * 0.5f}, size);
-        b.shadowed_text(l, {margin, H * 0.5f - h * 0.5f}, size);
-        b.shadowed_text(t, {W * 0.5f - text_width(t, size) * 0.5f, margin}, size);
-        b.shadowed_text(bo, {W * 0.5f - text_width(bo, size) * 0.5f, H - margin - h}, size);
-    }
-    if (a.scale_bar) {
-        const double mm = scale_bar_mm(cam, W, H);
-        const double dist = glm::length(cam.target - cam.eye);
-        const double px_per_mm = double(H) / (2.0 * dist * std::tan(glm::radians(cam.fov_y_degrees) * 0.5));
-        const float len = float(mm * px_per_mm), x0 = 16 * s, y0 = H - 20 * s;
-        b.rect({x0 - s, y0 - 4 * s - s}, {x0 + len + s, y0 + s}, {0, 0, 0, 0.75f});
-        b.rect({x0, y0 - 4 * s}, {x0 + len, y0}, {1, 1, 0.92f, 1});
-        char txt[32];
-        std::snprintf(txt, sizeof txt, "%g mm", mm);
-        b.shadowed_text(txt, {x0, y0 - 4 * s - 16 * s}, 1.4f * s);
-    }
+    out.labels = draw_labels(b, labels, W, H, s, out.atlas);
     return out;
 }
 

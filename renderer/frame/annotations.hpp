@@ -2,12 +2,16 @@
 // and points, 3D Slicer markups (point lists, lines with their length,
 // angles with their value), a scale bar in millimetres, and the patient
 // orientation letters (L/R/A/P/S/I) at the viewport edges. Built on the CPU
-// as coloured triangles in pixel coordinates; text comes from stb_easy_font
-// (Debian's libstb-dev), so no font file is needed. Everything scales with
-// `scale` so that a 4x export has 4x thicker lines and larger text. Markups
-// carry the depth of the 3D point each vertex draws: the overlay pass
-// compares it with the frame's depth and dims (and dashes) what lies behind
-// a surface (docs/markups.md, "Drawing markups").
+// as triangles in pixel coordinates; all text goes through the text engine
+// (renderer/text: DejaVu Sans through fontconfig and FreeType, sizes in
+// points) as glyph quads into a per-frame atlas, each label over a halo of
+// contrasting colour and placed so that labels do not cover one another
+// (docs/text.md). Everything scales with `scale` so that a 4x export has 4x
+// thicker lines and larger text. Markup lines and glyphs carry the depth of
+// the 3D point each vertex draws: the overlay pass compares it with the
+// frame's depth and dims (and dashes) what lies behind a surface; labels
+// are always drawn on top at full contrast (docs/markups.md, "Drawing
+// markups").
 #pragma once
 
 #include <string>
@@ -19,6 +23,8 @@
 
 #include "io/markups.hpp"
 #include "renderer/frame/camera.hpp"
+#include "renderer/frame/frame.hpp"
+#include "renderer/text/atlas.hpp"
 
 namespace iso {
 
@@ -38,12 +44,18 @@ struct Annotations {
     // Defined or not visible are skipped. Parts behind the nearest opaque
     // surface of the frame (its G-buffer depth) by more than
     // `occlusion_tolerance_mm` are drawn at `hidden_opacity` without their
-    // dark outline, hidden line parts also dashed; a glyph and its label
-    // are hidden as a whole only when the surface is in front at every pixel
-    // of the 3x3 block around their point.
+    // dark outline, hidden line parts also dashed; a glyph is hidden as a
+    // whole only when the surface is in front at every pixel of the 3x3
+    // block around its point. Labels are never dimmed.
     std::vector<Markup> markups;
     float hidden_opacity = 0.35f;
     float occlusion_tolerance_mm = 1.0f;
+    // Text sizes in points at `dpi` pixels per inch, times the frame's scale
+    // (the view's device pixel ratio, an export's --scale): 11 pt on a 96
+    // dpi screen is 14.7 px per em, 58.7 px in a 4x export.
+    float label_pt = 11.0f;       // markup labels and values, Annotations::labels, the scale bar's length
+    float orientation_pt = 16.0f; // the orientation letters
+    float dpi = 96.0f;
 };
 
 struct OverlayVertex {
@@ -60,18 +72,31 @@ struct OverlayVertex {
     // Pixels along a line from its start, for dashing hidden parts; negative: solid.
     float along = -1.0f;
     // The alpha factor when hidden: Annotations::hidden_opacity for the
-    // colour, 0 for outlines and text shadows.
+    // colour, 0 for outlines.
     float hidden_alpha = 1.0f;
+    // Text: the atlas texel (from its top-left corner) at this vertex, one
+    // texel per pixel, and the atlas channel that is the fragment's alpha
+    // (0: the glyph's coverage, 1: its halo); negative: not text.
+    glm::vec2 texel{0.0f};
+    float atlas_channel = -1.0f;
 };
 
-// Triangles (3 vertices each) for the annotations of a W x H view.
-std::vector<OverlayVertex> build_overlay(const Annotations& a, const Camera& cam, int width, int height, float scale);
+// What the overlay pass draws over a W x H colour image: triangles (3
+// vertices each), the glyph atlas their text samples, and the labels as
+// placed.
+struct Overlay {
+    std::vector<OverlayVertex> vertices;
+    text::AtlasImage atlas;
+    std::vector<LabelBox> labels;
+};
+// Throws iso::Error when there is text to draw and the font cannot be
+// found or read (text::overlay_font).
+Overlay build_overlay(const Annotations& a, const Camera& cam, int width, int height, float scale);
 
 // The text drawn with a Line or an Angle: its length as "42.3 mm" or its
-// angle as "87.5\u00b0" (UTF-8 degree sign; the overlay draws the sign
-// itself, stb_easy_font has ASCII only), one decimal. The file's own
-// "length"/"angle" measurement is used when it has a value in mm
-// (length) or degrees (angle), else computed_measurement()'s. Empty for
+// angle as "87.5\u00b0" (UTF-8: the font's own degree sign), one decimal.
+// The file's own "length"/"angle" measurement is used when it has a value
+// in mm (length) or degrees (angle), else computed_measurement()'s. Empty for
 // other types and when there is no value (a point not Defined, a
 // zero-length arm).
 std::string markup_measurement_text(const Markup& m);

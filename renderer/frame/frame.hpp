@@ -12,6 +12,7 @@
 #include <string>
 #include <vector>
 
+#include <glm/vec2.hpp>
 #include <glm/vec3.hpp>
 #include <glm/vec4.hpp>
 
@@ -174,6 +175,22 @@ struct OitStats {
     int redraws = 0;            // frames redrawn with a larger pool
 };
 
+// A label the overlay drew (a markup's name or value, one of
+// Annotations::labels, an orientation letter, the scale bar's length): where
+// it went and, so that what was drawn can be checked against the image, its
+// text's coverage and its halo over the box (docs/text.md).
+struct LabelBox {
+    std::string text;
+    glm::ivec2 lo{0}, hi{0};           // pixels from the image's top-left corner, hi exclusive: text and halo
+    glm::vec2 anchor{0.0f};            // the point it labels (fixed labels: the box's centre)
+    bool moved = false;                // away from its default place, joined to its anchor by a leader line
+    bool fixed = false;                // an orientation letter or the scale bar's length: never moved
+    glm::vec3 color{1.0f}, halo{0.0f}; // sRGB
+    // (hi - lo) pixels each, row-major from the top row, 0..255: the glyphs'
+    // coverage and the halo's alpha (the largest of overlapping glyphs').
+    std::vector<std::uint8_t> coverage, halo_alpha;
+};
+
 struct RenderResult {
     Image image; // RGBA8 sRGB colour, or the AOV as floats
     graph::FrameStats stats;
@@ -194,6 +211,7 @@ struct RenderResult {
     bool cancelled = false;   // RenderOptions::progress asked to stop: the image is incomplete
     std::vector<float> disk_terms;
     std::vector<glm::vec4> disk_receivers; // 2 per pixel: (point, AO), (normal, 0)
+    std::vector<LabelBox> labels;          // the overlay's labels (colour images with annotations)
 };
 
 } // namespace iso

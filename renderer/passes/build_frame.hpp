@@ -89,7 +89,7 @@ struct FrameContext {
     glm::vec2 translucent_depth{0.0f};      // linear depth (mm) the translucent objects' bounds span, within near..far
     Bounds bounds;                          // of the visible meshes
     std::uint64_t geometry_version = 0;     // changes when meshes are added
-    std::vector<OverlayVertex> overlay;     // annotation triangles (empty: none)
+    Overlay overlay;                        // annotation triangles and their glyph atlas (empty: none)
     AoHistory* ao = nullptr;                // required when the AO passes run
     std::vector<DiskSurface> disk_surfaces; // the opaque draws' meshes, for disk AO
     DiskState* disk = nullptr;              // required when the disk AO passes run

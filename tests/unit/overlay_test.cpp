@@ -1,7 +1,8 @@
 // The overlay's markups on the CPU: the measurement text a Line or an Angle
 // shows (the file's value, else computed from the points), the colours,
 // which control points are drawn, what each vertex carries for the depth
-// comparison, labels that are not ASCII, and the scale.
+// comparison, labels in Unicode at their size in points, never dimmed,
+// placed apart with leader lines, and the scale.
 #include "renderer/frame/annotations.hpp"
 
 #include <cmath>
@@ -97,7 +98,7 @@ TEST(Overlay, OnlyDefinedVisiblePointsAreDrawnAndCarryTheirDepth) {
     m.points[1].status = PositionStatus::Undefined;
     m.points[2].visible = false;
     // m.points[3] is nearer than the near plane (50 mm from the eye): not drawn.
-    const auto v = build_overlay(markups_only({m}), cam, 200, 100, 1.0f);
+    const auto v = build_overlay(markups_only({m}), cam, 200, 100, 1.0f).vertices;
     ASSERT_FALSE(v.empty());
     for (const auto& x : v) {
         // One glyph: every vertex anchored at the origin's pixel (the image centre), 300 mm deep.
@@ -109,18 +110,21 @@ TEST(Overlay, OnlyDefinedVisiblePointsAreDrawnAndCarryTheirDepth) {
     // Nothing defined: nothing drawn, and no annotation either.
     m.points.resize(2);
     m.points[0].status = PositionStatus::Preview;
-    EXPECT_TRUE(build_overlay(markups_only({m}), cam, 200, 100, 1.0f).empty());
+    const Overlay none = build_overlay(markups_only({m}), cam, 200, 100, 1.0f);
+    EXPECT_TRUE(none.vertices.empty());
+    EXPECT_TRUE(none.labels.empty());
 }
 
 TEST(Overlay, LineVerticesCarryTheirEndsDepthAndDashDistance) {
     const Camera cam = front_camera();
     // From 300 mm deep to 400 mm deep, across the image.
     const auto v =
-        build_overlay(markups_only({markup(MarkupType::Line, {{-20, 0, 0}, {20, 100, 0}})}), cam, 200, 200, 1.0f);
+        build_overlay(markups_only({markup(MarkupType::Line, {{-20, 0, 0}, {20, 100, 0}})}), cam, 200, 200, 1.0f)
+            .vertices;
     float max_along = 0;
     std::size_t line_vertices = 0;
     for (const auto& x : v) {
-        if (x.anchor.x >= 0) continue; // glyphs and the label
+        if (x.anchor.x >= 0 || x.inv_depth == 0) continue; // glyphs; the label and its leader line (2D)
         ++line_vertices;
         EXPECT_TRUE(std::abs(x.inv_depth - 1.0f / 300.0f) < 1e-7f || std::abs(x.inv_depth - 1.0f / 400.0f) < 1e-7f)
             << x.inv_depth;
@@ -133,22 +137,97 @@ TEST(Overlay, LineVerticesCarryTheirEndsDepthAndDashDistance) {
     EXPECT_NEAR(max_along, b - a, 1e-3);
 }
 
-TEST(Overlay, LabelsThatAreNotAsciiAndTheScale) {
+TEST(Overlay, LabelsAreUnicodeAtTheirSizeInPoints) {
     const Camera cam = front_camera();
     Markup m = markup(MarkupType::Fiducial, {{0, 0, 0}});
-    m.points[0].label = "Nasion \xC3\xBC \xE2\x86\x92 \x01"; // "ü", an arrow and a control character
-    const auto a = build_overlay(markups_only({m}), cam, 200, 200, 1.0f);
-    m.points[0].label = "Nasion ? ? ?";
-    EXPECT_EQ(a.size(), build_overlay(markups_only({m}), cam, 200, 200, 1.0f).size()) << "one '?' per character";
+    m.points[0].label = "Nasion \xC3\xBC \xE2\x86\x92 \xC2\xB1"; // "ü", an arrow, plus-minus
+    const Overlay o = build_overlay(markups_only({m}), cam, 300, 200, 1.0f);
+    ASSERT_EQ(o.labels.size(), 1u);
+    const LabelBox& l = o.labels[0];
+    EXPECT_EQ(l.text, m.points[0].label);
+    EXPECT_FALSE(l.moved);
+    EXPECT_EQ(l.color, markup_color(m, 0));
+    EXPECT_EQ(l.halo, glm::vec3(0.0f));
+    // To the point's right, centred on it vertically.
+    EXPECT_GT(l.lo.x, 150 + 6);
+    EXPECT_NEAR(0.5 * (l.lo.y + l.hi.y), 100.0, 2.0);
+    // Every character a glyph of its own (nothing became '?'): halo and text, two triangles each.
+    std::size_t text = 0, halo = 0;
+    for (const auto& v : o.vertices) {
+        text += v.atlas_channel == 0.0f;
+        halo += v.atlas_channel == 1.0f;
+        if (v.atlas_channel >= 0) {
+            EXPECT_EQ(v.inv_depth, 0.0f) << "labels are 2D: never compared with the depth, never dimmed";
+            EXPECT_EQ(v.hidden_alpha, 1.0f);
+        }
+    }
+    EXPECT_EQ(text, 6u * 9u) << "N a s i o n ü → ± (spaces have no ink)";
+    EXPECT_EQ(halo, text);
+    // What the box reports was drawn: coverage inside the halo, the halo all around.
+    const glm::ivec2 size = l.hi - l.lo;
+    ASSERT_EQ(l.coverage.size(), std::size_t(size.x * size.y));
+    std::size_t full = 0;
+    for (std::size_t i = 0; i < l.coverage.size(); ++i) {
+        EXPECT_GE(l.halo_alpha[i], l.coverage[i]);
+        full += l.coverage[i] == 255;
+    }
+    EXPECT_GT(full, 50u);
+    // 11 pt at 96 dpi is 14.7 px per em: the font's line (1.16 em) and a 2.5 px halo above and below.
+    EXPECT_NEAR(size.y, 11.0 * 96 / 72 * 1.16 + 2 * 2.5, 4.0);
+    // Scale 2 (or 22 pt) is twice the size.
+    const Overlay two = build_overlay(markups_only({m}), cam, 600, 400, 2.0f);
+    ASSERT_EQ(two.labels.size(), 1u);
+    const glm::vec2 size2 = glm::vec2(two.labels[0].hi - two.labels[0].lo);
+    EXPECT_NEAR(size2.x / size.x, 2.0, 0.06);
+    EXPECT_NEAR(size2.y / size.y, 2.0, 0.15) << "the line's height is hinted to whole pixels, the halo rounded up";
+    Annotations big = markups_only({m});
+    big.label_pt = 22;
+    const Overlay pt = build_overlay(big, cam, 600, 400, 1.0f);
+    EXPECT_EQ(pt.labels[0].hi - pt.labels[0].lo, two.labels[0].hi - two.labels[0].lo);
     // Scale 2: the glyph's extent around its point doubles.
     m.points[0].label.clear();
     auto extent = [&](float s) {
         float e = 0;
-        for (const auto& x : build_overlay(markups_only({m}), cam, 200, 200, s))
+        for (const auto& x : build_overlay(markups_only({m}), cam, 200, 200, s).vertices)
             e = std::max(e, glm::length(x.pixel - glm::vec2(100)));
         return e;
     };
     EXPECT_NEAR(extent(2.0f) / extent(1.0f), 2.0, 1e-5);
+}
+
+TEST(Overlay, CrowdedLabelsArePlacedApartWithLeaderLines) {
+    const Camera cam = front_camera();
+    // Twelve labelled points within a few millimetres, a line and an angle through them.
+    Markup points = markup(MarkupType::Fiducial, {});
+    for (int i = 0; i < 12; ++i)
+        points.points.push_back(point({double(i % 4) * 3 - 5, 0, double(i / 4) * 3 - 3}, "F-" + std::to_string(i + 1)));
+    Annotations a = markups_only({points, markup(MarkupType::Line, {{-10, 0, -5}, {10, 0, 5}}),
+                                  markup(MarkupType::Angle, {{-8, 0, 8}, {0, 0, 0}, {8, 0, 8}})});
+    a.labels.push_back({{0, 0, 0}, "centre"});
+    a.orientation = a.scale_bar = true;
+    const Overlay o = build_overlay(a, cam, 400, 300, 1.0f);
+    ASSERT_EQ(o.labels.size(), 4u + 1u + 12u + 1u + 1u + 1u) << "letters, scale bar, points, line, angle, plain label";
+    std::size_t moved = 0, fixed = 0;
+    for (std::size_t i = 0; i < o.labels.size(); ++i) {
+        const LabelBox& l = o.labels[i];
+        EXPECT_TRUE(l.lo.x >= 0 && l.lo.y >= 0 && l.hi.x <= 400 && l.hi.y <= 300) << l.text << " inside the image";
+        for (std::size_t k = 0; k < i; ++k) {
+            const LabelBox& m = o.labels[k];
+            const bool apart = l.hi.x <= m.lo.x || m.hi.x <= l.lo.x || l.hi.y <= m.lo.y || m.hi.y <= l.lo.y;
+            EXPECT_TRUE(apart) << "'" << l.text << "' and '" << m.text << "' overlap";
+        }
+        moved += l.moved;
+        fixed += l.fixed;
+    }
+    EXPECT_EQ(fixed, 5u);
+    EXPECT_GT(moved, 5u);
+    // A leader line per moved label: 2D segments (outline and colour) in the label's colour, not dashed.
+    std::size_t leader = 0;
+    for (const auto& l : o.labels)
+        if (l.moved)
+            for (const auto& v : o.vertices)
+                leader += v.atlas_channel < 0 && v.inv_depth == 0 && v.along < 0 && glm::vec3(v.color) == l.color;
+    EXPECT_GE(leader, moved * 6);
 }
 
 TEST(Overlay, TheHeadExampleShowsTheDocumentedValues) {
