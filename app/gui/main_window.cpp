@@ -177,6 +177,8 @@ MainWindow::MainWindow(QWidget* parent) : QMainWindow(parent), scene_(std::make_
     addDockWidget(Qt::RightDockWidgetArea, dock);
     measurements_ = new MeasurementsPanel(*this);
     addDockWidget(Qt::RightDockWidgetArea, measurements_);
+    // Wide enough for the Measurements table's surface and notes columns.
+    resizeDocks({dock, measurements_}, {400, 400}, Qt::Horizontal);
 
     statusBar()->showMessage("Ready");
     for (std::size_t i = 0; i < 3; ++i) views_[i]->set_content(scene_.get(), &planes_[i]);

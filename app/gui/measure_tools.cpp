@@ -407,12 +407,19 @@ void MeasureTools::redraw() {
     // The 3D view draws the placed points as a point list next to the markups.
     if (auto* v = window_.viewer()) {
         std::vector<Markup> drawn = drawn_markups();
-        // The names by the first points (the overlay labels a point list's points itself).
+        // Each line's and angle's name (the overlay labels a point list's
+        // points itself) by its point furthest right in the view now: the
+        // label runs to the right, away from the segments and the value.
         std::vector<std::pair<glm::dvec3, std::string>> names;
-        for (const Markup& m : drawn)
-            if (m.type != MarkupType::Fiducial && !m.name.empty() && !m.points.empty() &&
-                m.points[0].status == PositionStatus::Defined)
-                names.emplace_back(m.points[0].position, m.name);
+        for (const Markup& m : drawn) {
+            if (m.type == MarkupType::Fiducial || m.name.empty()) continue;
+            std::optional<std::pair<double, glm::dvec3>> right;
+            for (const auto& p : m.points) {
+                const auto px = p.status == PositionStatus::Defined ? v->image_pixel(p.position) : std::nullopt;
+                if (px && (!right || px->x() > right->first)) right = std::pair{px->x(), p.position};
+            }
+            if (right) names.emplace_back(right->second, m.name);
+        }
         v->set_labels(std::move(names));
         if (!pending_.empty()) {
             Markup placing;

@@ -311,9 +311,8 @@ bool MeasurementsPanel::load(const QString& path) {
     }
     auto* box = new QMessageBox(
         QMessageBox::Question, "Load markups",
-        QString(
-            "%1 measurement(s) came from %2 (loaded or saved).\n\nReplace them with what the file holds now, or add "
-            "the file's %3 measurement(s) to them?")
+        QString("%1 measurement(s) came from %2 (loaded from it or saved to it).\n\nReplace: they give way to the "
+                "%3 the file holds now.\nAdd: the file's %3 are added, and they stay.")
             .arg(from_file)
             .arg(QFileInfo(path).fileName())
             .arg(f.markups.size()),

@@ -19,6 +19,7 @@
 #include "renderer/core/pick.hpp"
 #include "renderer/core/scene.hpp"
 #include "renderer/core/slices.hpp"
+#include "renderer/frame/annotations.hpp"
 
 namespace iso::gui {
 
@@ -76,10 +77,16 @@ void MeasureTools::commit_grab() {
     grab_.reset();
     const bool moved =
         g.before.markups[g.markup].points[g.point].position != window_.markups()[g.markup].points[g.point].position;
-    if (moved)
-        window_.edit_markups("Move point", window_.markups_state(), std::move(g.before));
-    else
+    if (!moved) {
         window_.show_markups(window_.markups_state()); // the panel's columns left out while dragging
+        return;
+    }
+    const Markup& m = window_.markups()[g.markup];
+    const std::string value = markup_measurement_text(m);
+    const QString msg = "Moved " + point_name(m, g.point) + " to " + lps_text(m.points[g.point].position) +
+                        (value.empty() ? QString() : ": " + QString::fromStdString(value));
+    window_.edit_markups("Move point", window_.markups_state(), std::move(g.before));
+    window_.statusBar()->showMessage(msg);
 }
 
 // ---- the 3D view -------------------------------------------------------------------
