@@ -171,6 +171,7 @@ MainWindow::MainWindow(QWidget* parent) : QMainWindow(parent), scene_(std::make_
     surfaces_->changed = [this](bool outlines) {
         update_3d();
         if (outlines) refresh_slices();
+        measurements_->refresh_soon(); // which surface each point is on, what a ruler passes through
     };
     surfaces_->set_scene(scene_.get());
     dock->setWidget(surfaces_);

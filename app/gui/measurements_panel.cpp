@@ -1,5 +1,6 @@
 #include "app/gui/measurements_panel.hpp"
 
+#include <QApplication>
 #include <QFileDialog>
 #include <QFileInfo>
 #include <QHeaderView>
@@ -9,6 +10,7 @@
 #include <QTimer>
 #include <QToolButton>
 #include <QPushButton>
+#include <QShortcut>
 
 #include <cstdint>
 
@@ -76,6 +78,25 @@ MeasurementsPanel::MeasurementsPanel(MainWindow& window) : QDockWidget("Measurem
         rename(item->row(), item->text());
     });
     connect(table_, &QTableWidget::itemSelectionChanged, this, [this] { selection_changed(); });
+    // Delete (or Backspace) on a row deletes it, as its button does; not while a name is being edited.
+    for (const auto key : {Qt::Key_Delete, Qt::Key_Backspace}) {
+        auto* del = new QShortcut(QKeySequence(key), table_, nullptr, nullptr, Qt::WidgetShortcut);
+        connect(del, &QShortcut::activated, this, [this] {
+            const auto rows = table_->selectionModel()->selectedRows();
+            if (!rows.isEmpty()) remove(rows.front().row());
+        });
+    }
+    refresh_timer_ = new QTimer(this);
+    refresh_timer_->setSingleShot(true);
+    refresh_timer_->setInterval(300);
+    connect(refresh_timer_, &QTimer::timeout, this, [this] {
+        // A name being typed (its editor has the focus): later.
+        const QWidget* focus = QApplication::focusWidget();
+        if (focus && focus != table_ && table_->isAncestorOf(focus))
+            refresh_timer_->start();
+        else
+            refresh();
+    });
     setWidget(table_);
     refresh();
 }
@@ -132,6 +153,7 @@ void MeasurementsPanel::add_markup_rows(std::size_t index, const Markup& m) {
 
 void MeasurementsPanel::refresh() {
     if (renaming_) return; // the table shows the new name already
+    refresh_timer_->stop();
     filling_ = true;
     check_cache();
     const auto& markups = window_.markups();
@@ -140,6 +162,10 @@ void MeasurementsPanel::refresh() {
     for (std::size_t i = 0; i < markups.size(); ++i) add_markup_rows(i, markups[i]);
     filling_ = false;
     show_selection();
+}
+
+void MeasurementsPanel::refresh_soon() {
+    if (!window_.markups().empty()) refresh_timer_->start();
 }
 
 int MeasurementsPanel::row_of(std::size_t markup, int point) const {

@@ -28,6 +28,7 @@
 #include "io/markups.hpp"
 
 class QTableWidget;
+class QTimer;
 
 namespace iso::gui {
 
@@ -42,6 +43,9 @@ public:
     // Rebuilds the table from MainWindow::markups() (the window calls it
     // whenever they change).
     void refresh();
+    // refresh() once the surfaces rest (a slider being dragged changes them
+    // at every step; the surface and notes columns query every point).
+    void refresh_soon();
     // Selects the row of MainWindow::selected_markup() (none: no row).
     void show_selection();
     QTableWidget* table() const { return table_; }
@@ -84,6 +88,7 @@ private:
 
     MainWindow& window_;
     QTableWidget* table_ = nullptr;
+    QTimer* refresh_timer_ = nullptr;
     std::vector<Row> rows_;
     bool filling_ = false;  // the table is being rebuilt: its item changes are not edits
     bool renaming_ = false; // a rename from the table: the table already shows it
