@@ -8,6 +8,7 @@
 #include <QStatusBar>
 #include <QTimer>
 #include <QToolBar>
+#include <QUndoStack>
 
 #include <algorithm>
 #include <cmath>
@@ -108,6 +109,8 @@ MeasureTools::MeasureTools(MainWindow& window) : QObject(&window), window_(windo
     grab_timer_ = new QTimer(this);
     grab_timer_->setSingleShot(true);
     connect(grab_timer_, &QTimer::timeout, this, [this] { viewer_grab_pick(); });
+    // An undo or redo while a point is held (the keyboard) ends the drag: the state it started from is gone.
+    connect(window.undo_stack(), &QUndoStack::indexChanged, this, [this] { grab_.reset(); });
 }
 
 void MeasureTools::set_tool(Tool t) {

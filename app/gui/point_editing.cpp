@@ -75,8 +75,12 @@ void MeasureTools::commit_grab() {
     if (!grab_) return;
     Grab g = std::move(*grab_);
     grab_.reset();
-    const bool moved =
-        g.before.markups[g.markup].points[g.point].position != window_.markups()[g.markup].points[g.point].position;
+    // The markups may have changed under the drag (Edit > Undo from the keyboard): nothing to commit then.
+    const auto& now = window_.markups();
+    if (g.markup >= now.size() || g.point >= now[g.markup].points.size() || now.size() != g.before.markups.size() ||
+        now[g.markup].points.size() != g.before.markups[g.markup].points.size())
+        return;
+    const bool moved = g.before.markups[g.markup].points[g.point].position != now[g.markup].points[g.point].position;
     if (!moved) {
         window_.show_markups(window_.markups_state()); // the panel's columns left out while dragging
         return;
