@@ -11,6 +11,7 @@
 #include "io/markups.hpp"
 #include "io/mesh.hpp"
 #include "renderer/core/measure.hpp"
+#include "renderer/core/structures.hpp"
 #include "renderer/core/value_unit.hpp"
 
 namespace iso::cli {
@@ -21,8 +22,81 @@ struct MeasureArgs {
     std::string in, series, out;
     std::vector<double> isos;
     std::vector<std::string> distance, angle, values;
+    std::vector<std::string> component_at, surface_distance;
     bool json = false;
 };
+
+// A surface named on the command line: "x,y,z" is the component of the
+// visible surface nearest to that point, anything else a surface's name.
+struct SurfaceChoice {
+    iso::core::SurfaceId surface = 0;
+    std::optional<glm::dvec3> at;
+};
+
+SurfaceChoice choose_surface(const iso::core::Scene& scene, const std::string& text) {
+    try {
+        const glm::dvec3 p = iso::core::parse_point("--surface-distance", text);
+        return {iso::core::surface_at(scene, p).surface, p};
+    } catch (const iso::Error&) {}
+    std::string names;
+    for (const auto id : scene.surfaces()) {
+        if (scene.info(id).name == text) return {id, std::nullopt};
+        names += (names.empty() ? "" : ", ") + scene.info(id).name;
+    }
+    throw iso::Error("--surface-distance",
+                     "no surface is named '" + text + "' (the scene has: " + names + "), and it is not a point x,y,z");
+}
+
+// The structures asked for: isolated components and distances between surfaces (core/structures.hpp).
+nlohmann::json measure_structures(iso::core::Scene& scene, const MeasureArgs& a, iso::MarkupsFile& markups) {
+    nlohmann::json j{{"components", nlohmann::json::array()}, {"surface_distances", nlohmann::json::array()}};
+    std::vector<iso::core::SurfaceGap> gaps;
+    for (std::size_t i = 0; i + 1 < a.surface_distance.size(); i += 2) {
+        const SurfaceChoice x = choose_surface(scene, a.surface_distance[i]);
+        const SurfaceChoice y = choose_surface(scene, a.surface_distance[i + 1]);
+        gaps.push_back(iso::core::surface_gap(scene, x.surface, y.surface, x.at, y.at));
+    }
+    for (const auto& t : a.component_at) {
+        const glm::dvec3 p = iso::core::parse_point("--component-at", t);
+        const auto c = iso::core::isolate_component(scene, iso::core::surface_at(scene, p).surface, p);
+        j["components"].push_back(iso::core::component_json(scene, c));
+    }
+    for (const auto& g : gaps) {
+        j["surface_distances"].push_back(iso::core::gap_json(g));
+        markups.markups.push_back(iso::core::gap_markup(g));
+    }
+    return j;
+}
+
+void print_structures(const nlohmann::json& j) {
+    for (const auto& c : j["components"]) {
+        std::cout << c["surface"].get<std::string>() << " (" << c["component"].get<std::size_t>() << " of "
+                  << c["of_components"].get<std::size_t>() << " in " << c["from"].get<std::string>() << "): area "
+                  << std::setprecision(1) << c["area_mm2"].get<double>() << " mm2";
+        if (!c["area_uncertainty_mm2"].is_null()) std::cout << " +- " << c["area_uncertainty_mm2"].get<double>();
+        const std::string kind = c["volume_kind"].get<std::string>();
+        if (c["volume_ml"].is_null())
+            std::cout << ", volume undefined";
+        else
+            std::cout << ", volume " << (kind == "lower bound" ? ">= " : "") << std::setprecision(3)
+                      << c["volume_ml"].get<double>() << " mL";
+        if (!c["volume_uncertainty_ml"].is_null()) std::cout << " +- " << c["volume_uncertainty_ml"].get<double>();
+        std::cout << (c["closed"].get<bool>() ? ", closed" : ", open") << ", bounds LPS";
+        for (const auto& b : c["bounds_lps"])
+            std::cout << " (" << std::setprecision(1) << b[0].get<double>() << ", " << b[1].get<double>() << ", "
+                      << b[2].get<double>() << ")";
+        std::cout << "\n";
+    }
+    for (const auto& g : j["surface_distances"]) {
+        const auto& p = g["points"];
+        std::cout << "distance " << g["surfaces"][0].get<std::string>() << " to " << g["surfaces"][1].get<std::string>()
+                  << ": " << std::setprecision(3) << g["distance_mm"].get<double>() << " mm"
+                  << (g["touching"].get<bool>() ? " (they touch or cross)" : "") << ", between ("
+                  << p[0][0].get<double>() << ", " << p[0][1].get<double>() << ", " << p[0][2].get<double>()
+                  << ") and (" << p[1][0].get<double>() << ", " << p[1][1].get<double>() << ", "
+                  << p[1][2].get<double>() << ")\n";
+    }
+}
 
 int run_measure(const MeasureArgs& a) {
     iso::core::PointMeasurements points;
@@ -43,8 +117,12 @@ int run_measure(const MeasureArgs& a) {
     iso::core::Scene scene;
     open_input(scene, a.in, a.series, a.isos, {}, "measure");
     const auto surfaces = iso::core::measure_surfaces(scene);
-    const auto j = iso::core::measure_json(scene, surfaces, points);
-    if (!a.out.empty()) iso::save_markups(iso::core::point_markups(scene, points), a.out);
+    auto j = iso::core::measure_json(scene, surfaces, points);
+    iso::MarkupsFile markups = iso::core::point_markups(scene, points);
+    const auto structures = measure_structures(scene, a, markups);
+    j["components"] = structures["components"];
+    j["surface_distances"] = structures["surface_distances"];
+    if (!a.out.empty()) iso::save_markups(markups, a.out);
     if (a.json) {
         std::cout << j.dump(2) << "\n";
     } else {
@@ -82,6 +160,7 @@ int run_measure(const MeasureArgs& a) {
                 std::cout << iso::core::value_readout(v["value"].get<double>(), unit) << "\n";
             }
         }
+        print_structures(structures);
     }
     if (!a.out.empty()) std::cerr << "markups -> " << a.out << "\n";
     return 0;
@@ -106,6 +185,15 @@ RunFn add_measure(CLI::App& cmd, char*) {
     // --hu is the option's earlier name: scripts that use it keep working.
     c->add_option("--value,--hu", a.values, "The volume's value (HU for CT) at a point X,Y,Z (repeatable)")
         ->expected(1)
+        ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll);
+    c->add_option("--component-at", a.component_at,
+                  "Isolate and measure the connected component of the surface nearest to X,Y,Z (LPS mm; repeatable)")
+        ->expected(1)
+        ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll);
+    c->add_option("--surface-distance", a.surface_distance,
+                  "Shortest distance between two surfaces: --surface-distance A B, each a surface's name (\"iso 500\") "
+                  "or a point X,Y,Z meaning the component nearest to it (repeatable)")
+        ->expected(2)
         ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll);
     c->add_flag("--json", a.json, "Print JSON");
     c->add_option("-o,--output", a.out, "Write the points, distances and angles as 3D Slicer markups (.mrk.json, LPS)");

@@ -63,10 +63,8 @@ int run_pick(const PickArgs& a) {
         return 0;
     }
     std::cout << "pixel " << r.x << "," << r.y << " of " << r.width << "x" << r.height << ": ";
-    if (r.layers.empty())
+    if (!r.visible)
         std::cout << "background\n";
-    else if (!r.visible)
-        std::cout << "nothing opaque enough (threshold " << a.threshold << ")\n";
     else
         std::cout << r.layers[*r.visible].name << "\n";
     std::cout << std::fixed;
@@ -93,7 +91,7 @@ RunFn add_pick(CLI::App& cmd, char*) {
     c->add_option("--at", a.at, "Pixel X,Y from the image's top-left")->required();
     c->add_option("--rect", a.rect, "Also list the triangles visible in the rectangle X,Y,W,H");
     c->add_option("--threshold", a.threshold,
-                  "The visible layer: the first whose accumulated opacity reaches this (default 0.5)")
+                  "Where the click lands: the first surface whose own opacity reaches this, else the nearest (default 0.5)")
         ->check(CLI::Range(0.0, 1.0));
     c->add_flag("--all-layers", a.all_layers, "List every layer down to the first opaque one");
     c->add_flag("--json", a.json, "Print JSON");

@@ -21,6 +21,7 @@
 #include "app/gui/slice_view.hpp"
 #include "io/error.hpp"
 #include "renderer/core/scene.hpp"
+#include "renderer/core/structures.hpp"
 #include "renderer/core/value_unit.hpp"
 
 namespace iso::gui {
@@ -49,7 +50,8 @@ QString unit_suffix(const core::Scene* scene) {
 }
 
 bool same_post(const PostProcessOptions& a, const PostProcessOptions& b) {
-    return a.smooth == b.smooth && a.decimate == b.decimate && a.keep_largest == b.keep_largest;
+    return a.smooth == b.smooth && a.decimate == b.decimate && a.keep_largest == b.keep_largest &&
+           a.keep_at == b.keep_at;
 }
 
 } // namespace
@@ -219,6 +221,39 @@ void SurfacesPanel::add_surface(double iso, const PostProcessOptions& post) {
             add_row(id);
             notify(true);
             if (message) message(QString("Added the isosurface at %1: %2 triangles").arg(iso).arg(triangles));
+        });
+}
+
+void SurfacesPanel::isolate(std::uint32_t id, const glm::dvec3& at) {
+    if (busy && busy()) {
+        if (message) message("Busy: wait for the current task or cancel it");
+        return;
+    }
+    if (!scene_ || !scene_->has_surface(id)) return;
+    // The worker only reads the scene (the surface's mesh, the volume); the
+    // component joins the scene on the GUI thread.
+    auto plan = std::make_shared<core::ComponentPlan>();
+    core::Scene* s = scene_;
+    const unsigned generation = generation_;
+    const QString name = QString::fromStdString(scene_->info(id).name);
+    run_job(
+        "Isolating a component of " + name,
+        [s, id, at, plan](const ProgressFn&) { *plan = core::plan_component(*s, id, at); },
+        [this, s, plan, generation, name](std::exception_ptr e) {
+            if (e) {
+                if (error) error("Isolate failed", "Cannot isolate a component of " + name, e);
+                return;
+            }
+            if (s != scene_ || generation != generation_) return; // another scene meanwhile
+            const core::IsolatedComponent c = core::add_component(*scene_, std::move(*plan));
+            add_row(c.surface);
+            notify(true);
+            if (message)
+                message(QString("Isolated %1 (%2 of %3 components)")
+                            .arg(QString::fromStdString(c.measured.name))
+                            .arg(c.component + 1)
+                            .arg(c.components));
+            if (isolated) isolated(c);
         });
 }
 

@@ -18,6 +18,8 @@
 #include <QString>
 #include <QWidget>
 
+#include <glm/vec3.hpp>
+
 #include "io/progress.hpp"
 #include "renderer/surface/postprocess.hpp"
 
@@ -30,7 +32,8 @@ class QVBoxLayout;
 
 namespace iso::core {
 class Scene;
-}
+struct IsolatedComponent;
+} // namespace iso::core
 
 namespace iso::gui {
 
@@ -48,6 +51,11 @@ public:
     // "Add surface": the isosurface at `iso` extracted in the background
     // through run_job (progress dialog, Cancel), added on the GUI thread.
     void add_surface(double iso, const PostProcessOptions& post = {});
+    // The Isolate tool: the connected component of surface `id` nearest to
+    // `at` (LPS mm) becomes a surface of its own, planned in the background
+    // through run_job (core::plan_component: components and measurement) and
+    // added on the GUI thread (core::add_component); `isolated` reports it.
+    void isolate(std::uint32_t id, const glm::dvec3& at);
     // What a surface's row does when its iso slider or number moves, or its
     // smoothing / keep-largest change: re-extract in the background; the
     // latest request wins (a running one is cancelled through its ProgressFn).
@@ -72,6 +80,8 @@ public:
     std::function<void(const QString& title, const QString& what, std::exception_ptr)> error; // a dialog
     // The surfaces changed: redraw the 3D view; `outlines`: the slice views' outlines too.
     std::function<void(bool outlines)> changed;
+    // A component was isolated (isolate()).
+    std::function<void(const core::IsolatedComponent&)> isolated;
 
 private:
     struct Row;

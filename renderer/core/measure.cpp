@@ -8,6 +8,17 @@
 
 namespace iso::core {
 
+SurfaceMeasures measure_surface_mesh(const Scene& scene, const SurfaceInfo& info, const Mesh& mesh) {
+    // Isosurfaces of the volume get the uncertainty from coarser grids;
+    // label surfaces and meshes are measured as they are.
+    if (info.kind == SurfaceInfo::Kind::Iso && scene.has_volume()) {
+        MeasureOptions opt;
+        opt.components_only = info.post.keep_largest || info.post.keep_at;
+        return measure_isosurface(scene.volume(), info.value, mesh, opt);
+    }
+    return measure_surface(mesh);
+}
+
 std::vector<SurfaceMeasurement> measure_surfaces(const Scene& scene, const std::vector<SurfaceId>& ids) {
     std::vector<SurfaceMeasurement> out;
     for (const SurfaceId id : ids.empty() ? scene.surfaces() : ids) {
@@ -17,12 +28,7 @@ std::vector<SurfaceMeasurement> measure_surfaces(const Scene& scene, const std::
         m.name = info.name;
         m.kind = info.kind;
         m.value = info.value;
-        // Isosurfaces of the volume get the uncertainty from coarser grids;
-        // label surfaces and meshes are measured as they are.
-        if (info.kind == SurfaceInfo::Kind::Iso && scene.has_volume())
-            m.measures = measure_isosurface(scene.volume(), info.value, scene.mesh(id));
-        else
-            m.measures = measure_surface(scene.mesh(id));
+        m.measures = measure_surface_mesh(scene, info, scene.mesh(id));
         out.push_back(std::move(m));
     }
     return out;

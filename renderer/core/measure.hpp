@@ -30,6 +30,10 @@ struct SurfaceMeasurement {
 // surfaces as meshes (measure_surface: no uncertainty).
 std::vector<SurfaceMeasurement> measure_surfaces(const Scene& scene, const std::vector<SurfaceId>& ids = {});
 
+// A mesh measured as measure_surfaces measures a surface described by
+// `info` (its kind, value and post-processing), before it is in the scene.
+SurfaceMeasures measure_surface_mesh(const Scene& scene, const SurfaceInfo& info, const Mesh& mesh);
+
 // The volume's value at an LPS point, with its voxel; none outside the grid.
 // Throws iso::Error("value at a point", ...) when the scene has no volume.
 std::optional<VolumeSample> value_at(const Scene& scene, const glm::dvec3& lps);

@@ -41,6 +41,7 @@ void check_streamable(const MeshRequest& req) {
     if (req.post.smooth > 0) throw Error("smoothing factor", whole);
     if (req.post.decimate > 0) throw Error("decimation fraction", whole);
     if (req.post.keep_largest) throw Error("largest component", whole);
+    if (req.post.keep_at) throw Error("component point", whole);
     if (!req.series.empty()) throw Error("DICOM series", "DICOM series are not streamed");
 }
 

@@ -56,6 +56,25 @@ void validate(const PickRequest& p, int width, int height) {
 
 bool has_rect(const PickRequest& p) { return p.rect.width > 0 && p.rect.height > 0; }
 
+// Where a click lands: the first fragment (front to back) whose surface's
+// own opacity reaches the threshold, else the nearest one; none without
+// fragments. Not the accumulated alpha: two translucent skins (0.3 each)
+// reach 0.51 at the back of the head, and the click would land there
+// (docs/picking.md, "Where a click lands").
+// Unpickable surfaces are passed through.
+const PickFragment* visible_fragment(const std::vector<PickFragment>& fragments, double threshold, const Scene& scene) {
+    const PickFragment* nearest = nullptr;
+    for (const PickFragment& f : fragments) {
+        if (!scene.info(f.object).pickable) {
+            if (f.alpha >= 1.0f) break;
+            continue;
+        }
+        if (double(f.alpha) >= threshold) return &f;
+        if (!nearest) nearest = &f;
+    }
+    return nearest;
+}
+
 } // namespace
 
 PickRegion pick_region(const PickRequest& p) {
@@ -132,6 +151,12 @@ PickResult resolve_pick(const Scene& scene, const Camera& camera, int width, int
     const glm::dvec3 forward = camera.forward();
     const Volume* volume = scene.has_volume() ? &scene.volume() : nullptr;
     for (const PickFragment& f : at(p.x, p.y)) {
+        // An unpickable surface is drawn but passed through; an opaque one
+        // still hides everything behind it.
+        if (!scene.info(f.object).pickable) {
+            if (f.alpha >= 1.0f) break;
+            continue;
+        }
         PickLayer l;
         l.surface = f.object;
         const SurfaceInfo& info = scene.info(f.object);
@@ -169,22 +194,21 @@ PickResult resolve_pick(const Scene& scene, const Camera& camera, int width, int
                 l.unit = value_unit(*volume);
                 l.voxel = s->voxel;
             }
-        const bool reaches = l.accumulated_alpha >= p.threshold;
-        if (reaches && !out.visible) out.visible = out.layers.size();
+        const bool solid = l.alpha >= p.threshold;
+        if (solid && !out.visible) out.visible = out.layers.size();
         out.layers.push_back(std::move(l));
         if (f.alpha >= 1.0f) break;
-        if (reaches && !p.all_layers) break;
+        if (solid && !p.all_layers) break;
     }
+    // Only translucent surfaces along the ray: the click stays on the nearest.
+    if (!out.visible && !out.layers.empty()) out.visible = 0;
     if (rect) {
         std::map<std::pair<SurfaceId, std::uint32_t>, std::size_t> seen;
         for (int y = out.rect.y; y < out.rect.y + out.rect.height; ++y)
             for (int x = out.rect.x; x < out.rect.x + out.rect.width; ++x) {
                 // The pixel's visible layer, by the same rule.
-                for (const PickFragment& f : at(x, y))
-                    if (1.0 - double(f.transmittance) * (1.0 - double(f.alpha)) >= p.threshold) {
-                        ++seen[{f.object, f.primitive}];
-                        break;
-                    }
+                if (const PickFragment* f = visible_fragment(at(x, y), p.threshold, scene))
+                    ++seen[{f->object, f->primitive}];
             }
         for (const auto& [k, n] : seen) out.triangles.push_back({k.first, k.second, n});
         std::stable_sort(out.triangles.begin(), out.triangles.end(),

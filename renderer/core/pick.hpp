@@ -29,7 +29,8 @@ struct PickRequest {
     // Optional rectangle (image pixels from the top-left): every triangle
     // visible in it is listed too. Empty (width or height 0): none.
     PickRegion rect{0, 0, 0, 0};
-    // The visible layer: the first whose accumulated alpha reaches this.
+    // Where a click lands (the visible layer): the first surface along the
+    // ray whose own opacity reaches this, else the nearest surface hit.
     double threshold = 0.5;
     // List every layer (down to the first opaque one), not only those up to the visible one.
     bool all_layers = false;

@@ -206,6 +206,8 @@ private:
         if (s.post.decimate < 0.0 || s.post.decimate >= 1.0)
             fail(where + ".decimate", "must be at least 0 and below 1");
         s.post.keep_largest = boolean(item, "keep_largest", where + ".keep_largest", false);
+        if (item.contains("keep_at") && !item["keep_at"].is_null())
+            s.post.keep_at = vec3(item["keep_at"], where + ".keep_at");
         return s;
     }
 
@@ -278,6 +280,7 @@ ordered_json session_json(const Session& s, const std::string& session_path) {
             o["decimate"] = ss.post.decimate;
             o["keep_largest"] = ss.post.keep_largest;
         }
+        if (ss.post.keep_at) o["keep_at"] = vec_json(*ss.post.keep_at);
         j["surfaces"].push_back(o);
     }
     if (s.camera)
@@ -378,7 +381,12 @@ OpenedSession open_session(const Session& s, const ProgressFn& progress) {
             "surface " + std::to_string(i + 1) + (ss.name.empty() ? std::string() : " ('" + ss.name + "')");
         const ProgressFn p = part(0.3 + 0.7 * double(i) / double(n), 0.3 + 0.7 * double(i + 1) / double(n));
         std::vector<SurfaceId> ids;
-        if (ss.kind == SurfaceInfo::Kind::Mesh) {
+        if (ss.kind == SurfaceInfo::Kind::Mesh && ss.post.keep_at && !meshes.empty()) {
+            // A component isolated from the mesh input: made again from it.
+            SurfaceInfo info = scene.info(meshes.front());
+            info.post = ss.post;
+            ids = {scene.add_mesh(component_at(scene.mesh(meshes.front()), *ss.post.keep_at), info)};
+        } else if (ss.kind == SurfaceInfo::Kind::Mesh) {
             if (next_mesh >= meshes.size())
                 throw Error(s.input, where + ": a mesh surface, but the input is not a mesh file");
             ids = {meshes[next_mesh++]};

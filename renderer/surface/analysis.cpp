@@ -745,13 +745,6 @@ void compare_coarse_grid(const Volume& v, double iso, int g, const MeasureOption
     const Mesh cm = extract_isosurface(coarse, iso, eo);
     const Analysis co = analyse(cm);
     const double k = 3.0 / (r * r - 1.0); // Fs / (r^p - 1), Fs = 3, p = 2
-    if (u.grids == 1) {                   // Richardson, p = 2, from the first coarse grid
-        fine.area_extrapolated_mm2 = fine.area_mm2 + (fine.area_mm2 - co.m.area_mm2) / (r * r - 1.0);
-        if (fine.volume_kind != VolumeKind::Undefined)
-            fine.volume_extrapolated_ml = fine.volume_ml + (fine.volume_ml - co.m.volume_ml) / (r * r - 1.0);
-    }
-    u.area = std::max(u.area, k * std::abs(fine.area_mm2 - co.m.area_mm2));
-    u.volume = std::max(u.volume, k * std::abs(fine.volume_ml - co.m.volume_ml));
     const std::size_t nf = fine.components.size();
     const auto match = match_components(cells, cm, co.vertex_component, co.m.components.size());
     std::vector<double> area_c(nf, 0.0), vol_c(nf, 0.0);
@@ -760,6 +753,23 @@ void compare_coarse_grid(const Volume& v, double iso, int g, const MeasureOption
         area_c[match[c]] += co.m.components[c].area_mm2;
         if (co.m.components[c].volume_kind != VolumeKind::Undefined) vol_c[match[c]] += co.m.components[c].volume_ml;
     }
+    // The coarse surface's measures: all of it, or (the surface is some
+    // components of the isosurface) those matched to them.
+    double coarse_area = co.m.area_mm2, coarse_volume = co.m.volume_ml;
+    if (opt.components_only) {
+        coarse_area = coarse_volume = 0;
+        for (std::size_t f = 0; f < nf; ++f) {
+            coarse_area += area_c[f];
+            coarse_volume += vol_c[f];
+        }
+    }
+    if (u.grids == 1) { // Richardson, p = 2, from the first coarse grid
+        fine.area_extrapolated_mm2 = fine.area_mm2 + (fine.area_mm2 - coarse_area) / (r * r - 1.0);
+        if (fine.volume_kind != VolumeKind::Undefined)
+            fine.volume_extrapolated_ml = fine.volume_ml + (fine.volume_ml - coarse_volume) / (r * r - 1.0);
+    }
+    u.area = std::max(u.area, k * std::abs(fine.area_mm2 - coarse_area));
+    u.volume = std::max(u.volume, k * std::abs(fine.volume_ml - coarse_volume));
     for (std::size_t f = 0; f < nf; ++f) {
         const auto& s = fine.components[f];
         u.part_area[f] = std::max(u.part_area[f], k * std::abs(s.area_mm2 - area_c[f]));
@@ -846,6 +856,37 @@ SurfaceMeasures measure_surface(const Mesh& m, const MeasureOptions& opt) {
     SurfaceMeasures r;
     in_arena(opt.threads, [&] { r = analyse(m).m; });
     return r;
+}
+
+std::vector<std::uint32_t> triangle_components(const Mesh& m, const MeasureOptions& opt) {
+    std::vector<std::uint32_t> out(m.triangles.size(), kNone);
+    in_arena(opt.threads, [&] {
+        const Analysis a = analyse(m);
+        // Collapsed triangles join their vertices' components too (connected_components).
+        for (std::size_t t = 0; t < m.triangles.size(); ++t) out[t] = a.vertex_component[m.triangles[t][0]];
+    });
+    return out;
+}
+
+Mesh component_mesh(const Mesh& m, const std::vector<std::uint32_t>& triangle_component, std::uint32_t component) {
+    Mesh out;
+    std::vector<std::uint32_t> remap(m.positions.size(), kNone);
+    for (std::size_t t = 0; t < m.triangles.size() && t < triangle_component.size(); ++t) {
+        if (triangle_component[t] != component) continue;
+        std::array<std::uint32_t, 3> tri{};
+        for (int k = 0; k < 3; ++k) {
+            const std::uint32_t v = m.triangles[t][std::size_t(k)];
+            if (remap[v] == kNone) {
+                remap[v] = std::uint32_t(out.positions.size());
+                out.positions.push_back(m.positions[v]);
+                if (!m.normals.empty()) out.normals.push_back(m.normals[v]);
+                if (!m.colors.empty()) out.colors.push_back(m.colors[v]);
+            }
+            tri[std::size_t(k)] = remap[v];
+        }
+        out.triangles.push_back(tri);
+    }
+    return out;
 }
 
 Volume resample_extent(const Volume& v, std::array<std::int64_t, 3> m, glm::dvec3* ratio_out) {

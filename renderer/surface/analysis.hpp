@@ -163,6 +163,11 @@ struct MeasureOptions {
     // samples fall at different places on the structure); the uncertainty is
     // the largest of their estimates.
     int coarse_grids = 2;
+    // measure_isosurface: the surface is some components of the isosurface
+    // (the largest kept, one isolated), so the whole surface is compared with
+    // the coarse components matched to them, not with the whole coarse
+    // isosurface (its uncertainty is then its components' one).
+    bool components_only = false;
 };
 
 // Measures a mesh in the units of its positions (LPS mm). O(n): vertices are
@@ -172,6 +177,15 @@ struct MeasureOptions {
 // cost digits). Throws iso::Error("surface measure", ...) for a triangle
 // that names a missing vertex or a vertex that is not finite.
 SurfaceMeasures measure_surface(const Mesh& m, const MeasureOptions& opt = {});
+
+// Per triangle of `m`, its connected component: an index into the
+// components of measure_surface(m) (the same welding, the same order: by
+// volume, descending). Throws as measure_surface.
+std::vector<std::uint32_t> triangle_components(const Mesh& m, const MeasureOptions& opt = {});
+
+// The triangles of `m` whose component (triangle_components) is `component`,
+// with only the vertices they use (normals and colours kept).
+Mesh component_mesh(const Mesh& m, const std::vector<std::uint32_t>& triangle_component, std::uint32_t component);
 
 // Measures `surface`, the isosurface of `v` at `iso` as extract_isosurface
 // made it, and adds the discretization uncertainty (SurfaceMeasures): the

@@ -1,6 +1,9 @@
 #include "renderer/surface/postprocess.hpp"
 
+#include "io/error.hpp"
 #include "io/vtk_mesh.hpp"
+#include "renderer/surface/analysis.hpp"
+#include "renderer/surface/closest.hpp"
 
 #include <cmath>
 
@@ -19,16 +22,39 @@
 
 namespace iso {
 
-bool needs_postprocess(const PostProcessOptions& o) { return o.smooth > 0.0 || o.decimate > 0.0 || o.keep_largest; }
+bool needs_postprocess(const PostProcessOptions& o) {
+    return o.smooth > 0.0 || o.decimate > 0.0 || o.keep_largest || o.keep_at.has_value();
+}
+
+Mesh component_at(const Mesh& m, const glm::dvec3& at) {
+    if (m.empty()) return m;
+    const TriangleBvh bvh(m);
+    const NearestPoint nearest = nearest_point(bvh, at);
+    const auto comps = triangle_components(m);
+    return component_mesh(m, comps, comps[nearest.triangle]);
+}
 
 Mesh postprocess(const Mesh& in, const PostProcessOptions& o, const ProgressFn& progress) {
     if (!(o.smooth >= 0.0 && o.smooth <= 1.0)) throw Error("smoothing factor", "must be between 0 and 1");
     if (!(o.decimate >= 0.0 && o.decimate < 1.0)) throw Error("decimation fraction", "must be at least 0 and below 1");
+    if (o.keep_at && !(std::isfinite(o.keep_at->x) && std::isfinite(o.keep_at->y) && std::isfinite(o.keep_at->z)))
+        throw Error("component point", "the point is not finite");
     if (!needs_postprocess(o) || in.empty()) return in;
-    vtkSmartPointer<vtkPolyData> pd = to_polydata(in, false);
     int step = 0;
-    const int steps = (o.keep_largest ? 1 : 0) + (o.smooth > 0 ? 1 : 0) + (o.decimate > 0 ? 1 : 0) + 1;
+    const int steps =
+        (o.keep_at ? 1 : 0) + (o.keep_largest ? 1 : 0) + (o.smooth > 0 ? 1 : 0) + (o.decimate > 0 ? 1 : 0) + 1;
     auto next = [&](const char* stage) { report(progress, double(step++) / steps, stage, "postprocess"); };
+    Mesh kept;
+    if (o.keep_at) {
+        next("keeping the component at a point");
+        kept = component_at(in, *o.keep_at);
+        // Nothing else asked: the component as extracted (its normals, its exact triangles).
+        if (!o.keep_largest && !(o.smooth > 0) && !(o.decimate > 0)) {
+            report(progress, 1.0, "done", "postprocess");
+            return kept;
+        }
+    }
+    vtkSmartPointer<vtkPolyData> pd = to_polydata(o.keep_at ? kept : in, false);
 
     if (o.keep_largest) {
         next("keeping the largest component");

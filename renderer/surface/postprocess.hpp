@@ -3,6 +3,10 @@
 // connected component. Positions stay in LPS mm; normals are recomputed.
 #pragma once
 
+#include <optional>
+
+#include <glm/vec3.hpp>
+
 #include "io/mesh.hpp"
 #include "io/progress.hpp"
 
@@ -18,9 +22,18 @@ struct PostProcessOptions {
     double decimate = 0.0;
     // Keep only the largest connected component (by triangle count).
     bool keep_largest = false;
+    // Keep only the connected component nearest to this LPS point (3D
+    // Slicer's "keep selected island"; the Isolate tool): the component of
+    // the triangle nearest to it, as measure_surface numbers components.
+    // Applied before the largest is kept, smoothing and decimation.
+    std::optional<glm::dvec3> keep_at;
 };
 
 bool needs_postprocess(const PostProcessOptions& o);
+
+// The connected component of `m` nearest to `at` (PostProcessOptions::keep_at),
+// as it is: no normals recomputed. An empty mesh stays empty.
+Mesh component_at(const Mesh& m, const glm::dvec3& at);
 
 // Throws iso::Error for options out of range. An empty mesh stays empty.
 Mesh postprocess(const Mesh& m, const PostProcessOptions& o, const ProgressFn& progress = {});

@@ -5,8 +5,8 @@
 // vtkCellPicker (a CPU ray cast through a vtkCellLocator built once), on the
 // same meshes, camera, image size and pixels, in the same run (VTK under
 // xvfb-run through pick_peer). And what each returns: our visible layer
-// (the first whose accumulated opacity reaches 0.5: the bone through 0.3
-// skin) and first layer, VTK's picked cell and point (the nearest surface,
+// (the first surface whose own opacity reaches 0.5, else the nearest: the
+// bone through 0.3 skin, the front skin where no bone lies behind) and first layer, VTK's picked cell and point (the nearest surface,
 // whatever its opacity), each against a double-precision ray cast of the
 // written meshes (every crossing of the pixel centre's ray, the same
 // opacity rule).
@@ -111,17 +111,14 @@ std::vector<Hit> ray_cast(const std::vector<RefTriangle>& tris, const Ray& ray) 
     return hits;
 }
 
-// The visible crossing by the pick's rule: the first whose accumulated
-// opacity reaches the threshold; nothing behind an opaque one counts.
+// The visible crossing by the pick's rule: the first whose surface's own
+// opacity reaches the threshold, else the first crossing; nothing behind an
+// opaque one counts.
 std::optional<Hit> visible_hit(const std::vector<Hit>& hits, const std::vector<float>& opacity) {
-    double transmittance = 1;
-    for (const Hit& h : hits) {
-        const double alpha = opacity[std::size_t(h.surface)];
-        if (1.0 - transmittance * (1.0 - alpha) >= kThreshold) return h;
-        transmittance *= 1.0 - alpha;
-        if (alpha >= 1.0) break;
-    }
-    return std::nullopt;
+    for (const Hit& h : hits)
+        if (opacity[std::size_t(h.surface)] >= kThreshold) return h;
+    if (hits.empty()) return std::nullopt;
+    return hits.front();
 }
 
 // ---- our pick, resolved as core::pick resolves it ------------------------------

@@ -1,0 +1,177 @@
+#include "renderer/core/structures.hpp"
+
+#include <cmath>
+#include <algorithm>
+#include <limits>
+
+#include "io/error.hpp"
+#include "renderer/core/surface_name.hpp"
+#include "renderer/surface/analysis.hpp"
+#include "renderer/surface/postprocess.hpp"
+
+namespace iso::core {
+
+namespace {
+
+nlohmann::json vec(const glm::dvec3& v) { return nlohmann::json::array({v.x, v.y, v.z}); }
+
+bool finite(const glm::dvec3& p) { return std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z); }
+
+const Mesh& surface_mesh(const Scene& scene, SurfaceId id, const char* what) {
+    if (!scene.has_surface(id)) throw Error(what, "there is no surface " + std::to_string(id));
+    const Mesh& m = scene.mesh(id);
+    if (m.empty()) throw Error(what, scene.info(id).name + " has no triangles");
+    return m;
+}
+
+// A hue for the n-th isolated component, apart from the skin-to-bone
+// palette: saturated, distinct from each other (linear RGB).
+glm::vec3 component_color(std::size_t n) {
+    static const glm::vec3 kHues[] = {{0.80f, 0.10f, 0.08f}, {0.05f, 0.35f, 0.85f}, {0.10f, 0.60f, 0.12f},
+                                      {0.75f, 0.35f, 0.02f}, {0.45f, 0.08f, 0.65f}, {0.02f, 0.55f, 0.55f}};
+    return kHues[n % std::size(kHues)];
+}
+
+} // namespace
+
+SurfacePoint surface_at(const Scene& scene, const glm::dvec3& lps) {
+    if (!finite(lps)) throw Error("surface at a point", "the point is not finite");
+    SurfacePoint best;
+    best.distance_mm = std::numeric_limits<double>::infinity();
+    for (const SurfaceId id : scene.surfaces()) {
+        const SurfaceInfo& info = scene.info(id);
+        if (!info.visible || !info.pickable || scene.mesh(id).empty()) continue;
+        const NearestPoint n = nearest_point(TriangleBvh(scene.mesh(id)), lps);
+        if (n.distance_mm < best.distance_mm) best = {id, n.triangle, n.point, n.distance_mm};
+    }
+    if (!best.surface) throw Error("surface at a point", "the scene has no visible surface");
+    return best;
+}
+
+ComponentPlan plan_component(const Scene& scene, SurfaceId surface, const glm::dvec3& at) {
+    if (!finite(at)) throw Error("isolate", "the point is not finite");
+    const Mesh& parent = surface_mesh(scene, surface, "isolate");
+    const SurfaceInfo& info = scene.info(surface);
+    const auto comps = triangle_components(parent);
+    const NearestPoint n = nearest_point(TriangleBvh(parent), at);
+    ComponentPlan plan;
+    plan.from = surface;
+    plan.component = comps[n.triangle];
+    for (std::uint32_t c : comps)
+        if (c != std::numeric_limits<std::uint32_t>::max())
+            plan.components = std::max<std::size_t>(plan.components, c + 1);
+    plan.mesh = component_mesh(parent, comps, comps[n.triangle]);
+    // Recorded with the surface's post-processing, so that a session (or a
+    // moved iso value) makes the same component again from the volume.
+    plan.info = info;
+    plan.info.post.keep_at = n.point;
+    plan.info.name = info.name + " component " + std::to_string(plan.component + 1);
+    std::size_t isolated = 0;
+    for (const SurfaceId id : scene.surfaces()) isolated += scene.info(id).post.keep_at.has_value();
+    plan.info.color = component_color(isolated);
+    plan.info.opacity = 1.0f;
+    plan.info.visible = plan.info.pickable = true;
+    plan.measures = measure_surface_mesh(scene, plan.info, plan.mesh);
+    return plan;
+}
+
+IsolatedComponent add_component(Scene& scene, ComponentPlan plan) {
+    IsolatedComponent out;
+    out.from = plan.from;
+    out.component = plan.component;
+    out.components = plan.components;
+    out.measured.name = plan.info.name;
+    out.measured.kind = plan.info.kind;
+    out.measured.value = plan.info.value;
+    out.measured.measures = std::move(plan.measures);
+    out.surface = out.measured.surface = scene.add_mesh(std::move(plan.mesh), std::move(plan.info));
+    return out;
+}
+
+IsolatedComponent isolate_component(Scene& scene, SurfaceId surface, const glm::dvec3& at) {
+    return add_component(scene, plan_component(scene, surface, at));
+}
+
+SurfaceGap surface_gap(const Scene& scene, SurfaceId a, SurfaceId b, const std::optional<glm::dvec3>& at_a,
+                       const std::optional<glm::dvec3>& at_b) {
+    const Mesh& ma = surface_mesh(scene, a, "surface distance");
+    const Mesh& mb = surface_mesh(scene, b, "surface distance");
+    SurfaceGap g;
+    g.a = a;
+    g.b = b;
+    g.name_a = scene.info(a).name;
+    g.name_b = scene.info(b).name;
+    // One component of a surface: a hierarchy over its triangles only.
+    const auto part = [](const Mesh& m, const std::optional<glm::dvec3>& at, std::string& name) {
+        if (!at) return TriangleBvh(m);
+        if (!finite(*at)) throw Error("surface distance", "a component's point is not finite");
+        const auto comps = triangle_components(m);
+        const std::uint32_t c = comps[nearest_point(TriangleBvh(m), *at).triangle];
+        std::vector<std::uint32_t> tris;
+        for (std::uint32_t t = 0; t < comps.size(); ++t)
+            if (comps[t] == c) tris.push_back(t);
+        name += " component " + std::to_string(c + 1);
+        return TriangleBvh(m, std::move(tris));
+    };
+    const TriangleBvh ba = part(ma, at_a, g.name_a), bb = part(mb, at_b, g.name_b);
+    g.distance = surface_distance(ba, bb);
+    return g;
+}
+
+std::vector<LineCrossing> solid_crossings(const Scene& scene, const glm::dvec3& a, const glm::dvec3& b,
+                                          double threshold, double end_tolerance_mm) {
+    if (!finite(a) || !finite(b)) throw Error("line crossings", "a point is not finite");
+    const double length = glm::length(b - a);
+    std::vector<LineCrossing> out;
+    for (const SurfaceId id : scene.surfaces()) {
+        const SurfaceInfo& info = scene.info(id);
+        if (!info.visible || double(info.opacity) < threshold || scene.mesh(id).empty()) continue;
+        double last = -1e300;
+        for (const SegmentCrossing& c : segment_crossings(TriangleBvh(scene.mesh(id)), a, b)) {
+            const double along = c.t * length;
+            if (along < end_tolerance_mm || along > length - end_tolerance_mm) continue;
+            if (along - last < 1e-6) continue; // the same crossing through a shared edge
+            last = along;
+            out.push_back({id, info.name, a + c.t * (b - a), along});
+        }
+    }
+    std::sort(out.begin(), out.end(),
+              [](const LineCrossing& x, const LineCrossing& y) { return x.along_mm < y.along_mm; });
+    return out;
+}
+
+nlohmann::json gap_json(const SurfaceGap& g) {
+    return {{"surfaces", {g.name_a, g.name_b}},
+            {"distance_mm", g.distance.pair.distance_mm},
+            {"points", {vec(g.distance.pair.a), vec(g.distance.pair.b)}},
+            {"triangles", {g.distance.triangle_a, g.distance.triangle_b}},
+            {"touching", g.distance.touching},
+            {"triangle_pairs_measured", g.distance.triangle_pairs}};
+}
+
+nlohmann::json component_json(const Scene& scene, const IsolatedComponent& c) {
+    nlohmann::json j = measure_json(scene, {c.measured}, {})["surfaces"][0];
+    j["from"] = scene.info(c.from).name;
+    j["component"] = c.component + 1;
+    j["of_components"] = c.components;
+    const auto& at = scene.info(c.surface).post.keep_at;
+    j["at"] = at ? vec(*at) : nlohmann::json(nullptr);
+    return j;
+}
+
+Markup gap_markup(const SurfaceGap& g) {
+    Markup m;
+    m.type = MarkupType::Line;
+    m.name = g.name_a + " to " + g.name_b;
+    MarkupControlPoint p;
+    p.position = g.distance.pair.a;
+    p.label = m.name + "-1";
+    MarkupControlPoint q;
+    q.position = g.distance.pair.b;
+    q.label = m.name + "-2";
+    m.points = {p, q};
+    if (auto c = computed_measurement(m)) m.measurements.push_back(*c);
+    return m;
+}
+
+} // namespace iso::core

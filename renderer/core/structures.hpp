@@ -1,0 +1,101 @@
+// Structures through the core API (docs/measure.md, "Structures"), so the CLI
+// and the GUI share them: the connected component of a surface under a point
+// made a surface of its own (the Isolate tool; 3D Slicer's "keep selected
+// island"), measured as `measure` measures that component, and the exact
+// shortest distance between two surfaces or two components (a BVH over
+// each one's triangles: renderer/surface/closest.hpp).
+#pragma once
+
+#include <optional>
+#include <string>
+
+#include <glm/vec3.hpp>
+#include <nlohmann/json.hpp>
+
+#include "io/markups.hpp"
+#include "renderer/core/measure.hpp"
+#include "renderer/core/scene.hpp"
+#include "renderer/surface/closest.hpp"
+
+namespace iso::core {
+
+// The visible surface nearest to an LPS point (a picked point lies on its
+// surface: distance 0), and where on it. Unpickable and hidden surfaces are
+// left out. Throws iso::Error("surface at a point", ...) when the scene has
+// no visible surface, or the point is not finite.
+struct SurfacePoint {
+    SurfaceId surface = 0;
+    std::uint32_t triangle = 0;
+    glm::dvec3 point{0.0}; // on the surface, LPS mm
+    double distance_mm = 0;
+};
+SurfacePoint surface_at(const Scene& scene, const glm::dvec3& lps);
+
+struct IsolatedComponent {
+    SurfaceId surface = 0;       // the new surface
+    SurfaceId from = 0;          // the surface it came from
+    std::size_t component = 0;   // its index among the parent's components (measure's order: by volume)
+    std::size_t components = 0;  // how many the parent has
+    SurfaceMeasurement measured; // the new surface, as measure_surfaces measures it
+};
+
+// Makes the connected component of `surface` nearest to `at` a surface of
+// its own: kind and value of the parent (an isosurface stays one, so its
+// measurement has the isosurface's uncertainty and a session re-extracts it:
+// PostProcessOptions::keep_at records the point), named "<parent>
+// component <k>" (k: 1-based, by volume as `measure` lists them), in a
+// colour of its own, opaque. The parent is left as it is (hide it to see
+// the component alone). Throws iso::Error naming the surface for an unknown
+// or empty one.
+IsolatedComponent isolate_component(Scene& scene, SurfaceId surface, const glm::dvec3& at);
+
+// isolate_component in two steps, for a caller that works off its GUI
+// thread: plan_component only reads the scene (the surface's mesh and the
+// volume) and does the work (components, measurement); add_component puts
+// the planned surface into the scene.
+struct ComponentPlan {
+    SurfaceId from = 0;
+    std::size_t component = 0, components = 0;
+    Mesh mesh;
+    SurfaceInfo info;
+    SurfaceMeasures measures;
+};
+ComponentPlan plan_component(const Scene& scene, SurfaceId surface, const glm::dvec3& at);
+IsolatedComponent add_component(Scene& scene, ComponentPlan plan);
+
+// The shortest distance between two surfaces, or between the components of
+// them nearest to two points (`at_a`, `at_b`; none: the whole surface).
+struct SurfaceGap {
+    SurfaceId a = 0, b = 0;
+    std::string name_a, name_b; // "iso 500", "iso 1150 component 2"
+    SurfaceDistance distance;   // pair.a on a, pair.b on b
+};
+SurfaceGap surface_gap(const Scene& scene, SurfaceId a, SurfaceId b, const std::optional<glm::dvec3>& at_a = {},
+                       const std::optional<glm::dvec3>& at_b = {});
+
+// The surfaces a straight line between two points passes through (a
+// ruler drawn inside the head): each crossing of a visible surface whose own
+// opacity is at least `threshold` (the pick's rule: solid enough to hide
+// what lies behind), strictly between the ends: crossings within
+// `end_tolerance_mm` of either end are the surface the point lies on, and
+// are left out. Sorted along the line.
+struct LineCrossing {
+    SurfaceId surface = 0;
+    std::string name;
+    glm::dvec3 point{0.0};
+    double along_mm = 0; // from the first point
+};
+std::vector<LineCrossing> solid_crossings(const Scene& scene, const glm::dvec3& a, const glm::dvec3& b,
+                                          double threshold = 0.5, double end_tolerance_mm = 0.5);
+
+// JSON of a gap (surfaces, distance_mm, points LPS, triangles, touching) and
+// of an isolated component (the measure JSON of its surface, plus its parent
+// and index).
+nlohmann::json gap_json(const SurfaceGap& g);
+nlohmann::json component_json(const Scene& scene, const IsolatedComponent& c);
+
+// The gap as a 3D Slicer line markup between the two closest points, named
+// "<a> to <b>", its length the distance.
+Markup gap_markup(const SurfaceGap& g);
+
+} // namespace iso::core

@@ -1,0 +1,185 @@
+// Structures through the core API and the CLI (renderer/core/structures.hpp):
+// an isolated component is the component `measure` lists (the same volume,
+// area, bounds, closedness; its uncertainty that of the component), it comes
+// back from a session, and the distance between two components or surfaces
+// is the brute-force minimum over their triangle pairs and, for two balls,
+// the gap between them within the extraction's error.
+#include "renderer/core/structures.hpp"
+
+#include <cmath>
+
+#include <glm/glm.hpp>
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include "io/error.hpp"
+#include "io/markups.hpp"
+#include "renderer/core/session.hpp"
+#include "renderer/surface/analysis.hpp"
+#include "tests/support/measure_phantoms.hpp"
+#include "tests/support/test_util.hpp"
+
+using namespace iso;
+using namespace iso::test;
+using iso::core::SurfaceId;
+using iso::core::SurfaceInfo;
+
+namespace {
+
+// Two blurred balls, radii 9 and 5 mm, 26 mm apart (a 12 mm gap), on an
+// oblique, anisotropic grid: one isosurface with two components.
+const glm::dvec3 kBig{0, 0, 0}, kSmall{26, 0, 0};
+constexpr double kRBig = 9.0, kRSmall = 5.0;
+
+void two_balls(core::Scene& scene) {
+    const glm::dvec3 centre = 0.5 * (kBig + kSmall);
+    const auto dims = dims_for(22, 2, 1.0);
+    Volume v = sample_field(dims, oblique_affine(dims, 1.0, centre), [](const glm::dvec3& p) {
+        return std::max(ct_edge(kRBig - glm::length(p - kBig), 0.6), ct_edge(kRSmall - glm::length(p - kSmall), 0.6));
+    });
+    scene.set_volume(std::move(v), "two balls");
+}
+
+} // namespace
+
+TEST(Structures, AnIsolatedComponentIsTheComponentMeasureLists) {
+    core::Scene scene;
+    two_balls(scene);
+    const SurfaceId both = scene.add_isosurfaces({kBallIso}).front();
+    const auto whole = core::measure_surfaces(scene, {both}).front().measures;
+    ASSERT_EQ(whole.components.size(), 2u);
+    // A point just outside the small ball: its component is the second by volume.
+    const auto c = core::isolate_component(scene, both, kSmall + glm::dvec3(0, 0, kRSmall + 0.4));
+    EXPECT_EQ(c.component, 1u);
+    EXPECT_EQ(c.components, 2u);
+    EXPECT_EQ(scene.info(c.surface).name, "iso 500 component 2");
+    EXPECT_EQ(scene.info(c.surface).kind, SurfaceInfo::Kind::Iso);
+    const SurfacePart& part = whole.components[1];
+    const SurfaceMeasures& m = c.measured.measures;
+    EXPECT_EQ(m.triangles, part.triangles);
+    EXPECT_NEAR(m.volume_ml, part.volume_ml, 1e-12 * part.volume_ml);
+    EXPECT_NEAR(m.area_mm2, part.area_mm2, 1e-9 * part.area_mm2);
+    EXPECT_EQ(m.bounds_min, part.bounds_min);
+    EXPECT_EQ(m.bounds_max, part.bounds_max);
+    EXPECT_TRUE(m.closed);
+    EXPECT_EQ(m.components.size(), 1u);
+    // Its uncertainty is the component's, not the whole surface's against the whole coarse surface.
+    ASSERT_TRUE(std::isfinite(m.volume_uncertainty_ml));
+    EXPECT_NEAR(m.volume_uncertainty_ml, part.volume_uncertainty_ml, 1e-9);
+    EXPECT_NEAR(m.area_uncertainty_mm2, part.area_uncertainty_mm2, 1e-6);
+    // And about the ball's volume: 4/3 pi r^3, within its uncertainty.
+    const double ball_ml = 4.0 / 3.0 * 3.14159265358979 * std::pow(kRSmall, 3) / 1000.0;
+    EXPECT_NEAR(m.volume_ml, ball_ml, m.volume_uncertainty_ml);
+    // The parent stays.
+    EXPECT_EQ(core::measure_surfaces(scene, {both}).front().measures.components.size(), 2u);
+}
+
+TEST(Structures, AnIsolatedComponentComesBackFromASession) {
+    core::Scene scene;
+    const std::string volume = data("headsq.nhdr");
+    scene.open(volume);
+    const SurfaceId bone = scene.add_isosurfaces({1150}).front();
+    const Mesh& m = scene.mesh(bone);
+    const glm::dvec3 at(m.positions[m.triangles[m.triangles.size() / 2][0]]);
+    const auto c = core::isolate_component(scene, bone, at);
+    TempDir dir;
+    const std::string path = dir / "s.json";
+    core::save_session(core::capture_session(scene, volume, "", std::nullopt, std::nullopt, FrameLook{}, {}), path);
+    const auto again = core::open_session(path);
+    ASSERT_EQ(again.surfaces.size(), 2u);
+    const Mesh& back = again.scene->mesh(again.surfaces[1]);
+    EXPECT_EQ(back.triangles.size(), scene.mesh(c.surface).triangles.size());
+    EXPECT_EQ(again.scene->info(again.surfaces[1]).name, scene.info(c.surface).name);
+    EXPECT_NEAR(measure_surface(back).volume_ml, c.measured.measures.volume_ml, 1e-12);
+}
+
+TEST(Structures, DistanceBetweenComponentsIsTheBruteForceMinimumAndTheGap) {
+    core::Scene scene;
+    two_balls(scene);
+    const SurfaceId both = scene.add_isosurfaces({kBallIso}).front();
+    const auto g = core::surface_gap(scene, both, both, kBig + glm::dvec3(kRBig, 0, 0), kSmall);
+    EXPECT_EQ(g.name_a, "iso 500 component 1");
+    EXPECT_EQ(g.name_b, "iso 500 component 2");
+    // Brute force over the two components' triangles.
+    const auto comps = triangle_components(scene.mesh(both));
+    const Mesh big = component_mesh(scene.mesh(both), comps, 0), small = component_mesh(scene.mesh(both), comps, 1);
+    const SurfaceDistance brute = surface_distance_brute_force(big, small);
+    EXPECT_EQ(g.distance.pair.distance_mm, brute.pair.distance_mm);
+    // The balls' gap (12 mm), within the extraction's error of each surface (well under a voxel).
+    EXPECT_NEAR(g.distance.pair.distance_mm, 26.0 - kRBig - kRSmall, 0.15);
+    EXPECT_NEAR(g.distance.pair.a.y, 0.0, 1.0);
+    EXPECT_NEAR(g.distance.pair.b.x, kSmall.x - kRSmall, 0.15);
+    // The same surface against itself: it touches.
+    EXPECT_TRUE(core::surface_gap(scene, both, both).distance.touching);
+    // As a Slicer line between the two points.
+    const Markup line = core::gap_markup(g);
+    EXPECT_EQ(line.type, MarkupType::Line);
+    ASSERT_EQ(line.measurements.size(), 1u);
+    EXPECT_NEAR(*line.measurements[0].value, g.distance.pair.distance_mm, 1e-12);
+    EXPECT_THROW(core::surface_gap(scene, both, 99), Error);
+}
+
+TEST(Structures, TheCliIsolatesAndMeasuresDistances) {
+    core::Scene scene;
+    scene.open(data("headsq.nhdr"));
+    const auto ids = scene.add_isosurfaces({500, 1150});
+    const Mesh& m = scene.mesh(ids[1]);
+    const glm::dvec3 at(m.positions[m.triangles[m.triangles.size() / 3][1]]);
+    const auto comps = triangle_components(m);
+    const std::uint32_t k = comps[m.triangles.size() / 3];
+    char point[128];
+    std::snprintf(point, sizeof point, "%.9g,%.9g,%.9g", at.x, at.y, at.z);
+    TempDir dir;
+    const std::string out = dir / "gap.mrk.json";
+    const auto r = run_command(cli() + " measure " + data("headsq.nhdr") + " --iso 500 --iso 1150 --component-at " +
+                                   point + " --surface-distance 'iso 500' 'iso 1150' --json -o " + out,
+                               false);
+    ASSERT_EQ(r.exit_code, 0) << r.out;
+    const auto j = nlohmann::json::parse(r.out);
+    ASSERT_EQ(j["components"].size(), 1u);
+    const auto& c = j["components"][0];
+    EXPECT_EQ(c["from"], "iso 1150");
+    EXPECT_EQ(c["component"].get<std::size_t>(), k + 1);
+    // The component measure lists for the whole bone surface, to the digit.
+    const auto& listed = j["surfaces"][1]["components"][k];
+    EXPECT_NEAR(c["volume_ml"].get<double>(), listed["volume_ml"].get<double>(),
+                1e-12 * std::abs(listed["volume_ml"].get<double>()) + 1e-15);
+    EXPECT_EQ(c["triangles"], listed["triangles"]);
+    EXPECT_EQ(c["closed"], listed["closed"]);
+    ASSERT_EQ(j["surface_distances"].size(), 1u);
+    const auto& d = j["surface_distances"][0];
+    EXPECT_GE(d["distance_mm"].get<double>(), 0.0);
+    const auto markups = load_markups(out);
+    ASSERT_EQ(markups.markups.size(), 1u);
+    EXPECT_EQ(markups.markups[0].name, "iso 500 to iso 1150");
+    EXPECT_NEAR(*markups.markups[0].measurements[0].value, d["distance_mm"].get<double>(), 1e-9);
+    // A name that is no surface: the flag, the name and the choices.
+    const auto bad = run_command(
+        cli() + " measure " + data("headsq.nhdr") + " --iso 500 --surface-distance 'iso 9' 'iso 500'", true);
+    EXPECT_EQ(bad.exit_code, 1);
+    EXPECT_NE(bad.out.find("no surface is named 'iso 9'"), std::string::npos) << bad.out;
+}
+
+TEST(Structures, ALineThroughASolidSurfaceSaysWhichAndWhere) {
+    core::Scene scene;
+    two_balls(scene);
+    const SurfaceId both = scene.add_isosurfaces({kBallIso}).front();
+    // From left of the big ball to right of the small one, through both: four crossings.
+    auto x = core::solid_crossings(scene, {-20, 0, 0}, {40, 0, 0});
+    ASSERT_EQ(x.size(), 4u);
+    const double expect[] = {-kRBig, kRBig, kSmall.x - kRSmall, kSmall.x + kRSmall};
+    for (std::size_t i = 0; i < 4; ++i) {
+        EXPECT_EQ(x[i].surface, both);
+        EXPECT_NEAR(x[i].point.x, expect[i], 0.15);
+        EXPECT_NEAR(x[i].along_mm, expect[i] + 20.0, 0.15);
+    }
+    // Ends on the surface are where the points lie, not crossings: a ruler
+    // from the big ball's surface to the small one's crosses nothing.
+    const auto a = core::surface_at(scene, {kRBig + 1, 0, 0}),
+               b = core::surface_at(scene, {kSmall.x - kRSmall - 1, 0, 0});
+    EXPECT_TRUE(core::solid_crossings(scene, a.point, b.point).empty());
+    // Translucent (0.3, below the pick's threshold) or hidden: seen through, not crossed.
+    scene.info(both).opacity = 0.3f;
+    EXPECT_TRUE(core::solid_crossings(scene, {-20, 0, 0}, {40, 0, 0}).empty());
+    EXPECT_EQ(core::solid_crossings(scene, {-20, 0, 0}, {40, 0, 0}, 0.25).size(), 4u);
+}
