@@ -20,6 +20,7 @@
 #include "io/markups.hpp"
 #include "renderer/core/measure.hpp"
 #include "renderer/core/scene.hpp"
+#include "renderer/core/structures.hpp"
 #include "renderer/core/value_unit.hpp"
 
 namespace iso::gui {
@@ -269,9 +270,40 @@ void MeasurementsPanel::check_cache() {
     crossings_cache_.clear();
 }
 
-QString MeasurementsPanel::surface_text(const glm::dvec3&) { return {}; }
+QString MeasurementsPanel::surface_text(const glm::dvec3& p) {
+    const std::array<double, 3> key{p.x, p.y, p.z};
+    if (const auto it = surface_cache_.find(key); it != surface_cache_.end()) return it->second;
+    // While a point is dragged, only the points already known (each query builds a search tree).
+    if (window_.measure_tools()->editing()) return "...";
+    QString text;
+    try {
+        const core::SurfacePoint s = core::surface_at(window_.scene(), p);
+        text = s.distance_mm <= kOnSurfaceMm ? QString::fromStdString(window_.scene().info(s.surface).name)
+                                             : QString("off surface");
+    } catch (const Error&) {
+        text = "-"; // no visible surface
+    }
+    return surface_cache_[key] = text;
+}
 
-QString MeasurementsPanel::crossings_text(const Markup&) { return {}; }
+QString MeasurementsPanel::crossings_text(const Markup& m) {
+    if (m.type != MarkupType::Line || m.points.size() != 2 || m.points[0].status != PositionStatus::Defined ||
+        m.points[1].status != PositionStatus::Defined)
+        return {};
+    const glm::dvec3 a = m.points[0].position, b = m.points[1].position;
+    const std::array<double, 6> key{a.x, a.y, a.z, b.x, b.y, b.z};
+    if (const auto it = crossings_cache_.find(key); it != crossings_cache_.end()) return it->second;
+    if (window_.measure_tools()->editing()) return "...";
+    QStringList parts;
+    try {
+        for (const core::LineCrossing& c : core::solid_crossings(window_.scene(), a, b))
+            parts << QString("%1 at %2 mm").arg(QString::fromStdString(c.name)).arg(c.along_mm, 0, 'f', 1);
+    } catch (const Error&) {
+        // Not finite points (a damaged file): nothing to say about them.
+    }
+    const QString text = parts.isEmpty() ? QString() : "passes through " + parts.join(", ");
+    return crossings_cache_[key] = text;
+}
 
 void MeasurementsPanel::show_error(const QString& what, const QString& reason) {
     window_.statusBar()->showMessage(what + ": failed");
