@@ -55,12 +55,20 @@ class MarkupsCommand : public QUndoCommand {
 public:
     MarkupsCommand(MainWindow& w, const QString& text, MarkupsState before, MarkupsState after)
         : QUndoCommand(text), window_(w), before_(std::move(before)), after_(std::move(after)) {}
-    void undo() override { window_.show_markups(before_); }
-    void redo() override { window_.show_markups(after_); }
+    void undo() override {
+        window_.show_markups(before_);
+        window_.statusBar()->showMessage("Undone: " + text());
+    }
+    void redo() override {
+        window_.show_markups(after_);
+        if (!first_) window_.statusBar()->showMessage("Redone: " + text());
+        first_ = false; // push() runs redo() once: the edit itself, which says what it did
+    }
 
 private:
     MainWindow& window_;
     MarkupsState before_, after_;
+    bool first_ = true;
 };
 } // namespace
 

@@ -199,8 +199,12 @@ TEST_F(GuiEdit, CheekRulerOnTheFrontSkinDragUndoRedo) {
     EXPECT_EQ(w.undo_stack()->count(), 2) << "adding and moving: one step each";
     EXPECT_EQ(edit_action(w, "undo")->text(), "&Undo Move point");
 
+    QTest::qWait(200);
+    EXPECT_TRUE(w.grab().toImage().save(QString::fromStdString((out / "cheek_ruler.png").string())));
+
     // ---- undo, redo: exactly the old and the new point
     edit_action(w, "undo")->trigger();
+    EXPECT_EQ(w.statusBar()->currentMessage(), "Undone: Move point");
     EXPECT_EQ(w.markups()[0].points[0].position, ruler.points[0].position);
     EXPECT_EQ(cell(w, 0, gui::MeasurementsPanel::Value), value);
     edit_action(w, "redo")->trigger();
@@ -217,8 +221,6 @@ TEST_F(GuiEdit, CheekRulerOnTheFrontSkinDragUndoRedo) {
     ASSERT_EQ(w.markups().size(), 1u);
     EXPECT_EQ(w.markups()[0].points[0].position, moved);
     EXPECT_EQ(w.markups()[0].points[1].position, ruler.points[1].position);
-    QTest::qWait(200);
-    EXPECT_TRUE(w.grab().toImage().save(QString::fromStdString((out / "cheek_ruler.png").string())));
 }
 
 // A point dragged on the axial view moves in its plane; the window does not
@@ -308,6 +310,12 @@ TEST_F(GuiEdit, PointListInThePanelAndTheFile) {
     const core::SurfacePoint near2 = core::surface_at(w.scene(), clicked);
     EXPECT_EQ(cell(w, panel->row_of(0, 1), gui::MeasurementsPanel::Surface).toStdString(),
               near2.distance_mm <= 0.5 ? w.scene().info(near2.surface).name : "off surface");
+
+    // The window with the list's row selected (highlighted, the views centred on F-1).
+    w.measure_tools()->set_tool(gui::MeasureTools::Tool::None);
+    panel_table(w)->selectRow(panel->row_of(0));
+    QTest::qWait(300);
+    EXPECT_TRUE(w.grab().toImage().save(QString::fromStdString((output_dir("gui_edit") / "point_list.png").string())));
 
     // Saved like the other markups.
     const std::string saved = dir() / "points.mrk.json";
