@@ -24,8 +24,11 @@
 #include <QThread>
 #include <QTimer>
 #include <QToolBar>
+#include <QUndoCommand>
+#include <QUndoStack>
 #include <QVBoxLayout>
 
+#include <algorithm>
 #include <mutex>
 
 #include "app/gui/measure_tools.hpp"
@@ -44,6 +47,29 @@ namespace iso::gui {
 
 namespace {
 constexpr int kRecentMax = 8;
+} // namespace
+
+namespace {
+// One markup edit: the whole state before and after (a few markups: copies are cheap and undo is exact).
+class MarkupsCommand : public QUndoCommand {
+public:
+    MarkupsCommand(MainWindow& w, const QString& text, MarkupsState before, MarkupsState after)
+        : QUndoCommand(text), window_(w), before_(std::move(before)), after_(std::move(after)) {}
+    void undo() override {
+        window_.show_markups(before_);
+        window_.statusBar()->showMessage("Undone: " + text());
+    }
+    void redo() override {
+        window_.show_markups(after_);
+        if (!first_) window_.statusBar()->showMessage("Redone: " + text());
+        first_ = false; // push() runs redo() once: the edit itself, which says what it did
+    }
+
+private:
+    MainWindow& window_;
+    MarkupsState before_, after_;
+    bool first_ = true;
+};
 } // namespace
 
 struct MainWindow::Job {
@@ -111,8 +137,28 @@ MainWindow::MainWindow(QWidget* parent) : QMainWindow(parent), scene_(std::make_
     file->addSeparator();
     file->addAction("&Quit", QKeySequence::Quit, this, [this] { close(); });
 
+    // ---- Edit menu: undo and redo of the markup edits
+    undo_ = new QUndoStack(this);
+    auto* edit = menuBar()->addMenu("&Edit");
+    auto* undo = undo_->createUndoAction(this, "&Undo");
+    undo->setObjectName("undo");
+    undo->setShortcut(QKeySequence::Undo);
+    auto* redo = undo_->createRedoAction(this, "&Redo");
+    redo->setObjectName("redo");
+    redo->setShortcuts({QKeySequence(Qt::CTRL | Qt::SHIFT | Qt::Key_Z), QKeySequence(Qt::CTRL | Qt::Key_Y)});
+    edit->addAction(undo);
+    edit->addAction(redo);
+    edit->addSeparator();
+    auto* clear = edit->addAction("&Delete all measurements", this, [this] {
+        if (state_.markups.empty()) return;
+        edit_markups("Delete all measurements", {});
+        statusBar()->showMessage("Deleted all measurements (Edit > Undo brings them back)");
+    });
+    clear->setObjectName("clear_measurements");
+
     add_window_level_bar();
     tools_ = new MeasureTools(*this);
+    for (auto* v : views_) tools_->attach(*v);
 
     // ---- 3D view bar: patient views, reset, AO and transparency toggles
     view_bar_ = new ViewToolBar([this] { return viewer_; }, this);
@@ -133,12 +179,15 @@ MainWindow::MainWindow(QWidget* parent) : QMainWindow(parent), scene_(std::make_
     surfaces_->changed = [this](bool outlines) {
         update_3d();
         if (outlines) refresh_slices();
+        measurements_->refresh_soon(); // which surface each point is on, what a ruler passes through
     };
     surfaces_->set_scene(scene_.get());
     dock->setWidget(surfaces_);
     addDockWidget(Qt::RightDockWidgetArea, dock);
     measurements_ = new MeasurementsPanel(*this);
     addDockWidget(Qt::RightDockWidgetArea, measurements_);
+    // Wide enough for the Measurements table's surface and notes columns.
+    resizeDocks({dock, measurements_}, {400, 400}, Qt::Horizontal);
 
     statusBar()->showMessage("Ready");
     for (std::size_t i = 0; i < 3; ++i) views_[i]->set_content(scene_.get(), &planes_[i]);
@@ -377,7 +426,9 @@ void MainWindow::set_scene(std::unique_ptr<core::Scene> scene, const QString& pa
     path_ = path;
     series_ = series;
     session_path_.clear(); // open_session sets it again
-    markups_.clear();      // measurements belong to what was open
+    state_ = {};           // measurements belong to what was open
+    selected_.reset();
+    undo_->clear(); // and so do their edits
     tools_->reset();
     measurements_->refresh();
     planes_ = {};
@@ -470,7 +521,7 @@ void MainWindow::update_3d() {
         viewer_ = new Viewer(*scene_, PatientView::Anterior);
         viewer_->setObjectName("viewer");
         tools_->attach(*viewer_);
-        viewer_->set_markups(markups_);
+        tools_->redraw();
         view_bar_->attach(*viewer_);
         view3d_->addWidget(viewer_);
     }
@@ -479,14 +530,63 @@ void MainWindow::update_3d() {
 }
 
 void MainWindow::set_markups(std::vector<Markup> m) {
-    markups_ = std::move(m);
+    MarkupsState s;
+    s.sources.resize(m.size());
+    s.markups = std::move(m);
+    show_markups(std::move(s));
+}
+
+void MainWindow::show_markups(MarkupsState s) {
+    s.sources.resize(s.markups.size());
+    // The selection stays while its markup can only have stayed where it was
+    // (edited, or markups added after it); after a removal it goes.
+    if (selected_ && (s.markups.size() < state_.markups.size() || *selected_ >= s.markups.size() ||
+                      s.markups[*selected_].type != state_.markups[*selected_].type))
+        selected_.reset();
+    state_ = std::move(s);
     tools_->redraw(); // the 3D view's overlay and the slices
     measurements_->refresh();
 }
 
-void MainWindow::set_crosshair(const glm::dvec3& lps) {
+void MainWindow::edit_markups(const QString& text, MarkupsState after, std::optional<MarkupsState> before) {
+    after.sources.resize(after.markups.size());
+    // push() runs the command's redo(), which shows `after`.
+    undo_->push(new MarkupsCommand(*this, text, before ? std::move(*before) : state_, std::move(after)));
+}
+
+void MainWindow::select_markup(std::optional<std::size_t> index, bool centre) {
+    if (index && *index >= state_.markups.size()) index.reset();
+    selected_ = index;
+    tools_->redraw();
+    measurements_->show_selection();
+    if (!index || !centre) return;
+    const Markup& m = state_.markups[*index];
+    const auto first = std::find_if(m.points.begin(), m.points.end(),
+                                    [](const MarkupControlPoint& p) { return p.status == PositionStatus::Defined; });
+    if (first != m.points.end()) centre_on(first->position);
+}
+
+void MainWindow::centre_on(const glm::dvec3& lps) {
+    set_crosshair(lps);
+    if (!viewer_) return;
+    // The view turns about the point now; distance and direction stay.
+    Camera c = viewer_->camera();
+    const glm::dvec3 shift = lps - c.target;
+    c.target += shift;
+    c.eye += shift;
+    viewer_->set_camera(c);
+}
+
+void MainWindow::set_crosshair(const glm::dvec3& lps, const SliceView* keep) {
     if (!scene_->has_volume()) return;
+    std::optional<core::SlicePlane> kept;
+    if (keep) kept = planes_[std::size_t(keep->orientation())];
     core::set_crosshair(planes_, lps);
+    if (kept) { // its crosshair moves to the point, its slice stays
+        auto& p = planes_[std::size_t(keep->orientation())];
+        p.center = kept->center;
+        core::set_offset(p, kept->offset_mm());
+    }
     refresh_slices();
 }
 

@@ -11,10 +11,12 @@
 #include <exception>
 #include <functional>
 #include <memory>
+#include <optional>
 #include <vector>
 
 #include <QMainWindow>
 #include <QString>
+#include <QStringList>
 
 #include "io/markups.hpp"
 #include "io/progress.hpp"
@@ -27,6 +29,7 @@ class QMenu;
 class QProgressDialog;
 class QStackedWidget;
 class QThread;
+class QUndoStack;
 class QVBoxLayout;
 
 namespace iso::core {
@@ -37,6 +40,15 @@ struct SessionParts;
 } // namespace iso::core
 
 namespace iso::gui {
+
+// The window's markups with, for each, the .mrk.json files that hold it
+// (canonical paths: the files it was loaded from or saved to), so loading a
+// file again can offer to replace what came from it. What an undo step
+// snapshots and restores.
+struct MarkupsState {
+    std::vector<Markup> markups;
+    std::vector<QStringList> sources; // one per markup
+};
 
 class MeasureTools;
 class MeasurementsPanel;
@@ -79,10 +91,32 @@ public:
 
     // The measurements (3D Slicer markups, LPS mm) the views draw, the
     // measurements panel lists, sessions and exported images carry.
-    const std::vector<Markup>& markups() const { return markups_; }
+    const std::vector<Markup>& markups() const { return state_.markups; }
+    // Replaces them, from no file, outside the undo stack (a session restoring its markups).
     void set_markups(std::vector<Markup> m);
-    // Moves the slice views' shared crosshair to `lps` (a 3D pick): each plane through it.
-    void set_crosshair(const glm::dvec3& lps);
+    const MarkupsState& markups_state() const { return state_; }
+    // An edit of the markups, one step of Edit > Undo ("Undo TEXT"): the
+    // state becomes `after`; undo restores `before` (by default the
+    // current state; a drag passes the state at its press, having shown
+    // its steps through show_markups).
+    void edit_markups(const QString& text, MarkupsState after, std::optional<MarkupsState> before = {});
+    // Shows `s` without an undo step (the live steps of a drag; the undo commands).
+    void show_markups(MarkupsState s);
+    // Edit > Undo / Redo: every markup edit goes through it.
+    QUndoStack* undo_stack() const { return undo_; }
+    // The markup the Measurements panel's selected row names: drawn
+    // highlighted in the views (none: no row selected).
+    std::optional<std::size_t> selected_markup() const { return selected_; }
+    // Selects it (the panel's row follows) and, with `centre`, moves the
+    // slice views' crosshair to its first point and the 3D view's target
+    // there (the camera keeps its distance and direction).
+    void select_markup(std::optional<std::size_t> index, bool centre = true);
+    // The slice views' crosshair to `lps` and the 3D view's target there (its distance and direction kept).
+    void centre_on(const glm::dvec3& lps);
+    // Moves the slice views' shared crosshair to `lps` (a 3D pick): each
+    // plane through it, but the plane of `keep` stays where it is (a point
+    // placed on that view: the next one lands on the same slice).
+    void set_crosshair(const glm::dvec3& lps, const SliceView* keep = nullptr);
     // The pick readout and the Ruler / Angle tools; the Measurements dock.
     MeasureTools* measure_tools() const { return tools_; }
     MeasurementsPanel* measurements_panel() const { return measurements_; }
@@ -147,7 +181,9 @@ private:
     SurfacesPanel* surfaces_ = nullptr;
     QMenu* recent_menu_ = nullptr;
     QString path_, series_;
-    std::vector<Markup> markups_;
+    MarkupsState state_;
+    std::optional<std::size_t> selected_;
+    QUndoStack* undo_ = nullptr;
     QString session_path_;
     MeasureTools* tools_ = nullptr;
     MeasurementsPanel* measurements_ = nullptr;

@@ -8,13 +8,16 @@
 #include <QStatusBar>
 #include <QTimer>
 #include <QToolBar>
+#include <QUndoStack>
 
 #include <algorithm>
 #include <cmath>
+#include <functional>
 
 #include "app/gui/main_window.hpp"
 #include "app/gui/slice_view.hpp"
 #include "app/gui/viewer.hpp"
+#include "renderer/core/measure.hpp"
 #include "renderer/core/pick.hpp"
 #include "renderer/core/scene.hpp"
 #include "renderer/core/slices.hpp"
@@ -23,17 +26,21 @@
 
 namespace iso::gui {
 
-namespace {
-
-constexpr int kHoverMinMs = 80;
-
 QString lps_text(const glm::dvec3& p) {
     return QString("LPS (%1, %2, %3) mm").arg(p.x, 0, 'f', 2).arg(p.y, 0, 'f', 2).arg(p.z, 0, 'f', 2);
 }
 
-std::size_t points_needed(MeasureTools::Tool t) { return t == MeasureTools::Tool::Ruler ? 2 : 3; }
+namespace {
 
-QString tool_name(MeasureTools::Tool t) { return t == MeasureTools::Tool::Ruler ? "Ruler" : "Angle"; }
+constexpr int kHoverMinMs = 80;
+
+std::size_t points_needed(MeasureTools::Tool t) {
+    return t == MeasureTools::Tool::Point ? 1 : t == MeasureTools::Tool::Ruler ? 2 : 3;
+}
+
+QString tool_name(MeasureTools::Tool t) {
+    return t == MeasureTools::Tool::Point ? "Point" : t == MeasureTools::Tool::Ruler ? "Ruler" : "Angle";
+}
 
 // markup_color gives sRGB components in [0, 1], as Slicer stores them.
 QColor srgb(const glm::vec3& c) { return QColor::fromRgbF(c.r, c.g, c.b); }
@@ -74,12 +81,18 @@ MeasureTools::MeasureTools(MainWindow& window) : QObject(&window), window_(windo
     angle_ = bar->addAction("Angle");
     angle_->setObjectName("angle");
     angle_->setToolTip("Measure an angle: click three points (arm, vertex, arm) in the 3D view or on a slice");
-    for (auto* a : {ruler_, angle_}) {
+    point_ = bar->addAction("Point");
+    point_->setObjectName("point");
+    point_->setToolTip("Place points (a point list, F-1, F-2, ...): each click in the 3D view or on a slice adds one");
+    for (auto* a : {ruler_, angle_, point_}) {
         a->setCheckable(true);
         group->addAction(a);
     }
     connect(group, &QActionGroup::triggered, this, [this](QAction*) {
-        set_tool(ruler_->isChecked() ? Tool::Ruler : angle_->isChecked() ? Tool::Angle : Tool::None);
+        set_tool(ruler_->isChecked()   ? Tool::Ruler
+                 : angle_->isChecked() ? Tool::Angle
+                 : point_->isChecked() ? Tool::Point
+                                       : Tool::None);
     });
     // Escape drops the points placed so far (the tool stays on).
     escape_ = new QShortcut(QKeySequence(Qt::Key_Escape), &window);
@@ -93,16 +106,26 @@ MeasureTools::MeasureTools(MainWindow& window) : QObject(&window), window_(windo
     hover_timer_ = new QTimer(this);
     hover_timer_->setSingleShot(true);
     connect(hover_timer_, &QTimer::timeout, this, [this] { hover_pick(); });
+    grab_timer_ = new QTimer(this);
+    grab_timer_->setSingleShot(true);
+    connect(grab_timer_, &QTimer::timeout, this, [this] { viewer_grab_pick(); });
+    // An undo or redo while a point is held (the keyboard) ends the drag: the state it started from is gone.
+    connect(window.undo_stack(), &QUndoStack::indexChanged, this, [this] { grab_.reset(); });
 }
 
 void MeasureTools::set_tool(Tool t) {
     tool_ = t;
     ruler_->setChecked(t == Tool::Ruler);
     angle_->setChecked(t == Tool::Angle);
+    point_->setChecked(t == Tool::Point);
     pending_.clear();
     redraw();
     if (t == Tool::None)
-        window_.statusBar()->showMessage("Measuring off: a click shows what is there and moves the crosshair");
+        window_.statusBar()->showMessage(
+            "Measuring off: a click shows what is there and moves the crosshair; drag a placed point to move it");
+    else if (t == Tool::Point)
+        window_.statusBar()->showMessage("Point: each click in the 3D view (on the visible surface) or on a slice "
+                                         "adds a point to the point list");
     else
         window_.statusBar()->showMessage(
             QString("%1: click %2 points in the 3D view (on the visible surface) or on a slice%3")
@@ -115,11 +138,23 @@ void MeasureTools::attach(Viewer& viewer) {
     viewer_ = &viewer;
     viewer.on_click = [this](Viewer& v, QPointF p) { viewer_click(v, p); };
     viewer.on_hover = [this](Viewer& v, QPointF p) { viewer_hover(v, p); };
+    viewer.on_press = [this](Viewer& v, QPointF p) { return viewer_press(v, p); };
+    viewer.on_grab_move = [this](Viewer&, QPointF p) { viewer_grab_move(p); };
+    viewer.on_grab_release = [this](Viewer& v, QPointF p, bool dragged) { viewer_grab_release(v, p, dragged); };
+}
+
+void MeasureTools::attach(SliceView& view) {
+    view.on_press = [this](SliceView& v, QPointF p) { return slice_press(v, p); };
+    view.on_grab_move = [this](SliceView& v, QPointF p) { slice_grab_move(v, p); };
+    view.on_grab_release = [this](SliceView& v, QPointF p, bool dragged) { slice_grab_release(v, p, dragged); };
 }
 
 void MeasureTools::reset() {
     hover_timer_->stop();
     hover_at_.reset();
+    grab_timer_->stop();
+    grab_at_.reset();
+    grab_.reset();
     viewer_ = nullptr;
     pending_.clear();
     escape_->setEnabled(false);
@@ -189,9 +224,57 @@ void MeasureTools::hover_pick() {
 
 bool MeasureTools::slice_click(SliceView& view, QPointF pixel) {
     if (tool_ == Tool::None || !window_.scene().has_volume() || !view.has_image()) return false;
-    add_point(core::pixel_to_lps(view.grid(), {pixel.x(), pixel.y()}));
+    add_point(core::pixel_to_lps(view.grid(), {pixel.x(), pixel.y()}), &view);
     return true;
 }
+
+namespace {
+
+// One markup over a slice view: each point within half a slice of the
+// plane (`project` says where and whether), segments whose ends both are,
+// the value where the whole measurement is, and the name by its first point.
+void paint_markup(QPainter& p, const Markup& m, const std::function<std::pair<QPointF, bool>(glm::dvec3)>& project) {
+    std::vector<std::pair<QPointF, bool>> pts; // only Defined points have a position
+    bool all_defined = true;
+    for (const auto& cp : m.points) {
+        if (cp.status != PositionStatus::Defined) {
+            all_defined = false;
+            continue;
+        }
+        pts.push_back(project(cp.position));
+    }
+    const QColor c = srgb(markup_color(m));
+    const bool joined = m.type != MarkupType::Fiducial;
+    if (joined && all_defined) {
+        for (std::size_t i = 0; i + 1 < pts.size(); ++i)
+            if (pts[i].second && pts[i + 1].second) draw_segment(p, pts[i].first, pts[i + 1].first, c);
+        if (m.type == MarkupType::ClosedCurve && pts.size() > 2 && pts.back().second && pts.front().second)
+            draw_segment(p, pts.back().first, pts.front().first, c);
+    }
+    std::size_t k = 0;
+    bool all_near = !pts.empty();
+    for (std::size_t i = 0; i < m.points.size(); ++i) {
+        if (m.points[i].status != PositionStatus::Defined) continue;
+        const auto& [at, near] = pts[k++];
+        all_near &= near;
+        if (!near || !m.points[i].visible) continue;
+        const QColor pc = srgb(markup_color(m, int(i)));
+        draw_cross(p, at, pc);
+        if (m.type == MarkupType::Fiducial && !m.points[i].label.empty())
+            draw_text(p, at + QPointF(9, 4), QString::fromStdString(m.points[i].label), pc);
+    }
+    // The name below-right of the first point (a point list's points carry their own labels).
+    if (m.type != MarkupType::Fiducial && !m.name.empty() && !pts.empty() && pts[0].second)
+        draw_text(p, pts[0].first + QPointF(9, 16), QString::fromStdString(m.name), c);
+    // The value where the whole measurement lies on this slice.
+    const std::string value = markup_measurement_text(m);
+    if (all_near && all_defined && !value.empty()) {
+        const QPointF at = m.type == MarkupType::Line ? (pts[0].first + pts[1].first) / 2.0 : pts[1].first;
+        draw_text(p, at + QPointF(8, -8), QString::fromStdString(value), c);
+    }
+}
+
+} // namespace
 
 void MeasureTools::paint_slice(SliceView& view, QPainter& p) const {
     if (!window_.scene().has_volume() || !view.has_image()) return;
@@ -203,43 +286,7 @@ void MeasureTools::paint_slice(SliceView& view, QPainter& p) const {
         return std::pair{QPointF(s.pixel.x, s.pixel.y), std::abs(s.distance_mm) <= half};
     };
     p.setRenderHint(QPainter::Antialiasing);
-    for (const Markup& m : window_.markups()) {
-        std::vector<std::pair<QPointF, bool>> pts; // only Defined points have a position
-        bool all_defined = true;
-        for (const auto& cp : m.points) {
-            if (cp.status != PositionStatus::Defined) {
-                all_defined = false;
-                continue;
-            }
-            pts.push_back(project(cp.position));
-        }
-        const QColor c = srgb(markup_color(m));
-        const bool joined = m.type != MarkupType::Fiducial;
-        if (joined && all_defined) {
-            for (std::size_t i = 0; i + 1 < pts.size(); ++i)
-                if (pts[i].second && pts[i + 1].second) draw_segment(p, pts[i].first, pts[i + 1].first, c);
-            if (m.type == MarkupType::ClosedCurve && pts.size() > 2 && pts.back().second && pts.front().second)
-                draw_segment(p, pts.back().first, pts.front().first, c);
-        }
-        std::size_t k = 0;
-        bool all_near = !pts.empty();
-        for (std::size_t i = 0; i < m.points.size(); ++i) {
-            if (m.points[i].status != PositionStatus::Defined) continue;
-            const auto& [at, near] = pts[k++];
-            all_near &= near;
-            if (!near || !m.points[i].visible) continue;
-            const QColor pc = srgb(markup_color(m, int(i)));
-            draw_cross(p, at, pc);
-            if (m.type == MarkupType::Fiducial && !m.points[i].label.empty())
-                draw_text(p, at + QPointF(9, 4), QString::fromStdString(m.points[i].label), pc);
-        }
-        // The value where the whole measurement lies on this slice.
-        const std::string value = markup_measurement_text(m);
-        if (all_near && all_defined && !value.empty()) {
-            const QPointF at = m.type == MarkupType::Line ? (pts[0].first + pts[1].first) / 2.0 : pts[1].first;
-            draw_text(p, at + QPointF(8, -8), QString::fromStdString(value), c);
-        }
-    }
+    for (const Markup& m : drawn_markups()) paint_markup(p, m, project);
     // The measurement being placed.
     const QColor placing(255, 230, 80);
     std::vector<std::pair<QPointF, bool>> pts;
@@ -253,18 +300,31 @@ void MeasureTools::paint_slice(SliceView& view, QPainter& p) const {
 // ---- placing points ---------------------------------------------------------------------
 
 QString MeasureTools::next_name(MarkupType type) const {
-    const QString base = type == MarkupType::Line ? "Line" : "Angle";
     const auto& all = window_.markups();
-    int n = 1 + int(std::count_if(all.begin(), all.end(), [&](const Markup& m) { return m.type == type; }));
     const auto taken = [&](const QString& name) {
         return std::any_of(all.begin(), all.end(),
                            [&](const Markup& m) { return QString::fromStdString(m.name) == name; });
     };
+    // Slicer's names: point lists F, F_1, F_2, ...
+    if (type == MarkupType::Fiducial) {
+        QString name = "F";
+        for (int n = 1; taken(name); ++n) name = QString("F_%1").arg(n);
+        return name;
+    }
+    const QString base = type == MarkupType::Line ? "Line" : "Angle";
+    int n = 1 + int(std::count_if(all.begin(), all.end(), [&](const Markup& m) { return m.type == type; }));
     while (taken(QString("%1 %2").arg(base).arg(n))) ++n;
     return QString("%1 %2").arg(base).arg(n);
 }
 
-void MeasureTools::add_point(const glm::dvec3& lps) {
+void MeasureTools::add_point(const glm::dvec3& lps, const SliceView* on) {
+    // The slice views show where the point lies (the view it was placed on
+    // keeps its slice, so the next point lands there too).
+    window_.set_crosshair(lps, on);
+    if (tool_ == Tool::Point) {
+        add_list_point(lps);
+        return;
+    }
     pending_.push_back(lps);
     const std::size_t need = points_needed(tool_);
     if (pending_.size() < need) {
@@ -286,20 +346,84 @@ void MeasureTools::add_point(const glm::dvec3& lps) {
         m.points.push_back(std::move(cp));
     }
     pending_.clear();
-    std::vector<Markup> all = window_.markups();
-    all.push_back(m);
-    window_.set_markups(std::move(all)); // the views and the panel follow
+    MarkupsState s = window_.markups_state();
+    s.markups.push_back(m);
+    s.sources.emplace_back();
+    window_.edit_markups("Add " + QString::fromStdString(m.name), std::move(s)); // the views and the panel follow
     const std::string value = markup_measurement_text(m);
     window_.statusBar()->showMessage(
         QString::fromStdString(m.name) + ": " +
         (value.empty() ? QString("no value (an arm has no length)") : QString::fromStdString(value)));
 }
 
+// 3D Slicer's active point list: the one selected in the panel, else the
+// last one, else a new one ("F"); its points are labelled NAME-1, NAME-2, ...
+void MeasureTools::add_list_point(const glm::dvec3& lps) {
+    MarkupsState s = window_.markups_state();
+    std::optional<std::size_t> list;
+    if (const auto sel = window_.selected_markup(); sel && s.markups[*sel].type == MarkupType::Fiducial) list = sel;
+    for (std::size_t i = s.markups.size(); !list && i-- > 0;)
+        if (s.markups[i].type == MarkupType::Fiducial) list = i;
+    if (!list) {
+        Markup m;
+        m.type = MarkupType::Fiducial;
+        m.name = next_name(MarkupType::Fiducial).toStdString();
+        s.markups.push_back(std::move(m));
+        s.sources.emplace_back();
+        list = s.markups.size() - 1;
+    }
+    Markup& m = s.markups[*list];
+    const auto taken = [&](const std::string& label, const std::string& id) {
+        return std::any_of(m.points.begin(), m.points.end(),
+                           [&](const MarkupControlPoint& p) { return p.label == label || p.id == id; });
+    };
+    int n = int(m.points.size()) + 1;
+    const std::string prefix = (m.name.empty() ? std::string("F") : m.name) + "-";
+    while (taken(prefix + std::to_string(n), std::to_string(n))) ++n;
+    MarkupControlPoint cp;
+    cp.id = std::to_string(n);
+    cp.label = prefix + std::to_string(n);
+    cp.position = lps;
+    m.points.push_back(cp);
+    window_.edit_markups("Add point " + QString::fromStdString(cp.label), std::move(s));
+    QString msg = QString::fromStdString(cp.label) + ": " + lps_text(lps);
+    if (window_.scene().has_volume()) {
+        const auto v = core::value_at(window_.scene(), lps);
+        msg += ", " + (v ? QString::fromStdString(core::value_readout(v->value, core::value_unit(window_.scene())))
+                         : QString("outside the volume"));
+    }
+    window_.statusBar()->showMessage(msg);
+}
+
+std::vector<Markup> MeasureTools::drawn_markups() const {
+    std::vector<Markup> drawn = window_.markups();
+    if (const auto sel = window_.selected_markup(); sel && *sel < drawn.size()) {
+        Markup& m = drawn[*sel];
+        m.selected_color = highlight_color();
+        for (auto& p : m.points) p.selected = true;
+    }
+    return drawn;
+}
+
 void MeasureTools::redraw() {
     escape_->setEnabled(!pending_.empty());
     // The 3D view draws the placed points as a point list next to the markups.
     if (auto* v = window_.viewer()) {
-        std::vector<Markup> drawn = window_.markups();
+        std::vector<Markup> drawn = drawn_markups();
+        // Each line's and angle's name (the overlay labels a point list's
+        // points itself) by its point furthest right in the view now: the
+        // label runs to the right, away from the segments and the value.
+        std::vector<std::pair<glm::dvec3, std::string>> names;
+        for (const Markup& m : drawn) {
+            if (m.type == MarkupType::Fiducial || m.name.empty()) continue;
+            std::optional<std::pair<double, glm::dvec3>> right;
+            for (const auto& p : m.points) {
+                const auto px = p.status == PositionStatus::Defined ? v->image_pixel(p.position) : std::nullopt;
+                if (px && (!right || px->x() > right->first)) right = std::pair{px->x(), p.position};
+            }
+            if (right) names.emplace_back(right->second, m.name);
+        }
+        v->set_labels(std::move(names));
         if (!pending_.empty()) {
             Markup placing;
             placing.type = MarkupType::Fiducial;

@@ -1,12 +1,13 @@
 // Pick and measure in the main window (docs/gui.md "Pick and
 // measure"): the 3D view's click and hover readout (LPS, value, surface) in
-// the status bar, a 3D click moving the slice views' crosshair, and the Ruler
-// and Angle tools, which take their points from the 3D view's pick (the
-// visible layer) or from a slice view's click, and store the finished
-// measurement as a 3D Slicer markup (Line, Angle) through
-// MainWindow::set_markups. Presentation only: picking is core::pick_in_frame
-// (through Viewer::pick_at), slice positions core::pixel_to_lps /
-// core::lps_to_pixel, values the core's.
+// the status bar, a 3D click moving the slice views' crosshair; the Ruler,
+// Angle and Point tools, which take their points from the 3D view's pick
+// (the visible layer) or from a slice view's click, and store the
+// measurement as a 3D Slicer markup (Line, Angle, a point list's point)
+// through MainWindow::edit_markups (one undo step each); and moving a
+// placed point by dragging it (point_editing.cpp). Presentation only:
+// picking is core::pick_in_frame (through Viewer::pick_at), slice positions
+// core::pixel_to_lps / core::lps_to_pixel, values the core's.
 #pragma once
 
 #include <optional>
@@ -20,6 +21,7 @@
 
 #include <glm/vec3.hpp>
 
+#include "app/gui/main_window.hpp"
 #include "io/markups.hpp"
 
 class QAction;
@@ -33,15 +35,17 @@ struct PickResult;
 
 namespace iso::gui {
 
-class MainWindow;
 class SliceView;
 class Viewer;
 
+// A point as the readouts write it: "LPS (x, y, z) mm", 2 decimals.
+QString lps_text(const glm::dvec3& p);
+
 class MeasureTools : public QObject {
 public:
-    enum class Tool { None, Ruler, Angle };
+    enum class Tool { None, Ruler, Angle, Point };
 
-    // Adds the Measure tool bar (Ruler, Angle: checkable, at most one on) to `window`.
+    // Adds the Measure tool bar (Ruler, Angle, Point: checkable, at most one on) to `window`.
     explicit MeasureTools(MainWindow& window);
 
     Tool tool() const { return tool_; }
@@ -49,14 +53,26 @@ public:
     void set_tool(Tool t);
     QAction* ruler_action() const { return ruler_; }
     QAction* angle_action() const { return angle_; }
+    QAction* point_action() const { return point_; }
     // The points of the measurement being placed (LPS mm).
     const std::vector<glm::dvec3>& pending() const { return pending_; }
 
-    // Takes the 3D view's on_click and on_hover (call for each new viewer).
+    // Takes the 3D view's click, hover and point dragging (call for each new viewer).
     void attach(Viewer& viewer);
+    // Takes a slice view's point dragging (the window keeps its clicks).
+    void attach(SliceView& view);
     // A left click on a slice view: true when the active tool took it as a
     // point (then the window does nothing else with it).
     bool slice_click(SliceView& view, QPointF pixel);
+    // A markup point is being dragged (a press on it with no tool on).
+    bool editing() const { return grab_.has_value(); }
+    // The markups as the views draw them: the selected one (the
+    // Measurements panel's row) in the highlight colour.
+    std::vector<Markup> drawn_markups() const;
+    // The highlight colour of the selected markup (sRGB in [0, 1]).
+    static glm::dvec3 highlight_color() { return {1.0, 0.3, 1.0}; }
+    // How near (pixels) a press must be to a point's projection to grab it.
+    static constexpr double kGrabRadiusPx = 8;
     // Draws the markups and the points being placed over a slice view: each
     // point within half a slice of its plane, segments whose ends both are,
     // and the value.
@@ -83,12 +99,38 @@ private:
     void hover_pick();
     // Picks the visible layer at the pixel and shows the readout; none: background or failure.
     std::optional<glm::dvec3> pick_and_show(Viewer& v, QPointF pixel, bool hover);
-    void add_point(const glm::dvec3& lps);
+    // `on`: the slice view it was placed on (its slice stays), none: the 3D view.
+    void add_point(const glm::dvec3& lps, const SliceView* on = nullptr);
+    void add_list_point(const glm::dvec3& lps);
     QString next_name(MarkupType type) const;
+
+    // Dragging a placed point (point_editing.cpp): a press within
+    // kGrabRadiusPx of a point's projection grabs it; the moves place it
+    // (3D: on the pick's visible layer, throttled to one pick per event
+    // loop pass, the latest position winning; a slice: on the plane); the
+    // release commits one undo step.
+    struct Grab {
+        std::size_t markup = 0, point = 0;
+        MarkupsState before; // the state at the press: what Undo restores
+    };
+    struct Hit {
+        std::size_t markup = 0, point = 0;
+    };
+    bool grab(const std::optional<Hit>& hit);
+    bool viewer_press(Viewer& v, QPointF pixel);
+    void viewer_grab_move(QPointF pixel);
+    void viewer_grab_pick();
+    void viewer_grab_release(Viewer& v, QPointF pixel, bool dragged);
+    bool slice_press(SliceView& view, QPointF pixel);
+    void slice_grab_move(SliceView& view, QPointF pixel);
+    void slice_grab_release(SliceView& view, QPointF pixel, bool dragged);
+    void move_grabbed(const glm::dvec3& lps);
+    void commit_grab();
 
     MainWindow& window_;
     QAction* ruler_ = nullptr;
     QAction* angle_ = nullptr;
+    QAction* point_ = nullptr;
     Tool tool_ = Tool::None;
     std::vector<glm::dvec3> pending_;
     QPointer<Viewer> viewer_;
@@ -98,6 +140,9 @@ private:
     QElapsedTimer since_hover_;
     double last_pick_ms_ = 0;
     int hover_picks_ = 0;
+    std::optional<Grab> grab_;
+    std::optional<QPointF> grab_at_; // the 3D view's latest drag position, not picked yet
+    QTimer* grab_timer_ = nullptr;
 };
 
 } // namespace iso::gui

@@ -1,5 +1,6 @@
 #include "app/gui/measurements_panel.hpp"
 
+#include <QApplication>
 #include <QFileDialog>
 #include <QFileInfo>
 #include <QHeaderView>
@@ -8,13 +9,26 @@
 #include <QTableWidget>
 #include <QTimer>
 #include <QToolButton>
+#include <QPushButton>
+#include <QShortcut>
+
+#include <cstdint>
 
 #include "app/gui/main_window.hpp"
+#include "app/gui/measure_tools.hpp"
+#include "io/error.hpp"
 #include "io/markups.hpp"
+#include "renderer/core/measure.hpp"
+#include "renderer/core/scene.hpp"
+#include "renderer/core/structures.hpp"
+#include "renderer/core/value_unit.hpp"
 
 namespace iso::gui {
 
 namespace {
+
+// A point within this of a surface lies on it (a pick's point is on it up to rounding).
+constexpr double kOnSurfaceMm = 0.5;
 
 QString kind_text(MarkupType t) {
     switch (t) {
@@ -39,6 +53,8 @@ QString value_text(const Markup& m) {
     for (const auto& s : m.measurements)
         if (s.name == "length" && s.value)
             return QString("%1 %2 (stored)").arg(*s.value, 0, 'f', 2).arg(QString::fromStdString(s.units));
+    if (m.type == MarkupType::Fiducial)
+        return QString("%1 point%2").arg(m.points.size()).arg(m.points.size() == 1 ? "" : "s");
     return QString("%1 point(s)").arg(m.points.size());
 }
 
@@ -46,71 +62,247 @@ QString value_text(const Markup& m) {
 
 MeasurementsPanel::MeasurementsPanel(MainWindow& window) : QDockWidget("Measurements", &window), window_(window) {
     setObjectName("measurements");
-    table_ = new QTableWidget(0, 4, this);
+    table_ = new QTableWidget(0, 6, this);
     table_->setObjectName("measurements_table");
-    table_->setHorizontalHeaderLabels({"Name", "Kind", "Value", ""});
+    table_->setHorizontalHeaderLabels({"Name", "Kind", "Value", "On surface", "Notes", ""});
     table_->verticalHeader()->setVisible(false);
-    table_->horizontalHeader()->setSectionResizeMode(Name, QHeaderView::Stretch);
-    table_->horizontalHeader()->setSectionResizeMode(Kind, QHeaderView::ResizeToContents);
-    table_->horizontalHeader()->setSectionResizeMode(Value, QHeaderView::ResizeToContents);
-    table_->horizontalHeader()->setSectionResizeMode(Delete, QHeaderView::ResizeToContents);
+    auto* header = table_->horizontalHeader();
+    for (int c : {Name, Kind, Value, Surface, Notes, Delete})
+        header->setSectionResizeMode(c, QHeaderView::ResizeToContents);
+    header->setStretchLastSection(false);
     table_->setSelectionBehavior(QAbstractItemView::SelectRows);
+    table_->setSelectionMode(QAbstractItemView::SingleSelection);
     table_->setEditTriggers(QAbstractItemView::DoubleClicked | QAbstractItemView::EditKeyPressed |
                             QAbstractItemView::AnyKeyPressed);
     connect(table_, &QTableWidget::itemChanged, this, [this](QTableWidgetItem* item) {
         if (filling_ || item->column() != Name) return;
         rename(item->row(), item->text());
     });
+    connect(table_, &QTableWidget::itemSelectionChanged, this, [this] { selection_changed(); });
+    // Delete (or Backspace) on a row deletes it, as its button does; not while a name is being edited.
+    for (const auto key : {Qt::Key_Delete, Qt::Key_Backspace}) {
+        auto* del = new QShortcut(QKeySequence(key), table_, nullptr, nullptr, Qt::WidgetShortcut);
+        connect(del, &QShortcut::activated, this, [this] {
+            const auto rows = table_->selectionModel()->selectedRows();
+            if (!rows.isEmpty()) remove(rows.front().row());
+        });
+    }
+    refresh_timer_ = new QTimer(this);
+    refresh_timer_->setSingleShot(true);
+    refresh_timer_->setInterval(300);
+    connect(refresh_timer_, &QTimer::timeout, this, [this] {
+        // A name being typed (its editor has the focus): later.
+        const QWidget* focus = QApplication::focusWidget();
+        if (focus && focus != table_ && table_->isAncestorOf(focus))
+            refresh_timer_->start();
+        else
+            refresh();
+    });
     setWidget(table_);
     refresh();
 }
 
+void MeasurementsPanel::add_row(const Row& r, const std::array<QString, 5>& text, const QString& tooltip) {
+    const int row = table_->rowCount();
+    table_->insertRow(row);
+    rows_.push_back(r);
+    for (int col = Name; col <= Notes; ++col) {
+        auto* item = new QTableWidgetItem(text[std::size_t(col)]);
+        if (col != Name) item->setFlags(item->flags() & ~Qt::ItemIsEditable);
+        item->setToolTip(col == Name ? "Double-click to rename" : tooltip);
+        table_->setItem(row, col, item);
+    }
+    auto* del = new QToolButton(table_);
+    del->setObjectName("delete");
+    del->setText(QString(QChar(0x2715)));
+    del->setToolTip(r.point < 0 ? "Delete this measurement" : "Delete this point");
+    del->setAutoRaise(true);
+    // Queued: the button goes with the table's rebuild.
+    connect(del, &QToolButton::clicked, this,
+            [this, row] { QTimer::singleShot(0, this, [this, row] { remove(row); }); });
+    table_->setCellWidget(row, Delete, del);
+}
+
+void MeasurementsPanel::add_markup_rows(std::size_t index, const Markup& m) {
+    const bool has_volume = window_.scene().has_volume();
+    QStringList on;
+    for (const auto& p : m.points)
+        if (p.status == PositionStatus::Defined) on << surface_text(p.position);
+    const bool list = m.type == MarkupType::Fiducial;
+    add_row({index, -1},
+            {QString::fromStdString(m.name), kind_text(m.type), value_text(m), list ? QString() : on.join(" / "),
+             crossings_text(m)},
+            list ? QString() : "The surface each point lies on (within 0.5 mm), in the order of the points");
+    if (!list) return;
+    // A point list's points: label, the volume's value, surface, position.
+    for (std::size_t k = 0; k < m.points.size(); ++k) {
+        const MarkupControlPoint& p = m.points[k];
+        if (p.status != PositionStatus::Defined) {
+            add_row({index, int(k)}, {QString::fromStdString(p.label), "Point", "-", "-", "no position"}, {});
+            continue;
+        }
+        QString value = "-";
+        if (has_volume) {
+            const auto v = core::value_at(window_.scene(), p.position);
+            value = v ? QString::fromStdString(core::value_readout(v->value, core::value_unit(window_.scene())))
+                      : QString("outside the volume");
+        }
+        add_row({index, int(k)},
+                {QString::fromStdString(p.label), "Point", value, surface_text(p.position), lps_text(p.position)}, {});
+    }
+}
+
 void MeasurementsPanel::refresh() {
     if (renaming_) return; // the table shows the new name already
+    refresh_timer_->stop();
     filling_ = true;
+    check_cache();
     const auto& markups = window_.markups();
     table_->setRowCount(0);
-    table_->setRowCount(int(markups.size()));
-    for (int row = 0; row < int(markups.size()); ++row) {
-        const Markup& m = markups[std::size_t(row)];
-        auto* name = new QTableWidgetItem(QString::fromStdString(m.name));
-        name->setToolTip("Double-click to rename");
-        table_->setItem(row, Name, name);
-        for (const auto& [col, text] :
-             {std::pair{int(Kind), kind_text(m.type)}, std::pair{int(Value), value_text(m)}}) {
-            auto* item = new QTableWidgetItem(text);
-            item->setFlags(item->flags() & ~Qt::ItemIsEditable);
-            table_->setItem(row, col, item);
-        }
-        auto* del = new QToolButton(table_);
-        del->setObjectName("delete");
-        del->setText(QString(QChar(0x2715)));
-        del->setToolTip("Delete this measurement");
-        del->setAutoRaise(true);
-        // Queued: the button goes with the table's rebuild.
-        connect(del, &QToolButton::clicked, this,
-                [this, row] { QTimer::singleShot(0, this, [this, row] { remove(row); }); });
-        table_->setCellWidget(row, Delete, del);
-    }
+    rows_.clear();
+    for (std::size_t i = 0; i < markups.size(); ++i) add_markup_rows(i, markups[i]);
     filling_ = false;
+    show_selection();
+}
+
+void MeasurementsPanel::refresh_soon() {
+    if (!window_.markups().empty()) refresh_timer_->start();
+}
+
+int MeasurementsPanel::row_of(std::size_t markup, int point) const {
+    for (std::size_t r = 0; r < rows_.size(); ++r)
+        if (rows_[r].markup == markup && rows_[r].point == point) return int(r);
+    return -1;
+}
+
+void MeasurementsPanel::show_selection() {
+    const auto sel = window_.selected_markup();
+    const int row = sel ? row_of(*sel) : -1;
+    // Already on a row of that markup (a point list's point): stays.
+    const auto current = table_->selectionModel()->selectedRows();
+    if (row >= 0 && !current.isEmpty() && std::size_t(current.front().row()) < rows_.size() &&
+        rows_[std::size_t(current.front().row())].markup == *sel)
+        return;
+    const bool was = filling_;
+    filling_ = true; // not a user's selection
+    if (row < 0)
+        table_->clearSelection();
+    else
+        table_->selectRow(row);
+    filling_ = was;
+}
+
+void MeasurementsPanel::selection_changed() {
+    if (filling_) return;
+    const auto selected = table_->selectionModel()->selectedRows();
+    if (selected.isEmpty() || std::size_t(selected.front().row()) >= rows_.size()) {
+        window_.select_markup(std::nullopt);
+        return;
+    }
+    const Row r = rows_[std::size_t(selected.front().row())];
+    if (r.point < 0) {
+        window_.select_markup(r.markup);
+        return;
+    }
+    // A point list's point: the views centre on that point.
+    window_.select_markup(r.markup, false);
+    const auto& p = window_.markups()[r.markup].points[std::size_t(r.point)];
+    if (p.status == PositionStatus::Defined) window_.centre_on(p.position);
 }
 
 void MeasurementsPanel::rename(int row, const QString& name) {
-    std::vector<Markup> m = window_.markups();
-    if (row < 0 || row >= int(m.size())) return;
-    m[std::size_t(row)].name = name.toStdString();
+    if (row < 0 || std::size_t(row) >= rows_.size()) return;
+    const Row r = rows_[std::size_t(row)];
+    MarkupsState s = window_.markups_state();
+    if (r.markup >= s.markups.size()) return;
+    Markup& m = s.markups[r.markup];
+    QString old;
+    if (r.point < 0) {
+        old = QString::fromStdString(m.name);
+        m.name = name.toStdString();
+    } else {
+        auto& p = m.points[std::size_t(r.point)];
+        old = QString::fromStdString(p.label);
+        p.label = name.toStdString();
+    }
+    if (old == name) return;
     renaming_ = true;
-    window_.set_markups(std::move(m));
+    window_.edit_markups("Rename " + (old.isEmpty() ? QString("measurement") : old), std::move(s));
     renaming_ = false;
 }
 
 void MeasurementsPanel::remove(int row) {
-    std::vector<Markup> m = window_.markups();
-    if (row < 0 || row >= int(m.size())) return;
-    const QString name = QString::fromStdString(m[std::size_t(row)].name);
-    m.erase(m.begin() + row);
-    window_.set_markups(std::move(m));
-    window_.statusBar()->showMessage("Deleted " + (name.isEmpty() ? QString("the measurement") : name));
+    if (row < 0 || std::size_t(row) >= rows_.size()) return;
+    const Row r = rows_[std::size_t(row)];
+    MarkupsState s = window_.markups_state();
+    if (r.markup >= s.markups.size()) return;
+    QString name;
+    if (r.point < 0) {
+        name = QString::fromStdString(s.markups[r.markup].name);
+        s.markups.erase(s.markups.begin() + std::ptrdiff_t(r.markup));
+        s.sources.erase(s.sources.begin() + std::ptrdiff_t(r.markup));
+    } else {
+        auto& pts = s.markups[r.markup].points;
+        name = QString::fromStdString(pts[std::size_t(r.point)].label);
+        pts.erase(pts.begin() + r.point);
+    }
+    if (name.isEmpty()) name = r.point < 0 ? QString("the measurement") : QString("the point");
+    window_.edit_markups("Delete " + name, std::move(s));
+    window_.statusBar()->showMessage("Deleted " + name + " (Edit > Undo brings it back)");
+}
+
+// ---- where the points lie ------------------------------------------------------------
+
+void MeasurementsPanel::check_cache() {
+    // The answers hold while the surfaces do: which, their meshes, visibility and opacity.
+    std::string key;
+    const core::Scene& scene = window_.scene();
+    for (const auto id : scene.surfaces()) {
+        const auto& info = scene.info(id);
+        const auto& mesh = scene.mesh(id);
+        key += std::to_string(id) + info.name + (info.visible ? "v" : "h") + (info.pickable ? "p" : "n") +
+               std::to_string(info.opacity) + "/" + std::to_string(mesh.triangles.size()) + "@" +
+               std::to_string(reinterpret_cast<std::uintptr_t>(mesh.triangles.data())) + ";";
+    }
+    if (key == cache_key_) return;
+    cache_key_ = key;
+    surface_cache_.clear();
+    crossings_cache_.clear();
+}
+
+QString MeasurementsPanel::surface_text(const glm::dvec3& p) {
+    const std::array<double, 3> key{p.x, p.y, p.z};
+    if (const auto it = surface_cache_.find(key); it != surface_cache_.end()) return it->second;
+    // While a point is dragged, only the points already known (each query builds a search tree).
+    if (window_.measure_tools()->editing()) return "...";
+    QString text;
+    try {
+        const core::SurfacePoint s = core::surface_at(window_.scene(), p);
+        text = s.distance_mm <= kOnSurfaceMm ? QString::fromStdString(window_.scene().info(s.surface).name)
+                                             : QString("off surface");
+    } catch (const Error&) {
+        text = "-"; // no visible surface
+    }
+    return surface_cache_[key] = text;
+}
+
+QString MeasurementsPanel::crossings_text(const Markup& m) {
+    if (m.type != MarkupType::Line || m.points.size() != 2 || m.points[0].status != PositionStatus::Defined ||
+        m.points[1].status != PositionStatus::Defined)
+        return {};
+    const glm::dvec3 a = m.points[0].position, b = m.points[1].position;
+    const std::array<double, 6> key{a.x, a.y, a.z, b.x, b.y, b.z};
+    if (const auto it = crossings_cache_.find(key); it != crossings_cache_.end()) return it->second;
+    if (window_.measure_tools()->editing()) return "...";
+    QStringList parts;
+    try {
+        for (const core::LineCrossing& c : core::solid_crossings(window_.scene(), a, b))
+            parts << QString("%1 at %2 mm").arg(QString::fromStdString(c.name)).arg(c.along_mm, 0, 'f', 1);
+    } catch (const Error&) {
+        // Not finite points (a damaged file): nothing to say about them.
+    }
+    const QString text = parts.isEmpty() ? QString() : "passes through " + parts.join(", ");
+    return crossings_cache_[key] = text;
 }
 
 void MeasurementsPanel::show_error(const QString& what, const QString& reason) {
@@ -136,6 +328,12 @@ bool MeasurementsPanel::save(const QString& path) {
         show_error(what, QString::fromStdString(e.what()));
         return false;
     }
+    // The file holds them now: loading it again asks whether to replace them.
+    MarkupsState s = window_.markups_state();
+    const QString file = QFileInfo(path).canonicalFilePath();
+    for (auto& from : s.sources)
+        if (!from.contains(file)) from << file;
+    window_.show_markups(std::move(s));
     window_.statusBar()->showMessage(QString("Saved %1 measurement(s) to %2").arg(window_.markups().size()).arg(path));
     return true;
 }
@@ -158,14 +356,71 @@ bool MeasurementsPanel::load(const QString& path) {
     int unnamed = 0;
     for (auto& m : f.markups)
         if (m.name.empty()) m.name = (unnamed++ ? QString("%1 %2").arg(stem).arg(unnamed) : stem).toStdString();
-    std::vector<Markup> all = window_.markups();
-    const std::size_t added = f.markups.size();
-    for (auto& m : f.markups) all.push_back(std::move(m));
-    window_.set_markups(std::move(all));
-    QString msg = QString("Loaded %1 measurement(s) from %2").arg(added).arg(path);
+    // By the file's canonical path (the same file however it is named), not
+    // by comparing names and points: a markup moved or renamed since still
+    // came from the file, and two files may hold equal markups.
+    const QString file = QFileInfo(path).canonicalFilePath();
+    const auto& sources = window_.markups_state().sources;
+    const auto from_file =
+        std::count_if(sources.begin(), sources.end(), [&](const QStringList& s) { return s.contains(file); });
+    if (from_file == 0) {
+        add_loaded(f, path, LoadMode::Add);
+        return true;
+    }
+    auto* box = new QMessageBox(
+        QMessageBox::Question, "Load markups",
+        QString("%1 measurement(s) came from %2 (loaded from it or saved to it).\n\nReplace: they give way to the "
+                "%3 the file holds now.\nAdd: the file's %3 are added, and they stay.")
+            .arg(from_file)
+            .arg(QFileInfo(path).fileName())
+            .arg(f.markups.size()),
+        QMessageBox::NoButton, &window_);
+    box->setObjectName("reload");
+    auto* replace = box->addButton("Replace", QMessageBox::AcceptRole);
+    replace->setObjectName("replace");
+    auto* add = box->addButton("Add", QMessageBox::YesRole);
+    add->setObjectName("add");
+    box->addButton(QMessageBox::Cancel)->setObjectName("cancel");
+    box->setDefaultButton(replace);
+    box->setAttribute(Qt::WA_DeleteOnClose);
+    connect(box, &QMessageBox::buttonClicked, this, [this, f, path, replace, add](QAbstractButton* b) {
+        if (b == replace)
+            add_loaded(f, path, LoadMode::Replace);
+        else if (b == add)
+            add_loaded(f, path, LoadMode::Add);
+        else
+            window_.statusBar()->showMessage("Loading " + path + ": cancelled");
+    });
+    box->open(); // window-modal, not exec(): the event loop (and tests) go on
+    return true;
+}
+
+void MeasurementsPanel::add_loaded(const MarkupsFile& f, const QString& path, LoadMode mode) {
+    const QString file = QFileInfo(path).canonicalFilePath();
+    const MarkupsState& now = window_.markups_state();
+    MarkupsState s;
+    std::optional<std::size_t> at; // Replace: where the first of the file's markups was
+    for (std::size_t i = 0; i < now.markups.size(); ++i) {
+        if (mode == LoadMode::Replace && now.sources[i].contains(file)) {
+            if (!at) at = s.markups.size();
+            continue;
+        }
+        s.markups.push_back(now.markups[i]);
+        s.sources.push_back(now.sources[i]);
+    }
+    const std::size_t dropped = now.markups.size() - s.markups.size();
+    const std::size_t pos = at.value_or(s.markups.size());
+    s.markups.insert(s.markups.begin() + std::ptrdiff_t(pos), f.markups.begin(), f.markups.end());
+    s.sources.insert(s.sources.begin() + std::ptrdiff_t(pos), f.markups.size(), QStringList{file});
+    const QString name = QFileInfo(path).fileName();
+    window_.edit_markups((mode == LoadMode::Replace ? "Replace markups from " : "Load markups from ") + name,
+                         std::move(s));
+    QString msg =
+        mode == LoadMode::Replace
+            ? QString("Replaced %1 measurement(s) with the %2 of %3").arg(dropped).arg(f.markups.size()).arg(path)
+            : QString("Loaded %1 measurement(s) from %2").arg(f.markups.size()).arg(path);
     for (const auto& w : f.warnings) msg += "; " + QString::fromStdString(w);
     window_.statusBar()->showMessage(msg);
-    return true;
 }
 
 void MeasurementsPanel::save_dialog() {

@@ -1,16 +1,34 @@
 // The Measurements dock (docs/gui.md "Pick and measure"): a table
-// of the window's markups (MainWindow::markups(): rulers, angles, and what a
-// loaded .mrk.json holds) with the name (editable), the kind, the value
-// (mm or degrees, computed by the core from the points each time the
-// markups change) and a delete button; and File > Save markups... / Load
-// markups... through io/markups.hpp (3D Slicer's .mrk.json, LPS), errors in
-// a dialog naming the file. Presentation only.
+// of the window's markups (MainWindow::markups(): rulers, angles, point
+// lists, and what a loaded .mrk.json holds) with the name (editable), the
+// kind, the value (mm or degrees, computed by the core from the points each
+// time the markups change), the surface each point lies on
+// (core::surface_at), what a ruler passes through (core::solid_crossings)
+// and a delete button; a point list's points have rows of their own (label,
+// value of the volume there, surface, LPS). Selecting a row selects the
+// markup (MainWindow::select_markup: highlighted and centred in the views).
+// File > Save markups... / Load markups... through io/markups.hpp (3D
+// Slicer's .mrk.json, LPS), errors in a dialog naming the file; loading a
+// file some markups came from asks whether to replace them. Every edit is
+// an undo step (MainWindow::edit_markups). Presentation only.
 #pragma once
+
+#include <array>
+#include <cstddef>
+#include <map>
+#include <optional>
+#include <string>
+#include <vector>
 
 #include <QDockWidget>
 #include <QString>
 
+#include <glm/vec3.hpp>
+
+#include "io/markups.hpp"
+
 class QTableWidget;
+class QTimer;
 
 namespace iso::gui {
 
@@ -18,33 +36,65 @@ class MainWindow;
 
 class MeasurementsPanel : public QDockWidget {
 public:
-    enum Column { Name = 0, Kind = 1, Value = 2, Delete = 3 };
+    enum Column { Name = 0, Kind = 1, Value = 2, Surface = 3, Notes = 4, Delete = 5 };
 
     explicit MeasurementsPanel(MainWindow& window);
 
     // Rebuilds the table from MainWindow::markups() (the window calls it
     // whenever they change).
     void refresh();
+    // refresh() once the surfaces rest (a slider being dragged changes them
+    // at every step; the surface and notes columns query every point).
+    void refresh_soon();
+    // Selects the row of MainWindow::selected_markup() (none: no row).
+    void show_selection();
     QTableWidget* table() const { return table_; }
+    // The row of a markup (point -1) or of one of a point list's points; -1: none.
+    int row_of(std::size_t markup, int point = -1) const;
 
     // The file dialogs of File > Save markups... / Load markups....
     void save_dialog();
     void load_dialog();
-    // Writes every markup to `path` (replaced whole or not at all) / adds the
-    // markups of `path` to the window's. False on failure, after an error
+    // Writes every markup to `path` (replaced whole or not at all); the
+    // markups are then from that file too. False on failure, after an error
     // dialog that names the file and the reason.
     bool save(const QString& path);
+    // Adds the markups of `path` to the window's, one undo step. When some
+    // of the window's markups came from that file (loaded from or saved to
+    // it), a question box (object name "reload", opened, not exec'd) asks
+    // first: Replace (those markups give way to the file's, in their place),
+    // Add (both stay) or Cancel. False on failure, after an error dialog.
     bool load(const QString& path);
 
 private:
+    struct Row {
+        std::size_t markup = 0;
+        int point = -1; // a point list's point; -1: the markup's row
+    };
+    void add_markup_rows(std::size_t index, const Markup& m);
+    void add_row(const Row& r, const std::array<QString, 5>& text, const QString& tooltip);
     void rename(int row, const QString& name);
     void remove(int row);
+    void selection_changed();
     void show_error(const QString& what, const QString& reason);
+    enum class LoadMode { Add, Replace };
+    void add_loaded(const MarkupsFile& f, const QString& path, LoadMode mode);
+    // The names of the surfaces the points lie on (within 0.5 mm), and what a
+    // ruler's line passes through, cached per point while the scene's
+    // surfaces stay as they were (the core builds a search tree per query).
+    QString surface_text(const glm::dvec3& p);
+    QString crossings_text(const Markup& m);
+    void check_cache();
 
     MainWindow& window_;
     QTableWidget* table_ = nullptr;
+    QTimer* refresh_timer_ = nullptr;
+    std::vector<Row> rows_;
     bool filling_ = false;  // the table is being rebuilt: its item changes are not edits
     bool renaming_ = false; // a rename from the table: the table already shows it
+    std::string cache_key_; // the scene's surfaces the cache holds answers for
+    std::map<std::array<double, 3>, QString> surface_cache_;
+    std::map<std::array<double, 6>, QString> crossings_cache_;
 };
 
 } // namespace iso::gui

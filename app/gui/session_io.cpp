@@ -61,7 +61,8 @@ core::Session MainWindow::current_session() const {
     if (scene_->has_volume()) window = window_;
     // The 3D view's toggles (the view bar keeps them across scenes).
     const FrameLook look = viewer_ ? viewer_->options().look : view_bar_->look();
-    return core::capture_session(*scene_, path_.toStdString(), series_.toStdString(), camera, window, look, markups_);
+    return core::capture_session(*scene_, path_.toStdString(), series_.toStdString(), camera, window, look,
+                                 state_.markups);
 }
 
 void MainWindow::add_session_actions(QMenu* file) {

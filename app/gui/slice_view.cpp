@@ -106,9 +106,15 @@ void SliceView::resizeEvent(QResizeEvent*) {
 void SliceView::mousePressEvent(QMouseEvent* e) {
     drag_.start(e->position());
     window_at_press_ = window_;
+    grabbing_ = e->button() == Qt::LeftButton && e->buttons() == Qt::LeftButton && !image_.isNull() && on_press &&
+                on_press(*this, e->position());
 }
 
 void SliceView::mouseReleaseEvent(QMouseEvent* e) {
+    if (grabbing_ && e->button() == Qt::LeftButton) {
+        grabbing_ = false;
+        if (on_grab_release) on_grab_release(*this, e->position(), drag_.dragged);
+    }
     if (e->button() == Qt::LeftButton && !drag_.dragged && on_click && !image_.isNull()) on_click(*this, e->position());
 }
 
@@ -116,6 +122,10 @@ void SliceView::mouseMoveEvent(QMouseEvent* e) {
     if (e->buttons() == Qt::NoButton || image_.isNull() || !plane_) return;
     if (!drag_.follow(e->position())) return;
     const QPointF d = drag_.step(e->position());
+    if (grabbing_) { // a markup point follows the pointer; the window stays
+        if (on_grab_move) on_grab_move(*this, e->position());
+        return;
+    }
     if (e->buttons() & Qt::LeftButton) {
         if (!range_) range_ = scene_->volume().value_range();
         const QPointF total = e->position() - drag_.press;

@@ -54,6 +54,13 @@ public:
     // A left drag changed the window (3D Slicer's: horizontal = width,
     // vertical = level, core::drag_window); the view already shows it.
     std::function<void(SliceView&, const core::WindowLevel&)> on_window;
+    // A left press: true when the handler takes it (a markup point grabbed).
+    // Then the moves until the release go to on_grab_move (no window drag)
+    // and the release to on_grab_release (`dragged`: beyond the click slop;
+    // a release without a drag is also a click).
+    std::function<bool(SliceView&, QPointF)> on_press;
+    std::function<void(SliceView&, QPointF)> on_grab_move;
+    std::function<void(SliceView&, QPointF, bool dragged)> on_grab_release;
     // Draws over the slice after the outlines and the crosshair (the
     // measurements); the painter's coordinates are the grid's pixels.
     std::function<void(SliceView&, QPainter&)> on_paint_overlay;
@@ -86,6 +93,7 @@ private:
     // A drag (3D Slicer's slice view): left window/level, middle pan, right
     // zoom (core::pan_pixels, core::zoom_about on the plane's framing).
     PointerDrag drag_;
+    bool grabbing_ = false; // on_press took the press
     core::WindowLevel window_at_press_;
     std::optional<ValueRange> range_; // the volume's, for the window drag's gain (computed once per content)
 };

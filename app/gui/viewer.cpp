@@ -146,11 +146,34 @@ void Viewer::set_markups(std::vector<Markup> markups) {
     update();
 }
 
+void Viewer::set_labels(std::vector<std::pair<glm::dvec3, std::string>> labels) {
+    annotations_->labels.clear();
+    for (auto& [at, text] : labels) annotations_->labels.push_back({at, std::move(text)});
+    update();
+}
+
+std::optional<QPointF> Viewer::image_pixel(const glm::dvec3& lps) const {
+    const QSize size = image_size();
+    const double aspect = double(size.width()) / double(size.height());
+    // The overlay's projection (build_overlay): clip space to image pixels, y down.
+    const glm::dvec4 c = camera_.projection(aspect) * camera_.view() * glm::dvec4(lps, 1.0);
+    if (c.w <= 0) return std::nullopt;
+    return QPointF((c.x / c.w + 1) * 0.5 * size.width(), (1 - c.y / c.w) * 0.5 * size.height());
+}
+
 QPointF Viewer::to_image(QPointF widget) const { return widget * devicePixelRatioF(); }
 
-void Viewer::mousePressEvent(QMouseEvent* e) { drag_.start(e->position()); }
+void Viewer::mousePressEvent(QMouseEvent* e) {
+    drag_.start(e->position());
+    grabbing_ = e->button() == Qt::LeftButton && e->buttons() == Qt::LeftButton && on_press &&
+                on_press(*this, to_image(e->position()));
+}
 
 void Viewer::mouseReleaseEvent(QMouseEvent* e) {
+    if (grabbing_ && e->button() == Qt::LeftButton) {
+        grabbing_ = false;
+        if (on_grab_release) on_grab_release(*this, to_image(e->position()), drag_.dragged);
+    }
     if (e->button() == Qt::LeftButton && !drag_.dragged && on_click) on_click(*this, to_image(e->position()));
     if (dragging_ && e->buttons() == Qt::NoButton) {
         dragging_ = false;
@@ -164,6 +187,10 @@ void Viewer::mouseMoveEvent(QMouseEvent* e) {
         return;
     }
     if (!drag_.follow(e->position())) return;
+    if (grabbing_) { // a markup point follows the pointer; the camera stays
+        if (on_grab_move) on_grab_move(*this, to_image(e->position()));
+        return;
+    }
     dragging_ = true;
     const QPointF d = drag_.step(e->position());
     // 3D Slicer's mouse: left rotates, middle pans, right drags zoom (up: closer).

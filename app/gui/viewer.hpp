@@ -6,6 +6,7 @@
 
 #include <functional>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -80,6 +81,13 @@ public:
     // from the top-left, the pixel render_image / core::pick use).
     std::function<void(Viewer&, QPointF)> on_click;
     std::function<void(Viewer&, QPointF)> on_hover;
+    // A left press: true when the handler takes it (a markup point grabbed).
+    // Then the moves until the release go to on_grab_move and the release to
+    // on_grab_release (`dragged`: the pointer went beyond the click slop;
+    // a release without a drag is also a click), and the camera stays.
+    std::function<bool(Viewer&, QPointF)> on_press;
+    std::function<void(Viewer&, QPointF)> on_grab_move;
+    std::function<void(Viewer&, QPointF, bool dragged)> on_grab_release;
     // The view changed its own options (the O key toggled AO), so a tool bar can follow.
     std::function<void(Viewer&)> on_options_changed;
     // The size of the image the view draws (device pixels).
@@ -95,6 +103,11 @@ public:
     // Markups (LPS mm) drawn over the view by the renderer's overlay, as
     // `isoscope render --markups` draws them.
     void set_markups(std::vector<Markup> markups);
+    // Text drawn by the overlay next to LPS points (the markups' names).
+    void set_labels(std::vector<std::pair<glm::dvec3, std::string>> labels);
+    // Where `lps` projects in the image (as the overlay draws it, image
+    // pixels from the top-left); none behind the eye.
+    std::optional<QPointF> image_pixel(const glm::dvec3& lps) const;
 
 protected:
     void initializeGL() override;
@@ -116,6 +129,7 @@ private:
     Camera camera_;
     bool camera_set_ = false;
     PointerDrag drag_;
+    bool grabbing_ = false; // on_press took the press
     bool dragging_ = false; // a drag is moving the camera (AO may wait, ViewerOptions::ao_while_dragging)
     QPointF to_image(QPointF widget) const;
     double aspect() const;

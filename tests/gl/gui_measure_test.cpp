@@ -24,8 +24,8 @@ using namespace iso::test;
 using GuiMeasure = HeadWindow;
 
 // Ruler (two clicks), then Angle with a stray click dropped by Escape (three
-// clicks): the markups' points, the crosshair left alone, the panel's
-// values, and the ruler drawn on the axial view.
+// clicks): the markups' points, the axial slice kept and the other views
+// moved to the point, the panel's values, and the ruler drawn on the axial view.
 TEST_F(GuiMeasure, RulerAndAngleOnTheAxialView) {
     const std::filesystem::path out = output_dir("gui_measure");
     gui::MainWindow& w = window();
@@ -50,7 +50,12 @@ TEST_F(GuiMeasure, RulerAndAngleOnTheAxialView) {
         EXPECT_NEAR(glm::length(m.points[0].position - lps(a[0])), 0.0, 1e-9);
         EXPECT_NEAR(glm::length(m.points[1].position - lps(a[1])), 0.0, 1e-9);
     }
-    EXPECT_EQ(axial->grid().offset_mm, axial_offset) << "a tool's click does not move the crosshair";
+    EXPECT_EQ(axial->grid().offset_mm, axial_offset) << "a point placed on the axial view keeps its slice";
+    // The other views moved to the last point placed (the crosshair shows how deep it lies).
+    for (auto o : {core::SliceOrientation::Coronal, core::SliceOrientation::Sagittal}) {
+        const core::SliceGrid& g = w.slice_view(o)->grid();
+        EXPECT_NEAR(glm::dot(lps(a[1]), g.normal), g.offset_mm, 1e-9) << core::slice_orientation_name(o);
+    }
     const double distance = iso::distance_mm(lps(a[0]), lps(a[1]));
 
     const std::vector<QPoint> b = angle_pixels(w);
