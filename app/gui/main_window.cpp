@@ -26,6 +26,7 @@
 #include <QToolBar>
 #include <QUndoCommand>
 #include <QUndoStack>
+#include <QTableWidget>
 #include <QVBoxLayout>
 
 #include <algorithm>
@@ -36,11 +37,13 @@
 #include "app/gui/series_dialog.hpp"
 #include "app/gui/slice_view.hpp"
 #include "app/gui/view_toolbar.hpp"
+#include "app/gui/structure_tools.hpp"
 #include "app/gui/surfaces_panel.hpp"
 #include "app/gui/viewer.hpp"
 #include "io/error.hpp"
 #include "renderer/core/api.hpp"
 #include "renderer/core/scene.hpp"
+#include "renderer/core/structures.hpp"
 #include "renderer/core/value_unit.hpp"
 
 namespace iso::gui {
@@ -185,6 +188,7 @@ MainWindow::MainWindow(QWidget* parent) : QMainWindow(parent), scene_(std::make_
     dock->setWidget(surfaces_);
     addDockWidget(Qt::RightDockWidgetArea, dock);
     measurements_ = new MeasurementsPanel(*this);
+    add_structure_tools();
     addDockWidget(Qt::RightDockWidgetArea, measurements_);
     // Wide enough for the Measurements table's surface and notes columns.
     resizeDocks({dock, measurements_}, {400, 400}, Qt::Horizontal);
@@ -441,6 +445,7 @@ void MainWindow::set_scene(std::unique_ptr<core::Scene> scene, const QString& pa
     }
     for (std::size_t i = 0; i < 3; ++i) views_[i]->set_content(scene_.get(), &planes_[i]);
     surfaces_->set_scene(scene_.get());
+    structures_->reset(); // a session's isolated structures are measured again
     update_3d();
     setWindowTitle("isoscope - " + QFileInfo(path).fileName());
     remember_recent(path);
@@ -506,6 +511,18 @@ void MainWindow::dropEvent(QDropEvent* e) {
 // ---- surfaces --------------------------------------------------------------------------
 
 void MainWindow::add_surface(double iso) { surfaces_->add_surface(iso); }
+
+void MainWindow::add_structure_tools() {
+    structures_ = new StructureTools(*this);
+    surfaces_->isolated = [this](const core::IsolatedComponent& c) { structures_->add_component(c); };
+    // The Measurements dock: the markups' table above the isolated structures'.
+    auto* box = new QWidget;
+    auto* layout = new QVBoxLayout(box);
+    layout->setContentsMargins(0, 0, 0, 0);
+    layout->addWidget(measurements_->widget(), 3);
+    layout->addWidget(structures_->table(), 1);
+    measurements_->setWidget(box);
+}
 
 // ---- views -----------------------------------------------------------------------------
 

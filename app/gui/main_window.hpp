@@ -51,6 +51,7 @@ struct MarkupsState {
 };
 
 class MeasureTools;
+class StructureTools;
 class MeasurementsPanel;
 class SliceView;
 class SurfacesPanel;
@@ -120,6 +121,8 @@ public:
     // The pick readout and the Ruler / Angle tools; the Measurements dock.
     MeasureTools* measure_tools() const { return tools_; }
     MeasurementsPanel* measurements_panel() const { return measurements_; }
+    // The Isolate and Distance tools; their table of isolated structures is in the Measurements dock.
+    StructureTools* structure_tools() const { return structures_; }
 
     // Sessions and export (app/gui/session_io.cpp, docs/sessions.md).
     // What the window shows as a core::Session (input, series, surfaces,
@@ -157,6 +160,7 @@ private:
     void set_scene(std::unique_ptr<core::Scene> scene, const QString& path, const QString& series);
     void show_error(const QString& title, const QString& what, std::exception_ptr e);
     void refresh_slices();
+    void add_structure_tools();
     void update_3d();
     void slice_clicked(SliceView& view, QPointF pixel);
     void slice_scrolled(SliceView& view, double steps);
@@ -187,6 +191,7 @@ private:
     QString session_path_;
     MeasureTools* tools_ = nullptr;
     MeasurementsPanel* measurements_ = nullptr;
+    StructureTools* structures_ = nullptr;
     std::shared_ptr<Job> job_;                  // the job the window waits for
     std::vector<std::shared_ptr<Job>> running_; // every worker still running (abandoned ones too)
     bool updating_window_ = false;

@@ -14,6 +14,7 @@
 #include <cmath>
 #include <functional>
 
+#include "app/gui/structure_tools.hpp"
 #include "app/gui/main_window.hpp"
 #include "app/gui/slice_view.hpp"
 #include "app/gui/viewer.hpp"
@@ -115,6 +116,8 @@ MeasureTools::MeasureTools(MainWindow& window) : QObject(&window), window_(windo
 
 void MeasureTools::set_tool(Tool t) {
     tool_ = t;
+    // One tool at a time across the window.
+    if (t != Tool::None && window_.structure_tools()) window_.structure_tools()->set_tool(StructureTools::Tool::None);
     ruler_->setChecked(t == Tool::Ruler);
     angle_->setChecked(t == Tool::Angle);
     point_->setChecked(t == Tool::Point);
@@ -191,6 +194,7 @@ void MeasureTools::viewer_click(Viewer& v, QPointF pixel) {
     if (window_.busy()) return; // a worker is changing the scene
     hover_timer_->stop();       // the click's readout is the newer one
     hover_at_.reset();
+    if (window_.structure_tools() && window_.structure_tools()->viewer_click(v, pixel)) return; // Isolate, Distance
     const auto lps = pick_and_show(v, pixel, false);
     if (tool_ == Tool::None) {
         if (lps) window_.set_crosshair(*lps);

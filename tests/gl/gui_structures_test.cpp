@@ -1,0 +1,142 @@
+// Structures in the desktop app (docs/gui.md "Structures"): the Isolate tool
+// makes the bone component under the cursor a surface of its own, listed in
+// the Measurements dock with the volume `measure` gives that component; the
+// Distance tool measures skin to bone as the core does and draws it as one
+// undoable ruler. Driven through QTest in a real X server (CTest runs it
+// under xvfb-run; it skips without a display). Expected values come from
+// the core on a scene of the test's own (core::pick with every layer,
+// core::measure_surfaces, core::surface_gap), not from the window.
+#include <QAction>
+#include <QStatusBar>
+#include <QTableWidget>
+#include <QTest>
+#include <QUndoStack>
+
+#include <thread>
+
+#include "app/gui/structure_tools.hpp"
+#include "gui_measure_util.hpp"
+#include "renderer/core/measure.hpp"
+#include "renderer/core/pick.hpp"
+#include "renderer/core/structures.hpp"
+#include "renderer/surface/analysis.hpp"
+
+using namespace iso;
+using namespace iso::test;
+using GuiStructures = HeadWindow;
+
+namespace {
+
+// The window's scene, made again by the test on a worker thread (a one-off
+// core::pick makes its own GL context).
+struct Oracle {
+    core::Scene scene;
+    std::vector<core::SurfaceId> ids;
+    std::string error;
+    template <class F> void run(F f) {
+        std::thread worker([&] {
+            try {
+                f();
+            } catch (const std::exception& e) {
+                error = e.what();
+            }
+        });
+        worker.join();
+    }
+    Oracle() {
+        run([&] {
+            scene.open(headsq());
+            ids = scene.add_isosurfaces({500, 1150});
+            scene.info(ids[0]).opacity = 0.3f;
+        });
+    }
+    core::PickResult pick(QSize size, const Camera& camera, QPoint px) {
+        core::PickResult r;
+        run([&] {
+            core::RenderRequest req;
+            req.width = size.width();
+            req.height = size.height();
+            req.camera = camera;
+            core::PickRequest at;
+            at.x = px.x();
+            at.y = px.y();
+            r = core::pick(scene, req, at);
+        });
+        return r;
+    }
+};
+
+// A pixel on the row whose pick lands on the surface named `name`.
+std::optional<std::pair<QPoint, core::PickLayer>> find_pixel(Oracle& o, QSize size, const Camera& cam,
+                                                             const std::string& name, double row) {
+    for (int dx = 0; dx < size.width() / 2; dx += 6)
+        for (int side : {1, -1}) {
+            const QPoint px(size.width() / 2 + side * dx, int(size.height() * row));
+            const auto r = o.pick(size, cam, px);
+            if (r.visible && r.layers[*r.visible].name == name) return std::make_pair(px, r.layers[*r.visible]);
+        }
+    return std::nullopt;
+}
+
+} // namespace
+
+TEST_F(GuiStructures, IsolateListsTheComponentMeasureGivesAndDistanceIsTheCores) {
+    gui::MainWindow& w = window();
+    gui::Viewer* viewer = w.viewer();
+    const QSize size = viewer->image_size();
+    Oracle o;
+    ASSERT_TRUE(o.error.empty()) << o.error;
+    const auto bone = find_pixel(o, size, viewer->camera(), "iso 1150", 0.45);
+    ASSERT_TRUE(bone) << "no pixel sees the bone";
+
+    // ---- Isolate: the bone component under the cursor
+    gui::StructureTools* tools = w.structure_tools();
+    tools->isolate_action()->trigger();
+    ASSERT_EQ(tools->tool(), gui::StructureTools::Tool::Isolate);
+    const std::size_t before = w.scene().surfaces().size();
+    QTest::mouseClick(viewer, Qt::LeftButton, {}, bone->first);
+    ASSERT_TRUE(QTest::qWaitFor([&] { return w.scene().surfaces().size() == before + 1 && !w.busy(); }, 120000))
+        << w.statusBar()->currentMessage().toStdString();
+    const core::SurfaceId made = w.scene().surfaces().back();
+    // The core's answer: the bone's components, the one nearest the picked point.
+    const Mesh& bone_mesh = o.scene.mesh(o.ids[1]);
+    const auto comps = triangle_components(bone_mesh);
+    const std::uint32_t k = comps[nearest_point(TriangleBvh(bone_mesh), bone->second.lps).triangle];
+    const auto listed = core::measure_surfaces(o.scene, {o.ids[1]}).front().measures.components.at(k);
+    EXPECT_EQ(w.scene().info(made).name, "iso 1150 component " + std::to_string(k + 1));
+    EXPECT_EQ(w.scene().mesh(made).triangles.size(), listed.triangles);
+    const auto measured = core::measure_surfaces(w.scene(), {made}).front().measures;
+    EXPECT_NEAR(measured.volume_ml, listed.volume_ml, 1e-9 * std::abs(listed.volume_ml) + 1e-12);
+    // The dock's row: name, volume to 3 decimals with its uncertainty.
+    QTableWidget* table = tools->table();
+    ASSERT_EQ(table->rowCount(), 1);
+    EXPECT_EQ(table->item(0, gui::StructureTools::Name)->text().toStdString(), w.scene().info(made).name);
+    const QString volume = table->item(0, gui::StructureTools::Volume)->text();
+    EXPECT_TRUE(volume.contains(QString::number(listed.volume_ml, 'f', 3))) << volume.toStdString();
+    EXPECT_TRUE(volume.contains(QString::fromUtf8("\u00b1"))) << "an isosurface component has an uncertainty";
+    EXPECT_EQ(table->item(0, gui::StructureTools::Closed)->text(), listed.closed ? "closed" : "open");
+
+    // ---- Distance: skin (a cheek, skin only) to that bone component
+    w.scene().info(made).visible = false; // the view as before: the isolated copy off
+    const auto skin = find_pixel(o, size, viewer->camera(), "iso 500", 0.55);
+    ASSERT_TRUE(skin) << "no pixel sees only skin";
+    tools->distance_action()->trigger();
+    const std::size_t markups = w.markups().size();
+    QTest::mouseClick(viewer, Qt::LeftButton, {}, skin->first);
+    QTest::mouseClick(viewer, Qt::LeftButton, {}, bone->first);
+    ASSERT_TRUE(QTest::qWaitFor([&] { return tools->distances() == 1; }, 120000))
+        << w.statusBar()->currentMessage().toStdString();
+    ASSERT_EQ(w.markups().size(), markups + 1);
+    const Markup& line = w.markups().back();
+    const core::SurfaceGap gap = core::surface_gap(o.scene, o.ids[0], o.ids[1], skin->second.lps, bone->second.lps);
+    EXPECT_EQ(line.name, gap.name_a + " to " + gap.name_b);
+    ASSERT_EQ(line.points.size(), 2u);
+    EXPECT_NEAR(glm::length(line.points[0].position - gap.distance.pair.a), 0.0, 1e-9);
+    EXPECT_NEAR(glm::length(line.points[1].position - gap.distance.pair.b), 0.0, 1e-9);
+    EXPECT_NEAR(line_length_mm(line.points[0].position, line.points[1].position), gap.distance.pair.distance_mm, 1e-9);
+    std::printf("isolated %s: %s; %s: %.4f mm\n", w.scene().info(made).name.c_str(), volume.toStdString().c_str(),
+                line.name.c_str(), gap.distance.pair.distance_mm);
+    // One undo step.
+    w.undo_stack()->undo();
+    EXPECT_EQ(w.markups().size(), markups);
+}
