@@ -85,7 +85,8 @@ RenderOptions Viewer::frame_options() const {
 void Viewer::draw() {
     camera_.fit_planes(scene_.bounds());
     const RenderOptions opt = frame_options();
-    const auto r = scene_.render(camera_, opt);
+    auto r = scene_.render(camera_, opt);
+    labels_ = std::move(r.labels);
     ++frames_;
     // GL objects made after the first frame: none while the view is steady.
     const std::size_t objects = scene_.renderer().gl_objects_created();

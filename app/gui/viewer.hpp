@@ -105,6 +105,9 @@ public:
     void set_markups(std::vector<Markup> markups);
     // Text drawn by the overlay next to LPS points (the markups' names).
     void set_labels(std::vector<std::pair<glm::dvec3, std::string>> labels);
+    // The overlay's labels as the last frame placed them (boxes in image
+    // pixels, their masks): what a test reads the window's contrast with.
+    const std::vector<LabelBox>& drawn_labels() const { return labels_; }
     // Where `lps` projects in the image (as the overlay draws it, image
     // pixels from the top-left); none behind the eye.
     std::optional<QPointF> image_pixel(const glm::dvec3& lps) const;
@@ -136,6 +139,7 @@ private:
     int frames_ = 0;
     int ao_frames_ = 0;
     std::size_t objects_after_first_frame_ = 0, objects_since_first_frame_ = 0;
+    std::vector<LabelBox> labels_;
 };
 
 } // namespace iso::gui

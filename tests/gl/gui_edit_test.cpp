@@ -25,6 +25,7 @@
 #include "renderer/core/scene.hpp"
 #include "renderer/core/structures.hpp"
 #include "renderer/surface/analysis.hpp"
+#include "tests/support/contrast.hpp"
 
 using namespace iso;
 using namespace iso::test;
@@ -179,6 +180,29 @@ TEST_F(GuiEdit, CheekRulerOnTheFrontSkinDragUndoRedo) {
                  QString("%1 at %2 mm").arg(QString::fromStdString(c.name)).arg(c.along_mm, 0, 'f', 1);
     EXPECT_EQ(cell(w, 0, gui::MeasurementsPanel::Notes), notes);
     std::printf("notes: %s\n", notes.toStdString().c_str());
+
+    // ---- the ruler's label, as the window shows it: WCAG AA contrast (4.5:1)
+    // between its text and the halo around it, read from the window's own
+    // framebuffer (the label's masks say which pixel is which).
+    {
+        QTest::qWait(50);
+        const QImage shot = viewer->grabFramebuffer().convertToFormat(QImage::Format_RGB888);
+        Image img;
+        img.width = shot.width();
+        img.height = shot.height();
+        img.channels = 3;
+        for (int y = 0; y < shot.height(); ++y)
+            img.bytes.insert(img.bytes.end(), shot.constScanLine(y), shot.constScanLine(y) + 3 * shot.width());
+        int checked = 0;
+        for (const LabelBox& l : viewer->drawn_labels()) {
+            const test::Measured m = test::measure_label(img, l);
+            if (m.text == 0) continue; // off screen
+            EXPECT_GE(m.ratio, 4.5) << "label '" << l.text << "' in the window";
+            std::printf("window label '%s': contrast %.2f:1\n", l.text.c_str(), m.ratio);
+            checked += l.text.find("mm") != std::string::npos;
+        }
+        EXPECT_GE(checked, 1) << "the ruler's length is among the window's labels";
+    }
 
     // ---- drag the first point down the cheek: it lands on core::pick of the
     // release pixel

@@ -20,64 +20,13 @@
 #include "renderer/core/api.hpp"
 #include "renderer/core/scene.hpp"
 #include "tests/support/pixels.hpp"
+#include "tests/support/contrast.hpp"
 #include "tests/support/test_util.hpp"
 
 using namespace iso;
 using LabelContrast = test::GlTest;
 
 namespace {
-
-// WCAG 2.x relative luminance of an 8-bit sRGB pixel, from the definition.
-double luminance(test::Rgb p) {
-    const auto lin = [](int v) {
-        const double c = v / 255.0;
-        return c <= 0.03928 ? c / 12.92 : std::pow((c + 0.055) / 1.055, 2.4);
-    };
-    return 0.2126 * lin(p.r) + 0.7152 * lin(p.g) + 0.0722 * lin(p.b);
-}
-
-double median(std::vector<double> v) {
-    if (v.empty()) return NAN;
-    std::nth_element(v.begin(), v.begin() + std::ptrdiff_t(v.size() / 2), v.end());
-    return v[v.size() / 2];
-}
-
-struct Measured {
-    std::size_t text = 0, ring = 0; // pixels of each
-    double text_l = NAN, ring_l = NAN, ratio = NAN;
-    test::Rgb text_colour; // the median text pixel's (by luminance)
-};
-
-// The pixels come from the image; which pixels are text and which halo comes from the label's own masks.
-Measured measure(const Image& img, const LabelBox& l) {
-    Measured m;
-    std::vector<double> text, ring;
-    std::vector<std::pair<double, test::Rgb>> text_px;
-    const int w = l.hi.x - l.lo.x;
-    for (int y = l.lo.y; y < l.hi.y; ++y)
-        for (int x = l.lo.x; x < l.hi.x; ++x) {
-            if (x < 0 || y < 0 || x >= img.width || y >= img.height) continue;
-            const std::size_t i = std::size_t(y - l.lo.y) * w + std::size_t(x - l.lo.x);
-            const test::Rgb p = test::rgb_at(img, x, y);
-            if (l.coverage[i] == 255) {
-                text.push_back(luminance(p));
-                text_px.push_back({text.back(), p});
-            } else if (l.coverage[i] == 0 && l.halo_alpha[i] == 255) {
-                ring.push_back(luminance(p));
-            }
-        }
-    m.text = text.size();
-    m.ring = ring.size();
-    m.text_l = median(text);
-    m.ring_l = median(ring);
-    m.ratio = (std::max(m.text_l, m.ring_l) + 0.05) / (std::min(m.text_l, m.ring_l) + 0.05);
-    if (!text_px.empty()) {
-        std::nth_element(text_px.begin(), text_px.begin() + std::ptrdiff_t(text_px.size() / 2), text_px.end(),
-                         [](const auto& a, const auto& b) { return a.first < b.first; });
-        m.text_colour = text_px[text_px.size() / 2].second;
-    }
-    return m;
-}
 
 bool overlap(const LabelBox& a, const LabelBox& b) {
     return a.lo.x < b.hi.x && b.lo.x < a.hi.x && a.lo.y < b.hi.y && b.lo.y < a.hi.y;
@@ -114,7 +63,7 @@ void expect_legible(const core::RenderOutput& out, const Image& img) {
     double worst = 1e9;
     for (std::size_t i = 0; i < out.labels.size(); ++i) {
         const LabelBox& l = out.labels[i];
-        const Measured m = measure(img, l);
+        const test::Measured m = test::measure_label(img, l);
         std::printf("%-34s %4d,%4d %s text L %.3f ring L %.3f (%zu, %zu px) contrast %.2f:1\n", l.text.c_str(), l.lo.x,
                     l.lo.y, l.moved ? "moved" : "     ", m.text_l, m.ring_l, m.text, m.ring, m.ratio);
         EXPECT_GE(m.text, 6u) << l.text << ": bold stems have pixels at full coverage";
