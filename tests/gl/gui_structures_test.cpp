@@ -95,7 +95,7 @@ TEST_F(GuiStructures, IsolateListsTheComponentMeasureGivesAndDistanceIsTheCores)
     ASSERT_EQ(tools->tool(), gui::StructureTools::Tool::Isolate);
     const std::size_t before = w.scene().surfaces().size();
     QTest::mouseClick(viewer, Qt::LeftButton, {}, bone->first);
-    ASSERT_TRUE(QTest::qWaitFor([&] { return w.scene().surfaces().size() == before + 1 && !w.busy(); }, 120000))
+    ASSERT_TRUE(QTest::qWaitFor([&] { return w.scene().surfaces().size() == before + 1 && !w.busy(); }, 600000))
         << w.statusBar()->currentMessage().toStdString();
     const core::SurfaceId made = w.scene().surfaces().back();
     // The core's answer: the bone's components, the one nearest the picked point.
@@ -124,7 +124,7 @@ TEST_F(GuiStructures, IsolateListsTheComponentMeasureGivesAndDistanceIsTheCores)
     const std::size_t markups = w.markups().size();
     QTest::mouseClick(viewer, Qt::LeftButton, {}, skin->first);
     QTest::mouseClick(viewer, Qt::LeftButton, {}, bone->first);
-    ASSERT_TRUE(QTest::qWaitFor([&] { return tools->distances() == 1; }, 120000))
+    ASSERT_TRUE(QTest::qWaitFor([&] { return tools->distances() == 1; }, 600000))
         << w.statusBar()->currentMessage().toStdString();
     ASSERT_EQ(w.markups().size(), markups + 1);
     const Markup& line = w.markups().back();
