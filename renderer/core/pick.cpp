@@ -150,7 +150,10 @@ PickResult resolve_pick(const Scene& scene, const Camera& camera, int width, int
     const Ray ray = camera.pixel_ray(p.x + 0.5, p.y + 0.5, width, height);
     const glm::dvec3 forward = camera.forward();
     const Volume* volume = scene.has_volume() ? &scene.volume() : nullptr;
-    for (const PickFragment& f : at(p.x, p.y)) {
+    const std::vector<PickFragment>& fragments = at(p.x, p.y);
+    // Where the click lands: the one rule, which the rectangle's pixels follow too.
+    const PickFragment* seen = visible_fragment(fragments, p.threshold, scene);
+    for (const PickFragment& f : fragments) {
         // An unpickable surface is drawn but passed through; an opaque one
         // still hides everything behind it.
         if (!scene.info(f.object).pickable) {
@@ -194,14 +197,13 @@ PickResult resolve_pick(const Scene& scene, const Camera& camera, int width, int
                 l.unit = value_unit(*volume);
                 l.voxel = s->voxel;
             }
-        const bool solid = l.alpha >= p.threshold;
-        if (solid && !out.visible) out.visible = out.layers.size();
+        if (&f == seen) out.visible = out.layers.size();
         out.layers.push_back(std::move(l));
         if (f.alpha >= 1.0f) break;
-        if (solid && !p.all_layers) break;
+        // Without all_layers the list ends at a solid visible layer (with
+        // only translucent ones it runs on: they are all seen through).
+        if (&f == seen && double(f.alpha) >= p.threshold && !p.all_layers) break;
     }
-    // Only translucent surfaces along the ray: the click stays on the nearest.
-    if (!out.visible && !out.layers.empty()) out.visible = 0;
     if (rect) {
         std::map<std::pair<SurfaceId, std::uint32_t>, std::size_t> seen;
         for (int y = out.rect.y; y < out.rect.y + out.rect.height; ++y)
