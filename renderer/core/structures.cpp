@@ -52,19 +52,18 @@ ComponentPlan plan_component(const Scene& scene, SurfaceId surface, const glm::d
     if (!finite(at)) throw Error("isolate", "the point is not finite");
     const Mesh& parent = surface_mesh(scene, surface, "isolate");
     const SurfaceInfo& info = scene.info(surface);
-    const auto comps = triangle_components(parent);
-    const NearestPoint n = nearest_point(TriangleBvh(parent), at);
+    const NearestComponent near = nearest_component(parent, at);
     ComponentPlan plan;
     plan.from = surface;
-    plan.component = comps[n.triangle];
-    for (std::uint32_t c : comps)
+    plan.component = near.component;
+    for (std::uint32_t c : near.triangle_component)
         if (c != std::numeric_limits<std::uint32_t>::max())
             plan.components = std::max<std::size_t>(plan.components, c + 1);
-    plan.mesh = component_mesh(parent, comps, comps[n.triangle]);
+    plan.mesh = component_mesh(parent, near.triangle_component, near.component);
     // Recorded with the surface's post-processing, so that a session (or a
     // moved iso value) makes the same component again from the volume.
     plan.info = info;
-    plan.info.post.keep_at = n.point;
+    plan.info.post.keep_at = near.nearest.point;
     plan.info.name = info.name + " component " + std::to_string(plan.component + 1);
     std::size_t isolated = 0;
     for (const SurfaceId id : scene.surfaces()) isolated += scene.info(id).post.keep_at.has_value();
@@ -105,12 +104,11 @@ SurfaceGap surface_gap(const Scene& scene, SurfaceId a, SurfaceId b, const std::
     const auto part = [](const Mesh& m, const std::optional<glm::dvec3>& at, std::string& name) {
         if (!at) return TriangleBvh(m);
         if (!finite(*at)) throw Error("surface distance", "a component's point is not finite");
-        const auto comps = triangle_components(m);
-        const std::uint32_t c = comps[nearest_point(TriangleBvh(m), *at).triangle];
+        const NearestComponent near = nearest_component(m, *at);
         std::vector<std::uint32_t> tris;
-        for (std::uint32_t t = 0; t < comps.size(); ++t)
-            if (comps[t] == c) tris.push_back(t);
-        name += " component " + std::to_string(c + 1);
+        for (std::uint32_t t = 0; t < near.triangle_component.size(); ++t)
+            if (near.triangle_component[t] == near.component) tris.push_back(t);
+        name += " component " + std::to_string(near.component + 1);
         return TriangleBvh(m, std::move(tris));
     };
     const TriangleBvh ba = part(ma, at_a, g.name_a), bb = part(mb, at_b, g.name_b);

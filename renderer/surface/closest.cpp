@@ -10,6 +10,7 @@
 #include <glm/glm.hpp>
 
 #include "io/error.hpp"
+#include "renderer/surface/analysis.hpp"
 
 namespace iso {
 
@@ -186,11 +187,12 @@ TriangleBvh::TriangleBvh(const Mesh& mesh, std::vector<std::uint32_t> triangles)
     build();
 }
 
-TriangleCorners TriangleBvh::corners(std::uint32_t t) const {
-    const auto& tri = mesh_.triangles[t];
-    return {glm::dvec3(mesh_.positions[tri[0]]), glm::dvec3(mesh_.positions[tri[1]]),
-            glm::dvec3(mesh_.positions[tri[2]])};
+TriangleCorners triangle_corners(const Mesh& m, std::uint32_t t) {
+    const auto& tri = m.triangles[t];
+    return {glm::dvec3(m.positions[tri[0]]), glm::dvec3(m.positions[tri[1]]), glm::dvec3(m.positions[tri[2]])};
 }
+
+TriangleCorners TriangleBvh::corners(std::uint32_t t) const { return triangle_corners(mesh_, t); }
 
 void TriangleBvh::build() {
     check_mesh(mesh_, "surface distance", tris_);
@@ -304,16 +306,11 @@ SurfaceDistance surface_distance_brute_force(const Mesh& a, const Mesh& b) {
     std::iota(all_b.begin(), all_b.end(), 0u);
     check_mesh(a, "surface distance", all_a);
     check_mesh(b, "surface distance", all_b);
-    const auto corners = [](const Mesh& m, std::uint32_t t) {
-        const auto& tri = m.triangles[t];
-        return TriangleCorners{glm::dvec3(m.positions[tri[0]]), glm::dvec3(m.positions[tri[1]]),
-                               glm::dvec3(m.positions[tri[2]])};
-    };
     SurfaceDistance out;
     out.pair.distance_mm = kInf;
     for (std::uint32_t i : all_a)
         for (std::uint32_t j : all_b) {
-            const ClosestPair c = triangle_distance(corners(a, i), corners(b, j));
+            const ClosestPair c = triangle_distance(triangle_corners(a, i), triangle_corners(b, j));
             ++out.triangle_pairs;
             if (c.distance_mm < out.pair.distance_mm) {
                 out.pair = c;
@@ -355,6 +352,14 @@ NearestPoint nearest_point(const TriangleBvh& bvh, const glm::dvec3& p) {
             stack.push_back({n.right, r});
         }
     }
+    return out;
+}
+
+NearestComponent nearest_component(const Mesh& m, const glm::dvec3& at) {
+    NearestComponent out;
+    out.nearest = nearest_point(TriangleBvh(m), at);
+    out.triangle_component = triangle_components(m);
+    out.component = out.triangle_component[out.nearest.triangle];
     return out;
 }
 

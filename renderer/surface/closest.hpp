@@ -33,6 +33,8 @@ struct ClosestPair {
 };
 
 using TriangleCorners = std::array<glm::dvec3, 3>;
+// Triangle t of m, in double precision (t and its vertices must exist).
+TriangleCorners triangle_corners(const Mesh& m, std::uint32_t t);
 
 // The closest points of two triangles; 0 where they touch or cross. Degenerate
 // triangles (collinear or repeated corners) are measured as the segments they are.
@@ -93,6 +95,16 @@ struct NearestPoint {
 };
 // Throws iso::Error("nearest point", ...) for an empty surface or a non-finite point.
 NearestPoint nearest_point(const TriangleBvh& bvh, const glm::dvec3& p);
+
+// The connected component of a mesh nearest to a point: every triangle's
+// component (triangle_components: measure's numbering), the one of the
+// triangle nearest to `at`, and the nearest point on it.
+struct NearestComponent {
+    std::vector<std::uint32_t> triangle_component;
+    std::uint32_t component = 0;
+    NearestPoint nearest;
+};
+NearestComponent nearest_component(const Mesh& m, const glm::dvec3& at);
 
 // Where the segment [p, q] crosses the surface: the parameters t in [0, 1]
 // along it, sorted, each with its triangle (a crossing exactly at an edge

@@ -28,10 +28,8 @@ bool needs_postprocess(const PostProcessOptions& o) {
 
 Mesh component_at(const Mesh& m, const glm::dvec3& at) {
     if (m.empty()) return m;
-    const TriangleBvh bvh(m);
-    const NearestPoint nearest = nearest_point(bvh, at);
-    const auto comps = triangle_components(m);
-    return component_mesh(m, comps, comps[nearest.triangle]);
+    const NearestComponent c = nearest_component(m, at);
+    return component_mesh(m, c.triangle_component, c.component);
 }
 
 Mesh postprocess(const Mesh& in, const PostProcessOptions& o, const ProgressFn& progress) {
