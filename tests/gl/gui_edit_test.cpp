@@ -33,54 +33,6 @@ using GuiEdit = HeadWindow;
 
 namespace {
 
-// The window's state on a scene of the test's own, on a worker thread (a
-// one-off core::pick makes its own context): headsq, the skin (500) at 0.3
-// over the bone (1150), seen with `camera` at `size`.
-class Oracle {
-public:
-    Oracle(QSize size, const Camera& camera) : size_(size), camera_(camera) {
-        run([&] {
-            scene_.open(headsq());
-            const auto ids = scene_.add_isosurfaces({500, 1150});
-            scene_.info(ids[0]).opacity = 0.3f;
-        });
-    }
-    // Every layer at the pixel, front to back.
-    core::PickResult pick(QPoint px) {
-        core::PickResult r;
-        run([&] {
-            core::RenderRequest req;
-            req.width = size_.width();
-            req.height = size_.height();
-            req.camera = camera_;
-            core::PickRequest at;
-            at.x = px.x();
-            at.y = px.y();
-            at.all_layers = true;
-            r = core::pick(scene_, req, at);
-        });
-        return r;
-    }
-    const core::Scene& scene() const { return scene_; }
-    const std::string& error() const { return error_; }
-
-private:
-    template <class F> void run(F f) {
-        std::thread worker([&] {
-            try {
-                f();
-            } catch (const std::exception& e) {
-                error_ = e.what();
-            }
-        });
-        worker.join();
-    }
-    QSize size_;
-    Camera camera_;
-    core::Scene scene_;
-    std::string error_;
-};
-
 bool only_skin(const core::PickResult& r) {
     if (r.layers.empty()) return false;
     for (const auto& l : r.layers)
@@ -133,7 +85,7 @@ TEST_F(GuiEdit, CheekRulerOnTheFrontSkinDragUndoRedo) {
     gui::MainWindow& w = window();
     gui::Viewer* viewer = w.viewer();
     const QSize size = viewer->image_size();
-    Oracle oracle(size, viewer->camera());
+    HeadOracle oracle(size, viewer->camera());
     ASSERT_TRUE(oracle.error().empty()) << oracle.error();
 
     // The cheeks: from the middle of the face outwards, the first pixels

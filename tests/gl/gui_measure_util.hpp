@@ -15,6 +15,7 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include <glm/vec3.hpp>
@@ -26,6 +27,7 @@
 #include "app/gui/slice_view.hpp"
 #include "app/gui/viewer.hpp"
 #include "gui_test_util.hpp"
+#include "renderer/core/pick.hpp"
 #include "renderer/core/scene.hpp"
 #include "renderer/core/slices.hpp"
 
@@ -162,5 +164,54 @@ private:
 inline glm::dvec3 lps_of(const core::SliceGrid& grid, QPoint p) {
     return core::pixel_to_lps(grid, {double(p.x()), double(p.y())});
 }
+
+// The window's state on a scene of the test's own, on a worker thread (a
+// one-off core::pick makes its own context): headsq, the skin (500) at 0.3
+// over the bone (1150), seen with `camera` at `size` (the GUI tests' oracle:
+// what the core says the window should show).
+class HeadOracle {
+public:
+    HeadOracle(QSize size, const Camera& camera) : size_(size), camera_(camera) {
+        run([&] {
+            scene_.open(headsq());
+            const auto ids = scene_.add_isosurfaces({500, 1150});
+            scene_.info(ids[0]).opacity = 0.3f;
+        });
+    }
+    // Every layer at the pixel, front to back.
+    core::PickResult pick(QPoint px) {
+        core::PickResult r;
+        run([&] {
+            core::RenderRequest req;
+            req.width = size_.width();
+            req.height = size_.height();
+            req.camera = camera_;
+            core::PickRequest at;
+            at.x = px.x();
+            at.y = px.y();
+            at.all_layers = true;
+            r = core::pick(scene_, req, at);
+        });
+        return r;
+    }
+    const core::Scene& scene() const { return scene_; }
+    const std::string& error() const { return error_; }
+
+private:
+    template <class F> void run(F f) {
+        std::thread worker([&] {
+            try {
+                f();
+            } catch (const std::exception& e) {
+                error_ = e.what();
+            }
+        });
+        worker.join();
+    }
+    QSize size_;
+    Camera camera_;
+    core::Scene scene_;
+    std::string error_;
+};
 
 } // namespace iso::test

@@ -12,8 +12,6 @@
 #include <QTest>
 #include <QUndoStack>
 
-#include <thread>
-
 #include "app/gui/structure_tools.hpp"
 #include "gui_measure_util.hpp"
 #include "renderer/core/measure.hpp"
@@ -27,52 +25,13 @@ using GuiStructures = HeadWindow;
 
 namespace {
 
-// The window's scene, made again by the test on a worker thread (a one-off
-// core::pick makes its own GL context).
-struct Oracle {
-    core::Scene scene;
-    std::vector<core::SurfaceId> ids;
-    std::string error;
-    template <class F> void run(F f) {
-        std::thread worker([&] {
-            try {
-                f();
-            } catch (const std::exception& e) {
-                error = e.what();
-            }
-        });
-        worker.join();
-    }
-    Oracle() {
-        run([&] {
-            scene.open(headsq());
-            ids = scene.add_isosurfaces({500, 1150});
-            scene.info(ids[0]).opacity = 0.3f;
-        });
-    }
-    core::PickResult pick(QSize size, const Camera& camera, QPoint px) {
-        core::PickResult r;
-        run([&] {
-            core::RenderRequest req;
-            req.width = size.width();
-            req.height = size.height();
-            req.camera = camera;
-            core::PickRequest at;
-            at.x = px.x();
-            at.y = px.y();
-            r = core::pick(scene, req, at);
-        });
-        return r;
-    }
-};
-
 // A pixel on the row whose pick lands on the surface named `name`.
-std::optional<std::pair<QPoint, core::PickLayer>> find_pixel(Oracle& o, QSize size, const Camera& cam,
-                                                             const std::string& name, double row) {
+std::optional<std::pair<QPoint, core::PickLayer>> find_pixel(HeadOracle& o, QSize size, const std::string& name,
+                                                             double row) {
     for (int dx = 0; dx < size.width() / 2; dx += 6)
         for (int side : {1, -1}) {
             const QPoint px(size.width() / 2 + side * dx, int(size.height() * row));
-            const auto r = o.pick(size, cam, px);
+            const auto r = o.pick(px);
             if (r.visible && r.layers[*r.visible].name == name) return std::make_pair(px, r.layers[*r.visible]);
         }
     return std::nullopt;
@@ -84,9 +43,10 @@ TEST_F(GuiStructures, IsolateListsTheComponentMeasureGivesAndDistanceIsTheCores)
     gui::MainWindow& w = window();
     gui::Viewer* viewer = w.viewer();
     const QSize size = viewer->image_size();
-    Oracle o;
-    ASSERT_TRUE(o.error.empty()) << o.error;
-    const auto bone = find_pixel(o, size, viewer->camera(), "iso 1150", 0.45);
+    HeadOracle o(size, viewer->camera());
+    ASSERT_TRUE(o.error().empty()) << o.error();
+    const std::vector<core::SurfaceId> ids = o.scene().surfaces(); // skin, bone
+    const auto bone = find_pixel(o, size, "iso 1150", 0.45);
     ASSERT_TRUE(bone) << "no pixel sees the bone";
 
     // ---- Isolate: the bone component under the cursor
@@ -99,10 +59,10 @@ TEST_F(GuiStructures, IsolateListsTheComponentMeasureGivesAndDistanceIsTheCores)
         << w.statusBar()->currentMessage().toStdString();
     const core::SurfaceId made = w.scene().surfaces().back();
     // The core's answer: the bone's components, the one nearest the picked point.
-    const Mesh& bone_mesh = o.scene.mesh(o.ids[1]);
+    const Mesh& bone_mesh = o.scene().mesh(ids[1]);
     const auto comps = triangle_components(bone_mesh);
     const std::uint32_t k = comps[nearest_point(TriangleBvh(bone_mesh), bone->second.lps).triangle];
-    const auto listed = core::measure_surfaces(o.scene, {o.ids[1]}).front().measures.components.at(k);
+    const auto listed = core::measure_surfaces(o.scene(), {ids[1]}).front().measures.components.at(k);
     EXPECT_EQ(w.scene().info(made).name, "iso 1150 component " + std::to_string(k + 1));
     EXPECT_EQ(w.scene().mesh(made).triangles.size(), listed.triangles);
     const auto measured = core::measure_surfaces(w.scene(), {made}).front().measures;
@@ -118,7 +78,7 @@ TEST_F(GuiStructures, IsolateListsTheComponentMeasureGivesAndDistanceIsTheCores)
 
     // ---- Distance: skin (a cheek, skin only) to that bone component
     w.scene().info(made).visible = false; // the view as before: the isolated copy off
-    const auto skin = find_pixel(o, size, viewer->camera(), "iso 500", 0.55);
+    const auto skin = find_pixel(o, size, "iso 500", 0.55);
     ASSERT_TRUE(skin) << "no pixel sees only skin";
     tools->distance_action()->trigger();
     const std::size_t markups = w.markups().size();
@@ -128,7 +88,7 @@ TEST_F(GuiStructures, IsolateListsTheComponentMeasureGivesAndDistanceIsTheCores)
         << w.statusBar()->currentMessage().toStdString();
     ASSERT_EQ(w.markups().size(), markups + 1);
     const Markup& line = w.markups().back();
-    const core::SurfaceGap gap = core::surface_gap(o.scene, o.ids[0], o.ids[1], skin->second.lps, bone->second.lps);
+    const core::SurfaceGap gap = core::surface_gap(o.scene(), ids[0], ids[1], skin->second.lps, bone->second.lps);
     EXPECT_EQ(line.name, gap.name_a + " to " + gap.name_b);
     ASSERT_EQ(line.points.size(), 2u);
     EXPECT_NEAR(glm::length(line.points[0].position - gap.distance.pair.a), 0.0, 1e-9);
