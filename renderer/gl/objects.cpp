@@ -62,6 +62,18 @@ Texture Texture::create_3d(GLenum internal_format, int width, int height, int de
     return create(GL_TEXTURE_3D, internal_format, width, height, depth);
 }
 
+Texture Texture::create_2d_multisample(GLenum internal_format, int width, int height, int samples) {
+    GLuint id = 0;
+    glCreateTextures(GL_TEXTURE_2D_MULTISAMPLE, 1, &id);
+    Texture t;
+    static_cast<Object<TextureTraits>&>(t) = Object<TextureTraits>(id);
+    glTextureStorage2DMultisample(id, samples, internal_format, width, height, GL_TRUE);
+    t.w_ = width;
+    t.h_ = height;
+    t.format_ = internal_format;
+    return t;
+}
+
 Framebuffer Framebuffer::create() {
     GLuint id = 0;
     glCreateFramebuffers(1, &id);

@@ -94,6 +94,8 @@ public:
     static Texture create_2d_array(GLenum internal_format, int width, int height, int layers);
     // 3D texture, one level, nearest filtering.
     static Texture create_3d(GLenum internal_format, int width, int height, int depth);
+    // 2D multisample texture (fixed sample locations): `samples` per pixel.
+    static Texture create_2d_multisample(GLenum internal_format, int width, int height, int samples);
     int width() const { return w_; }
     int height() const { return h_; }
     int depth() const { return d_; } // layers of an array texture, slices of a 3D one, else 1

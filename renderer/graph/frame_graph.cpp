@@ -26,7 +26,7 @@ std::size_t bytes_per_pixel(Format f) {
 
 std::size_t bytes_of(const TextureDesc& d) {
     return std::size_t(d.width) * std::size_t(d.height) * std::size_t(d.layers) * std::size_t(d.depth) *
-           bytes_per_pixel(d.format);
+           std::size_t(d.samples) * bytes_per_pixel(d.format);
 }
 
 // ---- Builder -------------------------------------------------------------------

@@ -37,6 +37,7 @@ struct TextureDesc {
     int layers = 1;
     int depth = 1;
     bool array = false;
+    int samples = 1; // > 1: a multisample 2D texture (samples per pixel)
     bool operator==(const TextureDesc&) const = default;
 };
 std::size_t bytes_of(const TextureDesc& d);

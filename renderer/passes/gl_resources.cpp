@@ -22,7 +22,10 @@ std::uint64_t GlResources::create_texture(const graph::TextureDesc& d, const std
     const bool array = d.array || d.layers > 1;
     if (array && d.depth > 1)
         throw Error("GlResources::create_texture", "'" + name + "' asks for both layers and depth");
-    gl::Texture t = d.depth > 1 ? gl::Texture::create_3d(gl_format(d.format), d.width, d.height, d.depth)
+    if (d.samples > 1 && (array || d.depth > 1))
+        throw Error("GlResources::create_texture", "'" + name + "' asks for samples with layers or depth");
+    gl::Texture t = d.samples > 1 ? gl::Texture::create_2d_multisample(gl_format(d.format), d.width, d.height, d.samples)
+                    : d.depth > 1 ? gl::Texture::create_3d(gl_format(d.format), d.width, d.height, d.depth)
                     : array     ? gl::Texture::create_2d_array(gl_format(d.format), d.width, d.height, d.layers)
                                 : gl::Texture::create_2d(gl_format(d.format), d.width, d.height);
     glObjectLabel(GL_TEXTURE, t.id(), GLsizei(name.size()), name.c_str());
