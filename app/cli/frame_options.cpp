@@ -69,6 +69,13 @@ void add_frame_options(CLI::App* c, FrameArgs& a, bool input_required) {
     c->add_option("--ao-frames", req.look.ao_frames, "Still frames accumulated with new jitter sets (cone AO)")
         ->check(CLI::Range(1, 4096));
     c->add_option("--series", req.series, "DICOM series to load: index or SeriesInstanceUID");
+    c->add_option("--aa-samples", req.look.aa.samples,
+                  "Anti-aliasing: DSRAA visibility sub-samples per pixel, 1 (off), 2, 4 or 8 (default 4)");
+    c->add_option("--aa-frames", req.look.aa.frames,
+                  "Anti-aliasing: jittered frames averaged at most (default 64; 1: one frame)");
+    c->add_option("--aa-tolerance", req.look.aa.tolerance,
+                  "Anti-aliasing: stop averaging when the image changes by less (RMS, sRGB 0..1; default 0.04)");
+    c->add_flag("--no-aa", a.no_aa, "No anti-aliasing: one sample per pixel, one frame");
     add_look_options(c, a.look);
     c->add_option("--oit-epsilon", req.look.oit_epsilon,
                   "Translucent surfaces: stop compositing a pixel below this transmittance (default 1/512)")
@@ -87,6 +94,10 @@ iso::core::RenderRequest frame_request(const FrameArgs& a) {
     req.progress = progress_bar();
     if (!a.look.background.empty()) req.look.background = hex_option("--background", a.look.background);
     req.look.flat_shading = a.look.shading == "flat";
+    if (a.no_aa) {
+        req.look.aa.samples = 1;
+        req.look.aa.frames = 1;
+    }
     return req;
 }
 

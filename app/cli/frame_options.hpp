@@ -23,6 +23,7 @@ void add_cone_options(CLI::App* cmd, iso::ConeAoSettings& c);
 struct FrameArgs {
     std::string in, size = "1024x1024", ao = "off", disk_blend;
     Look look; // surface colours and opacities, background, shading
+    bool no_aa = false;
     iso::core::RenderRequest req;
 };
 

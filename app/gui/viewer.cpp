@@ -79,6 +79,10 @@ RenderOptions Viewer::frame_options() const {
     // the release bring it back and accumulate it.
     opt.look = options_.look;
     if (dragging_ && !options_.ao_while_dragging) opt.look.ao = AoMethod::Off;
+    // Still frames are jittered and averaged (anti-aliasing that converges
+    // to exact coverage, translucent surfaces and the overlay included);
+    // every frame has DSRAA's sub-samples. Any change starts the average again.
+    opt.accumulate = !dragging_ && options_.look.aa.view_frames > 1;
     return opt;
 }
 
@@ -95,10 +99,14 @@ void Viewer::draw() {
     // Cone AO accumulates still frames; the other methods are done in one.
     const bool accumulates = opt.look.ao == AoMethod::Cone;
     ao_frames_ = accumulates ? r.ao_frames : 0;
-    // Progressive AO: while the camera and the scene stay still, keep
-    // drawing so new jitter sets accumulate and the noise averages out; any
-    // interaction restarts the accumulation (the renderer sees the change).
-    if (accumulates && ao_frames_ < options_.look.ao_frames) QTimer::singleShot(0, this, [this] { update(); });
+    aa_frames_ = r.aa_frames;
+    // Progressive AO and anti-aliasing: while the camera and the scene stay
+    // still, keep drawing so new jitter sets (of the AO, of the sub-pixel
+    // offset) accumulate; any interaction restarts the accumulation (the
+    // renderer sees the change).
+    const bool ao_more = accumulates && ao_frames_ < options_.look.ao_frames;
+    const bool aa_more = opt.accumulate && aa_frames_ < options_.look.aa.view_frames;
+    if (ao_more || aa_more) QTimer::singleShot(0, this, [this] { update(); });
 }
 
 void Viewer::set_camera(const Camera& c) {
@@ -130,6 +138,7 @@ core::PickResult Viewer::pick_at(QPointF image_pixel) {
     // so the picture on screen and its AO accumulation stay as they are.
     RenderOptions opt = frame_options();
     opt.look.ao = AoMethod::Off;
+    opt.accumulate = false;
     opt.annotations = nullptr;
     opt.present = false;
     opt.target_framebuffer = 0;

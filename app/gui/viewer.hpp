@@ -53,12 +53,15 @@ public:
     explicit Viewer(core::Scene& scene, PatientView view, ViewerOptions options = {}, QWidget* parent = nullptr);
     ~Viewer() override;
     int frames() const { return frames_; }
-    // True once the picture stopped changing: no cone AO, or its still
-    // frames all accumulated.
+    // True once the picture stopped changing: the still frames of cone AO
+    // and of anti-aliasing all accumulated.
     bool converged() const {
-        return frames_ > 0 && (options_.look.ao != AoMethod::Cone || ao_frames_ >= options_.look.ao_frames);
+        const bool ao = options_.look.ao != AoMethod::Cone || ao_frames_ >= options_.look.ao_frames;
+        const bool aa = options_.look.aa.view_frames <= 1 || aa_frames_ >= options_.look.aa.view_frames;
+        return frames_ > 0 && ao && aa;
     }
     int ao_frames() const { return ao_frames_; }
+    int aa_frames() const { return aa_frames_; }
     // A mouse drag is moving the camera now.
     bool dragging() const { return dragging_; }
     // GL objects the renderer made after the first frame (0 in a steady
@@ -138,6 +141,7 @@ private:
     double aspect() const;
     int frames_ = 0;
     int ao_frames_ = 0;
+    int aa_frames_ = 0;
     std::size_t objects_after_first_frame_ = 0, objects_since_first_frame_ = 0;
     std::vector<LabelBox> labels_;
 };

@@ -1,5 +1,7 @@
 #include "renderer/core/api.hpp"
 
+#include <algorithm>
+#include <cmath>
 #include <cstdlib>
 #include <filesystem>
 #include <map>
@@ -132,7 +134,65 @@ Image ao_reference_cached(Scene& scene, const Camera& cam, const RenderOptions& 
     return img;
 }
 
+// The largest channel difference per pixel between two RGBA8 images, in
+// sRGB units (0..1): its RMS over the pixels that differ at all (0: none).
+double changed_rms(const Image& a, const Image& b) {
+    if (a.bytes.size() != b.bytes.size() || a.channels != 4) return 1.0;
+    double sum = 0;
+    std::size_t n = 0;
+    for (std::size_t i = 0; i + 3 < a.bytes.size(); i += 4) {
+        int d = 0;
+        for (int c = 0; c < 4; ++c) d = std::max(d, std::abs(int(a.bytes[i + c]) - int(b.bytes[i + c])));
+        if (d == 0) continue;
+        sum += (d / 255.0) * (d / 255.0);
+        ++n;
+    }
+    return n ? std::sqrt(sum / double(n)) : 0.0;
+}
+
 } // namespace
+
+std::string Convergence::text() const {
+    std::ostringstream t;
+    t.precision(3);
+    if (samples > 1)
+        t << "DSRAA " << samples << " sub-samples per pixel";
+    else
+        t << "1 sample per pixel";
+    if (frames > 1)
+        t << "; " << frames << " jittered frames averaged (the frames after the first: 1 sample each; last change "
+          << change << " sRGB)";
+    return t.str();
+}
+
+RenderResult render_converged(Scene& scene, const Camera& cam, RenderOptions ro, const RenderRequest& req,
+                              Convergence& out) {
+    const AntiAliasing& aa = req.look.aa;
+    const bool colour = ro.aov == Aov::None && ro.image;
+    // Cone AO's still frames each add new jitter sets to the running mean of the AO.
+    const int ao_frames = req.look.ao == AoMethod::Cone ? req.look.ao_frames : 1;
+    const int most = std::max(colour ? aa.frames : 1, ao_frames);
+    ro.accumulate = colour && aa.frames > 1;
+    Image previous; // the mean at the last check, half as many frames
+    RenderResult r;
+    for (int n = 1;; ++n) {
+        ro.restart_accumulation = n == 1;
+        r = scene.render(cam, ro);
+        if (r.cancelled) throw Cancelled("disk AO");
+        out.frames = n;
+        if (n == 1) out.samples = r.aa_samples;
+        if (n >= most) break;
+        report(req.progress, double(n) / most, "anti-aliasing", "render");
+        // At 2, 4, 8, ... frames the mean of n against that of n / 2; stops from 4 on.
+        if (!ro.accumulate || (n & (n - 1)) != 0) continue;
+        if (!previous.bytes.empty()) {
+            out.change = changed_rms(previous, r.image);
+            if (n >= 4 && out.change <= aa.tolerance && n >= ao_frames) break;
+        }
+        previous = r.image;
+    }
+    return r;
+}
 
 RenderOptions frame_options(const RenderRequest& req) {
     validate(req.look);
@@ -195,12 +255,13 @@ RenderOutput render_image(Scene& scene, const RenderRequest& req) {
     const bool colour_image = req.aov == Aov::None; // annotations and markups go on it only
     if ((req.annotations || !ann.markups.empty()) && colour_image) ro.annotations = &ann;
     const Camera cam = frame_camera(scene, req);
-    // Still frames: each adds new jitter sets to the running mean of the AO.
-    for (int f = 1; req.look.ao == AoMethod::Cone && f < req.look.ao_frames; ++f) scene.render(cam, ro);
-    auto r = scene.render(cam, ro);
-    if (r.cancelled) throw Cancelled("disk AO");
+    Convergence aa;
+    auto r = render_converged(scene, cam, ro, req, aa);
     RenderOutput out;
     out.meta = frame_metadata({scene, req, ro, cam, r, colour_image ? &ann : nullptr});
+    if (colour_image) out.meta.text["isoscope:antialiasing"] = aa.text();
+    out.aa_frames = aa.frames;
+    out.aa_change = aa.change;
     out.image = std::move(r.image);
     out.stats = std::move(r.stats);
     out.oit = r.oit;

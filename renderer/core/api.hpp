@@ -97,7 +97,26 @@ struct RenderOutput {
     OitStats oit;                 // translucent surfaces (zero without)
     PickList pick;                // with RenderRequest::pick
     std::vector<LabelBox> labels; // the overlay's labels as placed and drawn (docs/text.md)
+    int aa_frames = 1;            // jittered frames averaged (look.aa)
+    double aa_change = 0;         // the last change of their mean (sRGB units; look.aa.tolerance)
 };
+
+// How an export's accumulation ended: frames averaged and the last change
+// of their mean between N/2 and N frames (RMS over the pixels that changed,
+// sRGB units), and the words the image metadata records.
+struct Convergence {
+    int frames = 1;
+    int samples = 1; // DSRAA's sub-samples in the first frame (the GL's limit may lower look.aa.samples)
+    double change = 0;
+    std::string text() const;
+};
+// Draws the frame of an export: colour images accumulate jittered frames
+// (look.aa) until their mean changes by at most look.aa.tolerance between
+// N/2 and N frames (checked at N = 4, 8, 16, ...) or look.aa.frames are
+// drawn; cone AO draws at least look.ao_frames. Reports progress (stage
+// "anti-aliasing") and throws Cancelled when asked to stop.
+RenderResult render_converged(Scene& scene, const Camera& cam, RenderOptions ro, const RenderRequest& req,
+                              Convergence& out);
 
 // Renders the scene headlessly (its own EGL context, made on first use; the
 // caller's EGL context, or none, is current again on return, so that any

@@ -50,6 +50,13 @@ void validate(const FrameLook& look) {
     check_range("transparency memory", look.oit_memory_mib, 1.0, 65536.0);
     check_range("ambient occlusion frames", look.ao_frames, 1, 4096);
     check_range("ambient occlusion rays", look.ao_rays, 1, 1 << 20);
+    const int s = look.aa.samples;
+    if (s != 1 && s != 2 && s != 4 && s != 8)
+        throw Error("anti-aliasing samples", "expected 1 (off), 2, 4 or 8, got " + std::to_string(s));
+    check_range("anti-aliasing frames", look.aa.frames, 1, 4096);
+    check_range("anti-aliasing view frames", look.aa.view_frames, 1, 4096);
+    check_range("anti-aliasing tolerance", look.aa.tolerance, 0.0, 1.0);
+    check_range("anti-aliasing normal cosine", look.aa.normal_cos, -1.0, 1.0);
     // A method's settings are checked when it is asked for (the cone's
     // radius is every method's R; disk frames trace translucent surfaces'
     // AO with the cone's settings).

@@ -45,6 +45,28 @@ enum class AoMethod { Off, Cone, Disk, Reference };
 const char* ao_method_name(AoMethod m);                // "off", "cone", "disk", "reference"
 AoMethod ao_method_from_name(const std::string& name); // throws iso::Error("ambient occlusion", ...)
 
+// Anti-aliasing (docs/rendering.md, "Anti-aliasing"). Each frame stores
+// `samples` visibility sub-samples per pixel (depth, object id, normal) but
+// shades once per pixel; a reconstruction pass maps every sub-sample to the
+// shaded colour of its own pixel or of a neighbour of the same object with a
+// similar normal (DSRAA, decoupled sub-pixel reconstruction). Frames asked to
+// accumulate (RenderOptions::accumulate: the 3D view's still frames and
+// exports) are drawn with a sub-pixel jitter and averaged in linear light,
+// the first with DSRAA, the later ones with one sample each (DSRAA's fixed
+// sub-samples, moved by the jitter, would reach into the neighbours and
+// blur the average), which converges to exact coverage for everything,
+// translucent layers and the overlay included; exports stop when the
+// average changes by less than `tolerance` (the RMS change, in sRGB units
+// 0..1, of the pixels that moved) between N/2 and N frames, or at `frames`.
+struct AntiAliasing {
+    int samples = 4;          // visibility sub-samples per pixel: 1 (no DSRAA), 2, 4 or 8
+    int frames = 64;          // accumulated frames at most (exports; the 3D view stops at view_frames)
+    int view_frames = 16;     // the 3D view's still frames
+    double tolerance = 0.04;  // exports: convergence of the accumulated image (sRGB units)
+    float normal_cos = 0.8f;  // DSRAA: a neighbour's normal matches a sub-sample's within acos(normal_cos)
+    bool operator==(const AntiAliasing&) const = default;
+};
+
 // How a frame shades its surfaces: the one description that the CLI's
 // options, the 3D view, sessions, image exports and the renderer all read
 // (each takes what applies to it: the renderer ignores ao_frames and
@@ -73,6 +95,7 @@ struct FrameLook {
     DiskAoSettings disk;
     int ao_frames = 1;  // cone: still frames accumulated, each with new jitter sets (the 3D view: while nothing moves)
     int ao_rays = 1024; // reference: rays per pixel
+    AntiAliasing aa;
     bool operator==(const FrameLook&) const = default;
 };
 
@@ -132,6 +155,17 @@ struct RenderOptions {
     // top-left; clipped to the image. Fragments inside are listed by the
     // frame's own geometry passes; RenderResult::pick holds the lists.
     std::optional<PickRegion> pick;
+    // Accumulate this frame into the running average of the frames before it
+    // (look.aa): the renderer jitters each frame by a sub-pixel offset
+    // (Halton 2, 3; the first frame unjittered) and restarts the average
+    // whenever anything but the jitter changes (camera, size, surfaces,
+    // look, annotations). RenderResult::aa_frames counts the frames in it.
+    bool accumulate = false;
+    bool restart_accumulation = false; // this frame starts the average (an export's first frame)
+    // The sub-pixel offset of this frame instead of the renderer's sequence,
+    // in pixels (x right, y down, each in [-0.5, 0.5]): exact-coverage
+    // references place their sub-samples on a stratified grid.
+    std::optional<glm::vec2> jitter;
 };
 
 // Test and benchmark hooks, apart from what a user asks for.
@@ -198,6 +232,8 @@ struct RenderResult {
     SliceMap slicemap;      // with RenderHooks::read_slicemap
     bool voxelized = false; // the slicemap was rebuilt this frame (else reused)
     int ao_frames = 0;      // still frames accumulated into the AO so far
+    int aa_frames = 0;      // frames in the accumulated image (RenderOptions::accumulate)
+    int aa_samples = 1;     // DSRAA sub-samples per pixel this frame (1: not used)
     double ao_guard = 0;    // guard band used by the slicemap, fraction of the viewport per side
     OitStats oit;
     std::vector<std::uint32_t> oit_lists; // with RenderHooks::read_oit_lists

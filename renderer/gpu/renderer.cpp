@@ -58,6 +58,8 @@ struct Renderer::Impl {
     graph::ResourcePool pool{gl};
     std::uint64_t geometry_version = 0;
     passes::AoHistory ao;
+    passes::AaHistory aa;
+    int max_samples = 0; // multisample textures: the most samples every G-buffer format allows (0: not asked yet)
     passes::DiskState disk;
     std::uint64_t mesh_versions = 0;
     std::size_t oit_next_capacity = 0; // VOIT pool nodes for the next frame (0: none drawn yet)
@@ -176,14 +178,45 @@ RenderResult Renderer::render(const Camera& camera, const RenderOptions& opt, co
     ctx.gl = &im.gl;
     ctx.pool = &im.pool;
     ctx.geometry_version = im.geometry_version;
+    if (ctx.aa_samples > 1) { // llvmpipe, for one, stops at 4
+        if (im.max_samples == 0) {
+            GLint color = 1, depth = 1, integer = 1;
+            glGetIntegerv(GL_MAX_COLOR_TEXTURE_SAMPLES, &color);
+            glGetIntegerv(GL_MAX_DEPTH_TEXTURE_SAMPLES, &depth);
+            glGetIntegerv(GL_MAX_INTEGER_SAMPLES, &integer);
+            im.max_samples = std::max(1, std::min({color, depth, integer}));
+        }
+        ctx.aa_samples = std::min(ctx.aa_samples, im.max_samples);
+    }
     ctx.ao = &im.ao;
     ctx.disk = &im.disk;
     for (const auto& d : ctx.draws) {
         auto& m = im.meshes[d.id - 1];
         ctx.disk_surfaces.push_back({d.id, m.version, [&m] { return read_back(m); }, &m.disk});
     }
+    // Accumulated frames: the next jitter of the running average, which
+    // starts again when anything but the jitter changed.
+    const bool accumulates = opt.accumulate && opt.image && opt.aov == Aov::None;
+    if (accumulates) {
+        auto key = passes::accumulation_key(ctx);
+        if (key != im.aa.key || opt.restart_accumulation) {
+            im.aa.key = std::move(key);
+            im.aa.frames = 0;
+        }
+        ctx.aa = &im.aa;
+        ctx.aa_frame = im.aa.frames;
+        // The frames after the first take one sample each: DSRAA's fixed
+        // sub-sample pattern, moved by the jitter, would reach into the
+        // neighbours' footprints and blur the average; one jittered sample
+        // per frame averages to exact coverage.
+        if (ctx.aa_frame > 0) ctx.aa_samples = 1;
+        passes::set_jitter(ctx, opt.jitter ? *opt.jitter : passes::jitter_offset(im.aa.frames));
+    }
     for (int redraws = 0;; ++redraws) {
+        // A frame drawn again (the VOIT pool was too small) starts the average again.
+        if (redraws > 0) ctx.aa_frame = 0;
         RenderResult result;
+        result.aa_samples = ctx.aa_samples;
         result.gl_renderer = reinterpret_cast<const char*>(glGetString(GL_RENDERER));
         ctx.result = &result;
         ctx.oit_capacity = capacity;

@@ -27,6 +27,9 @@ FrameContext make_context(const Camera& camera, const RenderOptions& opt, std::v
     ctx.height = opt.height;
     const double aspect = double(opt.width) / double(opt.height);
     ctx.view_projection = glm::mat4(camera.projection(aspect) * camera.view());
+    set_jitter(ctx, opt.jitter.value_or(glm::vec2(0.0f)));
+    // Sub-samples serve the colour image; picks and AOVs read pixel centres.
+    ctx.aa_samples = opt.image && opt.aov == Aov::None && !opt.pick ? opt.look.aa.samples : 1;
     ctx.world_to_view = glm::mat3(glm::mat4(camera.view()));
     // Translucent draws go near to far (by their bounds' nearest corner along
     // the view axis): when the pool is full at its cap, the fragments left
@@ -64,6 +67,15 @@ FrameContext make_context(const Camera& camera, const RenderOptions& opt, std::v
     return ctx;
 }
 
+void set_jitter(FrameContext& ctx, glm::vec2 jitter) {
+    ctx.jitter = jitter;
+    // Clip space moved by the offset: x right, y down in pixels; NDC spans 2 per image.
+    const glm::vec2 ndc(2.0f * jitter.x / float(ctx.width), -2.0f * jitter.y / float(ctx.height));
+    glm::mat4 t(1.0f);
+    t[3] = glm::vec4(ndc, 0.0f, 1.0f);
+    ctx.raster_view_projection = t * ctx.view_projection;
+}
+
 void build_frame(graph::FrameGraph& fg, const FrameContext& ctx) {
     const RenderOptions& opt = ctx.opt;
     // The GL frame computes cone and disk AO; the reference is the core's (on the CPU).
@@ -90,7 +102,9 @@ void build_frame(graph::FrameGraph& fg, const FrameContext& ctx) {
         color = voit(fg, ctx, gb, color, lit_ao && !opt.look.flat_shading ? &ao : nullptr, picked);
     if (ctx.pick) pick(fg, ctx, gb, picked);
     if (!opt.image) return; // nothing reads the colour image or an AOV: their passes are culled
+    color = dsraa(fg, ctx, gb, color);
     if (opt.annotations) color = overlay(fg, ctx, color, gb.depth);
+    if (opt.accumulate && opt.aov == Aov::None) color = accumulate(fg, ctx, color);
     if (opt.present) return present(fg, ctx, color);
     // The colour image, or the AOV: depth, AO, or the G-buffer channel the layout table names.
     graph::TextureHandle source = color;

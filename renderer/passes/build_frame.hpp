@@ -59,6 +59,14 @@ struct AoHistory {
     int frames = 0;               // still frames accumulated so far
 };
 
+// What the accumulation of jittered frames keeps between frames besides its
+// history texture: what the average is of (everything but the jitter), and
+// how many frames are in it.
+struct AaHistory {
+    std::vector<double> key;
+    int frames = 0;
+};
+
 // A visible opaque surface as disk AO sees it: how to get its mesh (read
 // back from the renderer's GPU buffers, called only when the hierarchy is not
 // cached; the GL context is current) and the slot where its hierarchy is
@@ -78,6 +86,14 @@ struct FrameContext {
     RenderHooks hooks;
     int width = 1, height = 1;
     glm::mat4 view_projection{1.0f};
+    // The projection the geometry is rasterized with: view_projection moved
+    // by this frame's sub-pixel jitter (the AO passes keep the unjittered one,
+    // so a jittered frame neither rebuilds the slicemap nor restarts the AO).
+    glm::mat4 raster_view_projection{1.0f};
+    glm::vec2 jitter{0.0f}; // pixels, x right, y down
+    int aa_samples = 1;     // DSRAA visibility sub-samples (1: none: no colour image, a pick or an AOV)
+    AaHistory* aa = nullptr; // required when the frame accumulates
+    int aa_frame = 0;        // this frame's index in the accumulated average (0: it starts again)
     glm::mat3 world_to_view{1.0f};
     std::vector<DrawItem> draws;       // opaque (opacity 1): the G-buffer and AO
     std::vector<DrawItem> translucent; // opacity < 1: the VOIT lists
@@ -99,6 +115,8 @@ struct FrameContext {
 // Builds the context of a frame: matrices, bounds and the AO/overlay inputs.
 FrameContext make_context(const Camera& camera, const RenderOptions& opt, std::vector<DrawItem> draws,
                           const Bounds& bounds);
+// Sets the frame's sub-pixel jitter (pixels, x right, y down) and the projection it rasterizes with.
+void set_jitter(FrameContext& ctx, glm::vec2 jitter);
 
 // A pass that only reads (a read-back, a presentation) and runs for that
 // side effect: `execute(const Reads&, const graph::Resources&)` gets the
@@ -144,6 +162,10 @@ struct GBuffer {
     graph::TextureHandle depth, normal, id, albedo;
     graph::BufferHandle params;     // the pass's own
     graph::TextureHandle primitive; // with a pick: the nearest opaque surface's triangle (R32UI)
+    // With DSRAA (ctx.aa_samples > 1): the visibility sub-samples
+    // (multisample textures: depth, normal, id, albedo); the channels above
+    // are then their sample 0, the one sample each pixel shades.
+    graph::TextureHandle ms_depth, ms_normal, ms_id, ms_albedo;
 };
 GBuffer gbuffer(graph::FrameGraph& fg, const FrameContext& ctx);
 // The compute step (add each pixel's nearest opaque surface from the
@@ -227,6 +249,19 @@ graph::TextureHandle overlay(graph::FrameGraph& fg, const FrameContext& ctx, gra
 // listed too: `pick` is set to the lists.
 graph::TextureHandle voit(graph::FrameGraph& fg, const FrameContext& ctx, const GBuffer& gb, graph::TextureHandle color,
                           const AmbientOcclusion* ao, PickBuffers& pick);
+// DSRAA's reconstruction (dsraa.cpp): each visibility sub-sample takes the
+// shaded colour of its own pixel, else of the nearest neighbour of the same
+// object with a similar normal, else the background; the pixel is their
+// mean in linear light. Returns `color` unchanged without sub-samples.
+graph::TextureHandle dsraa(graph::FrameGraph& fg, const FrameContext& ctx, const GBuffer& gb,
+                           graph::TextureHandle color);
+// The accumulation of jittered frames (accumulate.cpp): the running mean in
+// linear light (history), and this frame's result encoded as sRGB.
+graph::TextureHandle accumulate(graph::FrameGraph& fg, const FrameContext& ctx, graph::TextureHandle color);
+// What the accumulated average depends on besides the jitter.
+std::vector<double> accumulation_key(const FrameContext& ctx);
+// Sub-pixel offset of the k-th accumulated frame (Halton 2, 3; frame 0 unjittered), pixels in [-0.5, 0.5).
+glm::vec2 jitter_offset(int k);
 void present(graph::FrameGraph& fg, const FrameContext& ctx, graph::TextureHandle color);
 void readback(graph::FrameGraph& fg, const FrameContext& ctx, graph::TextureHandle source);
 

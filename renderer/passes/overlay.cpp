@@ -74,7 +74,7 @@ graph::TextureHandle overlay(graph::FrameGraph& fg, const FrameContext& ctx, gra
                             OverlayParams{{float(ctx.width), float(ctx.height)},
                                           {float(ctx.camera.near_plane), float(ctx.camera.far_plane)},
                                           a ? a->occlusion_tolerance_mm : 1.0f,
-                                          8.0f * std::max(ctx.opt.scale, 0.1f)});
+                                          8.0f * std::max(ctx.opt.scale, 0.1f), ctx.jitter});
                 glEnable(GL_BLEND);
                 // Colour blends; alpha accumulates so a transparent background keeps annotations opaque.
                 glBlendFuncSeparate(GL_SRC_ALPHA, GL_ONE_MINUS_SRC_ALPHA, GL_ONE, GL_ONE_MINUS_SRC_ALPHA);

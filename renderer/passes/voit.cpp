@@ -118,7 +118,7 @@ graph::TextureHandle depth_cut(graph::FrameGraph& fg, const FrameContext& ctx, c
                 auto& prog =
                     gl.program({"render/gbuffer.vert", "render/oit_fragments.frag"}, "#define OIT_HISTOGRAM 1\n");
                 prog.use();
-                bind_params(gl, r, d.gbuffer_params, GBufferParams{ctx.view_projection});
+                bind_params(gl, r, d.gbuffer_params, GBufferParams{ctx.raster_view_projection});
                 bind_params(gl, r, d.params, oit_params(ctx));
                 glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 4, histogram);
                 draw_translucent(gl, ctx, gl.texture(r, d.depth), prog);
@@ -182,7 +182,7 @@ Lists fragment_lists(graph::FrameGraph& fg, const FrameContext& ctx, const GBuff
                            merge_define(ctx) + (d.cut.valid() ? "#define OIT_CUT 1\n" : "") + pick_defines(d.pick));
             prog.use();
             bind_pick(gl, r, ctx, d.pick, prog, true);
-            bind_params(gl, r, d.gbuffer_params, GBufferParams{ctx.view_projection});
+            bind_params(gl, r, d.gbuffer_params, GBufferParams{ctx.raster_view_projection});
             bind_params(gl, r, d.params, oit_params(ctx));
             glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, gl.buffer(r, d.counters));
             glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 1, gl.buffer(r, d.nodes));

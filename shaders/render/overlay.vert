@@ -29,5 +29,9 @@ void main() {
     v_along = along;
     v_texel = texel;
     v_channel = int(round(atlas_channel));
-    gl_Position = vec4(pixel.x / viewport.x * 2.0 - 1.0, 1.0 - pixel.y / viewport.y * 2.0, 0.0, 1.0);
+    // Text is drawn one atlas texel per pixel (its glyphs are anti-aliased by
+    // FreeType); the rest is jittered with the scene, so accumulated frames
+    // give lines and glyphs exact coverage.
+    vec2 at = pixel + (atlas_channel < 0.0 ? jitter : vec2(0.0));
+    gl_Position = vec4(at.x / viewport.x * 2.0 - 1.0, 1.0 - at.y / viewport.y * 2.0, 0.0, 1.0);
 }
