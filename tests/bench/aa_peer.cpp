@@ -80,6 +80,14 @@ std::vector<PeerImage> render_vtk_aa(const std::vector<PeerMesh>& meshes, const 
                                      const AaPeerOptions& opt, std::vector<std::string>* failed) {
     if (meshes.empty()) throw Error("render_vtk_aa", "no meshes");
     const std::string dir = work_folder(opt.work_dir);
+    // A folder of our own goes when done (a large mesh written as PLY is hundreds of MiB); the caller's stays.
+    struct Cleanup {
+        std::string dir;
+        ~Cleanup() {
+            std::error_code ec;
+            if (!dir.empty()) std::filesystem::remove_all(dir, ec);
+        }
+    } cleanup{opt.work_dir.empty() ? dir : std::string()};
     const std::string scene = scene_arguments(meshes, cam, W, H, opt, dir);
     const std::string peer = opt.peer.empty() ? std::string(ISOSCOPE_AA_PEER) : opt.peer;
     std::vector<PeerImage> out;

@@ -56,7 +56,7 @@ struct AaPeerOptions {
     // occlusion ratio 0, as oit_peer's reference); false: VTK's
     // weighted-blended OIT, its default without peeling.
     bool depth_peeling = true;
-    std::string work_dir; // meshes and images; empty: a new folder under the temp dir
+    std::string work_dir; // meshes, images, VTK's logs kept here; empty: a temporary folder, removed
     std::string peer;     // the aa_peer_vtk program; empty: the one built with this
 };
 
