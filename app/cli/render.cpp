@@ -19,7 +19,7 @@ struct RenderArgs {
     FrameArgs frame;
     std::string out, aov, cache, session;
     std::vector<std::string> markups;
-    bool stats = false, no_annotations = false, no_markups = false;
+    bool stats = false, no_annotations = false, no_legend = false, no_markups = false;
     bool view_given = false, ao_given = false; // with --session: replace the session's camera / AO method
 };
 
@@ -79,6 +79,7 @@ int run_render(const RenderArgs& a) {
     req.aov = iso::aov_from_name(a.aov);
     req.cache_dir = a.cache;
     req.annotations = !a.no_annotations;
+    req.legend = !a.no_legend;
     req.time_passes = a.stats;
     if (!a.markups.empty() && !a.aov.empty())
         throw iso::Error("--markups", "markups are drawn on the colour image, not on an AOV (--aov)");
@@ -123,7 +124,9 @@ RunFn add_render(CLI::App& cmd, char*) {
         ->check(CLI::Range(1, 1 << 20));
     c->add_option("--ao-cache", a.cache, "Folder caching AO references ('-': none; default ~/.cache/isoscope)");
     c->add_flag("--no-annotations", a.no_annotations,
-                "No scale bar, orientation letters or labels (--markups are still drawn)");
+                "No scale bar, orientation letters, legend or labels (--markups are still drawn)");
+    c->add_flag("--no-legend", a.no_legend,
+                "No legend (the surfaces' names, colours, opacities and iso values in a corner box)");
     c->add_option("--markups", a.markups,
                   "3D Slicer markups file (.mrk.json) to draw: points, lines with their length, angles "
                   "(repeatable; dimmed where a surface hides them)")

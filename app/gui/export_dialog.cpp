@@ -87,6 +87,11 @@ ExportDialog::ExportDialog(QSize size, AoMethod ao, const QString& file, const Q
     annotations_->setObjectName("annotations");
     annotations_->setChecked(true);
     form->addRow("Annotations:", annotations_);
+    legend_ = new QCheckBox("Legend: the surfaces' names, colours and iso values", this);
+    legend_->setObjectName("legend");
+    legend_->setChecked(true);
+    form->addRow("", legend_);
+    connect(annotations_, &QCheckBox::toggled, legend_, &QWidget::setEnabled); // drawn only with annotations
     markups_ = new QCheckBox("Points, rulers and angles", this);
     markups_->setObjectName("markups");
     markups_->setChecked(true);
@@ -119,6 +124,7 @@ core::RenderRequest ExportDialog::frame() const {
     r.height = height_->value();
     r.scale = float(scale_->value());
     r.annotations = annotations_->isChecked();
+    r.legend = legend_->isChecked();
     r.look.transparent_background = transparent_->isChecked();
     r.look.ao = ao_method_from_name(ao_->currentData().toString().toStdString());
     return r;

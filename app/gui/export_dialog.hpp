@@ -39,7 +39,7 @@ public:
 private:
     QSpinBox *width_, *height_;
     QDoubleSpinBox* scale_;
-    QCheckBox *annotations_, *transparent_, *markups_;
+    QCheckBox *annotations_, *legend_, *transparent_, *markups_;
     QComboBox* ao_;
     QLineEdit* file_;
     QLabel* problem_;

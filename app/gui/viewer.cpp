@@ -11,6 +11,7 @@
 #include <iostream>
 
 #include "io/error.hpp"
+#include "renderer/core/legend.hpp"
 #include "renderer/core/pick.hpp"
 #include "renderer/core/scene.hpp"
 #include "renderer/core/slices.hpp"
@@ -89,6 +90,8 @@ RenderOptions Viewer::frame_options() const {
 void Viewer::draw() {
     camera_.fit_planes(scene_.bounds());
     const RenderOptions opt = frame_options();
+    annotations_->legend.clear();
+    if (options_.legend) annotations_->legend = core::legend_entries(scene_, opt.look);
     auto r = scene_.render(camera_, opt);
     labels_ = std::move(r.labels);
     ++frames_;

@@ -38,6 +38,9 @@ struct ViewerOptions {
     // AO in the frames drawn while a mouse drag moves the camera (off: those
     // frames go without it and the still frames after the release bring it back).
     bool ao_while_dragging = false;
+    // The legend in the overlay: the visible surfaces' names, colours,
+    // opacities and iso values (core/legend.hpp), as exports draw it.
+    bool legend = true;
 
     static FrameLook interactive_look() {
         FrameLook l;

@@ -9,6 +9,7 @@
 
 #include "renderer/ao/reference.hpp"
 #include "renderer/core/image_metadata.hpp"
+#include "renderer/core/legend.hpp"
 #include "renderer/gl/context.hpp"
 
 namespace iso::core {
@@ -252,6 +253,7 @@ RenderOutput render_image(Scene& scene, const RenderRequest& req) {
     Annotations ann;
     ann.markups = req.markups;
     ann.scale_bar = ann.orientation = req.annotations;
+    if (req.annotations && req.legend) ann.legend = legend_entries(scene, req.look);
     const bool colour_image = req.aov == Aov::None; // annotations and markups go on it only
     if ((req.annotations || !ann.markups.empty()) && colour_image) ro.annotations = &ann;
     const Camera cam = frame_camera(scene, req);

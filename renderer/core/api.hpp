@@ -56,6 +56,9 @@ struct RenderRequest {
     Aov aov = Aov::None;     // a buffer instead of the colour image
     float scale = 1.0f;      // annotation scale (text, lines, glyphs)
     bool annotations = true; // scale bar and orientation letters
+    // With annotations: the legend, a row per visible surface (its name,
+    // colour swatch, opacity and iso value with unit; core/legend.hpp).
+    bool legend = true;
     // 3D Slicer markups (LPS mm; io/markups.hpp) drawn over the colour image,
     // with annotations on or off, never on AOVs: glyphs, labels, lines with
     // their length, angles with their value; dimmed where a surface hides

@@ -4,6 +4,7 @@
 #include <filesystem>
 #include <sstream>
 
+#include "io/color.hpp"
 #include "io/markups.hpp"
 #include "renderer/core/surface_name.hpp"
 #include "renderer/frame/ao_settings.hpp"
@@ -49,6 +50,26 @@ void add_markups(Text& t, const FrameRecord& f) {
                  (value.empty() ? "" : ", " + value);
     }
     t["isoscope:markups_drawn"] = drawn;
+}
+
+// The legend, one row a line: name, value, colour (sRGB hex) and opacity;
+// and a note when the image had no place for it.
+void add_legend(Text& t, const FrameRecord& f) {
+    if (!f.annotations || f.annotations->legend.empty()) return;
+    std::string rows;
+    for (const auto& e : f.annotations->legend) {
+        char opacity[32];
+        std::snprintf(opacity, sizeof opacity, "opacity %.0f %%", double(e.opacity) * 100.0);
+        rows += (rows.empty() ? "" : "\n") + e.name + ": " + (e.value.empty() ? "" : e.value + ", ") + "colour " +
+                hex_from_linear(e.color) + ", " + opacity;
+    }
+    t["isoscope:legend"] = rows;
+    bool drawn = false;
+    for (const auto& l : f.result.labels) drawn = drawn || l.legend;
+    if (!drawn)
+        t["isoscope:legend_note"] =
+            "not drawn: no place for it clear of the orientation letters and the scale bar at " +
+            std::to_string(f.options.width) + "x" + std::to_string(f.options.height);
 }
 
 std::string iso_values_text(const Scene& scene) {
@@ -135,6 +156,7 @@ ImageMetadata frame_metadata(const FrameRecord& f) {
     t["isoscope:input"] = t["isoscope:input_sha256"] = "";
     add_files(t, f.scene.sources(), "isoscope:input", "isoscope:input_sha256");
     add_markups(t, f);
+    add_legend(t, f);
     if (const auto isos = iso_values_text(f.scene); !isos.empty()) t["isoscope:iso"] = isos;
     t["isoscope:view_name"] = f.req.camera ? "the request's camera" : f.req.view;
     if (!f.req.session_file.empty()) {

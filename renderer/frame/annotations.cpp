@@ -8,6 +8,7 @@
 
 #include <glm/glm.hpp>
 
+#include "io/color.hpp"
 #include "renderer/text/contrast.hpp"
 #include "renderer/text/font.hpp"
 #include "renderer/text/placement.hpp"
@@ -124,6 +125,8 @@ struct PendingLabel {
     glm::vec3 color;
     glm::vec2 anchor, centre; // the point it labels; its box's centre at its default place
     bool fixed = false;
+    bool legend = false;                   // a legend row
+    glm::ivec2 swatch_lo{0}, swatch_hi{0}; // a legend row's opaque swatch
     glm::vec2 size() const { return glm::vec2(layout.hi - layout.lo); }
 };
 
@@ -348,6 +351,9 @@ std::vector<LabelBox> draw_labels(Builder& b, const LabelSet& set, int W, int H,
         l.anchor = p.fixed ? glm::vec2(l.lo + l.hi) * 0.5f : p.anchor;
         l.moved = placed[i].moved;
         l.fixed = p.fixed;
+        l.legend = p.legend;
+        l.swatch_lo = p.swatch_lo;
+        l.swatch_hi = p.swatch_hi;
         l.color = p.color;
         l.halo = text::halo_color(p.color);
         if (l.moved) leader_line(b, l, s);
@@ -391,7 +397,96 @@ void scale_bar(Builder& b, LabelSet& set, const Camera& cam, int W, int H, float
     l.fixed = true;
 }
 
+// Where the legend's box of `size` goes: the first place, corners first
+// (top left, top right, then down the left and right edges, bottom last),
+// whose box grown by `gap` meets no fixed label (the orientation letters,
+// the scale bar's length) and no obstacle (the scale bar, the markups'
+// glyphs); none when no place is free (an image too small for it).
+std::optional<glm::ivec2> legend_corner(const LabelSet& set, glm::ivec2 size, int W, int H, float margin, float gap) {
+    std::vector<text::Box> avoid = set.obstacles;
+    for (const auto& l : set.labels)
+        if (l.fixed) avoid.push_back({l.centre - 0.5f * l.size(), l.centre + 0.5f * l.size()});
+    const auto free = [&](glm::vec2 lo) {
+        const text::Box b{lo - gap, lo + glm::vec2(size) + gap};
+        for (const auto& a : avoid)
+            if (text::overlaps(a, b)) return false;
+        return true;
+    };
+    const float left = margin, right = float(W) - margin - float(size.x), bottom = float(H) - margin - float(size.y);
+    for (float y = margin; y <= bottom; y += std::max(1.0f, 0.5f * gap))
+        for (const float x : {left, right})
+            if (x >= 0 && free({x, y})) return glm::ivec2(glm::round(glm::vec2(x, y)));
+    return std::nullopt;
+}
+
+// A legend row's swatch at `lo`, `side` pixels high and two sides wide, over
+// a dark outline: the left half the colour itself, the right half the colour
+// at its opacity over a grey checker (so that the opacity shows).
+void legend_swatch(Builder& b, glm::ivec2 lo, int side, glm::vec3 srgb, float opacity, float s) {
+    const glm::vec2 p(lo), q = p + glm::vec2(2 * side, side), mid = p + glm::vec2(side, 0);
+    const float edge = std::max(1.0f, std::round(s));
+    b.rect(p - edge, q + edge, {0, 0, 0, 1});
+    b.rect(p, mid + glm::vec2(0, side), glm::vec4(srgb, 1));
+    const int cells = 3;
+    for (int j = 0; j < cells; ++j)
+        for (int i = 0; i < cells; ++i) {
+            const glm::vec2 c0 = mid + glm::vec2(i, j) * float(side) / float(cells);
+            const float grey = (i + j) % 2 ? 0.35f : 0.85f;
+            b.rect(glm::round(c0), glm::round(c0 + float(side) / float(cells)), {grey, grey, grey, 1});
+        }
+    b.rect(mid, q, glm::vec4(srgb, std::clamp(opacity, 0.0f, 1.0f)));
+}
+
+// The legend (Annotations::legend): a dark box with a row per surface, its
+// swatch and its text as a fixed label, the box an obstacle for the labels
+// placed later. Left out when no place is free for it.
+void legend(Builder& b, LabelSet& set, const std::vector<Annotations::LegendEntry>& entries, int W, int H, float px,
+            float s) {
+    if (entries.empty()) return;
+    const std::size_t first = set.labels.size();
+    glm::ivec2 text_size(0);
+    for (const auto& e : entries) {
+        const glm::ivec2 size(set.add(legend_text(e), px, kTextColor, {}).size());
+        text_size = glm::max(text_size, size);
+    }
+    const int pad = int(std::lround(5.0f * s)), side = std::max(4, int(std::lround(0.8f * px)));
+    const int swatch_w = 2 * side + int(std::lround(2.0f * s)); // the swatch and a gap before the text's halo
+    const int rows = int(entries.size());
+    const glm::ivec2 size(2 * pad + swatch_w + text_size.x, 2 * pad + rows * text_size.y);
+    const auto corner = legend_corner(set, size, W, H, 8.0f * s, 2.0f * s);
+    if (!corner) {
+        set.labels.erase(set.labels.begin() + std::ptrdiff_t(first), set.labels.end());
+        return;
+    }
+    const glm::ivec2 lo = *corner;
+    b.rect(glm::vec2(lo), glm::vec2(lo + size), {0, 0, 0, 0.55f});
+    set.obstacles.push_back({glm::vec2(lo), glm::vec2(lo + size)});
+    for (int i = 0; i < rows; ++i) {
+        PendingLabel& l = set.labels[first + std::size_t(i)];
+        const auto& e = entries[std::size_t(i)];
+        const glm::ivec2 text_lo = lo + glm::ivec2(pad + swatch_w, pad + i * text_size.y);
+        l.centre = l.anchor = glm::vec2(text_lo) + 0.5f * l.size();
+        l.fixed = l.legend = true;
+        // The swatch centred on the text's capitals (about 0.73 em above the baseline).
+        const float baseline = float(text_lo.y - l.layout.lo.y);
+        const glm::ivec2 swatch(lo.x + pad, int(std::lround(baseline - 0.365f * px - 0.5f * float(side))));
+        const glm::vec3 srgb(srgb_from_linear(e.color.r), srgb_from_linear(e.color.g), srgb_from_linear(e.color.b));
+        legend_swatch(b, swatch, side, srgb, e.opacity, s);
+        l.swatch_lo = swatch;
+        l.swatch_hi = swatch + glm::ivec2(side);
+    }
+}
+
 } // namespace
+
+std::string legend_text(const Annotations::LegendEntry& e) {
+    const std::string dot = " \xC2\xB7 ";
+    std::string t = e.name;
+    if (!e.value.empty()) t += (t.empty() ? "" : dot) + e.value;
+    const long percent = std::lround(std::clamp(double(e.opacity), 0.0, 1.0) * 100.0);
+    if (percent < 100) t += (t.empty() ? "" : dot) + std::to_string(percent) + " %";
+    return t;
+}
 
 Overlay build_overlay(const Annotations& a, const Camera& cam, int W, int H, float scale) {
     Overlay out;
@@ -433,6 +528,7 @@ Overlay build_overlay(const Annotations& a, const Camera& cam, int W, int H, flo
         b,        labels,        cam.view(), cam.projection(aspect), W, H, s, std::clamp(a.hidden_opacity, 0.0f, 1.0f),
         label_px, cam.near_plane};
     for (const auto& m : a.markups) markups.draw(m);
+    legend(b, labels, a.legend, W, H, label_px, s); // after the markups: over their lines, clear of their glyphs
     out.labels = draw_labels(b, labels, W, H, s, out.atlas);
     return out;
 }

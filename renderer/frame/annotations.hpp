@@ -48,6 +48,20 @@ struct Annotations {
     // whole only when the surface is in front at every pixel of the 3x3
     // block around its point. Labels are never dimmed.
     std::vector<Markup> markups;
+    // The legend: one row per visible surface, a colour swatch (its left
+    // half the surface's colour, its right half that colour at the
+    // surface's opacity over a checker) and its text ("iso 500 \u00b7 500 HU
+    // \u00b7 35 %": legend_text), in a box in the first corner clear of the
+    // orientation letters, the scale bar and the markups' glyphs; fixed, so
+    // labels placed after it keep off it. Empty: no legend. Left out of an
+    // image with no such place (too small for it).
+    struct LegendEntry {
+        std::string name;      // "iso 500", a mesh file's name
+        glm::vec3 color{1.0f}; // linear RGB
+        float opacity = 1.0f;  // 0..1
+        std::string value;     // the iso value with its unit, "500 HU"; empty: none (a mesh)
+    };
+    std::vector<LegendEntry> legend;
     float hidden_opacity = 0.35f;
     float occlusion_tolerance_mm = 1.0f;
     // Text sizes in points at `dpi` pixels per inch, times the frame's scale
@@ -107,6 +121,10 @@ std::string markup_measurement_text(const Markup& m);
 // default per type (points pink-red, lines cyan, angles green, curves
 // orange); sRGB components in [0, 1] as Slicer stores them.
 glm::vec3 markup_color(const Markup& m, int point = -1);
+
+// A legend row's text: the name, the value when there is one, the opacity
+// in percent when below 100 %, separated by middle dots (UTF-8).
+std::string legend_text(const Annotations::LegendEntry& e);
 
 // The letters of the patient directions pointing to the right and top of the
 // view ("L", "P", ...), and the scale bar's length in mm for a view of that width.

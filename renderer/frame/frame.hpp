@@ -223,6 +223,10 @@ struct LabelBox {
     // (hi - lo) pixels each, row-major from the top row, 0..255: the glyphs'
     // coverage and the halo's alpha (the largest of overlapping glyphs').
     std::vector<std::uint8_t> coverage, halo_alpha;
+    // A legend row (Annotations::legend; fixed too): the opaque half of its
+    // colour swatch, the surface's colour in sRGB, pixels like lo/hi (hi exclusive).
+    bool legend = false;
+    glm::ivec2 swatch_lo{0}, swatch_hi{0};
 };
 
 struct RenderResult {

@@ -58,8 +58,8 @@ std::pair<core::RenderOutput, Image> render_head(int w, int h, float scale, cons
 
 void expect_legible(const core::RenderOutput& out, const Image& img) {
     ASSERT_EQ(img.width, out.image.width);
-    // Letters (4), scale bar, 3 landmarks, 2 lines, the angle, the point inside.
-    ASSERT_EQ(out.labels.size(), 4u + 1u + 3u + 2u + 1u + 1u);
+    // Letters (4), scale bar, 3 landmarks, 2 lines, the angle, the point inside, the legend's 2 rows.
+    ASSERT_EQ(out.labels.size(), 4u + 1u + 3u + 2u + 1u + 1u + 2u);
     double worst = 1e9;
     for (std::size_t i = 0; i < out.labels.size(); ++i) {
         const LabelBox& l = out.labels[i];

@@ -41,6 +41,12 @@ TEST(RenderCli, PngWithMetadataAndAnnotations) {
     EXPECT_EQ(img.height, 150);
     auto& t = meta.text;
     EXPECT_EQ(t["isoscope:iso"], "500,1150");
+    EXPECT_NE(t["isoscope:legend"].find("iso 500: colour #"), std::string::npos) << t["isoscope:legend"];
+    EXPECT_NE(t["isoscope:legend"].find("\niso 1150: colour #"), std::string::npos) << t["isoscope:legend"];
+    render(test::data("headsq.nhdr") + " --iso 500 --size 96x96 --no-legend -o " + (dir / "b.png"));
+    ImageMetadata without;
+    load_image(dir / "b.png", &without);
+    EXPECT_EQ(without.text.count("isoscope:legend"), 0u) << "--no-legend";
     EXPECT_NE(t["isoscope:input"].find("headsq.nhdr"), std::string::npos);
     EXPECT_EQ(t["isoscope:input_sha256"].size(), 64u);
     EXPECT_NE(t["isoscope:camera"].find("eye"), std::string::npos);
@@ -110,8 +116,9 @@ TEST(RenderCli, GoldenImage) {
     // Tolerance: llvmpipe is deterministic, but GPUs rasterize and round
     // differently; allow 1 % of pixels to differ by more than 24/255 in any
     // channel (silhouette edges) and a mean absolute difference of 2/255.
+    // Without the legend, which has tests of its own (tests/gl/legend_test.cpp).
     TempDir dir;
-    render(test::data("headsq.nhdr") + " --iso 500 --size 160x120 -o " + (dir / "actual.png"));
+    render(test::data("headsq.nhdr") + " --iso 500 --size 160x120 --no-legend -o " + (dir / "actual.png"));
     const std::string golden = std::string(ISOSCOPE_SOURCE_DIR) + "/tests/golden/headsq_skin_anterior_160x120.png";
     EXPECT_TRUE(test::matches_golden(load_image(dir / "actual.png"), golden,
                                      {.off_threshold = 24, .max_off_fraction = 0.01, .max_mean = 2.0}));

@@ -73,6 +73,8 @@ TEST(SessionRender, EqualsRenderImageOfTheSameStateAndTheCli) {
     scene.info(skin[0]).color = core::linear_from_hex("#e8b49a");
     scene.info(skin[0]).opacity = 0.3f;
     scene.info(bone[0]).color = core::linear_from_hex("#f4efe0");
+    scene.info(skin[0]).name = "skin"; // the session's names: the legend shows them
+    scene.info(bone[0]).name = "bone";
     core::RenderRequest hand;
     hand.width = 320;
     hand.height = 240;

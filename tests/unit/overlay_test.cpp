@@ -6,9 +6,11 @@
 #include "renderer/frame/annotations.hpp"
 
 #include <cmath>
+#include <tuple>
 
 #include <glm/glm.hpp>
 
+#include "io/color.hpp"
 #include "tests/support/test_util.hpp"
 
 using namespace iso;
@@ -249,4 +251,65 @@ TEST(Overlay, TheHeadExampleShowsTheDocumentedValues) {
         for (std::size_t k = 0; k < f.markups[i].points.size(); ++k)
             EXPECT_EQ(g.markups[i].points[k].position, f.markups[i].points[k].position);
     }
+}
+
+TEST(Overlay, LegendTextNamesValueAndOpacity) {
+    EXPECT_EQ(legend_text({"iso 500", glm::vec3(1), 0.35f, "500 HU"}), "iso 500 \xC2\xB7 500 HU \xC2\xB7 35 %");
+    EXPECT_EQ(legend_text({"iso 1150", glm::vec3(1), 1.0f, "1150 HU"}), "iso 1150 \xC2\xB7 1150 HU");
+    EXPECT_EQ(legend_text({"bunny.vtp", glm::vec3(1), 1.0f, ""}), "bunny.vtp") << "a mesh: its name only";
+    EXPECT_EQ(legend_text({"skull", glm::vec3(1), 0.999f, ""}), "skull") << "rounds to 100 %";
+}
+
+TEST(Overlay, LegendKeepsClearOfLettersScaleBarAndLabels) {
+    const Camera cam = front_camera();
+    // Labelled points crowding the image's top left, where the legend goes when it fits.
+    Markup points = markup(MarkupType::Fiducial, {});
+    for (int i = 0; i < 6; ++i)
+        points.points.push_back(point({-30.0 + 6.0 * (i % 3), 0, 25.0 - 6.0 * (i / 3)}, "P" + std::to_string(i + 1)));
+    // At 320 x 240 the legend (about 240 px wide) fits only between the top and the left letter, without the points.
+    for (const auto& [w, h, scale, n] : {std::tuple{400, 300, 1.0f, 6}, {320, 240, 1.0f, 0}, {800, 600, 2.0f, 6}}) {
+        Annotations a = markups_only(n ? std::vector<Markup>{points} : std::vector<Markup>{});
+        a.orientation = a.scale_bar = true;
+        a.legend = {{"iso 500", {0.8f, 0.5f, 0.4f}, 0.4f, "500 HU"},
+                    {"iso 1150", {0.9f, 0.9f, 0.85f}, 1.0f, "1150 HU"}};
+        const Overlay o = build_overlay(a, cam, w, h, scale);
+        ASSERT_EQ(o.labels.size(), 4u + 1u + std::size_t(n) + 2u) << "letters, scale bar, points, legend at " << w;
+        std::vector<const LabelBox*> rows;
+        for (const auto& l : o.labels)
+            if (l.legend) rows.push_back(&l);
+        ASSERT_EQ(rows.size(), 2u);
+        EXPECT_EQ(rows[0]->text, "iso 500 \xC2\xB7 500 HU \xC2\xB7 40 %");
+        const auto apart = [](glm::ivec2 lo, glm::ivec2 hi, const LabelBox& m) {
+            return hi.x <= m.lo.x || m.hi.x <= lo.x || hi.y <= m.lo.y || m.hi.y <= lo.y;
+        };
+        for (const LabelBox* r : rows) {
+            EXPECT_TRUE(r->fixed && !r->moved);
+            EXPECT_TRUE(r->lo.x >= 0 && r->lo.y >= 0 && r->hi.x <= w && r->hi.y <= h) << r->text << " at " << w;
+            EXPECT_EQ(r->swatch_hi - r->swatch_lo, glm::ivec2(r->swatch_hi.y - r->swatch_lo.y));
+            EXPECT_LE(r->swatch_hi.x, r->lo.x) << "the swatch left of its text";
+            for (const auto& m : o.labels) {
+                if (m.legend) continue;
+                EXPECT_TRUE(apart(r->lo, r->hi, m)) << r->text << " and '" << m.text << "' at " << w << "x" << h;
+                EXPECT_TRUE(apart(r->swatch_lo, r->swatch_hi, m)) << "swatch and '" << m.text << "'";
+            }
+        }
+        // The swatch's opaque half: the surface's colour in sRGB.
+        const glm::vec3 want(srgb_from_linear(0.8), srgb_from_linear(0.5), srgb_from_linear(0.4));
+        std::size_t swatch = 0;
+        for (const auto& v : o.vertices)
+            swatch += glm::length(glm::vec3(v.color) - want) < 1e-5f && v.color.a == 1.0f && v.atlas_channel < 0;
+        EXPECT_EQ(swatch, 6u);
+    }
+}
+
+TEST(Overlay, LegendLeftOutWhereItHasNoPlace) {
+    // 160 px is narrower than the legend's rows: no place clear of the letters and the scale bar.
+    Annotations a;
+    a.legend = {{"iso 500", {0.8f, 0.5f, 0.4f}, 0.4f, "500 HU"}, {"iso 1150", {0.9f, 0.9f, 0.85f}, 1.0f, "1150 HU"}};
+    const Overlay small = build_overlay(a, front_camera(), 160, 120, 1.0f);
+    EXPECT_EQ(small.labels.size(), 4u + 1u) << "the letters and the scale bar, no legend";
+    for (const auto& l : small.labels) EXPECT_FALSE(l.legend);
+    a.orientation = a.scale_bar = false;
+    const Overlay alone = build_overlay(a, front_camera(), 300, 120, 1.0f);
+    EXPECT_EQ(alone.labels.size(), 2u) << "without letters it fits";
 }
