@@ -1,0 +1,284 @@
+// The whole image measured: each scene rendered in the live view's
+// configuration (one frame: without anti-aliasing, with DSRAA) and in the
+// export's (core::render_converged: DSRAA and jittered frames until the
+// image stops changing), compared with a reference image of the same scene:
+// exact coverage by 64 sub-samples per pixel (a stratified 8 x 8 grid of
+// jittered frames, one sample each), exact compositing of the translucent
+// layers (VOIT with a pool that holds every fragment) and, in the series
+// with AO, ray-traced AO. Prints time and error (RMSE and p99 over all
+// pixels and over edge pixels, sRGB units 0..1) per configuration, writes
+// OUT/image_bench.csv, the images and a time-vs-error plot per scene
+// (gnuplot, OUT/image_time_error.png).
+//
+//   image_bench [--out DIR] [--size WxH] [--reps N] [--scenes head,bunny,thin,dense] [--quick]
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+#include <string>
+#include <vector>
+
+#include <tbb/parallel_for.h>
+
+#include "aa_peer.hpp"
+#include "bench_util.hpp"
+#include "image_error.hpp"
+#include "io/image.hpp"
+#include "renderer/core/api.hpp"
+#include "renderer/gl/context.hpp"
+#include "tests/support/thin_phantom.hpp"
+
+using namespace iso;
+namespace fs = std::filesystem;
+
+namespace {
+
+struct Args {
+    std::string out = "image-bench-out", data = ISOSCOPE_DATA_DIR;
+    int width = 640, height = 480, reps = 3;
+    std::vector<std::string> scenes{"head", "bunny", "thin", "dense"};
+    bool quick = false;
+};
+
+// A dense surface: a gyroid of period 12 voxels in a cube of `n` voxels
+// (0.5 mm), about 10 M triangles at n = 320; ~90 per pixel of a 640 x 480
+// view, where one sample per pixel shows moire.
+Volume gyroid(int n) {
+    auto v = Volume::dense({n, n, n}, VoxelType::F32, make_affine({0.5, 0.5, 0.5}, {0, 0, 0}));
+    v.meta.source = "gyroid";
+    auto s = v.as<float>();
+    const double w = 2.0 * M_PI / 12.0;
+    tbb::parallel_for(0, n, [&](int k) {
+        for (int j = 0; j < n; ++j)
+            for (int i = 0; i < n; ++i)
+                s[v.linear_index(i, j, k)] =
+                    float(std::sin(w * i) * std::cos(w * j) + std::sin(w * j) * std::cos(w * k) +
+                          std::sin(w * k) * std::cos(w * i));
+    });
+    return v;
+}
+
+struct BenchScene {
+    std::string name, view;
+    core::Scene scene;
+    std::size_t triangles = 0;
+};
+
+void make_scene(BenchScene& s, const Args& a) {
+    if (s.name == "head") { // skin translucent over the bone
+        s.scene.open(a.data + "/headsq.nhdr");
+        const auto ids = s.scene.add_isosurfaces({500, 1150});
+        s.scene.info(ids[0]).opacity = 0.35f;
+        s.view = "left";
+    } else if (s.name == "bunny") {
+        s.scene.open(a.data + "/bunny.vtp");
+        s.view = "anterior";
+    } else if (s.name == "thin") { // vessels 3.5 .. 0.45 mm in radius in front of thin bone
+        s.scene.set_volume(bench::thin_phantom(), "thin-structure phantom");
+        s.scene.add_isosurfaces({150});
+        s.view = "anterior";
+    } else if (s.name == "dense") {
+        s.scene.set_volume(gyroid(a.quick ? 160 : 320), "gyroid");
+        s.scene.add_isosurfaces({0.0});
+        s.view = "anterior";
+    } else {
+        throw Error("image_bench", "unknown scene '" + s.name + "' (head, bunny, thin, dense)");
+    }
+    for (const auto id : s.scene.surfaces()) s.triangles += s.scene.mesh(id).triangles.size();
+}
+
+struct Config {
+    std::string name;
+    bool export_rule = false; // core::render_converged, else one frame
+    int samples = 1;
+};
+
+core::RenderRequest request(const Args& a, const BenchScene& s, AoMethod ao) {
+    core::RenderRequest req;
+    req.width = a.width;
+    req.height = a.height;
+    req.view = s.view;
+    req.annotations = false;
+    req.look.ao = ao;
+    req.look.oit_memory_mib = 2048; // exact compositing: no fragment merged
+    return req;
+}
+
+// One configuration's image and its time (median of reps, ms), the GL
+// context current, the frame loop as the live view or an export runs it.
+Image run(BenchScene& s, const core::RenderRequest& base, const Config& c, int reps, double& ms, int& frames) {
+    core::RenderRequest req = base;
+    req.look.aa.samples = c.samples;
+    if (!c.export_rule) req.look.aa.frames = 1;
+    if (!c.export_rule) req.look.ao_frames = 1;
+    const RenderOptions ro = core::frame_options(req);
+    const Camera cam = core::frame_camera(s.scene, req);
+    Image img;
+    std::vector<double> times;
+    for (int r = 0; r <= reps; ++r) { // the first run warms up (shaders, uploads)
+        const double t0 = bench::now_s();
+        core::Convergence conv;
+        img = core::render_converged(s.scene, cam, ro, req, conv).image;
+        frames = conv.frames;
+        if (r > 0) times.push_back((bench::now_s() - t0) * 1e3);
+    }
+    ms = bench::median(times);
+    return img;
+}
+
+// The reference: 64 frames on a stratified 8 x 8 grid of sub-pixel offsets,
+// one sample each, averaged by the renderer in linear light.
+Image reference(BenchScene& s, const core::RenderRequest& base, double& ms) {
+    core::RenderRequest req = base;
+    req.look.aa.samples = 1;
+    RenderOptions ro = core::frame_options(req);
+    ro.accumulate = true;
+    const Camera cam = core::frame_camera(s.scene, req);
+    const double t0 = bench::now_s();
+    RenderResult r;
+    for (int j = 0; j < 8; ++j)
+        for (int i = 0; i < 8; ++i) {
+            ro.restart_accumulation = i == 0 && j == 0;
+            ro.jitter = glm::vec2((i + 0.5f) / 8.0f - 0.5f, (j + 0.5f) / 8.0f - 0.5f);
+            r = s.scene.render(cam, ro);
+        }
+    ms = (bench::now_s() - t0) * 1e3;
+    if (r.aa_frames != 64)
+        throw Error("image_bench", "the reference averaged " + std::to_string(r.aa_frames) + " frames");
+    return r.image;
+}
+
+// VTK's anti-aliasing on the same meshes, camera and size (no AO: VTK's
+// SSAO is ao_bench's peer), each against VTK's own 8 x 8 supersampled
+// reference, since its shading is not ours.
+void peers(BenchScene& s, const Args& a, std::ofstream& csv) {
+    std::vector<bench::PeerMesh> meshes;
+    bool translucent = false;
+    for (const auto id : s.scene.surfaces()) {
+        const auto& info = s.scene.info(id);
+        if (!info.visible) continue;
+        meshes.push_back({&s.scene.mesh(id), info.color, info.opacity});
+        translucent |= info.opacity < 1.0f;
+    }
+    bench::AaPeerOptions opt;
+    // VTK 9.1 drops translucent surfaces from multisampled depth peeling: its weighted-blended OIT then.
+    opt.depth_peeling = !translucent;
+    opt.reference_factor = s.triangles > 4000000 ? 4 : 8;
+    const Camera cam = core::frame_camera(s.scene, request(a, s, AoMethod::Off));
+    std::vector<std::string> failed;
+    const auto images = bench::render_vtk_aa(meshes, cam, a.width, a.height, a.reps, opt, &failed);
+    for (const auto& f : failed) std::cout << "<!-- VTK failed: " << f << " -->\n";
+    const Image* ref = nullptr;
+    for (const auto& p : images)
+        if (p.name == "reference") ref = &p.image;
+    if (!ref) return;
+    save_image(*ref, a.out + "/" + s.name + "_vtk_reference.png", {});
+    for (const auto& p : images) {
+        if (p.name == "reference") continue;
+        save_image(p.image, a.out + "/" + s.name + "_vtk_" + p.name + ".png", {});
+        const bench::ImageError e = bench::compare(p.image, *ref);
+        const std::string name =
+            "VTK " + p.name + (p.samples_asked > 1 ? " (got " + std::to_string(p.samples_window) + ")" : "");
+        std::printf("| %s | VTK, no AO | %s | 1 | %.1f | %.4f | %.4f | %.4f | %.4f |\n", s.name.c_str(), name.c_str(),
+                    p.ms, e.rmse, e.p99, e.edge_rmse, e.edge_p99);
+        csv << s.name << ",VTK no AO," << name << ",1," << p.ms << "," << e.rmse << "," << e.p99 << "," << e.edge_rmse
+            << "," << e.edge_p99 << "," << s.triangles << "\n";
+    }
+}
+
+void write_plot(const std::string& csv, const std::string& png) {
+    const std::string gp = fs::path(png).replace_extension(".gp").string();
+    std::ofstream g(gp);
+    g << "set terminal pngcairo size 1200,800 font ',10'\nset output '" << png << "'\n"
+      << "set datafile separator ','\nset logscale x\nset xlabel 'time per image (ms, log)'\n"
+      << "set ylabel 'edge-pixel RMSE vs reference (sRGB)'\nset key outside right\nset grid\n"
+      << "set title 'Whole image: time against error per configuration (each scene its own colour)'\n"
+      << "plot '" << csv << "' skip 1 using 5:8:(stringcolumn(1).' '.stringcolumn(3)) with labels point pt 7 "
+      << "offset char 0.5,0.5 font ',7' notitle\n";
+    g.close();
+    if (std::system(("gnuplot " + gp + " 2>/dev/null").c_str()) == 0) std::cout << "wrote " << png << "\n";
+}
+
+} // namespace
+
+int main(int argc, char** argv) try {
+    Args a;
+    for (int i = 1; i < argc; ++i) {
+        const std::string arg = argv[i];
+        const auto next = [&]() -> std::string {
+            if (i + 1 >= argc) throw Error("image_bench", arg + " needs a value");
+            return argv[++i];
+        };
+        if (arg == "--out")
+            a.out = next();
+        else if (arg == "--size") {
+            const std::string v = next();
+            if (std::sscanf(v.c_str(), "%dx%d", &a.width, &a.height) != 2) throw Error("image_bench", "--size WxH");
+        } else if (arg == "--reps")
+            a.reps = std::max(1, std::stoi(next()));
+        else if (arg == "--quick") {
+            a.quick = true;
+            a.reps = 1;
+        } else if (arg == "--scenes") {
+            a.scenes.clear();
+            std::string v = next();
+            for (std::size_t p = 0; p != std::string::npos;) {
+                const std::size_t q = v.find(',', p);
+                a.scenes.push_back(v.substr(p, q == std::string::npos ? q : q - p));
+                p = q == std::string::npos ? q : q + 1;
+            }
+        } else {
+            std::cerr << "usage: image_bench [--out DIR] [--size WxH] [--reps N] [--scenes head,bunny,thin,dense] "
+                         "[--quick]\n";
+            return 2;
+        }
+    }
+    fs::create_directories(a.out);
+    const std::string csv_path = a.out + "/image_bench.csv";
+    std::ofstream csv(csv_path);
+    csv << "scene,series,config,frames,ms,rmse,p99,edge_rmse,edge_p99,triangles\n";
+    std::cout << "| scene | series | configuration | frames | ms | RMSE | p99 | edge RMSE | edge p99 |\n"
+              << "|---|---|---|---:|---:|---:|---:|---:|---:|\n";
+    const std::vector<Config> configs = {{"live: 1 sample", false, 1},
+                                         {"live: DSRAA 4", false, 4},
+                                         {"live: DSRAA 8", false, 8},
+                                         {"export: 1 sample + frames", true, 1},
+                                         {"export: DSRAA 4 + frames (default)", true, 4}};
+    const gl::ScopedCurrent context;
+    for (const auto& name : a.scenes) {
+        BenchScene s;
+        s.name = name;
+        make_scene(s, a);
+        std::cout << "<!-- " << name << ": " << s.triangles << " triangles -->\n";
+        for (const AoMethod ao : {AoMethod::Off, AoMethod::Cone}) {
+            const std::string series = ao == AoMethod::Off ? "no AO" : "cone AO";
+            const core::RenderRequest base = request(a, s, ao);
+            double ref_ms = 0;
+            const Image ref = reference(s, base, ref_ms);
+            save_image(ref, a.out + "/" + name + "_" + ao_method_name(ao) + "_reference.png", {});
+            for (const Config& c : configs) {
+                double ms = 0;
+                int frames = 0;
+                const Image img = run(s, base, c, a.reps, ms, frames);
+                const bench::ImageError e = bench::compare(img, ref);
+                std::printf("| %s | %s | %s | %d | %.1f | %.4f | %.4f | %.4f | %.4f |\n", name.c_str(), series.c_str(),
+                            c.name.c_str(), frames, ms, e.rmse, e.p99, e.edge_rmse, e.edge_p99);
+                std::fflush(stdout);
+                csv << name << "," << series << "," << c.name << "," << frames << "," << ms << "," << e.rmse << ","
+                    << e.p99 << "," << e.edge_rmse << "," << e.edge_p99 << "," << s.triangles << "\n";
+            }
+            std::printf("| %s | %s | reference (8x8 stratified, 1 sample each) | 64 | %.1f | 0 | 0 | 0 | 0 |\n",
+                        name.c_str(), series.c_str(), ref_ms);
+        }
+        peers(s, a, csv);
+        s.scene.release_gpu();
+    }
+    csv.close();
+    write_plot(csv_path, a.out + "/image_time_error.png");
+    return 0;
+} catch (const std::exception& e) {
+    std::cerr << "image_bench: " << e.what() << "\n";
+    return 1;
+}
