@@ -8,11 +8,15 @@
 // mean of its sub-samples' colours in linear light (premultiplied by
 // alpha, for transparent backgrounds). Runs after the translucent layers
 // are composited, so a neighbour's colour carries what lies in front of it.
-#include <glm/gtc/type_ptr.hpp>
-
-#include "io/color.hpp"
+// Beyond the thesis, which maps a sub-sample nothing matches to the
+// background: a surface's sub-sample is shaded from its own normal and
+// albedo (no AO), so structures thinner than a pixel that no pixel's shaded
+// sample hit still show (thin vessels); with translucent surfaces in the
+// frame it takes its pixel's colour instead (shading it would leave out the
+// layers in front).
 #include "renderer/passes/build_frame.hpp"
 #include "renderer/passes/gl_resources.hpp"
+#include "renderer/passes/std140.hpp"
 
 namespace iso::passes {
 
@@ -20,7 +24,8 @@ graph::TextureHandle dsraa(graph::FrameGraph& fg, const FrameContext& ctx, const
                            graph::TextureHandle color) {
     if (ctx.aa_samples <= 1 || !gb.ms_id.valid()) return color;
     struct Data {
-        graph::TextureHandle color, id, normal, ms_id, ms_normal, out;
+        graph::TextureHandle color, id, normal, ms_id, ms_normal, ms_albedo, out;
+        graph::BufferHandle params;
     };
     return fg
         .add_pass<Data>(
@@ -31,6 +36,8 @@ graph::TextureHandle dsraa(graph::FrameGraph& fg, const FrameContext& ctx, const
                 d.normal = b.read(gb.normal);
                 d.ms_id = b.read(gb.ms_id);
                 d.ms_normal = b.read(gb.ms_normal);
+                d.ms_albedo = b.read(gb.ms_albedo);
+                d.params = params_buffer<LightingParams>(b, "dsraa_params");
                 d.out = b.write(b.create("dsraa", {ctx.width, ctx.height, graph::Format::RGBA8}));
             },
             [&ctx](const Data& d, const graph::Resources& r) {
@@ -50,13 +57,17 @@ graph::TextureHandle dsraa(graph::FrameGraph& fg, const FrameContext& ctx, const
                 glBindTextureUnit(2, gl.texture(r, d.normal));
                 glBindTextureUnit(3, gl.texture(r, d.ms_id));
                 glBindTextureUnit(4, gl.texture(r, d.ms_normal));
+                glBindTextureUnit(5, gl.texture(r, d.ms_albedo));
                 const auto& look = ctx.opt.look;
                 glUniform1i(prog.uniform("samples"), S);
                 glUniform2fv(prog.uniform("sample_positions"), 8, positions);
                 glUniform1f(prog.uniform("normal_cos"), look.aa.normal_cos);
-                // The background as the lighting pass writes it (sRGB), in linear light here.
-                const glm::vec4 bg(look.background, look.transparent_background ? 0.0f : 1.0f);
-                glUniform4fv(prog.uniform("background"), 1, glm::value_ptr(bg));
+                glUniform1i(prog.uniform("shade_unmatched"), ctx.translucent.empty() ? 1 : 0);
+                // The lighting pass's parameters: the background as it writes it, the shading of unmatched sub-samples.
+                bind_params(gl, r, d.params,
+                            LightingParams{std140::mat3(ctx.world_to_view),
+                                           glm::vec4(look.background, look.transparent_background ? 0.0f : 1.0f),
+                                           look.ao != AoMethod::Off ? 1u : 0u, look.flat_shading ? 1u : 0u});
                 glBindVertexArray(gl.vertex_array("fullscreen"));
                 glDrawArrays(GL_TRIANGLES, 0, 3);
                 glBindVertexArray(0);

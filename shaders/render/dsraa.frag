@@ -3,21 +3,27 @@
 // DSRAA reconstruction (renderer/passes/dsraa.cpp): every visibility
 // sub-sample maps to a shaded pixel, its own or a neighbour's of the same
 // object with a similar normal (background sub-samples to a background
-// pixel), else to the background; the pixel is their mean in linear light.
+// pixel); a surface sub-sample that none matches (a vessel thinner than a
+// pixel, seen by a sub-sample only) is shaded here from its own normal and
+// albedo, without AO, when no translucent layer lies over the frame (else
+// it takes its own pixel's colour); the pixel is their mean in linear light.
 layout(binding = 0) uniform sampler2D color_tex;      // RGBA8, sRGB-encoded: the frame shaded once per pixel
 layout(binding = 1) uniform usampler2D id_tex;        // the shaded sample's object id (0: background)
 layout(binding = 2) uniform sampler2D normal_tex;     // and its world normal
 layout(binding = 3) uniform usampler2DMS ms_id;       // the visibility sub-samples
 layout(binding = 4) uniform sampler2DMS ms_normal;
+layout(binding = 5) uniform sampler2DMS ms_albedo;
 
 uniform int samples;
 uniform vec2 sample_positions[8]; // in the pixel, from its lower-left corner
 uniform float normal_cos;
-uniform vec4 background; // linear RGB, alpha
+uniform bool shade_unmatched; // no translucent surface in the frame
 
 layout(location = 0) out vec4 out_color;
 
-#include "srgb.glsl"
+#include "std140.glsl"
+#include "lighting_params.glsl"
+#include "shading.glsl"
 
 // Own pixel first, then the 8 neighbours.
 const ivec2 kOffsets[9] = ivec2[9](ivec2(0, 0), ivec2(1, 0), ivec2(-1, 0), ivec2(0, 1), ivec2(0, -1), ivec2(1, 1),
@@ -51,6 +57,12 @@ void main() {
         vec4 c = background;
         if (best >= 0) {
             vec4 e = texelFetch(color_tex, p + kOffsets[best], 0);
+            c = vec4(srgb_to_linear(e.rgb), e.a);
+        } else if (id != 0u && shade_unmatched) {
+            vec3 albedo = texelFetch(ms_albedo, p, s).rgb;
+            c = vec4(flat_shading ? albedo : shade(normalize(world_to_view * n), albedo, use_ao, 1.0), 1.0);
+        } else if (id != 0u) {
+            vec4 e = texelFetch(color_tex, p, 0);
             c = vec4(srgb_to_linear(e.rgb), e.a);
         }
         sum += vec4(c.rgb * c.a, c.a);
