@@ -214,7 +214,7 @@ TEST_F(ConeAoThin, ThinStructurePhantomAgainstTheEmbreeReference) {
     rq.view = "anterior";
     rq.width = rq.height = 256;
     rq.aov = Aov::Ao;
-    rq.look.ao = AoMethod::Reference;
+    rq.look.ao = AoMethod::Raytraced;
     rq.look.cone.radius_mm = 10;
     rq.look.ao_rays = 512;
     rq.cache_dir = "-";
