@@ -64,7 +64,7 @@ nlohmann::json describe(const Volume& v) {
 }
 
 namespace {
-// The cache folder for AO references (see RenderRequest::cache_dir); empty: none.
+// The cache folder for ray-traced AO terms (see RenderRequest::cache_dir); empty: none.
 std::filesystem::path cache_folder(const std::string& requested) {
     if (requested == "-") return {};
     if (!requested.empty()) return requested;
@@ -77,10 +77,10 @@ std::filesystem::path cache_folder(const std::string& requested) {
 
 // Ray-traced AO (look.ao raytraced): traced once, before the frame or
 // frames are drawn, and set in their options so that every one lights with
-// it (and the ao AOV reads it raw).
+// it (and the ao AOV reads it raw). The other AOVs do not read it.
 std::optional<RaytracedAo> raytraced_term(const Scene& scene, const Camera& cam, const RenderRequest& req,
                                           const RenderOptions& ro) {
-    if (req.look.ao != AoMethod::Raytraced) return std::nullopt;
+    if (req.look.ao != AoMethod::Raytraced || (req.aov != Aov::None && req.aov != Aov::Ao)) return std::nullopt;
     std::optional<RaytracedAo> rt = raytraced_ao(scene, cam, ro.width, ro.height, req.look, scene_key_text(scene, cam),
                                                  cache_folder(req.cache_dir).string(), req.progress);
     return rt;
