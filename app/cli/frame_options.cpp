@@ -61,8 +61,7 @@ void add_frame_options(CLI::App* c, FrameArgs& a, bool input_required) {
     c->add_option("--size", a.size, "Image size WxH (default 1024x1024)");
     c->add_option("--ao", a.ao,
                   "Ambient occlusion: off, cone (cone tracing), disk (disk hierarchy, high quality for stills), or "
-                  "reference (Embree ray "
-                  "tracing; with --aov ao)");
+                  "raytraced (Embree ray tracing, the ground truth; 'reference' is its former name)");
     c->add_option("--ao-radius", req.look.cone.radius_mm, "AO radius R_max in mm")->check(CLI::PositiveNumber);
     add_cone_options(c, req.look.cone);
     add_disk_options(c, req.look.disk, a.disk_blend);

@@ -120,9 +120,12 @@ RunFn add_render(CLI::App& cmd, char*) {
     c->add_option("--scale", a.frame.req.scale, "Scale of text, lines and glyphs (e.g. 2 for a 2x export)")
         ->check(CLI::Range(0.1, 20.0));
     c->add_option("--aov", a.aov, "Write a buffer instead of the colour image: depth, normal, id or ao (EXR)");
-    c->add_option("--ao-rays", a.frame.req.look.ao_rays, "Rays per pixel for --ao reference")
+    c->add_option("--ao-rays", a.frame.req.look.ao_rays, "--ao raytraced: the most rays per pixel (default 1024)")
         ->check(CLI::Range(1, 1 << 20));
-    c->add_option("--ao-cache", a.cache, "Folder caching AO references ('-': none; default ~/.cache/isoscope)");
+    c->add_option("--ao-error", a.frame.req.look.ao_error,
+                  "--ao raytraced: add rays until every pixel's standard error is at most this (default 0.005)")
+        ->check(CLI::Range(1e-4, 0.5));
+    c->add_option("--ao-cache", a.cache, "Folder caching ray-traced AO ('-': none; default ~/.cache/isoscope)");
     c->add_flag("--no-annotations", a.no_annotations,
                 "No scale bar, orientation letters, legend or labels (--markups are still drawn)");
     c->add_flag("--no-legend", a.no_legend,

@@ -87,8 +87,15 @@ RunFn add_view(CLI::App& cmd, char* argv0) {
     c->add_option("--view", a.view, "Initial view: anterior, posterior, left, right, superior or inferior");
     c->add_option("--series", a.series, "DICOM series to load: index or SeriesInstanceUID");
     c->add_option("--screenshot", a.screenshot, "Save the first converged frame to this PNG and quit (tests)");
-    c->add_option("--ao", a.ao, "Ambient occlusion: cone (default) or off; key O toggles it")
-        ->check(CLI::IsMember({"cone", "off"}));
+    c->add_option("--ao", a.ao,
+                  "Ambient occlusion: cone (default), raytraced (Embree, refined while the view is still) or off; "
+                  "key O toggles it")
+        ->check(CLI::IsMember({"cone", "raytraced", "off"}));
+    c->add_option("--ao-error", a.opt.look.ao_error,
+                  "--ao raytraced: refine until every pixel's standard error is at most this (default 0.02)")
+        ->check(CLI::Range(1e-4, 0.5));
+    c->add_option("--ao-rays", a.opt.look.ao_rays, "--ao raytraced: the most rays per pixel (default 1024)")
+        ->check(CLI::Range(1, 1 << 20));
     c->add_option("--ao-radius", a.opt.look.cone.radius_mm, "AO radius R_max in mm")->check(CLI::PositiveNumber);
     add_cone_options(c, a.opt.look.cone);
     c->add_option("--ao-frames", a.opt.look.ao_frames,

@@ -159,7 +159,7 @@ void MainWindow::open_session(const QString& path) {
             if (s.window) set_window_level(*s.window);
             set_markups(s.markups);
             // Through the view bar, which keeps its toggles for later views and gives them to this one.
-            view_bar_->ao_action()->setChecked(s.ao != AoMethod::Off);
+            view_bar_->set_ao(s.ao);
             view_bar_->transparency_action()->setChecked(s.transparency);
             if (viewer_) {
                 view_bar_->attach(*viewer_);

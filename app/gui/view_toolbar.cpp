@@ -1,6 +1,9 @@
 #include "app/gui/view_toolbar.hpp"
 
 #include <QAction>
+#include <QActionGroup>
+#include <QMenu>
+#include <QToolButton>
 
 namespace iso::gui {
 
@@ -40,9 +43,27 @@ ViewToolBar::ViewToolBar(std::function<Viewer*()> viewer, QWidget* parent)
     addSeparator();
     ao_ = addAction("AO");
     ao_->setObjectName("ambient_occlusion");
-    ao_->setToolTip("Ambient occlusion (cone traced)");
+    ao_->setToolTip("Ambient occlusion: cone traced, or ray traced (refined while the view is still); the arrow "
+                    "chooses");
     ao_->setCheckable(true);
     ao_->setChecked(ViewerOptions{}.look.ao != AoMethod::Off);
+    auto* methods = new QMenu(this);
+    auto* group = new QActionGroup(methods);
+    ao_cone_ = methods->addAction("Cone traced (interactive)");
+    ao_cone_->setObjectName("ao_cone");
+    ao_raytraced_ = methods->addAction("Ray traced (refines while the view is still)");
+    ao_raytraced_->setObjectName("ao_raytraced");
+    for (QAction* a : {ao_cone_, ao_raytraced_}) {
+        a->setCheckable(true);
+        group->addAction(a);
+    }
+    ao_cone_->setChecked(true);
+    ao_->setMenu(methods);
+    if (auto* b = qobject_cast<QToolButton*>(widgetForAction(ao_))) b->setPopupMode(QToolButton::MenuButtonPopup);
+    connect(group, &QActionGroup::triggered, this, [this] {
+        ao_->setChecked(true); // choosing a method turns AO on
+        apply_toggles();
+    });
     transparency_ = addAction("Transparency");
     transparency_->setObjectName("transparency");
     transparency_->setToolTip("Draw surfaces with their opacity; off: every surface opaque");
@@ -53,7 +74,7 @@ ViewToolBar::ViewToolBar(std::function<Viewer*()> viewer, QWidget* parent)
 }
 
 FrameLook ViewToolBar::look(FrameLook base) const {
-    base.ao = ao_->isChecked() ? AoMethod::Cone : AoMethod::Off;
+    base.ao = !ao_->isChecked() ? AoMethod::Off : ao_raytraced_->isChecked() ? AoMethod::Raytraced : AoMethod::Cone;
     base.transparency = transparency_->isChecked();
     return base;
 }
@@ -64,6 +85,13 @@ void ViewToolBar::attach(Viewer& v) const {
     v.set_options(o);
     // The O key in the view: the button follows (and, through toggled, sets the same again).
     v.on_options_changed = [this](Viewer& w) { ao_->setChecked(w.options().look.ao != AoMethod::Off); };
+}
+
+void ViewToolBar::set_ao(AoMethod m) {
+    if (m == AoMethod::Raytraced) ao_raytraced_->setChecked(true);
+    if (m == AoMethod::Cone) ao_cone_->setChecked(true);
+    ao_->setChecked(m != AoMethod::Off); // toggled: applies it
+    apply_toggles();
 }
 
 void ViewToolBar::apply_toggles() {

@@ -10,6 +10,7 @@
 #include <cmath>
 #include <iostream>
 
+#include "app/gui/raytraced_refiner.hpp"
 #include "io/error.hpp"
 #include "renderer/core/legend.hpp"
 #include "renderer/core/pick.hpp"
@@ -28,7 +29,8 @@ Viewer::Viewer(core::Scene& scene, PatientView view, ViewerOptions options, QWid
 }
 
 Viewer::~Viewer() {
-    makeCurrent(); // GL objects are released with the widget's context current
+    refiner_.reset(); // cancels and waits for its worker before anything it posts to goes
+    makeCurrent();    // GL objects are released with the widget's context current
     scene_.release_gpu();
     doneCurrent();
 }
@@ -80,6 +82,14 @@ RenderOptions Viewer::frame_options() const {
     // the release bring it back and accumulate it.
     opt.look = options_.look;
     if (dragging_ && !options_.ao_while_dragging) opt.look.ao = AoMethod::Off;
+    // Ray-traced AO: its latest batch for this view; cone AO until the first
+    // arrives and while the camera moves.
+    if (opt.look.ao == AoMethod::Raytraced) {
+        if (raytraced_ && !dragging_)
+            opt.ao_image = raytraced_.get();
+        else
+            opt.look.ao = AoMethod::Cone;
+    }
     // Still frames are jittered and averaged (anti-aliasing that converges
     // to exact coverage, translucent surfaces and the overlay included);
     // every frame has DSRAA's sub-samples. Any change starts the average again.
@@ -87,20 +97,58 @@ RenderOptions Viewer::frame_options() const {
     return opt;
 }
 
+bool Viewer::converged() const {
+    if (frames_ == 0) return false;
+    const bool aa = options_.look.aa.view_frames <= 1 || aa_frames_ >= options_.look.aa.view_frames;
+    if (options_.look.ao == AoMethod::Raytraced) return raytraced_drawn_ && raytraced_stats_.done && aa;
+    return (options_.look.ao != AoMethod::Cone || ao_frames_ >= options_.look.ao_frames) && aa;
+}
+
+// Ray-traced AO follows the view: a new camera, size, look or scene drops
+// the image and restarts the refinement; while a drag moves the camera
+// nothing is traced.
+void Viewer::follow_raytraced() {
+    if (options_.look.ao != AoMethod::Raytraced || dragging_) {
+        if (refiner_) refiner_->cancel();
+        raytraced_.reset();
+        return;
+    }
+    if (!refiner_)
+        refiner_ = std::make_unique<RaytracedRefiner>(this, [this](const RaytracedBatch& b) { take_batch(b); });
+    const QSize size = image_size();
+    const auto key = RaytracedRefiner::key(scene_, camera_, size.width(), size.height(), options_.look);
+    if (key == refiner_->current_key()) return;
+    raytraced_.reset();
+    raytraced_stats_ = {};
+    refiner_->ensure(key, scene_, camera_, size.width(), size.height(), options_.look);
+}
+
+// On the GUI thread, once per batch: keep the image and draw a frame with it.
+void Viewer::take_batch(const RaytracedBatch& b) {
+    if (!refiner_ || b.job != refiner_->job() || refiner_->current_key().empty()) return; // stale
+    raytraced_ = b.image;
+    raytraced_stats_ = b.stats;
+    update();
+}
+
 void Viewer::draw() {
     camera_.fit_planes(scene_.bounds());
+    follow_raytraced();
     const RenderOptions opt = frame_options();
     annotations_->legend.clear();
     if (options_.legend) annotations_->legend = core::legend_entries(scene_, opt.look);
     auto r = scene_.render(camera_, opt);
+    raytraced_drawn_ = opt.ao_image != nullptr;
     labels_ = std::move(r.labels);
     ++frames_;
     // GL objects made after the first frame: none while the view is steady.
     const std::size_t objects = scene_.renderer().gl_objects_created();
     if (frames_ == 1) objects_after_first_frame_ = objects;
     objects_since_first_frame_ = objects - objects_after_first_frame_;
-    // Cone AO accumulates still frames; the other methods are done in one.
-    const bool accumulates = opt.look.ao == AoMethod::Cone;
+    // Cone AO accumulates still frames; the other methods are done in one
+    // (cone AO standing in for ray-traced AO draws one frame: the tracer
+    // gets the processors).
+    const bool accumulates = opt.look.ao == AoMethod::Cone && options_.look.ao == AoMethod::Cone;
     ao_frames_ = accumulates ? r.ao_frames : 0;
     aa_frames_ = r.aa_frames;
     // Progressive AO and anti-aliasing: while the camera and the scene stay
@@ -225,8 +273,9 @@ void Viewer::keyPressEvent(QKeyEvent* e) {
     static const std::pair<int, PatientView> keys[] = {
         {Qt::Key_A, PatientView::Anterior}, {Qt::Key_P, PatientView::Posterior}, {Qt::Key_L, PatientView::Left},
         {Qt::Key_R, PatientView::Right},    {Qt::Key_S, PatientView::Superior},  {Qt::Key_I, PatientView::Inferior}};
-    if (e->key() == Qt::Key_O) { // ambient occlusion on / off
-        options_.look.ao = options_.look.ao == AoMethod::Off ? AoMethod::Cone : AoMethod::Off;
+    if (e->key() == Qt::Key_O) { // ambient occlusion on (the method it had, cone at first) / off
+        if (options_.look.ao != AoMethod::Off) ao_when_on_ = options_.look.ao;
+        options_.look.ao = options_.look.ao == AoMethod::Off ? ao_when_on_ : AoMethod::Off;
         update();
         if (on_options_changed) on_options_changed(*this);
         return;

@@ -16,6 +16,7 @@
 
 #include "io/markups.hpp"
 #include "app/gui/pointer_drag.hpp"
+#include "renderer/ao/progressive.hpp"
 #include "renderer/frame/camera.hpp"
 #include "renderer/frame/frame.hpp"
 
@@ -30,9 +31,14 @@ struct PickResult;
 
 namespace iso::gui {
 
+class RaytracedRefiner;
+struct RaytracedBatch;
+
 // The 3D view's look is a frame's (FrameLook: cone AO on, 16 still frames
 // by default; key O toggles AO between off and cone), plus how it behaves
-// while the camera moves.
+// while the camera moves. With ray-traced AO the still frames refine it on
+// worker threads (to the look's ao_error, 0.02 by default here) and the
+// frames that wait for its first batch, or move, use cone AO.
 struct ViewerOptions {
     FrameLook look = interactive_look();
     // AO in the frames drawn while a mouse drag moves the camera (off: those
@@ -45,7 +51,8 @@ struct ViewerOptions {
     static FrameLook interactive_look() {
         FrameLook l;
         l.ao = AoMethod::Cone;
-        l.ao_frames = 16; // still frames accumulating new jitter sets while nothing moves
+        l.ao_frames = 16;  // still frames accumulating new jitter sets while nothing moves
+        l.ao_error = 0.02; // ray-traced AO: the standard error a still view refines to
         return l;
     }
 };
@@ -56,15 +63,16 @@ public:
     explicit Viewer(core::Scene& scene, PatientView view, ViewerOptions options = {}, QWidget* parent = nullptr);
     ~Viewer() override;
     int frames() const { return frames_; }
-    // True once the picture stopped changing: the still frames of cone AO
-    // and of anti-aliasing all accumulated.
-    bool converged() const {
-        const bool ao = options_.look.ao != AoMethod::Cone || ao_frames_ >= options_.look.ao_frames;
-        const bool aa = options_.look.aa.view_frames <= 1 || aa_frames_ >= options_.look.aa.view_frames;
-        return frames_ > 0 && ao && aa;
-    }
+    // True once the picture stopped changing: no cone AO, or its still
+    // frames all accumulated; ray-traced AO: its last batch drawn; and the
+    // anti-aliasing's still frames all accumulated.
+    bool converged() const;
     int ao_frames() const { return ao_frames_; }
     int aa_frames() const { return aa_frames_; }
+    // Ray-traced AO: the image the last frame was lit with (null: none yet,
+    // cone AO stood in) and how far its refinement got.
+    const Image* raytraced_ao() const { return raytraced_drawn_ ? raytraced_.get() : nullptr; }
+    const ProgressiveAoStats& raytraced_stats() const { return raytraced_stats_; }
     // A mouse drag is moving the camera now.
     bool dragging() const { return dragging_; }
     // GL objects the renderer made after the first frame (0 in a steady
@@ -147,6 +155,14 @@ private:
     int aa_frames_ = 0;
     std::size_t objects_after_first_frame_ = 0, objects_since_first_frame_ = 0;
     std::vector<LabelBox> labels_;
+    // Ray-traced AO: the refiner's latest batch for the view as it is.
+    std::unique_ptr<RaytracedRefiner> refiner_;
+    std::shared_ptr<const Image> raytraced_;
+    ProgressiveAoStats raytraced_stats_;
+    bool raytraced_drawn_ = false;         // the last frame was lit with raytraced_
+    AoMethod ao_when_on_ = AoMethod::Cone; // what the O key turns AO back on with
+    void follow_raytraced();
+    void take_batch(const RaytracedBatch& b);
 };
 
 } // namespace iso::gui

@@ -17,6 +17,10 @@ struct AoReference::Impl {
     RTCDevice device = nullptr;
     RTCScene scene = nullptr;
     double epsilon = 1e-4; // ray origin offset, mm
+    // Per mesh (by index; null: empty), Embree's copies of its corners and
+    // triangles: hit points in double from the barycentrics.
+    std::vector<const float*> vertices;
+    std::vector<const unsigned*> indices;
     ~Impl() {
         if (scene) rtcReleaseScene(scene);
         if (device) rtcReleaseDevice(device);
@@ -30,7 +34,10 @@ AoReference::AoReference(const std::vector<const Mesh*>& meshes) : impl_(std::ma
     impl_->scene = rtcNewScene(impl_->device);
     rtcSetSceneBuildQuality(impl_->scene, RTC_BUILD_QUALITY_HIGH);
     Bounds b;
-    for (const Mesh* m : meshes) {
+    impl_->vertices.assign(meshes.size(), nullptr);
+    impl_->indices.assign(meshes.size(), nullptr);
+    for (unsigned mi = 0; mi < meshes.size(); ++mi) {
+        const Mesh* m = meshes[mi];
         if (!m || m->triangles.empty()) continue;
         RTCGeometry g = rtcNewGeometry(impl_->device, RTC_GEOMETRY_TYPE_TRIANGLE);
         auto* v = static_cast<float*>(rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
@@ -44,8 +51,10 @@ AoReference::AoReference(const std::vector<const Mesh*>& meshes) : impl_(std::ma
         auto* idx = static_cast<unsigned*>(rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3,
                                                                    3 * sizeof(unsigned), m->triangles.size()));
         std::memcpy(idx, m->triangles.data(), m->triangles.size() * 3 * sizeof(unsigned));
+        impl_->vertices[mi] = v;
+        impl_->indices[mi] = idx;
         rtcCommitGeometry(g);
-        rtcAttachGeometry(impl_->scene, g);
+        rtcAttachGeometryByID(impl_->scene, g, mi); // the hit's geomID is the mesh's index
         rtcReleaseGeometry(g);
     }
     rtcCommitScene(impl_->scene);
@@ -54,7 +63,7 @@ AoReference::AoReference(const std::vector<const Mesh*>& meshes) : impl_(std::ma
     scene_size_ = b.empty() ? 1.0 : std::max(2.0 * b.radius(), 1e-9);
     // Far enough above the surface to leave its own triangle behind in float
     // precision, small against any occluder distance that matters.
-    impl_->epsilon = 2e-5 * scene_size_;
+    impl_->epsilon = ray_offset();
 }
 
 AoReference::~AoReference() = default;
@@ -140,29 +149,73 @@ Image per_visible_pixel(const Camera& cam, const Image& depth, const Image& norm
 }
 } // namespace
 
+bool AoReference::occluded(const glm::dvec3& org, const glm::dvec3& d, double tfar) const {
+    RTCRay ray;
+    ray.org_x = float(org.x);
+    ray.org_y = float(org.y);
+    ray.org_z = float(org.z);
+    ray.dir_x = float(d.x);
+    ray.dir_y = float(d.y);
+    ray.dir_z = float(d.z);
+    ray.tnear = 0.0f;
+    ray.tfar = float(tfar);
+    ray.time = 0.0f;
+    ray.mask = 0xFFFFFFFFu;
+    ray.id = 0;
+    ray.flags = 0;
+    RTCIntersectContext ctx;
+    rtcInitIntersectContext(&ctx);
+    rtcOccluded1(impl_->scene, &ctx, &ray);
+    return ray.tfar < 0.0f; // Embree sets tfar to -inf on a hit
+}
+
+AoReference::Hit AoReference::intersect(const glm::dvec3& org, const glm::dvec3& d, double tnear, double tfar) const {
+    RTCRayHit rh;
+    rh.ray.org_x = float(org.x);
+    rh.ray.org_y = float(org.y);
+    rh.ray.org_z = float(org.z);
+    rh.ray.dir_x = float(d.x);
+    rh.ray.dir_y = float(d.y);
+    rh.ray.dir_z = float(d.z);
+    rh.ray.tnear = float(tnear);
+    rh.ray.tfar = float(tfar);
+    rh.ray.time = 0.0f;
+    rh.ray.mask = 0xFFFFFFFFu;
+    rh.ray.id = 0;
+    rh.ray.flags = 0;
+    rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+    rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+    RTCIntersectContext ctx;
+    rtcInitIntersectContext(&ctx);
+    rtcIntersect1(impl_->scene, &ctx, &rh);
+    Hit h;
+    if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) return h;
+    const glm::dvec3 ng(rh.hit.Ng_x, rh.hit.Ng_y, rh.hit.Ng_z);
+    const double len = glm::length(ng);
+    if (!(len > 0)) return h; // a degenerate triangle has no normal
+    h.hit = true;
+    h.t = rh.ray.tfar;
+    h.normal = ng / len;
+    h.mesh = rh.hit.geomID;
+    h.triangle = rh.hit.primID;
+    h.u = rh.hit.u;
+    h.v = rh.hit.v;
+    // On the triangle itself, in double: org + t dir carries the float error
+    // of t (~1e-4 mm at 1 m), more than the smallest ray offsets tested.
+    const unsigned* tri = impl_->indices[h.mesh] + 3 * std::size_t(h.triangle);
+    const float* v = impl_->vertices[h.mesh];
+    const auto corner = [&](int c) { return glm::dvec3(v[3 * tri[c]], v[3 * tri[c] + 1], v[3 * tri[c] + 2]); };
+    h.point = (1.0 - h.u - h.v) * corner(0) + h.u * corner(1) + h.v * corner(2);
+    return h;
+}
+
 double AoReference::at(const glm::dvec3& p, const glm::dvec3& n_in, const AoReferenceOptions& opt,
                        unsigned pixel_seed) const {
     const glm::dvec3 n = glm::normalize(n_in);
     const glm::dvec3 origin = p + n * impl_->epsilon;
     int unoccluded = 0;
     for_each_direction(n, opt, pixel_seed, [&](const glm::dvec3& d) {
-        RTCRay ray;
-        ray.org_x = float(origin.x);
-        ray.org_y = float(origin.y);
-        ray.org_z = float(origin.z);
-        ray.dir_x = float(d.x);
-        ray.dir_y = float(d.y);
-        ray.dir_z = float(d.z);
-        ray.tnear = 0.0f;
-        ray.tfar = float(opt.radius_mm);
-        ray.time = 0.0f;
-        ray.mask = 0xFFFFFFFFu;
-        ray.id = 0;
-        ray.flags = 0;
-        RTCIntersectContext ctx;
-        rtcInitIntersectContext(&ctx);
-        rtcOccluded1(impl_->scene, &ctx, &ray);
-        if (ray.tfar >= 0.0f) ++unoccluded; // Embree sets tfar to -inf on a hit
+        if (!occluded(origin, d, opt.radius_mm)) ++unoccluded;
     });
     return double(unoccluded) / double(opt.rays);
 }

@@ -46,6 +46,29 @@ public:
 
     // Scale of the scene (bounding-box diagonal), for ray offsets.
     double scene_size() const { return scene_size_; }
+    // How far above a surface AO rays leave it (mm): 5e-6 of the scene's size
+    // (1.5 um on the head CT), far above float precision at hit points
+    // computed on their triangle, and small enough that x10 or x0.1 of it
+    // changes AO by less than its noise (docs/ao.md).
+    double ray_offset() const { return 5e-6 * scene_size_; }
+
+    // The nearest triangle along org + t * dir, t in [tnear, tfar] (dir as
+    // given, not normalised): hit, its t, the point on the triangle
+    // (computed in double from the barycentrics: (1 - u - v) p0 + u p1 +
+    // v p2) and its unit geometric normal (the triangle's own, as its
+    // corners wind; not flipped); which mesh (its index in the
+    // constructor's list) and triangle.
+    struct Hit {
+        bool hit = false;
+        double t = 0;
+        glm::dvec3 point{0.0};
+        glm::dvec3 normal{0.0};
+        unsigned mesh = 0, triangle = 0;
+        double u = 0, v = 0;
+    };
+    Hit intersect(const glm::dvec3& org, const glm::dvec3& dir, double tnear, double tfar) const;
+    // Whether a triangle lies along org + t * dir for t in [0, tfar] (dir unit).
+    bool occluded(const glm::dvec3& org, const glm::dvec3& dir, double tfar) const;
 
 private:
     struct Impl;

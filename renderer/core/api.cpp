@@ -7,9 +7,9 @@
 #include <map>
 #include <sstream>
 
-#include "renderer/ao/reference.hpp"
 #include "renderer/core/image_metadata.hpp"
 #include "renderer/core/legend.hpp"
+#include "renderer/core/raytraced_ao.hpp"
 #include "renderer/gl/context.hpp"
 
 namespace iso::core {
@@ -67,7 +67,7 @@ nlohmann::json describe(const Volume& v) {
 }
 
 namespace {
-// The cache folder for AO references (see RenderRequest::cache_dir); empty: none.
+// The cache folder for ray-traced AO terms (see RenderRequest::cache_dir); empty: none.
 std::filesystem::path cache_folder(const std::string& requested) {
     if (requested == "-") return {};
     if (!requested.empty()) return requested;
@@ -78,61 +78,15 @@ std::filesystem::path cache_folder(const std::string& requested) {
     return {};
 }
 
-// The Embree reference for this view, from the cache when the same input,
-// surfaces, camera, size, radius and ray count were traced before.
-Image ao_reference_cached(Scene& scene, const Camera& cam, const RenderOptions& ro,
-                          const std::map<std::string, std::string>& t, const RenderRequest& req, bool& hit) {
-    std::ostringstream key;
-    key.precision(17);
-    key << "ao-reference v1 (Embree, Malley, rotated Hammersley, seed 1)\n"
-        << t.at("isoscope:input_sha256") << "\n"
-        << (t.count("isoscope:iso") ? t.at("isoscope:iso") : "") << "\n"
-        << t.at("isoscope:camera") << "\n"
-        << ro.width << "x" << ro.height << "\n"
-        << req.look.cone.radius_mm << "\n"
-        << req.look.ao_rays;
-    const auto dir = cache_folder(req.cache_dir);
-    const auto file = dir.empty() ? std::filesystem::path() : dir / "ao" / (sha256_of_string(key.str()) + ".exr");
-    std::error_code ec;
-    if (!file.empty() && std::filesystem::exists(file, ec)) {
-        try {
-            Image img = load_image(file.string());
-            if (img.is_float && img.channels == 1 && img.width == ro.width && img.height == ro.height) {
-                hit = true;
-                return img;
-            }
-        } catch (const Error&) {
-            // A damaged cache entry is recomputed and replaced below.
-        }
-    }
-    // The visible points come from the depth and normal AOVs, the occlusion
-    // from Embree rays against the same meshes.
-    RenderOptions d = ro;
-    d.annotations = nullptr;
-    d.look.ao = AoMethod::Off;
-    d.aov = Aov::Depth;
-    const Image depth = scene.render(cam, d).image;
-    d.aov = Aov::Normal;
-    const Image normal = scene.render(cam, d).image;
-    std::vector<const Mesh*> ptrs;
-    for (const SurfaceId id : scene.surfaces())
-        if (scene.info(id).visible) ptrs.push_back(&scene.mesh(id));
-    AoReference reference(ptrs);
-    AoReferenceOptions ao;
-    ao.radius_mm = req.look.cone.radius_mm;
-    ao.rays = req.look.ao_rays;
-    Image img = reference.image(cam, depth, normal, ao);
-    if (!file.empty()) {
-        std::filesystem::create_directories(file.parent_path(), ec);
-        try {
-            ImageMetadata m;
-            m.text["isoscope:cache_key"] = key.str();
-            save_image(img, file.string(), m);
-        } catch (const Error&) {
-            // An unwritable cache only costs time.
-        }
-    }
-    return img;
+// Ray-traced AO (look.ao raytraced): traced once, before the frame or
+// frames are drawn, and set in their options so that every one lights with
+// it (and the ao AOV reads it raw). The other AOVs do not read it.
+std::optional<RaytracedAo> raytraced_term(const Scene& scene, const Camera& cam, const RenderRequest& req,
+                                          const RenderOptions& ro) {
+    if (req.look.ao != AoMethod::Raytraced || (req.aov != Aov::None && req.aov != Aov::Ao)) return std::nullopt;
+    std::optional<RaytracedAo> rt = raytraced_ao(scene, cam, ro.width, ro.height, req.look, scene_key_text(scene, cam),
+                                                 cache_folder(req.cache_dir).string(), req.progress);
+    return rt;
 }
 
 // The largest channel difference per pixel between two RGBA8 images, in
@@ -198,22 +152,13 @@ RenderResult render_converged(Scene& scene, const Camera& cam, RenderOptions ro,
 RenderOptions frame_options(const RenderRequest& req) {
     validate(req.look);
     const AoMethod method = req.look.ao;
-    if (method == AoMethod::Reference && req.aov != Aov::Ao)
-        throw Error("ambient occlusion reference",
-                    "the ray-traced reference is written only as the raw AO term (the ao AOV)");
     if (req.aov == Aov::Ao && method == AoMethod::Off)
-        throw Error("ao AOV", "needs cone, disk or reference ambient occlusion");
+        throw Error("ao AOV", "needs cone, disk or raytraced ambient occlusion");
     RenderOptions ro;
     ro.width = req.width;
     ro.height = req.height;
     ro.look = req.look;
     ro.aov = req.aov;
-    // The reference is traced on the CPU from the depth and normal AOVs
-    // (ao_reference_cached); the GL frame itself draws the cheapest of them.
-    if (method == AoMethod::Reference) {
-        ro.look.ao = AoMethod::Off;
-        ro.aov = Aov::Depth;
-    }
     ro.scale = req.scale;
     ro.time_passes = req.time_passes;
     ro.pick = req.pick;
@@ -257,10 +202,13 @@ RenderOutput render_image(Scene& scene, const RenderRequest& req) {
     const bool colour_image = req.aov == Aov::None; // annotations and markups go on it only
     if ((req.annotations || !ann.markups.empty()) && colour_image) ro.annotations = &ann;
     const Camera cam = frame_camera(scene, req);
+    const std::optional<RaytracedAo> raytraced = raytraced_term(scene, cam, req, ro);
+    if (raytraced) ro.ao_image = &raytraced->image;
     Convergence aa;
     auto r = render_converged(scene, cam, ro, req, aa);
     RenderOutput out;
-    out.meta = frame_metadata({scene, req, ro, cam, r, colour_image ? &ann : nullptr});
+    out.meta =
+        frame_metadata({scene, req, ro, cam, r, colour_image ? &ann : nullptr, raytraced ? &*raytraced : nullptr});
     if (colour_image) out.meta.text["isoscope:antialiasing"] = aa.text();
     out.aa_frames = aa.frames;
     out.aa_change = aa.change;
@@ -271,8 +219,7 @@ RenderOutput render_image(Scene& scene, const RenderRequest& req) {
     out.labels = std::move(r.labels);
     out.gl_renderer = r.gl_renderer;
     out.camera = cam;
-    if (req.look.ao == AoMethod::Reference)
-        out.image = ao_reference_cached(scene, cam, ro, out.meta.text, req, out.ao_cache_hit);
+    if (raytraced) out.ao_cache_hit = raytraced->cache_hit;
     return out;
 }
 

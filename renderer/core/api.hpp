@@ -48,10 +48,10 @@ struct RenderRequest {
     // far planes fitted to the visible surfaces (as the 3D view does).
     std::optional<Camera> camera;
     int width = 1024, height = 1024;
-    // Background, transparency, flat shading and ambient occlusion: "cone"
-    // and "disk" darken the ambient light of the colour image; "reference"
-    // (Embree ray tracing) only as the ao AOV, which writes the raw term
-    // (1 = unoccluded) of any method.
+    // Background, transparency, flat shading and ambient occlusion: "cone",
+    // "disk" and "raytraced" (Embree, traced on the CPU before the frame)
+    // darken the ambient light of the colour image; the ao AOV writes the
+    // raw term (1 = unoccluded) of any method.
     FrameLook look;
     Aov aov = Aov::None;     // a buffer instead of the colour image
     float scale = 1.0f;      // annotation scale (text, lines, glyphs)
@@ -67,8 +67,9 @@ struct RenderRequest {
     std::vector<Markup> markups;
     std::vector<std::string> markups_files;
     bool time_passes = false; // real per-pass GPU times (glFinish after each pass)
-    // Reference results are cached by a hash of everything they depend on
-    // (input file contents, iso values, camera, size, radius, rays) under
+    // Ray-traced AO terms are cached by a hash of everything they depend on
+    // (input file contents, iso values, surfaces, camera, size, radius, rays,
+    // target error, the definition's version) under
     // this folder; empty: $ISOSCOPE_CACHE_DIR, else $XDG_CACHE_HOME/isoscope,
     // else ~/.cache/isoscope. "-": no cache.
     std::string cache_dir;
@@ -96,7 +97,7 @@ struct RenderOutput {
     graph::FrameStats stats;
     std::string gl_renderer;
     Camera camera;
-    bool ao_cache_hit = false;    // the AO reference came from the cache
+    bool ao_cache_hit = false;    // the ray-traced AO term came from the cache
     OitStats oit;                 // translucent surfaces (zero without)
     PickList pick;                // with RenderRequest::pick
     std::vector<LabelBox> labels; // the overlay's labels as placed and drawn (docs/text.md)
@@ -123,8 +124,8 @@ RenderResult render_converged(Scene& scene, const Camera& cam, RenderOptions ro,
 
 // Renders the scene headlessly (its own EGL context, made on first use; the
 // caller's EGL context, or none, is current again on return, so that any
-// one thread at a time may call it) as asked: camera from the patient view or `req.camera`, annotations and markups, AO (cone or
-// the Embree reference), AOVs; the output carries the metadata to embed
+// one thread at a time may call it) as asked: camera from the patient view or `req.camera`, annotations and markups, AO (cone,
+// disk or ray-traced), AOVs; the output carries the metadata to embed
 // (sources and their SHA-256, iso values, camera, matrices, markups files
 // and the measurements drawn, the session file and its SHA-256). `isos` and `series` of the
 // request are not used here. Throws iso::Error.

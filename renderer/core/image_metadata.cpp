@@ -125,6 +125,23 @@ void add_shading(Text& t, const FrameRecord& f) {
                             "; of the nearest opaque surface (translucent surfaces are not in the AOVs)";
 }
 
+// Ray-traced AO: the definition, the stop rule and where it stopped.
+void add_raytraced(Text& t, const RaytracedAo& rt) {
+    const auto& s = rt.stats;
+    t["isoscope:ao"] = "raytraced (Embree: primary ray through each pixel centre; cosine-weighted hemisphere about the "
+                       "hit triangle's geometric normal, facing the camera)";
+    t["isoscope:ao_parameters"] = "rays added in batches until every pixel's standard error is at most " +
+                                  number_text(rt.target_se) + ", at most " + std::to_string(rt.max_rays) +
+                                  " rays per pixel" + (rt.cache_hit ? "; from the cache" : "");
+    t["isoscope:ao_rays"] = std::to_string(rt.max_rays);
+    t["isoscope:ao_rays_traced"] = std::to_string(s.rays);
+    t["isoscope:ao_rays_per_pixel"] = "min " + std::to_string(s.rays_min) + ", mean " +
+                                      number_text(s.pixels ? double(s.rays) / s.pixels : 0.0) + ", max " +
+                                      std::to_string(s.rays_max);
+    t["isoscope:ao_standard_error"] = "max " + number_text(s.se_max) + "; " + std::to_string(s.capped) + " of " +
+                                      std::to_string(s.pixels) + " pixels stopped by the ray cap above the target";
+}
+
 // The AO method and every one of its settings (from the settings' tables).
 void add_ambient_occlusion(Text& t, const FrameRecord& f) {
     const FrameLook& look = f.req.look;
@@ -137,16 +154,18 @@ void add_ambient_occlusion(Text& t, const FrameRecord& f) {
         t["isoscope:ao"] = "disk (disk hierarchy with exact near triangles, GPU Gems 3 ch. 12)";
         t["isoscope:ao_parameters"] = settings_text(look.disk);
     }
-    if (f.req.aov == Aov::Ao) {
+    if (look.ao == AoMethod::Raytraced && f.raytraced) add_raytraced(t, *f.raytraced);
+    if (f.req.aov == Aov::Ao)
         t["isoscope:aov"] = "ao (1 = unoccluded; cosine-weighted visibility within the radius; NaN = background)";
-        if (look.ao == AoMethod::Reference) {
-            t["isoscope:ao"] = "reference (Embree ray tracing)";
-            t["isoscope:ao_rays"] = std::to_string(look.ao_rays);
-        }
-    }
 }
 
 } // namespace
+
+std::string scene_key_text(const Scene& scene, const Camera& cam) {
+    std::string sums;
+    for (const auto& f : scene.sources()) sums += sha256_of_path(f) + "\n";
+    return sums + iso_values_text(scene) + "\n" + surfaces_text(scene) + "\n" + camera_text(cam);
+}
 
 ImageMetadata frame_metadata(const FrameRecord& f) {
     ImageMetadata meta;

@@ -8,6 +8,7 @@
 
 #include "io/image.hpp"
 #include "renderer/core/api.hpp"
+#include "renderer/core/raytraced_ao.hpp"
 
 namespace iso::core {
 
@@ -18,9 +19,15 @@ struct FrameRecord {
     const RenderOptions& options;
     const Camera& camera;
     const RenderResult& result;
-    const Annotations* annotations; // drawn over the colour image; null: an AOV or none
+    const Annotations* annotations;         // drawn over the colour image; null: an AOV or none
+    const RaytracedAo* raytraced = nullptr; // the ray-traced AO term the frame was lit with
 };
 
 ImageMetadata frame_metadata(const FrameRecord& f);
+
+// What a frame's ray-traced AO depends on in the scene, one a line: the
+// inputs' SHA-256, the iso values, the visible surfaces, the camera (a
+// cache key's part).
+std::string scene_key_text(const Scene& scene, const Camera& cam);
 
 } // namespace iso::core

@@ -87,6 +87,13 @@ public:
         if (const json* v = member(root, "view"); v && !v->is_null()) {
             if (!v->is_object()) fail("view", "must be an object");
             s.ao = boolean(*v, "ao", "view.ao", true) ? AoMethod::Cone : AoMethod::Off;
+            // "ao_method": the method when on ("raytraced"; "cone" if absent).
+            if (const json* mth = member(*v, "ao_method"); mth && s.ao != AoMethod::Off) {
+                const std::string name = mth->is_string() ? mth->get<std::string>() : "";
+                if (name != "cone" && name != "raytraced" && name != "reference")
+                    fail("view.ao_method", "must be \"cone\" or \"raytraced\"");
+                s.ao = ao_method_from_name(name); // "reference": the ray-traced method's former name
+            }
             s.transparency = boolean(*v, "transparency", "view.transparency", true);
         }
         if (const json* m = member(root, "markups"); m && !m->is_null()) {
@@ -253,8 +260,10 @@ Session capture_session(const Scene& scene, const std::string& input, const std:
     }
     s.camera = camera;
     s.window = window;
-    // The 3D view draws cone AO or none (its interactive method).
-    s.ao = view.ao == AoMethod::Off ? AoMethod::Off : AoMethod::Cone;
+    // The 3D view draws cone AO, ray-traced AO (refined while still) or none.
+    s.ao = view.ao == AoMethod::Raytraced ? AoMethod::Raytraced
+           : view.ao == AoMethod::Off     ? AoMethod::Off
+                                          : AoMethod::Cone;
     s.transparency = view.transparency;
     s.markups = std::move(markups);
     return s;
@@ -295,6 +304,7 @@ ordered_json session_json(const Session& s, const std::string& session_path) {
     else
         j["window_level"] = nullptr;
     j["view"] = {{"ao", s.ao != AoMethod::Off}, {"transparency", s.transparency}};
+    if (s.ao == AoMethod::Raytraced) j["view"]["ao_method"] = "raytraced";
     if (s.markups.empty()) {
         j["markups"] = nullptr;
     } else {

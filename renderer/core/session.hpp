@@ -51,9 +51,11 @@ struct Session {
     // are fitted to the surfaces when drawn). None: the anterior view.
     std::optional<Camera> camera;
     std::optional<WindowLevel> window; // the slice views' window/level
-    AoMethod ao = AoMethod::Cone; // the 3D view's ambient occlusion: cone or off (the file's view.ao: true or false)
-    bool transparency = true;     // the 3D view's transparency on (off: every surface opaque)
-    std::vector<Markup> markups;  // LPS mm
+    // The 3D view's ambient occlusion: cone, raytraced or off (the file's
+    // view.ao: true or false; view.ao_method "raytraced" when it is).
+    AoMethod ao = AoMethod::Cone;
+    bool transparency = true;    // the 3D view's transparency on (off: every surface opaque)
+    std::vector<Markup> markups; // LPS mm
     // Found while loading, not stored: e.g. the input changed since saving.
     std::vector<std::string> warnings;
 };

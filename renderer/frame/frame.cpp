@@ -20,7 +20,7 @@ Aov aov_from_name(const std::string& n) {
 namespace {
 
 constexpr std::pair<AoMethod, const char*> kAoMethods[] = {
-    {AoMethod::Off, "off"}, {AoMethod::Cone, "cone"}, {AoMethod::Disk, "disk"}, {AoMethod::Reference, "reference"}};
+    {AoMethod::Off, "off"}, {AoMethod::Cone, "cone"}, {AoMethod::Disk, "disk"}, {AoMethod::Raytraced, "raytraced"}};
 
 // A range check whose error names the setting and shows the number as given.
 void check_range(const char* setting, double v, double lo, double hi) {
@@ -39,7 +39,8 @@ const char* ao_method_name(AoMethod m) {
 AoMethod ao_method_from_name(const std::string& name) {
     for (const auto& [method, n] : kAoMethods)
         if (name == n) return method;
-    throw Error("ambient occlusion", "method must be off, cone, disk or reference, got '" + name + "'");
+    if (name == "reference") return AoMethod::Raytraced; // the former name
+    throw Error("ambient occlusion", "method must be off, cone, disk or raytraced, got '" + name + "'");
 }
 
 void validate(const FrameLook& look) {
@@ -57,6 +58,7 @@ void validate(const FrameLook& look) {
     check_range("anti-aliasing view frames", look.aa.view_frames, 1, 4096);
     check_range("anti-aliasing tolerance", look.aa.tolerance, 0.0, 1.0);
     check_range("anti-aliasing normal cosine", look.aa.normal_cos, -1.0, 1.0);
+    check_range("ambient occlusion error", look.ao_error, 1e-4, 0.5);
     // A method's settings are checked when it is asked for (the cone's
     // radius is every method's R; disk frames trace translucent surfaces'
     // AO with the cone's settings).

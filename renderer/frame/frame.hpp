@@ -38,12 +38,14 @@ Aov aov_from_name(const std::string& name); // "depth", "normal", "id", "ao"; th
 
 // How the AO term is computed (docs/ao.md): not at all; cone tracing in a
 // slicemap (interactive); the disk hierarchy of GPU Gems 3 ch. 12 (still
-// pictures); or Embree ray tracing, the reference, which the core computes
-// on the CPU and writes only as the ao AOV (the GL renderer draws such a
-// frame without AO).
-enum class AoMethod { Off, Cone, Disk, Reference };
-const char* ao_method_name(AoMethod m);                // "off", "cone", "disk", "reference"
-AoMethod ao_method_from_name(const std::string& name); // throws iso::Error("ambient occlusion", ...)
+// pictures); or Embree ray tracing (the ground truth, refined progressively
+// on the CPU by the core or the 3D view and handed to the GL frame as
+// RenderOptions::ao_image).
+enum class AoMethod { Off, Cone, Disk, Raytraced };
+const char* ao_method_name(AoMethod m); // "off", "cone", "disk", "raytraced"
+// Also accepts "reference", the ray-traced method's former name (old sessions
+// and commands). Throws iso::Error("ambient occlusion", ...).
+AoMethod ao_method_from_name(const std::string& name);
 
 // Anti-aliasing (docs/rendering.md, "Anti-aliasing"). Each frame stores
 // `samples` visibility sub-samples per pixel (depth, object id, normal) but
@@ -93,8 +95,11 @@ struct FrameLook {
     AoMethod ao = AoMethod::Off;
     ConeAoSettings cone;
     DiskAoSettings disk;
-    int ao_frames = 1;  // cone: still frames accumulated, each with new jitter sets (the 3D view: while nothing moves)
-    int ao_rays = 1024; // reference: rays per pixel
+    int ao_frames = 1; // cone: still frames accumulated, each with new jitter sets (the 3D view: while nothing moves)
+    // Ray-traced: rays per pixel are added in batches until the standard
+    // error of every pixel's estimate is at most ao_error, up to ao_rays.
+    int ao_rays = 1024;
+    double ao_error = 0.005;
     AntiAliasing aa;
     bool operator==(const FrameLook&) const = default;
 };
@@ -166,6 +171,11 @@ struct RenderOptions {
     // in pixels (x right, y down, each in [-0.5, 0.5]): exact-coverage
     // references place their sub-samples on a stratified grid.
     std::optional<glm::vec2> jitter;
+    // Ray-traced AO (look.ao Raytraced): the AO term computed outside the
+    // frame, one float channel per pixel (1 = unoccluded, NaN: background),
+    // width x height, rows from the top as Image stores them; the frame
+    // uploads it and lights with it. Required for such a frame's image.
+    const Image* ao_image = nullptr;
 };
 
 // Test and benchmark hooks, apart from what a user asks for.

@@ -46,6 +46,8 @@ std::vector<double> accumulation_key(const FrameContext& ctx) {
     key.insert(key.end(), {l.background.r, l.background.g, l.background.b, double(l.transparent_background),
                            double(l.transparency), double(l.flat_shading), double(l.ao), l.cone.radius_mm,
                            double(l.aa.samples), double(l.ao_frames)});
+    // The AO term computed outside the frame (ray-traced AO: a new batch is a new picture).
+    if (ctx.opt.ao_image) key.push_back(hash_of(ctx.opt.ao_image->floats));
     // The overlay's geometry and text.
     key.push_back(hash_of(ctx.overlay.vertices));
     key.push_back(hash_of(ctx.overlay.atlas.texels));

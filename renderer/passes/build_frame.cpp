@@ -78,28 +78,33 @@ void set_jitter(FrameContext& ctx, glm::vec2 jitter) {
 
 void build_frame(graph::FrameGraph& fg, const FrameContext& ctx) {
     const RenderOptions& opt = ctx.opt;
-    // The GL frame computes cone and disk AO; the reference is the core's (on the CPU).
+    // The GL frame computes cone and disk AO; ray-traced AO comes computed
+    // (RenderOptions::ao_image) and is uploaded by ao_import.
     const AoMethod method = opt.look.ao;
-    if (method == AoMethod::Reference)
-        throw Error("ambient occlusion", "the ray-traced reference is computed by the core, not in a GL frame");
+    const bool raytraced = method == AoMethod::Raytraced;
+    const bool reads_ao = opt.image && (opt.aov == Aov::None || opt.aov == Aov::Ao);
+    if (raytraced && !opt.ao_image && reads_ao)
+        throw Error("ray-traced AO", "the frame needs its AO image (computed on the CPU before the frame)");
     if (opt.aov == Aov::Ao && method == AoMethod::Off)
-        throw Error("ao AOV", "needs cone, disk or reference ambient occlusion");
+        throw Error("ao AOV", "needs cone, disk or raytraced ambient occlusion");
     validate(opt.look);
-    const bool lit_ao = method != AoMethod::Off;
+    const bool lit_ao = method != AoMethod::Off && (!raytraced || opt.ao_image);
     const bool disk = method == AoMethod::Disk;
     const GBuffer gb = gbuffer(fg, ctx);
     // Declared always: culled by the graph when neither lighting nor the read-back reads it.
     const AmbientOcclusion ao = ambient_occlusion(fg, ctx, gb);
-    // Disk AO replaces the cone chain's image (the cone chain is then culled).
-    const graph::TextureHandle ao_image = disk ? disk_ambient_occlusion(fg, ctx, gb) : ao.ao;
+    // Disk AO and ray-traced AO replace the cone chain's image (the cone chain is then culled).
+    const graph::TextureHandle ao_image = raytraced && opt.ao_image ? imported_ao(fg, ctx)
+                                          : disk                    ? disk_ambient_occlusion(fg, ctx, gb)
+                                                                    : ao.ao;
     graph::TextureHandle color = lighting(fg, ctx, gb, lit_ao ? ao_image : graph::TextureHandle{});
     // Scene content, not an output request, decides this one: no translucent
     // object, no list passes. Lit translucent fragments get their own AO
     // (traced through the cone chain: the disk hierarchy holds the opaque
-    // surfaces only).
+    // surfaces only); with ray-traced AO they go without (docs/ao.md).
     PickBuffers picked;
-    if (!ctx.translucent.empty())
-        color = voit(fg, ctx, gb, color, lit_ao && !opt.look.flat_shading ? &ao : nullptr, picked);
+    const bool translucent_ao = lit_ao && !raytraced && !opt.look.flat_shading;
+    if (!ctx.translucent.empty()) color = voit(fg, ctx, gb, color, translucent_ao ? &ao : nullptr, picked);
     if (ctx.pick) pick(fg, ctx, gb, picked);
     if (!opt.image) return; // nothing reads the colour image or an AOV: their passes are culled
     color = dsraa(fg, ctx, gb, color);

@@ -236,6 +236,10 @@ AmbientOcclusion ambient_occlusion(graph::FrameGraph& fg, const FrameContext& ct
 // cull the chain when nothing reads the AO image.
 graph::TextureHandle disk_ambient_occlusion(graph::FrameGraph& fg, const FrameContext& ctx, const GBuffer& gb);
 
+// Ray-traced AO (ao_import.cpp): RenderOptions::ao_image uploaded into a
+// transient R32F texture (rows flipped to GL's bottom-up order).
+graph::TextureHandle imported_ao(graph::FrameGraph& fg, const FrameContext& ctx);
+
 // Deferred lighting; `ao` invalid: no AO.
 graph::TextureHandle lighting(graph::FrameGraph& fg, const FrameContext& ctx, const GBuffer& gb,
                               graph::TextureHandle ao);

@@ -29,5 +29,8 @@ void main() {
         return;
     }
     float ao = use_ao ? texelFetch(ao_tex, ivec2(gl_FragCoord.xy), 0).r : 1.0;
+    // An AO image made outside the frame (ray traced) may miss a silhouette
+    // pixel that the rasterizer covers: NaN there, taken as unoccluded.
+    if (isnan(ao)) ao = 1.0;
     out_color = vec4(srgb(shade(normalize(world_to_view * nw.xyz), albedo, use_ao, ao)), 1.0);
 }

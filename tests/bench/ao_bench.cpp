@@ -493,7 +493,7 @@ int main(int argc, char** argv) {
                     rq.view = sc.view;
                     rq.width = rq.height = S;
                     rq.aov = Aov::Ao;
-                    rq.look.ao = AoMethod::Reference;
+                    rq.look.ao = AoMethod::Raytraced;
                     rq.look.cone.radius_mm = sc.radius;
                     rq.look.ao_rays = a.rays;
                     const auto ref = core::render_input(sc.input, rq);

@@ -222,7 +222,7 @@ TEST_F(ConeAo, CtSkinAndBunnyAgainstTheEmbreeReference) {
         rq.view = k.view;
         rq.width = rq.height = 256;
         rq.aov = Aov::Ao;
-        rq.look.ao = AoMethod::Reference;
+        rq.look.ao = AoMethod::Raytraced;
         rq.look.cone.radius_mm = k.radius;
         rq.look.ao_rays = 512;
         rq.cache_dir = "-";
@@ -259,7 +259,7 @@ TEST_F(ConeAo, CoarseConePassIsUpsampledAlongSurfacesNotAcrossEdges) {
         rq.view = k.view;
         rq.width = rq.height = 256;
         rq.aov = Aov::Ao;
-        rq.look.ao = AoMethod::Reference;
+        rq.look.ao = AoMethod::Raytraced;
         rq.look.cone.radius_mm = k.radius;
         rq.look.ao_rays = 512;
         rq.cache_dir = "-";

@@ -204,7 +204,11 @@ TEST_F(ConeAoThin, TiltedSheetThinnerThanAVoxelKeepsItsVoxelsInEveryColumn) {
 TEST_F(ConeAoThin, ThinStructurePhantomAgainstTheEmbreeReference) {
     // The vessel tree (radii 3.5 .. 0.45 mm) and thin bone shells of
     // thin_phantom.hpp at iso 150, R = 10 mm, seen from the front, 256x256,
-    // 512-ray reference (own noise RMS ~0.01).
+    // ray-traced reference capped at 512 rays (own noise RMS ~0.005). The
+    // reference is the geometric-normal definition (docs/ao.md); cone and
+    // disk AO work about the interpolated normal, and on this phantom the
+    // two definitions differ by 0.037 RMSE (ao_raytraced_bench), which the
+    // errors below now include.
     const std::string file =
         (std::filesystem::temp_directory_path() / ("isoscope-thin-phantom-" + std::to_string(::getpid()) + ".nrrd"))
             .string();
@@ -214,7 +218,7 @@ TEST_F(ConeAoThin, ThinStructurePhantomAgainstTheEmbreeReference) {
     rq.view = "anterior";
     rq.width = rq.height = 256;
     rq.aov = Aov::Ao;
-    rq.look.ao = AoMethod::Reference;
+    rq.look.ao = AoMethod::Raytraced;
     rq.look.cone.radius_mm = 10;
     rq.look.ao_rays = 512;
     rq.cache_dir = "-";
@@ -237,11 +241,12 @@ TEST_F(ConeAoThin, ThinStructurePhantomAgainstTheEmbreeReference) {
     const auto e_axis = ao_error(axis.image, ref.image, rq.look.ao_rays);
     const auto e_disk = ao_error(disk.image, ref.image, rq.look.ao_rays);
     std::printf("thin phantom 256x256: disk RMSE %.4f bias %+.4f p95 %.4f\n", e_disk.rmse, e_disk.bias, e_disk.p95);
-    // Disk AO: measured 0.029 (bias -0.006) here, 0.031 at 512x512 against a 1024-ray
-    // reference (docs/ao.md); the bound leaves room for this 512-ray
-    // reference's noise (~0.01 RMS) and other rasterizers. It must beat the
-    // cone tracer here (the accurate mode).
-    EXPECT_LE(e_disk.rmse, 0.045) << "disk: bias " << e_disk.bias << " p95 " << e_disk.p95;
+    // Disk AO: measured 0.049 (bias +0.001) here against the geometric-normal
+    // reference (0.029, bias -0.006, against the former shading-normal one:
+    // the definitions' gap in quadrature); the bound leaves room for the
+    // reference's noise and other rasterizers. It must beat the cone tracer
+    // here (the accurate mode).
+    EXPECT_LE(e_disk.rmse, 0.06) << "disk: bias " << e_disk.bias << " p95 " << e_disk.p95;
     EXPECT_LE(std::abs(e_disk.bias), 0.02);
     EXPECT_LT(e_disk.rmse, e_axis.rmse);
     const auto e = ao_error(cone.image, ref.image, rq.look.ao_rays),
@@ -257,10 +262,11 @@ TEST_F(ConeAoThin, ThinStructurePhantomAgainstTheEmbreeReference) {
                 e.rmse, e.bias, e.p95, e_surface.rmse, e_surface.bias, e_rw1.rmse, e_rw1.bias, e_axis.rmse, e_axis.bias,
                 e_none.rmse);
     EXPECT_GT(e.pixels, 3000u);
-    // Bounds: measured 0.082 (bias +0.035) without axis probes, 0.081 with surface voxels, 0.073 (bias
-    // +0.011) with ray weight 1, no AO 0.193 (this machine's llvmpipe; the renders are deterministic, the
-    // margin of ~0.013 is for other rasterizers and the reference's own noise, ~0.01 RMS at 512 rays).
-    // Axis probes (axis weight 1, the default): measured 0.078, bias +0.002 (at 512x512 0.065 against 0.077).
+    // Bounds: measured 0.086 (bias +0.041) without axis probes, 0.085 with surface voxels, 0.076 (bias
+    // +0.017) with ray weight 1, no AO 0.197 against the geometric-normal reference (against the former
+    // shading-normal one: 0.082, 0.081, 0.073, 0.193); this machine's llvmpipe, the renders are
+    // deterministic, the margin is for other rasterizers and the reference's own noise.
+    // Axis probes (axis weight 1, the default): measured 0.080, bias +0.008 (former reference: 0.078, +0.002).
     // The target is 0.06 at 512x512: missed, see docs/ao.md "Thin structures".
     EXPECT_LE(e.rmse, 0.095) << "bias " << e.bias << " MAE " << e.mae << " p95 " << e.p95;
     EXPECT_GT(e.bias, 0.0) << "the cone tracer is too light on thin structures (the known limit)";

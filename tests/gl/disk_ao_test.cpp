@@ -440,7 +440,7 @@ TEST_F(DiskAo, CtSkinAndBunnyAgainstTheEmbreeReference) {
         rq.view = k.view;
         rq.width = rq.height = 256;
         rq.aov = Aov::Ao;
-        rq.look.ao = AoMethod::Reference;
+        rq.look.ao = AoMethod::Raytraced;
         rq.look.cone.radius_mm = k.radius;
         rq.look.ao_rays = 512;
         const auto ref = core::render_input(k.input, rq);

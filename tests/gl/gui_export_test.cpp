@@ -126,6 +126,8 @@ TEST(GuiExport, ExportSaveOpenSessionAndSurfaces) {
     EXPECT_EQ(dialog->findChild<QComboBox*>("ao")->currentData().toString(), "cone");
     // The high-quality still method is offered (disk AO, docs/ao.md).
     EXPECT_GE(dialog->findChild<QComboBox*>("ao")->findData("disk"), 0);
+    // ... and the ray-traced ground truth (docs/ao.md).
+    EXPECT_GE(dialog->findChild<QComboBox*>("ao")->findData("raytraced"), 0);
     screenshot(*dialog, "export_dialog.png");
     const std::string image = dir / "export.png";
     dialog->findChild<QSpinBox*>("width")->setValue(360);

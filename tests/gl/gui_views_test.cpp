@@ -388,6 +388,19 @@ TEST(GuiViews, ThreeDViewMouseAndToolBar) {
     QTest::keyClick(viewer, Qt::Key_O);
     EXPECT_EQ(viewer->options().look.ao, AoMethod::Off);
     EXPECT_FALSE(bar->ao_action()->isChecked());
+    // The AO button's menu chooses the method and turns AO on; the O key
+    // turns it off and back on with that method; cone traced again after.
+    bar->ao_raytraced_action()->trigger();
+    EXPECT_EQ(viewer->options().look.ao, AoMethod::Raytraced);
+    EXPECT_TRUE(bar->ao_action()->isChecked());
+    QTest::keyClick(viewer, Qt::Key_O);
+    EXPECT_EQ(viewer->options().look.ao, AoMethod::Off);
+    QTest::keyClick(viewer, Qt::Key_O);
+    EXPECT_EQ(viewer->options().look.ao, AoMethod::Raytraced);
+    bar->ao_cone_action()->trigger();
+    EXPECT_EQ(viewer->options().look.ao, AoMethod::Cone);
+    bar->ao_action()->trigger();
+    EXPECT_EQ(viewer->options().look.ao, AoMethod::Off);
 
     // ---- patient-view buttons and reset: the scene's camera for that view
     const double aspect = double(viewer->width()) / double(viewer->height());

@@ -135,10 +135,10 @@ TEST(RenderCli, MeshFilesRenderToo) {
     EXPECT_TRUE(meta.text["isoscope:iso"].empty());
 }
 
-TEST(RenderCli, ReferenceAoOfTheBundledCt) {
+TEST(RenderCli, RayTracedAoOfTheBundledCt) {
     TempDir dir;
     render(test::data("headsq.nhdr") +
-           " --iso 500 --size 64x48 --view left --aov ao --ao reference --ao-radius 10 --ao-rays 256 --ao-cache " +
+           " --iso 500 --size 64x48 --view left --aov ao --ao raytraced --ao-radius 10 --ao-rays 256 --ao-cache " +
            (dir / "cache") + " -o " + (dir / "ao.exr"));
     ImageMetadata meta;
     const Image ao = load_image(dir / "ao.exr", &meta);
@@ -157,6 +157,7 @@ TEST(RenderCli, ReferenceAoOfTheBundledCt) {
     EXPECT_TRUE(std::isnan(ao.floats[0]));
 }
 
+// "reference", the ray-traced method's former name, still works.
 TEST(RenderCli, ReferenceAoIsCachedByItsInputs) {
     TempDir dir;
     const std::string args = test::data("headsq.nhdr") +
@@ -216,8 +217,8 @@ TEST(RenderCli, ConeAoAsAnAovAndInTheColourImage) {
     EXPECT_NE(on.bytes, off.bytes);
     // Bad values are refused with the option's name.
     for (const std::string bad :
-         {" --ao cones", " --ao reference", " --aov ao", " --ao cone --ao-cones 0", " --ao cone --ao-layers 9",
-          " --ao cone --ao-resolution 0.1", " --ao cone --ao-resolution 2"}) {
+         {" --ao cones", " --ao raytraced --ao-error 0", " --aov ao", " --ao cone --ao-cones 0",
+          " --ao cone --ao-layers 9", " --ao cone --ao-resolution 0.1", " --ao cone --ao-resolution 2"}) {
         const auto r = test::run_command(test::cli() + " render " + test::data("headsq.nhdr") +
                                              " --iso 500 --size 32x32" + bad + " -o " + (dir / "x.exr"),
                                          true);
@@ -225,6 +226,39 @@ TEST(RenderCli, ConeAoAsAnAovAndInTheColourImage) {
         EXPECT_NE(r.out.find("--ao"), std::string::npos) << bad << ": " << r.out;
         EXPECT_FALSE(std::filesystem::exists(dir / "x.exr")) << bad;
     }
+}
+
+// --ao raytraced lights the colour image with the ray-traced term (traced
+// once before the frame): darker than no AO where the head folds, and the
+// metadata records the method, R, the rays used and the standard error
+// reached; the ao AOV of the same settings is the raw term it was lit with.
+TEST(RenderCli, RayTracedAoInTheColourImage) {
+    TempDir dir;
+    const std::string args = test::data("headsq.nhdr") +
+                             " --iso 500 --size 96x80 --view left --no-annotations --ao-radius 10 --ao-rays 256 "
+                             "--ao-error 0.02 --ao-cache " +
+                             (dir / "cache");
+    render(args + " --ao raytraced -o " + (dir / "on.png"));
+    render(args + " --ao off -o " + (dir / "off.png"));
+    ImageMetadata meta;
+    const Image on = load_image(dir / "on.png", &meta), off = load_image(dir / "off.png");
+    ASSERT_EQ(on.bytes.size(), off.bytes.size());
+    EXPECT_NE(meta.text["isoscope:ao"].find("raytraced"), std::string::npos) << meta.text["isoscope:ao"];
+    EXPECT_EQ(meta.text["isoscope:ao_radius_mm"], "10");
+    EXPECT_EQ(meta.text["isoscope:ao_rays"], "256");
+    EXPECT_FALSE(meta.text["isoscope:ao_rays_traced"].empty());
+    EXPECT_NE(meta.text["isoscope:ao_rays_per_pixel"].find("max "), std::string::npos);
+    EXPECT_NE(meta.text["isoscope:ao_standard_error"].find("max 0.0"), std::string::npos)
+        << meta.text["isoscope:ao_standard_error"];
+    std::size_t darker = 0;
+    for (std::size_t i = 0; i < on.bytes.size(); i += 4) darker += on.bytes[i] + 8 < off.bytes[i];
+    EXPECT_GT(darker, 50u) << "folds and the ear read darker";
+    // The ao AOV of the same request: the term (from the cache) the image was lit with.
+    render(args + " --ao raytraced --aov ao -o " + (dir / "ao.exr"));
+    const Image ao = load_image(dir / "ao.exr");
+    std::size_t fg = 0;
+    for (float v : ao.floats) fg += !std::isnan(v);
+    EXPECT_GT(fg, 500u);
 }
 
 // --ao disk (docs/ao.md, "Disk AO on the GPU"): the same one-channel float

@@ -95,3 +95,36 @@ TEST(Viewer, AmbientOcclusionConvergesWhileStillAndCanBeOff) {
     EXPECT_NE(bad.exit_code, 0);
     EXPECT_NE(bad.out.find("--ao-cones"), std::string::npos) << bad.out;
 }
+
+// `isoscope view --ao raytraced`: the screenshot waits for the refinement
+// (every pixel at the standard error asked for) and shows what `isoscope
+// render --ao raytraced` writes for the same view, size and settings (the
+// same term: same definition, seed and stop rule; the same tolerance as
+// the cone comparison above).
+TEST(Viewer, RayTracedAoScreenshotShowsWhatRenderWrites) {
+    if (test::run_command("command -v xvfb-run").exit_code != 0)
+        GTEST_SKIP() << "xvfb-run is not installed (./setup.sh)";
+    test::TempDir dir;
+    const std::string shot = dir / "shot.png", rendered = dir / "render.png";
+    const std::string ao = " --iso 500 --view left --ao raytraced --ao-error 0.03 --ao-rays 256";
+    const auto r = test::run_command("xvfb-run -a -s '-screen 0 1024x768x24' " + test::cli() + " view " +
+                                         test::data("headsq.nhdr") + ao + " --screenshot " + shot,
+                                     true);
+    ASSERT_EQ(r.exit_code, 0) << r.out;
+    const auto h = test::run_command(test::cli() + " render " + test::data("headsq.nhdr") + ao +
+                                         " --ao-cache - --size 800x600 -o " + rendered,
+                                     true);
+    ASSERT_EQ(h.exit_code, 0) << h.out;
+    const Image img = load_image(shot), ref = load_image(rendered);
+    ASSERT_EQ(img.width, 800);
+    ASSERT_EQ(img.height, 600);
+    std::size_t off = 0, total = 0;
+    for (std::size_t p = 0; p < std::size_t(img.width) * std::size_t(img.height); ++p)
+        for (int c = 0; c < 3; ++c) {
+            const int d = std::abs(int(img.bytes[p * img.channels + c]) - int(ref.bytes[p * ref.channels + c]));
+            off += d > 24;
+            total += std::size_t(d);
+        }
+    EXPECT_LT(off, std::size_t(img.width * img.height * 3 / 100)) << r.out;
+    EXPECT_LT(double(total) / (img.width * img.height * 3), 2.0);
+}

@@ -4,6 +4,8 @@
 // passes' GL work would only run in execute().
 #include "renderer/passes/build_frame.hpp"
 
+#include <algorithm>
+
 #include "io/error.hpp"
 #include "tests/support/test_util.hpp"
 
@@ -103,14 +105,52 @@ TEST(Frame, DiskAoRunsItsOwnChainInsteadOfTheCones) {
     }
 }
 
-// The ao AOV needs a method that the GL frame computes; the reference is the core's.
-TEST(Frame, TheAoAovNeedsAGlAoMethod) {
+// The ao AOV needs AO: a method the GL frame computes, or the ray-traced image given.
+TEST(Frame, TheAoAovNeedsAGlAoMethodOrTheRayTracedImage) {
     RenderOptions o = options();
     o.aov = Aov::Ao;
-    for (const AoMethod m : {AoMethod::Off, AoMethod::Reference}) {
+    for (const AoMethod m : {AoMethod::Off, AoMethod::Raytraced}) {
         o.look.ao = m;
         EXPECT_THROW(compile(o), Error) << ao_method_name(m);
     }
+    Image ao;
+    ao.width = o.width;
+    ao.height = o.height;
+    ao.channels = 1;
+    ao.is_float = true;
+    ao.floats.assign(std::size_t(o.width) * o.height, 1.0f);
+    o.ao_image = &ao;
+    EXPECT_EQ(compile(o).running, (Passes{"ao_import", "readback"})) << "the raw term needs no G-buffer";
+    ao.width = o.width + 1; // not the frame's size
+    EXPECT_THROW(compile(o), Error);
+}
+
+// Ray-traced AO: the image computed outside the frame is uploaded and lit
+// with; the cone and disk chains are culled, and translucent surfaces go
+// without AO (no cone chain for them either).
+TEST(Frame, RayTracedAoImportsItsImageAndCullsTheAoChains) {
+    RenderOptions o = options();
+    o.look.ao = AoMethod::Raytraced;
+    EXPECT_THROW(compile(o), Error) << "no AO image";
+    Image ao;
+    ao.width = o.width;
+    ao.height = o.height;
+    ao.channels = 1;
+    ao.is_float = true;
+    ao.floats.assign(std::size_t(o.width) * o.height, 0.5f);
+    o.ao_image = &ao;
+    EXPECT_EQ(compile(o).running, (Passes{"gbuffer", "ao_import", "lighting", "readback"}));
+    o.aov = Aov::Depth; // reads no AO: nothing imported
+    EXPECT_EQ(compile(o).running, (Passes{"gbuffer", "readback"}));
+    o.ao_image = nullptr; // nor needed
+    EXPECT_EQ(compile(o).running, (Passes{"gbuffer", "readback"}));
+    o.aov = Aov::None;
+    o.ao_image = &ao;
+    const Passes t = compile(o, {}, 0.5f).running; // the second object translucent
+    EXPECT_EQ(std::count(t.begin(), t.end(), "ao_import"), 1);
+    EXPECT_EQ(std::count(t.begin(), t.end(), "oit_resolve"), 1);
+    for (const char* chain : {"zrange", "voxelize", "cone_ao", "ao_upsample", "oit_ao", "disk_gather"})
+        EXPECT_EQ(std::count(t.begin(), t.end(), chain), 0) << chain;
 }
 
 TEST(Frame, AnAovRunsOnlyItsProducers) {

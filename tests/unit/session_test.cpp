@@ -136,6 +136,28 @@ TEST(Session, SavedAndLoadedBackExactly) {
     EXPECT_FALSE(core::same_state(moved, s));
 }
 
+// Ray-traced AO in the 3D view is saved as view.ao_method "raytraced" (only
+// then: other sessions' files are unchanged) and read back; "reference",
+// its former name, is read too.
+TEST(Session, RayTracedAoIsSavedAndLoadedBack) {
+    TempDir dir;
+    core::Session s = example(test::data("headsq.nhdr"));
+    s.ao = AoMethod::Raytraced;
+    core::save_session(s, dir / "rt.json");
+    auto j = nlohmann::json::parse(read_file(dir / "rt.json"));
+    EXPECT_EQ(j["view"]["ao"], true);
+    EXPECT_EQ(j["view"]["ao_method"], "raytraced");
+    EXPECT_EQ(core::load_session(dir / "rt.json").ao, AoMethod::Raytraced);
+    j["view"]["ao_method"] = "reference";
+    write_file(dir / "old.json", j.dump());
+    EXPECT_EQ(core::load_session(dir / "old.json").ao, AoMethod::Raytraced);
+    s.ao = AoMethod::Cone;
+    core::save_session(s, dir / "cone.json");
+    j = nlohmann::json::parse(read_file(dir / "cone.json"));
+    EXPECT_FALSE(j["view"].contains("ao_method"));
+    EXPECT_EQ(core::load_session(dir / "cone.json").ao, AoMethod::Cone);
+}
+
 TEST(Session, InputBelowTheSessionFolderIsRelativeAndMovesWithIt) {
     TempDir dir;
     fs::create_directories(dir.path() / "a" / "data");
@@ -208,6 +230,11 @@ TEST(Session, RefusalsNameTheFileAndTheField) {
         {edited([](auto& j) { j["window_level"]["width"] = 0; }), "window_level.width: must be positive"},
         {edited([](auto& j) { j["view"]["ao"] = "yes"; }), "view.ao: must be true or false"},
         {edited([](auto& j) { j["view"]["transparency"] = 0; }), "view.transparency: must be true or false"},
+        {edited([](auto& j) {
+             j["view"]["ao"] = true;
+             j["view"]["ao_method"] = "rays";
+         }),
+         "view.ao_method: must be \"cone\" or \"raytraced\""},
         {edited([](auto& j) { j["markups"]["markups"][0]["controlPoints"].erase(1); }),
          "markups: markup 1 (Line 'ruler'): a Line needs 2"},
     };
