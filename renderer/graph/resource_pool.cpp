@@ -54,13 +54,20 @@ std::uint64_t ResourcePool::take(const Entry& want, const std::string& name, boo
         waiting_.erase(pick);
         --stats_.waiting;
         ++stats_.reused;
-        e.name = name;
+        // An object that backs several resources in one frame (one's last
+        // use before another's first) keeps the first one's name, so next
+        // frame that one finds it again and the later ones take what is left.
+        if (e.named_in != stats_.frames) {
+            e.name = name;
+            e.named_in = stats_.frames;
+        }
         in_use_.emplace(e.id, e);
         if (created) *created = false;
         return e.id;
     }
     Entry e = want;
     e.name = name;
+    e.named_in = stats_.frames;
     e.id = make(want, name);
     in_use_.emplace(e.id, e);
     if (created) *created = true;

@@ -62,7 +62,8 @@ private:
         BufferDesc b;
         std::uint64_t id = 0;
         std::uint64_t last_used = 0; // frame number
-        std::string name;            // of the virtual resource it last backed
+        std::string name;            // of the first virtual resource it backed in the frame it was last used
+        std::uint64_t named_in = ~std::uint64_t(0); // the frame `name` was set in
     };
     std::uint64_t take(const Entry& want, const std::string& name, bool* created);
     std::uint64_t make(const Entry& want, const std::string& name);

@@ -14,6 +14,9 @@
 // sample hit still show (thin vessels); with translucent surfaces in the
 // frame it takes its pixel's colour instead (shading it would leave out the
 // layers in front).
+#include <array>
+#include <map>
+
 #include "renderer/passes/build_frame.hpp"
 #include "renderer/passes/gl_resources.hpp"
 #include "renderer/passes/std140.hpp"
@@ -43,11 +46,18 @@ graph::TextureHandle dsraa(graph::FrameGraph& fg, const FrameContext& ctx, const
             [&ctx](const Data& d, const graph::Resources& r) {
                 GlResources& gl = *ctx.gl;
                 const int S = ctx.aa_samples;
-                // Where the sub-samples lie in their pixel ([0, 1), from its lower-left corner).
-                glBindFramebuffer(GL_FRAMEBUFFER, gl.framebuffer({{gl.texture(r, d.ms_id)}}));
-                float positions[16] = {};
-                for (int s = 0; s < S && s < 8; ++s)
-                    glGetMultisamplefv(GL_SAMPLE_POSITION, GLuint(s), positions + 2 * s);
+                // Where the sub-samples lie in their pixel ([0, 1), from its
+                // lower-left corner): the GL's fixed pattern for S samples,
+                // asked once (a multisample framebuffer must be bound to ask).
+                static std::map<int, std::array<float, 16>> patterns;
+                auto pattern = patterns.find(S);
+                if (pattern == patterns.end()) {
+                    glBindFramebuffer(GL_FRAMEBUFFER, gl.framebuffer({{gl.texture(r, d.ms_id)}}));
+                    std::array<float, 16> p{};
+                    for (int s = 0; s < S && s < 8; ++s) glGetMultisamplefv(GL_SAMPLE_POSITION, GLuint(s), &p[2 * s]);
+                    pattern = patterns.emplace(S, p).first;
+                }
+                const float* positions = pattern->second.data();
                 glBindFramebuffer(GL_FRAMEBUFFER, gl.framebuffer({{gl.texture(r, d.out)}}));
                 glViewport(0, 0, ctx.width, ctx.height);
                 auto& prog = gl.program({"render/fullscreen.vert", "render/dsraa.frag"});

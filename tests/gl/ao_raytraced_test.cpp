@@ -138,6 +138,10 @@ TEST_F(RaytracedAo, RenderImageTracesOnceCachesAndRecords) {
     rq.look.cone.radius_mm = 20;
     rq.look.ao_rays = 256;
     rq.look.ao_error = 0.02;
+    // One sample per pixel: the ring is counted pixel by pixel (anti-aliasing
+    // blends the block's edge pixels with the ring).
+    rq.look.aa.samples = 1;
+    rq.look.aa.frames = 1;
     rq.cache_dir = dir / "cache";
     const auto first = core::render_image(scene, rq);
     EXPECT_FALSE(first.ao_cache_hit);

@@ -59,6 +59,7 @@ Comparison compare(const std::vector<Layer>& layers, const Camera& cam, int size
     const std::vector<ReferenceSurface> ref = add_layers(ren, layers);
     RenderOptions o;
     o.width = o.height = size;
+    o.look.aa.samples = 1; // compositing per pixel centre, as the reference traces it
     o.look.flat_shading = true;
     o.look.oit_epsilon = 0.0f; // composite everything: the reference has no early exit
     auto r = ren.render(cam, o, hooks);
@@ -255,6 +256,7 @@ TEST_F(Voit, TranslucentFragmentsGetTheirOwnAo) {
         ren.add(backdrop, {});
         RenderOptions o;
         o.width = o.height = 96;
+        o.look.aa.samples = 1; // the slab's pixels as the id AOV finds them (no blend with the ball's edge)
         o.look.ao = ao ? AoMethod::Cone : AoMethod::Off;
         o.aov = aov;
         o.look.cone.resolution = 1.0; // the cone pass at full size, as the fragments are traced

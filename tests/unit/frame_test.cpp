@@ -50,14 +50,35 @@ Compiled compile(const RenderOptions& opt, const RenderHooks& hooks = {}, float 
     return c;
 }
 
+// Without anti-aliasing, so the lists below are about their own passes
+// (AntiAliasingAddsItsPassesToColourFramesOnly has the AA passes).
 RenderOptions options() {
     RenderOptions o;
     o.width = 64;
     o.height = 48;
+    o.look.aa.samples = 1;
     return o;
 }
 
 } // namespace
+
+TEST(Frame, AntiAliasingAddsItsPassesToColourFramesOnly) {
+    RenderOptions o = options();
+    o.look.aa.samples = 4; // the default
+    EXPECT_EQ(compile(o).running, (Passes{"gbuffer", "lighting", "dsraa", "readback"}));
+    o.accumulate = true; // the view's still frames, exports
+    EXPECT_EQ(compile(o).running, (Passes{"gbuffer", "lighting", "dsraa", "accumulate", "readback"}));
+    o.look.aa.samples = 1;
+    EXPECT_EQ(compile(o).running, (Passes{"gbuffer", "lighting", "accumulate", "readback"}));
+    // AOVs and picks read pixel centres: no sub-samples, no average.
+    o.look.aa.samples = 4;
+    o.aov = Aov::Depth;
+    EXPECT_EQ(compile(o).running, (Passes{"gbuffer", "readback"}));
+    o.aov = Aov::None;
+    o.image = false;
+    o.pick = PickRegion{1, 1, 2, 2};
+    EXPECT_EQ(compile(o).running, (Passes{"gbuffer", "pick_resolve", "read_pick"}));
+}
 
 TEST(Frame, OpaqueColourWithoutAoRunsGbufferLightingReadback) {
     EXPECT_EQ(compile(options()).running, (Passes{"gbuffer", "lighting", "readback"}));
