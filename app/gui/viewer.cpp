@@ -81,7 +81,14 @@ RenderOptions Viewer::frame_options() const {
     // software GL it costs 2-3x a frame, docs/gui.md); the still frames after
     // the release bring it back and accumulate it.
     opt.look = options_.look;
-    if (dragging_ && !options_.ao_while_dragging) opt.look.ao = AoMethod::Off;
+    // DSRAA's sub-samples cost 2-3x a frame on software GL (llvmpipe
+    // rasterizes every sub-sample; docs/rendering.md "Anti-aliasing"): a drag
+    // goes without them, as without AO, and the still frames after it are
+    // anti-aliased.
+    if (dragging_ && !options_.ao_while_dragging) {
+        opt.look.ao = AoMethod::Off;
+        opt.look.aa.samples = 1;
+    }
     // Ray-traced AO: its latest batch for this view; cone AO until the first
     // arrives and while the camera moves.
     if (opt.look.ao == AoMethod::Raytraced) {
@@ -91,9 +98,13 @@ RenderOptions Viewer::frame_options() const {
             opt.look.ao = AoMethod::Cone;
     }
     // Still frames are jittered and averaged (anti-aliasing that converges
-    // to exact coverage, translucent surfaces and the overlay included);
-    // every frame has DSRAA's sub-samples. Any change starts the average again.
-    opt.accumulate = !dragging_ && options_.look.aa.view_frames > 1;
+    // to exact coverage, translucent surfaces and the overlay included).
+    // Any change starts the average again, a new ray-traced AO batch too:
+    // while the AO refines, each batch gets one plain frame (a drag's), and
+    // the anti-aliasing follows its last batch.
+    const bool refining = options_.look.ao == AoMethod::Raytraced && !raytraced_stats_.done;
+    if (refining) opt.look.aa.samples = 1;
+    opt.accumulate = !dragging_ && !refining && options_.look.aa.view_frames > 1;
     return opt;
 }
 

@@ -82,9 +82,13 @@ TEST(GuiRaytraced, StillFramesRefineToTheCoresRayTracedAoWhileEventsFlow) {
     // Every pixel at 0.01, or at the cap (p = 0.5 would need 2500 rays): 0.5 / sqrt(1024).
     EXPECT_LE(st.se_max, 0.5 / 32 + 1e-9);
     EXPECT_GT(ticks, 10) << "the timer ran while the view refined";
-    // The GUI thread uploads and draws one frame per batch, nothing more:
-    // a frame of this size is well under 100 ms on llvmpipe.
-    EXPECT_LE(worst, 100) << "the event loop was held up";
+    // The GUI thread uploads and draws one plain frame per batch (no
+    // sub-samples, no accumulation while the AO refines): a frame of this
+    // size is well under 100 ms on llvmpipe (30-70 ms late at most when the
+    // test runs alone); under `ctest -j2` another test program shares the
+    // two cores, so the bound allows 250 ms. A frame per batch that blocked
+    // the loop (the trace on the GUI thread) would be seconds late.
+    EXPECT_LE(worst, 250) << "the event loop was held up";
 
     // The core's ray-traced AO of the same camera, size and surfaces, to a
     // standard error of 0.005 (the same cap), on a scene of its own: the
