@@ -16,6 +16,7 @@
 // layers in front).
 #include <array>
 #include <map>
+#include <mutex>
 
 #include "renderer/passes/build_frame.hpp"
 #include "renderer/passes/gl_resources.hpp"
@@ -49,7 +50,9 @@ graph::TextureHandle dsraa(graph::FrameGraph& fg, const FrameContext& ctx, const
                 // Where the sub-samples lie in their pixel ([0, 1), from its
                 // lower-left corner): the GL's fixed pattern for S samples,
                 // asked once (a multisample framebuffer must be bound to ask).
+                static std::mutex guard; // frames of different contexts may run on different threads
                 static std::map<int, std::array<float, 16>> patterns;
+                const std::lock_guard lock(guard);
                 auto pattern = patterns.find(S);
                 if (pattern == patterns.end()) {
                     glBindFramebuffer(GL_FRAMEBUFFER, gl.framebuffer({{gl.texture(r, d.ms_id)}}));
