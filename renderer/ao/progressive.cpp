@@ -9,36 +9,15 @@
 #include <tbb/task_arena.h>
 
 #include "io/error.hpp"
+#include "renderer/ao/sequences.hpp"
 
 namespace iso {
 
 namespace {
 
-std::uint32_t mix(std::uint32_t x) {
-    x ^= x >> 16;
-    x *= 0x7feb352du;
-    x ^= x >> 15;
-    x *= 0x846ca68bu;
-    x ^= x >> 16;
-    return x;
-}
-double unit(std::uint32_t x) { return double(mix(x)) * 2.3283064365386963e-10; }
-
-// Halton points (bases 2 and 3): extensible, so every batch continues the
-// same low-discrepancy sequence where the pixel's last batch stopped.
-double radical_inverse2(std::uint32_t i) {
-    i = (i << 16u) | (i >> 16u);
-    i = ((i & 0x55555555u) << 1u) | ((i & 0xAAAAAAAAu) >> 1u);
-    i = ((i & 0x33333333u) << 2u) | ((i & 0xCCCCCCCCu) >> 2u);
-    i = ((i & 0x0F0F0F0Fu) << 4u) | ((i & 0xF0F0F0F0u) >> 4u);
-    i = ((i & 0x00FF00FFu) << 8u) | ((i & 0xFF00FF00u) >> 8u);
-    return double(i) * 2.3283064365386963e-10;
-}
-double radical_inverse3(std::uint32_t i) {
-    double r = 0, f = 1.0 / 3.0;
-    for (; i > 0; i /= 3, f /= 3.0) r += f * double(i % 3);
-    return r;
-}
+using sequences::radical_inverse2;
+using sequences::unit;
+double radical_inverse3(std::uint32_t i) { return sequences::radical_inverse(i, 3); }
 
 // The primary ray of image point (x, y) (pixels from the top-left): its
 // direction has unit length along the view axis, so t is the eye depth.

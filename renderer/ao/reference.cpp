@@ -10,6 +10,7 @@
 #include <tbb/task_arena.h>
 
 #include "io/error.hpp"
+#include "renderer/ao/sequences.hpp"
 
 namespace iso {
 
@@ -71,22 +72,8 @@ AoReference::~AoReference() = default;
 namespace {
 // Radical inverse base 2 (Hammersley points), with a per-point rotation
 // (Cranley-Patterson) so neighbouring pixels do not share the same directions.
-double radical_inverse(unsigned i) {
-    i = (i << 16u) | (i >> 16u);
-    i = ((i & 0x55555555u) << 1u) | ((i & 0xAAAAAAAAu) >> 1u);
-    i = ((i & 0x33333333u) << 2u) | ((i & 0xCCCCCCCCu) >> 2u);
-    i = ((i & 0x0F0F0F0Fu) << 4u) | ((i & 0xF0F0F0F0u) >> 4u);
-    i = ((i & 0x00FF00FFu) << 8u) | ((i & 0xFF00FF00u) >> 8u);
-    return double(i) * 2.3283064365386963e-10;
-}
-double hash01(unsigned x) {
-    x ^= x >> 16;
-    x *= 0x7feb352du;
-    x ^= x >> 15;
-    x *= 0x846ca68bu;
-    x ^= x >> 16;
-    return double(x) * 2.3283064365386963e-10;
-}
+double radical_inverse(unsigned i) { return sequences::radical_inverse2(i); }
+double hash01(unsigned x) { return sequences::unit(x); }
 
 // Calls f(direction) for `opt.rays` cosine-distributed directions around n
 // (Malley's method over rotated Hammersley points); stops early when f

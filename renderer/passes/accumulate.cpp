@@ -8,20 +8,13 @@
 #include <functional>
 #include <string_view>
 
+#include "renderer/ao/sequences.hpp"
 #include "renderer/passes/build_frame.hpp"
 #include "renderer/passes/gl_resources.hpp"
 
 namespace iso::passes {
 
 namespace {
-double halton(int i, int base) {
-    double f = 1.0, r = 0.0;
-    for (; i > 0; i /= base) {
-        f /= base;
-        r += f * (i % base);
-    }
-    return r;
-}
 template <class T> double hash_of(const std::vector<T>& v) {
     const std::string_view bytes(reinterpret_cast<const char*>(v.data()), v.size() * sizeof(T));
     return double(std::hash<std::string_view>{}(bytes) >> 11); // exact in a double
@@ -31,7 +24,7 @@ template <class T> double hash_of(const std::vector<T>& v) {
 glm::vec2 jitter_offset(int k) {
     // Halton (2, 3) turned by half a pixel (Cranley-Patterson), so that frame 0 is the pixel's centre.
     const auto at = [](double h) { return float(h + 0.5 - std::floor(h + 0.5) - 0.5); };
-    return {at(halton(k, 2)), at(halton(k, 3))};
+    return {at(sequences::radical_inverse(std::uint32_t(k), 2)), at(sequences::radical_inverse(std::uint32_t(k), 3))};
 }
 
 std::vector<double> accumulation_key(const FrameContext& ctx) {
