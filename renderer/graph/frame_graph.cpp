@@ -17,7 +17,8 @@ std::size_t bytes_per_pixel(Format f) {
     case Format::R32UI:
     case Format::Depth32F:
     case Format::RG16F: return 4;
-    case Format::RGBA16F: return 8;
+    case Format::RGBA16F:
+    case Format::RG32UI: return 8;
     case Format::RGBA32F:
     case Format::RGBA32UI: return 16;
     }

@@ -26,7 +26,7 @@
 
 namespace iso::graph {
 
-enum class Format : std::uint8_t { RGBA8, RGBA16F, RGBA32F, R32F, RG16F, R32UI, RGBA32UI, Depth32F };
+enum class Format : std::uint8_t { RGBA8, RGBA16F, RGBA32F, R32F, RG16F, R32UI, RG32UI, RGBA32UI, Depth32F };
 std::size_t bytes_per_pixel(Format f);
 
 // depth > 1: a 3D texture; array (or layers > 1): a 2D array texture of

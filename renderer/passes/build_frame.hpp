@@ -163,9 +163,14 @@ struct GBuffer {
     graph::BufferHandle params;     // the pass's own
     graph::TextureHandle primitive; // with a pick: the nearest opaque surface's triangle (R32UI)
     // With DSRAA (ctx.aa_samples > 1): the visibility sub-samples
-    // (multisample textures: depth, normal, id, albedo); the channels above
-    // are then their sample 0, the one sample each pixel shades.
-    graph::TextureHandle ms_depth, ms_normal, ms_id, ms_albedo;
+    // (multisample textures: depth; RG32UI object id and octahedral normal,
+    // the albedo follows from the id), the object table (per id: linear
+    // albedo, opacity) and the edge list (shaders/render/dsraa_edges.glsl:
+    // the pixels whose sub-samples do not all match their sample 0); the
+    // channels above are then their sample 0, the one sample each pixel
+    // shades.
+    graph::TextureHandle ms_depth, ms_vis;
+    graph::BufferHandle objects, edges;
 };
 GBuffer gbuffer(graph::FrameGraph& fg, const FrameContext& ctx);
 // The compute step (add each pixel's nearest opaque surface from the

@@ -1,11 +1,14 @@
 // G-buffer: depth (reversed Z, float) and the channels of kGBufferLayout
 // (world normal, object id, albedo) of the nearest surface, all meshes drawn
 // once, two-sided. With DSRAA (ctx.aa_samples > 1) the meshes are drawn
-// once into multisample channels, the visibility sub-samples (the fragment
-// shader still runs once per pixel and covered samples share its outputs;
-// depth is per sample), and a full-screen step copies each pixel's sample 0
-// into the ordinary channels: the one sample that the AO, lighting and
-// translucency passes shade.
+// once into the visibility sub-samples: multisample depth and one RG32UI
+// channel of object id and octahedral normal (8 bytes a sample besides
+// depth, half of what the three channels would take: on a software GL the
+// sub-samples' memory traffic is DSRAA's cost); the fragment shader still
+// runs once per pixel and covered samples share its outputs, depth is per
+// sample. A full-screen step then writes each pixel's sample 0 into the
+// ordinary channels (the albedo from the object table): the one sample that
+// the AO, lighting and translucency passes shade.
 #include <cctype>
 #include <iterator>
 
@@ -45,15 +48,23 @@ void clear_gbuffer(GLuint fb, bool primitive) {
     glClearNamedFramebufferfv(fb, GL_DEPTH, 0, &far_depth);
 }
 
-void draw_meshes(const FrameContext& ctx, GlResources& gl, const graph::Resources& r, const GBuffer& d) {
+void draw_meshes(const FrameContext& ctx, GlResources& gl, const graph::Resources& r, const GBuffer& d, bool vis) {
     glClipControl(GL_LOWER_LEFT, GL_ZERO_TO_ONE);
     glEnable(GL_DEPTH_TEST);
     glDepthFunc(GL_GREATER);
     glDisable(GL_CULL_FACE); // open surfaces show both sides
-    auto& prog = gl.program(
-        {"render/gbuffer.vert", "render/gbuffer.frag"},
-        gbuffer_defines() +
-            (d.primitive.valid() ? "#define GB_PRIMITIVE " + std::to_string(std::size(kGBufferLayout)) + "\n" : ""));
+    const auto program = [&](bool vis_variant) -> gl::Program& {
+        return gl.program({"render/gbuffer.vert", "render/gbuffer.frag"},
+                          vis_variant ? std::string("#define GB_VIS\n")
+                                      : gbuffer_defines() + (d.primitive.valid()
+                                                                 ? "#define GB_PRIMITIVE " +
+                                                                       std::to_string(std::size(kGBufferLayout)) + "\n"
+                                                                 : ""));
+    };
+    // The still frames after a DSRAA frame draw one sample: their program is
+    // built with the first, not in the middle of the refinement.
+    if (vis) program(false);
+    auto& prog = program(vis);
     prog.use();
     bind_params(gl, r, d.params, GBufferParams{ctx.raster_view_projection});
     const GLint id_loc = prog.uniform("object_id"), albedo_loc = prog.uniform("albedo");
@@ -68,14 +79,22 @@ void draw_meshes(const FrameContext& ctx, GlResources& gl, const graph::Resource
     glClipControl(GL_LOWER_LEFT, GL_NEGATIVE_ONE_TO_ONE);
 }
 
-// Each pixel's sample 0 of the sub-samples into the ordinary channels (depth through gl_FragDepth).
-void copy_sample0(GlResources& gl, const graph::Resources& r, const GBuffer& d, GLuint fb) {
+// Each pixel's sample 0 of the sub-samples into the ordinary channels
+// (depth through gl_FragDepth), and the edge list for DSRAA.
+void copy_sample0(const FrameContext& ctx, GlResources& gl, const graph::Resources& r, const GBuffer& d, GLuint fb) {
+    const GLuint header[4] = {0, 1, 1, 0}; // no groups of edge pixels yet (x, y, z), no edge pixels
+    glNamedBufferSubData(gl.buffer(r, d.edges), 0, sizeof header, header);
     glBindFramebuffer(GL_FRAMEBUFFER, fb);
     glEnable(GL_DEPTH_TEST);
     glDepthFunc(GL_ALWAYS);
-    gl.program({"render/fullscreen.vert", "render/gbuffer_sample.frag"}, gbuffer_defines()).use();
+    auto& prog = gl.program({"render/fullscreen.vert", "render/gbuffer_sample.frag"}, gbuffer_defines());
+    prog.use();
+    glUniform1i(prog.uniform("samples"), ctx.aa_samples);
+    glUniform1f(prog.uniform("normal_cos"), ctx.opt.look.aa.normal_cos);
     glBindTextureUnit(0, gl.texture(r, d.ms_depth));
-    for (GLuint unit = 1; const auto& c : kGBufferLayout) glBindTextureUnit(unit++, gl.texture(r, d.*c.ms_handle));
+    glBindTextureUnit(1, gl.texture(r, d.ms_vis));
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, gl.buffer(r, d.objects));
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 1, gl.buffer(r, d.edges));
     glBindVertexArray(gl.vertex_array("fullscreen"));
     glDrawArrays(GL_TRIANGLES, 0, 3);
     glBindVertexArray(0);
@@ -98,28 +117,35 @@ GBuffer gbuffer(graph::FrameGraph& fg, const FrameContext& ctx) {
             if (ctx.pick) d.primitive = b.write(b.create("primitive", {W, H, graph::Format::R32UI}));
             if (S > 1) {
                 d.ms_depth = b.write(b.create("ms_depth", {W, H, graph::Format::Depth32F, 1, 1, false, S}));
-                for (const auto& c : kGBufferLayout)
-                    d.*c.ms_handle = b.write(b.create(std::string("ms_") + c.name, {W, H, c.format, 1, 1, false, S}));
+                d.ms_vis = b.write(b.create("ms_vis", {W, H, graph::Format::RG32UI, 1, 1, false, S}));
+                d.objects =
+                    b.write(b.create("gbuffer_objects", graph::BufferDesc{ctx.objects.size() * sizeof(glm::vec4)}));
+                // Header (4 uints) and up to one (pixel, mask) pair per pixel.
+                d.edges = b.write(b.create("dsraa_edges", graph::BufferDesc{16 + std::size_t(W) * H * 8}));
             }
         },
         [&ctx, W, H, S](const GBuffer& d, const graph::Resources& r) {
             GlResources& gl = *ctx.gl;
-            std::vector<GlResources::Attachment> colors, ms_colors;
+            std::vector<GlResources::Attachment> colors;
             for (const auto& c : kGBufferLayout) colors.push_back({gl.texture(r, d.*c.handle)});
             if (d.primitive.valid()) colors.push_back({gl.texture(r, d.primitive)});
             const GLuint fb = gl.framebuffer(colors, gl.texture(r, d.depth));
             glViewport(0, 0, W, H);
             if (S > 1) {
-                for (const auto& c : kGBufferLayout) ms_colors.push_back({gl.texture(r, d.*c.ms_handle)});
-                const GLuint ms_fb = gl.framebuffer(ms_colors, gl.texture(r, d.ms_depth));
+                glNamedBufferSubData(gl.buffer(r, d.objects), 0, GLsizeiptr(ctx.objects.size() * sizeof(glm::vec4)),
+                                     ctx.objects.data());
+                const GLuint ms_fb = gl.framebuffer({{gl.texture(r, d.ms_vis)}}, gl.texture(r, d.ms_depth));
                 glBindFramebuffer(GL_FRAMEBUFFER, ms_fb);
-                clear_gbuffer(ms_fb, false);
-                draw_meshes(ctx, gl, r, d);
-                copy_sample0(gl, r, d, fb);
+                const GLuint zero_u[4] = {0, 0, 0, 0};
+                const float far_depth = 0.0f; // reversed Z
+                glClearNamedFramebufferuiv(ms_fb, GL_COLOR, 0, zero_u);
+                glClearNamedFramebufferfv(ms_fb, GL_DEPTH, 0, &far_depth);
+                draw_meshes(ctx, gl, r, d, true);
+                copy_sample0(ctx, gl, r, d, fb);
             } else {
                 glBindFramebuffer(GL_FRAMEBUFFER, fb);
                 clear_gbuffer(fb, d.primitive.valid());
-                draw_meshes(ctx, gl, r, d);
+                draw_meshes(ctx, gl, r, d, false);
             }
             glBindFramebuffer(GL_FRAMEBUFFER, 0);
         });

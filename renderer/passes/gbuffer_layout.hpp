@@ -15,15 +15,14 @@ struct GBufferChannel {
     const char* name; // resource name; GLSL define GB_<NAME>
     graph::Format format;
     Aov aov;                               // the AOV that reads it (None: no AOV)
-    graph::TextureHandle GBuffer::*handle;    // where the pass returns it
-    graph::TextureHandle GBuffer::*ms_handle; // its visibility sub-samples with DSRAA
+    graph::TextureHandle GBuffer::*handle; // where the pass returns it
 };
 
 inline const GBufferChannel kGBufferLayout[] = {
     // world (LPS) normal, w = 1 on geometry
-    {"normal", graph::Format::RGBA16F, Aov::Normal, &GBuffer::normal, &GBuffer::ms_normal},
-    {"id", graph::Format::R32UI, Aov::Id, &GBuffer::id, &GBuffer::ms_id},                 // object id, 0 = background
-    {"albedo", graph::Format::RGBA8, Aov::None, &GBuffer::albedo, &GBuffer::ms_albedo}, // linear albedo
+    {"normal", graph::Format::RGBA16F, Aov::Normal, &GBuffer::normal},
+    {"id", graph::Format::R32UI, Aov::Id, &GBuffer::id},               // object id, 0 = background
+    {"albedo", graph::Format::RGBA8, Aov::None, &GBuffer::albedo}, // linear albedo
 };
 
 std::string gbuffer_defines();

@@ -12,6 +12,7 @@ GLenum gl_format(graph::Format f) {
     case graph::Format::R32F: return GL_R32F;
     case graph::Format::RG16F: return GL_RG16F;
     case graph::Format::R32UI: return GL_R32UI;
+    case graph::Format::RG32UI: return GL_RG32UI;
     case graph::Format::RGBA32UI: return GL_RGBA32UI;
     case graph::Format::Depth32F: return GL_DEPTH_COMPONENT32F;
     }

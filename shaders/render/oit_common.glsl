@@ -19,20 +19,7 @@ layout(std430, binding = 1) coherent buffer OitNodes { OitNode oit_nodes[]; };
 // Per object: linear albedo (rgb) and opacity (a), index = object id.
 layout(std430, binding = 2) readonly buffer OitObjects { vec4 oit_objects[]; };
 
-vec2 oct_wrap(vec2 v) { return (1.0 - abs(v.yx)) * vec2(v.x >= 0.0 ? 1.0 : -1.0, v.y >= 0.0 ? 1.0 : -1.0); }
-
-uint pack_normal(vec3 n) {
-    n /= abs(n.x) + abs(n.y) + abs(n.z);
-    vec2 e = n.z >= 0.0 ? n.xy : oct_wrap(n.xy);
-    return packSnorm2x16(e);
-}
-
-vec3 unpack_normal(uint p) {
-    vec2 e = unpackSnorm2x16(p);
-    vec3 n = vec3(e, 1.0 - abs(e.x) - abs(e.y));
-    if (n.z < 0.0) n.xy = oct_wrap(n.xy);
-    return normalize(n);
-}
+#include "octahedral.glsl"
 
 // Past the pool's cap (OIT_MERGE), fragments that find it full are merged
 // per pixel, order-independently, in fixed point (integer atomics: GL 4.5
