@@ -39,6 +39,22 @@ inline void reset_peak_rss() {
     f << "5";
 }
 
+// "a,b,c" -> {"a", "b", "c"} (a benchmark's list arguments).
+inline std::vector<std::string> split_list(const std::string& v) {
+    std::vector<std::string> out;
+    for (std::size_t p = 0; p != std::string::npos;) {
+        const std::size_t q = v.find(',', p);
+        out.push_back(v.substr(p, q == std::string::npos ? q : q - p));
+        p = q == std::string::npos ? q : q + 1;
+    }
+    return out;
+}
+
+// "WxH" -> width, height; false when it is not that.
+inline bool parse_size(const std::string& v, int& width, int& height) {
+    return std::sscanf(v.c_str(), "%dx%d", &width, &height) == 2 && width > 0 && height > 0;
+}
+
 inline double median(std::vector<double> v) {
     if (v.empty()) return 0;
     std::sort(v.begin(), v.end());

@@ -20,16 +20,14 @@
 #include <string>
 #include <vector>
 
-#include <tbb/parallel_for.h>
-
 #include "aa_peer.hpp"
+#include "bench_scenes.hpp"
 #include "bench_util.hpp"
 #include "image_error.hpp"
 #include "io/image.hpp"
 #include "renderer/core/api.hpp"
 #include "renderer/core/raytraced_ao.hpp"
 #include "renderer/gl/context.hpp"
-#include "tests/support/thin_phantom.hpp"
 
 using namespace iso;
 namespace fs = std::filesystem;
@@ -37,58 +35,11 @@ namespace fs = std::filesystem;
 namespace {
 
 struct Args {
-    std::string out = "image-bench-out", data = ISOSCOPE_DATA_DIR;
+    std::string out = "image-bench-out";
     int width = 640, height = 480, reps = 3;
     std::vector<std::string> scenes{"head", "bunny", "thin", "dense"};
     bool quick = false;
 };
-
-// A dense surface: a gyroid of period 12 voxels in a cube of `n` voxels
-// (0.5 mm), about 10 M triangles at n = 320; ~90 per pixel of a 640 x 480
-// view, where one sample per pixel shows moire.
-Volume gyroid(int n) {
-    auto v = Volume::dense({n, n, n}, VoxelType::F32, make_affine({0.5, 0.5, 0.5}, {0, 0, 0}));
-    v.meta.source = "gyroid";
-    auto s = v.as<float>();
-    const double w = 2.0 * M_PI / 12.0;
-    tbb::parallel_for(0, n, [&](int k) {
-        for (int j = 0; j < n; ++j)
-            for (int i = 0; i < n; ++i)
-                s[v.linear_index(i, j, k)] =
-                    float(std::sin(w * i) * std::cos(w * j) + std::sin(w * j) * std::cos(w * k) +
-                          std::sin(w * k) * std::cos(w * i));
-    });
-    return v;
-}
-
-struct BenchScene {
-    std::string name, view;
-    core::Scene scene;
-    std::size_t triangles = 0;
-};
-
-void make_scene(BenchScene& s, const Args& a) {
-    if (s.name == "head") { // skin translucent over the bone
-        s.scene.open(a.data + "/headsq.nhdr");
-        const auto ids = s.scene.add_isosurfaces({500, 1150});
-        s.scene.info(ids[0]).opacity = 0.35f;
-        s.view = "left";
-    } else if (s.name == "bunny") {
-        s.scene.open(a.data + "/bunny.vtp");
-        s.view = "anterior";
-    } else if (s.name == "thin") { // vessels 3.5 .. 0.45 mm in radius in front of thin bone
-        s.scene.set_volume(bench::thin_phantom(), "thin-structure phantom");
-        s.scene.add_isosurfaces({150});
-        s.view = "anterior";
-    } else if (s.name == "dense") {
-        s.scene.set_volume(gyroid(a.quick ? 160 : 320), "gyroid");
-        s.scene.add_isosurfaces({0.0});
-        s.view = "anterior";
-    } else {
-        throw Error("image_bench", "unknown scene '" + s.name + "' (head, bunny, thin, dense)");
-    }
-    for (const auto id : s.scene.surfaces()) s.triangles += s.scene.mesh(id).triangles.size();
-}
 
 struct Config {
     std::string name;
@@ -97,7 +48,7 @@ struct Config {
     AoMethod ao = AoMethod::Off; // in the series with AO
 };
 
-core::RenderRequest request(const Args& a, const BenchScene& s, AoMethod ao) {
+core::RenderRequest request(const Args& a, const bench::BenchScene& s, AoMethod ao) {
     core::RenderRequest req;
     req.width = a.width;
     req.height = a.height;
@@ -110,7 +61,7 @@ core::RenderRequest request(const Args& a, const BenchScene& s, AoMethod ao) {
 
 // One configuration's image and its time (median of reps, ms), the GL
 // context current, the frame loop as the live view or an export runs it.
-Image run(BenchScene& s, const core::RenderRequest& base, const Config& c, int reps, double& ms, int& frames) {
+Image run(bench::BenchScene& s, const core::RenderRequest& base, const Config& c, int reps, double& ms, int& frames) {
     core::RenderRequest req = base;
     if (base.look.ao != AoMethod::Off) req.look.ao = c.ao;
     req.look.aa.samples = c.samples;
@@ -140,7 +91,7 @@ Image run(BenchScene& s, const core::RenderRequest& base, const Config& c, int r
 
 // The reference: 64 frames on a stratified 8 x 8 grid of sub-pixel offsets,
 // one sample each, averaged by the renderer in linear light.
-Image reference(BenchScene& s, const core::RenderRequest& base, double& ms) {
+Image reference(bench::BenchScene& s, const core::RenderRequest& base, double& ms) {
     core::RenderRequest req = base;
     req.look.aa.samples = 1;
     RenderOptions ro = core::frame_options(req);
@@ -171,7 +122,7 @@ Image reference(BenchScene& s, const core::RenderRequest& base, double& ms) {
 // VTK's anti-aliasing on the same meshes, camera and size (no AO: VTK's
 // SSAO is ao_bench's peer), each against VTK's own 8 x 8 supersampled
 // reference, since its shading is not ours.
-void peers(BenchScene& s, const Args& a, std::ofstream& csv) {
+void peers(bench::BenchScene& s, const Args& a, std::ofstream& csv) {
     std::vector<bench::PeerMesh> meshes;
     bool translucent = false;
     for (const auto id : s.scene.surfaces()) {
@@ -232,21 +183,14 @@ int main(int argc, char** argv) try {
         if (arg == "--out")
             a.out = next();
         else if (arg == "--size") {
-            const std::string v = next();
-            if (std::sscanf(v.c_str(), "%dx%d", &a.width, &a.height) != 2) throw Error("image_bench", "--size WxH");
+            if (!bench::parse_size(next(), a.width, a.height)) throw Error("image_bench", "--size WxH");
         } else if (arg == "--reps")
             a.reps = std::max(1, std::stoi(next()));
         else if (arg == "--quick") {
             a.quick = true;
             a.reps = 1;
         } else if (arg == "--scenes") {
-            a.scenes.clear();
-            std::string v = next();
-            for (std::size_t p = 0; p != std::string::npos;) {
-                const std::size_t q = v.find(',', p);
-                a.scenes.push_back(v.substr(p, q == std::string::npos ? q : q - p));
-                p = q == std::string::npos ? q : q + 1;
-            }
+            a.scenes = bench::split_list(next());
         } else {
             std::cerr << "usage: image_bench [--out DIR] [--size WxH] [--reps N] [--scenes head,bunny,thin,dense] "
                          "[--quick]\n";
@@ -268,9 +212,9 @@ int main(int argc, char** argv) try {
         {"export: DSRAA 4 + frames (default), ray-traced AO", true, 4, AoMethod::Raytraced}};
     const gl::ScopedCurrent context;
     for (const auto& name : a.scenes) {
-        BenchScene s;
+        bench::BenchScene s;
         s.name = name;
-        make_scene(s, a);
+        make_scene(s, ISOSCOPE_DATA_DIR, a.quick);
         std::cout << "<!-- " << name << ": " << s.triangles << " triangles -->\n";
         for (const AoMethod ao : {AoMethod::Off, AoMethod::Raytraced}) {
             const std::string series = ao == AoMethod::Off ? "no AO" : "AO (reference ray-traced)";
