@@ -49,4 +49,12 @@ inline AoError ao_error(const Image& ao, const Image& ref, int rays = 0) {
     return e;
 }
 
+// Cosine-weighted visibility at the foot of an infinite wall at distance d,
+// rays limited to R: directions project uniformly onto the unit disk, and
+// the wall blocks the segment x >= d/R of it.
+inline double wall_ao(double d, double R) {
+    const double a = std::min(d / R, 1.0);
+    return 1.0 - (std::acos(a) - a * std::sqrt(1.0 - a * a)) / M_PI;
+}
+
 } // namespace iso

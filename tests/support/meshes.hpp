@@ -34,6 +34,14 @@ inline Mesh box_mesh(glm::dvec3 lo, glm::dvec3 hi) {
     return m;
 }
 
+// Appends box_mesh(lo, hi) to m (scenes of several boxes).
+inline void append_box(Mesh& m, glm::dvec3 lo, glm::dvec3 hi) {
+    const Mesh b = box_mesh(lo, hi);
+    const auto base = std::uint32_t(m.positions.size());
+    m.positions.insert(m.positions.end(), b.positions.begin(), b.positions.end());
+    for (const auto& t : b.triangles) m.triangles.push_back({base + t[0], base + t[1], base + t[2]});
+}
+
 // The same box with flat normals: each face has its own four vertices
 // (shared corners would get averaged, tilted normals).
 inline Mesh flat_box_mesh(glm::vec3 lo, glm::vec3 hi) {

@@ -8,33 +8,13 @@
 #include <cmath>
 #include <cstdio>
 
+#include "tests/support/ao_metrics.hpp"
+#include "tests/support/meshes.hpp"
 #include "tests/support/test_util.hpp"
 
 using namespace iso;
 
 namespace {
-
-void add_box(Mesh& m, glm::vec3 lo, glm::vec3 hi) {
-    const auto base = std::uint32_t(m.positions.size());
-    for (int z = 0; z < 2; ++z)
-        for (int y = 0; y < 2; ++y)
-            for (int x = 0; x < 2; ++x) m.positions.emplace_back(x ? hi.x : lo.x, y ? hi.y : lo.y, z ? hi.z : lo.z);
-    auto q = [&](std::uint32_t a, std::uint32_t b, std::uint32_t c, std::uint32_t d) {
-        m.triangles.push_back({base + a, base + b, base + c});
-        m.triangles.push_back({base + a, base + c, base + d});
-    };
-    q(0, 2, 3, 1);
-    q(4, 5, 7, 6);
-    q(0, 1, 5, 4);
-    q(2, 6, 7, 3);
-    q(0, 4, 6, 2);
-    q(1, 3, 7, 5);
-}
-
-double wall_ao(double d, double R) {
-    const double a = std::min(d / R, 1.0);
-    return 1.0 - (std::acos(a) - a * std::sqrt(1.0 - a * a)) / M_PI;
-}
 
 // A floor (z <= 0) and a wall (x >= 10, 50 mm high), seen from 100 mm above.
 struct WallScene {
@@ -42,8 +22,8 @@ struct WallScene {
     Camera cam;
     static constexpr int W = 48, H = 32;
     WallScene() {
-        add_box(mesh, {-1000, -1000, -1}, {1000, 1000, 0});
-        add_box(mesh, {10, -1000, -1}, {20, 1000, 50});
+        test::append_box(mesh, {-1000, -1000, -1}, {1000, 1000, 0});
+        test::append_box(mesh, {10, -1000, -1}, {20, 1000, 50});
         cam.eye = {0, 0, 100};
         cam.target = {0, 0, 0};
         cam.up = {0, 1, 0};

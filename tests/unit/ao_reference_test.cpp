@@ -3,43 +3,15 @@
 
 #include <cmath>
 
+#include "tests/support/ao_metrics.hpp"
+#include "tests/support/meshes.hpp"
 #include "tests/support/test_util.hpp"
 
 using namespace iso;
 
-namespace {
-
-// An axis-aligned box of triangles, outward faces, from lo to hi.
-void add_box(Mesh& m, glm::vec3 lo, glm::vec3 hi) {
-    const auto base = std::uint32_t(m.positions.size());
-    for (int z = 0; z < 2; ++z)
-        for (int y = 0; y < 2; ++y)
-            for (int x = 0; x < 2; ++x) m.positions.emplace_back(x ? hi.x : lo.x, y ? hi.y : lo.y, z ? hi.z : lo.z);
-    auto q = [&](std::uint32_t a, std::uint32_t b, std::uint32_t c, std::uint32_t d) {
-        m.triangles.push_back({base + a, base + b, base + c});
-        m.triangles.push_back({base + a, base + c, base + d});
-    };
-    q(0, 2, 3, 1);
-    q(4, 5, 7, 6);
-    q(0, 1, 5, 4);
-    q(2, 6, 7, 3);
-    q(0, 4, 6, 2);
-    q(1, 3, 7, 5);
-}
-
-// Cosine-weighted visibility at the foot of an infinite wall at distance d,
-// rays limited to R: directions project uniformly onto the unit disk, and
-// the wall blocks the segment x >= d/R of it.
-double wall_ao(double d, double R) {
-    const double a = std::min(d / R, 1.0);
-    return 1.0 - (std::acos(a) - a * std::sqrt(1.0 - a * a)) / M_PI;
-}
-
-} // namespace
-
 TEST(AoReference, OpenPlaneIsUnoccluded) {
     Mesh floor;
-    add_box(floor, {-1000, -1000, -1}, {1000, 1000, 0});
+    test::append_box(floor, {-1000, -1000, -1}, {1000, 1000, 0});
     AoReference ref({&floor});
     EXPECT_EQ(ref.at({0, 0, 0}, {0, 0, 1}, {.radius_mm = 50, .rays = 512}), 1.0);
 }
@@ -49,8 +21,8 @@ TEST(AoReference, WallMatchesTheClosedForm) {
     // (At d = 0 the point would lie in the wall's own plane; 0.01 mm gives a = 0.001.)
     for (double d : {0.01, 2.0, 5.0, 9.0}) {
         Mesh scene;
-        add_box(scene, {-1000, -1000, -1}, {1000, 1000, 0});
-        add_box(scene, {float(d), -1000, -1}, {float(d) + 10, 1000, 1000});
+        test::append_box(scene, {-1000, -1000, -1}, {1000, 1000, 0});
+        test::append_box(scene, {float(d), -1000, -1}, {float(d) + 10, 1000, 1000});
         AoReference ref({&scene});
         const AoReferenceOptions opt{.radius_mm = 10.0, .rays = 4096};
         const double ao = ref.at({0, 0, 0}, {0, 0, 1}, opt, 7);
@@ -62,12 +34,12 @@ TEST(AoReference, WallMatchesTheClosedForm) {
 TEST(AoReference, ClosedBoxIsFullyOccludedAndRadiusLimits) {
     Mesh scene;
     // A room 20 mm high, the point on its floor.
-    add_box(scene, {-100, -100, -1}, {100, 100, 0});  // floor
-    add_box(scene, {-100, -100, 20}, {100, 100, 21}); // ceiling
-    add_box(scene, {-101, -100, -1}, {-100, 100, 21});
-    add_box(scene, {100, -100, -1}, {101, 100, 21});
-    add_box(scene, {-100, -101, -1}, {100, -100, 21});
-    add_box(scene, {-100, 100, -1}, {100, 101, 21});
+    test::append_box(scene, {-100, -100, -1}, {100, 100, 0});  // floor
+    test::append_box(scene, {-100, -100, 20}, {100, 100, 21}); // ceiling
+    test::append_box(scene, {-101, -100, -1}, {-100, 100, 21});
+    test::append_box(scene, {100, -100, -1}, {101, 100, 21});
+    test::append_box(scene, {-100, -101, -1}, {100, -100, 21});
+    test::append_box(scene, {-100, 100, -1}, {100, 101, 21});
     AoReference ref({&scene});
     // With R well beyond the ceiling's height, rays escaping sideways hit the
     // walls well within R only when R is large: at R = 1000 all are blocked.
@@ -78,8 +50,8 @@ TEST(AoReference, ClosedBoxIsFullyOccludedAndRadiusLimits) {
 
 TEST(AoReference, ErrorShrinksWithRays) {
     Mesh scene;
-    add_box(scene, {-1000, -1000, -1}, {1000, 1000, 0});
-    add_box(scene, {3, -1000, -1}, {13, 1000, 1000});
+    test::append_box(scene, {-1000, -1000, -1}, {1000, 1000, 0});
+    test::append_box(scene, {3, -1000, -1}, {13, 1000, 1000});
     AoReference ref({&scene});
     const double truth = wall_ao(3.0, 10.0);
     double err64 = 0, err4096 = 0;
