@@ -3,6 +3,7 @@
 #include <QAction>
 #include <QActionGroup>
 #include <QKeySequence>
+#include <QLabel>
 #include <QPainter>
 #include <QShortcut>
 #include <QStatusBar>
@@ -104,6 +105,10 @@ MeasureTools::MeasureTools(MainWindow& window) : QObject(&window), window_(windo
         redraw();
         window_.statusBar()->showMessage(tool_name(tool_) + ": points dropped");
     });
+    click_field_ = new QLabel(&window);
+    click_field_->setTextInteractionFlags(Qt::TextSelectableByMouse); // copy the coordinates
+    click_field_->setToolTip("The last click in the 3D view: what is there (hovering shows its readout to the left)");
+    window.statusBar()->addPermanentWidget(click_field_);
     hover_timer_ = new QTimer(this);
     hover_timer_->setSingleShot(true);
     connect(hover_timer_, &QTimer::timeout, this, [this] { hover_pick(); });
@@ -153,6 +158,7 @@ void MeasureTools::attach(SliceView& view) {
 }
 
 void MeasureTools::reset() {
+    click_field_->clear(); // a click on the scene that went
     hover_timer_->stop();
     hover_at_.reset();
     grab_timer_->stop();
@@ -162,6 +168,8 @@ void MeasureTools::reset() {
     pending_.clear();
     escape_->setEnabled(false);
 }
+
+QString MeasureTools::click_readout() const { return click_field_->text(); }
 
 int MeasureTools::hover_interval_ms() const { return std::max(kHoverMinMs, int(std::ceil(2.0 * last_pick_ms_))); }
 
@@ -186,6 +194,7 @@ std::optional<glm::dvec3> MeasureTools::pick_and_show(Viewer& v, QPointF pixel, 
     }
     last_pick_ms_ = r.frame_ms;
     window_.statusBar()->showMessage(readout(r));
+    if (!hover) click_field_->setText("Click: " + readout(r));
     if (!r.visible) return std::nullopt;
     return r.layers[*r.visible].lps;
 }

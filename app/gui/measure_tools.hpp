@@ -25,6 +25,7 @@
 #include "io/markups.hpp"
 
 class QAction;
+class QLabel;
 class QPainter;
 class QShortcut;
 class QTimer;
@@ -88,6 +89,10 @@ public:
     // "LPS (x, y, z) mm, READOUT, surface NAME" (READOUT: core::value_readout,
     // "v HU" for CT, else "value v"; left out where there is none), or "background".
     QString readout(const core::PickResult& r) const;
+    // The last click's readout in the 3D view, "Click: " + readout(), kept
+    // in a permanent field of the status bar (hover readouts are the status
+    // bar's passing messages and leave it alone); empty before a click.
+    QString click_readout() const;
     // Hover picks made so far (throttled: one per interval, the latest position wins).
     int hover_picks() const { return hover_picks_; }
     // The hover interval: at least 80 ms, and at least twice the last pick's time.
@@ -135,7 +140,8 @@ private:
     std::vector<glm::dvec3> pending_;
     QPointer<Viewer> viewer_;
     QTimer* hover_timer_ = nullptr;
-    QShortcut* escape_ = nullptr; // on only while points are being placed (it would take Escape from editors)
+    QLabel* click_field_ = nullptr; // the status bar's permanent field: the last click's readout
+    QShortcut* escape_ = nullptr;   // on only while points are being placed (it would take Escape from editors)
     std::optional<QPointF> hover_at_;
     QElapsedTimer since_hover_;
     double last_pick_ms_ = 0;

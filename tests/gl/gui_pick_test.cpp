@@ -45,9 +45,19 @@ TEST_F(GuiPick, ClickShowsTheCliPickAndMovesTheCrosshair) {
     EXPECT_NEAR(w.slice_view(core::SliceOrientation::Coronal)->grid().offset_mm, expected.y, 1e-6);
     EXPECT_NEAR(w.slice_view(core::SliceOrientation::Sagittal)->grid().offset_mm, expected.x, 1e-6);
 
+    // The click's readout stays in its own field while hovering shows others.
+    auto* tools = w.measure_tools();
+    EXPECT_EQ(tools->click_readout().toStdString(), "Click: " + msg);
+    const int before = tools->hover_picks();
+    hover(viewer, QPoint(at.x() - 40, at.y() + 20));
+    ASSERT_TRUE(wait_until([&] { return tools->hover_picks() > before; }, 5000)) << "no hover pick";
+    EXPECT_NE(w.statusBar()->currentMessage().toStdString(), msg) << "the hover readout shows elsewhere";
+    EXPECT_EQ(tools->click_readout().toStdString(), "Click: " + msg) << "hovering overwrote the click's readout";
+
     // A background pixel says so.
     QTest::mouseClick(viewer, Qt::LeftButton, {}, QPoint(3, 3));
     EXPECT_EQ(w.statusBar()->currentMessage(), "background");
+    EXPECT_EQ(tools->click_readout(), "Click: background");
 }
 
 // Throttled picks, the latest position wins.
