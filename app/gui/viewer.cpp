@@ -1,5 +1,6 @@
 #include "app/gui/viewer.hpp"
 
+#include <QApplication>
 #include <QKeyEvent>
 #include <QOpenGLContext>
 #include <QOpenGLFunctions>
@@ -26,6 +27,10 @@ Viewer::Viewer(core::Scene& scene, PatientView view, ViewerOptions options, QWid
     setFocusPolicy(Qt::StrongFocus);
     setMinimumSize(320, 240);
     setMouseTracking(true); // hover readout
+    still_timer_ = new QTimer(this);
+    still_timer_->setSingleShot(true);
+    connect(still_timer_, &QTimer::timeout, this, [this] { schedule_still_frame(); });
+    qApp->installEventFilter(this);
 }
 
 Viewer::~Viewer() {
@@ -168,7 +173,31 @@ void Viewer::draw() {
     // renderer sees the change).
     const bool ao_more = accumulates && ao_frames_ < options_.look.ao_frames;
     const bool aa_more = opt.accumulate && aa_frames_ < options_.look.aa.view_frames;
-    if (ao_more || aa_more) QTimer::singleShot(0, this, [this] { update(); });
+    if (ao_more || aa_more) still_timer_->start(0);
+}
+
+// Input anywhere in the application (this view's own included) holds the
+// still frames back until it has been quiet for input_quiet_ms_.
+bool Viewer::eventFilter(QObject* watched, QEvent* e) {
+    switch (e->type()) {
+    case QEvent::KeyPress:
+    case QEvent::MouseButtonPress:
+    case QEvent::MouseButtonRelease:
+    case QEvent::MouseMove:
+    case QEvent::Wheel: last_input_.restart(); break;
+    default: break;
+    }
+    return QOpenGLWidget::eventFilter(watched, e);
+}
+
+void Viewer::schedule_still_frame() {
+    const qint64 quiet = last_input_.isValid() ? last_input_.elapsed() : input_quiet_ms_;
+    if (quiet < input_quiet_ms_) {
+        ++still_frames_held_;
+        still_timer_->start(int(input_quiet_ms_ - quiet));
+        return;
+    }
+    update();
 }
 
 void Viewer::set_camera(const Camera& c) {

@@ -10,6 +10,7 @@
 #include <string>
 #include <vector>
 
+#include <QElapsedTimer>
 #include <QOpenGLWidget>
 
 #include <glm/vec3.hpp>
@@ -28,6 +29,8 @@ class Scene;
 struct PickResult;
 } // namespace core
 } // namespace iso
+
+class QTimer;
 
 namespace iso::gui {
 
@@ -75,6 +78,16 @@ public:
     const ProgressiveAoStats& raytraced_stats() const { return raytraced_stats_; }
     // A mouse drag is moving the camera now.
     bool dragging() const { return dragging_; }
+    // The still frames that accumulate AO and anti-aliasing wait while the
+    // user works anywhere in the application: after any key, button, wheel
+    // or pointer move (an application-wide event filter) the next one waits
+    // until the input has been quiet this long (a still frame takes
+    // hundreds of milliseconds on a software GL and holds the GUI thread;
+    // the input keeps the processors meanwhile). 0: no waiting.
+    static constexpr int kInputQuietMs = 300;
+    void set_input_quiet_ms(int ms) { input_quiet_ms_ = ms; }
+    // Still frames held back by input so far.
+    int still_frames_held() const { return still_frames_held_; }
     // GL objects the renderer made after the first frame (0 in a steady
     // view: resources live across frames).
     std::size_t gl_objects_since_first_frame() const { return objects_since_first_frame_; }
@@ -136,6 +149,7 @@ protected:
     void mouseReleaseEvent(QMouseEvent* e) override;
     void wheelEvent(QWheelEvent* e) override;
     void keyPressEvent(QKeyEvent* e) override;
+    bool eventFilter(QObject* watched, QEvent* e) override;
 
 private:
     core::Scene& scene_;
@@ -163,6 +177,12 @@ private:
     AoMethod ao_when_on_ = AoMethod::Cone; // what the O key turns AO back on with
     void follow_raytraced();
     void take_batch(const RaytracedBatch& b);
+    // The next still frame: now, or when the input has been quiet input_quiet_ms_.
+    void schedule_still_frame();
+    QTimer* still_timer_ = nullptr;
+    QElapsedTimer last_input_;
+    int input_quiet_ms_ = kInputQuietMs;
+    int still_frames_held_ = 0;
 };
 
 } // namespace iso::gui

@@ -8,11 +8,13 @@
 #include <QElapsedTimer>
 #include <QStatusBar>
 #include <QTest>
+#include <QWheelEvent>
 
 #include <algorithm>
 #include <cstdio>
 #include <thread>
 
+#include "app/gui/slice_view.hpp"
 #include "gui_measure_util.hpp"
 #include "renderer/core/pick.hpp"
 #include "renderer/core/scene.hpp"
@@ -180,4 +182,37 @@ TEST_F(GuiPick, PicksLeaveTheAoAccumulationAlone) {
         ASSERT_TRUE(wait_until([&] { return viewer->frames() > drawn; }, 10000));
         EXPECT_EQ(viewer->ao_frames(), ao_frames + 1) << "a pick restarted the view's AO accumulation";
     }
+}
+
+// Input anywhere in the window holds the 3D view's still frames (AO and
+// anti-aliasing accumulation, hundreds of ms each on a software GL) back
+// until it has been quiet for Viewer::kInputQuietMs; then they go on and
+// the view converges.
+TEST_F(GuiPick, InputElsewhereHoldsTheStillFramesBack) {
+    gui::MainWindow& w = window();
+    gui::Viewer* viewer = w.viewer();
+    gui::SliceView* axial = w.slice_view(core::SliceOrientation::Axial);
+    Camera turned = viewer->camera();
+    turned.orbit(20, 0);
+    viewer->set_camera(turned); // the accumulation starts again
+    ASSERT_TRUE(wait_until([&] { return viewer->frames() > 0 && !viewer->converged(); }, 20000));
+    QTest::qWait(50);
+    // A slice step every 100 ms for 1.5 s: the view draws at most the frame
+    // it was in and one more, and holds the rest back.
+    const int drawn = viewer->frames(), held = viewer->still_frames_held();
+    const QPointF mid(axial->width() / 2.0, axial->height() / 2.0);
+    QElapsedTimer t;
+    t.start();
+    for (int k = 0; t.elapsed() < 1500; ++k) {
+        QWheelEvent wheel(mid, axial->mapToGlobal(mid), QPoint(), QPoint(0, k % 2 ? 120 : -120), Qt::NoButton,
+                          Qt::NoModifier, Qt::NoScrollPhase, false);
+        QCoreApplication::sendEvent(axial, &wheel);
+        QTest::qWait(100);
+    }
+    std::printf("during 1.5 s of slice steps the 3D view drew %d still frames and held %d back\n",
+                viewer->frames() - drawn, viewer->still_frames_held() - held);
+    EXPECT_LE(viewer->frames() - drawn, 2) << "still frames kept coming while the user worked elsewhere";
+    EXPECT_GT(viewer->still_frames_held(), held);
+    // Quiet input: the accumulation resumes and converges.
+    ASSERT_TRUE(wait_until([&] { return viewer->converged(); }, 180000)) << "the still frames did not resume";
 }
