@@ -27,6 +27,7 @@
 
 #include "renderer/passes/build_frame.hpp"
 #include "renderer/passes/gl_resources.hpp"
+#include "renderer/passes/lighting_params.hpp"
 #include "renderer/passes/std140.hpp"
 
 namespace iso::passes {
@@ -95,10 +96,7 @@ graph::TextureHandle dsraa(graph::FrameGraph& fg, const FrameContext& ctx, const
                 glUniform1f(prog.uniform("normal_cos"), look.aa.normal_cos);
                 glUniform1i(prog.uniform("shade_unmatched"), ctx.translucent.empty() ? 1 : 0);
                 // The lighting pass's parameters: the background as it writes it, the shading of unmatched sub-samples.
-                bind_params(gl, r, d.params,
-                            LightingParams{std140::mat3(ctx.world_to_view),
-                                           glm::vec4(look.background, look.transparent_background ? 0.0f : 1.0f),
-                                           look.ao != AoMethod::Off ? 1u : 0u, look.flat_shading ? 1u : 0u});
+                bind_params(gl, r, d.params, lighting_params(ctx, look.ao != AoMethod::Off));
                 glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_COMMAND_BARRIER_BIT | GL_TEXTURE_FETCH_BARRIER_BIT |
                                 GL_SHADER_IMAGE_ACCESS_BARRIER_BIT);
                 glBindBuffer(GL_DISPATCH_INDIRECT_BUFFER, gl.buffer(r, d.edges));

@@ -2,6 +2,7 @@
 // given, tone mapping, sRGB; background where nothing was drawn.
 #include "renderer/passes/build_frame.hpp"
 #include "renderer/passes/gl_resources.hpp"
+#include "renderer/passes/lighting_params.hpp"
 #include "renderer/passes/std140.hpp"
 
 namespace iso::passes {
@@ -31,11 +32,7 @@ graph::TextureHandle lighting(graph::FrameGraph& fg, const FrameContext& ctx, co
                 glBindTextureUnit(0, gl.texture(r, d.normal));
                 glBindTextureUnit(1, gl.texture(r, d.albedo));
                 if (d.ao.valid()) glBindTextureUnit(2, gl.texture(r, d.ao));
-                bind_params(gl, r, d.params,
-                            LightingParams{
-                                std140::mat3(ctx.world_to_view),
-                                glm::vec4(ctx.opt.look.background, ctx.opt.look.transparent_background ? 0.0f : 1.0f),
-                                d.ao.valid() ? 1u : 0u, ctx.opt.look.flat_shading ? 1u : 0u});
+                bind_params(gl, r, d.params, lighting_params(ctx, d.ao.valid()));
                 glBindVertexArray(gl.vertex_array("fullscreen"));
                 glDrawArrays(GL_TRIANGLES, 0, 3);
                 glBindVertexArray(0);
