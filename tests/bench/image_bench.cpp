@@ -41,6 +41,13 @@ struct Args {
     bool quick = false;
 };
 
+// A text field of the CSV: its commas become semicolons (the configuration
+// names have commas; the plot and spreadsheets split on every comma).
+std::string csv_text(std::string s) {
+    std::replace(s.begin(), s.end(), ',', ';');
+    return s;
+}
+
 struct Config {
     std::string name;
     bool export_rule = false; // core::render_converged, else one frame
@@ -231,7 +238,7 @@ int main(int argc, char** argv) try {
                 std::printf("| %s | %s | %s | %d | %.1f | %.4f | %.4f | %.4f | %.4f |\n", name.c_str(), series.c_str(),
                             c.name.c_str(), frames, ms, e.rmse, e.p99, e.edge_rmse, e.edge_p99);
                 std::fflush(stdout);
-                csv << name << "," << series << "," << c.name << "," << frames << "," << ms << "," << e.rmse << ","
+                csv << name << "," << series << "," << csv_text(c.name) << "," << frames << "," << ms << "," << e.rmse << ","
                     << e.p99 << "," << e.edge_rmse << "," << e.edge_p99 << "," << s.triangles << "\n";
             }
             std::printf("| %s | %s | reference (8x8 stratified, 1 sample each) | 64 | %.1f | 0 | 0 | 0 | 0 |\n",
