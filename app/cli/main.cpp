@@ -11,6 +11,7 @@
 
 #include "app/cli/commands.hpp"
 #include "renderer/core/api.hpp"
+#include "renderer/core/versions.hpp"
 
 namespace {
 
@@ -43,7 +44,11 @@ int main(int argc, char** argv) {
     // No arguments: the desktop app where there is a display, the help otherwise.
     if (argc == 1 && (std::getenv("DISPLAY") || std::getenv("WAYLAND_DISPLAY"))) return iso::cli::run_gui("", argv[0]);
     CLI::App app{"isoscope: inspect CT volumes, reconstruct and render isosurfaces"};
-    app.set_version_flag("--version", std::string("isoscope ") + iso::core::version());
+    // isoscope's version, then the libraries' it is built with (a bug report's first lines).
+    std::string versions;
+    for (const auto& [name, v] : iso::core::component_versions())
+        versions += (versions.empty() ? "" : "\n") + name + " " + v;
+    app.set_version_flag("--version", versions);
     app.require_subcommand(1);
     std::vector<std::pair<CLI::App*, iso::cli::RunFn>> commands;
     for (const auto& c : kCommands) {

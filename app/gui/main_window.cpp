@@ -193,6 +193,7 @@ MainWindow::MainWindow(QWidget* parent) : QMainWindow(parent), scene_(std::make_
     // Wide enough for the Measurements table's surface and notes columns.
     resizeDocks({dock, measurements_}, {400, 400}, Qt::Horizontal);
 
+    add_view_and_help_menus();
     statusBar()->showMessage("Ready");
     for (std::size_t i = 0; i < 3; ++i) views_[i]->set_content(scene_.get(), &planes_[i]);
 }

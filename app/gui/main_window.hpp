@@ -142,6 +142,12 @@ public:
     // File > Save surfaces: one surface in LPS mm (.stl, .ply, .obj, .vtp).
     void save_surface(std::uint32_t id, const QString& path);
 
+    // Help > About's text: isoscope's version and its libraries'
+    // (core::component_versions), Qt's, and the 3D view's GL renderer once
+    // it has drawn. Help > Mouse and keyboard's text (HTML).
+    QString about_text() const;
+    static QString bindings_html();
+
 protected:
     void dragEnterEvent(QDragEnterEvent* e) override;
     void dropEvent(QDropEvent* e) override;
@@ -170,6 +176,7 @@ private:
     void open_folder_dialog();
     void add_session_actions(QMenu* file); // File menu entries (session_io.cpp)
     void add_window_level_bar();           // the window/level tool bar
+    void add_view_and_help_menus();        // View (docks, tool bars) and Help (bindings, About): help_menu.cpp
 
     std::unique_ptr<core::Scene> scene_;
     std::array<core::SlicePlane, 3> planes_{};

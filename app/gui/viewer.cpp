@@ -156,6 +156,7 @@ void Viewer::draw() {
     auto r = scene_.render(camera_, opt);
     raytraced_drawn_ = opt.ao_image != nullptr;
     labels_ = std::move(r.labels);
+    if (gl_renderer_.empty()) gl_renderer_ = r.gl_renderer;
     ++frames_;
     // GL objects made after the first frame: none while the view is steady.
     const std::size_t objects = scene_.renderer().gl_objects_created();

@@ -94,6 +94,8 @@ public:
     // The last rendering error (empty: none). paintGL never lets one escape:
     // it clears to the background, reports it here and on stderr, and stops.
     const std::string& error() const { return error_; }
+    // The GL renderer and version the view draws with (empty before its first frame).
+    const std::string& gl_renderer() const { return gl_renderer_; }
 
     // The camera the view draws with (LPS mm); setting it redraws.
     const Camera& camera() const { return camera_; }
@@ -156,6 +158,7 @@ private:
     PatientView initial_view_;
     ViewerOptions options_;
     std::string error_;
+    std::string gl_renderer_;
     std::unique_ptr<Annotations> annotations_;
     Camera camera_;
     bool camera_set_ = false;

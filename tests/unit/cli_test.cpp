@@ -1,4 +1,5 @@
 // The isoscope command line, run as a real process on the bundled data.
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 
@@ -133,4 +134,30 @@ TEST(Cli, MeshJsonOpenSurfaceVolumeIsMeasuresLowerBound) {
         << t.out;
     EXPECT_NE(t.out.find(", open, volume >= "), std::string::npos) << t.out;
     EXPECT_NE(t.out.find("(lower bound"), std::string::npos) << t.out;
+}
+
+// --version: isoscope's own, then each library's as the installed Debian
+// package says it (the package's upstream version begins with it).
+TEST(Cli, VersionNamesTheLibrariesAsInstalled) {
+    const auto r = test::run_command(test::cli() + " --version");
+    ASSERT_EQ(r.exit_code, 0) << r.out;
+    EXPECT_EQ(r.out.rfind("isoscope ", 0), 0u) << r.out;
+    const std::pair<const char*, const char*> packages[] = {{"VTK", "libvtk9.1"},
+                                                            {"OpenVDB", "libopenvdb10.0"},
+                                                            {"Embree", "libembree3-3"},
+                                                            {"oneTBB", "libtbb12"},
+                                                            {"OpenImageIO", "libopenimageio2.4"}};
+    for (const auto& [name, package] : packages) {
+        const auto at = r.out.find(std::string("\n") + name + " ");
+        ASSERT_NE(at, std::string::npos) << name << " missing: " << r.out;
+        const std::size_t from = at + 2 + std::strlen(name);
+        const std::string version = r.out.substr(from, r.out.find('\n', from) - from);
+        const auto dpkg = test::run_command(std::string("dpkg-query -W -f '${Version}' ") + package);
+        if (dpkg.exit_code != 0) continue; // not a Debian system: nothing to compare with
+        std::string upstream = dpkg.out.substr(0, dpkg.out.find_first_of("+-"));
+        if (const auto really = dpkg.out.find("really"); really != std::string::npos) // 9.1.0+really9.1.0+dfsg2-5
+            upstream = dpkg.out.substr(really + 6, dpkg.out.find_first_of("+-", really) - really - 6);
+        EXPECT_EQ(upstream.rfind(version, 0), 0u)
+            << name << " says " << version << ", " << package << " is " << dpkg.out;
+    }
 }

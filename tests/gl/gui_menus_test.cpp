@@ -1,0 +1,113 @@
+// The desktop app's View and Help menus (docs/gui.md "Menus"), driven
+// in-process through QTest under Xvfb (CTest runs this program under
+// xvfb-run; it skips without a display). Expected values: the versions from
+// the core (core::component_versions) and Qt, the GL renderer from a
+// render in another process (`isoscope render --stats`), the docks and tool
+// bars from the window's widgets.
+#include <QAction>
+#include <QApplication>
+#include <QDialog>
+#include <QDockWidget>
+#include <QMenu>
+#include <QMessageBox>
+#include <QTextBrowser>
+#include <QToolBar>
+
+#include "app/gui/viewer.hpp"
+#include "gui_measure_util.hpp"
+#include "renderer/core/versions.hpp"
+
+using namespace iso;
+using namespace iso::test;
+using GuiMenus = HeadWindow;
+
+namespace {
+
+QMenu* menu(gui::MainWindow& w, const char* name) {
+    auto* m = w.findChild<QMenu*>(name);
+    if (m) emit m->aboutToShow(); // as opening it does
+    return m;
+}
+
+QAction* action_named(QMenu* m, const QString& text) {
+    for (auto* a : m->actions())
+        if (a->text().remove('&') == text) return a;
+    return nullptr;
+}
+
+template <class T> T* top_level(const char* name) {
+    for (auto* w : QApplication::topLevelWidgets())
+        if (auto* t = qobject_cast<T*>(w); t && t->objectName() == name && t->isVisible()) return t;
+    return nullptr;
+}
+
+} // namespace
+
+// Every dock and tool bar has an entry; a closed dock comes back from it.
+TEST_F(GuiMenus, ViewMenuShowsAndHidesEachDockAndToolBar) {
+    gui::MainWindow& w = window();
+    QMenu* view = menu(w, "view_menu");
+    ASSERT_NE(view, nullptr);
+    const auto docks = w.findChildren<QDockWidget*>();
+    const auto bars = w.findChildren<QToolBar*>();
+    ASSERT_GE(docks.size(), 2);
+    for (auto* dock : docks) {
+        QAction* a = action_named(view, dock->windowTitle());
+        ASSERT_NE(a, nullptr) << "no View entry for the dock " << dock->windowTitle().toStdString();
+        ASSERT_TRUE(dock->isVisible());
+        dock->close(); // as its close button does
+        EXPECT_FALSE(dock->isVisible());
+        EXPECT_FALSE(a->isChecked());
+        a->trigger();
+        EXPECT_TRUE(dock->isVisible()) << dock->windowTitle().toStdString() << " did not come back";
+    }
+    for (auto* bar : bars) {
+        QAction* a = action_named(view, bar->windowTitle());
+        ASSERT_NE(a, nullptr) << "no View entry for the tool bar " << bar->windowTitle().toStdString();
+        a->trigger();
+        EXPECT_FALSE(bar->isVisible());
+        a->trigger();
+        EXPECT_TRUE(bar->isVisible());
+    }
+}
+
+// About names isoscope's and its libraries' versions, Qt's and the GL
+// renderer the 3D view draws with (the one a headless render reports).
+TEST_F(GuiMenus, AboutNamesTheVersionsAndTheRenderer) {
+    gui::MainWindow& w = window();
+    ASSERT_TRUE(wait_until([&] { return w.viewer() && w.viewer()->frames() > 0; }, 60000));
+    const QString about = w.about_text();
+    for (const auto& [name, version] : core::component_versions()) {
+        EXPECT_TRUE(about.contains(QString::fromStdString(name))) << name;
+        EXPECT_TRUE(about.contains(QString::fromStdString(version))) << name << " " << version;
+    }
+    EXPECT_TRUE(about.contains(qVersion()));
+    const auto r = run_command(cli() + " render " + headsq() + " --iso 500 --size 64x48 --no-aa --stats -o " +
+                               (std::filesystem::path(dir().path()) / "r.png").string());
+    ASSERT_EQ(r.exit_code, 0) << r.out;
+    const auto open = r.out.find("rendered 64x48 ("), close = r.out.find(") -> ", open);
+    ASSERT_NE(open, std::string::npos) << r.out;
+    const std::string renderer = r.out.substr(open + 16, close - open - 16);
+    EXPECT_TRUE(about.contains(QString::fromStdString(renderer).toHtmlEscaped())) << renderer;
+    // The menu entry opens it, not modal.
+    QMenu* help = w.findChild<QMenu*>("help_menu");
+    ASSERT_NE(help, nullptr);
+    w.findChild<QAction*>("help_about")->trigger();
+    QMessageBox* box = nullptr;
+    ASSERT_TRUE(wait_until([&] { return (box = top_level<QMessageBox>("about_box")) != nullptr; }, 5000));
+    EXPECT_EQ(box->text(), about);
+    box->close();
+}
+
+// Help > Mouse and keyboard lists the 3D view's keys and the slice views' bindings.
+TEST_F(GuiMenus, BindingsListTheViewsKeys) {
+    gui::MainWindow& w = window();
+    w.findChild<QAction*>("help_bindings")->trigger();
+    QDialog* d = nullptr;
+    ASSERT_TRUE(wait_until([&] { return (d = top_level<QDialog>("bindings_dialog")) != nullptr; }, 5000));
+    const QString text = d->findChild<QTextBrowser*>()->toPlainText();
+    for (const char* s : {"A P L R S I", "O", "Page Up", "Left drag", "Middle drag", "Right drag", "Escape", "Ctrl+Z"})
+        EXPECT_TRUE(text.contains(s)) << s;
+    EXPECT_FALSE(d->isModal());
+    d->close();
+}
