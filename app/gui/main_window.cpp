@@ -185,6 +185,7 @@ MainWindow::MainWindow(QWidget* parent) : QMainWindow(parent), scene_(std::make_
         measurements_->refresh_soon(); // which surface each point is on, what a ruler passes through
     };
     surfaces_->set_scene(scene_.get());
+    wire_surface_undo();
     dock->setWidget(surfaces_);
     addDockWidget(Qt::RightDockWidgetArea, dock);
     measurements_ = new MeasurementsPanel(*this);

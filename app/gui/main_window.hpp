@@ -170,6 +170,7 @@ private:
     void open_folder_dialog();
     void add_session_actions(QMenu* file); // File menu entries (session_io.cpp)
     void add_window_level_bar();           // the window/level tool bar
+    void wire_surface_undo();              // the Surfaces panel's undo steps (surface_commands.cpp)
 
     std::unique_ptr<core::Scene> scene_;
     std::array<core::SlicePlane, 3> planes_{};
