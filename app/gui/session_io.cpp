@@ -177,7 +177,8 @@ void MainWindow::open_session(const QString& path, bool recovered) {
                 view_bar_->attach(*viewer_);
                 if (s.camera) viewer_->set_camera(*s.camera);
             }
-            QString msg = "Opened the session " + path;
+            QString msg =
+                (recovered ? "Restored the unsaved work of the last run from " : "Opened the session ") + path;
             for (const auto& w : s.warnings) msg += "; warning: " + QString::fromStdString(w);
             statusBar()->showMessage(msg);
         });
