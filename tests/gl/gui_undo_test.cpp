@@ -27,6 +27,7 @@
 #include "app/gui/main_window.hpp"
 #include "app/gui/slice_view.hpp"
 #include "app/gui/surfaces_panel.hpp"
+#include "app/gui/viewer.hpp"
 #include "io/color.hpp"
 #include "renderer/core/scene.hpp"
 #include "renderer/core/session.hpp"
@@ -267,6 +268,12 @@ TEST(GuiUndo, SurfaceEditsUndoAndRedo) {
     EXPECT_EQ(w.scene().mesh(id).triangles.size(), kept_triangles);
     ASSERT_NE(w.surfaces_panel()->row(id), nullptr);
     EXPECT_FLOAT_EQ(float(child<QSlider>(w.surfaces_panel()->row(id), "opacity")->value()) / 100.0f, kept.opacity);
+    // The 3D view draws the restored surface (uploaded again into its object id).
+    ASSERT_NE(w.viewer(), nullptr);
+    const int frames = w.viewer()->frames();
+    w.viewer()->update();
+    ASSERT_TRUE(wait_until([&] { return w.viewer()->frames() > frames || !w.viewer()->error().empty(); }, 60000));
+    EXPECT_TRUE(w.viewer()->error().empty()) << w.viewer()->error();
     undo->redo();
     EXPECT_FALSE(w.scene().has_surface(id));
     undo->undo();
