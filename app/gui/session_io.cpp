@@ -164,6 +164,8 @@ void MainWindow::open_session(const QString& path, bool recovered) {
             set_scene(std::move(result->scene), QString::fromStdString(s.input), QString::fromStdString(s.series));
             if (recovered) {
                 undo_->resetClean(); // unsaved work again, saved nowhere else
+                // The next autosave writes the recovery file again, from what this window shows.
+                edited_since_autosave_ = true;
             } else {
                 session_path_ = path;
                 remember_folder("session_folder", path);
