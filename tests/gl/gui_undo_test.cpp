@@ -46,6 +46,14 @@ void open_headsq(gui::MainWindow& w) {
     ASSERT_TRUE(w.scene().has_volume());
 }
 
+// The window on screen with headsq open.
+void show_with_headsq(gui::MainWindow& w) {
+    w.resize(1400, 1000);
+    w.show();
+    ASSERT_TRUE(QTest::qWaitForWindowExposed(&w));
+    open_headsq(w);
+}
+
 void add_through_panel(gui::MainWindow& w, double iso) {
     auto* panel = w.surfaces_panel();
     auto* value = panel->findChild<QDoubleSpinBox*>("add_iso_value");
@@ -138,10 +146,7 @@ TEST(GuiUndo, SurfaceEditsUndoAndRedo) {
     test::TempDir dir;
     const auto app = test::make_app("gui_undo_test", dir / "config");
     gui::MainWindow w;
-    w.resize(1400, 1000);
-    w.show();
-    ASSERT_TRUE(QTest::qWaitForWindowExposed(&w));
-    open_headsq(w);
+    show_with_headsq(w);
     QUndoStack* undo = w.undo_stack();
     auto* undo_action = w.findChild<QAction*>("undo");
     ASSERT_NE(undo_action, nullptr);
@@ -293,10 +298,7 @@ TEST(GuiUndo, AskBeforeQuittingOrOpening) {
     test::TempDir dir;
     const auto app = test::make_app("gui_undo_test", dir / "config");
     gui::MainWindow w;
-    w.resize(1400, 1000);
-    w.show();
-    ASSERT_TRUE(QTest::qWaitForWindowExposed(&w));
-    open_headsq(w);
+    show_with_headsq(w);
     const std::string headsq = test::data("headsq.nhdr");
 
     // Nothing changed: quitting asks nothing.
@@ -461,4 +463,49 @@ TEST(GuiUndo, AutosaveKillAndRestore) {
     EXPECT_FALSE(std::filesystem::exists(recovery));
     w.offer_recovery([&] { otherwise = true; });
     EXPECT_TRUE(otherwise);
+}
+
+TEST(GuiUndo, RealAppRestoresOrDiscardsTheRecoveryFileAtStart) {
+    // `isoscope gui` itself: ISOSCOPE_RECOVERY answers the offer; a restored
+    // session is unsaved work, so the app autosaves it again (every 200 ms
+    // here) until killed with SIGKILL.
+    ISO_SKIP_WITHOUT_DISPLAY();
+    test::TempDir dir;
+    const auto folder = dir.path() / "config" / "isoscope" / "isoscope"; // the app's AppConfigLocation
+    std::filesystem::create_directories(folder);
+    const auto recovery = folder / "recovery.isoscope.json";
+    core::Session made;
+    made.input = std::filesystem::absolute(test::data("headsq.nhdr")).string();
+    made.surfaces.resize(1);
+    made.surfaces[0].value = 700;
+    made.surfaces[0].name = "iso 700";
+    made.surfaces[0].color = "#3366cc";
+    made.surfaces[0].opacity = 0.5f;
+    made.markups.push_back(ruler({1, 2, 3}, {4, 5, 6}));
+    const auto write_recovery = [&] {
+        core::save_session(made, recovery.string());
+        std::filesystem::last_write_time(recovery,
+                                         std::filesystem::file_time_type::clock::now() - std::chrono::hours(1));
+    };
+    const auto run = [&](const std::string& answer, int seconds) {
+        return test::run_command("XDG_CONFIG_HOME='" + (dir / "config") + "' ISOSCOPE_RECOVERY=" + answer +
+                                     " ISOSCOPE_AUTOSAVE_MS=200 timeout -s KILL " + std::to_string(seconds) + " " +
+                                     test::cli() + " gui",
+                                 true);
+    };
+
+    write_recovery();
+    const auto old_time = std::filesystem::last_write_time(recovery);
+    const auto restored = run("restore", 12);
+    ASSERT_TRUE(std::filesystem::exists(recovery)) << restored.out;
+    EXPECT_GT(std::filesystem::last_write_time(recovery), old_time)
+        << "not autosaved after the restore: " << restored.out;
+    const core::Session again = core::read_session(recovery.string());
+    expect_same_surfaces(again, made);
+    expect_same_markups(again.markups, made.markups);
+    EXPECT_EQ(again.input, made.input);
+
+    write_recovery();
+    const auto discarded = run("discard", 6);
+    EXPECT_FALSE(std::filesystem::exists(recovery)) << "Discard kept the file: " << discarded.out;
 }

@@ -17,17 +17,24 @@ std::size_t count_id(const Image& ids, float id) {
     for (const float v : ids.floats) n += v == id;
     return n;
 }
+
+// headsq's skin (500) and bone (1150); a 96 x 96 id AOV from the front.
+void head_skin_and_bone(core::Scene& s, RenderOptions& o, Camera& cam) {
+    s.open(test::data("headsq.nhdr"));
+    s.add_isosurface(s.extract_isosurface(500), 500);
+    s.add_isosurface(s.extract_isosurface(1150), 1150);
+    o.width = o.height = 96;
+    o.aov = Aov::Id;
+    cam = s.camera(PatientView::Anterior, 1.0);
+}
 } // namespace
 
 TEST_F(SceneSurfacesGl, ReplacedAndRemovedSurfacesShowInTheNextFrame) {
     core::Scene s;
-    s.open(test::data("headsq.nhdr"));
-    const auto skin = s.add_isosurface(s.extract_isosurface(500), 500);
-    const auto bone = s.add_isosurface(s.extract_isosurface(1150), 1150);
     RenderOptions o;
-    o.width = o.height = 96;
-    o.aov = Aov::Id;
-    const Camera cam = s.camera(PatientView::Anterior, 1.0);
+    Camera cam;
+    head_skin_and_bone(s, o, cam);
+    const core::SurfaceId skin = 1, bone = 2;
     const auto objects_before = [&] { return s.renderer().object_count(); };
     auto ids = s.render(cam, o).image;
     const std::size_t skin_px = count_id(ids, float(skin));
@@ -81,13 +88,10 @@ TEST_F(SceneSurfacesGl, RestoredSurfaceDrawsAgainUnderItsId) {
     // An undone removal (the desktop app's Edit > Undo): the GPU copy dropped
     // by the removal is uploaded again into the same object id.
     core::Scene s;
-    s.open(test::data("headsq.nhdr"));
-    const auto skin = s.add_isosurface(s.extract_isosurface(500), 500);
-    const auto bone = s.add_isosurface(s.extract_isosurface(1150), 1150);
     RenderOptions o;
-    o.width = o.height = 96;
-    o.aov = Aov::Id;
-    const Camera cam = s.camera(PatientView::Anterior, 1.0);
+    Camera cam;
+    head_skin_and_bone(s, o, cam);
+    const core::SurfaceId skin = 1, bone = 2;
     auto ids = s.render(cam, o).image;
     const std::size_t skin_px = count_id(ids, float(skin)), bone_px = count_id(ids, float(bone));
     ASSERT_GT(skin_px, 1000u);
