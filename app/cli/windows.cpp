@@ -116,13 +116,17 @@ int run_gui(const std::string& in, char* argv0) {
     QApplication::setApplicationName("isoscope");
     iso::gui::MainWindow w;
     w.show();
-    // A session (.json: no volume or mesh format uses it) restores what it saved.
-    const std::string json = ".json";
-    const bool session = in.size() > json.size() && in.compare(in.size() - json.size(), json.size(), json) == 0;
-    if (session)
-        w.open_session(QString::fromStdString(in));
-    else if (!in.empty())
-        w.open_path(QString::fromStdString(in));
+    // Unsaved work of a run that was killed first (ISOSCOPE_RECOVERY=restore
+    // or discard answers without asking); the input when it is not restored.
+    w.offer_recovery([&w, in] {
+        // A session (.json: no volume or mesh format uses it) restores what it saved.
+        const std::string json = ".json";
+        const bool session = in.size() > json.size() && in.compare(in.size() - json.size(), json.size(), json) == 0;
+        if (session)
+            w.open_session(QString::fromStdString(in));
+        else if (!in.empty())
+            w.open_path(QString::fromStdString(in));
+    });
     return qapp.exec();
 }
 

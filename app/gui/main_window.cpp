@@ -90,7 +90,7 @@ struct MainWindow::Job {
 };
 
 MainWindow::MainWindow(QWidget* parent) : QMainWindow(parent), scene_(std::make_unique<core::Scene>()) {
-    setWindowTitle("isoscope");
+    setWindowTitle("isoscope[*]");
     setAcceptDrops(true);
     resize(1280, 900);
 
@@ -128,8 +128,10 @@ MainWindow::MainWindow(QWidget* parent) : QMainWindow(parent), scene_(std::make_
 
     // ---- File menu
     auto* file = menuBar()->addMenu("&File");
-    file->addAction("&Open file...", QKeySequence::Open, this, [this] { open_file_dialog(); });
-    file->addAction("Open DICOM &folder...", this, [this] { open_folder_dialog(); });
+    file->addAction("&Open file...", QKeySequence::Open, this,
+                    [this] { ask_to_save("opening another file", [this] { open_file_dialog(); }); });
+    file->addAction("Open DICOM &folder...", this,
+                    [this] { ask_to_save("opening another folder", [this] { open_folder_dialog(); }); });
     recent_menu_ = file->addMenu("&Recent files");
     rebuild_recent_menu();
     file->addSeparator();
@@ -185,6 +187,7 @@ MainWindow::MainWindow(QWidget* parent) : QMainWindow(parent), scene_(std::make_
         measurements_->refresh_soon(); // which surface each point is on, what a ruler passes through
     };
     surfaces_->set_scene(scene_.get());
+    wire_surface_undo();
     dock->setWidget(surfaces_);
     addDockWidget(Qt::RightDockWidgetArea, dock);
     measurements_ = new MeasurementsPanel(*this);
@@ -196,6 +199,7 @@ MainWindow::MainWindow(QWidget* parent) : QMainWindow(parent), scene_(std::make_
     add_view_and_help_menus();
     statusBar()->showMessage("Ready");
     for (std::size_t i = 0; i < 3; ++i) views_[i]->set_content(scene_.get(), &planes_[i]);
+    watch_unsaved_work();
 }
 
 // The window/level bar: presets (CT's from Radiopaedia's table), centre and width.
@@ -242,6 +246,7 @@ void MainWindow::add_window_level_bar() {
 }
 
 MainWindow::~MainWindow() {
+    wait_for_autosave();           // it reads nothing of the window, but its thread must end
     surfaces_->set_scene(nullptr); // its re-extractions read the scene: they stop first
     // Workers still running (an abandoned load, an extraction) finish before
     // the scene they may use goes; extractions stop at their next progress call.
@@ -448,7 +453,7 @@ void MainWindow::set_scene(std::unique_ptr<core::Scene> scene, const QString& pa
     surfaces_->set_scene(scene_.get());
     structures_->reset(); // a session's isolated structures are measured again
     update_3d();
-    setWindowTitle("isoscope - " + QFileInfo(path).fileName());
+    setWindowTitle("isoscope - " + QFileInfo(path).fileName() + "[*]");
     remember_recent(path);
     if (scene_->has_volume()) {
         const auto& v = scene_->volume();
@@ -486,7 +491,8 @@ void MainWindow::remember_recent(const QString& path) {
 void MainWindow::rebuild_recent_menu() {
     recent_menu_->clear();
     const QStringList list = QSettings().value("recent_files").toStringList();
-    for (const auto& f : list) recent_menu_->addAction(f, this, [this, f] { open_path(f); });
+    for (const auto& f : list)
+        recent_menu_->addAction(f, this, [this, f] { ask_to_save("opening " + f, [this, f] { open_path(f); }); });
     recent_menu_->setEnabled(!list.isEmpty());
 }
 
@@ -505,7 +511,7 @@ void MainWindow::dropEvent(QDropEvent* e) {
         // A session (.json; Slicer's .mrk.json are markups, not sessions) restores what it saved.
         const bool session =
             path.endsWith(".json", Qt::CaseInsensitive) && !path.endsWith(".mrk.json", Qt::CaseInsensitive);
-        session ? open_session(path) : open_path(path);
+        ask_to_save("opening " + path, [this, path, session] { session ? open_session(path) : open_path(path); });
     });
 }
 
@@ -515,7 +521,10 @@ void MainWindow::add_surface(double iso) { surfaces_->add_surface(iso); }
 
 void MainWindow::add_structure_tools() {
     structures_ = new StructureTools(*this);
-    surfaces_->isolated = [this](const core::IsolatedComponent& c) { structures_->add_component(c); };
+    surfaces_->isolated = [this](const core::IsolatedComponent& c) {
+        structures_->add_component(c);
+        undo_->resetClean(); // a surface more, not an undo step: unsaved all the same
+    };
     // The Measurements dock: the markups' table above the isolated structures'.
     auto* box = new QWidget;
     auto* layout = new QVBoxLayout(box);

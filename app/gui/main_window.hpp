@@ -12,6 +12,8 @@
 #include <functional>
 #include <memory>
 #include <optional>
+#include <string>
+#include <utility>
 #include <vector>
 
 #include <QMainWindow>
@@ -29,6 +31,7 @@ class QMenu;
 class QProgressDialog;
 class QStackedWidget;
 class QThread;
+class QTimer;
 class QUndoStack;
 class QVBoxLayout;
 
@@ -132,8 +135,35 @@ public:
     const QString& session_path() const { return session_path_; }
     // File > Save session / Open session: in the background; an open
     // replaces the scene and restores the camera, window/level and markups.
-    void save_session(const QString& path);
-    void open_session(const QString& path);
+    // `then` runs after a successful save (which marks the state saved:
+    // the undo stack's clean state, the recovery file removed).
+    // `recovered`: the session is the recovery file, so it opens as unsaved
+    // work (no session file named, the title marked modified).
+    void save_session(const QString& path, std::function<void()> then = {});
+    void open_session(const QString& path, bool recovered = false);
+
+    // Unsaved work (unsaved_work.cpp, docs/gui.md "Unsaved work").
+    // Surfaces or measurements changed since the last session save or open:
+    // the undo stack is not at its clean state (the title shows "*").
+    bool modified() const;
+    // Runs `proceed` at once when nothing is unsaved; else asks first (a
+    // window-modal box named "unsaved": Save, Discard, Cancel): Save saves
+    // the session (to the current session file, else where a file dialog
+    // says) and proceeds only when that succeeded; Discard proceeds; Cancel
+    // does nothing. `doing` says what would discard it ("quitting").
+    void ask_to_save(const QString& doing, std::function<void()> proceed);
+    // Where autosave writes the session while there is unsaved work: beside
+    // the settings (QStandardPaths::AppConfigLocation), recovery.isoscope.json.
+    static QString recovery_path();
+    // Autosave's period in ms: 60000, or ISOSCOPE_AUTOSAVE_MS when set.
+    void set_autosave_interval(int ms);
+    int autosaves() const { return autosaves_; } // recovery files written so far
+    // At start: when a recovery file exists (the app was killed or crashed
+    // with unsaved work), offers to restore it (a box named "recovery":
+    // Restore opens it as unsaved work, Discard deletes it); the environment
+    // variable ISOSCOPE_RECOVERY=restore or discard answers without asking.
+    // `otherwise` runs when there is none or it was discarded.
+    void offer_recovery(std::function<void()> otherwise = {});
     // File > Export image: renders the current state as `isoscope render
     // --session` does (the session file it names: the current one when
     // the state is unchanged since it was saved or opened, else PATH.session.json
@@ -151,6 +181,7 @@ public:
 protected:
     void dragEnterEvent(QDragEnterEvent* e) override;
     void dropEvent(QDropEvent* e) override;
+    void closeEvent(QCloseEvent* e) override;
 
 private:
     struct Job;
@@ -177,6 +208,11 @@ private:
     void add_session_actions(QMenu* file); // File menu entries (session_io.cpp)
     void add_window_level_bar();           // the window/level tool bar
     void add_view_and_help_menus();        // View (docks, tool bars) and Help (bindings, About): help_menu.cpp
+    void wire_surface_undo();              // the Surfaces panel's undo steps (surface_commands.cpp)
+    void watch_unsaved_work();             // the title's "*" and autosave (unsaved_work.cpp)
+    void autosave();
+    void wait_for_autosave();
+    void remove_recovery_file();
 
     std::unique_ptr<core::Scene> scene_;
     std::array<core::SlicePlane, 3> planes_{};
@@ -202,6 +238,11 @@ private:
     std::shared_ptr<Job> job_;                  // the job the window waits for
     std::vector<std::shared_ptr<Job>> running_; // every worker still running (abandoned ones too)
     bool updating_window_ = false;
+    QTimer* autosave_timer_ = nullptr;
+    QThread* autosave_thread_ = nullptr; // the recovery file being written (null: none)
+    bool edited_since_autosave_ = false, closing_ = false;
+    int autosaves_ = 0;
+    std::pair<std::string, std::string> input_hash_; // the input and its SHA-256, hashed once for autosaves
 };
 
 } // namespace iso::gui

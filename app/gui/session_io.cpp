@@ -9,6 +9,7 @@
 #include <QMenu>
 #include <QSettings>
 #include <QStatusBar>
+#include <QUndoStack>
 
 #include "app/gui/export_dialog.hpp"
 #include "app/gui/main_window.hpp"
@@ -67,9 +68,11 @@ core::Session MainWindow::current_session() const {
 
 void MainWindow::add_session_actions(QMenu* file) {
     file->addAction("Open &session...", this, [this] {
-        const QString f = QFileDialog::getOpenFileName(this, "Open session", settings_folder("session_folder"),
-                                                       "isoscope sessions (*.json);;All files (*)");
-        if (!f.isEmpty()) open_session(f);
+        ask_to_save("opening another session", [this] {
+            const QString f = QFileDialog::getOpenFileName(this, "Open session", settings_folder("session_folder"),
+                                                           "isoscope sessions (*.json);;All files (*)");
+            if (!f.isEmpty()) open_session(f);
+        });
     });
     file->addAction("Sa&ve session...", QKeySequence::Save, this, [this] {
         const QString start = session_path_.isEmpty()
@@ -110,7 +113,7 @@ void MainWindow::add_session_actions(QMenu* file) {
     });
 }
 
-void MainWindow::save_session(const QString& path) {
+void MainWindow::save_session(const QString& path, std::function<void()> then) {
     if (busy()) {
         statusBar()->showMessage("Busy: wait for the current task or cancel it");
         return;
@@ -124,7 +127,7 @@ void MainWindow::save_session(const QString& path) {
     // The input's SHA-256 is computed on the worker (a DICOM folder can be large).
     run_job(
         "Saving the session " + path, false, [session, p](const ProgressFn&) { core::save_session(*session, p); },
-        [this, path](std::exception_ptr e) {
+        [this, path, then](std::exception_ptr e) {
             if (e) {
                 show_error("Cannot save the session", "Cannot save the session " + path, e);
                 return;
@@ -132,10 +135,15 @@ void MainWindow::save_session(const QString& path) {
             session_path_ = path;
             remember_folder("session_folder", path);
             statusBar()->showMessage("Saved the session " + path);
+            // Saved: nothing unsaved, nothing to recover.
+            undo_->setClean();
+            wait_for_autosave();
+            remove_recovery_file();
+            if (then) then();
         });
 }
 
-void MainWindow::open_session(const QString& path) {
+void MainWindow::open_session(const QString& path, bool recovered) {
     if (busy()) {
         statusBar()->showMessage("Busy: wait for the current task or cancel it");
         return;
@@ -147,15 +155,21 @@ void MainWindow::open_session(const QString& path) {
     run_job(
         "Opening the session " + path, true,
         [result, p](const ProgressFn& progress) { *result = core::open_session(p, progress); },
-        [this, result, path](std::exception_ptr e) {
+        [this, result, path, recovered](std::exception_ptr e) {
             if (e) {
                 show_error("Cannot open the session", "Cannot open the session " + path, e);
                 return;
             }
             const core::Session& s = result->session;
             set_scene(std::move(result->scene), QString::fromStdString(s.input), QString::fromStdString(s.series));
-            session_path_ = path;
-            remember_folder("session_folder", path);
+            if (recovered) {
+                undo_->resetClean(); // unsaved work again, saved nowhere else
+                // The next autosave writes the recovery file again, from what this window shows.
+                edited_since_autosave_ = true;
+            } else {
+                session_path_ = path;
+                remember_folder("session_folder", path);
+            }
             if (s.window) set_window_level(*s.window);
             set_markups(s.markups);
             // Through the view bar, which keeps its toggles for later views and gives them to this one.
@@ -165,7 +179,8 @@ void MainWindow::open_session(const QString& path) {
                 view_bar_->attach(*viewer_);
                 if (s.camera) viewer_->set_camera(*s.camera);
             }
-            QString msg = "Opened the session " + path;
+            QString msg =
+                (recovered ? "Restored the unsaved work of the last run from " : "Opened the session ") + path;
             for (const auto& w : s.warnings) msg += "; warning: " + QString::fromStdString(w);
             statusBar()->showMessage(msg);
         });

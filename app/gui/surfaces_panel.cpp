@@ -11,6 +11,7 @@
 #include <QHBoxLayout>
 #include <QLabel>
 #include <QPushButton>
+#include <QSignalBlocker>
 #include <QSlider>
 #include <QThread>
 #include <QVBoxLayout>
@@ -221,6 +222,7 @@ void SurfacesPanel::add_surface(double iso, const PostProcessOptions& post) {
             add_row(id);
             notify(true);
             if (message) message(QString("Added the isosurface at %1: %2 triangles").arg(iso).arg(triangles));
+            if (added) added(id);
         });
 }
 
@@ -316,23 +318,34 @@ void SurfacesPanel::add_title_line(Row& r, QGridLayout* grid) {
     grid->addLayout(line1, 0, 0, 1, 3);
 
     connect(visible, &QCheckBox::toggled, this, [this, id](bool on) {
+        const SurfaceSettings before = settings(id);
         scene_->info(id).visible = on;
         notify(true);
+        record(id, "change visibility", before);
     });
     connect(color, &QPushButton::clicked, this, [this, id, paint_button] {
         const QColor c = QColorDialog::getColor(to_qcolor(scene_->info(id).color), this, "Surface colour");
         if (!c.isValid()) return;
+        const SurfaceSettings before = settings(id);
         scene_->info(id).color = from_qcolor(c);
         paint_button(c);
         notify(true);
+        record(id, "change colour", before);
     });
     connect(remove, &QPushButton::clicked, this, [this, id] {
-        const QString name = QString::fromStdString(scene_->info(id).name);
-        remove_row(id);
-        scene_->remove_surface(id);
-        notify(true);
-        if (message) message("Removed " + name);
+        if (remove_requested)
+            remove_requested(id);
+        else
+            remove_surface(id);
     });
+}
+
+void SurfacesPanel::remove_surface(std::uint32_t id) {
+    const QString name = QString::fromStdString(scene_->info(id).name);
+    remove_row(id);
+    scene_->remove_surface(id);
+    notify(true);
+    if (message) message("Removed " + name);
 }
 
 // Line 2: opacity, 0..100 %.
@@ -344,13 +357,17 @@ void SurfacesPanel::add_opacity_line(Row& r, QGridLayout* grid) {
     opacity->setRange(0, 100);
     opacity->setValue(int(std::lround(scene_->info(id).opacity * 100)));
     auto* percent = new QLabel(QString("%1 %").arg(opacity->value()), r.widget);
+    percent->setObjectName("opacity_percent");
     percent->setMinimumWidth(40);
     grid->addWidget(opacity, 1, 1);
     grid->addWidget(percent, 1, 2);
+    track_drag(opacity);
     connect(opacity, &QSlider::valueChanged, this, [this, id, percent](int v) {
+        const SurfaceSettings before = settings(id);
         scene_->info(id).opacity = float(v) / 100.0f;
         percent->setText(QString("%1 %").arg(v));
         notify(false);
+        record(id, "change opacity", before);
     });
 }
 
@@ -389,21 +406,26 @@ void SurfacesPanel::add_iso_line(Row& r, QGridLayout* grid) {
     grid->addLayout(line2, 2, 1, 1, 2);
     grid->addWidget(r.busy, 3, 1, 1, 2);
 
+    track_drag(r.slider);
     connect(r.slider, &QSlider::valueChanged, this, [this, id](int s) {
         Row* row = find(id);
         if (!row || row->syncing) return;
+        const SurfaceSettings before = settings(id);
         row->syncing = true;
         row->value->setValue(row->from_slider(s));
         row->syncing = false;
         set_iso(id, row->value->value());
+        record(id, "change iso value", before);
     });
     connect(r.value, &QDoubleSpinBox::valueChanged, this, [this, id](double v) {
         Row* row = find(id);
         if (!row || row->syncing) return;
+        const SurfaceSettings before = settings(id);
         row->syncing = true;
         row->slider->setValue(row->to_slider(v));
         row->syncing = false;
         set_iso(id, v);
+        record(id, "change iso value", before);
     });
 }
 
@@ -432,10 +454,12 @@ void SurfacesPanel::add_post_line(Row& r, QGridLayout* grid) {
     const auto post_changed = [this, id] {
         Row* row = find(id);
         if (!row || row->syncing) return;
+        const SurfaceSettings before = settings(id);
         PostProcessOptions p = row->wanted_post;
         p.smooth = row->smooth->value();
         p.keep_largest = row->largest->isChecked();
         set_post(id, p);
+        record(id, p.keep_largest != before.post.keep_largest ? "change keep largest" : "change smoothing", before);
     };
     connect(r.smooth, &QDoubleSpinBox::valueChanged, this, post_changed);
     connect(r.largest, &QCheckBox::toggled, this, post_changed);
@@ -562,6 +586,69 @@ void SurfacesPanel::finished(std::uint32_t id, const std::shared_ptr<Worker>& w)
         }
     }
     r->busy->setVisible(false);
+}
+
+// ---- undo ------------------------------------------------------------------------------
+
+SurfaceSettings SurfacesPanel::settings(std::uint32_t id) const {
+    const auto& info = scene_->info(id);
+    SurfaceSettings s{info.color, info.opacity, info.visible, info.value, info.post};
+    if (const Row* r = find(id)) { // what the user asked for last, perhaps still extracting
+        s.iso = r->wanted;
+        s.post = r->wanted_post;
+    }
+    return s;
+}
+
+void SurfacesPanel::apply(std::uint32_t id, const SurfaceSettings& s) {
+    Row* r = find(id);
+    if (!r || !scene_->has_surface(id)) return;
+    auto& info = scene_->info(id);
+    info.color = s.color;
+    info.opacity = s.opacity;
+    info.visible = s.visible;
+    // The row's controls show it without making an edit of their own.
+    if (auto* visible = r->widget->findChild<QCheckBox*>("visible")) {
+        const QSignalBlocker block(visible);
+        visible->setChecked(s.visible);
+    }
+    if (auto* color = r->widget->findChild<QPushButton*>("color"))
+        color->setStyleSheet("background-color: " + to_qcolor(s.color).name());
+    if (auto* opacity = r->widget->findChild<QSlider*>("opacity")) {
+        const QSignalBlocker block(opacity);
+        opacity->setValue(int(std::lround(s.opacity * 100)));
+        if (auto* percent = r->widget->findChild<QLabel*>("opacity_percent"))
+            percent->setText(QString("%1 %").arg(opacity->value()));
+    }
+    if (r->slider) {
+        if (s.iso != r->wanted) set_iso(id, s.iso);
+        if (!same_post(s.post, r->wanted_post)) set_post(id, s.post);
+    }
+    notify(true);
+}
+
+void SurfacesPanel::restore_surface(std::uint32_t id, Mesh mesh, const core::SurfaceInfo& info) {
+    scene_->restore_surface(id, std::move(mesh), info);
+    add_row(id);
+    // Back in its place among the rows: before the row of the next surface in the scene's order.
+    const auto ids = scene_->surfaces();
+    for (auto it = std::find(ids.begin(), ids.end(), id); it != ids.end(); ++it)
+        if (const Row* next = *it != id ? find(*it) : nullptr) {
+            QWidget* w = find(id)->widget;
+            rows_layout_->removeWidget(w);
+            rows_layout_->insertWidget(rows_layout_->indexOf(next->widget), w);
+            break;
+        }
+    notify(true);
+}
+
+void SurfacesPanel::record(std::uint32_t id, const char* what, const SurfaceSettings& before) {
+    if (edited) edited(id, QString(what) + " of " + QString::fromStdString(scene_->info(id).name), before, drag_);
+}
+
+void SurfacesPanel::track_drag(QSlider* slider) {
+    connect(slider, &QSlider::sliderPressed, this, [this] { drag_ = ++drags_; });
+    connect(slider, &QSlider::sliderReleased, this, [this] { drag_ = 0; });
 }
 
 } // namespace iso::gui

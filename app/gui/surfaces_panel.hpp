@@ -20,6 +20,7 @@
 
 #include <glm/vec3.hpp>
 
+#include "io/mesh.hpp"
 #include "io/progress.hpp"
 #include "renderer/surface/postprocess.hpp"
 
@@ -28,14 +29,25 @@ class QGridLayout;
 class QDoubleSpinBox;
 class QCheckBox;
 class QLabel;
+class QSlider;
 class QVBoxLayout;
 
 namespace iso::core {
 class Scene;
 struct IsolatedComponent;
+struct SurfaceInfo;
 } // namespace iso::core
 
 namespace iso::gui {
+
+// What a row edits and an undo step of it restores (surface_commands.hpp).
+struct SurfaceSettings {
+    glm::vec3 color{0.9f};
+    float opacity = 1.0f;
+    bool visible = true;
+    double iso = 0; // the value last asked for (a re-extraction may still run)
+    PostProcessOptions post;
+};
 
 class SurfacesPanel : public QWidget {
 public:
@@ -69,6 +81,16 @@ public:
     // iso_value, smoothing, keep_largest, remove, busy); null if none.
     QWidget* row(std::uint32_t id) const;
 
+    // ---- undo (surface_commands.hpp makes the steps) ----------------------
+    SurfaceSettings settings(std::uint32_t id) const;
+    // Shows `s` in the scene and the row, making no undo step; a changed iso
+    // value or post-processing re-extracts (set_iso, set_post).
+    void apply(std::uint32_t id, const SurfaceSettings& s);
+    // Removes the surface and its row, as its Remove button does without `remove_requested`.
+    void remove_surface(std::uint32_t id);
+    // Puts a removed surface back under its id with its row (core::Scene::restore_surface).
+    void restore_surface(std::uint32_t id, Mesh mesh, const core::SurfaceInfo& info);
+
     // ---- wiring (the main window) ---------------------------------------
     // Runs work on a worker thread with the progress dialog; done on the GUI
     // thread with what the work threw (MainWindow::run_job).
@@ -82,6 +104,14 @@ public:
     std::function<void(bool outlines)> changed;
     // A component was isolated (isolate()).
     std::function<void(const core::IsolatedComponent&)> isolated;
+    // The user's edits, for the undo stack: "Add surface" added `id`; its
+    // Remove button was pressed (unset: the panel removes it); a row changed
+    // a setting (`text`: "change opacity of NAME"; `before`: the settings
+    // before; `drag`: the slider drag it is part of, 0 for none: the steps of
+    // one drag make one undo step).
+    std::function<void(std::uint32_t id)> added;
+    std::function<void(std::uint32_t id)> remove_requested;
+    std::function<void(std::uint32_t id, const QString& text, const SurfaceSettings& before, int drag)> edited;
 
 private:
     struct Row;
@@ -100,6 +130,8 @@ private:
     void stop_workers();
     void update_presets();
     void notify(bool outlines);
+    void record(std::uint32_t id, const char* what, const SurfaceSettings& before);
+    void track_drag(QSlider* slider);
 
     core::Scene* scene_ = nullptr;
     QComboBox* preset_ = nullptr;
@@ -112,6 +144,7 @@ private:
     std::vector<std::shared_ptr<Worker>> workers_; // every re-extraction thread still running
     unsigned generation_ = 0;                      // bumped per scene: late results of an old one are dropped
     int swaps_ = 0;
+    int drag_ = 0, drags_ = 0; // the slider drag under way (0: none), drags so far
 };
 
 } // namespace iso::gui

@@ -214,6 +214,21 @@ void Scene::remove_surface(SurfaceId id) {
     e.gpu_stale = true;
 }
 
+void Scene::restore_surface(SurfaceId id, Mesh m, SurfaceInfo info) {
+    if (id == 0 || id > impl_->surfaces.size())
+        throw Error("Scene::restore_surface", "no surface with id " + std::to_string(id) + " was ever added");
+    auto& e = impl_->surfaces[id - 1];
+    if (!e.removed) throw Error("Scene::restore_surface", "surface " + std::to_string(id) + " is not removed");
+    if (!(info.opacity >= 0.0f && info.opacity <= 1.0f))
+        throw Error("Scene::restore_surface", "opacity of '" + info.name + "' must be between 0 and 1");
+    e.info = std::move(info);
+    e.bounds = Bounds{};
+    for (const auto& p : m.positions) e.bounds.add(glm::dvec3(p));
+    e.mesh = std::move(m);
+    e.removed = false;
+    e.gpu_stale = true; // the renderer dropped its copy: upload it into the same object id
+}
+
 bool Scene::has_surface(SurfaceId id) const {
     return id != 0 && id <= impl_->surfaces.size() && !impl_->surfaces[id - 1].removed;
 }

@@ -101,6 +101,11 @@ public:
     // surfaces() no longer lists it, info() and mesh() throw for it, and the
     // renderer drops its GPU copy on the next render.
     void remove_surface(SurfaceId id);
+    // Puts a removed surface back under its id (an undone removal): the mesh
+    // and properties given, its place in surfaces() the one it had; the
+    // renderer uploads it again on the next render. Throws iso::Error when
+    // `id` was never added or is not removed.
+    void restore_surface(SurfaceId id, Mesh m, SurfaceInfo info);
     bool has_surface(SurfaceId id) const; // added and not removed
 
     std::vector<SurfaceId> surfaces() const; // in the order added (removed ones left out)

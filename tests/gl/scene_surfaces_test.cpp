@@ -1,7 +1,7 @@
 // Surfaces replaced and removed after the scene was drawn (the Surfaces
 // panel's iso slider and Remove): the renderer's GPU copy follows in the next
 // frame, in the same object id (the id AOV and picking report surface ids),
-// and a removed surface draws nothing.
+// a removed surface draws nothing, and a restored one (an undone removal) draws again.
 #include "renderer/core/scene.hpp"
 
 #include "renderer/gl/context.hpp"
@@ -17,17 +17,24 @@ std::size_t count_id(const Image& ids, float id) {
     for (const float v : ids.floats) n += v == id;
     return n;
 }
+
+// headsq's skin (500) and bone (1150); a 96 x 96 id AOV from the front.
+void head_skin_and_bone(core::Scene& s, RenderOptions& o, Camera& cam) {
+    s.open(test::data("headsq.nhdr"));
+    s.add_isosurface(s.extract_isosurface(500), 500);
+    s.add_isosurface(s.extract_isosurface(1150), 1150);
+    o.width = o.height = 96;
+    o.aov = Aov::Id;
+    cam = s.camera(PatientView::Anterior, 1.0);
+}
 } // namespace
 
 TEST_F(SceneSurfacesGl, ReplacedAndRemovedSurfacesShowInTheNextFrame) {
     core::Scene s;
-    s.open(test::data("headsq.nhdr"));
-    const auto skin = s.add_isosurface(s.extract_isosurface(500), 500);
-    const auto bone = s.add_isosurface(s.extract_isosurface(1150), 1150);
     RenderOptions o;
-    o.width = o.height = 96;
-    o.aov = Aov::Id;
-    const Camera cam = s.camera(PatientView::Anterior, 1.0);
+    Camera cam;
+    head_skin_and_bone(s, o, cam);
+    const core::SurfaceId skin = 1, bone = 2;
     const auto objects_before = [&] { return s.renderer().object_count(); };
     auto ids = s.render(cam, o).image;
     const std::size_t skin_px = count_id(ids, float(skin));
@@ -75,4 +82,36 @@ TEST_F(SceneSurfacesGl, ReplacedAndRemovedSurfacesShowInTheNextFrame) {
     ids = s.render(cam, o).image;
     EXPECT_GT(count_id(ids, float(after)), 1000u);
     EXPECT_EQ(s.renderer().object_count(), 5u);
+}
+
+TEST_F(SceneSurfacesGl, RestoredSurfaceDrawsAgainUnderItsId) {
+    // An undone removal (the desktop app's Edit > Undo): the GPU copy dropped
+    // by the removal is uploaded again into the same object id.
+    core::Scene s;
+    RenderOptions o;
+    Camera cam;
+    head_skin_and_bone(s, o, cam);
+    const core::SurfaceId skin = 1, bone = 2;
+    auto ids = s.render(cam, o).image;
+    const std::size_t skin_px = count_id(ids, float(skin)), bone_px = count_id(ids, float(bone));
+    ASSERT_GT(skin_px, 1000u);
+
+    Mesh kept = s.mesh(skin);
+    const core::SurfaceInfo info = s.info(skin);
+    s.remove_surface(skin);
+    ids = s.render(cam, o).image;
+    ASSERT_EQ(count_id(ids, float(skin)), 0u);
+    s.restore_surface(skin, std::move(kept), info);
+    ids = s.render(cam, o).image;
+    EXPECT_EQ(count_id(ids, float(skin)), skin_px) << "drawn again, under its id";
+    EXPECT_EQ(count_id(ids, float(bone)), bone_px);
+    EXPECT_EQ(s.renderer().object_count(), 2u) << "in its old slot, not added";
+
+    // Removed and restored between two frames: drawn as before.
+    kept = s.mesh(bone);
+    const core::SurfaceInfo bone_info = s.info(bone);
+    s.remove_surface(bone);
+    s.restore_surface(bone, std::move(kept), bone_info);
+    ids = s.render(cam, o).image;
+    EXPECT_EQ(count_id(ids, float(bone)), bone_px);
 }

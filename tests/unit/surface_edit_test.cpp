@@ -211,6 +211,44 @@ TEST(SurfaceEdit, AddReplaceRemoveKeepIdsStable) {
     EXPECT_THROW(s.info(99), Error);
 }
 
+TEST(SurfaceEdit, RestoreARemovedSurfaceUnderItsId) {
+    // An undone removal: the surface comes back with its id, place, mesh and properties.
+    core::Scene s;
+    s.set_volume(two_balls(), "two balls");
+    const auto a = s.add_isosurface(s.extract_isosurface(0), 0);
+    const auto b = s.add_isosurface(s.extract_isosurface(4), 4);
+    const auto c = s.add_isosurface(s.extract_isosurface(8), 8);
+    s.info(b).opacity = 0.25f;
+    s.info(b).color = glm::vec3(0.1f, 0.2f, 0.3f);
+    s.info(b).visible = false;
+    const core::SurfaceInfo kept = s.info(b);
+    Mesh mesh = s.mesh(b);
+    const std::size_t triangles = mesh.triangles.size();
+    EXPECT_THROW(s.restore_surface(b, mesh, kept), Error) << "not removed";
+    s.remove_surface(b);
+    EXPECT_THROW(s.restore_surface(0, mesh, kept), Error);
+    EXPECT_THROW(s.restore_surface(9, mesh, kept), Error) << "never added";
+    core::SurfaceInfo bad = kept;
+    bad.opacity = 2;
+    EXPECT_THROW(s.restore_surface(b, mesh, bad), Error);
+    EXPECT_FALSE(s.has_surface(b));
+    s.restore_surface(b, std::move(mesh), kept);
+    EXPECT_TRUE(s.has_surface(b));
+    EXPECT_EQ(s.surfaces(), (std::vector<core::SurfaceId>{a, b, c})) << "back in its place";
+    EXPECT_EQ(s.mesh(b).triangles.size(), triangles);
+    EXPECT_EQ(s.info(b).opacity, 0.25f);
+    EXPECT_EQ(s.info(b).color, glm::vec3(0.1f, 0.2f, 0.3f));
+    EXPECT_FALSE(s.info(b).visible);
+    EXPECT_EQ(s.info(b).value, 4.0);
+    EXPECT_EQ(s.add_isosurface(Mesh{}, 2), 4u) << "ids stay unique";
+    s.info(b).visible = true;
+    Bounds expected;
+    for (const auto id : {a, b, c})
+        for (const auto& p : s.mesh(id).positions) expected.add(glm::dvec3(p));
+    EXPECT_EQ(s.bounds().min, expected.min) << "its bounds count again";
+    EXPECT_EQ(s.bounds().max, expected.max);
+}
+
 TEST(SurfaceEdit, ExtractOnAWorkerWhileTheSceneIsEdited) {
     // The panel's pattern: a worker extracts while the GUI thread edits the
     // surfaces and swaps meshes in.
