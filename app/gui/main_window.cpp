@@ -126,40 +126,7 @@ MainWindow::MainWindow(QWidget* parent) : QMainWindow(parent), scene_(std::make_
     grid->setColumnStretch(1, 1);
     setCentralWidget(central);
 
-    // ---- File menu
-    auto* file = menuBar()->addMenu("&File");
-    file->addAction("&Open file...", QKeySequence::Open, this,
-                    [this] { ask_to_save("opening another file", [this] { open_file_dialog(); }); });
-    file->addAction("Open DICOM &folder...", this,
-                    [this] { ask_to_save("opening another folder", [this] { open_folder_dialog(); }); });
-    recent_menu_ = file->addMenu("&Recent files");
-    rebuild_recent_menu();
-    file->addSeparator();
-    file->addAction("&Load markups...", this, [this] { measurements_->load_dialog(); });
-    file->addAction("&Save markups...", this, [this] { measurements_->save_dialog(); });
-    file->addSeparator();
-    add_session_actions(file);
-    file->addSeparator();
-    file->addAction("&Quit", QKeySequence::Quit, this, [this] { close(); });
-
-    // ---- Edit menu: undo and redo of the markup edits
-    undo_ = new QUndoStack(this);
-    auto* edit = menuBar()->addMenu("&Edit");
-    auto* undo = undo_->createUndoAction(this, "&Undo");
-    undo->setObjectName("undo");
-    undo->setShortcut(QKeySequence::Undo);
-    auto* redo = undo_->createRedoAction(this, "&Redo");
-    redo->setObjectName("redo");
-    redo->setShortcuts({QKeySequence(Qt::CTRL | Qt::SHIFT | Qt::Key_Z), QKeySequence(Qt::CTRL | Qt::Key_Y)});
-    edit->addAction(undo);
-    edit->addAction(redo);
-    edit->addSeparator();
-    auto* clear = edit->addAction("&Delete all measurements", this, [this] {
-        if (state_.markups.empty()) return;
-        edit_markups("Delete all measurements", {});
-        statusBar()->showMessage("Deleted all measurements (Edit > Undo brings them back)");
-    });
-    clear->setObjectName("clear_measurements");
+    add_file_and_edit_menus();
 
     add_window_level_bar();
     tools_ = new MeasureTools(*this);
@@ -200,6 +167,44 @@ MainWindow::MainWindow(QWidget* parent) : QMainWindow(parent), scene_(std::make_
     statusBar()->showMessage("Ready");
     for (std::size_t i = 0; i < 3; ++i) views_[i]->set_content(scene_.get(), &planes_[i]);
     watch_unsaved_work();
+}
+
+// The File menu, and the Edit menu with the undo stack every edit goes through.
+void MainWindow::add_file_and_edit_menus() {
+    // ---- File menu
+    auto* file = menuBar()->addMenu("&File");
+    file->addAction("&Open file...", QKeySequence::Open, this,
+                    [this] { ask_to_save("opening another file", [this] { open_file_dialog(); }); });
+    file->addAction("Open DICOM &folder...", this,
+                    [this] { ask_to_save("opening another folder", [this] { open_folder_dialog(); }); });
+    recent_menu_ = file->addMenu("&Recent files");
+    rebuild_recent_menu();
+    file->addSeparator();
+    file->addAction("&Load markups...", this, [this] { measurements_->load_dialog(); });
+    file->addAction("&Save markups...", this, [this] { measurements_->save_dialog(); });
+    file->addSeparator();
+    add_session_actions(file);
+    file->addSeparator();
+    file->addAction("&Quit", QKeySequence::Quit, this, [this] { close(); });
+
+    // ---- Edit menu: undo and redo of the markup edits
+    undo_ = new QUndoStack(this);
+    auto* edit = menuBar()->addMenu("&Edit");
+    auto* undo = undo_->createUndoAction(this, "&Undo");
+    undo->setObjectName("undo");
+    undo->setShortcut(QKeySequence::Undo);
+    auto* redo = undo_->createRedoAction(this, "&Redo");
+    redo->setObjectName("redo");
+    redo->setShortcuts({QKeySequence(Qt::CTRL | Qt::SHIFT | Qt::Key_Z), QKeySequence(Qt::CTRL | Qt::Key_Y)});
+    edit->addAction(undo);
+    edit->addAction(redo);
+    edit->addSeparator();
+    auto* clear = edit->addAction("&Delete all measurements", this, [this] {
+        if (state_.markups.empty()) return;
+        edit_markups("Delete all measurements", {});
+        statusBar()->showMessage("Deleted all measurements (Edit > Undo brings them back)");
+    });
+    clear->setObjectName("clear_measurements");
 }
 
 // The window/level bar: presets (CT's from Radiopaedia's table), centre and width.

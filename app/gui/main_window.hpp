@@ -207,6 +207,7 @@ private:
     void open_folder_dialog();
     void add_session_actions(QMenu* file); // File menu entries (session_io.cpp)
     void add_window_level_bar();           // the window/level tool bar
+    void add_file_and_edit_menus();        // File, and Edit with the undo stack
     void add_view_and_help_menus();        // View (docks, tool bars) and Help (bindings, About): help_menu.cpp
     void wire_surface_undo();              // the Surfaces panel's undo steps (surface_commands.cpp)
     void watch_unsaved_work();             // the title's "*" and autosave (unsaved_work.cpp)
