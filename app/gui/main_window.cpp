@@ -365,6 +365,11 @@ void MainWindow::show_error(const QString& title, const QString& what, std::exce
 // ---- opening -------------------------------------------------------------------------
 
 void MainWindow::open_path(const QString& path, const QString& series) {
+    // One DICOM file stands for its series: the series of that file, from its folder.
+    if (const auto of = series.isEmpty() && !busy() ? core::dicom_series_of_file(path.toStdString()) : std::nullopt) {
+        load(QString::fromStdString(of->folder), QString::fromStdString(of->uid));
+        return;
+    }
     if (series.isEmpty() && !busy() && QFileInfo(path).isDir()) {
         choose_series(path);
         return;
