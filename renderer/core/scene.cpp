@@ -356,10 +356,10 @@ void export_image(const Image& image, const ImageMetadata& meta, const std::stri
 }
 
 glm::vec3 surface_color(std::size_t index, std::size_t count) {
-    // Outer surfaces (lower CT values) skin-toned, inner ones bone ivory, then
+    // Outer surfaces (lower CT values) skin-toned, inner ones bone white, then
     // ten other hues: each clearly apart from the one before it, on the slices'
-    // grey too (CIE76 delta E 44 between skin and bone, 28 or more between any two).
-    static const char* const palette[] = {"#e0906c", "#f2ecd8", "#d03a30", "#3a7bd5", "#4caf50", "#e0b020",
+    // grey too (CIE76 delta E 48 between skin and bone, 28 or more between any two).
+    static const char* const palette[] = {"#e0906c", "#f9f6ec", "#d03a30", "#3a7bd5", "#4caf50", "#e0b020",
                                           "#8e44ad", "#20b8c8", "#e040a0", "#8a9a30", "#f07820", "#305080"};
     constexpr std::size_t n = std::size(palette);
     if (count == 1) return linear_from_hex(palette[1]);

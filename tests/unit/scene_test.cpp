@@ -30,9 +30,9 @@ TEST(Scene, VolumeIsosurfacesAreSortedNamedAndColoured) {
     EXPECT_EQ(s.info(1).kind, core::SurfaceInfo::Kind::Iso);
     EXPECT_EQ(s.info(2).value, 1150.0);
     // The default colours, linear RGB, stated here rather than read from the
-    // palette under test (as sRGB hex): skin tone outside, bone ivory inside.
+    // palette under test (as sRGB hex): skin tone outside, bone white inside.
     EXPECT_EQ(s.info(1).color, linear_from_hex("#e0906c")) << "skin-toned outer surface";
-    EXPECT_EQ(s.info(2).color, linear_from_hex("#f2ecd8")) << "bone-ivory inner surface";
+    EXPECT_EQ(s.info(2).color, linear_from_hex("#f9f6ec")) << "bone-white inner surface";
     EXPECT_EQ(s.info(1).source, test::data("headsq.nhdr"));
     EXPECT_GT(s.mesh(1).triangles.size(), 10000u);
     EXPECT_EQ(s.sources(), (std::vector<std::string>{test::data("headsq.nhdr")}));

@@ -164,7 +164,7 @@ TEST(SurfaceEdit, AddReplaceRemoveKeepIdsStable) {
     EXPECT_EQ(s.info(skin).source, test::data("headsq.nhdr"));
     // The default colours, linear RGB, stated here rather than read from the palette under test.
     EXPECT_EQ(s.info(skin).color, linear_from_hex("#e0906c")) << "the first skin-toned";
-    EXPECT_EQ(s.info(bone).color, linear_from_hex("#f2ecd8")) << "then bone ivory";
+    EXPECT_EQ(s.info(bone).color, linear_from_hex("#f9f6ec")) << "then bone white";
     EXPECT_EQ(s.info(third).color, glm::vec3(0.1f, 0.2f, 0.3f));
     EXPECT_EQ(s.info(bone).post.smooth, 0.5);
 
