@@ -192,6 +192,8 @@ MainWindow::MainWindow(QWidget* parent) : QMainWindow(parent), scene_(std::make_
     addDockWidget(Qt::RightDockWidgetArea, measurements_);
     // Wide enough for the Measurements table's surface and notes columns.
     resizeDocks({dock, measurements_}, {400, 400}, Qt::Horizontal);
+    // Surfaces above (a row or two visible; their list scrolls), measurements below.
+    resizeDocks({dock, measurements_}, {500, 300}, Qt::Vertical);
 
     add_view_and_help_menus();
     statusBar()->showMessage("Ready");
