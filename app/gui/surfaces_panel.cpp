@@ -222,7 +222,8 @@ void SurfacesPanel::update_presets() {
     iso_->setRange(range.min, range.max);
     iso_->setDecimals(range.max - range.min < 10 ? 3 : 1);
     iso_->setSuffix(unit);
-    if (first >= 0) preset_->setCurrentIndex(first);
+    preset_->setPlaceholderText("No preset fits this volume");
+    preset_->setCurrentIndex(first); // -1 (none): the placeholder
     iso_->setValue(first >= 0 ? kIsoPresets[preset_->itemData(first).toInt()].value : 0.5 * (range.min + range.max));
     if (volume) {
         range_->setText(QString("Values %1 to %2%3").arg(range.min).arg(range.max).arg(unit));
