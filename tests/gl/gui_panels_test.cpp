@@ -142,11 +142,18 @@ TEST(GuiPanels, SurfaceListScrollsAndTheWindowKeepsItsSize) {
     auto* scroll = w.surfaces_panel()->findChild<QScrollArea*>("surface_list");
     QWidget* last = w.surfaces_panel()->row(w.scene().surfaces().back());
     ASSERT_NE(last, nullptr);
-    scroll->ensureWidgetVisible(last);
-    QTest::qWait(50);
+    // (Once the list's layout has placed the last row: it runs from posted events.)
+    const auto in_view = [&] { return QRect(last->mapTo(scroll->viewport(), QPoint(0, 0)), last->size()); };
+    EXPECT_TRUE(wait_until(
+        [&] {
+            scroll->ensureWidgetVisible(last);
+            return scroll->viewport()->rect().intersects(in_view());
+        },
+        5000))
+        << "the last row is not scrolled into view: row at " << in_view().y() << ".." << in_view().bottom()
+        << ", view 0.." << scroll->viewport()->height() << ", scrolled " << scroll->verticalScrollBar()->value()
+        << " of " << scroll->verticalScrollBar()->maximum();
     EXPECT_GT(scroll->verticalScrollBar()->maximum(), 0) << "eight rows fit without scrolling?";
-    const QRect in_view(last->mapTo(scroll->viewport(), QPoint(0, 0)), last->size());
-    EXPECT_TRUE(scroll->viewport()->rect().intersects(in_view)) << "the last row is not scrolled into view";
     EXPECT_GT(scroll->verticalScrollBar()->value(), 0);
 
     // ---- removing four: the window stays within its size
