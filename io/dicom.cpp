@@ -412,6 +412,7 @@ struct Layout {
     std::vector<int> grid;
     glm::dmat4 affine{1.0};
     std::vector<std::string> warnings;
+    bool scout = false; // looks like a scout/localizer
 };
 
 Layout lay_out(Group& g, const std::string& where);
@@ -433,7 +434,9 @@ SeriesInfo info_of(const Group& g, const std::string& where) {
         const Layout l = lay_out(copy, where);
         si.dims[2] = l.grid.back() + 1; // missing slices are filled in
         si.warnings = l.warnings;
+        si.for_3d = !l.scout;
     } catch (const Error& e) {
+        si.for_3d = false;
         si.warnings.push_back(std::string("cannot be loaded: ") + e.what());
     }
     return si;
@@ -682,7 +685,8 @@ Layout lay_out(Group& g, const std::string& where) {
     affine[3] = glm::dvec4(g.slices[0].ipp, 1.0);
     check_affine(where, affine, /*allow_shear=*/true);
     const std::string desc = upper(first.description);
-    if (desc.find("SCOUT") != std::string::npos || desc.find("LOCALI") != std::string::npos || first.localizer)
+    out.scout = desc.find("SCOUT") != std::string::npos || desc.find("LOCALI") != std::string::npos || first.localizer;
+    if (out.scout)
         warnings.push_back("series \"" + first.description + "\" looks like a scout/localizer (" + std::to_string(n) +
                            " slice(s), " + fmt(glm::length(step_vec)) + " mm apart): not meant for 3D reconstruction");
     out.affine = affine;

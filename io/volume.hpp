@@ -67,6 +67,9 @@ struct SeriesInfo {
     // slices, uneven spacing, gantry tilt, a scout, geometry that cannot be
     // loaded): the series chooser shows them before anything is read.
     std::vector<std::string> warnings;
+    // Fit for a 3D reconstruction: loadable and not a scout/localizer (both
+    // also said in `warnings`).
+    bool for_3d = true;
 };
 
 struct Metadata {

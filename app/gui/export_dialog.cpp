@@ -154,13 +154,51 @@ void ExportDialog::accept() {
     problem_->show();
 }
 
+// ---- default file names ----------------------------------------------------------------
+
+QString data_name(const QString& data) {
+    if (data.isEmpty()) return "untitled";
+    const QFileInfo fi(data);
+    if (fi.isDir()) return QDir(fi.absoluteFilePath()).dirName();
+    QString name = fi.fileName();
+    if (name.endsWith(".gz", Qt::CaseInsensitive)) name.chop(3);
+    const int dot = name.lastIndexOf('.');
+    if (dot > 0) name.truncate(dot);
+    return name.isEmpty() ? "untitled" : name;
+}
+
+QString save_folder(const QString& data, const QString& last) {
+    if (!data.isEmpty()) {
+        const QFileInfo fi(data);
+        // A DICOM folder is left as it is: beside it, not in it.
+        const QFileInfo folder(fi.isDir() ? QFileInfo(fi.absoluteFilePath()).absolutePath() : fi.absolutePath());
+        if (folder.isDir() && folder.isWritable()) return folder.absoluteFilePath();
+    }
+    if (!last.isEmpty() && QFileInfo(last).isDir()) return last;
+    return QDir::homePath();
+}
+
+QString suggested_save_path(const QString& data, const QString& last, const QString& suffix) {
+    return QDir(save_folder(data, last)).filePath(data_name(data) + suffix);
+}
+
+QString surface_file_stem(const QString& surface_name) {
+    QString stem;
+    for (const QChar c : surface_name.trimmed()) {
+        if (c.isSpace()) continue;
+        stem += c.isLetterOrNumber() || c == '.' || c == '_' || c == '-' ? c : QChar('-');
+    }
+    return stem.isEmpty() ? "surface" : stem;
+}
+
 // ---- Save surfaces ---------------------------------------------------------------------
 
 namespace {
 const char* const kMeshFormats[][2] = {{"STL", "stl"}, {"PLY", "ply"}, {"OBJ", "obj"}, {"VTP (VTK XML)", "vtp"}};
 }
 
-SaveSurfacesDialog::SaveSurfacesDialog(const core::Scene& scene, const QString& folder, QWidget* parent)
+SaveSurfacesDialog::SaveSurfacesDialog(const core::Scene& scene, const QString& folder, const QString& stem,
+                                       QWidget* parent)
     : QDialog(parent) {
     setWindowTitle("Save surfaces");
     setObjectName("save_surfaces_dialog");
@@ -185,13 +223,11 @@ SaveSurfacesDialog::SaveSurfacesDialog(const core::Scene& scene, const QString& 
     problem_ = problem_label(this);
     col->addWidget(problem_);
     col->addWidget(buttons(this, "Save"));
-    // The file name follows the surface (iso 500 -> iso-500.stl) and the format.
-    const auto rename = [this] {
+    // The file name follows the surface (iso 500 of headsq -> headsq-iso500.stl) and the format.
+    const auto rename = [this, stem] {
         QFileInfo fi(file_->text());
-        QString stem = surface_->currentText().section(" (", 0, 0);
-        stem.replace(' ', '-');
-        if (stem.isEmpty()) stem = "surface";
-        file_->setText(fi.dir().filePath(stem + "." + format_->currentData().toString()));
+        const QString surface = surface_file_stem(surface_->currentText().section(" (", 0, 0));
+        file_->setText(fi.dir().filePath(stem + "-" + surface + "." + format_->currentData().toString()));
     };
     connect(surface_, &QComboBox::currentIndexChanged, this, rename);
     connect(format_, &QComboBox::currentIndexChanged, this, rename);

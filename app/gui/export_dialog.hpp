@@ -45,12 +45,27 @@ private:
     QLabel* problem_;
 };
 
+// Where the save dialogs start (docs/gui.md, "Where files are saved"):
+// `data` is what is open (a file, or a DICOM folder), `last` the folder
+// last saved to of that kind (empty: none).
+// The data's name: the file's without its extensions ("headsq" for
+// headsq.nhdr, "ct" for ct.nii.gz), a folder's own name; "untitled" for none.
+QString data_name(const QString& data);
+// The folder: the data's (a file's folder; the folder holding a DICOM
+// folder) when it exists and is writable, else `last`, else the home folder.
+QString save_folder(const QString& data, const QString& last);
+// save_folder / data_name + `suffix` (".png", ".isoscope.json", "-iso500.stl").
+QString suggested_save_path(const QString& data, const QString& last, const QString& suffix);
+// A surface's part of its file name: its name without spaces ("iso 500" ->
+// "iso500"), other characters unfit for file names as '-'.
+QString surface_file_stem(const QString& surface_name);
+
 // A surface of the scene (named by its row: name, triangles) and a format
-// (STL, PLY, OBJ, VTP); the file name's extension follows the format.
-// Widgets: surface, format, file.
+// (STL, PLY, OBJ, VTP); the file name (in `folder`) is `stem`-surface.format
+// (surface_file_stem) and follows the choices. Widgets: surface, format, file.
 class SaveSurfacesDialog : public QDialog {
 public:
-    SaveSurfacesDialog(const core::Scene& scene, const QString& folder, QWidget* parent = nullptr);
+    SaveSurfacesDialog(const core::Scene& scene, const QString& folder, const QString& stem, QWidget* parent = nullptr);
     std::uint32_t surface() const;
     QString path() const;
     void accept() override;

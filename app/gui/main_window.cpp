@@ -20,6 +20,7 @@
 #include <QSettings>
 #include <QSlider>
 #include <QStackedWidget>
+#include <QStandardItemModel>
 #include <QStatusBar>
 #include <QThread>
 #include <QTimer>
@@ -30,6 +31,7 @@
 #include <QVBoxLayout>
 
 #include <algorithm>
+#include <cmath>
 #include <mutex>
 
 #include "app/gui/measure_tools.hpp"
@@ -50,6 +52,33 @@ namespace iso::gui {
 
 namespace {
 constexpr int kRecentMax = 8;
+
+// The window/level bar's presets: "default", the CT presets, "custom".
+// The CT presets are in Hounsfield units: for a volume without that unit
+// (core::value_unit) they stay listed but disabled, saying why.
+void enable_ct_window_presets(QComboBox* combo, bool hu) {
+    auto* model = qobject_cast<QStandardItemModel*>(combo->model());
+    for (int i = 1; i + 1 < combo->count(); ++i) {
+        model->item(i)->setEnabled(hu);
+        model->item(i)->setToolTip(hu ? QString() : "For CT in Hounsfield units; this volume's values have no unit");
+    }
+}
+
+// The entry that names window `w`: "default" (the volume's default window),
+// a CT preset (HU volumes only), else "custom" (the last entry).
+int window_preset_index(const QComboBox* combo, const core::WindowLevel& w, const core::Scene& scene) {
+    const auto same = [&w](const core::WindowLevel& o) {
+        return std::abs(o.center - w.center) < 0.05 && std::abs(o.width - w.width) < 0.05;
+    };
+    if (!scene.has_volume()) return 0;
+    if (same(core::default_window(scene.volume()))) return 0;
+    if (!core::value_unit(scene).empty()) {
+        const auto presets = core::ct_window_presets();
+        for (std::size_t i = 0; i < presets.size(); ++i)
+            if (same(presets[i].window)) return int(i) + 1;
+    }
+    return combo->count() - 1;
+}
 } // namespace
 
 namespace {
@@ -103,6 +132,7 @@ MainWindow::MainWindow(QWidget* parent) : QMainWindow(parent), scene_(std::make_
     placeholder_ = new QLabel(
         "Open a volume (File > Open, or drop a file or folder here),\nthen add a surface in the Surfaces panel.",
         view3d_);
+    placeholder_->setObjectName("view3d_hint");
     placeholder_->setAlignment(Qt::AlignCenter);
     view3d_->addWidget(placeholder_);
     view3d_->setMinimumSize(320, 240);
@@ -162,6 +192,8 @@ MainWindow::MainWindow(QWidget* parent) : QMainWindow(parent), scene_(std::make_
     addDockWidget(Qt::RightDockWidgetArea, measurements_);
     // Wide enough for the Measurements table's surface and notes columns.
     resizeDocks({dock, measurements_}, {400, 400}, Qt::Horizontal);
+    // Surfaces above (a row or two visible; their list scrolls), measurements below.
+    resizeDocks({dock, measurements_}, {500, 300}, Qt::Vertical);
 
     add_view_and_help_menus();
     statusBar()->showMessage("Ready");
@@ -220,6 +252,7 @@ void MainWindow::add_window_level_bar() {
                                     .arg(QString::fromUtf8(p.name.data(), qsizetype(p.name.size())))
                                     .arg(p.window.width)
                                     .arg(p.window.center));
+    window_preset_->addItem("custom"); // numbers set by hand or a drag
     wl->addWidget(window_preset_);
     wl->addWidget(new QLabel(" Level (center): "));
     center_ = new QDoubleSpinBox(wl);
@@ -234,7 +267,7 @@ void MainWindow::add_window_level_bar() {
     width_->setDecimals(1);
     wl->addWidget(width_);
     connect(window_preset_, &QComboBox::currentIndexChanged, this, [this](int index) {
-        if (updating_window_ || index < 0) return;
+        if (updating_window_ || index < 0 || index == window_preset_->count() - 1) return;
         if (index == 0) {
             if (scene_->has_volume()) set_window_level(core::default_window(scene_->volume()));
             return;
@@ -365,6 +398,11 @@ void MainWindow::show_error(const QString& title, const QString& what, std::exce
 // ---- opening -------------------------------------------------------------------------
 
 void MainWindow::open_path(const QString& path, const QString& series) {
+    // One DICOM file stands for its series: the series of that file, from its folder.
+    if (const auto of = series.isEmpty() && !busy() ? core::dicom_series_of_file(path.toStdString()) : std::nullopt) {
+        load(QString::fromStdString(of->folder), QString::fromStdString(of->uid));
+        return;
+    }
     if (series.isEmpty() && !busy() && QFileInfo(path).isDir()) {
         choose_series(path);
         return;
@@ -449,6 +487,7 @@ void MainWindow::set_scene(std::unique_ptr<core::Scene> scene, const QString& pa
     planes_ = {};
     if (scene_->has_volume()) {
         planes_ = core::default_planes(scene_->volume());
+        enable_ct_window_presets(window_preset_, !core::value_unit(*scene_).empty());
         updating_window_ = true;
         window_preset_->setCurrentIndex(0);
         updating_window_ = false;
@@ -545,7 +584,14 @@ void MainWindow::update_3d() {
     bool any_visible = false;
     for (auto id : scene_->surfaces()) any_visible |= scene_->info(id).visible;
     if (!any_visible) {
-        // The camera frames the visible surfaces: with none there is nothing to frame.
+        // The camera frames the visible surfaces: with none there is nothing
+        // to frame. The hint says what to do next.
+        placeholder_->setText(
+            !scene_->has_volume()        ? "Open a volume (File > Open, or drop a file or folder here),\nthen add "
+                                           "a surface in the Surfaces panel."
+            : scene_->surfaces().empty() ? "Add a surface in the Surfaces panel (a preset or an iso value,\nthen "
+                                           "Add surface) to see it here."
+                                         : "Every surface is hidden: tick one in the Surfaces panel to see it here.");
         view3d_->setCurrentWidget(placeholder_);
         return;
     }
@@ -631,6 +677,7 @@ void MainWindow::set_window_level(const core::WindowLevel& w) {
     updating_window_ = true;
     center_->setValue(w.center);
     width_->setValue(w.width);
+    window_preset_->setCurrentIndex(window_preset_index(window_preset_, w, *scene_));
     updating_window_ = false;
     for (auto* v : views_) v->set_window(w);
 }

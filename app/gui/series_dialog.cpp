@@ -10,6 +10,8 @@
 #include <QColor>
 #include <QVBoxLayout>
 
+#include "renderer/core/api.hpp"
+
 namespace iso::gui {
 
 namespace {
@@ -55,7 +57,9 @@ SeriesDialog::SeriesDialog(const QString& folder, std::vector<SeriesInfo> series
     table_->horizontalHeader()->setSectionResizeMode(QHeaderView::ResizeToContents);
     table_->horizontalHeader()->setStretchLastSection(true);
     table_->resizeRowsToContents();
-    if (!series_.empty()) table_->selectRow(0);
+    // Pre-selected (Enter opens it): the series most fit for 3D, not a scout
+    // that the table itself warns about (core::suggested_series).
+    if (!series_.empty()) table_->selectRow(std::max(0, core::suggested_series(series_)));
     col->addWidget(table_, 1);
 
     auto* buttons = new QDialogButtonBox(QDialogButtonBox::Open | QDialogButtonBox::Cancel, this);

@@ -3,7 +3,8 @@
 // worker thread) and shows this table to choose one from: modality,
 // description, series number, dimensions, slices and what loading would warn
 // about (missing slices, uneven spacing, gantry tilt, a scout, a series that
-// cannot be loaded). Presentation only: the list is the DICOM reader's
+// cannot be loaded). The row pre-selected is the series most fit for 3D
+// (core::suggested_series). Presentation only: the list is the DICOM reader's
 // (io/volume.hpp SeriesInfo).
 #pragma once
 

@@ -29,6 +29,9 @@ QString settings_folder(const char* key) {
     return f.isEmpty() ? QDir::homePath() : f;
 }
 
+// The folder last saved to of a kind (empty: none yet).
+QString last_folder(const char* key) { return QSettings().value(key).toString(); }
+
 void remember_folder(const char* key, const QString& file) {
     QSettings().setValue(key, QFileInfo(file).absolutePath());
 }
@@ -76,7 +79,7 @@ void MainWindow::add_session_actions(QMenu* file) {
     });
     file->addAction("Sa&ve session...", QKeySequence::Save, this, [this] {
         const QString start = session_path_.isEmpty()
-                                  ? QDir(settings_folder("session_folder")).filePath("session.isoscope.json")
+                                  ? suggested_save_path(path_, last_folder("session_folder"), ".isoscope.json")
                                   : session_path_;
         const QString f = QFileDialog::getSaveFileName(this, "Save session", start, "isoscope sessions (*.json)");
         if (!f.isEmpty()) save_session(f);
@@ -88,8 +91,7 @@ void MainWindow::add_session_actions(QMenu* file) {
             return;
         }
         bool write = false;
-        const QString image =
-            QDir(settings_folder("export_folder")).filePath(QFileInfo(path_).completeBaseName() + ".png");
+        const QString image = suggested_save_path(path_, last_folder("export_folder"), ".png");
         const QString named = export_session_path(session_path_, current_session(), image, write);
         const QString note =
             write ? "The state is also saved as a session next to the image (IMAGE.session.json); the image's "
@@ -106,7 +108,8 @@ void MainWindow::add_session_actions(QMenu* file) {
             statusBar()->showMessage("No surface to save: add one in the Surfaces panel");
             return;
         }
-        auto* d = new SaveSurfacesDialog(*scene_, settings_folder("surface_folder"), this);
+        auto* d =
+            new SaveSurfacesDialog(*scene_, save_folder(path_, last_folder("surface_folder")), data_name(path_), this);
         d->setAttribute(Qt::WA_DeleteOnClose);
         connect(d, &QDialog::accepted, this, [this, d] { save_surface(d->surface(), d->path()); });
         d->open();

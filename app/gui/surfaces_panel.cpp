@@ -11,12 +11,16 @@
 #include <QHBoxLayout>
 #include <QLabel>
 #include <QPushButton>
+#include <QScrollArea>
 #include <QSignalBlocker>
+#include <QSpinBox>
+#include <QStandardItemModel>
 #include <QSlider>
 #include <QThread>
 #include <QVBoxLayout>
 
 #include <atomic>
+#include <stdexcept>
 #include <cmath>
 
 #include "app/gui/slice_view.hpp"
@@ -76,8 +80,8 @@ struct SurfacesPanel::Row {
     QDoubleSpinBox* smooth = nullptr;
     QCheckBox* largest = nullptr;
     QLabel* busy = nullptr;
-    // The slider maps [lo, lo + steps * step] to 0..steps.
-    double lo = 0, step = 1;
+    // The slider maps [lo, lo + steps * step] to 0..steps (the last step ends at hi).
+    double lo = 0, hi = 0, step = 1;
     int steps = 0;
     bool syncing = false;
     // What the user asked for last, and the re-extraction under way (null: none).
@@ -85,7 +89,7 @@ struct SurfacesPanel::Row {
     PostProcessOptions wanted_post;
     std::shared_ptr<Worker> worker;
     int to_slider(double v) const { return int(std::clamp(std::lround((v - lo) / step), 0L, long(steps))); }
-    double from_slider(int s) const { return lo + double(s) * step; }
+    double from_slider(int s) const { return std::min(hi, lo + double(s) * step); }
 };
 
 SurfacesPanel::SurfacesPanel(QWidget* parent) : QWidget(parent) {
@@ -133,9 +137,20 @@ SurfacesPanel::SurfacesPanel(QWidget* parent) : QWidget(parent) {
         post.keep_largest = largest_->isChecked();
         add_surface(iso_->value(), post);
     });
-    rows_layout_ = new QVBoxLayout;
-    col->addLayout(rows_layout_);
-    col->addStretch(1);
+    // The rows scroll: any number of surfaces fits the dock, and the dock
+    // (so the window) does not grow with them.
+    auto* list = new QWidget;
+    list->setObjectName("surface_rows");
+    rows_layout_ = new QVBoxLayout(list);
+    rows_layout_->setContentsMargins(0, 0, 0, 0);
+    rows_layout_->addStretch(1);
+    auto* scroll = new QScrollArea(this);
+    scroll->setObjectName("surface_list");
+    scroll->setWidgetResizable(true);
+    scroll->setFrameShape(QFrame::NoFrame);
+    scroll->setWidget(list);
+    scroll->setMinimumHeight(9 * fontMetrics().height()); // about one row
+    col->addWidget(scroll, 1);
     update_presets();
 }
 
@@ -173,20 +188,45 @@ void SurfacesPanel::set_scene(core::Scene* scene) {
 
 void SurfacesPanel::update_presets() {
     // CT in Hounsfield units: the HU presets first and the numbers marked HU.
+    // Without a unit the HU presets stay listed but disabled, saying why;
+    // so does a preset outside the volume's values.
     const QString unit = unit_suffix(scene_);
     const bool hu = !unit.isEmpty();
+    const bool volume = scene_ && scene_->has_volume();
+    const ValueRange range = volume ? scene_->value_range() : ValueRange{-1e6, 1e6};
     preset_->clear();
+    auto* model = qobject_cast<QStandardItemModel*>(preset_->model());
+    int first = -1;
     for (int pass = 0; pass < 2; ++pass)
         for (int i = 0; i < int(std::size(kIsoPresets)); ++i) {
             const auto& p = kIsoPresets[i];
             if ((pass == 0) != (p.hu == hu)) continue;
-            preset_->addItem(QString("%1: %2%3").arg(p.name).arg(p.value).arg(p.hu ? " HU" : ""), i);
+            QString why;
+            if (p.hu && !hu)
+                why = "For CT in Hounsfield units; this volume's values have no unit";
+            else if (p.value < range.min || p.value > range.max)
+                why = QString("Outside this volume's values (%1 to %2%3)").arg(range.min).arg(range.max).arg(unit);
+            preset_->addItem(QString("%1: %2%3%4")
+                                 .arg(p.name)
+                                 .arg(p.value)
+                                 .arg(p.hu ? " HU" : "")
+                                 .arg(p.hu && !hu && volume ? " (CT only)" : ""),
+                             i);
+            auto* item = model->item(preset_->count() - 1);
+            item->setToolTip(why);
+            item->setEnabled(why.isEmpty() || !volume);
+            if (first < 0 && (why.isEmpty() || !volume)) first = preset_->count() - 1;
         }
+    // The number stays within the volume's values, starting at the first
+    // preset that fits (none: the middle of the range).
+    iso_->setRange(range.min, range.max);
+    iso_->setDecimals(range.max - range.min < 10 ? 3 : 1);
     iso_->setSuffix(unit);
-    iso_->setValue(kIsoPresets[preset_->itemData(0).toInt()].value);
-    if (scene_ && scene_->has_volume()) {
-        const auto r = scene_->value_range();
-        range_->setText(QString("Values %1 to %2%3").arg(r.min).arg(r.max).arg(unit));
+    preset_->setPlaceholderText("No preset fits this volume");
+    preset_->setCurrentIndex(first); // -1 (none): the placeholder
+    iso_->setValue(first >= 0 ? kIsoPresets[preset_->itemData(first).toInt()].value : 0.5 * (range.min + range.max));
+    if (volume) {
+        range_->setText(QString("Values %1 to %2%3").arg(range.min).arg(range.max).arg(unit));
     } else {
         range_->setText("Open a volume to add surfaces");
     }
@@ -201,6 +241,23 @@ void SurfacesPanel::add_surface(double iso, const PostProcessOptions& post) {
     }
     if (!scene_ || !scene_->has_volume()) {
         if (message) message("Open a volume first");
+        return;
+    }
+    if (const auto r = scene_->value_range(); !(iso >= r.min && iso <= r.max)) {
+        // No surface would cross it: nothing is added.
+        const auto sources = scene_->sources();
+        const QString file = sources.empty() ? QString("the volume") : QString::fromStdString(sources.front());
+        const QString why = QString("The iso value %1 is outside the values of %2 (%3 to %4%5); "
+                                    "no surface would be found there.")
+                                .arg(iso)
+                                .arg(file)
+                                .arg(r.min)
+                                .arg(r.max)
+                                .arg(unit_suffix(scene_));
+        if (message) message("Not added: " + why);
+        if (error)
+            error("Cannot add the surface", QString("Cannot add the isosurface at %1").arg(iso),
+                  std::make_exception_ptr(std::runtime_error(why.toStdString())));
         return;
     }
     // The worker only reads the volume; the mesh joins the scene on the GUI thread.
@@ -292,7 +349,7 @@ void SurfacesPanel::add_row(std::uint32_t id) {
         add_iso_line(*r, grid);
         add_post_line(*r, grid);
     }
-    rows_layout_->addWidget(r->widget);
+    rows_layout_->insertWidget(rows_layout_->count() - 1, r->widget); // above the stretch
     rows_.push_back(std::move(row));
 }
 
@@ -348,31 +405,49 @@ void SurfacesPanel::remove_surface(std::uint32_t id) {
     if (message) message("Removed " + name);
 }
 
-// Line 2: opacity, 0..100 %.
+// Line 2: opacity, 0..100 %: a slider and a number, kept in step.
 void SurfacesPanel::add_opacity_line(Row& r, QGridLayout* grid) {
     const std::uint32_t id = r.id;
     grid->addWidget(new QLabel("Opacity"), 1, 0);
     auto* opacity = new QSlider(Qt::Horizontal, r.widget);
     opacity->setObjectName("opacity");
     opacity->setRange(0, 100);
+    opacity->setPageStep(10);
     opacity->setValue(int(std::lround(scene_->info(id).opacity * 100)));
-    auto* percent = new QLabel(QString("%1 %").arg(opacity->value()), r.widget);
-    percent->setObjectName("opacity_percent");
-    percent->setMinimumWidth(40);
+    auto* percent = new QSpinBox(r.widget);
+    percent->setObjectName("opacity_value");
+    percent->setRange(0, 100);
+    percent->setSuffix(" %");
+    percent->setValue(opacity->value());
     grid->addWidget(opacity, 1, 1);
     grid->addWidget(percent, 1, 2);
     track_drag(opacity);
     connect(opacity, &QSlider::valueChanged, this, [this, id, percent](int v) {
         const SurfaceSettings before = settings(id);
+        percent->setValue(v); // the number follows (its own signal then finds nothing to do)
         scene_->info(id).opacity = float(v) / 100.0f;
-        percent->setText(QString("%1 %").arg(v));
         notify(false);
         record(id, "change opacity", before);
     });
+    connect(percent, &QSpinBox::valueChanged, opacity, &QSlider::setValue);
 }
 
-// Line 3: the iso slider and its number, kept in step; below them the
-// "extracting..." label of a re-extraction under way.
+namespace {
+// The nearest of 1, 2, 5 times a power of ten to `x` > 0.
+double nice_step(double x) {
+    const double p = std::pow(10.0, std::floor(std::log10(x)));
+    double best = p;
+    for (double m : {2.0, 5.0, 10.0})
+        if (std::abs(std::log(m * p / x)) < std::abs(std::log(best / x))) best = m * p;
+    return best;
+}
+} // namespace
+
+// Line 3: the iso number (and the "extracting..." label of a re-extraction
+// under way); line 4: the iso slider across the whole row, kept in step
+// with the number. The slider moves in steps of a round increment near a
+// thousandth of the volume's range (at least 1 for integer voxels); a page
+// (a click beside the handle, Page Up/Down) is about a twentieth.
 void SurfacesPanel::add_iso_line(Row& r, QGridLayout* grid) {
     const std::uint32_t id = r.id;
     const double value = scene_->info(id).value;
@@ -381,30 +456,40 @@ void SurfacesPanel::add_iso_line(Row& r, QGridLayout* grid) {
     const bool integral = type != VoxelType::F32 && type != VoxelType::F64 && !scene_->volume().is_sparse();
     const double span = std::max(range.max - range.min, 1e-9);
     r.lo = range.min;
-    r.steps = integral && span <= 100000 ? int(std::lround(span)) : 1000;
-    r.step = span / r.steps;
+    r.hi = range.max;
+    r.step = nice_step(span / 1000);
+    if (integral) r.step = std::max(r.step, 1.0);
+    r.steps = int(std::ceil(span / r.step - 1e-9));
     const QString unit = unit_suffix(scene_);
     grid->addWidget(new QLabel("Iso"), 2, 0);
     r.slider = new QSlider(Qt::Horizontal, r.widget);
     r.slider->setObjectName("iso_slider");
     r.slider->setRange(0, r.steps);
+    r.slider->setSingleStep(1);
+    r.slider->setPageStep(std::max(1, int(std::lround(nice_step(span / 20) / r.step))));
     r.slider->setValue(r.to_slider(value));
-    r.slider->setToolTip(QString("Iso value, %1 to %2%3").arg(range.min).arg(range.max).arg(unit));
+    r.slider->setToolTip(QString("Iso value, %1 to %2%3, in steps of %4; Page Up/Down: %5")
+                             .arg(range.min)
+                             .arg(range.max)
+                             .arg(unit)
+                             .arg(r.step)
+                             .arg(r.slider->pageStep() * r.step));
     r.value = new QDoubleSpinBox(r.widget);
     r.value->setObjectName("iso_value");
     r.value->setRange(range.min, range.max);
     r.value->setDecimals(integral ? 0 : 3);
+    r.value->setSingleStep(r.step);
     r.value->setKeyboardTracking(false); // on Enter, arrows or leaving the box
     r.value->setSuffix(unit);
     r.value->setValue(value);
     r.busy = new QLabel("extracting...", r.widget);
     r.busy->setObjectName("busy");
     r.busy->setVisible(false);
-    auto* line2 = new QHBoxLayout;
-    line2->addWidget(r.slider, 1);
-    line2->addWidget(r.value);
-    grid->addLayout(line2, 2, 1, 1, 2);
-    grid->addWidget(r.busy, 3, 1, 1, 2);
+    auto* line3 = new QHBoxLayout;
+    line3->addWidget(r.value);
+    line3->addWidget(r.busy, 1);
+    grid->addLayout(line3, 2, 1, 1, 2);
+    grid->addWidget(r.slider, 3, 0, 1, 3);
 
     track_drag(r.slider);
     connect(r.slider, &QSlider::valueChanged, this, [this, id](int s) {
@@ -617,8 +702,10 @@ void SurfacesPanel::apply(std::uint32_t id, const SurfaceSettings& s) {
     if (auto* opacity = r->widget->findChild<QSlider*>("opacity")) {
         const QSignalBlocker block(opacity);
         opacity->setValue(int(std::lround(s.opacity * 100)));
-        if (auto* percent = r->widget->findChild<QLabel*>("opacity_percent"))
-            percent->setText(QString("%1 %").arg(opacity->value()));
+        if (auto* percent = r->widget->findChild<QSpinBox*>("opacity_value")) {
+            const QSignalBlocker block_number(percent);
+            percent->setValue(opacity->value());
+        }
     }
     if (r->slider) {
         if (s.iso != r->wanted) set_iso(id, s.iso);

@@ -52,8 +52,12 @@ double Viewer::aspect() const { return double(std::max(1, width())) / double(std
 
 // The same framing as `isoscope render`: the scene's camera for the view.
 // A camera set before the first frame (a session) is kept.
+// Framed while every visible surface was empty, it frames the first
+// surfaces that are not (keeping the direction) once they appear; later
+// surfaces leave the camera where the user put it.
 void Viewer::initializeGL() {
     if (!camera_set_) camera_ = scene_.camera(initial_view_, aspect());
+    framed_empty_ = !camera_set_ && scene_.bounds().empty();
 }
 
 void Viewer::paintGL() {
@@ -148,6 +152,14 @@ void Viewer::take_batch(const RaytracedBatch& b) {
 }
 
 void Viewer::draw() {
+    if (framed_empty_ && !scene_.bounds().empty()) {
+        const glm::dvec3 f = camera_.forward();
+        if (std::isfinite(f.x) && std::isfinite(f.y) && std::isfinite(f.z))
+            camera_.fit(scene_.bounds(), aspect());
+        else
+            camera_ = scene_.camera(initial_view_, aspect());
+        framed_empty_ = false;
+    }
     camera_.fit_planes(scene_.bounds());
     follow_raytraced();
     const RenderOptions opt = frame_options();
@@ -204,6 +216,7 @@ void Viewer::schedule_still_frame() {
 void Viewer::set_camera(const Camera& c) {
     camera_ = c;
     camera_set_ = true;
+    framed_empty_ = false;
     update();
 }
 

@@ -97,7 +97,9 @@ public:
     // The GL renderer and version the view draws with (empty before its first frame).
     const std::string& gl_renderer() const { return gl_renderer_; }
 
-    // The camera the view draws with (LPS mm); setting it redraws.
+    // The camera the view draws with (LPS mm); setting it redraws. Until it
+    // is set, a view that first drew only empty surfaces frames the first
+    // ones that are not, once they appear (the view's direction kept).
     const Camera& camera() const { return camera_; }
     void set_camera(const Camera& c);
     // The view's patient-view framing (as `isoscope render --view`), fitted to the widget.
@@ -162,6 +164,7 @@ private:
     std::unique_ptr<Annotations> annotations_;
     Camera camera_;
     bool camera_set_ = false;
+    bool framed_empty_ = false; // framed before any visible surface had a triangle
     PointerDrag drag_;
     bool grabbing_ = false; // on_press took the press
     bool dragging_ = false; // a drag is moving the camera (AO may wait, ViewerOptions::ao_while_dragging)

@@ -7,6 +7,7 @@
 #include <map>
 #include <sstream>
 
+#include "io/error.hpp"
 #include "renderer/core/image_metadata.hpp"
 #include "renderer/core/legend.hpp"
 #include "renderer/core/raytraced_ao.hpp"
@@ -21,6 +22,30 @@ Volume open_volume(const std::string& path, const LoadOptions& opt) { return loa
 Mesh open_mesh(const std::string& path) { return load_mesh(path); }
 
 std::vector<SeriesInfo> list_series(const std::string& path) { return list_dicom_series({path}); }
+
+int suggested_series(const std::vector<SeriesInfo>& list) {
+    const bool any_3d = std::any_of(list.begin(), list.end(), [](const SeriesInfo& s) { return s.for_3d; });
+    int best = -1;
+    for (int i = 0; i < int(list.size()); ++i) {
+        const SeriesInfo& s = list[std::size_t(i)];
+        if (any_3d && !s.for_3d) continue;
+        if (best < 0 || s.files > list[std::size_t(best)].files) best = i;
+    }
+    return best;
+}
+
+std::optional<SeriesOfFile> dicom_series_of_file(const std::string& path) {
+    std::error_code ec;
+    if (!std::filesystem::is_regular_file(path, ec) || volume_format_of(path) != VolumeFormat::Dicom) return {};
+    try {
+        const auto list = list_dicom_series({path});
+        if (list.size() != 1 || list.front().uid.empty()) return {};
+        const auto folder = std::filesystem::absolute(path).parent_path();
+        return SeriesOfFile{folder.string(), list.front().uid};
+    } catch (const Error&) {
+        return {}; // loading the file itself reports what is wrong with it
+    }
+}
 
 nlohmann::json describe(const Volume& v) {
     using nlohmann::json;

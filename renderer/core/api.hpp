@@ -26,6 +26,18 @@ Mesh open_mesh(const std::string& path);
 
 // Lists the DICOM series of a folder or file without loading pixel data.
 std::vector<SeriesInfo> list_series(const std::string& path);
+// The series to offer first among `list`: the one with the most slices among
+// those fit for 3D (SeriesInfo::for_3d), else among all (the first of equals);
+// -1 for an empty list.
+int suggested_series(const std::vector<SeriesInfo>& list);
+// Opening one DICOM file means its series: the file's folder and the
+// SeriesInstanceUID of the file (LoadOptions::series picks the series by it).
+// None when `path` is not a DICOM file (by its extension, as load_volume
+// tells) or its header cannot be read (then loading the file says why).
+struct SeriesOfFile {
+    std::string folder, uid;
+};
+std::optional<SeriesOfFile> dicom_series_of_file(const std::string& path);
 
 // What `isoscope info` shows, as one JSON object: dims, spacing,
 // index_to_lps (row-major 4x4), range, type, memory_bytes, format, source,

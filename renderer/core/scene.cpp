@@ -1,11 +1,14 @@
 #include "renderer/core/scene.hpp"
 
 #include <algorithm>
+#include <cmath>
+#include <iterator>
 #include <cstdio>
 #include <filesystem>
 #include <mutex>
 #include <optional>
 
+#include "io/color.hpp"
 #include "io/error.hpp"
 #include "renderer/core/surface_name.hpp"
 
@@ -353,11 +356,23 @@ void export_image(const Image& image, const ImageMetadata& meta, const std::stri
 }
 
 glm::vec3 surface_color(std::size_t index, std::size_t count) {
-    // Outer surfaces (lower CT values) skin-toned, inner ones bone white; more get distinct hues.
-    static const glm::vec3 palette[] = {{0.93f, 0.72f, 0.60f}, {0.95f, 0.92f, 0.84f}, {0.85f, 0.25f, 0.22f},
-                                        {0.35f, 0.55f, 0.85f}, {0.45f, 0.75f, 0.40f}, {0.80f, 0.65f, 0.30f}};
-    if (count == 1) return palette[1];
-    return palette[index % 6];
+    // Outer surfaces (lower CT values) skin-toned, inner ones bone white, then
+    // ten other hues: each clearly apart from the one before it, on the slices'
+    // grey too (CIE76 delta E 48 between skin and bone, 28 or more between any two).
+    static const char* const palette[] = {"#e0906c", "#f9f6ec", "#d03a30", "#3a7bd5", "#4caf50", "#e0b020",
+                                          "#8e44ad", "#20b8c8", "#e040a0", "#8a9a30", "#f07820", "#305080"};
+    constexpr std::size_t n = std::size(palette);
+    if (count == 1) return linear_from_hex(palette[1]);
+    if (index < n) return linear_from_hex(palette[index]);
+    // Beyond the palette: hues a golden angle apart, saturation and value
+    // alternating, so neighbours differ and none repeats.
+    const std::size_t j = index - n;
+    const double h = std::fmod(0.05 + double(j) * 0.618033988749895, 1.0) * 6.0;
+    const double sat = j % 2 ? 0.55 : 0.75, val = j % 3 == 1 ? 0.70 : 0.95;
+    const double f = h - std::floor(h), p = val * (1 - sat), q = val * (1 - sat * f), t = val * (1 - sat * (1 - f));
+    const glm::dvec3 rgb[] = {{val, t, p}, {q, val, p}, {p, val, t}, {p, q, val}, {t, p, val}, {val, p, q}};
+    const glm::dvec3 c = rgb[int(h) % 6];
+    return glm::vec3(float(linear_from_srgb(c.r)), float(linear_from_srgb(c.g)), float(linear_from_srgb(c.b)));
 }
 
 } // namespace iso::core

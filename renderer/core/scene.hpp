@@ -140,7 +140,10 @@ private:
 // half-written file.
 void export_image(const Image& image, const ImageMetadata& meta, const std::string& path);
 
-// Surface colours for iso values in increasing order (skin, bone, ...).
+// Surface colours for iso values in increasing order (linear RGB): skin,
+// bone, then ten other hues, each clearly apart from the one before (on the
+// slices' grey too); past twelve, generated hues that do not repeat. A lone
+// surface (count 1) is bone.
 glm::vec3 surface_color(std::size_t index, std::size_t count);
 
 } // namespace iso::core

@@ -222,7 +222,7 @@ TEST(GuiExport, ExportSaveOpenSessionAndSurfaces) {
     sd->findChild<QComboBox*>("surface")->setCurrentIndex(1);
     sd->findChild<QComboBox*>("format")->setCurrentIndex(1); // PLY
     auto* mesh_file = sd->findChild<QLineEdit*>("file");
-    EXPECT_TRUE(mesh_file->text().endsWith("iso-1150.ply")) << mesh_file->text().toStdString();
+    EXPECT_TRUE(mesh_file->text().endsWith("/headsq-iso1150.ply")) << mesh_file->text().toStdString();
     const std::string ply = dir / "bone.ply";
     mesh_file->setText(QString::fromStdString(ply));
     QTest::mouseClick(sd->findChild<QDialogButtonBox*>()->button(QDialogButtonBox::Ok), Qt::LeftButton);

@@ -7,8 +7,10 @@
 #pragma once
 
 #include <QApplication>
+#include <QDoubleSpinBox>
 #include <QElapsedTimer>
 #include <QImage>
+#include <QPushButton>
 #include <QSurfaceFormat>
 #include <QTest>
 
@@ -20,6 +22,8 @@
 
 #include <gtest/gtest.h>
 
+#include "app/gui/main_window.hpp"
+#include "app/gui/surfaces_panel.hpp"
 #include "tests/support/test_util.hpp"
 
 namespace iso::test {
@@ -32,6 +36,19 @@ inline bool wait_until(const std::function<bool()>& ready, int timeout_ms) {
         QTest::qWait(20);
     }
     return true;
+}
+
+// Adds the isosurface at `iso` as the user does: the Surfaces panel's iso
+// number, then Add surface; waits for the extraction to end.
+inline void add_through_panel(gui::MainWindow& w, double iso) {
+    auto* panel = w.surfaces_panel();
+    auto* value = panel->findChild<QDoubleSpinBox*>("add_iso_value");
+    auto* add = panel->findChild<QPushButton*>("add_surface");
+    ASSERT_NE(value, nullptr);
+    ASSERT_NE(add, nullptr);
+    value->setValue(iso);
+    QTest::mouseClick(add, Qt::LeftButton);
+    ASSERT_TRUE(wait_until([&] { return !w.busy(); }, 60000)) << "the extraction did not finish";
 }
 
 // Pixels brighter than black: the picture shows something, not an empty frame.

@@ -32,6 +32,7 @@
 
 #include "io/error.hpp"
 #include "io/volume_io.hpp"
+#include "renderer/core/api.hpp"
 #include "tests/support/dicom_fixtures.hpp"
 #include "tests/support/expect.hpp"
 #include "tests/support/test_util.hpp"
@@ -764,4 +765,62 @@ TEST(Dicom, CliInfoJsonAndSeriesChoice) {
     ASSERT_EQ(listed.size(), 2u);
     for (std::size_t i = 0; i < 2; ++i)
         EXPECT_EQ(j1["series"][i]["warnings"].get<std::vector<std::string>>(), listed[i].warnings) << i;
+}
+
+// The series offered first: the most slices among those fit for 3D (a scout
+// with more slices is passed over); one DICOM file names its folder and series.
+TEST(Dicom, SuggestedSeriesAndTheSeriesOfOneFile) {
+    TempDir tmp;
+    const std::string dir = tmp / "study";
+    SeriesSpec scout;
+    scout.description = "scout";
+    scout.series_number = 1;
+    scout.nz = 12;
+    scout.spacing = {0.7, 0.8, 20.0};
+    scout.pattern = "%s/S-%04d.dcm";
+    SeriesSpec axial;
+    axial.description = "axial";
+    axial.series_number = 2;
+    axial.pattern = "%s/A-%04d.dcm";
+    SeriesSpec thin;
+    thin.description = "thin";
+    thin.series_number = 3;
+    thin.nz = 5;
+    thin.pattern = "%s/T-%04d.dcm";
+    write_series(dir, scout);
+    write_series(dir, axial);
+    write_series(dir, thin);
+    const auto list = core::list_series(dir);
+    ASSERT_EQ(list.size(), 3u);
+    const auto index_of = [&](const std::string& d) {
+        for (std::size_t i = 0; i < list.size(); ++i)
+            if (list[i].description == d) return int(i);
+        return -1;
+    };
+    const int s = index_of("scout"), a = index_of("axial"), t = index_of("thin");
+    ASSERT_TRUE(s >= 0 && a >= 0 && t >= 0);
+    EXPECT_FALSE(list[std::size_t(s)].for_3d);
+    EXPECT_TRUE(list[std::size_t(a)].for_3d);
+    EXPECT_TRUE(list[std::size_t(t)].for_3d);
+    EXPECT_EQ(core::suggested_series(list), a) << "the 12-slice scout is passed over";
+    // None fit: the most slices of all; none at all: -1.
+    auto unfit = list;
+    for (auto& x : unfit) x.for_3d = false;
+    EXPECT_EQ(core::suggested_series(unfit), s);
+    EXPECT_EQ(core::suggested_series({}), -1);
+
+    // ---- one file of the axial series: its folder and UID, which load the whole series
+    const auto of = core::dicom_series_of_file(dir + "/A-0002.dcm");
+    ASSERT_TRUE(of.has_value());
+    EXPECT_EQ(fs::path(of->folder), fs::absolute(dir));
+    EXPECT_EQ(of->uid, list[std::size_t(a)].uid);
+    LoadOptions opt;
+    opt.series = of->uid;
+    EXPECT_EQ(load_volume(of->folder, opt).dims[2], 8);
+    // Not DICOM by its name, a folder, missing, or unreadable: none (loading says why).
+    EXPECT_FALSE(core::dicom_series_of_file(test::data("headsq.nhdr")).has_value());
+    EXPECT_FALSE(core::dicom_series_of_file(dir).has_value());
+    EXPECT_FALSE(core::dicom_series_of_file(dir + "/missing.dcm").has_value());
+    std::ofstream(tmp / "broken.dcm") << "not DICOM";
+    EXPECT_FALSE(core::dicom_series_of_file(tmp / "broken.dcm").has_value());
 }

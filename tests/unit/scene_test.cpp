@@ -4,8 +4,14 @@
 // the operation and the file.
 #include "renderer/core/scene.hpp"
 
+#include <algorithm>
+#include <cmath>
 #include <filesystem>
+#include <vector>
 
+#include <glm/geometric.hpp>
+
+#include "io/color.hpp"
 #include "io/error.hpp"
 #include "tests/support/test_util.hpp"
 
@@ -24,9 +30,9 @@ TEST(Scene, VolumeIsosurfacesAreSortedNamedAndColoured) {
     EXPECT_EQ(s.info(1).kind, core::SurfaceInfo::Kind::Iso);
     EXPECT_EQ(s.info(2).value, 1150.0);
     // The default colours, linear RGB, stated here rather than read from the
-    // palette under test: skin tone outside, bone white inside.
-    EXPECT_EQ(s.info(1).color, glm::vec3(0.93f, 0.72f, 0.60f)) << "skin-toned outer surface";
-    EXPECT_EQ(s.info(2).color, glm::vec3(0.95f, 0.92f, 0.84f)) << "bone-white inner surface";
+    // palette under test (as sRGB hex): skin tone outside, bone white inside.
+    EXPECT_EQ(s.info(1).color, linear_from_hex("#e0906c")) << "skin-toned outer surface";
+    EXPECT_EQ(s.info(2).color, linear_from_hex("#f9f6ec")) << "bone-white inner surface";
     EXPECT_EQ(s.info(1).source, test::data("headsq.nhdr"));
     EXPECT_GT(s.mesh(1).triangles.size(), 10000u);
     EXPECT_EQ(s.sources(), (std::vector<std::string>{test::data("headsq.nhdr")}));
@@ -110,4 +116,37 @@ TEST(Scene, ErrorsNameTheOperationAndTheFile) {
     bad.opacity = 1.5f;
     expect_error([&] { s.add_mesh(Mesh{}, bad); }, "Scene::add_mesh", "opacity of 'glass'");
     EXPECT_TRUE(s.surfaces().empty()) << "nothing half-added";
+}
+
+namespace {
+// CIE L*a*b* (D65) of a linear RGB colour, computed here (sRGB primaries),
+// not by the palette's code.
+glm::dvec3 lab_of(const glm::vec3& linear) {
+    const double r = linear.r, g = linear.g, b = linear.b;
+    const double x = (0.4124 * r + 0.3576 * g + 0.1805 * b) / 0.95047;
+    const double y = 0.2126 * r + 0.7152 * g + 0.0722 * b;
+    const double z = (0.0193 * r + 0.1192 * g + 0.9505 * b) / 1.08883;
+    const auto f = [](double t) { return t > 0.008856 ? std::cbrt(t) : 7.787 * t + 16.0 / 116.0; };
+    return {116 * f(y) - 16, 500 * (f(x) - f(y)), 200 * (f(y) - f(z))};
+}
+double delta_e(const glm::vec3& a, const glm::vec3& b) { return glm::length(lab_of(a) - lab_of(b)); }
+} // namespace
+
+// The default colours, as surfaces are added one by one: each clearly apart
+// from the one before (skin and bone too, whose outlines share the slices'
+// grey), none repeated within the first 12, and the generated ones after
+// them still apart from their neighbour and from every earlier one.
+TEST(Scene, DefaultColoursAreDistinct) {
+    constexpr std::size_t n = 40;
+    std::vector<glm::vec3> c;
+    for (std::size_t i = 0; i < n; ++i) c.push_back(core::surface_color(i, std::max<std::size_t>(i + 1, 2)));
+    EXPECT_GT(delta_e(c[0], c[1]), 40.0) << "skin and bone";
+    for (std::size_t i = 0; i + 1 < n; ++i)
+        EXPECT_GT(delta_e(c[i], c[i + 1]), 25.0) << "surfaces " << i << ", " << i + 1;
+    for (std::size_t i = 0; i < 12; ++i)
+        for (std::size_t j = i + 1; j < 12; ++j) EXPECT_GT(delta_e(c[i], c[j]), 20.0) << "surfaces " << i << ", " << j;
+    for (std::size_t i = 0; i < n; ++i)
+        for (std::size_t j = i + 1; j < n; ++j) EXPECT_GT(delta_e(c[i], c[j]), 4.0) << "surfaces " << i << ", " << j;
+    // A lone surface is bone.
+    EXPECT_EQ(core::surface_color(0, 1), c[1]);
 }

@@ -9,6 +9,7 @@
 #include <cmath>
 #include <thread>
 
+#include "io/color.hpp"
 #include "io/error.hpp"
 #include "renderer/surface/extract.hpp"
 #include "renderer/surface/analysis.hpp"
@@ -162,8 +163,8 @@ TEST(SurfaceEdit, AddReplaceRemoveKeepIdsStable) {
     EXPECT_EQ(s.info(skin).kind, core::SurfaceInfo::Kind::Iso);
     EXPECT_EQ(s.info(skin).source, test::data("headsq.nhdr"));
     // The default colours, linear RGB, stated here rather than read from the palette under test.
-    EXPECT_EQ(s.info(skin).color, glm::vec3(0.93f, 0.72f, 0.60f)) << "the first skin-toned";
-    EXPECT_EQ(s.info(bone).color, glm::vec3(0.95f, 0.92f, 0.84f)) << "then bone white";
+    EXPECT_EQ(s.info(skin).color, linear_from_hex("#e0906c")) << "the first skin-toned";
+    EXPECT_EQ(s.info(bone).color, linear_from_hex("#f9f6ec")) << "then bone white";
     EXPECT_EQ(s.info(third).color, glm::vec3(0.1f, 0.2f, 0.3f));
     EXPECT_EQ(s.info(bone).post.smooth, 0.5);
 
