@@ -2,9 +2,11 @@
 // Scene: a mesh file is a mesh whatever the case of its extension (view used
 // to read X.STL as a volume), a volume without --iso is refused naming the
 // flag, and the CLI turns the core's setting names into its flags.
+#include <cstdio>
 #include <filesystem>
 
 #include "io/image.hpp"
+#include "renderer/core/scene.hpp"
 #include "tests/support/test_util.hpp"
 
 using namespace iso;
@@ -93,8 +95,11 @@ TEST(CliInputs, SurfaceColourOpacityBackgroundAndFlatShading) {
     EXPECT_NE(t.out.find("transparency: "), std::string::npos) << t.out;
     ImageMetadata gm;
     load_image(dir / "glass.png", &gm);
-    EXPECT_NE(gm.text["isoscope:surfaces"].find("iso 500: albedo 0.93 0.72 0.6, opacity 0.3"), std::string::npos)
-        << gm.text["isoscope:surfaces"];
+    // The skin has the palette's first colour (core::surface_color: skin, bone) and the first opacity.
+    const glm::vec3 skin = core::surface_color(0, 2);
+    char want[128];
+    std::snprintf(want, sizeof want, "iso 500: albedo %.6g %.6g %.6g, opacity 0.3", skin.r, skin.g, skin.b);
+    EXPECT_NE(gm.text["isoscope:surfaces"].find(want), std::string::npos) << gm.text["isoscope:surfaces"];
     // Bad values name the flag, and nothing is written.
     for (const auto& [args, flag] : std::vector<std::pair<std::string, std::string>>{
              {" --iso 500 --opacity 1.5", "--opacity"},
