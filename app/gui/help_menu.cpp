@@ -19,7 +19,8 @@
 namespace iso::gui {
 
 QString MainWindow::about_text() const {
-    QString s = "<p><b>isoscope</b>: inspect CT volumes, reconstruct and render isosurfaces, measure.</p><table>";
+    QString s = "<p><b>isoscope</b>: inspect CT volumes, reconstruct and render isosurfaces, measure.</p><table "
+                "cellspacing='6'>";
     for (const auto& [name, version] : core::component_versions())
         s += "<tr><td>" + QString::fromStdString(name) + "</td><td>" + QString::fromStdString(version) + "</td></tr>";
     s += "<tr><td>Qt</td><td>" + QString(qVersion()) + "</td></tr>";
