@@ -246,6 +246,7 @@ void MainWindow::add_window_level_bar() {
     wl->addWidget(new QLabel(" Window: "));
     window_preset_ = new QComboBox(wl);
     window_preset_->setObjectName("window_preset");
+    window_preset_->setToolTip("Window presets of the slice views (CT ones for volumes in HU); 'custom': set by hand");
     window_preset_->addItem("default");
     for (const auto& p : core::ct_window_presets())
         window_preset_->addItem(QString("%1 (W %2 / L %3)")
@@ -257,12 +258,14 @@ void MainWindow::add_window_level_bar() {
     wl->addWidget(new QLabel(" Level (center): "));
     center_ = new QDoubleSpinBox(wl);
     center_->setObjectName("window_center");
+    center_->setToolTip("Window level: the value shown mid-grey (a left drag up or down in a slice view changes it)");
     center_->setRange(-1e6, 1e6);
     center_->setDecimals(1);
     wl->addWidget(center_);
     wl->addWidget(new QLabel(" Width: "));
     width_ = new QDoubleSpinBox(wl);
     width_->setObjectName("window_width");
+    width_->setToolTip("Window width: the range of values from black to white (a left drag left or right changes it)");
     width_->setRange(0, 2e6);
     width_->setDecimals(1);
     wl->addWidget(width_);

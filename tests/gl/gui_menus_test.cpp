@@ -4,14 +4,21 @@
 // the core (core::component_versions) and Qt, the GL renderer from a
 // render in another process (`isoscope render --stats`), the docks and tool
 // bars from the window's widgets.
+#include <QAbstractButton>
+#include <QAbstractSlider>
+#include <QAbstractSpinBox>
 #include <QAction>
 #include <QApplication>
+#include <QComboBox>
 #include <QDialog>
 #include <QDockWidget>
 #include <QMenu>
 #include <QMessageBox>
+#include <QScrollBar>
 #include <QTextBrowser>
 #include <QToolBar>
+
+#include <cstdio>
 
 #include "app/gui/viewer.hpp"
 #include "gui_measure_util.hpp"
@@ -110,4 +117,27 @@ TEST_F(GuiMenus, BindingsListTheViewsKeys) {
         EXPECT_TRUE(text.contains(s)) << s;
     EXPECT_FALSE(d->isModal());
     d->close();
+}
+
+// Every control of the window says what it does when the pointer rests on
+// it (buttons, sliders, number boxes, lists), a surface's row included;
+// scroll bars and Qt's own title-bar and overflow buttons aside.
+TEST_F(GuiMenus, EveryControlHasATooltip) {
+    gui::MainWindow& w = window();
+    std::vector<std::string> missing;
+    int checked = 0;
+    for (QWidget* c : w.findChildren<QWidget*>()) {
+        const bool control = qobject_cast<QAbstractButton*>(c) || qobject_cast<QAbstractSlider*>(c) ||
+                             qobject_cast<QAbstractSpinBox*>(c) || qobject_cast<QComboBox*>(c);
+        const QString cls = c->metaObject()->className();
+        if (!control || !c->isVisible() || qobject_cast<QScrollBar*>(c) || cls == "QDockWidgetTitleButton" ||
+            cls == "QTableCornerButton" || c->objectName() == "qt_toolbar_ext_button")
+            continue;
+        ++checked;
+        if (c->toolTip().trimmed().isEmpty())
+            missing.push_back(cls.toStdString() + " '" + c->objectName().toStdString() + "'");
+    }
+    std::printf("%d controls checked\n", checked);
+    EXPECT_GT(checked, 20);
+    for (const auto& m : missing) ADD_FAILURE() << "no tooltip: " << m;
 }
