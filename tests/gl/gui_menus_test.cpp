@@ -101,7 +101,7 @@ TEST_F(GuiMenus, AboutNamesTheVersionsAndTheRenderer) {
     ASSERT_NE(help, nullptr);
     w.findChild<QAction*>("help_about")->trigger();
     QMessageBox* box = nullptr;
-    ASSERT_TRUE(wait_until([&] { return (box = top_level<QMessageBox>("about_box")) != nullptr; }, 5000));
+    ASSERT_TRUE(wait_until([&] { return (box = top_level<QMessageBox>("about_box")) != nullptr; }, 30000));
     EXPECT_EQ(box->text(), about);
     box->close();
 }
@@ -111,7 +111,7 @@ TEST_F(GuiMenus, BindingsListTheViewsKeys) {
     gui::MainWindow& w = window();
     w.findChild<QAction*>("help_bindings")->trigger();
     QDialog* d = nullptr;
-    ASSERT_TRUE(wait_until([&] { return (d = top_level<QDialog>("bindings_dialog")) != nullptr; }, 5000));
+    ASSERT_TRUE(wait_until([&] { return (d = top_level<QDialog>("bindings_dialog")) != nullptr; }, 30000));
     const QString text = d->findChild<QTextBrowser*>()->toPlainText();
     for (const char* s : {"A P L R S I", "O", "Page Up", "Left drag", "Middle drag", "Right drag", "Escape", "Ctrl+Z"})
         EXPECT_TRUE(text.contains(s)) << s;

@@ -99,7 +99,7 @@ template <class T> T* visible_child(QWidget& w, const char* name) {
 // Closes the error box the window shows, returning its text (empty: none came).
 QString take_error_box(gui::MainWindow& w) {
     QMessageBox* box = nullptr;
-    if (!wait_until([&] { return (box = visible_child<QMessageBox>(w, "error")) != nullptr; }, 5000)) return {};
+    if (!wait_until([&] { return (box = visible_child<QMessageBox>(w, "error")) != nullptr; }, 30000)) return {};
     const QString text = box->text();
     box->close();
     QTest::qWait(50);
@@ -533,14 +533,14 @@ TEST(GuiPanels, SaveLocationsFollowTheData) {
     save->trigger();
     gui::SaveSurfacesDialog* sd = nullptr;
     ASSERT_TRUE(
-        wait_until([&] { return (sd = visible_child<gui::SaveSurfacesDialog>(w, "save_surfaces_dialog")); }, 5000));
+        wait_until([&] { return (sd = visible_child<gui::SaveSurfacesDialog>(w, "save_surfaces_dialog")); }, 30000));
     EXPECT_EQ(sd->findChild<QLineEdit*>("file")->text(), d + "/data/headsq-iso500.stl");
     sd->reject();
     QAction* exp = file_action(w, "&Export image...");
     ASSERT_NE(exp, nullptr);
     exp->trigger();
     gui::ExportDialog* ed = nullptr;
-    ASSERT_TRUE(wait_until([&] { return (ed = visible_child<gui::ExportDialog>(w, "export_dialog")); }, 5000));
+    ASSERT_TRUE(wait_until([&] { return (ed = visible_child<gui::ExportDialog>(w, "export_dialog")); }, 30000));
     EXPECT_EQ(ed->findChild<QLineEdit*>("file")->text(), d + "/data/headsq.png");
     ed->reject();
 }

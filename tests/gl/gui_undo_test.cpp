@@ -98,7 +98,7 @@ void answer(gui::MainWindow& w, const char* name, QMessageBox::StandardButton wh
     ASSERT_TRUE(wait_until([&] { return (box = w.findChild<QMessageBox*>(name)) && box->isVisible(); }, 10000))
         << "no question " << name;
     QTest::mouseClick(box->button(which), Qt::LeftButton);
-    ASSERT_TRUE(wait_until([&] { return w.findChild<QMessageBox*>(name) == nullptr; }, 5000));
+    ASSERT_TRUE(wait_until([&] { return w.findChild<QMessageBox*>(name) == nullptr; }, 30000));
 }
 
 QAction* recent_action(gui::MainWindow& w, const std::string& path) {
@@ -442,7 +442,7 @@ TEST(GuiUndo, AutosaveKillAndRestore) {
     bool otherwise = false;
     w.offer_recovery([&] { otherwise = true; });
     QMessageBox* box = nullptr;
-    ASSERT_TRUE(wait_until([&] { return (box = w.findChild<QMessageBox*>("recovery")) && box->isVisible(); }, 5000));
+    ASSERT_TRUE(wait_until([&] { return (box = w.findChild<QMessageBox*>("recovery")) && box->isVisible(); }, 30000));
     QTest::mouseClick(box->findChild<QPushButton*>("restore"), Qt::LeftButton);
     ASSERT_TRUE(wait_until([&] { return !w.busy() && !w.scene().surfaces().empty(); }, 60000));
     EXPECT_FALSE(otherwise);
