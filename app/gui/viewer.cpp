@@ -90,10 +90,10 @@ RenderOptions Viewer::frame_options() const {
     // software GL it costs 2-3x a frame, docs/gui.md); the still frames after
     // the release bring it back and accumulate it.
     opt.look = options_.look;
-    // DSRAA's sub-samples cost 2-3x a frame on software GL (llvmpipe
-    // rasterizes every sub-sample; docs/rendering.md "Anti-aliasing"): a drag
-    // goes without them, as without AO, and the still frames after it are
-    // anti-aliased.
+    // DSRAA's sub-samples cost up to 2.7x a frame without AO on software GL
+    // (llvmpipe rasterizes every sub-sample; docs/image_bench.md "What DSRAA
+    // costs the live view"): a drag goes without them, as without AO, and the
+    // still frames after it are anti-aliased.
     if (dragging_ && !options_.ao_while_dragging) {
         opt.look.ao = AoMethod::Off;
         opt.look.aa.samples = 1;
