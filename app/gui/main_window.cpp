@@ -287,6 +287,9 @@ void MainWindow::add_window_level_bar() {
 }
 
 MainWindow::~MainWindow() {
+    // The undo stack is a child: ~QWidget deletes it after this destructor,
+    // and its clear() then signals lambdas that read this window's members.
+    undo_->disconnect(this);
     wait_for_autosave();           // it reads nothing of the window, but its thread must end
     surfaces_->set_scene(nullptr); // its re-extractions read the scene: they stop first
     // Workers still running (an abandoned load, an extraction) finish before
