@@ -17,17 +17,25 @@ namespace iso::core {
 struct Scene::Impl {
     struct Entry {
         SurfaceInfo info;
-        Mesh mesh;
+        std::shared_ptr<const Mesh> mesh; // shared with snapshots: replaced, never changed in place
         Bounds bounds;
-        std::uint32_t gpu_id = 0; // the renderer's object id once uploaded (0: not yet)
-        bool gpu_stale = false;   // the mesh changed (or was removed) since it was uploaded
-        bool removed = false;     // the id stays taken: ids equal the renderer's object ids
+        std::uint64_t version = 0; // a new one with each mesh (and removal)
+        bool removed = false;      // the id stays taken: ids equal the renderer's object ids
     };
     std::vector<Entry> surfaces;
+    std::uint64_t versions = 0;
+    SnapshotRenderer gpu;
+    // A new mesh for `e` (null: removed) and its bounds.
+    void set_mesh(Entry& e, std::shared_ptr<const Mesh> m) {
+        e.bounds = Bounds{};
+        if (m)
+            for (const auto& p : m->positions) e.bounds.add(glm::dvec3(p));
+        e.mesh = std::move(m);
+        e.version = ++versions;
+    }
     std::optional<Volume> volume;
     std::string volume_source;
     std::vector<std::string> sources;
-    std::unique_ptr<Renderer> renderer;
     // Computed once per volume, read by extractions on worker threads.
     mutable std::mutex cache_mutex;
     mutable std::shared_ptr<const ChunkIndex> index;
@@ -203,18 +211,13 @@ void Scene::replace_surface(SurfaceId id, Mesh m, double value, const PostProces
         e.info.name = surface_name(false, value);
     e.info.value = value;
     e.info.post = post;
-    e.bounds = Bounds{};
-    for (const auto& p : m.positions) e.bounds.add(glm::dvec3(p));
-    e.mesh = std::move(m);
-    e.gpu_stale = true;
+    impl_->set_mesh(e, std::make_shared<const Mesh>(std::move(m)));
 }
 
 void Scene::remove_surface(SurfaceId id) {
     auto& e = impl_->at(id, "Scene::remove_surface");
     e.removed = true;
-    e.mesh = Mesh{};
-    e.bounds = Bounds{};
-    e.gpu_stale = true;
+    impl_->set_mesh(e, nullptr);
 }
 
 void Scene::restore_surface(SurfaceId id, Mesh m, SurfaceInfo info) {
@@ -225,11 +228,8 @@ void Scene::restore_surface(SurfaceId id, Mesh m, SurfaceInfo info) {
     if (!(info.opacity >= 0.0f && info.opacity <= 1.0f))
         throw Error("Scene::restore_surface", "opacity of '" + info.name + "' must be between 0 and 1");
     e.info = std::move(info);
-    e.bounds = Bounds{};
-    for (const auto& p : m.positions) e.bounds.add(glm::dvec3(p));
-    e.mesh = std::move(m);
+    impl_->set_mesh(e, std::make_shared<const Mesh>(std::move(m))); // uploaded again into the same object id
     e.removed = false;
-    e.gpu_stale = true; // the renderer dropped its copy: upload it into the same object id
 }
 
 bool Scene::has_surface(SurfaceId id) const {
@@ -272,9 +272,8 @@ std::vector<SurfaceId> Scene::add_extracted(std::vector<Mesh> meshes, SurfaceInf
 SurfaceId Scene::add_mesh(Mesh m, SurfaceInfo info) {
     if (!(info.opacity >= 0.0f && info.opacity <= 1.0f))
         throw Error("Scene::add_mesh", "opacity of '" + info.name + "' must be between 0 and 1");
-    Bounds b;
-    for (const auto& p : m.positions) b.add(glm::dvec3(p));
-    impl_->surfaces.push_back({std::move(info), std::move(m), b, 0, false, false});
+    impl_->surfaces.push_back({std::move(info), nullptr, Bounds{}, 0, false});
+    impl_->set_mesh(impl_->surfaces.back(), std::make_shared<const Mesh>(std::move(m)));
     return SurfaceId(impl_->surfaces.size());
 }
 
@@ -288,7 +287,7 @@ std::vector<SurfaceId> Scene::surfaces() const {
 
 SurfaceInfo& Scene::info(SurfaceId id) { return impl_->at(id, "Scene::info").info; }
 const SurfaceInfo& Scene::info(SurfaceId id) const { return impl_->at(id, "Scene::info").info; }
-const Mesh& Scene::mesh(SurfaceId id) const { return impl_->at(id, "Scene::mesh").mesh; }
+const Mesh& Scene::mesh(SurfaceId id) const { return *impl_->at(id, "Scene::mesh").mesh; }
 
 Bounds Scene::bounds() const {
     Bounds b;
@@ -310,43 +309,67 @@ Camera Scene::camera(PatientView view, double aspect) const {
     return c;
 }
 
-Renderer& Scene::renderer() {
-    if (!impl_->renderer) impl_->renderer = std::make_unique<Renderer>();
-    return *impl_->renderer;
-}
-
-RenderResult Scene::render(const Camera& camera, const RenderOptions& opt) {
-    Renderer& ren = renderer();
-    // Upload what is new or changed, drop what was removed; carry the
-    // properties a front end may have edited. Every entry keeps its slot, so
-    // the renderer's object ids (id AOV, picking) equal the surface ids.
-    for (auto& e : impl_->surfaces) {
+SceneSnapshot Scene::snapshot() const {
+    SceneSnapshot s;
+    s.surfaces.reserve(impl_->surfaces.size());
+    for (const auto& e : impl_->surfaces) {
         SceneObject o;
         o.name = e.info.name;
         o.color = e.info.color;
         o.opacity = e.info.opacity;
         o.visible = e.info.visible && !e.removed;
         o.pickable = e.info.pickable && !e.removed;
-        if (e.gpu_id == 0) {
-            e.gpu_id = ren.add(e.mesh, o);
-        } else if (e.gpu_stale) {
-            if (e.removed)
-                ren.remove(e.gpu_id);
-            else
-                ren.replace(e.gpu_id, e.mesh);
-        }
-        e.gpu_stale = false;
-        ren.object(e.gpu_id) = o;
+        s.surfaces.push_back({e.mesh, e.version, std::move(o)});
     }
-    return ren.render(camera, opt);
+    s.bounds = bounds();
+    return s;
 }
 
-void Scene::release_gpu() {
-    impl_->renderer.reset();
-    for (auto& e : impl_->surfaces) {
-        e.gpu_id = 0;
-        e.gpu_stale = false;
+RenderResult Scene::render(const Camera& camera, const RenderOptions& opt) {
+    return impl_->gpu.render(snapshot(), camera, opt);
+}
+
+void Scene::release_gpu() { impl_->gpu.release(); }
+
+Renderer& Scene::renderer() { return impl_->gpu.renderer(); }
+
+SnapshotRenderer::SnapshotRenderer() = default;
+SnapshotRenderer::~SnapshotRenderer() = default;
+
+Renderer& SnapshotRenderer::renderer() {
+    if (!renderer_) {
+        renderer_ = std::make_unique<Renderer>();
+        uploaded_.clear();
     }
+    return *renderer_;
+}
+
+void SnapshotRenderer::release() {
+    renderer_.reset();
+    uploaded_.clear();
+}
+
+RenderResult SnapshotRenderer::render(const SceneSnapshot& s, const Camera& camera, const RenderOptions& opt) {
+    Renderer& ren = renderer();
+    // Upload what is new or changed, drop what was removed; carry the
+    // properties a front end may have edited. Every slot keeps its place, so
+    // the renderer's object ids (id AOV, picking) equal the surface ids.
+    static const Mesh empty;
+    for (std::size_t i = 0; i < s.surfaces.size(); ++i) {
+        const auto& e = s.surfaces[i];
+        if (i == uploaded_.size()) {
+            ren.add(e.mesh ? *e.mesh : empty, e.object);
+            uploaded_.push_back(e.version);
+        } else if (uploaded_[i] != e.version) {
+            if (e.mesh)
+                ren.replace(std::uint32_t(i + 1), *e.mesh);
+            else
+                ren.remove(std::uint32_t(i + 1));
+            uploaded_[i] = e.version;
+        }
+        ren.object(std::uint32_t(i + 1)) = e.object;
+    }
+    return ren.render(camera, opt);
 }
 
 void Scene::export_mesh(SurfaceId id, const std::string& path) const { save_mesh(mesh(id), path); }

@@ -46,6 +46,38 @@ struct SurfaceInfo {
     PostProcessOptions post;
 };
 
+// What a frame draws, taken at one moment: each surface slot's mesh
+// (shared and never changed in place: a replaced mesh is a new one), a
+// version that changes whenever the slot's mesh does, and its drawing
+// properties. A render thread draws a snapshot while the GUI thread goes on
+// editing the scene (the desktop app's still frames).
+struct SceneSnapshot {
+    struct Surface {
+        std::shared_ptr<const Mesh> mesh; // null: removed
+        std::uint64_t version = 0;
+        SceneObject object;
+    };
+    std::vector<Surface> surfaces; // slot i is surface id i + 1
+    Bounds bounds;                 // of the visible surfaces (Scene::bounds)
+};
+
+// Draws snapshots in the current GL context, keeping its GPU copies across
+// calls and uploading only the slots whose version changed; renderer
+// object ids equal the surface ids. Scene::render draws through one; a
+// thread with its own context keeps another.
+class SnapshotRenderer {
+public:
+    SnapshotRenderer();
+    ~SnapshotRenderer();
+    RenderResult render(const SceneSnapshot& s, const Camera& camera, const RenderOptions& opt);
+    Renderer& renderer(); // made on first use in the current context
+    void release();       // with the context current, before it goes
+
+private:
+    std::unique_ptr<Renderer> renderer_;
+    std::vector<std::uint64_t> uploaded_; // per slot: the version on the GPU
+};
+
 class Scene {
 public:
     Scene();
@@ -124,6 +156,8 @@ public:
     // release_gpu() with it current before the context goes.
     RenderResult render(const Camera& camera, const RenderOptions& opt);
     void release_gpu();
+    // The surfaces as they are now, for a renderer on another thread.
+    SceneSnapshot snapshot() const;
     // The GPU renderer (tests, benchmarks); made on first use in the current context.
     Renderer& renderer();
     // Writes a surface in LPS mm (.stl, .ply, .obj, .vtp; tagged LPS).

@@ -109,6 +109,7 @@ struct DiskAoSettings {
     // none). Relative to R so that it scales with the scene (docs/ao.md,
     // "Disk AO: hierarchy and CPU evaluation").
     double receiver_offset = 1e-3;
+    bool operator==(const DiskAoSettings&) const = default; // FrameLook compares itself with it
 };
 
 // One setting of S as the table describes it: `name` is how errors
