@@ -1,4 +1,5 @@
 #include "app/gui/viewer.hpp"
+#include "renderer/gl/present.hpp"
 
 #include <QApplication>
 #include <QKeyEvent>
@@ -12,6 +13,7 @@
 #include <iostream>
 
 #include "app/gui/raytraced_refiner.hpp"
+#include "app/gui/still_frames.hpp"
 #include "io/error.hpp"
 #include "renderer/core/legend.hpp"
 #include "renderer/core/pick.hpp"
@@ -35,8 +37,10 @@ Viewer::Viewer(core::Scene& scene, PatientView view, ViewerOptions options, QWid
 
 Viewer::~Viewer() {
     refiner_.reset(); // cancels and waits for its worker before anything it posts to goes
+    stills_.reset();  // its frame in progress finishes; it frees its own context's objects
     makeCurrent();    // GL objects are released with the widget's context current
     scene_.release_gpu();
+    if (presenter_) presenter_->release();
     doneCurrent();
 }
 
@@ -118,11 +122,11 @@ RenderOptions Viewer::frame_options() const {
 }
 
 bool Viewer::converged() const {
-    if (frames_ == 0) return false;
-    const bool aa = options_.look.aa.view_frames <= 1 || aa_frames_ >= options_.look.aa.view_frames;
-    if (options_.look.ao == AoMethod::Raytraced) return raytraced_drawn_ && raytraced_stats_.done && aa;
-    return (options_.look.ao != AoMethod::Cone || ao_frames_ >= options_.look.ao_frames) && aa;
+    if (frames_ == 0 || !complete_) return false;
+    return options_.look.ao != AoMethod::Raytraced || (raytraced_drawn_ && raytraced_stats_.done);
 }
+
+int Viewer::still_frames_held() const { return still_frames_held_ + (stills_ ? stills_->held() : 0); }
 
 // Ray-traced AO follows the view: a new camera, size, look or scene drops
 // the image and restarts the refinement; while a drag moves the camera
@@ -151,7 +155,9 @@ void Viewer::take_batch(const RaytracedBatch& b) {
     update();
 }
 
-void Viewer::draw() {
+// The camera framed for what is visible now (see initializeGL), its
+// near and far planes around it.
+void Viewer::frame_camera() {
     if (framed_empty_ && !scene_.bounds().empty()) {
         const glm::dvec3 f = camera_.forward();
         if (std::isfinite(f.x) && std::isfinite(f.y) && std::isfinite(f.z))
@@ -161,11 +167,141 @@ void Viewer::draw() {
         framed_empty_ = false;
     }
     camera_.fit_planes(scene_.bounds());
+}
+
+// Frames whose look needs still frames: AO traced in the frame (cone,
+// disk), DSRAA's sub-samples, the jittered average.
+namespace {
+bool needs_still_frames(const RenderOptions& opt) {
+    const bool traced_ao = opt.look.ao != AoMethod::Off && !(opt.look.ao == AoMethod::Raytraced && opt.ao_image);
+    return traced_ao || opt.look.aa.samples > 1 || opt.accumulate;
+}
+
+// The plain frame shown until the still-frame thread's first one arrives:
+// what a drag draws (no AO but ray-traced AO already traced, one sample).
+RenderOptions plain(RenderOptions opt) {
+    if (!(opt.look.ao == AoMethod::Raytraced && opt.ao_image)) {
+        opt.look.ao = AoMethod::Off;
+        opt.ao_image = nullptr;
+    }
+    opt.look.aa.samples = 1;
+    opt.accumulate = false;
+    return opt;
+}
+} // namespace
+
+void Viewer::draw() {
+    frame_camera();
     follow_raytraced();
     const RenderOptions opt = frame_options();
     annotations_->legend.clear();
     if (options_.legend) annotations_->legend = core::legend_entries(scene_, opt.look);
+    if (!dragging_ && needs_still_frames(opt) && use_still_thread()) {
+        if (show_still(opt)) return;
+        draw_here(plain(opt), true);
+        return;
+    }
+    draw_here(opt, false);
+}
+
+// What a frame shows apart from its jitter: the camera, the image, the
+// surfaces (mesh versions, colours, names), the overlay and the AO image;
+// the look is compared on its own.
+std::vector<double> Viewer::frame_key(const RenderOptions& opt) const {
+    const Camera& c = camera_;
+    std::vector<double> k{c.eye.x,
+                          c.eye.y,
+                          c.eye.z,
+                          c.target.x,
+                          c.target.y,
+                          c.target.z,
+                          c.up.x,
+                          c.up.y,
+                          c.up.z,
+                          c.fov_y_degrees,
+                          c.near_plane,
+                          c.far_plane,
+                          double(opt.width),
+                          double(opt.height),
+                          double(opt.scale),
+                          double(opt.accumulate),
+                          double(annotations_version_),
+                          double(reinterpret_cast<std::uintptr_t>(opt.ao_image))};
+    for (const auto& s : scene_.snapshot().surfaces)
+        k.insert(k.end(), {double(s.version), double(std::hash<std::string>{}(s.object.name) >> 11), s.object.color.r,
+                           s.object.color.g, s.object.color.b, s.object.opacity, double(s.object.visible)});
+    return k;
+}
+
+bool Viewer::use_still_thread() {
+    if (!options_.still_thread || stills_failed_) return false;
+    if (!stills_) {
+        stills_ = std::make_unique<StillFrames>(this, [this](const StillFrame& f) { take_still(f); });
+        presenter_ = std::make_unique<gl::ImagePresenter>();
+    }
+    return true;
+}
+
+// Still frames from the thread: a view it was not asked for yet is asked
+// for; its latest frame for this view is blitted (true). False: none yet,
+// the caller shows a plain frame meanwhile.
+bool Viewer::show_still(const RenderOptions& opt) {
+    std::vector<double> key = frame_key(opt);
+    if (key != still_key_ || !(opt.look == still_look_)) {
+        StillRequest r;
+        r.id = ++still_id_;
+        r.scene = scene_.snapshot();
+        r.camera = camera_;
+        r.opt = opt;
+        r.annotations = std::make_shared<const Annotations>(*annotations_);
+        if (opt.ao_image) r.ao_image = raytraced_;
+        r.ao_frames = opt.look.ao == AoMethod::Cone && options_.look.ao == AoMethod::Cone ? options_.look.ao_frames : 0;
+        r.aa_frames = opt.accumulate ? options_.look.aa.view_frames : 1;
+        stills_->request(std::move(r));
+        still_key_ = key;
+        still_look_ = opt.look;
+        still_.reset();
+    }
+    if (!still_ || !still_->image) return false;
+    presenter_->present(*still_->image, defaultFramebufferObject());
+    shown_key_ = std::move(key);
+    shown_look_ = opt.look;
+    labels_ = still_->labels;
+    raytraced_drawn_ = opt.ao_image != nullptr;
+    ao_frames_ = still_->ao_frames;
+    aa_frames_ = still_->aa_frames;
+    complete_ = still_->last;
+    ++frames_;
+    return true;
+}
+
+// On the GUI thread, for each frame the thread drew: kept and shown if it
+// is for the view as it is; an error makes the view draw its still frames
+// itself from now on (and report the error if it has it too).
+void Viewer::take_still(const StillFrame& f) {
+    if (f.request != still_id_) return; // stale: the view changed since
+    if (!f.error.empty()) {
+        std::cerr << "isoscope view: still frames drawn on the GUI thread: " << f.error << "\n";
+        stills_failed_ = true;
+        still_key_.clear();
+        update();
+        return;
+    }
+    still_ = std::make_shared<const StillFrame>(f);
+    ++thread_frames_;
+    last_thread_ms_ = f.ms;
+    update();
+}
+
+// A frame drawn here, on the GUI thread: a drag's, a final one, the plain
+// frame standing in for the thread's (`stand_in`), or every still frame
+// without the thread. A plain frame already on screen is not drawn again.
+void Viewer::draw_here(const RenderOptions& opt, bool stand_in) {
+    std::vector<double> key = frame_key(opt);
+    if (stand_in && key == shown_key_ && opt.look == shown_look_) return;
     auto r = scene_.render(camera_, opt);
+    shown_key_ = std::move(key);
+    shown_look_ = opt.look;
     raytraced_drawn_ = opt.ao_image != nullptr;
     labels_ = std::move(r.labels);
     if (gl_renderer_.empty()) gl_renderer_ = r.gl_renderer;
@@ -180,13 +316,14 @@ void Viewer::draw() {
     const bool accumulates = opt.look.ao == AoMethod::Cone && options_.look.ao == AoMethod::Cone;
     ao_frames_ = accumulates ? r.ao_frames : 0;
     aa_frames_ = r.aa_frames;
-    // Progressive AO and anti-aliasing: while the camera and the scene stay
-    // still, keep drawing so new jitter sets (of the AO, of the sub-pixel
-    // offset) accumulate; any interaction restarts the accumulation (the
-    // renderer sees the change).
+    // Progressive AO and anti-aliasing without the thread: while the camera
+    // and the scene stay still, keep drawing so new jitter sets (of the AO,
+    // of the sub-pixel offset) accumulate; any interaction restarts the
+    // accumulation (the renderer sees the change).
     const bool ao_more = accumulates && ao_frames_ < options_.look.ao_frames;
     const bool aa_more = opt.accumulate && aa_frames_ < options_.look.aa.view_frames;
-    if (ao_more || aa_more) still_timer_->start(0);
+    complete_ = !stand_in && !dragging_ && !ao_more && !aa_more;
+    if (!stand_in && (ao_more || aa_more)) still_timer_->start(0);
 }
 
 // Input anywhere in the application (this view's own included) holds the
@@ -197,7 +334,10 @@ bool Viewer::eventFilter(QObject* watched, QEvent* e) {
     case QEvent::MouseButtonPress:
     case QEvent::MouseButtonRelease:
     case QEvent::MouseMove:
-    case QEvent::Wheel: last_input_.restart(); break;
+    case QEvent::Wheel:
+        last_input_.restart();
+        if (stills_) stills_->hold_for(input_quiet_ms_);
+        break;
     default: break;
     }
     return QOpenGLWidget::eventFilter(watched, e);
@@ -258,11 +398,13 @@ core::PickResult Viewer::pick_at(QPointF image_pixel) {
 
 void Viewer::set_markups(std::vector<Markup> markups) {
     annotations_->markups = std::move(markups);
+    ++annotations_version_;
     update();
 }
 
 void Viewer::set_labels(std::vector<std::pair<glm::dvec3, std::string>> labels) {
     annotations_->labels.clear();
+    ++annotations_version_;
     for (auto& [at, text] : labels) annotations_->labels.push_back({at, std::move(text)});
     update();
 }
@@ -292,7 +434,10 @@ void Viewer::mouseReleaseEvent(QMouseEvent* e) {
     if (e->button() == Qt::LeftButton && !drag_.dragged && on_click) on_click(*this, to_image(e->position()));
     if (dragging_ && e->buttons() == Qt::NoButton) {
         dragging_ = false;
-        update(); // the still frames, with AO again
+        // The still frames, with AO again: the end of the view's own drag
+        // does not hold them back (the user waits for them now).
+        if (stills_) stills_->release_hold();
+        update();
     }
 }
 

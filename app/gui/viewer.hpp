@@ -32,10 +32,16 @@ struct PickResult;
 
 class QTimer;
 
+namespace iso::gl {
+class ImagePresenter;
+}
+
 namespace iso::gui {
 
 class RaytracedRefiner;
 struct RaytracedBatch;
+class StillFrames;
+struct StillFrame;
 
 // The 3D view's look is a frame's (FrameLook: cone AO on, 16 still frames
 // by default; key O toggles AO between off and cone), plus how it behaves
@@ -47,6 +53,12 @@ struct ViewerOptions {
     // AO in the frames drawn while a mouse drag moves the camera (off: those
     // frames go without it and the still frames after the release bring it back).
     bool ao_while_dragging = false;
+    // Still frames (AO, anti-aliasing) drawn on a thread of their own
+    // (StillFrames) while the GUI thread shows a plain frame (no AO, one
+    // sample) and blits each one that arrives; off: drawn on the GUI thread
+    // between events (the way to compare, and the fallback when that thread
+    // has no GL context).
+    bool still_thread = true;
     // The legend in the overlay: the visible surfaces' names, colours,
     // opacities and iso values (core/legend.hpp), as exports draw it.
     bool legend = true;
@@ -87,7 +99,11 @@ public:
     static constexpr int kInputQuietMs = 300;
     void set_input_quiet_ms(int ms) { input_quiet_ms_ = ms; }
     // Still frames held back by input so far.
-    int still_frames_held() const { return still_frames_held_; }
+    int still_frames_held() const;
+    // Frames the still-frame thread delivered and this view showed (0 with
+    // ViewerOptions::still_thread off), and the last one's render time.
+    int thread_frames() const { return thread_frames_; }
+    double last_thread_frame_ms() const { return last_thread_ms_; }
     // GL objects the renderer made after the first frame (0 in a steady
     // view: resources live across frames).
     std::size_t gl_objects_since_first_frame() const { return objects_since_first_frame_; }
@@ -147,6 +163,10 @@ protected:
     void initializeGL() override;
     void paintGL() override;
     void draw();
+    void frame_camera();
+    void draw_here(const RenderOptions& opt, bool stand_in);
+    bool show_still(const RenderOptions& opt);
+    std::vector<double> frame_key(const RenderOptions& opt) const;
     RenderOptions frame_options() const;
     void mousePressEvent(QMouseEvent* e) override;
     void mouseMoveEvent(QMouseEvent* e) override;
@@ -189,6 +209,23 @@ private:
     QElapsedTimer last_input_;
     int input_quiet_ms_ = kInputQuietMs;
     int still_frames_held_ = 0;
+    // The picture stopped changing (Viewer::converged's test, with the
+    // ray-traced AO's own).
+    bool complete_ = false;
+    // Still frames on their own thread: what was asked of it (key and look
+    // of the view it is for), its latest frame for that, the picture on screen.
+    std::unique_ptr<StillFrames> stills_;
+    std::unique_ptr<gl::ImagePresenter> presenter_;
+    bool stills_failed_ = false;
+    std::uint64_t still_id_ = 0;
+    std::vector<double> still_key_, shown_key_;
+    FrameLook still_look_, shown_look_;
+    std::shared_ptr<const StillFrame> still_;
+    std::uint64_t annotations_version_ = 0;
+    int thread_frames_ = 0;
+    double last_thread_ms_ = 0;
+    bool use_still_thread();
+    void take_still(const StillFrame& f);
 };
 
 } // namespace iso::gui

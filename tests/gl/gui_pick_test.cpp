@@ -163,7 +163,7 @@ TEST_F(GuiPick, ClickAfterRotatingIsCorePickWithTheViewsCamera) {
 
 // What a pick costs in the view (docs/gui.md: the frame it rides on,
 // presented, and the resolve; printed), and picks leave the view's AO
-// accumulation alone: the next frame adds to it.
+// accumulation alone: the picture stays the converged one.
 TEST_F(GuiPick, PicksLeaveTheAoAccumulationAlone) {
     gui::MainWindow& w = window();
     gui::Viewer* viewer = w.viewer();
@@ -180,7 +180,8 @@ TEST_F(GuiPick, PicksLeaveTheAoAccumulationAlone) {
         viewer->pick_at(QPointF(at));
         viewer->update();
         ASSERT_TRUE(wait_until([&] { return viewer->frames() > drawn; }, 10000));
-        EXPECT_EQ(viewer->ao_frames(), ao_frames + 1) << "a pick restarted the view's AO accumulation";
+        EXPECT_TRUE(viewer->converged()) << "a pick changed the view's picture";
+        EXPECT_EQ(viewer->ao_frames(), ao_frames) << "a pick restarted the view's AO accumulation";
     }
 }
 
@@ -197,21 +198,78 @@ TEST_F(GuiPick, InputElsewhereHoldsTheStillFramesBack) {
     viewer->set_camera(turned); // the accumulation starts again
     ASSERT_TRUE(wait_until([&] { return viewer->frames() > 0 && !viewer->converged(); }, 20000));
     QTest::qWait(50);
-    // 15 slice steps 100 ms apart (counted, not timed: a slow build draws a
-    // frame of seconds): the view draws at most the frame it was in and one
-    // more, and holds the rest back.
-    const int drawn = viewer->frames(), held = viewer->still_frames_held();
+    // Slice steps 100 ms apart (counted, not timed: a slow build draws a
+    // frame of seconds) until the still frames are held back (the frame in
+    // progress when the steps began finishes first), then 10 more: from the
+    // hold on, no still frame comes while the user works elsewhere.
+    const int held = viewer->still_frames_held();
     const QPointF mid(axial->width() / 2.0, axial->height() / 2.0);
-    for (int k = 0; k < 15; ++k) {
-        QWheelEvent wheel(mid, axial->mapToGlobal(mid), QPoint(), QPoint(0, k % 2 ? 120 : -120), Qt::NoButton,
+    int k = 0;
+    const auto step = [&] {
+        QWheelEvent wheel(mid, axial->mapToGlobal(mid), QPoint(), QPoint(0, k++ % 2 ? 120 : -120), Qt::NoButton,
                           Qt::NoModifier, Qt::NoScrollPhase, false);
         QCoreApplication::sendEvent(axial, &wheel);
         QTest::qWait(100);
-    }
-    std::printf("during 15 slice steps the 3D view drew %d still frames and held %d back\n", viewer->frames() - drawn,
-                viewer->still_frames_held() - held);
-    EXPECT_LE(viewer->frames() - drawn, 2) << "still frames kept coming while the user worked elsewhere";
-    EXPECT_GT(viewer->still_frames_held(), held);
+    };
+    while (viewer->still_frames_held() == held && k < 600) step();
+    ASSERT_GT(viewer->still_frames_held(), held) << "the still frames were never held back";
+    QTest::qWait(50); // a frame finished just before the hold is shown
+    const int drawn = viewer->thread_frames();
+    for (int n = 0; n < 10; ++n) step();
+    std::printf("held after %d slice steps; during 10 more the 3D view showed %d still frames\n", k - 10,
+                viewer->thread_frames() - drawn);
+    EXPECT_EQ(viewer->thread_frames() - drawn, 0) << "still frames kept coming while the user worked elsewhere";
     // Quiet input: the accumulation resumes and converges.
     ASSERT_TRUE(wait_until([&] { return viewer->converged(); }, 180000)) << "the still frames did not resume";
+}
+
+// Still frames come from their own thread (ViewerOptions::still_thread, on
+// by default): after a camera change the GUI thread draws one plain frame
+// and then only shows the thread's frames; the converged picture is the one
+// the GUI thread draws itself when asked to (the way it was drawn before),
+// pixel for pixel within rounding, and right side up.
+TEST_F(GuiPick, StillFramesComeFromTheirThreadAndMatchTheGuiThreads) {
+    gui::MainWindow& w = window();
+    gui::Viewer* viewer = w.viewer();
+    ASSERT_TRUE(viewer->options().still_thread);
+    ASSERT_NE(viewer->options().look.ao, AoMethod::Off);
+    Camera turned = viewer->camera();
+    turned.orbit(25, 10);
+    const int frames = viewer->frames(), thread_frames = viewer->thread_frames();
+    viewer->set_camera(turned);
+    ASSERT_TRUE(wait_until([&] { return viewer->converged() || !viewer->error().empty(); }, 180000));
+    ASSERT_EQ(viewer->error(), "");
+    const int gui_frames = (viewer->frames() - frames) - (viewer->thread_frames() - thread_frames);
+    std::printf("after the turn: %d frame(s) drawn on the GUI thread, %d from the still-frame thread (last %.0f ms)\n",
+                gui_frames, viewer->thread_frames() - thread_frames, viewer->last_thread_frame_ms());
+    EXPECT_LE(gui_frames, 1) << "the GUI thread drew still frames";
+    EXPECT_GE(viewer->thread_frames() - thread_frames, viewer->options().look.ao_frames);
+    EXPECT_EQ(viewer->ao_frames(), viewer->options().look.ao_frames);
+    const QImage threaded = viewer->grabFramebuffer().convertToFormat(QImage::Format_RGB32);
+
+    gui::ViewerOptions o = viewer->options();
+    o.still_thread = false;
+    const int before = viewer->frames(), shown_from_thread = viewer->thread_frames();
+    viewer->set_options(o);
+    ASSERT_TRUE(wait_until(
+        [&] { return (viewer->frames() > before && viewer->converged()) || !viewer->error().empty(); }, 180000));
+    EXPECT_EQ(viewer->thread_frames(), shown_from_thread) << "the thread's frames were shown with it off";
+    const QImage here = viewer->grabFramebuffer().convertToFormat(QImage::Format_RGB32);
+    ASSERT_EQ(threaded.size(), here.size());
+    double sum = 0;
+    int worst = 0;
+    for (int y = 0; y < here.height(); ++y)
+        for (int x = 0; x < here.width(); ++x) {
+            const QRgb a = threaded.pixel(x, y), b = here.pixel(x, y);
+            for (const int d : {qRed(a) - qRed(b), qGreen(a) - qGreen(b), qBlue(a) - qBlue(b)}) {
+                sum += double(d) * d;
+                worst = std::max(worst, std::abs(d));
+            }
+        }
+    const double rmse = std::sqrt(sum / (3.0 * here.width() * here.height())) / 255.0;
+    std::printf("thread's picture against the GUI thread's: RMSE %.5f, largest difference %d of 255\n", rmse, worst);
+    EXPECT_LT(rmse, 0.002);
+    // Upside down or shifted pictures differ by far more; so does a picture without AO.
+    o.still_thread = true;
+    viewer->set_options(o);
 }

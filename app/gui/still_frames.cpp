@@ -1,0 +1,150 @@
+#include "app/gui/still_frames.hpp"
+
+#include <QMetaObject>
+#include <QObject>
+
+#include <chrono>
+#ifdef __linux__
+#include <sys/resource.h>
+#include <sys/syscall.h>
+#include <unistd.h>
+#endif
+
+#include "renderer/gl/context.hpp"
+
+namespace iso::gui {
+
+namespace {
+std::int64_t now_ns() {
+    return std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::steady_clock::now().time_since_epoch())
+        .count();
+}
+} // namespace
+
+StillFrames::StillFrames(QObject* receiver, std::function<void(const StillFrame&)> on_frame)
+    : receiver_(receiver), on_frame_(std::move(on_frame)) {
+    thread_ = std::thread([this] { run(); });
+}
+
+StillFrames::~StillFrames() {
+    {
+        std::lock_guard lock(mutex_);
+        stop_ = true;
+    }
+    wake_.notify_all();
+    thread_.join();
+}
+
+void StillFrames::request(StillRequest r) {
+    {
+        std::lock_guard lock(mutex_);
+        pending_ = std::move(r);
+    }
+    wake_.notify_all();
+}
+
+void StillFrames::cancel() {
+    std::lock_guard lock(mutex_);
+    pending_.reset();
+}
+
+void StillFrames::hold_for(int ms) {
+    const std::int64_t until = now_ns() + std::int64_t(ms) * 1000000;
+    std::int64_t seen = hold_until_ns_.load(std::memory_order_relaxed);
+    while (seen < until && !hold_until_ns_.compare_exchange_weak(seen, until, std::memory_order_relaxed)) {}
+}
+
+// Waits until there is a request not yet drawn to the end and the input has
+// settled; false: the thread is to stop.
+bool StillFrames::wait_for_work(std::unique_lock<std::mutex>& lock) {
+    bool counted = false;
+    for (;;) {
+        wake_.wait(lock, [this] { return stop_ || (pending_ && pending_->id != done_); });
+        if (stop_) return false;
+        const std::int64_t hold = hold_until_ns_.load(std::memory_order_relaxed) - now_ns();
+        if (hold <= 0) return true;
+        if (!counted) ++held_;
+        counted = true;
+        // Woken early by a new request or the end of the hold: look again.
+        wake_.wait_for(lock, std::chrono::nanoseconds(hold));
+    }
+}
+
+void StillFrames::run() {
+#ifdef __linux__
+    // Below the GUI thread, and so are the rasterizer threads the context
+    // starts (a thread inherits its creator's nice value): the GUI thread's
+    // slice steps and clicks take the processors first.
+    setpriority(PRIO_PROCESS, id_t(syscall(SYS_gettid)), 10);
+#endif
+    std::unique_ptr<gl::HeadlessContext> context;
+    core::SnapshotRenderer renderer;
+    std::string failed;
+    try {
+        context = std::make_unique<gl::HeadlessContext>();
+        context->make_current();
+    } catch (const std::exception& e) {
+        failed = std::string("the still-frame thread has no GL context: ") + e.what();
+    }
+    std::uint64_t drawing = 0; // the request the frames are accumulating for
+    int frames_left = 0;
+    std::unique_lock lock(mutex_);
+    while (wait_for_work(lock)) {
+        StillRequest r = *pending_; // shares the meshes, annotations and AO image
+        lock.unlock();
+        StillFrame f;
+        if (!failed.empty()) {
+            f.request = r.id;
+            f.error = failed;
+            f.last = true;
+        } else {
+            if (r.id != drawing) frames_left = std::max({1, r.ao_frames, r.aa_frames});
+            drawing = r.id;
+            f = draw(renderer, r, frames_left);
+        }
+        lock.lock();
+        if (f.last && pending_ && pending_->id == r.id) done_ = r.id;
+        lock.unlock();
+        post(std::move(f));
+        lock.lock();
+    }
+    lock.unlock();
+    if (context) renderer.release(); // the context is still current on this thread
+}
+
+StillFrame StillFrames::draw(core::SnapshotRenderer& renderer, const StillRequest& r, int& frames_left) {
+    StillFrame f;
+    f.request = r.id;
+    const auto t0 = std::chrono::steady_clock::now();
+    try {
+        RenderOptions opt = r.opt;
+        opt.annotations = r.annotations.get();
+        opt.ao_image = r.ao_image.get();
+        opt.present = false;
+        opt.target_framebuffer = 0;
+        RenderResult res = renderer.render(r.scene, r.camera, opt);
+        f.image = std::make_shared<const Image>(std::move(res.image));
+        f.ao_frames = r.ao_frames > 0 ? res.ao_frames : 0;
+        f.aa_frames = res.aa_frames;
+        f.labels = std::move(res.labels);
+        // Done when the AO and the average have their frames (a restart
+        // inside the renderer, such as a grown translucency pool, is counted in them).
+        --frames_left;
+        const bool ao_done = r.ao_frames <= 0 || f.ao_frames >= r.ao_frames;
+        const bool aa_done = !opt.accumulate || f.aa_frames >= r.aa_frames;
+        f.last = (ao_done && aa_done) || frames_left < -4 * std::max(r.ao_frames, r.aa_frames);
+    } catch (const std::exception& e) {
+        f.error = e.what();
+        f.last = true;
+    }
+    f.ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+    return f;
+}
+
+void StillFrames::post(StillFrame f) {
+    // The callback is copied into the event: it never reaches back into this object.
+    QMetaObject::invokeMethod(
+        receiver_, [cb = on_frame_, f = std::move(f)] { cb(f); }, Qt::QueuedConnection);
+}
+
+} // namespace iso::gui

@@ -1,0 +1,94 @@
+// The 3D view's still frames (AO accumulation, anti-aliasing, DSRAA) drawn
+// on a thread of their own (docs/gui.md, "Still frames off the GUI
+// thread"): its own headless GL context and renderer draw a snapshot of the
+// scene (core::SceneSnapshot: the meshes shared, not copied), read the
+// image back and hand it to the GUI thread, which only blits it. The thread
+// runs below the GUI thread's priority (so do the software rasterizer's
+// threads it starts) and starts no frame while the user's input is recent.
+#pragma once
+
+#include <atomic>
+#include <condition_variable>
+#include <cstdint>
+#include <functional>
+#include <memory>
+#include <mutex>
+#include <optional>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "renderer/core/scene.hpp"
+#include "renderer/frame/annotations.hpp"
+#include "renderer/frame/frame.hpp"
+
+class QObject;
+
+namespace iso::gui {
+
+// What to draw: the frames of one view, accumulated until done.
+struct StillRequest {
+    std::uint64_t id = 0; // increasing: a frame answers the request it was drawn for
+    core::SceneSnapshot scene;
+    Camera camera;
+    RenderOptions opt; // annotations and ao_image are taken from the two below
+    std::shared_ptr<const Annotations> annotations;
+    std::shared_ptr<const Image> ao_image;
+    int ao_frames = 0; // cone AO frames to accumulate (0: the AO is done in one frame)
+    int aa_frames = 1; // frames the anti-aliasing averages
+};
+
+// One frame, as the GUI thread receives it.
+struct StillFrame {
+    std::uint64_t request = 0;
+    std::shared_ptr<const Image> image; // 8-bit RGBA, rows top-down
+    int ao_frames = 0, aa_frames = 0;
+    bool last = false; // the request's frames are all drawn: the picture stopped changing
+    std::vector<LabelBox> labels;
+    double ms = 0;     // render and read-back time of this frame
+    std::string error; // the thread could not draw (no context, a rendering error): no image
+};
+
+class StillFrames {
+public:
+    // `on_frame` runs on `receiver`'s (the GUI) thread, through its event
+    // queue; the receiver must outlive this object.
+    StillFrames(QObject* receiver, std::function<void(const StillFrame&)> on_frame);
+    ~StillFrames(); // the frame being drawn finishes, then the thread ends
+    StillFrames(const StillFrames&) = delete;
+    StillFrames& operator=(const StillFrames&) = delete;
+
+    // Replaces what was asked before (a frame being drawn for it finishes,
+    // and arrives with the older id).
+    void request(StillRequest r);
+    // Nothing more to draw.
+    void cancel();
+    // Input: no frame starts within `ms` of now (called on every input event: cheap).
+    void hold_for(int ms);
+    // The input that held the frames back is over (the view's own drag ended).
+    void release_hold() {
+        hold_until_ns_.store(0, std::memory_order_relaxed);
+        wake_.notify_all();
+    }
+    // Frames that waited for the input to settle before they started.
+    int held() const { return held_; }
+
+private:
+    void run();
+    bool wait_for_work(std::unique_lock<std::mutex>& lock);
+    StillFrame draw(core::SnapshotRenderer& renderer, const StillRequest& r, int& frames_left);
+    void post(StillFrame f);
+
+    QObject* receiver_; // outlives this object: its owner waits for the thread first
+    std::function<void(const StillFrame&)> on_frame_;
+    std::mutex mutex_;
+    std::condition_variable wake_;
+    std::optional<StillRequest> pending_; // guarded by mutex_
+    std::uint64_t done_ = 0;              // the last request drawn to the end
+    bool stop_ = false;
+    std::atomic<std::int64_t> hold_until_ns_{0}; // steady clock
+    std::atomic<int> held_{0};
+    std::thread thread_;
+};
+
+} // namespace iso::gui
