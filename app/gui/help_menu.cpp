@@ -49,7 +49,10 @@ QString MainWindow::bindings_html() {
                                    {"Left drag", "window width (drag right: wider) and level (drag up: higher)"},
                                    {"Middle drag", "pan"},
                                    {"Right drag", "zoom about the pressed point"},
-                                   {"Click", "move the crosshair (with a tool on: place a point)"}}) +
+                                   {"Click", "move the crosshair (with a tool on: place a point)"},
+                                   {"Pointer over a view", "the point, value and voxel under it (bottom left)"},
+                                   {"F, double-click, Fit", "re-centre on the volume and zoom to fit"},
+                                   {"Slider under a view", "go to a slice (one step per slice)"}}) +
            section("Measuring", {{"Ruler, Angle, Point", "click the points in the 3D view or on a slice"},
                                  {"Escape", "drop the points placed so far"},
                                  {"Delete (Measurements list)", "delete the selected measurement"}}) +

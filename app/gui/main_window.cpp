@@ -37,6 +37,7 @@
 #include "app/gui/measure_tools.hpp"
 #include "app/gui/measurements_panel.hpp"
 #include "app/gui/series_dialog.hpp"
+#include "app/gui/slice_panel.hpp"
 #include "app/gui/slice_view.hpp"
 #include "app/gui/view_toolbar.hpp"
 #include "app/gui/structure_tools.hpp"
@@ -141,14 +142,14 @@ MainWindow::MainWindow(QWidget* parent) : QMainWindow(parent), scene_(std::make_
                                                    core::SliceOrientation::Sagittal};
     const std::pair<int, int> cells[] = {{0, 1}, {1, 0}, {1, 1}};
     for (int i = 0; i < 3; ++i) {
-        auto* v = new SliceView(orientations[i], central);
-        v->setObjectName(core::slice_orientation_name(orientations[i]));
+        auto* panel = new SlicePanel(orientations[i], central); // the view, its slider and Fit
+        auto* v = panel->view();
         v->on_click = [this](SliceView& view, QPointF p) { slice_clicked(view, p); };
         v->on_scroll = [this](SliceView& view, double steps) { slice_scrolled(view, steps); };
         v->on_paint_overlay = [this](SliceView& view, QPainter& p) { tools_->paint_slice(view, p); };
         v->on_window = [this](SliceView&, const core::WindowLevel& w) { set_window_level(w); }; // a left drag
         views_[std::size_t(i)] = v;
-        grid->addWidget(v, cells[i].first, cells[i].second);
+        grid->addWidget(panel, cells[i].first, cells[i].second);
     }
     grid->setRowStretch(0, 1);
     grid->setRowStretch(1, 1);
@@ -199,6 +200,7 @@ MainWindow::MainWindow(QWidget* parent) : QMainWindow(parent), scene_(std::make_
     statusBar()->showMessage("Ready");
     for (std::size_t i = 0; i < 3; ++i) views_[i]->set_content(scene_.get(), &planes_[i]);
     watch_unsaved_work();
+    enable_data_actions();
 }
 
 // The File menu, and the Edit menu with the undo stack every edit goes through.
@@ -212,8 +214,8 @@ void MainWindow::add_file_and_edit_menus() {
     recent_menu_ = file->addMenu("&Recent files");
     rebuild_recent_menu();
     file->addSeparator();
-    file->addAction("&Load markups...", this, [this] { measurements_->load_dialog(); });
-    file->addAction("&Save markups...", this, [this] { measurements_->save_dialog(); });
+    file->addAction("&Load markups...", this, [this] { measurements_->load_dialog(); })->setObjectName("load_markups");
+    file->addAction("&Save markups...", this, [this] { measurements_->save_dialog(); })->setObjectName("save_markups");
     file->addSeparator();
     add_session_actions(file);
     file->addSeparator();
@@ -599,8 +601,10 @@ void MainWindow::update_3d() {
                                            "Add surface) to see it here."
                                          : "Every surface is hidden: tick one in the Surfaces panel to see it here.");
         view3d_->setCurrentWidget(placeholder_);
+        enable_data_actions();
         return;
     }
+    enable_data_actions(); // data_actions.cpp
     if (!viewer_) {
         viewer_ = new Viewer(*scene_, PatientView::Anterior);
         viewer_->setObjectName("viewer");
@@ -691,21 +695,10 @@ void MainWindow::set_window_level(const core::WindowLevel& w) {
 void MainWindow::slice_clicked(SliceView& view, QPointF pixel) {
     if (!scene_->has_volume()) return;
     if (tools_->slice_click(view, pixel)) return; // a point of a ruler or an angle
-    const glm::dvec2 px{pixel.x(), pixel.y()};
     const auto& g = view.grid();
-    const glm::dvec3 lps = core::pixel_to_lps(g, px);
-    const auto s = core::sample_at_pixel(scene_->volume(), g, px);
-    core::set_crosshair(planes_, lps);
-    QString msg = QString("LPS (%1, %2, %3) mm").arg(lps.x, 0, 'f', 2).arg(lps.y, 0, 'f', 2).arg(lps.z, 0, 'f', 2);
-    if (s)
-        msg += QString(", %1, voxel (%2, %3, %4)")
-                   .arg(QString::fromStdString(core::value_readout(s->value, core::value_unit(scene_->volume()))))
-                   .arg(s->voxel[0])
-                   .arg(s->voxel[1])
-                   .arg(s->voxel[2]);
-    else
-        msg += ", outside the volume";
-    statusBar()->showMessage(msg);
+    // The hover probe's text for the same point (slice_readout).
+    statusBar()->showMessage(slice_readout(scene_->volume(), g, pixel));
+    core::set_crosshair(planes_, core::pixel_to_lps(g, {pixel.x(), pixel.y()}));
     refresh_slices();
 }
 

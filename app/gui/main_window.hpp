@@ -211,6 +211,7 @@ private:
     void add_view_and_help_menus();        // View (docks, tool bars) and Help (bindings, About): help_menu.cpp
     void wire_surface_undo();              // the Surfaces panel's undo steps (surface_commands.cpp)
     void watch_unsaved_work();             // the title's "*" and autosave (unsaved_work.cpp)
+    void enable_data_actions();            // what needs a volume or a surface (data_actions.cpp)
     void autosave();
     void wait_for_autosave();
     void remove_recovery_file();

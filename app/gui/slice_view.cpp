@@ -1,15 +1,18 @@
 #include "app/gui/slice_view.hpp"
 
+#include <QFont>
 #include <QKeyEvent>
 #include <QMouseEvent>
 #include <QPainter>
 #include <QWheelEvent>
 
 #include <cmath>
+#include <utility>
 #include <iostream>
 
 #include "io/color.hpp"
 #include "renderer/core/scene.hpp"
+#include "renderer/core/value_unit.hpp"
 
 namespace iso::gui {
 
@@ -23,6 +26,20 @@ SliceView::SliceView(core::SliceOrientation orientation, QWidget* parent) : QWid
     setFocusPolicy(Qt::StrongFocus);
     setMinimumSize(160, 160);
     setAttribute(Qt::WA_OpaquePaintEvent);
+    setMouseTracking(true); // the hover probe
+}
+
+QString slice_readout(const Volume& v, const core::SliceGrid& g, QPointF pixel) {
+    const glm::dvec2 px{pixel.x(), pixel.y()};
+    const glm::dvec3 lps = core::pixel_to_lps(g, px);
+    QString msg = QString("LPS (%1, %2, %3) mm").arg(lps.x, 0, 'f', 2).arg(lps.y, 0, 'f', 2).arg(lps.z, 0, 'f', 2);
+    if (const auto s = core::sample_at_pixel(v, g, px))
+        return msg + QString(", %1, voxel (%2, %3, %4)")
+                         .arg(QString::fromStdString(core::value_readout(s->value, core::value_unit(v))))
+                         .arg(s->voxel[0])
+                         .arg(s->voxel[1])
+                         .arg(s->voxel[2]);
+    return msg + ", outside the volume";
 }
 
 void SliceView::set_content(const core::Scene* scene, core::SlicePlane* plane) {
@@ -74,8 +91,33 @@ void SliceView::refresh() {
         std::cerr << "isoscope gui: " << core::slice_orientation_name(orientation_) << " view: " << e.what() << "\n";
         image_ = QImage();
     }
+    update_probe(); // the slice under the pointer moved
     update();
+    if (on_refresh) on_refresh(*this);
 }
+
+void SliceView::fit() {
+    if (!scene_ || !plane_ || !scene_->has_volume()) return;
+    core::fit_view(*plane_, scene_->volume(), width(), height());
+    fitted_ = true;
+    refresh();
+}
+
+void SliceView::update_probe() {
+    probe_.clear();
+    if (hover_ && !image_.isNull() && scene_ && scene_->has_volume())
+        probe_ = slice_readout(scene_->volume(), grid_, *hover_);
+}
+
+QString SliceView::edge_letter(core::SliceEdge e) const {
+    return image_.isNull() || !plane_ ? QString() : QString::fromStdString(core::slice_edge_letter(*plane_, e));
+}
+
+double SliceView::scale_bar_mm() const {
+    return image_.isNull() || !plane_ ? 0.0 : core::slice_scale_bar_mm(*plane_, grid_.width);
+}
+
+double SliceView::scale_bar_pixels() const { return image_.isNull() ? 0.0 : scale_bar_mm() / grid_.pixel_mm; }
 
 void SliceView::paintEvent(QPaintEvent*) {
     QPainter p(this);
@@ -96,6 +138,55 @@ void SliceView::paintEvent(QPaintEvent*) {
         QPointF(6, 16),
         QString("%1  %2 mm").arg(core::slice_orientation_name(orientation_)).arg(plane_->offset_mm(), 0, 'f', 1));
     if (on_paint_overlay) on_paint_overlay(*this, p);
+    paint_annotations(p);
+}
+
+namespace {
+// Text readable on any grey: a dark halo under it.
+void halo_text(QPainter& p, const QRectF& box, int flags, const QString& text, const QColor& c) {
+    p.setPen(QColor(0, 0, 0, 230));
+    for (const QPointF d : {QPointF(-1, 0), QPointF(1, 0), QPointF(0, -1), QPointF(0, 1), QPointF(1, 1)})
+        p.drawText(box.translated(d), flags, text);
+    p.setPen(c);
+    p.drawText(box, flags, text);
+}
+} // namespace
+
+// The letters at the edges' middles, the scale bar bottom right, the probe bottom left.
+void SliceView::paint_annotations(QPainter& p) const {
+    const QColor text(235, 235, 235);
+    const double w = width(), h = height(), m = 4;
+    QFont bold = p.font();
+    bold.setBold(true);
+    p.setFont(bold);
+    const double lh = p.fontMetrics().height();
+    halo_text(p, QRectF(m, 0, w - 2 * m, h), Qt::AlignLeft | Qt::AlignVCenter, edge_letter(core::SliceEdge::Left),
+              text);
+    halo_text(p, QRectF(m, 0, w - 2 * m, h), Qt::AlignRight | Qt::AlignVCenter, edge_letter(core::SliceEdge::Right),
+              text);
+    halo_text(p, QRectF(0, m, w, h), Qt::AlignHCenter | Qt::AlignTop, edge_letter(core::SliceEdge::Top), text);
+    halo_text(p, QRectF(0, 0, w, h - m), Qt::AlignHCenter | Qt::AlignBottom, edge_letter(core::SliceEdge::Bottom),
+              text);
+    p.setFont(font());
+    const double mm = scale_bar_mm(), len = scale_bar_pixels();
+    if (mm > 0 && len >= 1) {
+        const double x1 = w - 12, x0 = x1 - len, y = h - 12;
+        for (const auto& [colour, thick] : {std::pair{QColor(0, 0, 0, 230), 4.0}, std::pair{text, 2.0}}) {
+            p.setPen(QPen(colour, thick, Qt::SolidLine, Qt::FlatCap));
+            p.drawLine(QPointF(x0, y), QPointF(x1, y));
+            p.drawLine(QPointF(x0, y - 5), QPointF(x0, y + 1));
+            p.drawLine(QPointF(x1, y - 5), QPointF(x1, y + 1));
+        }
+        const QString label = QString("%1 mm").arg(mm, 0, 'g', 6);
+        halo_text(p, QRectF(x0 - 40, y - 6 - lh, len + 80, lh), Qt::AlignHCenter | Qt::AlignBottom, label, text);
+    }
+    if (probe_.isEmpty()) return;
+    // Two lines above the bottom letter: the point, then the value and voxel.
+    const int cut = probe_.indexOf("mm, ");
+    const QString first = cut < 0 ? probe_ : probe_.left(cut + 2), second = cut < 0 ? QString() : probe_.mid(cut + 4);
+    const QColor probe(255, 230, 120);
+    halo_text(p, QRectF(6, h - 8 - 3 * lh, w - 12, lh), Qt::AlignLeft | Qt::AlignBottom, first, probe);
+    halo_text(p, QRectF(6, h - 8 - 2 * lh, w - 12, lh), Qt::AlignLeft | Qt::AlignBottom, second, probe);
 }
 
 void SliceView::resizeEvent(QResizeEvent*) {
@@ -104,6 +195,7 @@ void SliceView::resizeEvent(QResizeEvent*) {
 }
 
 void SliceView::mousePressEvent(QMouseEvent* e) {
+    swallow_release_ = false;
     drag_.start(e->position());
     window_at_press_ = window_;
     grabbing_ = e->button() == Qt::LeftButton && e->buttons() == Qt::LeftButton && !image_.isNull() && on_press &&
@@ -111,6 +203,10 @@ void SliceView::mousePressEvent(QMouseEvent* e) {
 }
 
 void SliceView::mouseReleaseEvent(QMouseEvent* e) {
+    if (swallow_release_ && e->button() == Qt::LeftButton) {
+        swallow_release_ = false; // the double-click's release: no click
+        return;
+    }
     if (grabbing_ && e->button() == Qt::LeftButton) {
         grabbing_ = false;
         if (on_grab_release) on_grab_release(*this, e->position(), drag_.dragged);
@@ -118,8 +214,27 @@ void SliceView::mouseReleaseEvent(QMouseEvent* e) {
     if (e->button() == Qt::LeftButton && !drag_.dragged && on_click && !image_.isNull()) on_click(*this, e->position());
 }
 
+void SliceView::mouseDoubleClickEvent(QMouseEvent* e) {
+    mousePressEvent(e); // the second press of the double-click
+    if (e->button() != Qt::LeftButton || grabbing_) return;
+    fit();
+    swallow_release_ = true;
+}
+
+void SliceView::leaveEvent(QEvent*) {
+    hover_.reset();
+    probe_.clear();
+    update();
+}
+
 void SliceView::mouseMoveEvent(QMouseEvent* e) {
-    if (e->buttons() == Qt::NoButton || image_.isNull() || !plane_) return;
+    if (e->buttons() == Qt::NoButton) {
+        hover_ = e->position();
+        update_probe();
+        update();
+        return;
+    }
+    if (image_.isNull() || !plane_) return;
     if (!drag_.follow(e->position())) return;
     const QPointF d = drag_.step(e->position());
     if (grabbing_) { // a markup point follows the pointer; the window stays
@@ -155,6 +270,10 @@ void SliceView::wheelEvent(QWheelEvent* e) {
 void SliceView::keyPressEvent(QKeyEvent* e) {
     if ((e->key() == Qt::Key_PageUp || e->key() == Qt::Key_PageDown) && on_scroll) {
         on_scroll(*this, e->key() == Qt::Key_PageUp ? 1.0 : -1.0);
+        return;
+    }
+    if (e->key() == Qt::Key_F && e->modifiers() == Qt::NoModifier) {
+        fit();
         return;
     }
     QWidget::keyPressEvent(e);

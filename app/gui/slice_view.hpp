@@ -1,11 +1,14 @@
 // One slice view of the main window (docs/gui.md): paints the
 // volume resliced on its plane through the window (core::reslice,
-// core::apply_window), the surfaces' outlines (core::mesh_outline) and the
-// crosshair. Presentation only: the plane belongs to the main window, which
+// core::apply_window), the surfaces' outlines (core::mesh_outline), the
+// crosshair, the patient directions at its edges (core::slice_edge_letter),
+// a scale bar (core::slice_scale_bar_mm) and the hover probe's readout
+// (core::sample_at_pixel). Presentation only: the plane belongs to the main window, which
 // also decides what a click or a scroll does (core::set_crosshair,
 // core::scroll_slices). The geometry is the core's (renderer/core/slices.hpp).
 #pragma once
 
+#include <array>
 #include <functional>
 #include <optional>
 #include <vector>
@@ -13,6 +16,7 @@
 #include <QColor>
 #include <QImage>
 #include <QPainter>
+#include <QString>
 #include <QWidget>
 
 #include "app/gui/pointer_drag.hpp"
@@ -42,6 +46,21 @@ public:
     // The image's grid (one image pixel per widget pixel); valid after refresh
     // with content.
     const core::SliceGrid& grid() const { return grid_; }
+    const core::Scene* scene() const { return scene_; }
+    core::SlicePlane* plane() const { return plane_; }
+    // Fit: re-centres on the volume and zooms to fit (core::fit_view; key F
+    // or a left double-click), keeping the slice and the crosshair.
+    void fit();
+
+    // What the view draws over the slice (empty without an image): the
+    // letter at each edge (core::SliceEdge order: left, right, top, bottom),
+    // the scale bar's length in mm and in pixels, and the hover probe's
+    // readout (slice_readout of the pixel under the pointer; empty while the
+    // pointer is elsewhere).
+    QString edge_letter(core::SliceEdge e) const;
+    double scale_bar_mm() const;
+    double scale_bar_pixels() const;
+    const QString& probe_text() const { return probe_; }
     bool has_image() const { return !image_.isNull(); }
     const QImage& image() const { return image_; }
     std::size_t outline_segments() const;
@@ -64,6 +83,8 @@ public:
     // Draws over the slice after the outlines and the crosshair (the
     // measurements); the painter's coordinates are the grid's pixels.
     std::function<void(SliceView&, QPainter&)> on_paint_overlay;
+    // After each refresh (the plane may have moved: a slider follows).
+    std::function<void(SliceView&)> on_refresh;
 
 protected:
     void paintEvent(QPaintEvent*) override;
@@ -73,6 +94,8 @@ protected:
     void mouseReleaseEvent(QMouseEvent* e) override;
     void wheelEvent(QWheelEvent* e) override;
     void keyPressEvent(QKeyEvent* e) override;
+    void mouseDoubleClickEvent(QMouseEvent* e) override;
+    void leaveEvent(QEvent* e) override;
 
 private:
     struct Outline {
@@ -96,7 +119,19 @@ private:
     bool grabbing_ = false; // on_press took the press
     core::WindowLevel window_at_press_;
     std::optional<ValueRange> range_; // the volume's, for the window drag's gain (computed once per content)
+    std::optional<QPointF> hover_;    // the pointer over the view, no button held
+    QString probe_;                   // the readout at hover_
+    bool swallow_release_ = false;    // a left double-click fitted: its release is no click
+    void update_probe();
+    void paint_annotations(QPainter& p) const;
 };
+
+// The readout of a point of a slice view, as a click and the hover probe
+// write it: "LPS (x, y, z) mm, READOUT, voxel (i, j, k)" (READOUT:
+// core::value_readout in core::value_unit's unit), or "LPS (x, y, z) mm,
+// outside the volume"; the point is core::pixel_to_lps of the continuous
+// pixel, the value and voxel core::sample_at_pixel's.
+QString slice_readout(const Volume& v, const core::SliceGrid& g, QPointF pixel);
 
 // Linear RGB (the scene's surface colours) -> an sRGB QColor, and back,
 // through the one sRGB pair (io/color.hpp): a colour picked as #rrggbb is

@@ -13,6 +13,7 @@
 #include <cmath>
 #include <limits>
 #include <type_traits>
+#include <utility>
 
 #include <glm/common.hpp>
 #include <glm/geometric.hpp>
@@ -22,6 +23,7 @@
 #include <tbb/parallel_for.h>
 
 #include "io/error.hpp"
+#include "renderer/frame/annotations.hpp"
 #include "renderer/surface/atomic.hpp"
 
 namespace iso::core {
@@ -166,6 +168,21 @@ const char* slice_orientation_name(SliceOrientation o) {
     return "axial";
 }
 
+namespace {
+// The LPS bounding box of the voxels' extent (index -0.5 .. n - 0.5) through its 8 corners.
+std::pair<glm::dvec3, glm::dvec3> lps_box(const Volume& v) {
+    glm::dvec3 lo(std::numeric_limits<double>::max()), hi(-std::numeric_limits<double>::max());
+    for (int corner = 0; corner < 8; ++corner) {
+        const glm::dvec3 ijk(corner & 1 ? double(v.dims[0]) - 0.5 : -0.5, corner & 2 ? double(v.dims[1]) - 0.5 : -0.5,
+                             corner & 4 ? double(v.dims[2]) - 0.5 : -0.5);
+        const glm::dvec3 p = v.index_to_world(ijk);
+        lo = glm::min(lo, p);
+        hi = glm::max(hi, p);
+    }
+    return {lo, hi};
+}
+} // namespace
+
 double SlicePlane::offset_mm() const { return glm::dot(origin, normal); }
 
 double slice_step_mm(const Volume& v, const glm::dvec3& normal) {
@@ -176,14 +193,7 @@ double slice_step_mm(const Volume& v, const glm::dvec3& normal) {
 
 SlicePlane default_plane(const Volume& v, SliceOrientation o) {
     if (v.voxel_count() <= 0) throw Error("slice views", "there is no volume to slice (no voxels)");
-    glm::dvec3 lo(std::numeric_limits<double>::max()), hi(-std::numeric_limits<double>::max());
-    for (int corner = 0; corner < 8; ++corner) {
-        const glm::dvec3 ijk(corner & 1 ? double(v.dims[0]) - 0.5 : -0.5, corner & 2 ? double(v.dims[1]) - 0.5 : -0.5,
-                             corner & 4 ? double(v.dims[2]) - 0.5 : -0.5);
-        const glm::dvec3 p = v.index_to_world(ijk);
-        lo = glm::min(lo, p);
-        hi = glm::max(hi, p);
-    }
+    const auto [lo, hi] = lps_box(v);
     const Axes ax = orientation_axes(o);
     const glm::dvec3 extent = hi - lo;
     SlicePlane p;
@@ -255,6 +265,57 @@ void zoom_about(SlicePlane& p, int width, int height, const glm::dvec2& fixed, d
 double drag_zoom_factor(double dy_up, int height) {
     if (height < 1 || !std::isfinite(dy_up)) return 1.0;
     return std::exp2(dy_up / (0.5 * double(height)));
+}
+
+void fit_view(SlicePlane& p, const Volume& v, int width, int height) {
+    if (v.voxel_count() <= 0) return;
+    const auto [lo, hi] = lps_box(v);
+    const glm::dvec3 c = 0.5 * (lo + hi);
+    p.center = c + (glm::dot(p.origin - c, p.normal)) * p.normal;
+    zoom_to_fit(p, width, height);
+}
+
+SliceRange slice_range(const Volume& v, const SlicePlane& p) {
+    SliceRange r;
+    r.step_mm = p.step_mm > 0 && std::isfinite(p.step_mm) ? p.step_mm : 1.0;
+    if (v.voxel_count() <= 0) {
+        r.first_mm = p.offset_mm();
+        return r;
+    }
+    const auto [lo, hi] = lps_box(v);
+    double a = std::numeric_limits<double>::max(), b = -a;
+    for (int corner = 0; corner < 8; ++corner) {
+        const double d = glm::dot(
+            glm::dvec3(corner & 1 ? hi.x : lo.x, corner & 2 ? hi.y : lo.y, corner & 4 ? hi.z : lo.z), p.normal);
+        a = std::min(a, d);
+        b = std::max(b, d);
+    }
+    // Slices a step apart from half a step inside the box's near face: one per voxel along a grid axis.
+    const double n = std::floor((b - a) / r.step_mm + 1e-6);
+    r.count = int(std::clamp(n, 1.0, 1e6));
+    r.first_mm = n >= 1 ? a + 0.5 * r.step_mm : 0.5 * (a + b);
+    return r;
+}
+
+int slice_index(const SliceRange& r, double offset_mm) {
+    // Half-way between two slices rounds up, whatever the rounding of the division.
+    const double t = std::floor((offset_mm - r.first_mm) / r.step_mm + 0.5 + 1e-6);
+    return std::isfinite(t) ? int(std::clamp(t, 0.0, double(r.count - 1))) : 0;
+}
+
+std::string slice_edge_letter(const SlicePlane& p, SliceEdge e) {
+    switch (e) {
+    case SliceEdge::Left: return orientation_letter(-p.right);
+    case SliceEdge::Right: return orientation_letter(p.right);
+    case SliceEdge::Top: return orientation_letter(p.up);
+    case SliceEdge::Bottom: return orientation_letter(-p.up);
+    }
+    return {};
+}
+
+double slice_scale_bar_mm(const SlicePlane& p, int width) {
+    if (width < 1 || !(p.pixel_mm > 0) || !std::isfinite(p.pixel_mm)) return 0;
+    return round_length_mm(0.2 * double(width) * p.pixel_mm);
 }
 
 // ---- Pixels <-> LPS --------------------------------------------------------------

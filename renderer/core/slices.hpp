@@ -19,6 +19,7 @@
 #include <cstdint>
 #include <optional>
 #include <span>
+#include <string>
 #include <string_view>
 #include <vector>
 
@@ -107,6 +108,41 @@ void zoom_about(SlicePlane& p, int width, int height, const glm::dvec2& fixed, d
 // magnifies) in a view `height` pixels tall: 2^(dy_up / (height / 2)), so a
 // drag over half the view doubles or halves the scale whatever its size.
 double drag_zoom_factor(double dy_up, int height);
+
+// A view's Fit (key F, a double-click): the centre back on the volume's LPS
+// bounding box's centre (moved along the normal onto the plane: the slice
+// and the crosshair stay) and zoom_to_fit. Nothing for an empty volume.
+void fit_view(SlicePlane& p, const Volume& v, int width, int height);
+
+// The slices a view's slider spans: count offsets first_mm + i * step_mm
+// (i = 0 .. count - 1), step_mm the plane's step (scroll_slices moves one),
+// from half a step inside the volume's LPS bounding box along the normal
+// (for a normal along a grid axis: the voxel centres, count = the voxels
+// along it). At least one (a volume thinner than a step: its middle).
+struct SliceRange {
+    double first_mm = 0;
+    double step_mm = 1;
+    int count = 1;
+};
+SliceRange slice_range(const Volume& v, const SlicePlane& p);
+// The slice nearest to an offset (half-way rounds up), clamped to the range.
+int slice_index(const SliceRange& r, double offset_mm);
+
+// ---- Annotations ------------------------------------------------------------------
+
+// The patient direction at an edge of a plane's image, as 3D Slicer's slice
+// view annotations: the letter (R, L, A, P, S or I) of the LPS axis nearest
+// to the in-plane direction that points there (left: -right, right: right,
+// top: up, bottom: -up; iso::orientation_letter, the 3D overlay's rule), so
+// a plane whose axes are not LPS axes gets the nearest ones.
+enum class SliceEdge : std::uint8_t { Left, Right, Top, Bottom };
+std::string slice_edge_letter(const SlicePlane& p, SliceEdge e);
+
+// A slice view's scale bar: the longest round length (1, 2 or 5 x 10^k mm,
+// iso::round_length_mm, the 3D overlay's rule) not above a fifth of a view
+// `width` pixels wide at the plane's pixel_mm; 0 for a width below 1 or a
+// pixel size that is not a positive finite number.
+double slice_scale_bar_mm(const SlicePlane& p, int width);
 
 // ---- Pixels <-> LPS --------------------------------------------------------------
 

@@ -26,7 +26,11 @@ double scale_bar_mm(const Camera& cam, int width, int height) {
     // mm per pixel at the target's depth, and a round length near 1/5 of the width.
     const double dist = glm::length(cam.target - cam.eye);
     const double mm_per_px = 2.0 * dist * std::tan(glm::radians(cam.fov_y_degrees) * 0.5) / double(height);
-    const double want = 0.2 * width * mm_per_px;
+    return round_length_mm(0.2 * width * mm_per_px);
+}
+
+double round_length_mm(double want) {
+    if (!(want > 0) || !std::isfinite(want)) return 0;
     const double p = std::pow(10.0, std::floor(std::log10(want)));
     for (double m : {5.0, 2.0, 1.0})
         if (m * p <= want) return m * p;

@@ -130,5 +130,8 @@ std::string legend_text(const Annotations::LegendEntry& e);
 // view ("L", "P", ...), and the scale bar's length in mm for a view of that width.
 std::string orientation_letter(const glm::dvec3& world_direction);
 double scale_bar_mm(const Camera& cam, int width, int height);
+// The longest round length (1, 2 or 5 x 10^k) not above `want` (0 for a
+// `want` that is not a positive finite number): the scale bars' lengths.
+double round_length_mm(double want);
 
 } // namespace iso

@@ -113,7 +113,8 @@ TEST_F(GuiMenus, BindingsListTheViewsKeys) {
     QDialog* d = nullptr;
     ASSERT_TRUE(wait_until([&] { return (d = top_level<QDialog>("bindings_dialog")) != nullptr; }, 30000));
     const QString text = d->findChild<QTextBrowser*>()->toPlainText();
-    for (const char* s : {"A P L R S I", "O", "Page Up", "Left drag", "Middle drag", "Right drag", "Escape", "Ctrl+Z"})
+    for (const char* s : {"A P L R S I", "O", "Page Up", "Left drag", "Middle drag", "Right drag", "Escape", "Ctrl+Z",
+                          "F, double-click, Fit", "Pointer over a view", "Slider under a view"})
         EXPECT_TRUE(text.contains(s)) << s;
     EXPECT_FALSE(d->isModal());
     d->close();

@@ -232,6 +232,136 @@ TEST(SlicePlanes, ZoomAndNativeSize) {
     EXPECT_THROW(slice_grid(bad, 10, 10), Error);
 }
 
+// The letters at the view's edges: radiological for the LPS planes (the
+// table of docs/slices.md, written out here), the nearest LPS axis for a
+// plane turned in-plane, and opposite letters on opposite edges.
+TEST(SliceAnnotations, EdgeLettersAreTheNearestPatientDirections) {
+    const auto planes = default_planes(oblique_linear());
+    // left, right, top, bottom
+    const char* want[3][4] = {{"R", "L", "A", "P"}, {"R", "L", "S", "I"}, {"A", "P", "S", "I"}};
+    const SliceEdge edges[4] = {SliceEdge::Left, SliceEdge::Right, SliceEdge::Top, SliceEdge::Bottom};
+    for (std::size_t i = 0; i < 3; ++i)
+        for (int e = 0; e < 4; ++e)
+            EXPECT_EQ(slice_edge_letter(planes[i], edges[e]), want[i][e])
+                << slice_orientation_name(planes[i].orientation) << " edge " << e;
+    // An axial plane turned by t about S: right = (cos t, sin t, 0), up =
+    // (sin t, -cos t, 0). At 30 degrees right is nearer L than P and up
+    // nearer A; at 60 degrees right is nearer P and up nearer L.
+    const char* turned[2][4] = {{"R", "L", "A", "P"}, {"A", "P", "L", "R"}};
+    const double angles[2] = {30.0, 60.0};
+    for (int k = 0; k < 2; ++k) {
+        SlicePlane p = planes[0];
+        const double t = angles[k] * kPi / 180.0;
+        p.right = {std::cos(t), std::sin(t), 0.0};
+        p.up = {std::sin(t), -std::cos(t), 0.0};
+        for (int e = 0; e < 4; ++e) EXPECT_EQ(slice_edge_letter(p, edges[e]), turned[k][e]) << angles[k] << " deg";
+    }
+    // A coronal plane tilted 20 degrees about L: up = S tilted towards P stays S.
+    SlicePlane c = planes[1];
+    const double t = 20.0 * kPi / 180.0;
+    c.up = {0.0, std::sin(t), std::cos(t)};
+    EXPECT_EQ(slice_edge_letter(c, SliceEdge::Top), "S");
+    EXPECT_EQ(slice_edge_letter(c, SliceEdge::Bottom), "I");
+}
+
+// The bar: the longest of 1, 2, 5 x 10^k mm not above a fifth of the view.
+TEST(SliceAnnotations, ScaleBarIsARoundLengthNearAFifthOfTheView) {
+    SlicePlane p;
+    struct Case {
+        double pixel_mm;
+        int width;
+        double want;
+    };
+    // A fifth of the width in mm: 0.2 * width * pixel_mm.
+    const Case cases[] = {
+        {1.0, 500, 100},  // exactly 100
+        {0.5, 500, 50},   // exactly 50
+        {0.7, 500, 50},   // 70 -> 50
+        {0.9, 600, 100},  // 108 -> 100
+        {0.3, 300, 10},   // 18 -> 10
+        {0.45, 300, 20},  // 27 -> 20
+        {0.01, 400, 0.5}, // 0.8 -> 0.5
+        {3.0, 1000, 500}, // 600 -> 500
+    };
+    for (const auto& c : cases) {
+        p.pixel_mm = c.pixel_mm;
+        const double mm = slice_scale_bar_mm(p, c.width);
+        EXPECT_NEAR(mm, c.want, 1e-9 * c.want) << c.pixel_mm << " mm/px, " << c.width << " px";
+        // Between 2/5 of a fifth (1 -> 2 -> 5 -> 10 steps) and a fifth of the width.
+        const double px = mm / c.pixel_mm;
+        EXPECT_LE(px, 0.2 * c.width + 1e-9);
+        EXPECT_GT(px, 0.08 * c.width);
+    }
+    p.pixel_mm = 0;
+    EXPECT_EQ(slice_scale_bar_mm(p, 500), 0.0);
+    p.pixel_mm = 1;
+    EXPECT_EQ(slice_scale_bar_mm(p, 0), 0.0);
+}
+
+// The slider's slices: one per voxel along a grid axis, a scroll step apart,
+// so one scroll step moves the nearest slice by one.
+TEST(SlicePlanes, TheSliceRangeSpansTheVolumeOneStepPerSlice) {
+    const std::array<std::int64_t, 3> dims{8, 9, 10};
+    const glm::dvec3 origin(5, 6, 7), sp(0.7, 1.0, 1.3);
+    const Volume v = Volume::dense(dims, VoxelType::I16, make_affine(sp, origin));
+    const auto planes = default_planes(v);
+    for (std::size_t i = 0; i < 3; ++i) {
+        // The normals: z (axial), y (coronal), x (sagittal): the voxel centres along it.
+        const int axis = i == 0 ? 2 : i == 1 ? 1 : 0;
+        const SliceRange r = slice_range(v, planes[i]);
+        EXPECT_EQ(r.count, int(dims[std::size_t(axis)]));
+        EXPECT_NEAR(r.step_mm, sp[axis], 1e-12);
+        EXPECT_NEAR(r.first_mm, origin[axis], 1e-9);
+        SlicePlane p = planes[i];
+        set_offset(p, origin[axis] + 3 * sp[axis]); // voxel 3's centre
+        EXPECT_EQ(slice_index(r, p.offset_mm()), 3);
+        scroll_slices(p, 1);
+        EXPECT_EQ(slice_index(r, p.offset_mm()), 4);
+        scroll_slices(p, -2);
+        EXPECT_EQ(slice_index(r, p.offset_mm()), 2);
+        // Clamped at both ends; half-way rounds up.
+        EXPECT_EQ(slice_index(r, origin[axis] - 50), 0);
+        EXPECT_EQ(slice_index(r, origin[axis] + 500), r.count - 1);
+        EXPECT_EQ(slice_index(r, origin[axis] + 1.5 * sp[axis]), 2);
+    }
+    // The default plane of an even count lies half-way: each step still moves the index by one.
+    SlicePlane a = planes[0]; // 10 slices: between 4 and 5
+    const SliceRange r = slice_range(v, a);
+    const int i0 = slice_index(r, a.offset_mm());
+    EXPECT_EQ(i0, 5);
+    for (int k = 1; k <= 3; ++k) {
+        scroll_slices(a, -1);
+        EXPECT_EQ(slice_index(r, a.offset_mm()), i0 - k);
+    }
+    // Oblique: the box's extent along the normal in steps.
+    const Volume o = oblique_linear();
+    for (const auto& p : default_planes(o)) {
+        const SliceRange ro = slice_range(o, p);
+        EXPECT_NEAR(ro.step_mm, p.step_mm, 1e-12);
+        EXPECT_GE(ro.count, 2);
+        EXPECT_EQ(slice_index(ro, p.offset_mm()), ro.count / 2) << slice_orientation_name(p.orientation);
+    }
+}
+
+// Fit: the centre back on the volume's centre, on the same slice, zoomed to fit.
+TEST(SlicePlanes, FitRecentresAndZoomsOnTheSameSlice) {
+    const Volume v = oblique_linear();
+    for (const auto& start : default_planes(v)) {
+        SlicePlane p = start;
+        scroll_slices(p, 3);
+        pan_pixels(p, {40, -25});
+        zoom_about(p, 300, 200, {10, 20}, 3.0);
+        const double offset = p.offset_mm();
+        const glm::dvec3 cross = p.origin;
+        fit_view(p, v, 300, 200);
+        EXPECT_NEAR(p.offset_mm(), offset, 1e-9);
+        EXPECT_EQ(p.origin, cross);
+        const glm::dvec3 want = start.center + 3 * start.step_mm * start.normal;
+        EXPECT_NEAR(glm::length(p.center - want), 0.0, 1e-9) << slice_orientation_name(p.orientation);
+        EXPECT_NEAR(p.pixel_mm, std::max(start.fov_mm.x / 300, start.fov_mm.y / 200), 1e-12);
+    }
+}
+
 // Panning and zooming change the framing only: what the new grid maps a
 // pixel to is checked against the old grid's LPS points (the drag's
 // invariant: the content follows the pointer; a zoom keeps the point under

@@ -1,0 +1,78 @@
+// The window's actions and controls that need something open (docs/gui.md
+// "What needs data"): disabled, their tooltip saying why, until a volume or
+// a surface exists. A MainWindow member kept out of main_window.cpp; it
+// finds the actions and controls by their object names.
+#include <QAction>
+#include <QWidget>
+
+#include "app/gui/main_window.hpp"
+#include "renderer/core/scene.hpp"
+
+namespace iso::gui {
+
+namespace {
+// What each action or control needs, by object name; the File menu's
+// session entries (session_io.cpp) are found by their text and named here.
+enum class Needs { Data, Volume, Surface };
+struct Entry {
+    const char* name;
+    Needs needs;
+    const char* text = nullptr; // an action without a name yet: its text, '&' left out
+};
+constexpr Entry kEntries[] = {
+    {"save_session", Needs::Data, "Save session..."},
+    {"export_image", Needs::Data, "Export image..."},
+    {"save_surfaces", Needs::Surface, "Save surfaces..."},
+    {"load_markups", Needs::Data},
+    {"save_markups", Needs::Data},
+    {"ruler", Needs::Data},
+    {"angle", Needs::Data},
+    {"point", Needs::Data},
+    {"isolate_tool", Needs::Surface},
+    {"distance_tool", Needs::Surface},
+    {"add_surface", Needs::Volume},
+    {"add_iso_value", Needs::Volume},
+    {"iso_preset", Needs::Volume},
+    {"add_smoothing", Needs::Volume},
+    {"add_keep_largest", Needs::Volume},
+    {"window_preset", Needs::Volume},
+    {"window_center", Needs::Volume},
+    {"window_width", Needs::Volume},
+};
+
+const char* why_not(Needs n) {
+    switch (n) {
+    case Needs::Data: return "Open a volume or a mesh first (File > Open)";
+    case Needs::Volume: return "Open a volume first (File > Open)";
+    case Needs::Surface: return "Add a surface first (Surfaces panel) or open a mesh";
+    }
+    return "";
+}
+
+// The tooltip while enabled is the object's own; while disabled the reason
+// comes first (taken off again when it is enabled).
+template <class T> void enable(T* o, bool on, Needs needs) {
+    const QString reason = why_not(needs);
+    QString tip = o->toolTip();
+    if (tip.startsWith(reason)) tip = tip.mid(reason.size()).remove(0, 2);
+    o->setEnabled(on);
+    o->setToolTip(on ? tip : tip.isEmpty() ? reason : reason + ". " + tip);
+}
+} // namespace
+
+void MainWindow::enable_data_actions() {
+    const bool volume = scene_->has_volume(), surface = !scene_->surfaces().empty();
+    for (const auto& e : kEntries) {
+        const bool on = e.needs == Needs::Volume ? volume : e.needs == Needs::Surface ? surface : volume || surface;
+        QAction* a = findChild<QAction*>(e.name);
+        if (!a && e.text)
+            for (QAction* t : findChildren<QAction*>())
+                if (t->text().remove('&') == e.text) (a = t)->setObjectName(e.name);
+        if (a)
+            enable(a, on, e.needs);
+        else if (auto* w = findChild<QWidget*>(e.name))
+            enable(w, on, e.needs);
+    }
+}
+
+} // namespace iso::gui
