@@ -402,6 +402,12 @@ void Viewer::set_markups(std::vector<Markup> markups) {
     update();
 }
 
+void Viewer::set_guides(std::vector<Annotations::Line> lines, std::vector<glm::dvec3> points) {
+    annotations_->lines = std::move(lines);
+    annotations_->points = std::move(points);
+    update();
+}
+
 void Viewer::set_labels(std::vector<std::pair<glm::dvec3, std::string>> labels) {
     annotations_->labels.clear();
     ++annotations_version_;
