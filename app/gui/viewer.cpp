@@ -403,6 +403,8 @@ void Viewer::set_markups(std::vector<Markup> markups) {
 }
 
 void Viewer::set_guides(std::vector<Annotations::Line> lines, std::vector<glm::dvec3> points) {
+    // None before and none now: no new frame (the still frames' accumulation goes on).
+    if (lines.empty() && points.empty() && annotations_->lines.empty() && annotations_->points.empty()) return;
     annotations_->lines = std::move(lines);
     annotations_->points = std::move(points);
     update();
