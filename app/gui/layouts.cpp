@@ -11,6 +11,9 @@
 #include <QMenu>
 #include <QStackedWidget>
 
+#include <array>
+#include <vector>
+
 #include "app/gui/main_window.hpp"
 #include "app/gui/slice_view.hpp"
 #include "app/gui/viewer.hpp"
@@ -40,6 +43,30 @@ const LayoutEntry kLayouts[] = {
     {core::ViewLayout::Coronal, "C&oronal only", "The coronal slice view alone", Qt::Key_5},
     {core::ViewLayout::Sagittal, "&Sagittal only", "The sagittal slice view alone", Qt::Key_6},
 };
+
+// Where a layout puts the views (0: the 3D view, 1 to 3: axial, coronal,
+// sagittal) in the central grid, and the stretch of its rows and columns.
+struct Cell {
+    int view, row, column, rows, columns;
+};
+struct Arrangement {
+    std::vector<Cell> cells;
+    std::array<int, 3> row_stretch, column_stretch;
+};
+
+Arrangement arrangement(core::ViewLayout l) {
+    switch (l) {
+    case core::ViewLayout::FourUp: // 3D top left, axial top right, coronal and sagittal below
+        return {{{0, 0, 0, 1, 1}, {1, 0, 1, 1, 1}, {2, 1, 0, 1, 1}, {3, 1, 1, 1, 1}}, {1, 1, 0}, {1, 1, 0}};
+    case core::ViewLayout::Conventional: // Slicer's: the 3D view across the top, twice as tall as the slices' row
+        return {{{0, 0, 0, 1, 3}, {1, 1, 0, 1, 1}, {2, 1, 1, 1, 1}, {3, 1, 2, 1, 1}}, {2, 1, 0}, {1, 1, 1}};
+    case core::ViewLayout::ThreeD: return {{{0, 0, 0, 1, 1}}, {1, 0, 0}, {1, 0, 0}};
+    case core::ViewLayout::Axial: return {{{1, 0, 0, 1, 1}}, {1, 0, 0}, {1, 0, 0}};
+    case core::ViewLayout::Coronal: return {{{2, 0, 0, 1, 1}}, {1, 0, 0}, {1, 0, 0}};
+    case core::ViewLayout::Sagittal: return {{{3, 0, 0, 1, 1}}, {1, 0, 0}, {1, 0, 0}};
+    }
+    return arrangement(core::ViewLayout::FourUp);
+}
 
 } // namespace
 
@@ -86,37 +113,21 @@ void MainWindow::add_layout_actions(QMenu* view) {
 
 void MainWindow::set_layout(core::ViewLayout l) {
     auto* grid = qobject_cast<QGridLayout*>(centralWidget()->layout());
-    QWidget* const views[4] = {view3d_, views_[0], views_[1], views_[2]}; // 3D, axial, coronal, sagittal
+    QWidget* const views[4] = {view3d_, views_[0], views_[1], views_[2]};
     for (QWidget* w : views) grid->removeWidget(w);
+    const Arrangement a = arrangement(l);
     for (int i = 0; i < 3; ++i) {
-        grid->setRowStretch(i, 0);
-        grid->setColumnStretch(i, 0);
+        grid->setRowStretch(i, a.row_stretch[std::size_t(i)]);
+        grid->setColumnStretch(i, a.column_stretch[std::size_t(i)]);
     }
     std::array<bool, 4> shown{};
-    const auto put = [&](int view, int row, int column, int rows = 1, int columns = 1) {
-        grid->addWidget(views[view], row, column, rows, columns);
-        shown[std::size_t(view)] = true;
-    };
-    switch (l) {
-    case core::ViewLayout::FourUp: // 3D top left, axial top right, coronal and sagittal below
-        put(0, 0, 0), put(1, 0, 1), put(2, 1, 0), put(3, 1, 1);
-        grid->setRowStretch(0, 1), grid->setRowStretch(1, 1);
-        grid->setColumnStretch(0, 1), grid->setColumnStretch(1, 1);
-        break;
-    case core::ViewLayout::Conventional: // Slicer's: the 3D view twice as tall as the row of slices
-        put(0, 0, 0, 1, 3), put(1, 1, 0), put(2, 1, 1), put(3, 1, 2);
-        grid->setRowStretch(0, 2), grid->setRowStretch(1, 1);
-        for (int c = 0; c < 3; ++c) grid->setColumnStretch(c, 1);
-        break;
-    default: { // one view alone
-        const int view = l == core::ViewLayout::ThreeD ? 0 : 1 + int(l) - int(core::ViewLayout::Axial);
-        put(view, 0, 0);
-        grid->setRowStretch(0, 1), grid->setColumnStretch(0, 1);
-    }
+    for (const Cell& c : a.cells) {
+        grid->addWidget(views[c.view], c.row, c.column, c.rows, c.columns);
+        shown[std::size_t(c.view)] = true;
     }
     for (std::size_t i = 0; i < 4; ++i) views[i]->setVisible(shown[i]);
     layout_ = std::uint8_t(l);
-    if (auto* a = layout_action(l)) a->setChecked(true);
+    if (auto* action = layout_action(l)) action->setChecked(true);
 }
 
 void MainWindow::set_slice_views(const core::SliceViewsState& s) {
