@@ -113,7 +113,12 @@ void MainWindow::add_layout_actions(QMenu* view) {
 
 void MainWindow::set_layout(core::ViewLayout l) {
     auto* grid = qobject_cast<QGridLayout*>(centralWidget()->layout());
-    QWidget* const views[4] = {view3d_, views_[0], views_[1], views_[2]};
+    // What the grid holds for each view: the view or the widget around it (a slice view's panel).
+    const auto cell = [this](QWidget* w) {
+        while (w->parentWidget() && w->parentWidget() != centralWidget()) w = w->parentWidget();
+        return w;
+    };
+    QWidget* const views[4] = {cell(view3d_), cell(views_[0]), cell(views_[1]), cell(views_[2])};
     for (QWidget* w : views) grid->removeWidget(w);
     const Arrangement a = arrangement(l);
     for (int i = 0; i < 3; ++i) {

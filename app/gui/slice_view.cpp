@@ -105,6 +105,7 @@ void SliceView::fit() {
     if (!scene_ || !plane_ || !scene_->has_volume()) return;
     core::fit_view(*plane_, scene_->volume(), width(), height());
     fitted_ = true;
+    user_framed_ = false; // fitted again: a resize fits it again too
     refresh();
 }
 

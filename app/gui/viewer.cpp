@@ -407,6 +407,7 @@ void Viewer::set_guides(std::vector<Annotations::Line> lines, std::vector<glm::d
     if (lines.empty() && points.empty() && annotations_->lines.empty() && annotations_->points.empty()) return;
     annotations_->lines = std::move(lines);
     annotations_->points = std::move(points);
+    ++annotations_version_; // the still frames' picture changed
     update();
 }
 
