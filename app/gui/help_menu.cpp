@@ -1,5 +1,6 @@
-// The View menu (show or hide each dock and tool bar; a closed dock used to
-// come back only through the tool bar's context menu) and the Help menu
+// The View menu (the layout and the slice planes in 3D, layouts.cpp; show or
+// hide each dock and tool bar; a closed dock used to come back only through
+// the tool bar's context menu) and the Help menu
 // (the mouse and keyboard bindings; About with the versions a bug report
 // needs). Part of MainWindow (main_window.hpp).
 #include <QDialog>
@@ -58,17 +59,24 @@ QString MainWindow::bindings_html() {
                                  {"Delete (Measurements list)", "delete the selected measurement"}}) +
            section("Window", {{"Ctrl+O", "open a file"},
                               {"Ctrl+S", "save the session"},
+                              {"Ctrl+1 ... Ctrl+6", "layout: Four-Up, Conventional, 3D only, axial, coronal, "
+                                                    "sagittal only"},
+                              {"Ctrl+Shift+P", "slice planes in the 3D view on / off"},
                               {"Ctrl+Z / Ctrl+Shift+Z", "undo / redo"},
                               {"F1", "this list"},
                               {"Ctrl+Q", "quit"}});
 }
 
 void MainWindow::add_view_and_help_menus() {
-    // ---- View: every dock and tool bar, listed when the menu opens (docks are added later too)
+    // ---- View: the layouts, then every dock and tool bar, listed when the menu opens (docks are added later too)
     auto* view = menuBar()->addMenu("&View");
     view->setObjectName("view_menu");
+    add_layout_actions(view);
     connect(view, &QMenu::aboutToShow, this, [this, view] {
         view->clear();
+        view->addMenu(layout_menu_); // View > Layout and the slice planes toggle: layouts.cpp
+        view->addAction(slice_planes_3d_);
+        view->addSeparator();
         for (auto* dock : findChildren<QDockWidget*>()) view->addAction(dock->toggleViewAction());
         view->addSeparator();
         for (auto* bar : findChildren<QToolBar*>()) view->addAction(bar->toggleViewAction());

@@ -614,6 +614,7 @@ void MainWindow::update_3d() {
         view3d_->addWidget(viewer_);
     }
     view3d_->setCurrentWidget(viewer_);
+    update_slice_planes_3d();
     viewer_->update();
 }
 
@@ -680,6 +681,7 @@ void MainWindow::set_crosshair(const glm::dvec3& lps, const SliceView* keep) {
 
 void MainWindow::refresh_slices() {
     for (auto* v : views_) v->refresh();
+    update_slice_planes_3d(); // the planes' outlines in the 3D view follow
 }
 
 void MainWindow::set_window_level(const core::WindowLevel& w) {

@@ -8,6 +8,7 @@
 
 #include <array>
 #include <atomic>
+#include <cstdint>
 #include <exception>
 #include <functional>
 #include <memory>
@@ -24,6 +25,7 @@
 #include "io/progress.hpp"
 #include "renderer/core/slices.hpp"
 
+class QAction;
 class QComboBox;
 class QDoubleSpinBox;
 class QLabel;
@@ -38,6 +40,8 @@ class QVBoxLayout;
 namespace iso::core {
 class Scene;
 struct Session;
+struct SliceViewsState;
+enum class ViewLayout : std::uint8_t;
 struct RenderRequest;
 struct SessionParts;
 } // namespace iso::core
@@ -127,9 +131,27 @@ public:
     // The Isolate and Distance tools; their table of isolated structures is in the Measurements dock.
     StructureTools* structure_tools() const { return structures_; }
 
+    // Layouts and the slice planes in the 3D view (layouts.cpp, docs/gui.md
+    // "Layouts"). View > Layout: Four-Up (2 x 2), Conventional, 3D only,
+    // or one slice view alone; the views are moved and shown or hidden, not
+    // made again (the 3D view keeps its GL context, camera and AO).
+    core::ViewLayout layout() const;
+    void set_layout(core::ViewLayout l);
+    QAction* layout_action(core::ViewLayout l) const;
+    // View > Slice planes in 3D: the 3D view draws each slice plane's outline
+    // in the volume (core::slice_outline_3d) in its colour and the crosshair point.
+    bool slice_planes_in_3d() const;
+    void set_slice_planes_in_3d(bool on);
+    QAction* slice_planes_action() const { return slice_planes_3d_; }
+    // The slice views' planes (axial, coronal, sagittal), and setting them
+    // from a session's state (each view keeps the framing it gets).
+    const std::array<core::SlicePlane, 3>& planes() const { return planes_; }
+    void set_slice_views(const core::SliceViewsState& s);
+
     // Sessions and export (app/gui/session_io.cpp, docs/sessions.md).
     // What the window shows as a core::Session (input, series, surfaces,
-    // the 3D view's camera and AO, window/level, markups).
+    // the 3D view's camera and AO, window/level, markups, the layout and
+    // the slice views).
     core::Session current_session() const;
     // The session file last saved or opened (empty: none).
     const QString& session_path() const { return session_path_; }
@@ -209,6 +231,8 @@ private:
     void add_window_level_bar();           // the window/level tool bar
     void add_file_and_edit_menus();        // File, and Edit with the undo stack
     void add_view_and_help_menus();        // View (docks, tool bars) and Help (bindings, About): help_menu.cpp
+    void add_layout_actions(QMenu* view);  // View > Layout and Slice planes in 3D (layouts.cpp)
+    void update_slice_planes_3d();         // the 3D view's slice outlines and crosshair, from the planes
     void wire_surface_undo();              // the Surfaces panel's undo steps (surface_commands.cpp)
     void watch_unsaved_work();             // the title's "*" and autosave (unsaved_work.cpp)
     void enable_data_actions();            // what needs a volume or a surface (data_actions.cpp)
@@ -240,6 +264,10 @@ private:
     std::shared_ptr<Job> job_;                  // the job the window waits for
     std::vector<std::shared_ptr<Job>> running_; // every worker still running (abandoned ones too)
     bool updating_window_ = false;
+    std::uint8_t layout_ = 0;                  // a core::ViewLayout
+    std::array<QAction*, 6> layout_actions_{}; // by core::ViewLayout
+    QMenu* layout_menu_ = nullptr;
+    QAction* slice_planes_3d_ = nullptr;
     QTimer* autosave_timer_ = nullptr;
     QThread* autosave_thread_ = nullptr; // the recovery file being written (null: none)
     bool edited_since_autosave_ = false, closing_ = false;

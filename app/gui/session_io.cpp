@@ -65,8 +65,13 @@ core::Session MainWindow::current_session() const {
     if (scene_->has_volume()) window = window_;
     // The 3D view's toggles (the view bar keeps them across scenes).
     const FrameLook look = viewer_ ? viewer_->options().look : view_bar_->look();
-    return core::capture_session(*scene_, path_.toStdString(), series_.toStdString(), camera, window, look,
-                                 state_.markups);
+    core::Session s = core::capture_session(*scene_, path_.toStdString(), series_.toStdString(), camera, window, look,
+                                            state_.markups);
+    // The layout and the slice views (layouts.cpp).
+    s.layout = layout();
+    s.slice_planes_in_3d = slice_planes_in_3d();
+    if (scene_->has_volume()) s.slice_views = core::capture_slice_views(planes_);
+    return s;
 }
 
 void MainWindow::add_session_actions(QMenu* file) {
@@ -174,6 +179,10 @@ void MainWindow::open_session(const QString& path, bool recovered) {
                 remember_folder("session_folder", path);
             }
             if (s.window) set_window_level(*s.window);
+            // An older session has no layout or slice views: the window's layout and the default planes stay.
+            if (s.layout) set_layout(*s.layout);
+            if (s.slice_views) set_slice_views(*s.slice_views);
+            set_slice_planes_in_3d(s.slice_planes_in_3d);
             set_markups(s.markups);
             // Through the view bar, which keeps its toggles for later views and gives them to this one.
             view_bar_->set_ao(s.ao);

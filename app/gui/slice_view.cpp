@@ -45,8 +45,13 @@ QString slice_readout(const Volume& v, const core::SliceGrid& g, QPointF pixel) 
 void SliceView::set_content(const core::Scene* scene, core::SlicePlane* plane) {
     scene_ = scene;
     plane_ = plane;
-    fitted_ = false;
+    fitted_ = user_framed_ = false;
     range_.reset();
+    refresh();
+}
+
+void SliceView::keep_framing() {
+    fitted_ = user_framed_ = true;
     refresh();
 }
 
@@ -100,6 +105,7 @@ void SliceView::fit() {
     if (!scene_ || !plane_ || !scene_->has_volume()) return;
     core::fit_view(*plane_, scene_->volume(), width(), height());
     fitted_ = true;
+    user_framed_ = false; // fitted again: a resize fits it again too
     refresh();
 }
 
@@ -190,7 +196,7 @@ void SliceView::paint_annotations(QPainter& p) const {
 }
 
 void SliceView::resizeEvent(QResizeEvent*) {
-    fitted_ = false;
+    if (!user_framed_) fitted_ = false;
     refresh();
 }
 
@@ -249,10 +255,12 @@ void SliceView::mouseMoveEvent(QMouseEvent* e) {
         if (on_window) on_window(*this, w);
     } else if (e->buttons() & Qt::MiddleButton) {
         core::pan_pixels(*plane_, {d.x(), d.y()});
+        user_framed_ = true;
         refresh();
     } else if (e->buttons() & Qt::RightButton) {
         core::zoom_about(*plane_, width(), height(), {drag_.press.x(), drag_.press.y()},
                          core::drag_zoom_factor(-d.y(), height()));
+        user_framed_ = true;
         refresh();
     }
 }

@@ -41,6 +41,11 @@ public:
     void set_window(const core::WindowLevel& w);
     // Recomputes the image and outlines from the plane (call after it changed).
     void refresh();
+    // Keeps the plane's framing (centre and pixel size) as it is, through
+    // resizes too, as after a pan or zoom (a session restored it); until
+    // then, and again after set_content, a resize fits the plane's field of
+    // view to the view.
+    void keep_framing();
 
     core::SliceOrientation orientation() const { return orientation_; }
     // The image's grid (one image pixel per widget pixel); valid after refresh
@@ -107,6 +112,7 @@ private:
     core::SlicePlane* plane_ = nullptr;
     core::WindowLevel window_;
     bool fitted_ = false;
+    bool user_framed_ = false; // panned, zoomed or restored: resizes keep the framing
     core::SliceGrid grid_;
     core::SliceImage values_;
     std::vector<std::uint8_t> grey_;

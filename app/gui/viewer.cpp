@@ -402,6 +402,15 @@ void Viewer::set_markups(std::vector<Markup> markups) {
     update();
 }
 
+void Viewer::set_guides(std::vector<Annotations::Line> lines, std::vector<glm::dvec3> points) {
+    // None before and none now: no new frame (the still frames' accumulation goes on).
+    if (lines.empty() && points.empty() && annotations_->lines.empty() && annotations_->points.empty()) return;
+    annotations_->lines = std::move(lines);
+    annotations_->points = std::move(points);
+    ++annotations_version_; // the still frames' picture changed
+    update();
+}
+
 void Viewer::set_labels(std::vector<std::pair<glm::dvec3, std::string>> labels) {
     annotations_->labels.clear();
     ++annotations_version_;

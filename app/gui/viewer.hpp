@@ -18,11 +18,11 @@
 #include "io/markups.hpp"
 #include "app/gui/pointer_drag.hpp"
 #include "renderer/ao/progressive.hpp"
+#include "renderer/frame/annotations.hpp"
 #include "renderer/frame/camera.hpp"
 #include "renderer/frame/frame.hpp"
 
 namespace iso {
-struct Annotations;
 struct RenderOptions;
 namespace core {
 class Scene;
@@ -150,6 +150,10 @@ public:
     // Markups (LPS mm) drawn over the view by the renderer's overlay, as
     // `isoscope render --markups` draws them.
     void set_markups(std::vector<Markup> markups);
+    // Lines (each in its colour) and points (LPS mm) drawn over the view by
+    // the overlay: the slice planes' outlines and the crosshair (View >
+    // Slice planes in 3D). Empty: none.
+    void set_guides(std::vector<Annotations::Line> lines, std::vector<glm::dvec3> points);
     // Text drawn by the overlay next to LPS points (the markups' names).
     void set_labels(std::vector<std::pair<glm::dvec3, std::string>> labels);
     // The overlay's labels as the last frame placed them (boxes in image

@@ -95,7 +95,15 @@ public:
                 s.ao = ao_method_from_name(name); // "reference": the ray-traced method's former name
             }
             s.transparency = boolean(*v, "transparency", "view.transparency", true);
+            s.slice_planes_in_3d = boolean(*v, "slice_planes", "view.slice_planes", false);
         }
+        if (const json* l = member(root, "layout"); l && !l->is_null()) {
+            s.layout = view_layout_from_name(l->is_string() ? l->get<std::string>() : std::string());
+            if (!s.layout)
+                fail("layout", "must be \"four_up\", \"conventional\", \"3d\", \"axial\", \"coronal\" or "
+                               "\"sagittal\"");
+        }
+        if (const json* sv = member(root, "slice_views"); sv && !sv->is_null()) s.slice_views = slice_views(*sv);
         if (const json* m = member(root, "markups"); m && !m->is_null()) {
             try {
                 auto f = parse_markups(m->dump(), "markups");
@@ -218,6 +226,22 @@ private:
         return s;
     }
 
+    SliceViewsState slice_views(const json& sv) const {
+        if (!sv.is_object()) fail("slice_views", "must be an object, not a " + std::string(sv.type_name()));
+        SliceViewsState out;
+        out.crosshair = vec3(require(sv, "crosshair", "slice_views.crosshair"), "slice_views.crosshair");
+        for (std::size_t i = 0; i < 3; ++i) {
+            const std::string name = slice_orientation_name(SliceOrientation(i)), where = "slice_views." + name;
+            const json& view = object(sv, name.c_str(), where, true);
+            SliceViewState& v = out.views[i];
+            v.origin = vec3(require(view, "origin", where + ".origin"), where + ".origin");
+            v.center = vec3(require(view, "center", where + ".center"), where + ".center");
+            v.pixel_mm = number(require(view, "pixel_mm", where + ".pixel_mm"), where + ".pixel_mm");
+            if (!(v.pixel_mm > 0.0)) fail(where + ".pixel_mm", "must be positive");
+        }
+        return out;
+    }
+
     Camera camera(const json& c) const {
         if (!c.is_object()) fail("camera", "must be an object, not a " + std::string(c.type_name()));
         Camera cam;
@@ -238,6 +262,43 @@ private:
 };
 
 } // namespace
+
+const char* view_layout_name(ViewLayout l) {
+    switch (l) {
+    case ViewLayout::FourUp: return "four_up";
+    case ViewLayout::Conventional: return "conventional";
+    case ViewLayout::ThreeD: return "3d";
+    case ViewLayout::Axial: return "axial";
+    case ViewLayout::Coronal: return "coronal";
+    case ViewLayout::Sagittal: return "sagittal";
+    }
+    return "four_up";
+}
+
+std::optional<ViewLayout> view_layout_from_name(const std::string& name) {
+    for (const ViewLayout l : {ViewLayout::FourUp, ViewLayout::Conventional, ViewLayout::ThreeD, ViewLayout::Axial,
+                               ViewLayout::Coronal, ViewLayout::Sagittal})
+        if (name == view_layout_name(l)) return l;
+    return std::nullopt;
+}
+
+SliceViewsState capture_slice_views(const std::array<SlicePlane, 3>& planes) {
+    SliceViewsState s;
+    s.crosshair = crosshair_point(planes);
+    for (std::size_t i = 0; i < 3; ++i) s.views[i] = {planes[i].origin, planes[i].center, planes[i].pixel_mm};
+    return s;
+}
+
+void apply_slice_views(const SliceViewsState& s, std::array<SlicePlane, 3>& planes) {
+    set_crosshair(planes, s.crosshair);
+    for (std::size_t i = 0; i < 3; ++i) {
+        SlicePlane& p = planes[i];
+        const SliceViewState& v = s.views[i];
+        p.origin = v.origin;
+        p.center = v.center + glm::dot(v.origin - v.center, p.normal) * p.normal; // on the plane
+        if (v.pixel_mm > 0.0 && std::isfinite(v.pixel_mm)) p.pixel_mm = v.pixel_mm;
+    }
+}
 
 Session capture_session(const Scene& scene, const std::string& input, const std::string& series,
                         const std::optional<Camera>& camera, const std::optional<WindowLevel>& window,
@@ -305,12 +366,25 @@ ordered_json session_json(const Session& s, const std::string& session_path) {
         j["window_level"] = nullptr;
     j["view"] = {{"ao", s.ao != AoMethod::Off}, {"transparency", s.transparency}};
     if (s.ao == AoMethod::Raytraced) j["view"]["ao_method"] = "raytraced";
+    if (s.slice_planes_in_3d) j["view"]["slice_planes"] = true; // written only when on, as ao_method
     if (s.markups.empty()) {
         j["markups"] = nullptr;
     } else {
         MarkupsFile f;
         f.markups = s.markups;
         j["markups"] = ordered_json::parse(markups_json_text(f, session_path + ": markups"));
+    }
+    // The desktop app's layout and slice views, when it recorded them.
+    if (s.layout) j["layout"] = view_layout_name(*s.layout);
+    if (s.slice_views) {
+        ordered_json sv;
+        sv["crosshair"] = vec_json(s.slice_views->crosshair);
+        for (std::size_t i = 0; i < 3; ++i) {
+            const SliceViewState& v = s.slice_views->views[i];
+            sv[slice_orientation_name(SliceOrientation(i))] = {
+                {"origin", vec_json(v.origin)}, {"center", vec_json(v.center)}, {"pixel_mm", v.pixel_mm}};
+        }
+        j["slice_views"] = sv;
     }
     return j;
 }

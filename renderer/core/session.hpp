@@ -9,6 +9,8 @@
 // as 3D Slicer markups JSON in LPS).
 #pragma once
 
+#include <array>
+#include <cstdint>
 #include <functional>
 #include <memory>
 #include <optional>
@@ -42,6 +44,36 @@ struct SessionSurface {
     PostProcessOptions post;
 };
 
+// The desktop app's arrangement of its views (View > Layout), named as 3D
+// Slicer names its layouts: Four-Up (2 x 2: 3D top left, axial top right,
+// coronal and sagittal below), Conventional (the 3D view large above, the
+// three slice views in a row below), and the One-Up layouts (one view alone:
+// 3D only, axial, coronal or sagittal).
+enum class ViewLayout : std::uint8_t { FourUp, Conventional, ThreeD, Axial, Coronal, Sagittal };
+// "four_up", "conventional", "3d", "axial", "coronal", "sagittal" (the session file's names).
+const char* view_layout_name(ViewLayout l);
+std::optional<ViewLayout> view_layout_from_name(const std::string& name);
+
+// One slice view's position and framing (LPS mm): its plane's origin (the
+// slice: offset_mm is dot(origin, normal)), the point at the image's centre
+// (its pan) and the size of a pixel (its zoom).
+struct SliceViewState {
+    glm::dvec3 origin{0.0};
+    glm::dvec3 center{0.0};
+    double pixel_mm = 1.0;
+};
+// The three slice views and the crosshair they share (crosshair_point).
+struct SliceViewsState {
+    glm::dvec3 crosshair{0.0};
+    std::array<SliceViewState, 3> views{}; // axial, coronal, sagittal
+};
+// The state of the planes (default_planes' order), and back: onto the
+// volume's default planes (their axes and steps), the crosshair first
+// (set_crosshair), then each view's origin, centre (moved onto the plane)
+// and pixel size.
+SliceViewsState capture_slice_views(const std::array<SlicePlane, 3>& planes);
+void apply_slice_views(const SliceViewsState& s, std::array<SlicePlane, 3>& planes);
+
 struct Session {
     std::string input;                    // absolute path of the file or folder opened
     std::string input_sha256;             // empty: not recorded (save_session fills it in)
@@ -56,6 +88,12 @@ struct Session {
     AoMethod ao = AoMethod::Cone;
     bool transparency = true;    // the 3D view's transparency on (off: every surface opaque)
     std::vector<Markup> markups; // LPS mm
+    // The desktop app's layout, slice views and whether its 3D view draws
+    // the slice planes; none (a session saved before they were stored, or
+    // by the CLI): the app's defaults (Four-Up, the volume's default planes).
+    std::optional<ViewLayout> layout;
+    std::optional<SliceViewsState> slice_views;
+    bool slice_planes_in_3d = false;
     // Found while loading, not stored: e.g. the input changed since saving.
     std::vector<std::string> warnings;
 };
@@ -84,7 +122,8 @@ Session load_session(const std::string& path);
 Session read_session(const std::string& path);
 
 // The same state: same input, series, surfaces, camera, window, view
-// options and markups (the recorded SHA-256s and warnings aside).
+// options, markups, layout and slice views (the recorded SHA-256s and
+// warnings aside).
 bool same_state(const Session& a, const Session& b);
 
 struct OpenedSession {

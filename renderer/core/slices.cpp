@@ -536,4 +536,75 @@ std::vector<SliceSegment> mesh_outline(const Mesh& m, const SliceGrid& g) {
     return out;
 }
 
+// ---- The planes in the 3D view ------------------------------------------------------
+
+glm::vec3 slice_color(SliceOrientation o) {
+    // vtkMRMLSliceNode's default colours (Red, Green, Yellow slice views).
+    switch (o) {
+    case SliceOrientation::Axial: return {0.952941f, 0.290196f, 0.2f};
+    case SliceOrientation::Coronal: return {0.431373f, 0.690196f, 0.290196f};
+    case SliceOrientation::Sagittal: return {0.929412f, 0.835294f, 0.298039f};
+    }
+    return {1.0f, 1.0f, 1.0f};
+}
+
+std::array<glm::dvec3, 8> volume_corners(const Volume& v) {
+    std::array<glm::dvec3, 8> c{};
+    for (int i = 0; i < 8; ++i)
+        c[std::size_t(i)] =
+            v.index_to_world({i & 1 ? double(v.dims[0]) - 0.5 : -0.5, i & 2 ? double(v.dims[1]) - 0.5 : -0.5,
+                              i & 4 ? double(v.dims[2]) - 0.5 : -0.5});
+    return c;
+}
+
+std::vector<glm::dvec3> plane_box_section(const std::array<glm::dvec3, 8>& corners, const glm::dvec3& normal,
+                                          double offset_mm) {
+    std::array<double, 8> d{};
+    double size = 0;
+    for (std::size_t i = 0; i < 8; ++i) {
+        d[i] = glm::dot(corners[i], normal) - offset_mm;
+        size = std::max(size, glm::length(corners[i] - corners[0]));
+    }
+    // Corners on the plane, then the edges (corners one bit apart) it crosses.
+    std::vector<glm::dvec3> pts;
+    for (std::size_t i = 0; i < 8; ++i)
+        if (d[i] == 0.0) pts.push_back(corners[i]);
+    for (std::size_t i = 0; i < 8; ++i)
+        for (std::size_t bit = 1; bit < 8; bit <<= 1) {
+            const std::size_t j = i | bit;
+            if (j == i || !((d[i] < 0.0 && d[j] > 0.0) || (d[i] > 0.0 && d[j] < 0.0))) continue;
+            const double t = d[i] / (d[i] - d[j]);
+            glm::dvec3 p = corners[i] + t * (corners[j] - corners[i]);
+            p -= (glm::dot(p, normal) - offset_mm) * normal; // onto the plane despite rounding
+            pts.push_back(p);
+        }
+    // A corner where edges cross the plane next to it can come twice.
+    const double eps = 1e-12 * std::max(size, 1.0);
+    std::vector<glm::dvec3> unique;
+    for (const auto& p : pts)
+        if (std::none_of(unique.begin(), unique.end(), [&](const glm::dvec3& q) { return glm::length(p - q) <= eps; }))
+            unique.push_back(p);
+    if (unique.size() < 3) return {};
+    // Counter-clockwise about the normal: by angle about the centroid.
+    glm::dvec3 c(0.0);
+    for (const auto& p : unique) c += p;
+    c /= double(unique.size());
+    const glm::dvec3 u = glm::normalize(unique[0] - c), w = glm::cross(normal, u);
+    std::sort(unique.begin(), unique.end(), [&](const glm::dvec3& a, const glm::dvec3& b) {
+        return std::atan2(glm::dot(a - c, w), glm::dot(a - c, u)) < std::atan2(glm::dot(b - c, w), glm::dot(b - c, u));
+    });
+    return unique;
+}
+
+std::vector<glm::dvec3> slice_outline_3d(const Volume& v, const SlicePlane& p) {
+    if (v.voxel_count() <= 0) return {};
+    return plane_box_section(volume_corners(v), p.normal, p.offset_mm());
+}
+
+glm::dvec3 crosshair_point(const std::array<SlicePlane, 3>& planes) {
+    glm::dvec3 c(0.0);
+    for (std::size_t i = 0; i < 3; ++i) c += glm::dot(planes[(i + 1) % 3].origin, planes[i].normal) * planes[i].normal;
+    return c;
+}
+
 } // namespace iso::core

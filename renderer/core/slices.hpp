@@ -144,6 +144,37 @@ std::string slice_edge_letter(const SlicePlane& p, SliceEdge e);
 // pixel size that is not a positive finite number.
 double slice_scale_bar_mm(const SlicePlane& p, int width);
 
+// ---- The planes in the 3D view ------------------------------------------------------
+
+// Each orientation's colour, 3D Slicer's (its slice views' title bars and
+// "slice intersections"): axial red #f34a33, coronal green #6eb04a,
+// sagittal yellow #edd54c; sRGB components in [0, 1].
+glm::vec3 slice_color(SliceOrientation o);
+
+// The corners of the volume's LPS box: index -0.5 and n - 0.5 on each axis
+// through the index -> LPS affine (a parallelepiped for an oblique or
+// sheared grid). Corner i is at the high end of axis a when bit a of i is set.
+std::array<glm::dvec3, 8> volume_corners(const Volume& v);
+
+// The plane dot(p, normal) == offset_mm (normal unit) cut through the
+// parallelepiped of `corners` (ordered as volume_corners orders them): the
+// section's vertices, 3 to 6, in order counter-clockwise about the normal.
+// Each is on the plane and on the box's surface (a point where an edge
+// crosses the plane, or a corner on it). Empty when the plane misses the
+// box or touches it only at a corner or along an edge.
+std::vector<glm::dvec3> plane_box_section(const std::array<glm::dvec3, 8>& corners, const glm::dvec3& normal,
+                                          double offset_mm);
+// A slice plane's outline in the volume (plane_box_section of volume_corners):
+// what the 3D view draws for the plane, in slice_color.
+std::vector<glm::dvec3> slice_outline_3d(const Volume& v, const SlicePlane& p);
+
+// The point the three views' crosshairs mark: each view draws it where its
+// origin is, so the point lies on the line through each origin along that
+// view's normal. For the three orthogonal planes of default_planes that is
+// the sum over views i of dot(origin of the next view, normal_i) * normal_i
+// (every origin, when set_crosshair put them all at one point).
+glm::dvec3 crosshair_point(const std::array<SlicePlane, 3>& planes);
+
 // ---- Pixels <-> LPS --------------------------------------------------------------
 
 // A width x height image of a plane: continuous pixel coordinates (x, y)

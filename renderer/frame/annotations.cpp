@@ -509,7 +509,7 @@ Overlay build_overlay(const Annotations& a, const Camera& cam, int W, int H, flo
     const glm::vec4 line_color(1.0f, 0.85f, 0.2f, 1.0f);
     for (const auto& l : a.lines) {
         glm::vec2 p, q;
-        if (project(l.a, p) && project(l.b, q)) b.line(p, q, 2.0f * s, line_color);
+        if (project(l.a, p) && project(l.b, q)) b.line(p, q, 2.0f * s, l.color);
     }
     for (const auto& p : a.points) {
         glm::vec2 px;

@@ -35,6 +35,7 @@ struct Annotations {
     };
     struct Line {
         glm::dvec3 a, b;
+        glm::vec4 color{1.0f, 0.85f, 0.2f, 1.0f}; // sRGB, straight alpha
     };
     std::vector<Label> labels;
     std::vector<Line> lines;

@@ -22,6 +22,7 @@
 
 #include "app/gui/viewer.hpp"
 #include "gui_measure_util.hpp"
+#include "renderer/core/session.hpp"
 #include "renderer/core/versions.hpp"
 
 using namespace iso;
@@ -78,6 +79,44 @@ TEST_F(GuiMenus, ViewMenuShowsAndHidesEachDockAndToolBar) {
     }
 }
 
+// View > Layout lists the six layouts (one checked at a time, each with a
+// tooltip and its Ctrl+digit), and View has the slice planes toggle;
+// choosing an entry sets the window's layout.
+TEST_F(GuiMenus, ViewMenuHasTheLayoutsAndTheSlicePlanesToggle) {
+    gui::MainWindow& w = window();
+    QMenu* view = menu(w, "view_menu");
+    ASSERT_NE(view, nullptr);
+    QAction* entry = action_named(view, "Layout");
+    ASSERT_NE(entry, nullptr);
+    ASSERT_NE(entry->menu(), nullptr);
+    const auto layouts = entry->menu()->actions();
+    ASSERT_EQ(layouts.size(), 6);
+    for (int i = 0; i < 6; ++i) {
+        QAction* a = layouts[i];
+        EXPECT_TRUE(a->isCheckable());
+        EXPECT_FALSE(a->toolTip().isEmpty());
+        EXPECT_NE(a->toolTip(), a->text().remove('&')) << "a tooltip that says more than the entry";
+        EXPECT_EQ(a->shortcut(), QKeySequence(Qt::CTRL | Qt::Key(Qt::Key_1 + i)));
+        EXPECT_EQ(a, w.layout_action(core::ViewLayout(i)));
+    }
+    layouts[3]->trigger();
+    EXPECT_EQ(w.layout(), core::ViewLayout::Axial);
+    int checked = 0;
+    for (QAction* a : layouts) checked += a->isChecked();
+    EXPECT_EQ(checked, 1);
+    EXPECT_TRUE(layouts[3]->isChecked());
+    layouts[0]->trigger();
+    EXPECT_EQ(w.layout(), core::ViewLayout::FourUp);
+    QAction* planes = action_named(view, "Slice planes in 3D");
+    ASSERT_NE(planes, nullptr);
+    EXPECT_EQ(planes, w.slice_planes_action());
+    EXPECT_TRUE(planes->isCheckable());
+    EXPECT_FALSE(planes->toolTip().isEmpty());
+    EXPECT_FALSE(w.slice_planes_in_3d());
+    planes->trigger();
+    EXPECT_TRUE(w.slice_planes_in_3d());
+}
+
 // About names isoscope's and its libraries' versions, Qt's and the GL
 // renderer the 3D view draws with (the one a headless render reports).
 TEST_F(GuiMenus, AboutNamesTheVersionsAndTheRenderer) {
@@ -113,8 +152,9 @@ TEST_F(GuiMenus, BindingsListTheViewsKeys) {
     QDialog* d = nullptr;
     ASSERT_TRUE(wait_until([&] { return (d = top_level<QDialog>("bindings_dialog")) != nullptr; }, 30000));
     const QString text = d->findChild<QTextBrowser*>()->toPlainText();
-    for (const char* s : {"A P L R S I", "O", "Page Up", "Left drag", "Middle drag", "Right drag", "Escape", "Ctrl+Z",
-                          "F, double-click, Fit", "Pointer over a view", "Slider under a view"})
+    for (const char* s :
+         {"A P L R S I", "O", "Page Up", "Left drag", "Middle drag", "Right drag", "Escape", "Ctrl+Z",
+          "F, double-click, Fit", "Pointer over a view", "Slider under a view", "Ctrl+1", "Ctrl+Shift+P"})
         EXPECT_TRUE(text.contains(s)) << s;
     EXPECT_FALSE(d->isModal());
     d->close();

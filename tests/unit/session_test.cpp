@@ -158,6 +158,93 @@ TEST(Session, RayTracedAoIsSavedAndLoadedBack) {
     EXPECT_EQ(core::load_session(dir / "cone.json").ao, AoMethod::Cone);
 }
 
+// The desktop app's layout, slice views (each plane's origin, pan and
+// zoom, the crosshair) and its 3D view's slice planes toggle come back bit
+// for bit; a session without them (written before they were stored) still
+// loads, with none of them, and writes none of them back.
+TEST(Session, LayoutAndSliceViewsAreSavedAndLoadedBack) {
+    TempDir dir;
+    core::Session s = example(test::data("headsq.nhdr"));
+    s.layout = core::ViewLayout::Sagittal;
+    s.slice_planes_in_3d = true;
+    core::SliceViewsState v;
+    v.crosshair = {1.0 / 3.0, -20.5, 47.125};
+    for (std::size_t i = 0; i < 3; ++i)
+        v.views[i] = {
+            {0.1 * double(i), -20.5, 47.125 + double(i)}, {5.0 / 7.0, -1.25 * double(i), 3.5}, 0.3 + 0.1 * double(i)};
+    s.slice_views = v;
+    const std::string path = dir / "s.json";
+    core::save_session(s, path);
+    const auto j = nlohmann::json::parse(read_file(path));
+    EXPECT_EQ(j["layout"], "sagittal");
+    EXPECT_EQ(j["view"]["slice_planes"], true);
+    EXPECT_EQ(j["slice_views"]["coronal"]["pixel_mm"], 0.4);
+    const core::Session r = core::load_session(path);
+    ASSERT_TRUE(r.layout.has_value());
+    EXPECT_EQ(*r.layout, core::ViewLayout::Sagittal);
+    EXPECT_TRUE(r.slice_planes_in_3d);
+    ASSERT_TRUE(r.slice_views.has_value());
+    EXPECT_EQ(r.slice_views->crosshair, v.crosshair);
+    for (std::size_t i = 0; i < 3; ++i) {
+        EXPECT_EQ(r.slice_views->views[i].origin, v.views[i].origin);
+        EXPECT_EQ(r.slice_views->views[i].center, v.views[i].center);
+        EXPECT_EQ(r.slice_views->views[i].pixel_mm, v.views[i].pixel_mm);
+    }
+    EXPECT_TRUE(core::same_state(r, s));
+    core::Session other = r;
+    other.layout = core::ViewLayout::FourUp;
+    EXPECT_FALSE(core::same_state(other, s));
+    other = r;
+    other.slice_views->views[2].origin.x += 1.0;
+    EXPECT_FALSE(core::same_state(other, s));
+    for (const auto l : {core::ViewLayout::FourUp, core::ViewLayout::Conventional, core::ViewLayout::ThreeD,
+                         core::ViewLayout::Axial, core::ViewLayout::Coronal, core::ViewLayout::Sagittal})
+        EXPECT_EQ(core::view_layout_from_name(core::view_layout_name(l)), l);
+
+    // An older file: no layout, no slice_views, no view.slice_planes.
+    auto old = j;
+    old.erase("layout");
+    old.erase("slice_views");
+    old["view"].erase("slice_planes");
+    write_file(dir / "old.json", old.dump(2));
+    const core::Session o = core::load_session(dir / "old.json");
+    EXPECT_FALSE(o.layout.has_value());
+    EXPECT_FALSE(o.slice_views.has_value());
+    EXPECT_FALSE(o.slice_planes_in_3d);
+    EXPECT_EQ(o.camera->eye, s.camera->eye); // the rest as before
+    core::save_session(o, dir / "again.json");
+    const auto again = nlohmann::json::parse(read_file(dir / "again.json"));
+    EXPECT_FALSE(again.contains("layout"));
+    EXPECT_FALSE(again.contains("slice_views"));
+    EXPECT_FALSE(again["view"].contains("slice_planes"));
+}
+
+// Slice views onto a volume's default planes: the crosshair the views mark
+// is the one stored, each plane's offset, pan and zoom are the stored ones.
+TEST(Session, SliceViewsApplyToTheDefaultPlanes) {
+    const Volume vol =
+        Volume::dense({8, 10, 12}, VoxelType::F32, make_affine({0.5, 0.75, 1.5}, {-10.0, 20.0, 30.0}, glm::dmat3(1.0)));
+    auto planes = core::default_planes(vol);
+    const glm::dvec3 cross(-8.5, 23.0, 36.0);
+    core::set_crosshair(planes, cross);
+    core::set_offset(planes[0], 40.5);         // the axial view on another slice than the crosshair's
+    planes[1].center += 3.0 * planes[1].right; // the coronal view panned
+    planes[2].pixel_mm = 0.125;                // the sagittal view zoomed
+    const core::SliceViewsState st = core::capture_slice_views(planes);
+    EXPECT_EQ(st.crosshair, cross);
+    auto back = core::default_planes(vol);
+    core::apply_slice_views(st, back);
+    EXPECT_EQ(core::crosshair_point(back), cross);
+    EXPECT_DOUBLE_EQ(back[0].offset_mm(), 40.5);
+    EXPECT_EQ(back[1].offset_mm(), cross.y);
+    EXPECT_EQ(back[2].offset_mm(), cross.x);
+    for (std::size_t i = 0; i < 3; ++i) {
+        EXPECT_EQ(back[i].origin, planes[i].origin);
+        EXPECT_NEAR(glm::length(back[i].center - planes[i].center), 0.0, 1e-12);
+        EXPECT_EQ(back[i].pixel_mm, planes[i].pixel_mm);
+    }
+}
+
 TEST(Session, InputBelowTheSessionFolderIsRelativeAndMovesWithIt) {
     TempDir dir;
     fs::create_directories(dir.path() / "a" / "data");
@@ -235,6 +322,22 @@ TEST(Session, RefusalsNameTheFileAndTheField) {
              j["view"]["ao_method"] = "rays";
          }),
          "view.ao_method: must be \"cone\" or \"raytraced\""},
+        {edited([](auto& j) { j["layout"] = "six_up"; }), "layout: must be \"four_up\""},
+        {edited([](auto& j) { j["view"]["slice_planes"] = 1; }), "view.slice_planes: must be true or false"},
+        {edited([](auto& j) {
+             j["slice_views"] = {{"crosshair", {1, 2}}};
+         }),
+         "slice_views.crosshair: must be an array of 3 numbers"},
+        {edited([](auto& j) {
+             j["slice_views"] = {{"crosshair", {1, 2, 3}}};
+         }),
+         "slice_views.axial: missing"},
+        {edited([](auto& j) {
+             const nlohmann::json view = {{"origin", {0, 0, 0}}, {"center", {0, 0, 0}}, {"pixel_mm", 1}};
+             j["slice_views"] = {{"crosshair", {1, 2, 3}}, {"axial", view}, {"coronal", view}, {"sagittal", view}};
+             j["slice_views"]["coronal"]["pixel_mm"] = 0;
+         }),
+         "slice_views.coronal.pixel_mm: must be positive"},
         {edited([](auto& j) { j["markups"]["markups"][0]["controlPoints"].erase(1); }),
          "markups: markup 1 (Line 'ruler'): a Line needs 2"},
     };

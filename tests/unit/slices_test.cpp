@@ -878,3 +878,133 @@ TEST(SliceOutline, AMillionTrianglesChainIntoClosedLoops) {
     const SliceGrid g = slice_grid(p, 512, 512);
     EXPECT_TRUE(chain(mesh_outline(sphere, g)).ok);
 }
+
+// ---- the planes in the 3D view -------------------------------------------------------
+
+namespace {
+
+// The corners of the axis-aligned box [lo, hi] in volume_corners' order.
+std::array<glm::dvec3, 8> box_corners(glm::dvec3 lo, glm::dvec3 hi) {
+    std::array<glm::dvec3, 8> c{};
+    for (int i = 0; i < 8; ++i) c[std::size_t(i)] = {i & 1 ? hi.x : lo.x, i & 2 ? hi.y : lo.y, i & 4 ? hi.z : lo.z};
+    return c;
+}
+
+// `got` is `want` as a cycle (same vertices in the same cyclic order, any start).
+void expect_same_cycle(const std::vector<glm::dvec3>& got, const std::vector<glm::dvec3>& want, double tol) {
+    ASSERT_EQ(got.size(), want.size());
+    std::size_t start = 0;
+    while (start < got.size() && glm::length(got[start] - want[0]) > tol) ++start;
+    ASSERT_LT(start, got.size()) << "the first expected vertex is missing";
+    for (std::size_t i = 0; i < want.size(); ++i)
+        EXPECT_LT(glm::length(got[(start + i) % got.size()] - want[i]), tol) << "vertex " << i;
+}
+
+// Convex and counter-clockwise about `n`: every turn is to the left.
+void expect_convex_ccw(const std::vector<glm::dvec3>& poly, const glm::dvec3& n) {
+    for (std::size_t i = 0; i < poly.size(); ++i) {
+        const auto& a = poly[i];
+        const auto& b = poly[(i + 1) % poly.size()];
+        const auto& c = poly[(i + 2) % poly.size()];
+        EXPECT_GT(glm::dot(glm::cross(b - a, c - b), n), 0.0) << "turn at vertex " << (i + 1) % poly.size();
+    }
+}
+
+} // namespace
+
+// An axial plane through a box: the rectangle of the box's x and y extent at
+// the plane's z, counter-clockwise seen from above (+z).
+TEST(SliceOutline3d, AnAxialPlaneGivesTheBoxsRectangleAtItsHeight) {
+    const auto c = box_corners({-5, -10, 0}, {15, 30, 60});
+    const auto poly = plane_box_section(c, {0, 0, 1}, 20.0);
+    expect_same_cycle(poly, {{-5, -10, 20}, {15, -10, 20}, {15, 30, 20}, {-5, 30, 20}}, 1e-12);
+    // A face of the box is the face; a plane beside the box gives nothing.
+    EXPECT_EQ(plane_box_section(c, {0, 0, 1}, 60.0).size(), 4u);
+    EXPECT_TRUE(plane_box_section(c, {0, 0, 1}, 60.5).empty());
+    EXPECT_TRUE(plane_box_section(c, {0, 0, 1}, -1.0).empty());
+}
+
+// The unit cube cut by x + y + z = k: a regular hexagon at k = 1.5 (the
+// midpoints of the six edges the plane crosses), a triangle at k = 0.5
+// (the three edges at the origin, halfway), nothing at k = 0 (one corner).
+TEST(SliceOutline3d, ObliquePlanesThroughTheUnitCube) {
+    const auto c = box_corners({0, 0, 0}, {1, 1, 1});
+    const glm::dvec3 n = glm::normalize(glm::dvec3(1, 1, 1));
+    const auto hex = plane_box_section(c, n, 1.5 / std::sqrt(3.0));
+    expect_same_cycle(hex, {{1, 0.5, 0}, {0.5, 1, 0}, {0, 1, 0.5}, {0, 0.5, 1}, {0.5, 0, 1}, {1, 0, 0.5}}, 1e-12);
+    expect_convex_ccw(hex, n);
+    const auto tri = plane_box_section(c, n, 0.5 / std::sqrt(3.0));
+    expect_same_cycle(tri, {{0.5, 0, 0}, {0, 0.5, 0}, {0, 0, 0.5}}, 1e-12);
+    EXPECT_TRUE(plane_box_section(c, n, 0.0).empty());
+    // Through two opposite edges: the diagonal rectangle (corners on the plane count once).
+    const glm::dvec3 d = glm::normalize(glm::dvec3(1, -1, 0));
+    const auto diagonal = plane_box_section(c, d, 0.0);
+    expect_same_cycle(diagonal, {{0, 0, 0}, {1, 1, 0}, {1, 1, 1}, {0, 0, 1}}, 1e-12);
+    expect_convex_ccw(diagonal, d);
+}
+
+// Random planes through a sheared, rotated box (an oblique volume's):
+// 3 to 6 vertices, each on the plane and on the box's surface (one of its
+// box coordinates at 0 or 1), the polygon convex and counter-clockwise.
+TEST(SliceOutline3d, RandomPlanesThroughAnObliqueVolumesBox) {
+    const Volume v = oblique_linear({12, 9, 7});
+    const auto c = volume_corners(v);
+    // The box coordinates: c[0] + E * t, t in [0, 1]^3, E's columns the three edges from corner 0.
+    const glm::dmat3 e(c[1] - c[0], c[2] - c[0], c[4] - c[0]);
+    const glm::dmat3 inv = glm::inverse(e);
+    std::mt19937 rng(7);
+    std::uniform_real_distribution<double> u(-1.0, 1.0), t(0.05, 0.95);
+    int seen[7] = {};
+    for (int k = 0; k < 400; ++k) {
+        const glm::dvec3 n = glm::normalize(glm::dvec3(u(rng), u(rng), u(rng)));
+        const glm::dvec3 through = c[0] + e * glm::dvec3(t(rng), t(rng), t(rng)); // inside the box
+        const auto poly = plane_box_section(c, n, glm::dot(through, n));
+        ASSERT_GE(poly.size(), 3u);
+        ASSERT_LE(poly.size(), 6u);
+        ++seen[poly.size()];
+        for (const auto& p : poly) {
+            EXPECT_NEAR(glm::dot(p, n), glm::dot(through, n), 1e-9);
+            const glm::dvec3 b = inv * (p - c[0]);
+            double face = 1.0;
+            for (int a = 0; a < 3; ++a) {
+                EXPECT_GE(b[a], -1e-9);
+                EXPECT_LE(b[a], 1.0 + 1e-9);
+                face = std::min({face, std::abs(b[a]), std::abs(b[a] - 1.0)});
+            }
+            EXPECT_LT(face, 1e-9) << "a vertex inside the box, not on its surface";
+        }
+        expect_convex_ccw(poly, n);
+    }
+    EXPECT_GT(seen[3] + seen[4] + seen[5] + seen[6], 0);
+    EXPECT_GT(seen[6], 0) << "no hexagon in 400 random planes";
+}
+
+// A view's outline is its plane through the volume's box, the box of the
+// voxels' extent (index -0.5 .. n - 0.5); it follows the plane as it scrolls.
+TEST(SliceOutline3d, TheAxialViewsOutlineFollowsItsSlice) {
+    const Volume v =
+        Volume::dense({10, 20, 30}, VoxelType::F32, make_affine({0.5, 1.0, 2.0}, {-3.0, 4.0, 5.0}, glm::dmat3(1.0)));
+    auto planes = default_planes(v);
+    SlicePlane& axial = planes[0];
+    scroll_slices(axial, 3);
+    const double z = axial.offset_mm();
+    EXPECT_NEAR(z, 5.0 + (29.0 / 2.0 + 3.0) * 2.0, 1e-9);
+    const double x0 = -3.0 - 0.25, x1 = -3.0 + 9.5 * 0.5, y0 = 4.0 - 0.5, y1 = 4.0 + 19.5;
+    expect_same_cycle(slice_outline_3d(v, axial), {{x0, y0, z}, {x1, y0, z}, {x1, y1, z}, {x0, y1, z}}, 1e-9);
+}
+
+// Where the three views' crosshairs meet: the shared point after
+// set_crosshair, still that point when one view kept its slice.
+TEST(SliceOutline3d, TheCrosshairPointIsWhereTheViewsMarkIt) {
+    const Volume v = oblique_linear();
+    auto planes = default_planes(v);
+    const glm::dvec3 pick = kCentre + glm::dvec3(3.3, -4.4, 5.5);
+    set_crosshair(planes, pick);
+    EXPECT_LT(glm::length(crosshair_point(planes) - pick), 1e-12);
+    set_offset(planes[1], planes[1].offset_mm() + 7.0); // the coronal view kept another slice
+    EXPECT_LT(glm::length(crosshair_point(planes) - pick), 1e-12);
+    // Slicer's colours: axial red, coronal green, sagittal yellow.
+    EXPECT_NEAR(slice_color(SliceOrientation::Axial).r, 243.0 / 255.0, 1e-3);
+    EXPECT_NEAR(slice_color(SliceOrientation::Coronal).g, 176.0 / 255.0, 1e-3);
+    EXPECT_NEAR(slice_color(SliceOrientation::Sagittal).g, 213.0 / 255.0, 1e-3);
+}
