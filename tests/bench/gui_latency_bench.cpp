@@ -41,6 +41,7 @@
 #include <vector>
 
 #include "app/gui/main_window.hpp"
+#include "gui_bench_util.hpp"
 #include "app/gui/slice_view.hpp"
 #include "app/gui/viewer.hpp"
 #include "io/atomic_file.hpp"
@@ -48,36 +49,15 @@
 #include "renderer/core/scene.hpp"
 
 using namespace iso;
+using bench::now_ms;
+using bench::quantile;
+using bench::wait_until;
 
 namespace {
-
-double now_ms() {
-    using namespace std::chrono;
-    return duration<double, std::milli>(steady_clock::now().time_since_epoch()).count();
-}
-
-// Runs the event loop until `ready` or `timeout_ms`.
-bool wait_until(const std::function<bool()>& ready, int timeout_ms) {
-    const double t0 = now_ms();
-    while (!ready()) {
-        if (now_ms() - t0 > timeout_ms) return false;
-        QEventLoop loop;
-        QTimer::singleShot(5, &loop, &QEventLoop::quit);
-        loop.exec();
-    }
-    return true;
-}
 
 void wait_ms(int ms) {
     const double until = now_ms() + ms;
     wait_until([&] { return now_ms() >= until; }, ms + 1000);
-}
-
-double quantile(std::vector<double> v, double q) {
-    if (v.empty()) return NAN;
-    std::sort(v.begin(), v.end()); // nearest rank
-    const std::size_t k = std::size_t(std::ceil(q * double(v.size())));
-    return v[std::min(v.size() - 1, k == 0 ? 0 : k - 1)];
 }
 
 int fail(const std::string& why) {
@@ -200,11 +180,7 @@ int main(int argc, char** argv) {
             return a == "--help" ? 0 : 2;
         }
     }
-    QSurfaceFormat fmt;
-    fmt.setVersion(4, 5);
-    fmt.setProfile(QSurfaceFormat::CoreProfile);
-    fmt.setDepthBufferSize(24);
-    QSurfaceFormat::setDefaultFormat(fmt);
+    bench::set_gl_format();
     int qargc = 1;
     char* qargv[] = {argv[0], nullptr};
     QApplication app(qargc, qargv);
@@ -214,16 +190,8 @@ int main(int argc, char** argv) {
     gui::MainWindow w; // its default size, as a user first sees it
     QPushButton button("probe");
     w.statusBar()->addPermanentWidget(&button);
-    w.show();
-    if (!wait_until([&] { return w.isVisible(); }, 10000)) return fail("the window did not show");
-    w.open_path(QString::fromStdString(input));
-    if (!wait_until([&] { return !w.busy(); }, 120000) || !w.scene().has_volume()) return fail("cannot open " + input);
-    for (double iso : {500.0, 1150.0}) {
-        w.add_surface(iso);
-        if (!wait_until([&] { return !w.busy(); }, 300000)) return fail("the extraction did not finish");
-    }
+    if (const std::string why = bench::open_head(w, input); !why.empty()) return fail(why);
     const auto ids = w.scene().surfaces();
-    if (ids.size() != 2) return fail("expected the skin and the bone surfaces");
     w.scene().info(ids[0]).opacity = 0.3f;
     gui::Viewer* v = w.viewer();
     if (!v || !wait_until([&] { return v->frames() > 0 || !v->error().empty(); }, 60000)) return fail("no 3D frame");
@@ -264,11 +232,7 @@ int main(int argc, char** argv) {
         out += line;
     }
     try {
-        write_atomically(csv, [&](const std::string& tmp) {
-            std::ofstream f(tmp);
-            f << out;
-            if (!f.flush()) throw Error(csv, "cannot write");
-        });
+        bench::write_text(csv, out);
     } catch (const std::exception& e) {
         return fail(e.what());
     }
