@@ -29,6 +29,9 @@ Viewer::Viewer(core::Scene& scene, PatientView view, ViewerOptions options, QWid
     setFocusPolicy(Qt::StrongFocus);
     setMinimumSize(320, 240);
     setMouseTracking(true); // hover readout
+    // The framebuffer keeps its picture between paints: a plain frame
+    // already on screen is not drawn again (draw_here), and a grab reads it.
+    setUpdateBehavior(QOpenGLWidget::PartialUpdate);
     still_timer_ = new QTimer(this);
     still_timer_->setSingleShot(true);
     connect(still_timer_, &QTimer::timeout, this, [this] { schedule_still_frame(); });
