@@ -169,13 +169,10 @@ const char* slice_orientation_name(SliceOrientation o) {
 }
 
 namespace {
-// The LPS bounding box of the voxels' extent (index -0.5 .. n - 0.5) through its 8 corners.
+// The LPS bounding box of the voxels' extent (volume_corners).
 std::pair<glm::dvec3, glm::dvec3> lps_box(const Volume& v) {
     glm::dvec3 lo(std::numeric_limits<double>::max()), hi(-std::numeric_limits<double>::max());
-    for (int corner = 0; corner < 8; ++corner) {
-        const glm::dvec3 ijk(corner & 1 ? double(v.dims[0]) - 0.5 : -0.5, corner & 2 ? double(v.dims[1]) - 0.5 : -0.5,
-                             corner & 4 ? double(v.dims[2]) - 0.5 : -0.5);
-        const glm::dvec3 p = v.index_to_world(ijk);
+    for (const glm::dvec3& p : volume_corners(v)) {
         lo = glm::min(lo, p);
         hi = glm::max(hi, p);
     }
