@@ -43,11 +43,6 @@ void StillFrames::request(StillRequest r) {
     wake_.notify_all();
 }
 
-void StillFrames::cancel() {
-    std::lock_guard lock(mutex_);
-    pending_.reset();
-}
-
 void StillFrames::hold_for(int ms) {
     const std::int64_t until = now_ns() + std::int64_t(ms) * 1000000;
     std::int64_t seen = hold_until_ns_.load(std::memory_order_relaxed);

@@ -61,8 +61,6 @@ public:
     // Replaces what was asked before (a frame being drawn for it finishes,
     // and arrives with the older id).
     void request(StillRequest r);
-    // Nothing more to draw.
-    void cancel();
     // Input: no frame starts within `ms` of now (called on every input event: cheap).
     void hold_for(int ms);
     // The input that held the frames back is over (the view's own drag ended).

@@ -210,7 +210,7 @@ void Viewer::draw() {
 // What a frame shows apart from its jitter: the camera, the image, the
 // surfaces (mesh versions, colours, names), the overlay and the AO image;
 // the look is compared on its own.
-std::vector<double> Viewer::frame_key(const RenderOptions& opt) const {
+std::vector<double> Viewer::frame_key(const RenderOptions& opt, const core::SceneSnapshot& scene) const {
     const Camera& c = camera_;
     std::vector<double> k{c.eye.x,
                           c.eye.y,
@@ -230,7 +230,7 @@ std::vector<double> Viewer::frame_key(const RenderOptions& opt) const {
                           double(opt.accumulate),
                           double(annotations_version_),
                           double(reinterpret_cast<std::uintptr_t>(opt.ao_image))};
-    for (const auto& s : scene_.snapshot().surfaces)
+    for (const auto& s : scene.surfaces)
         k.insert(k.end(), {double(s.version), double(std::hash<std::string>{}(s.object.name) >> 11), s.object.color.r,
                            s.object.color.g, s.object.color.b, s.object.opacity, double(s.object.visible)});
     return k;
@@ -249,11 +249,12 @@ bool Viewer::use_still_thread() {
 // for; its latest frame for this view is blitted (true). False: none yet,
 // the caller shows a plain frame meanwhile.
 bool Viewer::show_still(const RenderOptions& opt) {
-    std::vector<double> key = frame_key(opt);
+    core::SceneSnapshot scene = scene_.snapshot();
+    std::vector<double> key = frame_key(opt, scene);
     if (key != still_key_ || !(opt.look == still_look_)) {
         StillRequest r;
         r.id = ++still_id_;
-        r.scene = scene_.snapshot();
+        r.scene = std::move(scene);
         r.camera = camera_;
         r.opt = opt;
         r.annotations = std::make_shared<const Annotations>(*annotations_);
@@ -300,7 +301,7 @@ void Viewer::take_still(const StillFrame& f) {
 // frame standing in for the thread's (`stand_in`), or every still frame
 // without the thread. A plain frame already on screen is not drawn again.
 void Viewer::draw_here(const RenderOptions& opt, bool stand_in) {
-    std::vector<double> key = frame_key(opt);
+    std::vector<double> key = frame_key(opt, scene_.snapshot());
     if (stand_in && key == shown_key_ && opt.look == shown_look_) return;
     auto r = scene_.render(camera_, opt);
     shown_key_ = std::move(key);

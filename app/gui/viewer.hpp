@@ -27,6 +27,7 @@ struct RenderOptions;
 namespace core {
 class Scene;
 struct PickResult;
+struct SceneSnapshot;
 } // namespace core
 } // namespace iso
 
@@ -170,7 +171,7 @@ protected:
     void frame_camera();
     void draw_here(const RenderOptions& opt, bool stand_in);
     bool show_still(const RenderOptions& opt);
-    std::vector<double> frame_key(const RenderOptions& opt) const;
+    std::vector<double> frame_key(const RenderOptions& opt, const core::SceneSnapshot& scene) const;
     RenderOptions frame_options() const;
     void mousePressEvent(QMouseEvent* e) override;
     void mouseMoveEvent(QMouseEvent* e) override;
