@@ -128,7 +128,7 @@ glm::vec3 hex_option(const std::string& flag, const std::string& text) {
 // Opens the input of `render` and `view`: a mesh, or a volume and its
 // isosurfaces (--iso required), and gives the surfaces their look.
 void open_input(iso::core::Scene& scene, const std::string& input, const std::string& series,
-                const std::vector<double>& isos, const Look& look, const std::string& command) {
+                const std::vector<double>& isos, const Look& look, const std::string& command, bool volume_rendering) {
     iso::LoadOptions lo;
     lo.series = series;
     lo.progress = progress_bar();
@@ -136,8 +136,10 @@ void open_input(iso::core::Scene& scene, const std::string& input, const std::st
     std::vector<iso::core::SurfaceId> in_order; // as the user gave them
     if (scene.has_volume()) {
         for (const auto& w : scene.volume().meta.warnings) std::cerr << "warning: " << w << "\n";
-        if (isos.empty()) throw iso::Error("isoscope " + command, input + " is a volume: give --iso V (repeatable)");
-        const auto ids = scene.add_isosurfaces(isos, {}, {}, progress_bar());
+        if (isos.empty() && !volume_rendering)
+            throw iso::Error("isoscope " + command, input + " is a volume: give --iso V (repeatable) or --volume TF");
+        const auto ids =
+            isos.empty() ? std::vector<iso::core::SurfaceId>{} : scene.add_isosurfaces(isos, {}, {}, progress_bar());
         for (const auto id : ids)
             for (const auto& w : scene.mesh(id).warnings)
                 std::cerr << "warning: " << scene.info(id).name << ": " << w << "\n";

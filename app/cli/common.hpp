@@ -57,6 +57,7 @@ glm::vec3 hex_option(const std::string& flag, const std::string& text);
 // Opens the input of `render` and `view`: a mesh, or a volume and its
 // isosurfaces (--iso required), and gives the surfaces their look.
 void open_input(iso::core::Scene& scene, const std::string& input, const std::string& series,
-                const std::vector<double>& isos, const Look& look, const std::string& command);
+                const std::vector<double>& isos, const Look& look, const std::string& command,
+                bool volume_rendering = false);
 
 } // namespace iso::cli

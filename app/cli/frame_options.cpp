@@ -79,6 +79,19 @@ void add_frame_options(CLI::App* c, FrameArgs& a, bool input_required) {
     c->add_option("--oit-epsilon", req.look.oit_epsilon,
                   "Translucent surfaces: stop compositing a pixel below this transmittance (default 1/512)")
         ->check(CLI::Range(0.0, 0.999));
+    c->add_option("--volume", a.volume,
+                  "Ray cast the volume with this transfer function: a preset (bone, vessels, skin, soft tissue) or "
+                  "value:opacity:#rrggbb,... (opacity per mm, piecewise linear; combinable with --iso)");
+    c->add_option("--volume-mode", a.volume_mode, "Volume rendering: composite (default), mip or minip");
+    c->add_option("--volume-step", req.look.volume.step,
+                  "Volume rendering: sample step in voxels of the smallest spacing (default 0.5)")
+        ->check(CLI::Range(0.01, 8.0));
+    c->add_flag("--no-empty-skipping", a.no_empty_skipping,
+                "Volume rendering: march every chunk, also those the transfer function leaves empty (checks)");
+    c->add_option("--clip", a.clip,
+                  "Cut surfaces and volume: box=x0,y0,z0,x1,y1,z1 or plane=px,py,pz,nx,ny,nz (LPS mm; the side the "
+                  "normal points to is kept; repeatable)")
+        ->allow_extra_args(false);
     c->add_option("--oit-memory", req.look.oit_memory_mib,
                   "Translucent surfaces: fragment pool cap in MiB (default 256)")
         ->check(CLI::Range(1.0, 65536.0));
@@ -93,6 +106,13 @@ iso::core::RenderRequest frame_request(const FrameArgs& a) {
     req.progress = progress_bar();
     if (!a.look.background.empty()) req.look.background = hex_option("--background", a.look.background);
     req.look.flat_shading = a.look.shading == "flat";
+    if (!a.volume.empty()) {
+        req.look.volume.enabled = true;
+        req.look.volume.tf = iso::transfer_function_from(a.volume);
+    }
+    req.look.volume.mode = iso::volume_mode_from_name(a.volume_mode);
+    req.look.volume.skip_empty = !a.no_empty_skipping;
+    for (const auto& c : a.clip) req.look.clip.add(c);
     if (a.no_aa) {
         req.look.aa.samples = 1;
         req.look.aa.frames = 1;

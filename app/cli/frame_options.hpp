@@ -24,6 +24,10 @@ struct FrameArgs {
     std::string in, size = "1024x1024", ao = "off", disk_blend;
     Look look; // surface colours and opacities, background, shading
     bool no_aa = false;
+    // Volume rendering: a preset or value:opacity:#rrggbb,...; its mode; clips.
+    std::string volume, volume_mode = "composite";
+    std::vector<std::string> clip;
+    bool no_empty_skipping = false;
     iso::core::RenderRequest req;
 };
 

@@ -55,7 +55,7 @@ int run_pick(const PickArgs& a) {
     p.threshold = a.threshold;
     p.all_layers = a.all_layers;
     iso::core::Scene scene;
-    open_input(scene, a.frame.in, req.series, req.isos, a.frame.look, "pick");
+    open_input(scene, a.frame.in, req.series, req.isos, a.frame.look, "pick", req.look.volume.enabled);
     const auto r = iso::core::pick(scene, req, p);
     if (!r.complete) std::cerr << "warning: the pick's lists overflowed: some layers are missing\n";
     if (a.json) {
@@ -90,8 +90,9 @@ RunFn add_pick(CLI::App& cmd, char*) {
     add_frame_options(c, a.frame);
     c->add_option("--at", a.at, "Pixel X,Y from the image's top-left")->required();
     c->add_option("--rect", a.rect, "Also list the triangles visible in the rectangle X,Y,W,H");
-    c->add_option("--threshold", a.threshold,
-                  "Where the click lands: the first surface whose own opacity reaches this, else the nearest (default 0.5)")
+    c->add_option(
+         "--threshold", a.threshold,
+         "Where the click lands: the first surface whose own opacity reaches this, else the nearest (default 0.5)")
         ->check(CLI::Range(0.0, 1.0));
     c->add_flag("--all-layers", a.all_layers, "List every layer down to the first opaque one");
     c->add_flag("--json", a.json, "Print JSON");

@@ -23,6 +23,16 @@ struct RenderArgs {
     bool view_given = false, ao_given = false; // with --session: replace the session's camera / AO method
 };
 
+void print_volume_stats(const iso::VolumeStats& v) {
+    if (!v.drawn) return;
+    const double taken = double(v.samples), all = double(v.samples + v.skipped);
+    std::cout << "volume: step " << std::setprecision(3) << v.step_mm << " mm; " << v.rays << " rays, " << v.samples
+              << " samples, " << v.skipped << " skipped in empty chunks (" << std::setprecision(1)
+              << (all > 0 ? 100.0 * (1.0 - taken / all) : 0.0) << " %), " << v.terminated << " rays ended early; "
+              << v.empty_chunks << " of " << v.chunks << " chunks empty under the transfer function; texture "
+              << human_bytes(double(v.texture_bytes)) << "\n";
+}
+
 void print_stats(const iso::graph::FrameStats& stats, const iso::OitStats& oit) {
     std::cout << std::left << std::setw(14) << "pass" << std::setw(8) << "ran" << std::setw(12) << "ms"
               << "created\n";
@@ -92,12 +102,15 @@ int run_render(const RenderArgs& a) {
         req.markups_files.push_back(path);
     }
     iso::core::Scene local;
-    if (!opened) open_input(local, a.frame.in, req.series, req.isos, a.frame.look, "render");
+    if (!opened) open_input(local, a.frame.in, req.series, req.isos, a.frame.look, "render", req.look.volume.enabled);
     const auto out = iso::core::render_image(opened ? *opened->scene : local, req);
     iso::core::export_image(out.image, out.meta, a.out);
     std::cout << "rendered " << out.image.width << "x" << out.image.height << " (" << out.gl_renderer << ") -> "
               << a.out << "\n";
-    if (a.stats) print_stats(out.stats, out.oit);
+    if (a.stats) {
+        print_stats(out.stats, out.oit);
+        print_volume_stats(out.volume);
+    }
     if (out.oit.merged > 0)
         std::cerr << "warning: " << out.oit.merged << " translucent fragments in " << out.oit.merged_pixels
                   << " pixels did not fit the " << req.look.oit_memory_mib

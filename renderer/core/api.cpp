@@ -198,20 +198,24 @@ RenderOutput render_input(const std::string& input, const RenderRequest& req) {
     lo.progress = req.progress;
     scene.open(input, lo);
     if (scene.has_volume()) {
-        if (req.isos.empty()) throw Error("render " + input, "a volume needs at least one iso value");
-        scene.add_isosurfaces(req.isos, {}, {}, req.progress);
+        if (req.isos.empty() && !req.look.volume.enabled)
+            throw Error("render " + input, "a volume needs at least one iso value or volume rendering");
+        if (!req.isos.empty()) scene.add_isosurfaces(req.isos, {}, {}, req.progress);
     }
     return render_image(scene, req);
 }
 
 Camera frame_camera(const Scene& scene, const RenderRequest& req) {
-    if (!req.camera) return scene.camera(patient_view_from_name(req.view), double(req.width) / double(req.height));
+    if (!req.camera)
+        return scene.camera(patient_view_from_name(req.view), double(req.width) / double(req.height), req.look);
     Camera cam = *req.camera;
-    cam.fit_planes(scene.bounds());
+    cam.fit_planes(scene.bounds(req.look));
     return cam;
 }
 
 RenderOutput render_image(Scene& scene, const RenderRequest& req) {
+    if (req.look.volume.enabled && !scene.has_volume())
+        throw Error("volume rendering", "there is no volume to ray cast: the input is a mesh");
     const gl::ScopedCurrent context;
     // One GL context serves every scene of the process: free this one's GPU
     // resources while it is current, also when a frame throws.
@@ -240,6 +244,7 @@ RenderOutput render_image(Scene& scene, const RenderRequest& req) {
     out.image = std::move(r.image);
     out.stats = std::move(r.stats);
     out.oit = r.oit;
+    out.volume = r.volume;
     out.pick = std::move(r.pick);
     out.labels = std::move(r.labels);
     out.gl_renderer = r.gl_renderer;

@@ -111,6 +111,7 @@ struct RenderOutput {
     Camera camera;
     bool ao_cache_hit = false;    // the ray-traced AO term came from the cache
     OitStats oit;                 // translucent surfaces (zero without)
+    VolumeStats volume;           // volume rendering (zero without)
     PickList pick;                // with RenderRequest::pick
     std::vector<LabelBox> labels; // the overlay's labels as placed and drawn (docs/text.md)
     int aa_frames = 1;            // jittered frames averaged (look.aa)

@@ -118,6 +118,16 @@ void add_shading(Text& t, const FrameRecord& f) {
                               std::to_string(oit.merge_error_max) + " per channel)"
                         : std::string());
     }
+    if (look.volume.enabled) {
+        const VolumeLook& v = look.volume;
+        t["isoscope:volume_transfer_function"] = v.tf.text();
+        t["isoscope:volume"] = std::string("ray cast, ") + volume_mode_name(v.mode) +
+                               "; opacity per mm, colours sRGB interpolated in linear light; step " +
+                               number_text(f.result.volume.step_mm) + " mm (" + number_text(v.step) + " voxel); " +
+                               (v.shading && !look.flat_shading ? "gradient shading" : "flat (unshaded)") +
+                               (v.skip_empty ? "; empty chunks skipped" : "");
+    }
+    if (look.clip.active()) t["isoscope:clip"] = look.clip.text() + " (LPS mm)";
     if (req.aov != Aov::None && req.aov != Aov::Ao)
         t["isoscope:aov"] = std::string(req.aov == Aov::Depth    ? "depth (mm along the view axis)"
                                         : req.aov == Aov::Normal ? "normal (LPS)"

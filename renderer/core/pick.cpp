@@ -106,13 +106,13 @@ PickResult pick_in_frame(Scene& scene, const Camera& camera, RenderOptions opt, 
     opt.image = false; // the lists are the output: no lighting, VOIT resolve or read-back
     const auto t0 = std::chrono::steady_clock::now();
     const RenderResult frame = scene.render(camera, opt);
-    PickResult out = resolve_pick(scene, camera, opt.width, opt.height, frame.pick, p);
+    PickResult out = resolve_pick(scene, camera, opt.width, opt.height, frame.pick, p, &opt.look);
     out.frame_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
     return out;
 }
 
 PickResult resolve_pick(const Scene& scene, const Camera& camera, int width, int height, const PickList& list,
-                        const PickRequest& p) {
+                        const PickRequest& p, const FrameLook* look) {
     validate(p, width, height);
     const bool rect = has_rect(p);
     PickResult out;
@@ -216,6 +216,7 @@ PickResult resolve_pick(const Scene& scene, const Camera& camera, int width, int
         std::stable_sort(out.triangles.begin(), out.triangles.end(),
                          [](const PickedTriangle& a, const PickedTriangle& b) { return a.pixels > b.pixels; });
     }
+    if (look && look->volume.enabled && volume) add_volume_layer(out, scene, camera, list, p, *look);
     return out;
 }
 
@@ -225,6 +226,7 @@ nlohmann::json pick_json(const PickResult& r) {
     json layers = json::array();
     for (const auto& l : r.layers) {
         json j;
+        j["layer"] = l.volume ? "volume" : "surface";
         j["surface"] = l.name;
         j["surface_id"] = l.surface;
         j["iso"] = l.kind == SurfaceInfo::Kind::Iso ? json(l.surface_value) : json(nullptr);

@@ -37,6 +37,10 @@ struct PickRequest {
 };
 
 struct PickLayer {
+    // A surface's layer, or the volume's (volume rendering: where the
+    // volume's own accumulated opacity along the ray reaches 0.5; surface 0,
+    // name "volume", no triangle or normal).
+    bool volume = false;
     SurfaceId surface = 0;
     std::string name; // "iso 500", a mesh file's name
     SurfaceInfo::Kind kind = SurfaceInfo::Kind::Mesh;
@@ -98,8 +102,21 @@ PickResult pick_in_frame(Scene& scene, const Camera& camera, RenderOptions opt, 
 // iso::Error: a pixel outside the image, a threshold outside (0, 1], a
 // list whose region does not hold the pixel and rectangle, a triangle the
 // surface's mesh does not have.
+// With `look` ray casting the volume (look->volume.enabled), the volume's
+// layer is added (add_volume_layer).
 PickResult resolve_pick(const Scene& scene, const Camera& camera, int width, int height, const PickList& list,
-                        const PickRequest& p);
+                        const PickRequest& p, const FrameLook* look = nullptr);
+
+// The volume as a layer of a resolved pick (pick_volume.cpp): the pixel's
+// ray marched on the CPU through the stated model (renderer/volume/
+// reference.hpp) with the surfaces of the frame's list at their depths; the
+// layer lies where the volume's own accumulated opacity reaches 0.5 (MIP /
+// MinIP: at the extreme value when its opacity reaches 0.5), with its LPS
+// point, value, unit and voxel. It is the visible layer when it lies in
+// front of the visible surface (or there is none); layers behind it are
+// then dropped unless all are asked for. Nothing when the ray never gets there.
+void add_volume_layer(PickResult& r, const Scene& scene, const Camera& camera, const PickList& list,
+                      const PickRequest& p, const FrameLook& look);
 
 // The JSON `isoscope pick --json` prints: visible, layers (surface, iso,
 // lps, normal, triangle, depth_mm, alpha, share, value, unit (null when

@@ -33,7 +33,8 @@ struct Scene::Impl {
         e.mesh = std::move(m);
         e.version = ++versions;
     }
-    std::optional<Volume> volume;
+    std::shared_ptr<const Volume> volume; // shared with snapshots: replaced, never changed in place
+    std::uint64_t volume_version = 0;
     std::string volume_source;
     std::vector<std::string> sources;
     // Computed once per volume, read by extractions on worker threads.
@@ -87,12 +88,13 @@ void Scene::set_volume(Volume v, const std::string& source) {
         impl_->index.reset();
         impl_->range.reset();
     }
-    impl_->volume = std::move(v);
+    impl_->volume = std::make_shared<const Volume>(std::move(v));
+    impl_->volume_version = ++impl_->versions;
     impl_->volume_source = source;
     impl_->sources.push_back(source);
 }
 
-bool Scene::has_volume() const { return impl_->volume.has_value(); }
+bool Scene::has_volume() const { return impl_->volume != nullptr; }
 
 const Volume& Scene::volume() const {
     if (!impl_->volume) throw Error("Scene::volume", "no volume is open");
@@ -301,8 +303,25 @@ Bounds Scene::bounds() const {
 
 std::vector<std::string> Scene::sources() const { return impl_->sources; }
 
-Camera Scene::camera(PatientView view, double aspect) const {
-    const Bounds b = bounds();
+Camera Scene::camera(PatientView view, double aspect) const { return camera(view, aspect, FrameLook{}); }
+
+Bounds Scene::bounds(const FrameLook& look) const {
+    Bounds b = bounds();
+    if (!look.volume.enabled || !impl_->volume) return b;
+    Bounds v = volume_bounds();
+    if (look.clip.box) {
+        v.min = glm::max(v.min, look.clip.box->first);
+        v.max = glm::min(v.max, look.clip.box->second);
+    }
+    if (!v.empty()) {
+        b.add(v.min);
+        b.add(v.max);
+    }
+    return b;
+}
+
+Camera Scene::camera(PatientView view, double aspect, const FrameLook& look) const {
+    const Bounds b = bounds(look);
     Camera c;
     c.set_view(view, b);
     c.fit(b, aspect);
@@ -322,7 +341,23 @@ SceneSnapshot Scene::snapshot() const {
         s.surfaces.push_back({e.mesh, e.version, std::move(o)});
     }
     s.bounds = bounds();
+    if (impl_->volume) {
+        s.volume = impl_->volume;
+        s.volume_version = impl_->volume_version;
+        std::lock_guard lock(impl_->cache_mutex);
+        s.volume_index = impl_->index;
+    }
     return s;
+}
+
+Bounds Scene::volume_bounds() const {
+    Bounds b;
+    if (!impl_->volume) return b;
+    const Volume& v = *impl_->volume;
+    for (int c = 0; c < 8; ++c)
+        b.add(v.index_to_world(glm::dvec3((c & 1) ? double(v.dims[0] - 1) : 0.0, (c & 2) ? double(v.dims[1] - 1) : 0.0,
+                                          (c & 4) ? double(v.dims[2] - 1) : 0.0)));
+    return b;
 }
 
 RenderResult Scene::render(const Camera& camera, const RenderOptions& opt) {
@@ -340,6 +375,7 @@ Renderer& SnapshotRenderer::renderer() {
     if (!renderer_) {
         renderer_ = std::make_unique<Renderer>();
         uploaded_.clear();
+        volume_version_ = 0;
     }
     return *renderer_;
 }
@@ -347,6 +383,7 @@ Renderer& SnapshotRenderer::renderer() {
 void SnapshotRenderer::release() {
     renderer_.reset();
     uploaded_.clear();
+    volume_version_ = 0;
 }
 
 RenderResult SnapshotRenderer::render(const SceneSnapshot& s, const Camera& camera, const RenderOptions& opt) {
@@ -368,6 +405,10 @@ RenderResult SnapshotRenderer::render(const SceneSnapshot& s, const Camera& came
             uploaded_[i] = e.version;
         }
         ren.object(std::uint32_t(i + 1)) = e.object;
+    }
+    if (s.volume && s.volume_version != volume_version_) {
+        ren.set_volume(s.volume, s.volume_index);
+        volume_version_ = s.volume_version;
     }
     return ren.render(camera, opt);
 }

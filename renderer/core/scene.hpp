@@ -59,6 +59,12 @@ struct SceneSnapshot {
     };
     std::vector<Surface> surfaces; // slot i is surface id i + 1
     Bounds bounds;                 // of the visible surfaces (Scene::bounds)
+    // The volume (ray cast when the frame's look.volume asks; null: none),
+    // a version that changes with it, and its range index when one was made
+    // (the renderer makes one otherwise).
+    std::shared_ptr<const Volume> volume;
+    std::uint64_t volume_version = 0;
+    std::shared_ptr<const ChunkIndex> volume_index;
 };
 
 // Draws snapshots in the current GL context, keeping its GPU copies across
@@ -76,6 +82,7 @@ public:
 private:
     std::unique_ptr<Renderer> renderer_;
     std::vector<std::uint64_t> uploaded_; // per slot: the version on the GPU
+    std::uint64_t volume_version_ = 0;    // of the volume handed to the renderer
 };
 
 class Scene {
@@ -145,12 +152,18 @@ public:
     const SurfaceInfo& info(SurfaceId id) const;
     const Mesh& mesh(SurfaceId id) const;
     Bounds bounds() const; // of the visible surfaces
+    // The volume's index box [0, n-1] in LPS mm (empty without a volume).
+    Bounds volume_bounds() const;
+    // What a frame of `look` draws: the visible surfaces, and the volume's
+    // box when the look ray casts it (within the clip box, if any).
+    Bounds bounds(const FrameLook& look) const;
     // Every file or folder opened, in order (image metadata, cache keys).
     std::vector<std::string> sources() const;
 
     // ---- verbs ------------------------------------------------------------
     // A camera looking from `view` at the visible surfaces, fitted to them.
     Camera camera(PatientView view, double aspect) const;
+    Camera camera(PatientView view, double aspect, const FrameLook& look) const; // fitted to bounds(look)
     // Renders with the caller's GL 4.5 context current. GPU resources live in
     // that context across calls (first call: the meshes are uploaded); call
     // release_gpu() with it current before the context goes.

@@ -58,6 +58,9 @@ void validate(const FrameLook& look) {
     check_range("anti-aliasing view frames", look.aa.view_frames, 1, 4096);
     check_range("anti-aliasing tolerance", look.aa.tolerance, 0.0, 1.0);
     check_range("anti-aliasing normal cosine", look.aa.normal_cos, -1.0, 1.0);
+    validate(look.volume);
+    if (int(look.clip.half_spaces().size()) > kMaxClipHalfSpaces)
+        throw Error("clip", "at most " + std::to_string(kMaxClipHalfSpaces - 6) + " planes");
     check_range("ambient occlusion error", look.ao_error, 1e-4, 0.5);
     // A method's settings are checked when it is asked for (the cone's
     // radius is every method's R; disk frames trace translucent surfaces'

@@ -21,6 +21,7 @@
 #include "io/progress.hpp"
 #include "renderer/frame/ao_settings.hpp"
 #include "renderer/graph/frame_graph.hpp"
+#include "renderer/volume/transfer_function.hpp"
 
 namespace iso {
 
@@ -61,11 +62,11 @@ AoMethod ao_method_from_name(const std::string& name);
 // average changes by less than `tolerance` (the RMS change, in sRGB units
 // 0..1, of the pixels that moved) between N/2 and N frames, or at `frames`.
 struct AntiAliasing {
-    int samples = 4;          // visibility sub-samples per pixel: 1 (no DSRAA), 2, 4 or 8
-    int frames = 64;          // accumulated frames at most (exports; the 3D view stops at view_frames)
-    int view_frames = 16;     // the 3D view's still frames
-    double tolerance = 0.04;  // exports: convergence of the accumulated image (sRGB units)
-    float normal_cos = 0.8f;  // DSRAA: a neighbour's normal matches a sub-sample's within acos(normal_cos)
+    int samples = 4;         // visibility sub-samples per pixel: 1 (no DSRAA), 2, 4 or 8
+    int frames = 64;         // accumulated frames at most (exports; the 3D view stops at view_frames)
+    int view_frames = 16;    // the 3D view's still frames
+    double tolerance = 0.04; // exports: convergence of the accumulated image (sRGB units)
+    float normal_cos = 0.8f; // DSRAA: a neighbour's normal matches a sub-sample's within acos(normal_cos)
     bool operator==(const AntiAliasing&) const = default;
 };
 
@@ -101,6 +102,12 @@ struct FrameLook {
     int ao_rays = 1024;
     double ao_error = 0.005;
     AntiAliasing aa;
+    // The volume, ray cast (docs/volume.md): off unless enabled; drawn from
+    // the renderer's volume (Renderer::set_volume), composited exactly with
+    // the surfaces (flat_shading: the transfer function's colours unshaded).
+    VolumeLook volume;
+    // A crop that cuts the surfaces and the volume alike (LPS mm).
+    Clip clip;
     bool operator==(const FrameLook&) const = default;
 };
 
@@ -166,6 +173,9 @@ struct RenderOptions {
     // whenever anything but the jitter changes (camera, size, surfaces,
     // look, annotations). RenderResult::aa_frames counts the frames in it.
     bool accumulate = false;
+    // The camera is moving (the 3D view's drag frames): the volume is
+    // sampled at look.volume.moving_step instead of look.volume.step.
+    bool moving = false;
     bool restart_accumulation = false; // this frame starts the average (an export's first frame)
     // The sub-pixel offset of this frame instead of the renderer's sequence,
     // in pixels (x right, y down, each in [-0.5, 0.5]): exact-coverage
@@ -219,6 +229,20 @@ struct OitStats {
     int redraws = 0;            // frames redrawn with a larger pool
 };
 
+// What the volume pass did this frame (all zero without a volume).
+struct VolumeStats {
+    bool drawn = false;
+    double step_mm = 0;              // the sample step
+    std::size_t chunks = 0;          // of the range index
+    std::size_t empty_chunks = 0;    // mapped to zero opacity by the transfer function: never marched
+    std::uint64_t rays = 0;          // pixels whose ray met the (clipped) volume
+    std::uint64_t samples = 0;       // samples taken
+    std::uint64_t skipped = 0;       // samples skipped in empty chunks
+    std::uint64_t terminated = 0;    // rays ended early (transmittance below epsilon)
+    std::uint64_t texture_bytes = 0; // the volume's 3D texture
+    bool uploaded = false;           // the texture was (re)made this frame
+};
+
 // A label the overlay drew (a markup's name or value, one of
 // Annotations::labels, an orientation letter, the scale bar's length): where
 // it went and, so that what was drawn can be checked against the image, its
@@ -250,6 +274,7 @@ struct RenderResult {
     int aa_samples = 1;     // DSRAA sub-samples per pixel this frame (1: not used)
     double ao_guard = 0;    // guard band used by the slicemap, fraction of the viewport per side
     OitStats oit;
+    VolumeStats volume;
     std::vector<std::uint32_t> oit_lists; // with RenderHooks::read_oit_lists
     PickList pick;                        // with RenderOptions::pick
     // Disk AO: the hierarchy was built (some surface's on the CPU) and

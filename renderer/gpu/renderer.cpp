@@ -12,6 +12,7 @@
 
 #include "io/error.hpp"
 #include "renderer/gl/objects.hpp"
+#include "renderer/gpu/gpu_volume.hpp"
 #include "renderer/ao/disk_hierarchy.hpp"
 #include "renderer/passes/disk_state.hpp"
 #include "renderer/passes/build_frame.hpp"
@@ -64,6 +65,7 @@ struct Renderer::Impl {
     std::uint64_t mesh_versions = 0;
     std::size_t oit_next_capacity = 0; // VOIT pool nodes for the next frame (0: none drawn yet)
     bool oit_cut = false;              // the last frame at the VOIT cap needed the depth cut: start with it
+    GpuVolume volume;
 };
 
 Renderer::Renderer() : impl_(std::make_unique<Impl>()) {}
@@ -140,6 +142,11 @@ void Renderer::remove(std::uint32_t id) {
 
 std::size_t Renderer::object_count() const { return impl_->meshes.size(); }
 
+void Renderer::set_volume(std::shared_ptr<const Volume> v, std::shared_ptr<const ChunkIndex> index) {
+    impl_->volume.set(std::move(v), std::move(index));
+    ++impl_->geometry_version;
+}
+
 SceneObject& Renderer::object(std::uint32_t id) { return impl_->meshes.at(id - 1).object; }
 
 Bounds Renderer::bounds() const {
@@ -190,6 +197,8 @@ RenderResult Renderer::render(const Camera& camera, const RenderOptions& opt, co
     }
     ctx.ao = &im.ao;
     ctx.disk = &im.disk;
+    // The volume serves the colour image only (picks march it on the CPU: core/pick.hpp).
+    if (opt.look.volume.enabled && opt.image && opt.aov == Aov::None) ctx.volume = &im.volume.prepare(opt.look.volume);
     for (const auto& d : ctx.draws) {
         auto& m = im.meshes[d.id - 1];
         ctx.disk_surfaces.push_back({d.id, m.version, [&m] { return read_back(m); }, &m.disk});

@@ -11,11 +11,14 @@
 #include <memory>
 
 #include "io/mesh.hpp"
+#include "io/volume.hpp"
 #include "renderer/frame/camera.hpp"
 #include "renderer/frame/frame.hpp"
 #include "renderer/graph/resource_pool.hpp"
 
 namespace iso {
+
+class ChunkIndex;
 
 class Renderer {
 public:
@@ -33,6 +36,11 @@ public:
     // theirs) and draws nothing from now on.
     void remove(std::uint32_t id);
     std::size_t object_count() const;
+    // The volume that frames with look.volume.enabled ray cast (null: none),
+    // with its range index (per-chunk min/max) when one was made (else the
+    // renderer makes one); uploaded as a 3D texture on the first such frame
+    // and kept.
+    void set_volume(std::shared_ptr<const Volume> v, std::shared_ptr<const ChunkIndex> index = nullptr);
     Bounds bounds() const;
     SceneObject& object(std::uint32_t id);
 

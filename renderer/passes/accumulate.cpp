@@ -8,6 +8,7 @@
 #include <functional>
 #include <string_view>
 
+#include "io/color.hpp"
 #include "renderer/ao/sequences.hpp"
 #include "renderer/passes/build_frame.hpp"
 #include "renderer/passes/gl_resources.hpp"
@@ -39,6 +40,17 @@ std::vector<double> accumulation_key(const FrameContext& ctx) {
     key.insert(key.end(), {l.background.r, l.background.g, l.background.b, double(l.transparent_background),
                            double(l.transparency), double(l.flat_shading), double(l.ao), l.cone.radius_mm,
                            double(l.aa.samples), double(l.ao_frames)});
+    // The volume: whether drawn, its transfer function, mode, step, shading; the clip.
+    if (ctx.volume) {
+        const VolumeLook& v = l.volume;
+        key.insert(key.end(), {1.0, double(v.mode), v.step, double(v.shading), double(v.skip_empty)});
+        for (const auto& p : v.tf.points()) {
+            const glm::vec3 c = linear_from_hex(p.color);
+            key.insert(key.end(), {p.value, p.opacity, c.r, c.g, c.b});
+        }
+        key.push_back(double(ctx.geometry_version));
+    }
+    for (const auto& h : l.clip.half_spaces()) key.insert(key.end(), {h.normal.x, h.normal.y, h.normal.z, h.offset});
     // The AO term computed outside the frame (ray-traced AO: a new batch is a new picture).
     if (ctx.opt.ao_image) key.push_back(hash_of(ctx.opt.ao_image->floats));
     // The overlay's geometry and text.

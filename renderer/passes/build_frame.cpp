@@ -104,7 +104,12 @@ void build_frame(graph::FrameGraph& fg, const FrameContext& ctx) {
     // surfaces only); with ray-traced AO they go without (docs/ao.md).
     PickBuffers picked;
     const bool translucent_ao = lit_ao && !raytraced && !opt.look.flat_shading;
-    if (!ctx.translucent.empty()) color = voit(fg, ctx, gb, color, translucent_ao ? &ao : nullptr, picked);
+    // The volume is ray cast between the translucent fragments by the VOIT
+    // resolve, or over the opaque image by its own pass.
+    if (!ctx.translucent.empty())
+        color = voit(fg, ctx, gb, color, translucent_ao ? &ao : nullptr, picked);
+    else if (ctx.volume && opt.image && opt.aov == Aov::None)
+        color = volume(fg, ctx, gb, color);
     if (ctx.pick) pick(fg, ctx, gb, picked);
     if (!opt.image) return; // nothing reads the colour image or an AOV: their passes are culled
     color = dsraa(fg, ctx, gb, color);

@@ -78,6 +78,22 @@ struct DiskSurface {
     std::shared_ptr<const DiskHierarchy>* cache = nullptr;
 };
 
+// The volume as a frame ray casts it (docs/volume.md): the renderer keeps
+// its 3D texture (the values, 16-bit where the data is) and the occupancy
+// of its chunks under the frame's transfer function across frames.
+struct VolumeInput {
+    std::uint32_t texture = 0, occupancy = 0; // GL textures: values (linear filtering), per chunk 1/0 (R8UI)
+    glm::ivec3 dims{1};
+    glm::dmat4 index_to_lps{1.0};
+    glm::vec2 value_map{1.0f, 0.0f}; // value = texel * x + y
+    int chunk_size = 32;
+    glm::ivec3 chunk_counts{1};
+    std::size_t empty_chunks = 0;
+    double min_spacing = 1;
+    std::uint64_t texture_bytes = 0;
+    bool uploaded = false; // the texture was made this frame
+};
+
 struct FrameContext {
     GlResources* gl = nullptr; // null: declare only (compile without a GPU)
     graph::ResourcePool* pool = nullptr;
@@ -90,8 +106,8 @@ struct FrameContext {
     // by this frame's sub-pixel jitter (the AO passes keep the unjittered one,
     // so a jittered frame neither rebuilds the slicemap nor restarts the AO).
     glm::mat4 raster_view_projection{1.0f};
-    glm::vec2 jitter{0.0f}; // pixels, x right, y down
-    int aa_samples = 1;     // DSRAA visibility sub-samples (1: none: no colour image, a pick or an AOV)
+    glm::vec2 jitter{0.0f};  // pixels, x right, y down
+    int aa_samples = 1;      // DSRAA visibility sub-samples (1: none: no colour image, a pick or an AOV)
     AaHistory* aa = nullptr; // required when the frame accumulates
     int aa_frame = 0;        // this frame's index in the accumulated average (0: it starts again)
     glm::mat3 world_to_view{1.0f};
@@ -110,6 +126,7 @@ struct FrameContext {
     std::vector<DiskSurface> disk_surfaces; // the opaque draws' meshes, for disk AO
     DiskState* disk = nullptr;              // required when the disk AO passes run
     RenderResult* result = nullptr;         // what passes report back (image, AO state, slicemap)
+    const VolumeInput* volume = nullptr;    // the volume to ray cast in the colour image (null: none)
 };
 
 // Builds the context of a frame: matrices, bounds and the AO/overlay inputs.
@@ -258,6 +275,26 @@ graph::TextureHandle overlay(graph::FrameGraph& fg, const FrameContext& ctx, gra
 // listed too: `pick` is set to the lists.
 graph::TextureHandle voit(graph::FrameGraph& fg, const FrameContext& ctx, const GBuffer& gb, graph::TextureHandle color,
                           const AmbientOcclusion* ao, PickBuffers& pick);
+// Volume ray casting (volume.cpp; docs/volume.md) over `color` when no
+// translucent surface is drawn (the VOIT resolve marches it otherwise).
+graph::TextureHandle volume(graph::FrameGraph& fg, const FrameContext& ctx, const GBuffer& gb,
+                            graph::TextureHandle color);
+// What a pass that marches the volume reads besides the colour: declared in
+// its setup, bound in its execute (texture units 4-6, buffers 11-12, the
+// parameters at 3), the counters read back into RenderResult::volume after.
+struct VolumeBindings {
+    graph::TextureHandle depth;
+    graph::BufferHandle tables, counters, params;
+};
+VolumeBindings declare_volume(graph::FrameGraph::Builder& b, const FrameContext& ctx, const GBuffer& gb);
+void bind_volume(GlResources& gl, const graph::Resources& r, const FrameContext& ctx, const VolumeBindings& v);
+void report_volume(GlResources& gl, const graph::Resources& r, const FrameContext& ctx, const VolumeBindings& v);
+// The frame's clip in the surfaces' programs (shaders/render/clip.glsl):
+// the define to build them with, and the uniforms to set on the bound one.
+std::string clip_define(const FrameContext& ctx);
+void set_clip(const FrameContext& ctx, iso::gl::Program& prog);
+// The sample step of this frame in mm (the still or the moving step).
+double volume_step_mm(const FrameContext& ctx);
 // DSRAA's reconstruction (dsraa.cpp): each visibility sub-sample takes the
 // shaded colour of its own pixel, else of the nearest neighbour of the same
 // object with a similar normal, else the background; the pixel is their

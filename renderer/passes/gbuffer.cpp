@@ -54,18 +54,21 @@ void draw_meshes(const FrameContext& ctx, GlResources& gl, const graph::Resource
     glDepthFunc(GL_GREATER);
     glDisable(GL_CULL_FACE); // open surfaces show both sides
     const auto program = [&](bool vis_variant) -> gl::Program& {
-        return gl.program({"render/gbuffer.vert", "render/gbuffer.frag"},
-                          vis_variant ? std::string("#define GB_VIS\n")
-                                      : gbuffer_defines() + (d.primitive.valid()
-                                                                 ? "#define GB_PRIMITIVE " +
-                                                                       std::to_string(std::size(kGBufferLayout)) + "\n"
-                                                                 : ""));
+        return gl.program(
+            {"render/gbuffer.vert", "render/gbuffer.frag"},
+            clip_define(ctx) +
+                (vis_variant
+                     ? std::string("#define GB_VIS\n")
+                     : gbuffer_defines() + (d.primitive.valid() ? "#define GB_PRIMITIVE " +
+                                                                      std::to_string(std::size(kGBufferLayout)) + "\n"
+                                                                : "")));
     };
     // The still frames after a DSRAA frame draw one sample: their program is
     // built with the first, not in the middle of the refinement.
     if (vis) program(false);
     auto& prog = program(vis);
     prog.use();
+    set_clip(ctx, prog);
     bind_params(gl, r, d.params, GBufferParams{ctx.raster_view_projection});
     const GLint id_loc = prog.uniform("object_id"), albedo_loc = prog.uniform("albedo");
     for (const auto& m : ctx.draws) {

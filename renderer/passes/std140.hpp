@@ -68,6 +68,7 @@ namespace iso::passes {
 #include "shaders/ao/upsample_params.glsl"
 #include "shaders/ao/disk_params.glsl"
 #include "shaders/render/oit_params.glsl"
+#include "shaders/render/volume_params.glsl"
 #undef ISO_BLOCK_BEGIN
 #undef ISO_MEMBER
 #undef ISO_BLOCK_END
@@ -91,6 +92,7 @@ namespace iso::passes {
 #include "shaders/ao/upsample_params.glsl"
 #include "shaders/ao/disk_params.glsl"
 #include "shaders/render/oit_params.glsl"
+#include "shaders/render/volume_params.glsl"
 #undef ISO_BLOCK_BEGIN
 #undef ISO_MEMBER
 #undef ISO_BLOCK_END

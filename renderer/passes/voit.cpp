@@ -115,9 +115,10 @@ graph::TextureHandle depth_cut(graph::FrameGraph& fg, const FrameContext& ctx, c
                 GlResources& gl = *ctx.gl;
                 const GLuint zero = 0, histogram = gl.buffer(r, d.histogram);
                 glClearNamedBufferData(histogram, GL_R32UI, GL_RED_INTEGER, GL_UNSIGNED_INT, &zero);
-                auto& prog =
-                    gl.program({"render/gbuffer.vert", "render/oit_fragments.frag"}, "#define OIT_HISTOGRAM 1\n");
+                auto& prog = gl.program({"render/gbuffer.vert", "render/oit_fragments.frag"},
+                                        "#define OIT_HISTOGRAM 1\n" + clip_define(ctx));
                 prog.use();
+                set_clip(ctx, prog);
                 bind_params(gl, r, d.gbuffer_params, GBufferParams{ctx.raster_view_projection});
                 bind_params(gl, r, d.params, oit_params(ctx));
                 glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 4, histogram);
@@ -139,6 +140,8 @@ struct Lists {
 };
 
 std::string merge_define(const FrameContext& ctx) { return ctx.oit_merge ? "#define OIT_MERGE 1\n" : ""; }
+// The resolve marches the volume between the fragments (volume_march.glsl).
+std::string volume_define(const FrameContext& ctx) { return ctx.volume ? "#define VOLUME 1\n" : ""; }
 constexpr std::size_t kCountersBytes = 3 * 4; // OitCounters in oit_common.glsl
 constexpr std::size_t kTailBytes = 12 * 4;    // OitTail in oit_common.glsl
 
@@ -177,10 +180,11 @@ Lists fragment_lists(graph::FrameGraph& fg, const FrameContext& ctx, const GBuff
                                        &zero); // the empty tail
                 glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 3, gl.buffer(r, d.tails));
             }
-            auto& prog =
-                gl.program({"render/gbuffer.vert", "render/oit_fragments.frag"},
-                           merge_define(ctx) + (d.cut.valid() ? "#define OIT_CUT 1\n" : "") + pick_defines(d.pick));
+            auto& prog = gl.program({"render/gbuffer.vert", "render/oit_fragments.frag"},
+                                    merge_define(ctx) + (d.cut.valid() ? "#define OIT_CUT 1\n" : "") +
+                                        pick_defines(d.pick) + clip_define(ctx));
             prog.use();
+            set_clip(ctx, prog);
             bind_pick(gl, r, ctx, d.pick, prog, true);
             bind_params(gl, r, d.gbuffer_params, GBufferParams{ctx.raster_view_projection});
             bind_params(gl, r, d.params, oit_params(ctx));
@@ -275,12 +279,13 @@ void clear_stats(GlResources& gl, const graph::Resources& r, const ListInputs& i
 }
 
 // The resolve in one pass: sort, shade (no AO), composite.
-graph::TextureHandle resolve(graph::FrameGraph& fg, const FrameContext& ctx, const Lists& lists,
+graph::TextureHandle resolve(graph::FrameGraph& fg, const FrameContext& ctx, const GBuffer& gb, const Lists& lists,
                              graph::TextureHandle color) {
     struct Data {
         ListInputs in;
         graph::TextureHandle color;
         graph::BufferHandle params;
+        VolumeBindings vol;
     };
     return fg
         .add_pass<Data>(
@@ -289,24 +294,27 @@ graph::TextureHandle resolve(graph::FrameGraph& fg, const FrameContext& ctx, con
                 d.in = list_inputs(b, lists, b.create("oit_stats", graph::BufferDesc{kStatsBytes}), false);
                 d.color = b.write(b.read(color));
                 d.params = params_buffer<OitParams>(b, "oit_resolve_params");
+                if (ctx.volume) d.vol = declare_volume(b, ctx, gb);
             },
             [&ctx](const Data& d, const graph::Resources& r) {
                 GlResources& gl = *ctx.gl;
                 clear_stats(gl, r, d.in);
-                gl.program({"render/oit_resolve.comp"}, merge_define(ctx)).use();
+                gl.program({"render/oit_resolve.comp"}, merge_define(ctx) + volume_define(ctx)).use();
                 bind_params(gl, r, d.params, oit_params(ctx));
                 bind_lists(gl, r, d.in, GL_READ_ONLY);
+                if (ctx.volume) bind_volume(gl, r, ctx, d.vol);
                 glBindImageTexture(1, gl.texture(r, d.color), 0, GL_FALSE, 0, GL_READ_WRITE, GL_RGBA8);
                 glDispatchCompute(GLuint((ctx.width + 7) / 8), GLuint((ctx.height + 7) / 8), 1);
                 glMemoryBarrier(GL_ALL_BARRIER_BITS);
                 report(ctx, gl.buffer(r, d.in.counters), gl.buffer(r, d.in.stats));
+                if (ctx.volume) report_volume(gl, r, ctx, d.vol);
             })
         .color;
 }
 
 // With translucent AO: sort (and list what will be shaded), trace, composite.
-graph::TextureHandle resolve_with_ao(graph::FrameGraph& fg, const FrameContext& ctx, const Lists& lists,
-                                     graph::TextureHandle color, const AmbientOcclusion& ao) {
+graph::TextureHandle resolve_with_ao(graph::FrameGraph& fg, const FrameContext& ctx, const GBuffer& gb,
+                                     const Lists& lists, graph::TextureHandle color, const AmbientOcclusion& ao) {
     struct Sorted {
         ListInputs in;
         graph::BufferHandle params, trace;
@@ -370,6 +378,7 @@ graph::TextureHandle resolve_with_ao(graph::FrameGraph& fg, const FrameContext& 
         ListInputs in;
         graph::TextureHandle color;
         graph::BufferHandle ao, params;
+        VolumeBindings vol;
     };
     return fg
         .add_pass<Composite>(
@@ -382,17 +391,22 @@ graph::TextureHandle resolve_with_ao(graph::FrameGraph& fg, const FrameContext& 
                 d.ao = b.read(traced.ao);
                 d.color = b.write(b.read(color));
                 d.params = params_buffer<OitParams>(b, "oit_resolve_params");
+                if (ctx.volume) d.vol = declare_volume(b, ctx, gb);
             },
             [&ctx](const Composite& d, const graph::Resources& r) {
                 GlResources& gl = *ctx.gl;
-                gl.program({"render/oit_resolve.comp"}, "#define OIT_SORTED 1\n" + merge_define(ctx)).use();
+                gl.program({"render/oit_resolve.comp"},
+                           "#define OIT_SORTED 1\n" + merge_define(ctx) + volume_define(ctx))
+                    .use();
                 bind_params(gl, r, d.params, oit_params(ctx));
                 bind_lists(gl, r, d.in, GL_READ_ONLY);
+                if (ctx.volume) bind_volume(gl, r, ctx, d.vol);
                 glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 4, gl.buffer(r, d.ao));
                 glBindImageTexture(1, gl.texture(r, d.color), 0, GL_FALSE, 0, GL_READ_WRITE, GL_RGBA8);
                 glDispatchCompute(GLuint((ctx.width + 7) / 8), GLuint((ctx.height + 7) / 8), 1);
                 glMemoryBarrier(GL_ALL_BARRIER_BITS);
                 report(ctx, gl.buffer(r, d.in.counters), gl.buffer(r, d.in.stats));
+                if (ctx.volume) report_volume(gl, r, ctx, d.vol);
             })
         .color;
 }
@@ -405,7 +419,7 @@ graph::TextureHandle voit(graph::FrameGraph& fg, const FrameContext& ctx, const 
         fragment_lists(fg, ctx, gb, ctx.oit_cut ? depth_cut(fg, ctx, gb) : graph::TextureHandle{}, pick);
     pick = lists.pick;
     if (ctx.hooks.read_oit_lists) read_lists(fg, ctx, lists);
-    return ao ? resolve_with_ao(fg, ctx, lists, color, *ao) : resolve(fg, ctx, lists, color);
+    return ao ? resolve_with_ao(fg, ctx, gb, lists, color, *ao) : resolve(fg, ctx, gb, lists, color);
 }
 
 } // namespace iso::passes

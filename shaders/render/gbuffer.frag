@@ -8,6 +8,7 @@
 // output: the albedo follows from the id. No side effects, so the depth
 // test stays early.
 #include "octahedral.glsl"
+#include "clip.glsl"
 
 in vec3 world_normal;
 
@@ -34,6 +35,7 @@ layout(location = GB_PRIMITIVE) out uint out_primitive;   // R32UI
 #endif
 
 void main() {
+    clip_fragment();
     vec3 n = normalize(world_normal);
     // Two-sided: open surfaces (cut by the volume border) show their inside.
     if (!gl_FrontFacing) n = -n;

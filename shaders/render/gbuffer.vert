@@ -8,8 +8,10 @@ layout(location = 1) in vec3 normal;
 
 
 out vec3 world_normal;
+out vec3 world_position;   // the clip's (clip.glsl)
 
 void main() {
     world_normal = normal;
+    world_position = position;
     gl_Position = view_projection * vec4(position, 1.0);
 }

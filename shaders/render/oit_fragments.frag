@@ -19,6 +19,7 @@
 #include "std140.glsl"
 #include "oit_params.glsl"
 #include "oit_common.glsl"
+#include "clip.glsl"
 #ifdef OIT_MERGE
 #include "shading.glsl"
 #endif
@@ -62,6 +63,7 @@ void merge(vec3 n, uint t) {
 #endif
 
 void main() {
+    clip_fragment();
     vec3 n = normalize(world_normal);
     if (!gl_FrontFacing) n = -n;   // two-sided, as the opaque surfaces
     uint t = uint(gl_FragCoord.y) * uint(image_size.x) + uint(gl_FragCoord.x);

@@ -72,12 +72,22 @@ vec3 acc = vec3(0.0);
 float transmittance = 1.0;
 uint shaded = 0u;
 
+#if defined(VOLUME) && !defined(OIT_SORT)
+// The volume's pieces between the fragments (volume_march.glsl).
+#include "volume_params.glsl"
+#include "volume_march.glsl"
+bool vol_on = false;
+#endif
+
 // The next fragment front to back: shade it (or list it for tracing).
 void take(uint i, ivec2 p) {
     float alpha = oit_objects[oit_nodes[i].object].a;
 #ifdef OIT_SORT
     oit_trace_append(p, i);
 #else
+#ifdef VOLUME
+    if (vol_on) volume_until(vol_t_of_depth(oit_nodes[i].depth));
+#endif
     acc += transmittance * alpha * fragment_color(i);
 #endif
     transmittance *= 1.0 - alpha;
@@ -88,11 +98,17 @@ void main() {
     ivec2 p = ivec2(gl_GlobalInvocationID.xy);
     if (p.x >= image_size.x || p.y >= image_size.y) return;
     uint head = imageLoad(heads, p).r;
+#if defined(VOLUME) && !defined(OIT_SORT)
+    vol_on = volume_begin(p);
+    bool nothing = !vol_on;
+#else
+    const bool nothing = true;
+#endif
 #if defined(OIT_MERGE) && !defined(OIT_SORT)
     uint t = uint(p.y) * uint(image_size.x) + uint(p.x);
-    if (head == OIT_END && oit_tails[t].count == 0u) return;   // nothing translucent here: the opaque result stays
+    if (nothing && head == OIT_END && oit_tails[t].count == 0u) return;   // nothing translucent here: the opaque result stays
 #else
-    if (head == OIT_END) return;
+    if (nothing && head == OIT_END) return;
 #endif
 #ifdef OIT_SORTED
     for (uint i = head; i != OIT_END && transmittance >= epsilon; i = oit_nodes[i].next) take(i, p);
@@ -149,6 +165,12 @@ void main() {
     }
 #endif
 #ifndef OIT_SORT
+#ifdef VOLUME
+    if (vol_on) {
+        volume_until(vol_t1);   // the volume behind the last fragment, up to the opaque depth
+        volume_end();
+    }
+#endif
 #ifdef OIT_MERGE
     // The merged fragments, behind the list: their opacity-weighted mean
     // colour over their total coverage. Merged by the depth cut, they all lie

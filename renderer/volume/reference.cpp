@@ -1,0 +1,211 @@
+// The CPU ray march of the stated model (reference.hpp).
+#include "renderer/volume/reference.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include <glm/glm.hpp>
+
+#include "io/error.hpp"
+
+namespace iso {
+
+VolumeSampler::VolumeSampler(const Volume& v, std::optional<ValueRange> range) : v_(v) {
+    if (v.voxel_count() <= 0) throw Error("volume rendering", "the volume has no samples");
+    to_index_ = glm::inverse(v.index_to_lps);
+    hi_ = glm::dvec3(double(v.dims[0] - 1), double(v.dims[1] - 1), double(v.dims[2] - 1));
+    // Float volumes may hold NaN and Inf: NaN is the extractor's substitute
+    // below every finite value, Inf clamps to the finite range.
+    if (v.type == VoxelType::F32 || v.type == VoxelType::F64 || v.is_sparse()) {
+        const ValueRange r = range ? *range : v.value_range();
+        const bool any = r.min <= r.max;
+        lo_ = any ? r.min : 0.0;
+        hi_value_ = any ? r.max : 0.0;
+        nan_value_ = lo_ - std::max(1.0, std::abs(lo_) * 1e-3);
+        finite_check_ = true;
+    }
+}
+
+double VolumeSampler::raw(std::int64_t i, std::int64_t j, std::int64_t k) const {
+    const double x = v_.value(i, j, k);
+    if (!finite_check_) return x;
+    if (std::isnan(x)) return nan_value_;
+    return std::clamp(x, lo_, hi_value_);
+}
+
+double VolumeSampler::at_index(const glm::dvec3& ijk) const {
+    const glm::dvec3 p = glm::clamp(ijk, glm::dvec3(0.0), hi_);
+    std::int64_t i0[3];
+    double f[3];
+    for (int a = 0; a < 3; ++a) {
+        i0[a] = std::min<std::int64_t>(std::int64_t(std::floor(p[a])), std::max<std::int64_t>(v_.dims[a] - 2, 0));
+        f[a] = p[a] - double(i0[a]);
+    }
+    const std::int64_t i1[3] = {std::min(i0[0] + 1, v_.dims[0] - 1), std::min(i0[1] + 1, v_.dims[1] - 1),
+                                std::min(i0[2] + 1, v_.dims[2] - 1)};
+    double c[2][2];
+    for (int dz = 0; dz < 2; ++dz)
+        for (int dy = 0; dy < 2; ++dy) {
+            const std::int64_t j = dy ? i1[1] : i0[1], k = dz ? i1[2] : i0[2];
+            c[dz][dy] = raw(i0[0], j, k) * (1.0 - f[0]) + raw(i1[0], j, k) * f[0];
+        }
+    const double y0 = c[0][0] * (1.0 - f[1]) + c[0][1] * f[1], y1 = c[1][0] * (1.0 - f[1]) + c[1][1] * f[1];
+    return y0 * (1.0 - f[2]) + y1 * f[2];
+}
+
+glm::dvec3 VolumeSampler::to_index(const glm::dvec3& lps) const { return glm::dvec3(to_index_ * glm::dvec4(lps, 1.0)); }
+
+std::optional<std::pair<double, double>> VolumeSampler::box_interval(const glm::dvec3& origin,
+                                                                     const glm::dvec3& dir) const {
+    const glm::dvec3 o = to_index(origin), d = glm::dvec3(to_index_ * glm::dvec4(dir, 0.0));
+    double t0 = -std::numeric_limits<double>::infinity(), t1 = std::numeric_limits<double>::infinity();
+    for (int a = 0; a < 3; ++a) {
+        if (d[a] == 0.0) {
+            if (o[a] < 0.0 || o[a] > hi_[a]) return std::nullopt;
+            continue;
+        }
+        double ta = (0.0 - o[a]) / d[a], tb = (hi_[a] - o[a]) / d[a];
+        if (ta > tb) std::swap(ta, tb);
+        t0 = std::max(t0, ta);
+        t1 = std::min(t1, tb);
+    }
+    if (!(t0 <= t1)) return std::nullopt;
+    return std::pair{t0, t1};
+}
+
+double VolumeSampler::min_spacing() const {
+    const glm::dvec3 s = v_.spacing();
+    return std::min({s.x, s.y, s.z});
+}
+
+std::optional<std::pair<double, double>> ray_interval(const VolumeSampler& s, const Clip& clip,
+                                                      const glm::dvec3& origin, const glm::dvec3& dir, double t_near,
+                                                      double t_far) {
+    auto box = s.box_interval(origin, dir);
+    if (!box) return std::nullopt;
+    double t0 = std::max(box->first, t_near), t1 = std::min(box->second, t_far);
+    for (const ClipPlane& h : clip.half_spaces()) {
+        // dot(n, o + t d) >= offset
+        const double a = glm::dot(h.normal, dir), b = h.offset - glm::dot(h.normal, origin);
+        if (a == 0.0) {
+            if (b > 0.0) return std::nullopt;
+        } else if (a > 0.0) {
+            t0 = std::max(t0, b / a);
+        } else {
+            t1 = std::min(t1, b / a);
+        }
+    }
+    if (!(t0 < t1)) return std::nullopt;
+    return std::pair{t0, t1};
+}
+
+namespace {
+
+struct Accumulator {
+    glm::dvec3 color{0.0};
+    double transmittance = 1;
+    double volume_transmittance = 1; // the volume's own, for the pick's 0.5 crossing
+    void layer(const RayLayer& l) {
+        color += transmittance * l.alpha * l.color;
+        transmittance *= 1.0 - l.alpha;
+    }
+};
+
+// Emission-absorption over [a, b]: n equal steps sampled at their midpoints.
+void composite_piece(const VolumeSampler& s, const VolumeLook& look, const glm::dvec3& origin, const glm::dvec3& dir,
+                     double a, double b, double step, double epsilon, Accumulator& acc, RayResult& out) {
+    if (!(b > a)) return;
+    const auto n = std::int64_t(std::ceil((b - a) / step));
+    const double h = (b - a) / double(n);
+    for (std::int64_t k = 0; k < n && acc.transmittance >= epsilon; ++k) {
+        const double t = a + (double(k) + 0.5) * h;
+        const double v = s.at_index(s.to_index(origin + t * dir));
+        const glm::dvec4 c = look.tf.at(v);
+        ++out.samples;
+        if (c.a <= 0.0) continue;
+        const double keep = std::pow(1.0 - c.a, h), alpha = 1.0 - keep;
+        acc.color += acc.transmittance * alpha * glm::dvec3(c);
+        acc.transmittance *= keep;
+        const double before = acc.volume_transmittance;
+        acc.volume_transmittance *= keep;
+        if (!out.t_half && acc.volume_transmittance <= 0.5) {
+            // Within the step the opacity is constant: T(x) = before * keep^(x / h).
+            const double x = keep > 0.0 ? h * std::log(0.5 / before) / std::log(keep) : 0.0;
+            out.t_half = t - 0.5 * h + std::clamp(x, 0.0, h);
+            out.value_half = v;
+        }
+    }
+}
+
+} // namespace
+
+RayResult march_ray(const VolumeSampler& s, const VolumeLook& look, const Clip& clip, const glm::dvec3& origin,
+                    const glm::dvec3& dir, double t_near, double t_far, std::span<const RayLayer> layers,
+                    double step_mm, double epsilon) {
+    RayResult out;
+    std::vector<RayLayer> sorted(layers.begin(), layers.end());
+    std::stable_sort(sorted.begin(), sorted.end(), [](const RayLayer& a, const RayLayer& b) { return a.t < b.t; });
+    // An opaque layer ends the ray.
+    double end = t_far;
+    for (const auto& l : sorted)
+        if (l.alpha >= 1.0) {
+            end = std::min(end, l.t);
+            break;
+        }
+    const auto span = ray_interval(s, clip, origin, dir, t_near, end);
+    Accumulator acc;
+    if (look.mode != VolumeMode::Composite) {
+        std::optional<RayLayer> extreme;
+        if (span) {
+            const auto n = std::max<std::int64_t>(1, std::int64_t(std::ceil((span->second - span->first) / step_mm)));
+            const double h = (span->second - span->first) / double(n);
+            const bool mip = look.mode == VolumeMode::Mip;
+            for (std::int64_t k = 0; k <= n; ++k) {
+                const double t = span->first + double(k) * h, v = s.at_index(s.to_index(origin + t * dir));
+                ++out.samples;
+                if (!out.extreme || (mip ? v > *out.extreme : v < *out.extreme)) {
+                    out.extreme = v;
+                    out.t_extreme = t;
+                }
+            }
+            const glm::dvec4 c = look.tf.at(*out.extreme);
+            extreme = RayLayer{out.t_extreme, glm::dvec3(c), c.a};
+            if (c.a >= 0.5) {
+                out.t_half = out.t_extreme;
+                out.value_half = *out.extreme;
+            }
+        }
+        bool placed = !extreme;
+        for (const auto& l : sorted) {
+            if (l.t > end) break;
+            if (!placed && extreme->t <= l.t) {
+                acc.layer(*extreme);
+                placed = true;
+            }
+            acc.layer(l);
+            if (l.alpha >= 1.0) break;
+        }
+        if (!placed) acc.layer(*extreme);
+        out.color = acc.color;
+        out.transmittance = acc.transmittance;
+        return out;
+    }
+    double t = span ? span->first : 0.0;
+    for (const auto& l : sorted) {
+        if (l.t > end || acc.transmittance < epsilon) break;
+        if (span && l.t > t) {
+            composite_piece(s, look, origin, dir, t, std::min(l.t, span->second), step_mm, epsilon, acc, out);
+            t = std::max(t, l.t);
+        }
+        acc.layer(l);
+        if (l.alpha >= 1.0) break;
+    }
+    if (span && acc.transmittance >= epsilon)
+        composite_piece(s, look, origin, dir, t, span->second, step_mm, epsilon, acc, out);
+    out.color = acc.color;
+    out.transmittance = acc.transmittance;
+    return out;
+}
+
+} // namespace iso
