@@ -112,9 +112,11 @@ PickResult resolve_pick(const Scene& scene, const Camera& camera, int width, int
 // reference.hpp) with the surfaces of the frame's list at their depths; the
 // layer lies where the volume's own accumulated opacity reaches 0.5 (MIP /
 // MinIP: at the extreme value when its opacity reaches 0.5), with its LPS
-// point, value, unit and voxel. It is the visible layer when it lies in
-// front of the visible surface (or there is none); layers behind it are
-// then dropped unless all are asked for. Nothing when the ray never gets there.
+// point, value, unit and voxel. By the click's rule (the first layer whose
+// own opacity reaches the threshold, else the nearest) it is the visible
+// layer when it lies in front of a visible surface that reaches the
+// threshold, or when no surface does; layers behind it are then dropped
+// unless all are asked for. Nothing when the ray never gets there.
 void add_volume_layer(PickResult& r, const Scene& scene, const Camera& camera, const PickList& list,
                       const PickRequest& p, const FrameLook& look);
 

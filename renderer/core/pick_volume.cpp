@@ -48,11 +48,15 @@ void add_volume_layer(PickResult& r, const Scene& scene, const Camera& camera, c
         l.value = m.value_half;
     }
     l.unit = value_unit(v);
-    // Its place among the surface layers, by depth; visible when in front of the visible one.
+    // Its place among the surface layers, by depth. The click's rule: the
+    // first layer whose own opacity reaches the threshold (the volume's layer
+    // is where it reaches 0.5), else the nearest: it is visible when in front
+    // of a visible surface that reaches the threshold, or when none does.
     const auto at =
         std::find_if(r.layers.begin(), r.layers.end(), [&](const PickLayer& s) { return s.depth_mm > l.depth_mm; });
     const std::size_t index = std::size_t(at - r.layers.begin());
-    const bool in_front = !r.visible || index <= *r.visible;
+    const bool surface_reaches = r.visible && r.layers[*r.visible].alpha >= p.threshold;
+    const bool in_front = !surface_reaches || index <= *r.visible;
     if (!in_front && !p.all_layers && index >= r.layers.size()) return;
     r.layers.insert(at, std::move(l));
     if (in_front) {

@@ -17,11 +17,13 @@ namespace {
 
 const char* const kWhere = "transfer function";
 
-// Shortest text that reads back as the same double.
+// Shortest text that reads back as the same double; plain decimals (no
+// exponent) for the values transfer functions and clips hold.
 std::string short_number(double v) {
     char buf[64];
-    for (int digits = 1; digits <= 17; ++digits) {
-        std::snprintf(buf, sizeof buf, "%.*g", digits, v);
+    const bool plain = std::abs(v) >= 1e-4 && std::abs(v) < 1e15;
+    for (int digits = plain ? 0 : 1; digits <= 17; ++digits) {
+        std::snprintf(buf, sizeof buf, plain ? "%.*f" : "%.*g", digits, v);
         if (std::strtod(buf, nullptr) == v) break;
     }
     return buf;

@@ -25,7 +25,8 @@ struct Compiled {
     Passes running;
 };
 
-Compiled compile(const RenderOptions& opt, const RenderHooks& hooks = {}, float second_opacity = 1.0f) {
+Compiled compile(const RenderOptions& opt, const RenderHooks& hooks = {}, float second_opacity = 1.0f,
+                 const passes::VolumeInput* volume = nullptr) {
     NullBackend be;
     graph::ResourcePool pool(be);
     passes::AoHistory history;
@@ -42,6 +43,7 @@ Compiled compile(const RenderOptions& opt, const RenderHooks& hooks = {}, float 
     ctx.pool = &pool;
     ctx.ao = &history;
     ctx.result = &result;
+    ctx.volume = volume; // the renderer sets it only for colour images of a look with the volume on
     graph::FrameGraph fg;
     passes::build_frame(fg, ctx);
     fg.compile();
@@ -61,6 +63,20 @@ RenderOptions options() {
 }
 
 } // namespace
+
+TEST(Frame, TheVolumeIsMarchedByItsOwnPassOrInsideTheVoitResolve) {
+    RenderOptions o = options();
+    o.look.volume.enabled = true;
+    o.look.volume.tf = TransferFunction::parse("0:0.1:#ffffff");
+    const passes::VolumeInput volume;
+    EXPECT_EQ(compile(o, {}, 1.0f, &volume).running, (Passes{"gbuffer", "lighting", "volume", "readback"}));
+    // With a translucent surface the resolve marches it between the fragments: no pass of its own.
+    EXPECT_EQ(compile(o, {}, 0.5f, &volume).running,
+              (Passes{"gbuffer", "lighting", "oit_fragments", "oit_resolve", "readback"}));
+    // An AOV has no volume in it.
+    o.aov = Aov::Depth;
+    EXPECT_EQ(compile(o, {}, 1.0f, &volume).running, (Passes{"gbuffer", "readback"}));
+}
 
 TEST(Frame, AntiAliasingAddsItsPassesToColourFramesOnly) {
     RenderOptions o = options();
