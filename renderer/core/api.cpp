@@ -147,7 +147,7 @@ std::string Convergence::text() const {
 
 RenderResult render_converged(Scene& scene, const Camera& cam, RenderOptions ro, const RenderRequest& req,
                               Convergence& out) {
-    const AntiAliasing& aa = req.look.aa;
+    const AntiAliasing aa = ro.look.aa; // frame_options' (the volume's check mode samples pixel centres)
     const bool colour = ro.aov == Aov::None && ro.image;
     // Cone AO's still frames each add new jitter sets to the running mean of the AO.
     const int ao_frames = req.look.ao == AoMethod::Cone ? req.look.ao_frames : 1;
@@ -187,6 +187,13 @@ RenderOptions frame_options(const RenderRequest& req) {
     ro.scale = req.scale;
     ro.time_passes = req.time_passes;
     ro.pick = req.pick;
+    // Volume rendering with flat shading is the check mode of the stated
+    // model (docs/volume.md): each pixel is the ray through its centre, as a
+    // point-sampled reference march draws it, so no sub-samples or jitter.
+    if (req.look.volume.enabled && req.look.flat_shading) {
+        ro.look.aa.samples = 1;
+        ro.look.aa.frames = 1;
+    }
     if (method == AoMethod::Disk) ro.progress = req.progress; // the gather takes seconds: progress and cancel
     return ro;
 }
