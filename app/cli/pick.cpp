@@ -72,10 +72,12 @@ int run_pick(const PickArgs& a) {
         const auto& l = r.layers[i];
         std::cout << (r.visible && *r.visible == i ? "* " : "  ") << std::setw(10) << std::left << l.name << std::right
                   << std::setprecision(2) << " LPS (" << l.lps.x << ", " << l.lps.y << ", " << l.lps.z << ") mm, depth "
-                  << l.depth_mm << " mm, alpha " << std::setprecision(3) << l.alpha << ", share " << l.share;
+                  << l.depth_mm << " mm, alpha " << std::setprecision(3) << l.alpha;
+        if (!l.volume) std::cout << ", share " << l.share; // the volume's layer is a point inside it, not a fragment
         if (l.value) std::cout << ", " << iso::core::value_readout(*l.value, l.unit);
         if (l.voxel) std::cout << ", voxel (" << (*l.voxel)[0] << ", " << (*l.voxel)[1] << ", " << (*l.voxel)[2] << ")";
-        std::cout << ", triangle " << l.triangle << "\n";
+        if (!l.volume) std::cout << ", triangle " << l.triangle;
+        std::cout << "\n";
     }
     if (r.rect.width > 0) std::cout << r.triangles.size() << " triangles visible in the rectangle\n";
     return 0;
