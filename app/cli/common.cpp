@@ -66,6 +66,11 @@ std::string flag_of(std::string where) {
         {"decimation fraction", "--decimate"},
         {"largest component", "--largest"},
         {"DICOM series", "--series"},
+        // Volume rendering (renderer/volume/transfer_function.hpp).
+        {"transfer function", "--volume"},
+        {"volume mode", "--volume-mode"},
+        {"volume step", "--volume-step"},
+        {"clip", "--clip"},
         // The streaming engine's settings (renderer/surface/stream_plan.cpp).
         {"memory budget", "--memory"},
         {"chunk size", "--chunk"},

@@ -311,3 +311,46 @@ TEST(RenderCli, DiskAoAsAnAovAndInTheColourImage) {
         EXPECT_FALSE(std::filesystem::exists(dir / "x.exr")) << bad;
     }
 }
+
+TEST(RenderCli, VolumeRenderingFromTheCommandLine) {
+    TempDir dir;
+    const std::string tf = "400:0:#c08060,600:0.05:#e0b090,1000:0.05:#f0d0b0,1200:0.5:#ffffff";
+    const std::string out =
+        render(test::data("headsq.nhdr") + " --volume '" + tf +
+               "' --iso 1150 --opacity 0.4 --size 120x100 --view left --stats -o " + (dir / "v.png"));
+    EXPECT_NE(out.find("volume: step 0.750 mm"), std::string::npos) << out;
+    EXPECT_NE(out.find("oit_resolve"), std::string::npos) << out; // marched inside the resolve
+    ImageMetadata meta;
+    const Image img = load_image(dir / "v.png", &meta);
+    EXPECT_EQ(img.width, 120);
+    EXPECT_EQ(meta.text["isoscope:volume_transfer_function"], tf);
+    EXPECT_NE(meta.text["isoscope:volume"].find("composite"), std::string::npos);
+    EXPECT_NE(meta.text["isoscope:legend"].find("volume"), std::string::npos) << meta.text["isoscope:legend"];
+    // A volume alone (no --iso), a preset, MIP and a clip.
+    render(test::data("headsq.nhdr") +
+           " --volume bone --volume-mode mip --clip box=-150,0,-140,0,200,0 --size 64x64 -o " + (dir / "m.png"));
+    ImageMetadata mip;
+    load_image(dir / "m.png", &mip);
+    EXPECT_NE(mip.text["isoscope:volume"].find("mip"), std::string::npos);
+    EXPECT_EQ(mip.text["isoscope:clip"], "box=-150,0,-140,0,200,0 (LPS mm)");
+    // Errors name the flag and the reason; nothing is written.
+    for (const auto& [args, want] : std::vector<std::pair<std::string, std::string>>{
+             {"--volume bones", "--volume: 'bones' is neither a preset"},
+             {"--volume 1:2:#ffffff", "--volume: point 1: opacity per mm must be in 0..1"},
+             {"--volume bone --volume-mode max", "--volume-mode: must be composite, mip or minip"},
+             {"--volume bone --clip box=1,2,3", "--clip: 'box=1,2,3' needs 6 numbers"}}) {
+        const auto r = test::run_command(
+            test::cli() + " render " + test::data("headsq.nhdr") + " " + args + " -o " + (dir / "bad.png"), true);
+        EXPECT_EQ(r.exit_code, 1) << args;
+        EXPECT_NE(r.out.find(want), std::string::npos) << r.out;
+        EXPECT_FALSE(std::filesystem::exists(dir / "bad.png"));
+    }
+    const auto mesh = test::run_command(
+        test::cli() + " render " + test::data("bunny.vtp") + " --volume bone -o " + (dir / "bad.png"), true);
+    EXPECT_NE(mesh.out.find("no volume to ray cast: the input is a mesh"), std::string::npos) << mesh.out;
+    // A pick on the volume alone lands in it.
+    const auto pick = test::run_command(test::cli() + " pick " + test::data("headsq.nhdr") + " --volume '" + tf +
+                                            "' --view left --size 120x100 --at 60,50 --json",
+                                        true);
+    EXPECT_NE(pick.out.find("\"layer\": \"volume\""), std::string::npos) << pick.out;
+}

@@ -39,7 +39,8 @@ template <class F> std::shared_ptr<const Volume> make_volume(std::array<std::int
     auto d = v.as<float>();
     for (std::int64_t k = 0; k < n[2]; ++k)
         for (std::int64_t j = 0; j < n[1]; ++j)
-            for (std::int64_t i = 0; i < n[0]; ++i) d[v.linear_index(i, j, k)] = float(f(double(i), double(j), double(k)));
+            for (std::int64_t i = 0; i < n[0]; ++i)
+                d[v.linear_index(i, j, k)] = float(f(double(i), double(j), double(k)));
     return std::make_shared<const Volume>(std::move(v));
 }
 
@@ -132,7 +133,8 @@ TEST_F(VolumeRender, ABallInAnObliqueAnisotropicVolumeMatchesTheReference) {
     m = glm::translate(glm::dmat4(1.0), glm::dvec3(-30, 12, 40)) * m * glm::scale(glm::dmat4(1.0), {0.8, 1.0, 1.3});
     const double c0 = 20, c1 = 16, c2 = 12;
     const auto v = make_volume({41, 33, 25}, m, [&](double i, double j, double k) {
-        const double r = std::sqrt(std::pow((i - c0) * 0.8, 2) + std::pow((j - c1) * 1.0, 2) + std::pow((k - c2) * 1.3, 2));
+        const double r =
+            std::sqrt(std::pow((i - c0) * 0.8, 2) + std::pow((j - c1) * 1.0, 2) + std::pow((k - c2) * 1.3, 2));
         return 1000.0 * std::exp(-r * r / 120.0);
     });
     Renderer ren;
@@ -184,7 +186,8 @@ TEST_F(VolumeRender, ATranslucentPlaneThroughTheVolumeIsCompositedInOrder) {
         const double t = (4.0 - ray.origin.z) / ray.dir.z;
         const glm::dvec3 at = ray.origin + t * ray.dir;
         const bool on_plane = at.x > -10 && at.x < 30 && at.y > -10 && at.y < 30;
-        return reference_pixel(s, cam, o, x, y, 0.5, on_plane ? std::vector<RayLayer>{{t, rc, 0.5}} : std::vector<RayLayer>{});
+        return reference_pixel(s, cam, o, x, y, 0.5,
+                               on_plane ? std::vector<RayLayer>{{t, rc, 0.5}} : std::vector<RayLayer>{});
     });
     EXPECT_LE(e.max, 1.01 / 255.0);
     // An opaque plane ends the ray: what is behind it never shows.
@@ -367,7 +370,7 @@ TEST_F(VolumeRender, EveryResolveVariantMarchesTheVolume) {
     const RenderResult with_ao = ren.render(cam, o);
     o.look.ao = AoMethod::Off;
     o.look.oit_memory_mib = 1; // 52428 nodes: at the cap, fragments beyond it are merged
-    o.width = o.height = 384; // about 86000 fragments
+    o.width = o.height = 384;  // about 86000 fragments
     const RenderResult merged = ren.render(cam, o);
     for (const RenderResult* r : {&plain, &with_ao, &merged}) {
         EXPECT_TRUE(r->volume.drawn);
@@ -411,16 +414,14 @@ PixelError bundled_ct_against_reference(bool with_surface, std::string* antialia
     const glm::dvec3 bg(req.look.background), color(with_surface ? scene.info(1).color : glm::vec3(0.0f));
     return compare(out.image, [&](int x, int y) {
         const Ray r = cam.pixel_ray(x + 0.5, y + 0.5, req.width, req.height);
-        const double cosine = glm::dot(r.dir, cam.forward()), t0 = cam.near_plane / cosine,
-                     t1 = cam.far_plane / cosine;
+        const double cosine = glm::dot(r.dir, cam.forward()), t0 = cam.near_plane / cosine, t1 = cam.far_plane / cosine;
         std::vector<RayLayer> layers;
         if (bvh)
             for (const auto& c : segment_crossings(*bvh, r.origin + t0 * r.dir, r.origin + t1 * r.dir)) {
                 const double t = t0 + c.t * (t1 - t0);
                 if (layers.empty() || t - layers.back().t > 1e-6) layers.push_back({t, color, 0.4});
             }
-        const RayResult m = march_ray(s, req.look.volume, {}, r.origin, r.dir, t0, t1, layers,
-                                      0.05 * s.min_spacing());
+        const RayResult m = march_ray(s, req.look.volume, {}, r.origin, r.dir, t0, t1, layers, 0.05 * s.min_spacing());
         const glm::dvec3 c = m.color + m.transmittance * bg;
         return glm::dvec3(srgb_from_linear(c.r), srgb_from_linear(c.g), srgb_from_linear(c.b));
     });
