@@ -8,6 +8,7 @@
 
 #include <glm/glm.hpp>
 
+#include "renderer/ao/sequences.hpp"
 #include "renderer/passes/build_frame.hpp"
 #include "renderer/passes/gl_resources.hpp"
 #include "renderer/passes/std140.hpp"
@@ -60,6 +61,11 @@ VolumeParams volume_params(const FrameContext& ctx) {
     const auto& pts = look.tf.points();
     const double span = pts.empty() ? 1.0 : std::max(pts.back().value - pts.front().value, 1e-6);
     p.gradient_ref = float(0.05 * span / v.min_spacing);
+    // The first frame (and every frame not accumulated) samples midpoints,
+    // the stated model; the later frames of an average spread the samples
+    // over their steps (0.5, 0, 0.75, 0.25, ...: van der Corput, shifted).
+    const double spread = ctx.aa && ctx.aa_frame > 0 ? sequences::radical_inverse2(std::uint32_t(ctx.aa_frame)) : 0.0;
+    p.sample_offset = float(std::fmod(0.5 + spread, 1.0));
     p.mode = look.mode == VolumeMode::Mip ? 1u : look.mode == VolumeMode::Minip ? 2u : 0u;
     p.tf_count = std::uint32_t(pts.size());
     p.clip_count = std::uint32_t(std::min(ctx.opt.look.clip.half_spaces().size(), kClipSlots));

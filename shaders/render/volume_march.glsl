@@ -8,7 +8,10 @@
 // into n = ceil((b - a) / step) equal steps sampled at their midpoints; a
 // step of h mm at opacity a per mm transmits (1 - a)^h (the stated model:
 // exact for constant values whatever the step). The CPU reference
-// (renderer/volume/reference.cpp) samples the same way.
+// (renderer/volume/reference.cpp) samples the same way. Frames averaged
+// into an accumulation (the 3D view's still frames, exports) move the
+// samples within their steps (sample_offset: 0.5 in the first), so the
+// average samples each ray ever finer and the step's banding fades.
 //
 // Chunks whose value range the transfer function maps to zero opacity
 // (occupancy 0, from the extractor's per-chunk min/max) are jumped over:
@@ -96,7 +99,7 @@ bool volume_begin(ivec2 p) {
         float n = max(1.0, ceil((t1 - t0) / step_mm)), h = (t1 - t0) / n;
         float best = mode == 1u ? -3.0e38 : 3.0e38;
         for (float k = 0.0; k <= n; k += 1.0) {
-            float t = t0 + k * h, v = vol_value(vol_o_idx + t * vol_d_idx);
+            float t = clamp(t0 + (k + sample_offset - 0.5) * h, t0, t1), v = vol_value(vol_o_idx + t * vol_d_idx);
             if (mode == 1u ? v > best : v < best) {
                 best = v;
                 vol_extreme_t = t;
@@ -158,7 +161,7 @@ void volume_until(float t) {
     float n = ceil((b - a) / step_mm), h = (b - a) / n;
     for (float k = 0.0; k < n; k += 1.0) {
         if (transmittance < vol_epsilon) break;
-        float ts = a + (k + 0.5) * h;
+        float ts = a + (k + sample_offset) * h;
         vec3 idx = vol_o_idx + ts * vol_d_idx;
         if (skip_empty) {
             bool empty;
@@ -166,7 +169,7 @@ void volume_until(float t) {
             if (empty) {
                 // The first sample at or beyond the chunk's exit (a hair early:
                 // a sample found still inside is skipped again next time round).
-                float next = max(k + 1.0, ceil((t_exit - a) / h - 0.5 - 1e-3));
+                float next = max(k + 1.0, ceil((t_exit - a) / h - sample_offset - 1e-3));
                 vol_skipped_n += uint(min(next, n) - k);
                 k = next - 1.0;
                 continue;

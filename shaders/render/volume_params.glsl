@@ -15,6 +15,7 @@ ISO_MEMBER(ivec2, vol_image_size)
 ISO_MEMBER(float, step_mm)                // the sample step
 ISO_MEMBER(float, vol_epsilon)                // stop once the transmittance is below it
 ISO_MEMBER(float, gradient_ref)           // gradient magnitude (value per mm) at which shading is full
+ISO_MEMBER(float, sample_offset)          // where in its step a sample lies: 0.5 (midpoints); accumulated frames spread it
 ISO_MEMBER(uint, mode)                    // 0 composite, 1 MIP, 2 MinIP
 ISO_MEMBER(uint, tf_count)                // transfer-function points
 ISO_MEMBER(uint, clip_count)              // clip half-spaces
