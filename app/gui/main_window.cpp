@@ -506,7 +506,8 @@ void MainWindow::set_scene(std::unique_ptr<core::Scene> scene, const QString& pa
     }
     for (std::size_t i = 0; i < 3; ++i) views_[i]->set_content(scene_.get(), &planes_[i]);
     surfaces_->set_scene(scene_.get());
-    volume_->set_scene(scene_.get()); // the volume off, its default transfer function, the crop box its box
+    // The volume off, its default transfer function, the crop box its box.
+    volume_->set_scene(scene_.get());
     structures_->reset(); // a session's isolated structures are measured again
     update_3d();
     setWindowTitle("isoscope - " + QFileInfo(path).fileName() + "[*]");

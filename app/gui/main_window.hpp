@@ -240,12 +240,15 @@ private:
     void add_layout_actions(QMenu* view);  // View > Layout and Slice planes in 3D (layouts.cpp)
     void update_slice_planes_3d();         // the 3D view's slice outlines and crosshair, from the planes
     void wire_surface_undo();              // the Surfaces panel's undo steps (surface_commands.cpp)
-    void add_volume_dock(QDockWidget* beside);              // the Volume dock, tabbed with `beside` (volume_commands.cpp)
-    void apply_volume();                                    // the Volume panel's look and clip into the 3D view
-    void restore_volume(const core::Session& s);            // a session's volume look and crop box into the panel
-    std::vector<Annotations::Line> crop_box_lines() const; // the crop box's edges while cropping
     void watch_unsaved_work();             // the title's "*" and autosave (unsaved_work.cpp)
     void enable_data_actions();            // what needs a volume or a surface (data_actions.cpp)
+    // The Volume dock, tabbed with `beside`; its state into the 3D view
+    // (look and clip); a session's volume look and crop box into it; the
+    // crop box's edges while cropping (volume_commands.cpp).
+    void add_volume_dock(QDockWidget* beside);
+    void apply_volume();
+    void restore_volume(const core::Session& s);
+    std::vector<Annotations::Line> crop_box_lines() const;
     void autosave();
     void wait_for_autosave();
     void remove_recovery_file();

@@ -260,8 +260,8 @@ void TfEditor::add_point(QPointF at) {
     const glm::dvec4 c = tf_.empty() ? glm::dvec4(1.0) : tf_.at(value);
     pt.color = hex_from_linear(glm::vec3(c.r, c.g, c.b));
     std::vector<TfPoint> pts = tf_.points();
-    const auto where = std::upper_bound(pts.begin(), pts.end(), value,
-                                        [](double v, const TfPoint& p) { return v < p.value; });
+    const auto where =
+        std::upper_bound(pts.begin(), pts.end(), value, [](double v, const TfPoint& p) { return v < p.value; });
     selected_ = std::size_t(where - pts.begin());
     pts.insert(where, pt);
     finish("Add transfer function point", tf_, std::move(pts));

@@ -251,7 +251,8 @@ void VolumePanel::show_state() {
     mode_->setCurrentIndex(int(state_.look.mode));
     int preset = preset_->count() - 1; // custom
     for (int i = 0; i + 1 < preset_->count(); ++i) {
-        const TransferFunction tf = !ct_ && i == 0 ? initial_tf() : transfer_function_from(preset_->itemText(i).toStdString());
+        const TransferFunction tf =
+            !ct_ && i == 0 ? initial_tf() : transfer_function_from(preset_->itemText(i).toStdString());
         if (tf == state_.look.tf) preset = i;
     }
     preset_->setCurrentIndex(preset);

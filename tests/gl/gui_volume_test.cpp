@@ -157,8 +157,7 @@ protected:
     }
     void settle(gui::Viewer* v) {
         const int frames = v->frames();
-        EXPECT_TRUE(wait_until([&] { return (v->frames() > frames && v->converged()) || !v->error().empty(); },
-                               60000));
+        EXPECT_TRUE(wait_until([&] { return (v->frames() > frames && v->converged()) || !v->error().empty(); }, 60000));
         EXPECT_EQ(v->error(), "");
     }
 
@@ -299,9 +298,10 @@ TEST_F(GuiVolume, TheCropBoxCuts) {
     const QImage background = core_picture(off, v->camera(), v->image_size(), error);
     ASSERT_EQ(error, "");
     const Box whole = projected(*v, {vb.min, vb.max}, 0), cut = projected(*v, box, 3);
-    const Diff outside =
-        compare(shown, background, [&](int x, int y) { return whole.contains(x, y) && !cut.contains(x, y); }, 2);
-    const Diff inside = compare(shown, background, [&](int x, int y) { return cut.contains(x, y); }, 8);
+    const Diff outside = compare(
+        shown, background, [&](int x, int y) { return whole.contains(x, y) && !cut.contains(x, y); }, 2);
+    const Diff inside = compare(
+        shown, background, [&](int x, int y) { return cut.contains(x, y); }, 8);
     std::printf("crop: %d of %d pixels outside the box's projection differ from the background; %d of %d inside\n",
                 outside.differing, outside.pixels, inside.differing, inside.pixels);
     EXPECT_GT(outside.pixels, 1000);
@@ -351,7 +351,8 @@ TEST_F(GuiVolume, SessionRoundTripKeepsTheVolumeAndTheCrop) {
     EXPECT_EQ(w2.viewer()->options().look.clip, saved.clip());
     EXPECT_TRUE(core::same_state(w2.current_session(), w.current_session()));
 
-    const auto r = run_command(cli() + " render --session " + file + " --stats --size 160x120 -o " + (dir_ / "s.png"), true);
+    const auto r =
+        run_command(cli() + " render --session " + file + " --stats --size 160x120 -o " + (dir_ / "s.png"), true);
     EXPECT_EQ(r.exit_code, 0) << r.out;
     EXPECT_NE(r.out.find("volume: step"), std::string::npos) << "the render drew no volume: " << r.out;
 }
@@ -393,8 +394,8 @@ TEST_F(GuiVolume, ClickOnTheVolumeIsTheCorePick) {
     const glm::dvec3 crosshair(w.slice_view(core::SliceOrientation::Sagittal)->grid().offset_mm,
                                w.slice_view(core::SliceOrientation::Coronal)->grid().offset_mm,
                                w.slice_view(core::SliceOrientation::Axial)->grid().offset_mm);
-    std::printf("core pick %.6f %.6f %.6f; window %.6f %.6f %.6f\n", layer.lps.x, layer.lps.y, layer.lps.z,
-                crosshair.x, crosshair.y, crosshair.z);
+    std::printf("core pick %.6f %.6f %.6f; window %.6f %.6f %.6f\n", layer.lps.x, layer.lps.y, layer.lps.z, crosshair.x,
+                crosshair.y, crosshair.z);
     EXPECT_NEAR(crosshair.x, layer.lps.x, 1e-6);
     EXPECT_NEAR(crosshair.y, layer.lps.y, 1e-6);
     EXPECT_NEAR(crosshair.z, layer.lps.z, 1e-6);

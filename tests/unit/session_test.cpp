@@ -198,9 +198,15 @@ TEST(Session, VolumeLookAndClipBoxAreSavedAndLoadedBack) {
         {[](auto& x) { x["volume"].erase("transfer_function"); }, "volume.transfer_function: missing"},
         {[](auto& x) { x["volume"]["mode"] = "max"; }, "volume.mode: must be"},
         {[](auto& x) { x["volume"]["enabled"] = 1; }, "volume.enabled: must be true or false"},
-        {[](auto& x) { x["clip"]["box"]["min"] = {1, 2}; }, "clip.box.min: must be an array of 3 numbers"},
+        {[](auto& x) {
+             x["clip"]["box"]["min"] = {1, 2};
+         },
+         "clip.box.min: must be an array of 3 numbers"},
         {[](auto& x) { x["clip"]["box"].erase("max"); }, "clip.box.max: missing"},
-        {[](auto& x) { x["clip"]["box"]["min"] = {0, 500, 0}; }, "clip.box: min must not exceed max"},
+        {[](auto& x) {
+             x["clip"]["box"]["min"] = {0, 500, 0};
+         },
+         "clip.box: min must not exceed max"},
     };
     for (const auto& [edit, expect] : cases) {
         auto bad = j;
