@@ -39,7 +39,8 @@ VolumePanel::VolumePanel(QWidget* parent) : QWidget(parent) {
     editor_ = new TfEditor(this);
     editor_->setObjectName("tf_editor");
     layout->addWidget(editor_, 1);
-    auto* hint = new QLabel("Drag a point; double-click: add a point, or a point's colour; right-click: remove", this);
+    auto* hint =
+        new QLabel("Drag a point. Double-click: add a point, or pick a point's colour. Right-click: remove.", this);
     hint->setWordWrap(true);
     hint->setObjectName("tf_hint");
     layout->addWidget(hint);
@@ -122,7 +123,8 @@ QWidget* VolumePanel::make_crop_rows() {
             s->setKeyboardTracking(false);
             spins_[std::size_t(a + 3 * m)] = s;
             grid->addWidget(s, 2 + a, 1 + m);
-            connect(s, &QDoubleSpinBox::valueChanged, this, [this] { crop_spin_changed(); });
+            const QString what = QString("Crop box %1 %2").arg(kAxes[a]).arg(m ? "max" : "min");
+            connect(s, &QDoubleSpinBox::valueChanged, this, [this, what] { crop_spin_changed(what); });
         }
     }
     grid->setColumnStretch(1, 1);
@@ -142,7 +144,7 @@ QWidget* VolumePanel::make_crop_rows() {
     return box;
 }
 
-void VolumePanel::crop_spin_changed() {
+void VolumePanel::crop_spin_changed(const QString& what) {
     if (showing_) return;
     VolumeState a = state_;
     for (int i = 0; i < 3; ++i) {
@@ -150,7 +152,7 @@ void VolumePanel::crop_spin_changed() {
         a.box.second[i] = spins_[std::size_t(i + 3)]->value();
     }
     if (a == state_) return;
-    edit("Crop box", a, true);
+    edit(what, a, true); // a run of steps of one number: one undo step
 }
 
 TransferFunction VolumePanel::default_tf(double lo, double hi) {

@@ -77,7 +77,7 @@ private:
     void show_state();
     void edit(const QString& text, VolumeState after, bool merge = false);
     void preset_chosen(int index);
-    void crop_spin_changed();
+    void crop_spin_changed(const QString& what);
     void make_histogram();
 
     const core::Scene* scene_ = nullptr;

@@ -5,8 +5,8 @@
 // session's folder when it is below it, absolute otherwise; its SHA-256),
 // the DICOM series, the surfaces (kind, value, name, source, "#rrggbb" sRGB
 // colour, opacity, visibility, the post-processing they were extracted
-// with), the 3D camera, window/level, view options and the markups (inline,
-// as 3D Slicer markups JSON in LPS).
+// with), the 3D camera, window/level, view options, the markups (inline,
+// as 3D Slicer markups JSON in LPS), and the volume look and crop box.
 #pragma once
 
 #include <array>
