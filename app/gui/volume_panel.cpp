@@ -121,6 +121,12 @@ QWidget* VolumePanel::make_crop_rows() {
             s->setDecimals(1);
             s->setSingleStep(1.0);
             s->setKeyboardTracking(false);
+            s->setToolTip(QString("The crop box's %1 %2 (LPS mm; %3)")
+                              .arg(m ? "largest" : "smallest")
+                              .arg(kAxes[a])
+                              .arg(a == 0   ? "towards the patient's left"
+                                   : a == 1 ? "towards the back"
+                                            : "upwards"));
             spins_[std::size_t(a + 3 * m)] = s;
             grid->addWidget(s, 2 + a, 1 + m);
             const QString what = QString("Crop box %1 %2").arg(kAxes[a]).arg(m ? "max" : "min");
