@@ -38,6 +38,7 @@ constexpr Entry kEntries[] = {
     {"window_preset", Needs::Volume},
     {"window_center", Needs::Volume},
     {"window_width", Needs::Volume},
+    {"volume_panel", Needs::Volume},
 };
 
 const char* why_not(Needs n) {

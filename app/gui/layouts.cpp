@@ -155,6 +155,7 @@ void MainWindow::update_slice_planes_3d() {
         }
         points.push_back(core::crosshair_point(planes_));
     }
+    for (auto& line : crop_box_lines()) lines.push_back(line); // the Volume panel's crop box
     viewer_->set_guides(std::move(lines), std::move(points));
 }
 

@@ -43,6 +43,7 @@
 #include "app/gui/structure_tools.hpp"
 #include "app/gui/surfaces_panel.hpp"
 #include "app/gui/viewer.hpp"
+#include "app/gui/volume_panel.hpp"
 #include "io/error.hpp"
 #include "renderer/core/api.hpp"
 #include "renderer/core/scene.hpp"
@@ -135,6 +136,7 @@ MainWindow::MainWindow(QWidget* parent) : QMainWindow(parent), scene_(std::make_
         view3d_);
     placeholder_->setObjectName("view3d_hint");
     placeholder_->setAlignment(Qt::AlignCenter);
+    placeholder_->setWordWrap(true);
     view3d_->addWidget(placeholder_);
     view3d_->setMinimumSize(320, 240);
     grid->addWidget(view3d_, 0, 0);
@@ -188,6 +190,7 @@ MainWindow::MainWindow(QWidget* parent) : QMainWindow(parent), scene_(std::make_
     wire_surface_undo();
     dock->setWidget(surfaces_);
     addDockWidget(Qt::RightDockWidgetArea, dock);
+    add_volume_dock(dock);
     measurements_ = new MeasurementsPanel(*this);
     add_structure_tools();
     addDockWidget(Qt::RightDockWidgetArea, measurements_);
@@ -503,6 +506,8 @@ void MainWindow::set_scene(std::unique_ptr<core::Scene> scene, const QString& pa
     }
     for (std::size_t i = 0; i < 3; ++i) views_[i]->set_content(scene_.get(), &planes_[i]);
     surfaces_->set_scene(scene_.get());
+    // The volume off, its default transfer function, the crop box its box.
+    volume_->set_scene(scene_.get());
     structures_->reset(); // a session's isolated structures are measured again
     update_3d();
     setWindowTitle("isoscope - " + QFileInfo(path).fileName() + "[*]");
@@ -591,15 +596,19 @@ void MainWindow::add_structure_tools() {
 void MainWindow::update_3d() {
     bool any_visible = false;
     for (auto id : scene_->surfaces()) any_visible |= scene_->info(id).visible;
-    if (!any_visible) {
-        // The camera frames the visible surfaces: with none there is nothing
-        // to frame. The hint says what to do next.
+    const bool volume_shown = scene_->has_volume() && volume_->state().look.enabled;
+    if (!any_visible && !volume_shown) {
+        // The camera frames the visible surfaces and the volume when it is
+        // shown: with neither there is nothing to frame. The hint says what
+        // to do next.
         placeholder_->setText(
-            !scene_->has_volume()        ? "Open a volume (File > Open, or drop a file or folder here),\nthen add "
-                                           "a surface in the Surfaces panel."
-            : scene_->surfaces().empty() ? "Add a surface in the Surfaces panel (a preset or an iso value,\nthen "
-                                           "Add surface) to see it here."
-                                         : "Every surface is hidden: tick one in the Surfaces panel to see it here.");
+            !scene_->has_volume() ? "Open a volume (File > Open, or drop a file or folder here),\nthen add "
+                                    "a surface in the Surfaces panel."
+            : scene_->surfaces().empty()
+                ? "Add a surface in the Surfaces panel (a preset or an iso value,\nthen "
+                  "Add surface), or tick Show volume in the Volume panel,\nto see it here."
+                : "Every surface is hidden: tick one in the Surfaces panel\n(or Show volume in the Volume panel) to "
+                  "see it here.");
         view3d_->setCurrentWidget(placeholder_);
         enable_data_actions();
         return;
@@ -613,6 +622,7 @@ void MainWindow::update_3d() {
         view_bar_->attach(*viewer_);
         view3d_->addWidget(viewer_);
     }
+    apply_volume(); // before its first frame: a volume alone is framed
     view3d_->setCurrentWidget(viewer_);
     update_slice_planes_3d();
     viewer_->update();

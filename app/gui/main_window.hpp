@@ -24,9 +24,11 @@
 #include "io/markups.hpp"
 #include "io/progress.hpp"
 #include "renderer/core/slices.hpp"
+#include "renderer/frame/annotations.hpp"
 
 class QAction;
 class QComboBox;
+class QDockWidget;
 class QDoubleSpinBox;
 class QLabel;
 class QMenu;
@@ -63,6 +65,7 @@ class MeasurementsPanel;
 class SliceView;
 class SurfacesPanel;
 class Viewer;
+class VolumePanel;
 class ViewToolBar;
 
 class MainWindow : public QMainWindow {
@@ -86,6 +89,9 @@ public:
     // volume in the background (SurfacesPanel::add_surface).
     void add_surface(double iso);
     SurfacesPanel* surfaces_panel() const { return surfaces_; }
+    // The Volume dock (volume_panel.hpp, volume_commands.cpp): the volume
+    // ray cast in the 3D view and the crop box; its edits are undo steps.
+    VolumePanel* volume_panel() const { return volume_; }
     // A background job (load or extraction) is running.
     bool busy() const { return job_ != nullptr; }
 
@@ -236,6 +242,13 @@ private:
     void wire_surface_undo();              // the Surfaces panel's undo steps (surface_commands.cpp)
     void watch_unsaved_work();             // the title's "*" and autosave (unsaved_work.cpp)
     void enable_data_actions();            // what needs a volume or a surface (data_actions.cpp)
+    // The Volume dock, tabbed with `beside`; its state into the 3D view
+    // (look and clip); a session's volume look and crop box into it; the
+    // crop box's edges while cropping (volume_commands.cpp).
+    void add_volume_dock(QDockWidget* beside);
+    void apply_volume();
+    void restore_volume(const core::Session& s);
+    std::vector<Annotations::Line> crop_box_lines() const;
     void autosave();
     void wait_for_autosave();
     void remove_recovery_file();
@@ -252,6 +265,7 @@ private:
     QDoubleSpinBox* center_ = nullptr;
     QDoubleSpinBox* width_ = nullptr;
     SurfacesPanel* surfaces_ = nullptr;
+    VolumePanel* volume_ = nullptr;
     QMenu* recent_menu_ = nullptr;
     QString path_, series_;
     MarkupsState state_;

@@ -180,6 +180,8 @@ QString MeasureTools::readout(const core::PickResult& r) const {
     const core::PickLayer& l = r.layers[*r.visible];
     QString s = lps_text(l.lps);
     if (l.value) s += ", " + QString::fromStdString(core::value_readout(*l.value, l.unit));
+    // The ray-cast volume's layer (where its accumulated opacity reaches 0.5) is no surface.
+    if (l.volume) return s + ", in the volume";
     return s + ", surface " + QString::fromStdString(l.name);
 }
 

@@ -15,6 +15,7 @@
 #include "app/gui/main_window.hpp"
 #include "app/gui/view_toolbar.hpp"
 #include "app/gui/viewer.hpp"
+#include "app/gui/volume_panel.hpp"
 #include "io/atomic_file.hpp"
 #include "io/error.hpp"
 #include "renderer/core/api.hpp"
@@ -64,7 +65,12 @@ core::Session MainWindow::current_session() const {
     std::optional<core::WindowLevel> window;
     if (scene_->has_volume()) window = window_;
     // The 3D view's toggles (the view bar keeps them across scenes).
-    const FrameLook look = viewer_ ? viewer_->options().look : view_bar_->look();
+    FrameLook look = viewer_ ? viewer_->options().look : view_bar_->look();
+    // The Volume panel's look and crop box (kept while the view is not made).
+    if (scene_->has_volume()) {
+        look.volume = volume_->state().look;
+        look.clip = volume_->state().clip();
+    }
     core::Session s = core::capture_session(*scene_, path_.toStdString(), series_.toStdString(), camera, window, look,
                                             state_.markups);
     // The layout and the slice views (layouts.cpp).
@@ -184,6 +190,7 @@ void MainWindow::open_session(const QString& path, bool recovered) {
             if (s.slice_views) set_slice_views(*s.slice_views);
             set_slice_planes_in_3d(s.slice_planes_in_3d);
             set_markups(s.markups);
+            restore_volume(s);
             // Through the view bar, which keeps its toggles for later views and gives them to this one.
             view_bar_->set_ao(s.ao);
             view_bar_->transparency_action()->setChecked(s.transparency);

@@ -122,6 +122,7 @@ StillFrame StillFrames::draw(core::SnapshotRenderer& renderer, const StillReques
         f.ao_frames = r.ao_frames > 0 ? res.ao_frames : 0;
         f.aa_frames = res.aa_frames;
         f.labels = std::move(res.labels);
+        f.volume = res.volume;
         // Done when the AO and the average have their frames (a restart
         // inside the renderer, such as a grown translucency pool, is counted in them).
         --frames_left;

@@ -45,6 +45,8 @@ struct StillFrame {
     int ao_frames = 0, aa_frames = 0;
     bool last = false; // the request's frames are all drawn: the picture stopped changing
     std::vector<LabelBox> labels;
+    // The volume's ray casting in this frame.
+    VolumeStats volume;
     double ms = 0;     // render and read-back time of this frame
     std::string error; // the thread could not draw (no context, a rendering error): no image
 };

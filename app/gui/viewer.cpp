@@ -63,8 +63,8 @@ double Viewer::aspect() const { return double(std::max(1, width())) / double(std
 // surfaces that are not (keeping the direction) once they appear; later
 // surfaces leave the camera where the user put it.
 void Viewer::initializeGL() {
-    if (!camera_set_) camera_ = scene_.camera(initial_view_, aspect());
-    framed_empty_ = !camera_set_ && scene_.bounds().empty();
+    if (!camera_set_) camera_ = scene_.camera(initial_view_, aspect(), options_.look);
+    framed_empty_ = !camera_set_ && scene_.bounds(options_.look).empty();
 }
 
 void Viewer::paintGL() {
@@ -97,6 +97,9 @@ RenderOptions Viewer::frame_options() const {
     // software GL it costs 2-3x a frame, docs/gui.md); the still frames after
     // the release bring it back and accumulate it.
     opt.look = options_.look;
+    // The volume is sampled more coarsely while the camera moves
+    // (VolumeLook::moving_step); still frames take the full step.
+    opt.moving = dragging_;
     // DSRAA's sub-samples cost up to 2.7x a frame without AO on software GL
     // (llvmpipe rasterizes every sub-sample; docs/image_bench.md "What DSRAA
     // costs the live view"): a drag goes without them, as without AO, and the
@@ -158,18 +161,20 @@ void Viewer::take_batch(const RaytracedBatch& b) {
     update();
 }
 
-// The camera framed for what is visible now (see initializeGL), its
-// near and far planes around it.
+// The camera framed for what is visible now (see initializeGL): the
+// visible surfaces and the volume when it is ray cast (Scene::bounds(look)),
+// its near and far planes around them.
 void Viewer::frame_camera() {
-    if (framed_empty_ && !scene_.bounds().empty()) {
+    const Bounds shown = scene_.bounds(options_.look);
+    if (framed_empty_ && !shown.empty()) {
         const glm::dvec3 f = camera_.forward();
         if (std::isfinite(f.x) && std::isfinite(f.y) && std::isfinite(f.z))
-            camera_.fit(scene_.bounds(), aspect());
+            camera_.fit(shown, aspect());
         else
-            camera_ = scene_.camera(initial_view_, aspect());
+            camera_ = scene_.camera(initial_view_, aspect(), options_.look);
         framed_empty_ = false;
     }
-    camera_.fit_planes(scene_.bounds());
+    camera_.fit_planes(shown);
 }
 
 // Frames whose look needs still frames: AO traced in the frame (cone,
@@ -271,6 +276,7 @@ bool Viewer::show_still(const RenderOptions& opt) {
     shown_key_ = std::move(key);
     shown_look_ = opt.look;
     labels_ = still_->labels;
+    volume_stats_ = still_->volume;
     raytraced_drawn_ = opt.ao_image != nullptr;
     ao_frames_ = still_->ao_frames;
     aa_frames_ = still_->aa_frames;
@@ -308,6 +314,7 @@ void Viewer::draw_here(const RenderOptions& opt, bool stand_in) {
     shown_look_ = opt.look;
     raytraced_drawn_ = opt.ao_image != nullptr;
     labels_ = std::move(r.labels);
+    volume_stats_ = r.volume;
     if (gl_renderer_.empty()) gl_renderer_ = r.gl_renderer;
     ++frames_;
     // GL objects made after the first frame: none while the view is steady.
@@ -364,7 +371,7 @@ void Viewer::set_camera(const Camera& c) {
     update();
 }
 
-void Viewer::set_view(PatientView v) { set_camera(scene_.camera(v, aspect())); }
+void Viewer::set_view(PatientView v) { set_camera(scene_.camera(v, aspect(), options_.look)); }
 
 void Viewer::set_options(const ViewerOptions& o) {
     options_ = o;
@@ -396,7 +403,7 @@ core::PickResult Viewer::pick_at(QPointF image_pixel) {
         Viewer& v;
         ~Done() { v.doneCurrent(); }
     } done{*this};
-    camera_.fit_planes(scene_.bounds());
+    camera_.fit_planes(scene_.bounds(options_.look));
     return core::pick_in_frame(scene_, camera_, opt, p);
 }
 

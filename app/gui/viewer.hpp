@@ -108,6 +108,9 @@ public:
     // GL objects the renderer made after the first frame (0 in a steady
     // view: resources live across frames).
     std::size_t gl_objects_since_first_frame() const { return objects_since_first_frame_; }
+    // The volume's ray casting in the frame on screen (VolumeStats::drawn:
+    // the volume was drawn).
+    const VolumeStats& volume_stats() const { return volume_stats_; }
     // The last rendering error (empty: none). paintGL never lets one escape:
     // it clears to the background, reports it here and on stderr, and stops.
     const std::string& error() const { return error_; }
@@ -200,6 +203,7 @@ private:
     int aa_frames_ = 0;
     std::size_t objects_after_first_frame_ = 0, objects_since_first_frame_ = 0;
     std::vector<LabelBox> labels_;
+    VolumeStats volume_stats_;
     // Ray-traced AO: the refiner's latest batch for the view as it is.
     std::unique_ptr<RaytracedRefiner> refiner_;
     std::shared_ptr<const Image> raytraced_;

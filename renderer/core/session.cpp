@@ -104,6 +104,8 @@ public:
                                "\"sagittal\"");
         }
         if (const json* sv = member(root, "slice_views"); sv && !sv->is_null()) s.slice_views = slice_views(*sv);
+        if (const json* v = member(root, "volume"); v && !v->is_null()) s.volume = volume(*v);
+        if (const json* c = member(root, "clip"); c && !c->is_null()) s.clip_box = clip_box(*c);
         if (const json* m = member(root, "markups"); m && !m->is_null()) {
             try {
                 auto f = parse_markups(m->dump(), "markups");
@@ -242,6 +244,36 @@ private:
         return out;
     }
 
+    VolumeLook volume(const json& v) const {
+        if (!v.is_object()) fail("volume", "must be an object, not a " + std::string(v.type_name()));
+        VolumeLook look;
+        look.enabled = boolean(v, "enabled", "volume.enabled", false);
+        try {
+            look.tf = TransferFunction::parse(string(v, "transfer_function", "volume.transfer_function", true));
+        } catch (const Error& e) {
+            fail("volume.transfer_function", e.reason());
+        }
+        const std::string mode = string(v, "mode", "volume.mode", false);
+        if (!mode.empty()) {
+            try {
+                look.mode = volume_mode_from_name(mode);
+            } catch (const Error&) {
+                fail("volume.mode", "must be \"composite\", \"mip\" or \"minip\", not \"" + mode + "\"");
+            }
+        }
+        return look;
+    }
+
+    std::pair<glm::dvec3, glm::dvec3> clip_box(const json& c) const {
+        if (!c.is_object()) fail("clip", "must be an object, not a " + std::string(c.type_name()));
+        const json& box = object(c, "box", "clip.box", true);
+        const glm::dvec3 lo = vec3(require(box, "min", "clip.box.min"), "clip.box.min");
+        const glm::dvec3 hi = vec3(require(box, "max", "clip.box.max"), "clip.box.max");
+        for (int i = 0; i < 3; ++i)
+            if (lo[i] > hi[i]) fail("clip.box", "min must not exceed max on any axis");
+        return {lo, hi};
+    }
+
     Camera camera(const json& c) const {
         if (!c.is_object()) fail("camera", "must be an object, not a " + std::string(c.type_name()));
         Camera cam;
@@ -326,6 +358,14 @@ Session capture_session(const Scene& scene, const std::string& input, const std:
            : view.ao == AoMethod::Off     ? AoMethod::Off
                                           : AoMethod::Cone;
     s.transparency = view.transparency;
+    if (!view.volume.tf.empty()) {
+        VolumeLook v;
+        v.enabled = view.volume.enabled;
+        v.tf = view.volume.tf;
+        v.mode = view.volume.mode;
+        s.volume = v;
+    }
+    s.clip_box = view.clip.box;
     s.markups = std::move(markups);
     return s;
 }
@@ -386,6 +426,13 @@ ordered_json session_json(const Session& s, const std::string& session_path) {
         }
         j["slice_views"] = sv;
     }
+    // The volume and the crop box, when there are any (else no field: files as before).
+    if (s.volume)
+        j["volume"] = {{"enabled", s.volume->enabled},
+                       {"transfer_function", s.volume->tf.text()},
+                       {"mode", volume_mode_name(s.volume->mode)}};
+    if (s.clip_box)
+        j["clip"] = {{"box", {{"min", vec_json(s.clip_box->first)}, {"max", vec_json(s.clip_box->second)}}}};
     return j;
 }
 
@@ -513,6 +560,12 @@ RenderRequest session_request(const Session& s, const std::string& session_file,
     if (take.markups) frame.markups.insert(frame.markups.end(), s.markups.begin(), s.markups.end());
     if (take.ao) frame.look.ao = s.ao;
     frame.look.transparency = s.transparency;
+    if (s.volume) {
+        frame.look.volume.enabled = s.volume->enabled;
+        frame.look.volume.tf = s.volume->tf;
+        frame.look.volume.mode = s.volume->mode;
+    }
+    if (s.clip_box) frame.look.clip.box = s.clip_box;
     frame.session_file = session_file;
     return frame;
 }

@@ -5,8 +5,8 @@
 // session's folder when it is below it, absolute otherwise; its SHA-256),
 // the DICOM series, the surfaces (kind, value, name, source, "#rrggbb" sRGB
 // colour, opacity, visibility, the post-processing they were extracted
-// with), the 3D camera, window/level, view options and the markups (inline,
-// as 3D Slicer markups JSON in LPS).
+// with), the 3D camera, window/level, view options, the markups (inline,
+// as 3D Slicer markups JSON in LPS), and the volume look and crop box.
 #pragma once
 
 #include <array>
@@ -94,13 +94,23 @@ struct Session {
     std::optional<ViewLayout> layout;
     std::optional<SliceViewsState> slice_views;
     bool slice_planes_in_3d = false;
+    // The volume ray cast in the 3D view (the desktop app's Volume panel):
+    // whether it is shown, its transfer function and mode (the other
+    // VolumeLook settings are not stored: their defaults). None (a session
+    // saved before it was stored, by the CLI, of a mesh): off, and the
+    // file has no "volume" field.
+    std::optional<VolumeLook> volume;
+    // The crop box (LPS mm: min, max) cutting surfaces and volume alike
+    // (FrameLook::clip.box); none: no crop, and no "clip" field.
+    std::optional<std::pair<glm::dvec3, glm::dvec3>> clip_box;
     // Found while loading, not stored: e.g. the input changed since saving.
     std::vector<std::string> warnings;
 };
 
 // What the window shows, as a session (no file access: the SHA-256 is left
 // empty); each surface's post-processing is its SurfaceInfo::post; the 3D
-// view's AO (cone or off) and transparency toggle come from `view`.
+// view's AO (cone or off), transparency toggle, volume look (when it has a
+// transfer function) and clip box come from `view`.
 Session capture_session(const Scene& scene, const std::string& input, const std::string& series,
                         const std::optional<Camera>& camera, const std::optional<WindowLevel>& window,
                         const FrameLook& view, std::vector<Markup> markups);
@@ -144,8 +154,9 @@ OpenedSession open_session(const std::string& path, const ProgressFn& progress =
 
 // Which parts of a session's picture the session gives (the others are the
 // caller's): its camera (else the frame's view), its markups (added to the
-// frame's) and its AO method (else the frame's). The transparency toggle
-// is always the session's.
+// frame's) and its AO method (else the frame's). The transparency toggle,
+// the volume look (enabled, transfer function, mode) and the clip box are
+// always the session's when it has them.
 struct SessionParts {
     bool camera = true;
     bool markups = true;

@@ -158,6 +158,70 @@ TEST(Session, RayTracedAoIsSavedAndLoadedBack) {
     EXPECT_EQ(core::load_session(dir / "cone.json").ao, AoMethod::Cone);
 }
 
+// The volume look (shown, transfer function, mode) and the crop box come
+// back exactly and reach the render request; a session without them writes
+// no "volume" or "clip" field and loads with none; bad fields are named.
+TEST(Session, VolumeLookAndClipBoxAreSavedAndLoadedBack) {
+    TempDir dir;
+    core::Session s = example(test::data("headsq.nhdr"));
+    core::save_session(s, dir / "none.json");
+    auto j = nlohmann::json::parse(read_file(dir / "none.json"));
+    EXPECT_FALSE(j.contains("volume"));
+    EXPECT_FALSE(j.contains("clip"));
+    const core::Session none = core::load_session(dir / "none.json");
+    EXPECT_FALSE(none.volume.has_value());
+    EXPECT_FALSE(none.clip_box.has_value());
+    EXPECT_FALSE(core::session_request(none, "", {}).look.volume.enabled);
+
+    VolumeLook v;
+    v.enabled = true;
+    v.tf = TransferFunction::parse("400:0:#c08060,600:0.05:#e0b090,1000.25:0.0625:#f0d0b0,1200:0.5:#ffffff");
+    v.mode = VolumeMode::Mip;
+    s.volume = v;
+    s.clip_box = std::pair{glm::dvec3(-150.5, 20, -100), glm::dvec3(-40, 180.25, -10)};
+    core::save_session(s, dir / "vol.json");
+    j = nlohmann::json::parse(read_file(dir / "vol.json"));
+    EXPECT_EQ(j["volume"]["mode"], "mip");
+    const core::Session back = core::load_session(dir / "vol.json");
+    ASSERT_TRUE(back.volume.has_value());
+    EXPECT_EQ(*back.volume, v);
+    EXPECT_EQ(back.clip_box, s.clip_box);
+    EXPECT_TRUE(core::same_state(back, s));
+    const auto r = core::session_request(back, "", {});
+    EXPECT_TRUE(r.look.volume.enabled);
+    EXPECT_EQ(r.look.volume.tf, v.tf);
+    EXPECT_EQ(r.look.volume.mode, VolumeMode::Mip);
+    EXPECT_EQ(r.look.clip.box, s.clip_box);
+
+    const std::pair<std::function<void(nlohmann::json&)>, std::string> cases[] = {
+        {[](auto& x) { x["volume"]["transfer_function"] = "400:2:#ffffff"; }, "volume.transfer_function: "},
+        {[](auto& x) { x["volume"].erase("transfer_function"); }, "volume.transfer_function: missing"},
+        {[](auto& x) { x["volume"]["mode"] = "max"; }, "volume.mode: must be"},
+        {[](auto& x) { x["volume"]["enabled"] = 1; }, "volume.enabled: must be true or false"},
+        {[](auto& x) {
+             x["clip"]["box"]["min"] = {1, 2};
+         },
+         "clip.box.min: must be an array of 3 numbers"},
+        {[](auto& x) { x["clip"]["box"].erase("max"); }, "clip.box.max: missing"},
+        {[](auto& x) {
+             x["clip"]["box"]["min"] = {0, 500, 0};
+         },
+         "clip.box: min must not exceed max"},
+    };
+    for (const auto& [edit, expect] : cases) {
+        auto bad = j;
+        edit(bad);
+        write_file(dir / "bad.json", bad.dump());
+        try {
+            core::load_session(dir / "bad.json");
+            ADD_FAILURE() << "accepted: " << expect;
+        } catch (const Error& e) {
+            EXPECT_NE(std::string(e.what()).find(expect), std::string::npos) << e.what();
+            EXPECT_NE(std::string(e.what()).find("bad.json"), std::string::npos) << e.what();
+        }
+    }
+}
+
 // The desktop app's layout, slice views (each plane's origin, pan and
 // zoom, the crosshair) and its 3D view's slice planes toggle come back bit
 // for bit; a session without them (written before they were stored) still
