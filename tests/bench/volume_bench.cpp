@@ -18,7 +18,7 @@
 //
 //   volume_bench [--out DIR] [--size N] [--reps N] [--cases headsq,cta,ct512] [--steps 0.25,0.5,1,2]
 //                [--ref-step 0.05] [--rotate 36] [--budget SECONDS] [--quick] [--no-vtk] [--peer PATH]
-// --budget caps the timed frames of one setting (default 20 s; never fewer
+// --budget caps the timed frames of one setting (default 15 s; never fewer
 // than 3 frames): the large volume's fine steps take seconds per frame here.
 #include <algorithm>
 #include <cmath>
@@ -55,7 +55,7 @@ struct Args {
     std::vector<std::string> cases{"headsq", "cta", "ct512"};
     std::vector<double> steps{0.25, 0.5, 1.0, 2.0};
     double ref_step = 0.05;
-    double budget_s = 20; // per setting's timed frames, at most (at least 3 frames)
+    double budget_s = 15; // per setting's timed frames, at most (at least 3 frames)
     bool vtk = true, quick = false;
 };
 
@@ -67,7 +67,7 @@ struct Case {
 
 // A transfer function for the bundled head CT (its own units, not HU: skin
 // about 500, bone about 1150): faint skin and soft tissue, opaque bone.
-const char* kHeadsqTf = "450:0:#a0522d,600:0.04:#e0a080,1000:0.04:#e8c0a0,1150:0.6:#f4ecd8,4000:0.8:#ffffff";
+const char* kHeadsqTf = "450:0:#a0522d,600:0.015:#e0a080,1000:0.015:#e8c0a0,1150:0.5:#f4ecd8,4000:0.8:#ffffff";
 
 Case make_case(const std::string& name, bool quick) {
     Case c;
@@ -78,8 +78,8 @@ Case make_case(const std::string& name, bool quick) {
         c.tf = TransferFunction::parse(kHeadsqTf);
         c.description = "bundled CT headsq.nhdr, 64x64x93 int16, 3.2x3.2x1.5 mm, directions (-1,1,-1)";
     } else if (name == "cta") {
-        const std::array<std::int64_t, 3> d = quick ? std::array<std::int64_t, 3>{128, 128, 100}
-                                                    : std::array<std::int64_t, 3>{256, 256, 200};
+        const std::array<std::int64_t, 3> d =
+            quick ? std::array<std::int64_t, 3>{128, 128, 100} : std::array<std::int64_t, 3>{256, 256, 200};
         const double sp = quick ? 1.4 : 0.7;
         c.volume = bench::cta_phantom(d, sp);
         c.tf_name = "vessels";
@@ -87,14 +87,14 @@ Case make_case(const std::string& name, bool quick) {
         c.description = "CT angiogram phantom " + std::to_string(d[0]) + "x" + std::to_string(d[1]) + "x" +
                         std::to_string(d[2]) + " int16 HU, " + std::to_string(sp).substr(0, 3) + " mm";
     } else if (name == "ct512") {
-        const std::array<std::int64_t, 3> d = quick ? std::array<std::int64_t, 3>{256, 256, 200}
-                                                    : std::array<std::int64_t, 3>{512, 512, 400};
+        const std::array<std::int64_t, 3> d =
+            quick ? std::array<std::int64_t, 3>{256, 256, 200} : std::array<std::int64_t, 3>{512, 512, 400};
         const double sp = quick ? 1.4 : 0.7;
         c.volume = bench::scale_ct(d, sp);
         c.tf_name = "bone";
         c.tf = transfer_function_from("bone");
-        c.description = "CT-like volume (scale_volume.hpp) " + std::to_string(d[0]) + "x" + std::to_string(d[1]) +
-                        "x" + std::to_string(d[2]) + " int16 HU, " + std::to_string(sp).substr(0, 3) + " mm";
+        c.description = "CT-like volume (scale_volume.hpp) " + std::to_string(d[0]) + "x" + std::to_string(d[1]) + "x" +
+                        std::to_string(d[2]) + " int16 HU, " + std::to_string(sp).substr(0, 3) + " mm";
     } else {
         throw Error("volume_bench", "unknown case '" + name + "' (headsq, cta, ct512)");
     }
@@ -168,20 +168,15 @@ double quantile(std::vector<double> v, double q) {
     return v.empty() ? 0.0 : v[std::min(v.size() - 1, std::size_t(q * double(v.size())))];
 }
 
-// Our renderer on one scene, drawing into an offscreen framebuffer (timing)
-// or reading the image back.
+// Our renderer on one scene and camera. A timed frame is the whole
+// Scene::render with the image read back (about a millisecond of a frame
+// of 100+ ms here), so that the last timed frame gives the image and the
+// volume's statistics; VTK's frames are timed with their read-back too.
 struct Ours {
     core::Scene& scene;
     Camera cam;
     int W, H;
-    gl::Texture target;
-    gl::Framebuffer fb;
 
-    Ours(core::Scene& s, const Camera& c, int w, int h)
-        : scene(s), cam(c), W(w), H(h), target(gl::Texture::create_2d(GL_RGBA8, w, h)),
-          fb(gl::Framebuffer::create()) {
-        fb.attach(GL_COLOR_ATTACHMENT0, target);
-    }
     RenderOptions options(const VolumeLook& vl, bool flat) const {
         RenderOptions o;
         o.width = W;
@@ -192,13 +187,13 @@ struct Ours {
         o.look.volume = vl;
         return o;
     }
-    double timed(const Camera& c, RenderOptions o) {
-        o.present = true;
-        o.target_framebuffer = fb.id();
+    double timed(const Camera& c, const RenderOptions& o, RenderResult* out = nullptr) {
         const double t0 = bench::now_s();
-        scene.render(c, o);
+        RenderResult r = scene.render(c, o);
         glFinish();
-        return 1000.0 * (bench::now_s() - t0);
+        const double ms = 1000.0 * (bench::now_s() - t0);
+        if (out) *out = std::move(r);
+        return ms;
     }
 };
 
@@ -208,53 +203,56 @@ int reps_within(const Args& a, double first_ms) {
     return std::clamp(int(a.budget_s * 1000.0 / std::max(first_ms, 1.0)), std::min(3, a.reps), a.reps);
 }
 
-// A frame without the volume: what the rest of the frame costs.
-Row time_frames(Ours& ours, const Args& a, const RenderOptions& o, const std::string& config) {
-    const int n = reps_within(a, ours.timed(ours.cam, o));
-    std::vector<double> ms;
-    for (int f = 0; f < n; ++f) ms.push_back(ours.timed(ours.cam, o));
-    Row row{"isoscope GPU", config};
+// Frames of options `o` (after one warm-up frame): their times and the last one's result.
+std::vector<double> frames(Ours& ours, const Args& a, const RenderOptions& o, RenderResult& last) {
+    std::vector<double> ms{ours.timed(ours.cam, o, &last)};
+    for (int f = 1, n = reps_within(a, ms[0]); f < n; ++f) ms.push_back(ours.timed(ours.cam, o, &last));
+    return ms;
+}
+
+Row timed_row(const std::string& config, const std::vector<double>& ms, const RenderResult& r, double step) {
+    Row row{"isoscope GPU", config, step, r.volume.step_mm};
     row.ms = bench::median(ms);
     row.ms_lo = quantile(ms, 0.25);
     row.ms_hi = quantile(ms, 0.75);
-    row.note = std::to_string(n) + " frames";
+    row.samples = r.volume.samples;
+    row.skipped = r.volume.skipped;
+    row.rays = r.volume.rays;
+    row.note = std::to_string(ms.size()) + " frames";
     return row;
 }
 
-// Ours at each step, with and without empty-space skipping (alternated
-// frame by frame), flat; rows with errors against `ref`; the lit frame at
-// the default step.
+// Ours at each step, with and without empty-space skipping (frames
+// alternated A/B; as many pairs as --reps and --budget allow), flat, with
+// errors against `ref`; then lit at the default step, and a frame without
+// the volume. One warm-up pair first (shaders, the texture upload).
 std::vector<Row> run_ours(Ours& ours, const Case& c, const Args& a, const Image& ref, const std::string& out_prefix) {
     std::vector<Row> rows;
     VolumeLook vl;
     vl.enabled = true;
     vl.tf = c.tf;
+    RenderResult r[2];
+    for (int s = 0; s < 2; ++s) {
+        vl.skip_empty = s == 0;
+        vl.step = a.steps.back();
+        ours.timed(ours.cam, ours.options(vl, true));
+    }
     for (double step : a.steps) {
         vl.step = step;
-        std::vector<double> ms[2];
         RenderOptions o[2];
         for (int s = 0; s < 2; ++s) {
             vl.skip_empty = s == 0;
             o[s] = ours.options(vl, true);
         }
-        double first = 0;
-        for (int s = 0; s < 2; ++s) first = std::max(first, ours.timed(ours.cam, o[s])); // warm-up
-        const int n = reps_within(a, first);
-        for (int f = 0; f < n; ++f)
-            for (int s = 0; s < 2; ++s) ms[s].push_back(ours.timed(ours.cam, o[s]));
-        RenderResult r[2];
-        for (int s = 0; s < 2; ++s) r[s] = ours.scene.render(ours.cam, o[s]);
+        std::vector<double> ms[2];
+        for (int f = 0, n = 1; f < n; ++f) {
+            for (int s = 0; s < 2; ++s) ms[s].push_back(ours.timed(ours.cam, o[s], &r[s]));
+            if (f == 0) n = reps_within(a, ms[0][0] + ms[1][0]);
+        }
         const int diff = max_channel_diff(r[0].image, r[1].image);
         for (int s = 0; s < 2; ++s) {
-            Row row{"isoscope GPU", s == 0 ? "flat, skipping" : "flat, no skipping", step, r[s].volume.step_mm};
-            row.ms = bench::median(ms[s]);
-            row.ms_lo = quantile(ms[s], 0.25);
-            row.ms_hi = quantile(ms[s], 0.75);
+            Row row = timed_row(s == 0 ? "flat, skipping" : "flat, no skipping", ms[s], r[s], step);
             add_error(row, r[s].image, ref);
-            row.samples = r[s].volume.samples;
-            row.skipped = r[s].volume.skipped;
-            row.rays = r[s].volume.rays;
-            row.note = std::to_string(n) + " frames";
             if (s == 0)
                 row.note += "; vs no skipping: max diff " + std::to_string(diff) + "/255; " +
                             std::to_string(r[0].volume.empty_chunks) + " of " + std::to_string(r[0].volume.chunks) +
@@ -265,28 +263,19 @@ std::vector<Row> run_ours(Ours& ours, const Case& c, const Args& a, const Image&
         std::snprintf(name, sizeof name, "_ours_step%g.png", step);
         save_image(r[0].image, out_prefix + name);
     }
-    // Lit, default step, skipping (no reference: the reference is flat).
+    // Lit, default step, skipping (no error: the reference is flat).
     vl = VolumeLook{};
     vl.enabled = true;
     vl.tf = c.tf;
     const RenderOptions lit = ours.options(vl, false);
+    auto ms = frames(ours, a, lit, r[0]);
+    save_image(r[0].image, out_prefix + "_ours_lit.png");
+    rows.push_back(timed_row("lit, skipping", ms, r[0], vl.step));
+    rows.back().note += "; gradient shading: not the reference's model";
     RenderOptions none = lit;
     none.look.volume.enabled = false;
-    rows.push_back(time_frames(ours, a, none, "no volume (the frame's other passes)"));
-    const int n = reps_within(a, ours.timed(ours.cam, lit));
-    std::vector<double> ms;
-    for (int f = 0; f < n; ++f) ms.push_back(ours.timed(ours.cam, lit));
-    const RenderResult r = ours.scene.render(ours.cam, lit);
-    save_image(r.image, out_prefix + "_ours_lit.png");
-    Row row{"isoscope GPU", "lit, skipping", vl.step, r.volume.step_mm};
-    row.ms = bench::median(ms);
-    row.ms_lo = quantile(ms, 0.25);
-    row.ms_hi = quantile(ms, 0.75);
-    row.samples = r.volume.samples;
-    row.skipped = r.volume.skipped;
-    row.rays = r.volume.rays;
-    row.note = std::to_string(n) + " frames; gradient shading: not the reference's model";
-    rows.push_back(row);
+    ms = frames(ours, a, none, r[1]);
+    rows.push_back(timed_row("no volume (the frame's other passes)", ms, r[1], 0));
     return rows;
 }
 
@@ -330,10 +319,9 @@ std::string peer_command(const Args& a, const Case& c, const Volume& v, const Ca
     const glm::dvec3 sp = v.spacing();
     std::ostringstream cmd;
     cmd.precision(17);
-    cmd << "xvfb-run -a -s '-screen 0 " << std::max(a.size + 64, 1280) << "x" << std::max(a.size + 64, 1024)
-        << "x24' '" << a.peer << "' --raw '" << raw << "' --dims " << v.dims[0] << "," << v.dims[1] << ","
-        << v.dims[2] << " --origin " << v3(glm::dvec3(v.index_to_lps[3])) << " --spacing " << v3(sp)
-        << " --direction ";
+    cmd << "xvfb-run -a -s '-screen 0 " << std::max(a.size + 64, 1280) << "x" << std::max(a.size + 64, 1024) << "x24' '"
+        << a.peer << "' --raw '" << raw << "' --dims " << v.dims[0] << "," << v.dims[1] << "," << v.dims[2]
+        << " --origin " << v3(glm::dvec3(v.index_to_lps[3])) << " --spacing " << v3(sp) << " --direction ";
     for (int r = 0; r < 3; ++r) // row r of the 3x3 direction matrix: component r of each unit axis
         for (int k = 0; k < 3; ++k) cmd << (r || k ? "," : "") << v.index_to_lps[k][r] / sp[k];
     cmd << " --tf '";
@@ -377,8 +365,8 @@ std::vector<Row> run_vtk(const Args& a, const Case& c, const Volume& v, const Ca
             r.ms_hi = j.at("ms_p75").get<double>();
             add_error(r, load_image(j.at("png").get<std::string>()), ref);
             renderer = j.at("renderer").get<std::string>();
-            r.note = std::string("direction matrix honoured: ") +
-                     (j.at("direction_honoured").get<bool>() ? "yes" : "NO");
+            r.note =
+                std::string("direction matrix honoured: ") + (j.at("direction_honoured").get<bool>() ? "yes" : "NO");
         } else {
             r.ms_lo = j.at("ms_p5").get<double>();
             r.ms_hi = j.at("ms_p95").get<double>();
@@ -404,8 +392,8 @@ void print_rows(const std::string& title, const std::vector<Row>& rows) {
         char err[96] = "- | - | -";
         if (r.rmse >= 0) std::snprintf(err, sizeof err, "%.4f | %.4f | %.4f", r.rmse, r.p99, r.max_err);
         std::printf("| %s | %s | %.3g | %.3g | %.1f | %.1f-%.1f | %s | %llu | %llu | %s |\n", r.renderer.c_str(),
-                    r.config.c_str(), r.step_vox, r.step_mm, r.ms, r.ms_lo, r.ms_hi, err,
-                    (unsigned long long)r.samples, (unsigned long long)r.skipped, r.note.c_str());
+                    r.config.c_str(), r.step_vox, r.step_mm, r.ms, r.ms_lo, r.ms_hi, err, (unsigned long long)r.samples,
+                    (unsigned long long)r.skipped, r.note.c_str());
     }
     std::fflush(stdout);
 }
@@ -417,24 +405,33 @@ bool parse(int argc, char** argv, Args& a) {
             if (i + 1 >= argc) throw Error("volume_bench", s + " needs a value");
             return argv[++i];
         };
-        if (s == "--out") a.out = next();
-        else if (s == "--size") a.size = std::stoi(next());
-        else if (s == "--reps") a.reps = std::max(1, std::stoi(next()));
-        else if (s == "--rotate") a.rotate = std::max(1, std::stoi(next()));
-        else if (s == "--cases") a.cases = bench::split_list(next());
+        if (s == "--out")
+            a.out = next();
+        else if (s == "--size")
+            a.size = std::stoi(next());
+        else if (s == "--reps")
+            a.reps = std::max(1, std::stoi(next()));
+        else if (s == "--rotate")
+            a.rotate = std::max(1, std::stoi(next()));
+        else if (s == "--cases")
+            a.cases = bench::split_list(next());
         else if (s == "--steps") {
             a.steps.clear();
             for (const auto& t : bench::split_list(next())) a.steps.push_back(std::stod(t));
-        } else if (s == "--ref-step") a.ref_step = std::stod(next());
-        else if (s == "--peer") a.peer = next();
-        else if (s == "--no-vtk") a.vtk = false;
+        } else if (s == "--ref-step")
+            a.ref_step = std::stod(next());
+        else if (s == "--peer")
+            a.peer = next();
+        else if (s == "--no-vtk")
+            a.vtk = false;
         else if (s == "--quick") {
             a.quick = true;
             a.size = 256;
             a.reps = 3;
             a.rotate = 12;
             a.ref_step = 0.1;
-        } else return false;
+        } else
+            return false;
     }
     return true;
 }
@@ -461,15 +458,15 @@ std::vector<Row> run_case(const Args& a, const std::string& name, std::string& d
     const Image ref = reference_image(v, look.volume, cam, S, S, a.ref_step, look.background, ref_ms);
     const std::string prefix = a.out + "/volume_" + name;
     save_image(ref, prefix + "_reference.png");
-    Row ref_row{"CPU reference (march_ray)", "flat, double", a.ref_step, a.ref_step * std::min({v.spacing().x, v.spacing().y, v.spacing().z})};
+    Row ref_row{"CPU reference (march_ray)", "flat, double", a.ref_step,
+                a.ref_step * std::min({v.spacing().x, v.spacing().y, v.spacing().z})};
     ref_row.ms = ref_ms;
     ref_row.note = "2 threads (TBB); one frame";
     std::vector<Row> rows{ref_row};
     std::fprintf(stderr, "[volume_bench] %s: isoscope\n", name.c_str());
-    Ours ours(scene, cam, S, S);
+    Ours ours{scene, cam, S, S};
     for (auto& r : run_ours(ours, c, a, ref, prefix)) rows.push_back(r);
     const double min_spacing = VolumeSampler(v).min_spacing();
-    rows.push_back(run_rotation(ours, c.tf, min_spacing, a.rotate, true));
     rows.push_back(run_rotation(ours, c.tf, min_spacing, a.rotate, false));
     scene.release_gpu();
     std::string renderer = "-", failure;
@@ -483,8 +480,7 @@ std::vector<Row> run_case(const Args& a, const std::string& name, std::string& d
         }
     }
     char title[512];
-    std::snprintf(title, sizeof title, "%s: %dx%d, VTK's GL renderer: %s", description.c_str(), S, S,
-                  renderer.c_str());
+    std::snprintf(title, sizeof title, "%s: %dx%d, VTK's GL renderer: %s", description.c_str(), S, S, renderer.c_str());
     print_rows(title, rows);
     return rows;
 }
@@ -496,9 +492,8 @@ void write_plot(const Args& a, const std::vector<std::pair<std::string, std::vec
        << "/volume_bench.png'\nset multiplot layout 1," << all.size()
        << "\nset logscale xy\nset xlabel 'ms per frame (llvmpipe, 2 cores)'\nset ylabel 'RMSE vs reference (sRGB)'\n"
        << "set key top right\nset grid\n";
-    const std::vector<std::pair<std::string, std::string>> series{{"isoscope GPU", "flat, skipping"},
-                                                                  {"isoscope GPU", "flat, no skipping"},
-                                                                  {"VTK 9.1 GPU mapper", "flat"}};
+    const std::vector<std::pair<std::string, std::string>> series{
+        {"isoscope GPU", "flat, skipping"}, {"isoscope GPU", "flat, no skipping"}, {"VTK 9.1 GPU mapper", "flat"}};
     for (const auto& [name, rows] : all) {
         gp << "set title '" << name << " (labels: step in voxels)'\nplot";
         for (std::size_t i = 0; i < series.size(); ++i)
@@ -526,7 +521,8 @@ int main(int argc, char** argv) {
     try {
         if (!parse(argc, argv, a)) {
             std::cerr << "usage: volume_bench [--out DIR] [--size N] [--reps N] [--cases headsq,cta,ct512] "
-                         "[--steps 0.25,0.5,1,2] [--ref-step 0.05] [--rotate 36] [--budget S] [--quick] [--no-vtk] [--peer PATH]\n";
+                         "[--steps 0.25,0.5,1,2] [--ref-step 0.05] [--rotate 36] [--budget S] [--quick] [--no-vtk] "
+                         "[--peer PATH]\n";
             return 2;
         }
         std::filesystem::create_directories(a.out);

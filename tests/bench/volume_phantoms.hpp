@@ -74,7 +74,9 @@ inline Volume cta_phantom(std::array<std::int64_t, 3> dims, double spacing, unsi
         const double z = ext.z * (0.15 + 0.14 * k), hu = 1100.0 + 80.0 * k;
         for (int s = 0; s < 12; ++s) {
             const double a0 = 0.15 * 3.14159 + s * 0.06 * 3.14159, a1 = a0 + 0.06 * 3.14159;
-            auto at = [&](double a) { return glm::dvec3(c.x + 0.88 * bx * std::cos(a), c.y + 0.88 * by * std::sin(a), z); };
+            auto at = [&](double a) {
+                return glm::dvec3(c.x + 0.88 * bx * std::cos(a), c.y + 0.88 * by * std::sin(a), z);
+            };
             ribs.push_back({at(a0), at(a1), 3.0, hu});
         }
     }
@@ -89,7 +91,8 @@ inline Volume cta_phantom(std::array<std::int64_t, 3> dims, double spacing, unsi
         std::vector<const Segment*> near;
         for (const auto* list : {&vessels, &ribs})
             for (const auto& g : *list)
-                if (std::min(g.a.z, g.b.z) - g.r - 1.0 <= z && std::max(g.a.z, g.b.z) + g.r + 1.0 >= z) near.push_back(&g);
+                if (std::min(g.a.z, g.b.z) - g.r - 1.0 <= z && std::max(g.a.z, g.b.z) + g.r + 1.0 >= z)
+                    near.push_back(&g);
         for (std::int64_t j = 0; j < dims[1]; ++j)
             for (std::int64_t i = 0; i < dims[0]; ++i) {
                 const glm::dvec3 p(double(i) * spacing, double(j) * spacing, z);
@@ -102,7 +105,8 @@ inline Volume cta_phantom(std::array<std::int64_t, 3> dims, double spacing, unsi
                     if (ds < spine_r) hu = disc > 0.15 ? (ds > spine_r - 2.5 ? 1400.0 : 700.0) + 30.0 * noise(r) : 90.0;
                     for (const Segment* g : near) {
                         const double w = std::clamp(g->r - cta_detail::segment_distance(p, *g) + 0.5 * spacing, 0.0,
-                                                    spacing) / spacing; // partial volume over one voxel
+                                                    spacing) /
+                                         spacing; // partial volume over one voxel
                         if (w > 0.0) hu = std::max(hu, 40.0 + w * (g->hu - 40.0) + 12.0 * noise(r));
                     }
                 }
