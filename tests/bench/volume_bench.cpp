@@ -17,7 +17,8 @@
 // time-vs-error plot.
 //
 //   volume_bench [--out DIR] [--size N] [--reps N] [--cases headsq,cta,ct512] [--steps 0.25,0.5,1,2]
-//                [--ref-step 0.05] [--rotate 36] [--budget SECONDS] [--quick] [--no-vtk] [--peer PATH]
+//                [--ref-step 0.05] [--rotate 36] [--budget SECONDS] [--zoom 1.4]
+//                [--no-ref-check] [--quick] [--no-vtk] [--peer PATH]
 // --budget caps the timed frames of one setting (default 15 s; never fewer
 // than 3 frames): the large volume's fine steps take seconds per frame here.
 #include <algorithm>
@@ -51,12 +52,14 @@ namespace {
 
 struct Args {
     std::string out = "bench-results", peer = ISOSCOPE_VOLUME_PEER;
-    int size = 512, reps = 10, rotate = 36;
+    int size = 384, reps = 10, rotate = 36;
     std::vector<std::string> cases{"headsq", "cta", "ct512"};
     std::vector<double> steps{0.25, 0.5, 1.0, 2.0};
     double ref_step = 0.05;
+    double zoom = 1.4;    // the camera moved closer than the fitted view by this factor
     double budget_s = 15; // per setting's timed frames, at most (at least 3 frames)
     bool vtk = true, quick = false;
+    bool ref_check = true; // the reference again at twice its step: how far from converged it is
 };
 
 struct Case {
@@ -152,15 +155,35 @@ struct Row {
     double step_vox = 0, step_mm = 0;
     double ms = 0, ms_lo = 0, ms_hi = 0; // median and p25/p75 (rotation: p95 as hi)
     double rmse = -1, p99 = -1, max_err = -1;
+    double fg_rmse = -1; // over the pixels where the reference is not the background
     std::uint64_t samples = 0, skipped = 0, rays = 0;
     std::string note;
 };
+
+// The background's bytes in the images (sRGB), for telling the volume's pixels apart.
+glm::ivec3 background_bytes() {
+    const glm::vec3 bg = FrameLook{}.background;
+    return {int(std::lround(srgb_from_linear(bg.r) * 255)), int(std::lround(srgb_from_linear(bg.g) * 255)),
+            int(std::lround(srgb_from_linear(bg.b) * 255))};
+}
 
 void add_error(Row& r, const Image& img, const Image& ref) {
     const auto e = bench::compare(img, ref);
     r.rmse = e.rmse;
     r.p99 = e.p99;
     r.max_err = max_channel_diff(img, ref) / 255.0;
+    const glm::ivec3 bg = background_bytes();
+    double sum = 0;
+    std::size_t n = 0;
+    for (std::size_t p = 0; p < ref.bytes.size(); p += 4) {
+        if (ref.bytes[p] == bg.r && ref.bytes[p + 1] == bg.g && ref.bytes[p + 2] == bg.b) continue;
+        for (int c = 0; c < 3; ++c) {
+            const double d = (int(img.bytes[p + std::size_t(c)]) - int(ref.bytes[p + std::size_t(c)])) / 255.0;
+            sum += d * d / 3.0;
+        }
+        ++n;
+    }
+    r.fg_rmse = n ? std::sqrt(sum / double(n)) : 0.0;
 }
 
 double quantile(std::vector<double> v, double q) {
@@ -370,8 +393,8 @@ std::vector<Row> run_vtk(const Args& a, const Case& c, const Volume& v, const Ca
         } else {
             r.ms_lo = j.at("ms_p5").get<double>();
             r.ms_hi = j.at("ms_p95").get<double>();
-            r.note = std::to_string(j.at("frames").get<int>()) + " frames; image sample distance at the end " +
-                     std::to_string(j.at("image_sample_distance").get<double>()).substr(0, 4) + "; lo/hi = p5/p95";
+            r.note = std::to_string(j.at("frames").get<int>()) + " frames; image sample distance up to " +
+                     std::to_string(j.at("image_sample_distance_max").get<double>()).substr(0, 4) + "; lo/hi = p5/p95";
         }
         rows.push_back(r);
     }
@@ -386,11 +409,12 @@ std::vector<Row> run_vtk(const Args& a, const Case& c, const Volume& v, const Ca
 
 void print_rows(const std::string& title, const std::vector<Row>& rows) {
     std::printf("\n### %s\n\n", title.c_str());
-    std::printf("| renderer | config | step vox | step mm | ms median | ms lo-hi | RMSE | p99 | max | samples | "
-                "skipped | notes |\n|---|---|---:|---:|---:|---|---:|---:|---:|---:|---:|---|\n");
+    std::printf("| renderer | config | step vox | step mm | ms median | ms lo-hi | RMSE | volume px RMSE | p99 | max | "
+                "samples | skipped | notes |\n|---|---|---:|---:|---:|---|---:|---:|---:|---:|---:|---:|---|\n");
     for (const auto& r : rows) {
-        char err[96] = "- | - | -";
-        if (r.rmse >= 0) std::snprintf(err, sizeof err, "%.4f | %.4f | %.4f", r.rmse, r.p99, r.max_err);
+        char err[128] = "- | - | - | -";
+        if (r.rmse >= 0)
+            std::snprintf(err, sizeof err, "%.4f | %.4f | %.4f | %.4f", r.rmse, r.fg_rmse, r.p99, r.max_err);
         std::printf("| %s | %s | %.3g | %.3g | %.1f | %.1f-%.1f | %s | %llu | %llu | %s |\n", r.renderer.c_str(),
                     r.config.c_str(), r.step_vox, r.step_mm, r.ms, r.ms_lo, r.ms_hi, err, (unsigned long long)r.samples,
                     (unsigned long long)r.skipped, r.note.c_str());
@@ -420,6 +444,12 @@ bool parse(int argc, char** argv, Args& a) {
             for (const auto& t : bench::split_list(next())) a.steps.push_back(std::stod(t));
         } else if (s == "--ref-step")
             a.ref_step = std::stod(next());
+        else if (s == "--budget")
+            a.budget_s = std::stod(next());
+        else if (s == "--zoom")
+            a.zoom = std::stod(next());
+        else if (s == "--no-ref-check")
+            a.ref_check = false;
         else if (s == "--peer")
             a.peer = next();
         else if (s == "--no-vtk")
@@ -451,7 +481,11 @@ std::vector<Row> run_case(const Args& a, const std::string& name, std::string& d
     FrameLook look;
     look.volume.enabled = true;
     look.volume.tf = c.tf;
-    const Camera cam = scene.camera(PatientView::Anterior, 1.0, look);
+    // The patient view fitted to the volume's box, moved closer so that the
+    // volume, not the background, fills most of the image.
+    Camera cam = scene.camera(PatientView::Anterior, 1.0, look);
+    cam.zoom(a.zoom);
+    cam.fit_planes(scene.bounds(look));
     const int S = a.size;
     std::fprintf(stderr, "[volume_bench] %s: reference (step %g voxel)\n", name.c_str(), a.ref_step);
     double ref_ms = 0;
@@ -463,6 +497,16 @@ std::vector<Row> run_case(const Args& a, const std::string& name, std::string& d
     ref_row.ms = ref_ms;
     ref_row.note = "2 threads (TBB); one frame";
     std::vector<Row> rows{ref_row};
+    if (a.ref_check) {
+        double ms = 0;
+        const Image coarse = reference_image(v, look.volume, cam, S, S, 2 * a.ref_step, look.background, ms);
+        Row check{"CPU reference (march_ray)", "flat, twice the step, vs the reference", 2 * a.ref_step,
+                  2 * ref_row.step_mm};
+        check.ms = ms;
+        add_error(check, coarse, ref);
+        check.note = "the reference's own convergence";
+        rows.push_back(check);
+    }
     std::fprintf(stderr, "[volume_bench] %s: isoscope\n", name.c_str());
     Ours ours{scene, cam, S, S};
     for (auto& r : run_ours(ours, c, a, ref, prefix)) rows.push_back(r);
@@ -521,7 +565,8 @@ int main(int argc, char** argv) {
     try {
         if (!parse(argc, argv, a)) {
             std::cerr << "usage: volume_bench [--out DIR] [--size N] [--reps N] [--cases headsq,cta,ct512] "
-                         "[--steps 0.25,0.5,1,2] [--ref-step 0.05] [--rotate 36] [--budget S] [--quick] [--no-vtk] "
+                         "[--steps 0.25,0.5,1,2] [--ref-step 0.05] [--rotate 36] [--budget S] [--zoom F] "
+                         "[--no-ref-check] [--quick] [--no-vtk] "
                          "[--peer PATH]\n";
             return 2;
         }
@@ -532,7 +577,8 @@ int main(int argc, char** argv) {
                     "voxel\n",
                     a.size, a.size, a.reps, ctx.info().renderer.c_str(), a.ref_step);
         std::ofstream csv(a.out + "/volume_bench.csv");
-        csv << "case,renderer,config,step_vox,step_mm,ms_median,ms_lo,ms_hi,rmse,p99,max,samples,skipped,rays,note\n";
+        csv << "case,renderer,config,step_vox,step_mm,ms_median,ms_lo,ms_hi,rmse,fg_rmse,p99,max,samples,skipped,rays,"
+               "note\n";
         std::vector<std::pair<std::string, std::vector<Row>>> all;
         for (const auto& name : a.cases) {
             std::string description;
@@ -541,8 +587,9 @@ int main(int argc, char** argv) {
                 std::string note = r.note;
                 std::replace(note.begin(), note.end(), '"', '\'');
                 csv << name << ",\"" << r.renderer << "\",\"" << r.config << "\"," << r.step_vox << "," << r.step_mm
-                    << "," << r.ms << "," << r.ms_lo << "," << r.ms_hi << "," << r.rmse << "," << r.p99 << ","
-                    << r.max_err << "," << r.samples << "," << r.skipped << "," << r.rays << ",\"" << note << "\"\n";
+                    << "," << r.ms << "," << r.ms_lo << "," << r.ms_hi << "," << r.rmse << "," << r.fg_rmse << ","
+                    << r.p99 << "," << r.max_err << "," << r.samples << "," << r.skipped << "," << r.rays << ",\""
+                    << note << "\"\n";
             }
             csv.flush();
             all.emplace_back(name, rows);
