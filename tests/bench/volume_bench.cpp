@@ -535,7 +535,7 @@ void write_plot(const Args& a, const std::vector<std::pair<std::string, std::vec
     gp << "set terminal pngcairo size " << 480 * int(all.size()) << ",440\nset output '" << a.out
        << "/volume_bench.png'\nset multiplot layout 1," << all.size()
        << "\nset logscale xy\nset xlabel 'ms per frame (llvmpipe, 2 cores)'\nset ylabel 'RMSE vs reference (sRGB)'\n"
-       << "set key top right\nset grid\n";
+       << "set key bottom left\nset grid\n";
     const std::vector<std::pair<std::string, std::string>> series{
         {"isoscope GPU", "flat, skipping"}, {"isoscope GPU", "flat, no skipping"}, {"VTK 9.1 GPU mapper", "flat"}};
     for (const auto& [name, rows] : all) {
