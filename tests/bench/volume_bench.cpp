@@ -573,7 +573,7 @@ int main(int argc, char** argv) {
         std::filesystem::create_directories(a.out);
         gl::HeadlessContext ctx;
         ctx.make_current();
-        std::printf("volume_bench: %dx%d, %d timed frames per setting (median), GL renderer %s, reference step %g "
+        std::printf("volume_bench at %dx%d, %d timed frames per setting (median), GL renderer %s, reference step %g "
                     "voxel\n",
                     a.size, a.size, a.reps, ctx.info().renderer.c_str(), a.ref_step);
         std::ofstream csv(a.out + "/volume_bench.csv");
