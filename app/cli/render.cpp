@@ -20,7 +20,8 @@ struct RenderArgs {
     std::string out, aov, cache, session;
     std::vector<std::string> markups;
     bool stats = false, no_annotations = false, no_legend = false, no_markups = false;
-    bool view_given = false, ao_given = false; // with --session: replace the session's camera / AO method
+    bool view_given = false, ao_given = false;     // with --session: replace the session's camera / AO method
+    bool volume_given = false, mode_given = false; // --volume, --volume-mode: replace the session's
 };
 
 void print_volume_stats(const iso::VolumeStats& v) {
@@ -68,7 +69,15 @@ iso::core::RenderRequest session_render_request(const RenderArgs& a, iso::core::
     take.camera = !a.view_given;
     take.markups = !a.no_markups;
     take.ao = !a.ao_given;
-    return iso::core::session_request(opened.session, a.session, frame_request(f), take);
+    const iso::core::RenderRequest cli = frame_request(f);
+    iso::core::RenderRequest req = iso::core::session_request(opened.session, a.session, cli, take);
+    // What the command line gives replaces the session's, as --view and --ao do.
+    if (a.volume_given)
+        req.look.volume = cli.look.volume;
+    else if (a.mode_given)
+        req.look.volume.mode = cli.look.volume.mode;
+    if (!f.clip.empty()) req.look.clip = cli.look.clip;
+    return req;
 }
 
 int run_render(const RenderArgs& a) {
@@ -128,7 +137,8 @@ RunFn add_render(CLI::App& cmd, char*) {
     add_frame_options(c, a.frame, false);
     c->add_option("--session", a.session,
                   "Render a session file of the desktop app (its input, surfaces, camera, markups, AO) "
-                  "instead of INPUT; --view replaces its camera, --ao its AO setting");
+                  "instead of INPUT; --view replaces its camera, --ao its AO setting, --volume and --volume-mode its "
+                  "volume, --clip its crop");
     c->add_flag("--no-markups", a.no_markups, "With --session: leave out the session's markups");
     c->add_option("--scale", a.frame.req.scale, "Scale of text, lines and glyphs (e.g. 2 for a 2x export)")
         ->check(CLI::Range(0.1, 20.0));
@@ -153,6 +163,8 @@ RunFn add_render(CLI::App& cmd, char*) {
     return [args, c] {
         args->view_given = c->get_option("--view")->count() > 0;
         args->ao_given = c->get_option("--ao")->count() > 0;
+        args->volume_given = c->get_option("--volume")->count() > 0;
+        args->mode_given = c->get_option("--volume-mode")->count() > 0;
         return run_render(*args);
     };
 }

@@ -33,6 +33,8 @@ vec3 vol_dir;         // unit, LPS
 vec3 vol_o_idx;       // eye in index space
 vec3 vol_d_idx;       // direction in index space (per mm)
 float vol_t0 = 0.0, vol_t1 = -1.0; // the kept interval
+// The occupied chunk the last sample lay in ends here: until then no lookup.
+float vol_chunk_end = -3.0e38;
 float vol_at = 0.0;   // composited up to here
 uint vol_samples_n = 0u, vol_skipped_n = 0u;
 // MIP / MinIP: the extreme sample and whether it was composited yet.
@@ -163,9 +165,10 @@ void volume_until(float t) {
         if (transmittance < vol_epsilon) break;
         float ts = a + (k + sample_offset) * h;
         vec3 idx = vol_o_idx + ts * vol_d_idx;
-        if (skip_empty) {
+        if (skip_empty && !(ts < vol_chunk_end)) {
             bool empty;
             float t_exit = vol_chunk_exit(idx, empty);
+            vol_chunk_end = empty ? -3.0e38 : t_exit;   // an occupied chunk's samples need no lookup
             if (empty) {
                 // The first sample at or beyond the chunk's exit (a hair early:
                 // a sample found still inside is skipped again next time round).
