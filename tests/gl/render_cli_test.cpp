@@ -6,6 +6,7 @@
 
 #include "tests/support/image_compare.hpp"
 #include "io/image.hpp"
+#include "renderer/core/session.hpp"
 #include "tests/support/test_util.hpp"
 
 using namespace iso;
@@ -353,4 +354,31 @@ TEST(RenderCli, VolumeRenderingFromTheCommandLine) {
                                             "' --view left --size 120x100 --at 60,50 --json",
                                         true);
     EXPECT_NE(pick.out.find("\"layer\": \"volume\""), std::string::npos) << pick.out;
+}
+
+TEST(RenderCli, SessionVolumeAndTheFlagsThatReplaceIt) {
+    TempDir dir;
+    core::Session s;
+    s.input = std::filesystem::absolute(test::data("headsq.nhdr")).lexically_normal().string();
+    VolumeLook v;
+    v.enabled = true;
+    v.tf = TransferFunction::parse("400:0:#c08060,1200:0.3:#ffffff");
+    s.volume = v;
+    s.clip_box = std::pair{glm::dvec3(-150, 0, -140), glm::dvec3(0, 200, 0)};
+    core::save_session(s, dir / "s.json");
+    const auto meta_of = [&](const std::string& args) {
+        render("--session " + (dir / "s.json") + " --size 48x48 " + args + " -o " + (dir / "o.png"));
+        ImageMetadata m;
+        load_image(dir / "o.png", &m);
+        return m.text;
+    };
+    auto t = meta_of("");
+    EXPECT_EQ(t["isoscope:volume_transfer_function"], "400:0:#c08060,1200:0.3:#ffffff");
+    EXPECT_EQ(t["isoscope:clip"], "box=-150,0,-140,0,200,0 (LPS mm)");
+    t = meta_of("--volume-mode mip"); // the mode alone: the session's transfer function stays
+    EXPECT_EQ(t["isoscope:volume_transfer_function"], "400:0:#c08060,1200:0.3:#ffffff");
+    EXPECT_NE(t["isoscope:volume"].find("mip"), std::string::npos);
+    t = meta_of("--volume bone --clip box=-100,0,-100,0,100,0");
+    EXPECT_EQ(t["isoscope:volume_transfer_function"], transfer_function_from("bone").text());
+    EXPECT_EQ(t["isoscope:clip"], "box=-100,0,-100,0,100,0 (LPS mm)");
 }
