@@ -65,6 +65,12 @@ TEST_F(UniformBlocks, CppStructsMatchTheLinkedPrograms) {
         expect_block_matches<ConeParams>(gl::Program::from_files({"ao/cone.comp"}, d + "#define COARSE 1\n"),
                                          "cone coarse " + d);
     }
+    // The volume's march: its own pass and the VOIT resolve that marches it between fragments.
+    expect_block_matches<VolumeParams>(gl::Program::from_files({"render/volume.comp"}), "volume");
+    expect_block_matches<VolumeParams>(gl::Program::from_files({"render/oit_resolve.comp"}, "#define VOLUME 1\n"),
+                                       "oit_resolve with the volume");
+    expect_block_matches<OitParams>(gl::Program::from_files({"render/oit_resolve.comp"}, "#define VOLUME 1\n"),
+                                    "oit_resolve with the volume");
 }
 
 TEST_F(UniformBlocks, Std140LayoutOfTheCppStructs) {
