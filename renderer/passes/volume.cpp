@@ -4,6 +4,7 @@
 // when it marches the volume between its fragments.
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <vector>
 
 #include <glm/glm.hpp>
@@ -17,16 +18,38 @@ namespace iso::passes {
 
 namespace {
 
-constexpr std::size_t kClipSlots = 16;       // clip_planes[16] in volume_march.glsl
+constexpr std::size_t kClipSlots = 16;
+constexpr std::size_t kTfBins =
+    256; // tf_bins in volume_march.glsl: 64 uvec4       // clip_planes[16] in volume_march.glsl
 constexpr std::size_t kCounterBytes = 4 * 4; // VolumeCounters
 
 // The tables buffer: clip half-spaces, then the transfer function's points.
+// Per bin of the values the transfer function's points span, a point at or
+// below every value of the bin and of the one before (a value's bin is
+// computed in float: it may land one bin high): the shader's search for the
+// value's segment starts there and moves forward, ending where a search from
+// the first point ends. `map` takes a value to its bin.
+std::vector<std::uint32_t> tf_bins(const TransferFunction& tf, glm::vec2& map) {
+    const auto& pts = tf.points();
+    const double lo = pts.empty() ? 0.0 : pts.front().value, hi = pts.empty() ? 0.0 : pts.back().value;
+    const double width = (hi - lo) / double(kTfBins);
+    map = glm::vec2(width > 0 ? float(1.0 / width) : 0.0f, float(lo));
+    std::vector<std::uint32_t> bins(kTfBins, 0);
+    for (std::size_t b = 0; b < kTfBins; ++b)
+        for (std::size_t i = 0; i < pts.size(); ++i)
+            if (pts[i].value <= lo + (double(b) - 1.0) * width) bins[b] = std::uint32_t(i);
+    return bins;
+}
+
 std::vector<glm::vec4> volume_tables(const FrameContext& ctx) {
-    std::vector<glm::vec4> t(kClipSlots, glm::vec4(0.0f));
+    std::vector<glm::vec4> t(kClipSlots + kTfBins / 4, glm::vec4(0.0f));
     const auto half = ctx.opt.look.clip.half_spaces();
     for (std::size_t i = 0; i < half.size() && i < kClipSlots; ++i)
         t[i] = glm::vec4(glm::vec3(half[i].normal), float(half[i].offset));
     const TransferFunction& tf = ctx.opt.look.volume.tf;
+    glm::vec2 map;
+    const auto bins = tf_bins(tf, map);
+    std::memcpy(&t[kClipSlots], bins.data(), kTfBins * sizeof(std::uint32_t));
     for (std::size_t i = 0; i < tf.points().size(); ++i) {
         t.push_back(glm::vec4(float(tf.points()[i].value), float(tf.points()[i].opacity), 0.0f, 0.0f));
         t.push_back(glm::vec4(glm::vec3(tf.linear_color(i)), 0.0f));
@@ -35,7 +58,8 @@ std::vector<glm::vec4> volume_tables(const FrameContext& ctx) {
 }
 
 std::size_t tables_bytes(const FrameContext& ctx) {
-    return (kClipSlots + 2 * std::max<std::size_t>(ctx.opt.look.volume.tf.points().size(), 1)) * sizeof(glm::vec4);
+    return (kClipSlots + kTfBins / 4 + 2 * std::max<std::size_t>(ctx.opt.look.volume.tf.points().size(), 1)) *
+           sizeof(glm::vec4);
 }
 
 VolumeParams volume_params(const FrameContext& ctx) {
@@ -53,6 +77,7 @@ VolumeParams volume_params(const FrameContext& ctx) {
     p.texel = glm::vec4(1.0f / glm::vec3(v.dims), 0.0f);
     p.vol_near_far = {float(ctx.camera.near_plane), float(ctx.camera.far_plane)};
     p.value_map = v.value_map;
+    tf_bins(look.tf, p.tf_bin_map);
     p.vol_image_size = {ctx.width, ctx.height};
     p.step_mm = float(volume_step_mm(ctx));
     p.vol_epsilon = ctx.opt.look.oit_epsilon;

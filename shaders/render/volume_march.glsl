@@ -23,8 +23,11 @@ layout(binding = 4) uniform sampler3D volume_tex;     // the values (normalized 
 layout(binding = 5) uniform usampler3D occupancy_tex; // per chunk: 1 marched, 0 empty
 layout(binding = 6) uniform sampler2D opaque_depth;   // the G-buffer's reversed-Z depth
 // clip[0..clip_count): half-spaces (normal, offset): kept where dot(n, p) >= offset;
+// tf_bins: per bin of values (tf_bin_map; 256 bins, 4 to a uvec4) a point at
+// or below every value of the bin and the one before: where the search for a
+// value's segment starts, a step or two before its end.
 // tf[2i] = (value, opacity per mm, 0, 0), tf[2i + 1] = (linear RGB, 0).
-layout(std430, binding = 11) readonly buffer VolumeTables { vec4 clip_planes[16]; vec4 tf[]; };
+layout(std430, binding = 11) readonly buffer VolumeTables { vec4 clip_planes[16]; uvec4 tf_bins[64]; vec4 tf[]; };
 // Rays met, samples taken, samples skipped (empty chunks), rays ended early.
 layout(std430, binding = 12) buffer VolumeCounters { uint vol_rays; uint vol_samples; uint vol_skipped; uint vol_terminated; };
 
@@ -46,8 +49,12 @@ vec4 tf_at(float v) {
     uint n = tf_count;
     if (!(v > tf[0].x)) return vec4(tf[1].rgb, tf[0].y);
     if (v >= tf[2u * (n - 1u)].x) return vec4(tf[2u * (n - 1u) + 1u].rgb, tf[2u * (n - 1u)].y);
-    uint i = 0u;
-    while (i + 1u < n && tf[2u * (i + 1u)].x <= v) ++i;   // the last point at or below v
+    uint bin = uint(clamp((v - tf_bin_map.y) * tf_bin_map.x, 0.0, 255.0));
+    uint i = tf_bins[bin >> 2u][bin & 3u];
+    for (uint k = 0u; k < n; ++k) {   // to the last point at or below v
+        if (i + 1u >= n || tf[2u * (i + 1u)].x > v) break;
+        ++i;
+    }
     vec4 a = tf[2u * i], b = tf[2u * i + 2u];
     float t = (v - a.x) / (b.x - a.x);
     return vec4(mix(tf[2u * i + 1u].rgb, tf[2u * i + 3u].rgb, t), mix(a.y, b.y, t));

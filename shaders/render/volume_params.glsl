@@ -11,6 +11,7 @@ ISO_MEMBER(vec4, chunk_counts)            // chunks per axis
 ISO_MEMBER(vec4, texel)                   // 1 / n per axis: index -> texture coordinate
 ISO_MEMBER(vec2, vol_near_far)                // the camera's planes (mm)
 ISO_MEMBER(vec2, value_map)               // value = texel * x + y (normalized integer textures)
+ISO_MEMBER(vec2, tf_bin_map)              // a value's bin of tf_bins: (value - y) * x
 ISO_MEMBER(ivec2, vol_image_size)
 ISO_MEMBER(float, step_mm)                // the sample step
 ISO_MEMBER(float, vol_epsilon)                // stop once the transmittance is below it
