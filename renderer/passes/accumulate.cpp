@@ -8,7 +8,6 @@
 #include <functional>
 #include <string_view>
 
-#include "io/color.hpp"
 #include "renderer/ao/sequences.hpp"
 #include "renderer/passes/build_frame.hpp"
 #include "renderer/passes/gl_resources.hpp"
@@ -44,11 +43,10 @@ std::vector<double> accumulation_key(const FrameContext& ctx) {
     if (ctx.volume) {
         const VolumeLook& v = l.volume;
         key.insert(key.end(), {1.0, double(v.mode), v.step, double(v.shading), double(v.skip_empty)});
-        for (const auto& p : v.tf.points()) {
-            const glm::vec3 c = linear_from_hex(p.color);
-            key.insert(key.end(), {p.value, p.opacity, c.r, c.g, c.b});
+        for (std::size_t i = 0; i < v.tf.points().size(); ++i) {
+            const glm::dvec3 c = v.tf.linear_color(i);
+            key.insert(key.end(), {v.tf.points()[i].value, v.tf.points()[i].opacity, c.r, c.g, c.b});
         }
-        key.push_back(double(ctx.geometry_version));
     }
     for (const auto& h : l.clip.half_spaces()) key.insert(key.end(), {h.normal.x, h.normal.y, h.normal.z, h.offset});
     // The AO term computed outside the frame (ray-traced AO: a new batch is a new picture).

@@ -18,22 +18,39 @@ namespace iso::passes {
 
 namespace {
 
-constexpr std::size_t kClipSlots = 16;
-constexpr std::size_t kTfBins =
-    256; // tf_bins in volume_march.glsl: 64 uvec4       // clip_planes[16] in volume_march.glsl
+constexpr std::size_t kClipSlots = 16;       // clip_planes[16] in volume_march.glsl (and clip.glsl)
+constexpr std::size_t kTfBins = 256;         // tf_bins in volume_march.glsl: 64 uvec4
 constexpr std::size_t kCounterBytes = 4 * 4; // VolumeCounters
 
-// The tables buffer: clip half-spaces, then the transfer function's points.
-// Per bin of the values the transfer function's points span, a point at or
-// below every value of the bin and of the one before (a value's bin is
-// computed in float: it may land one bin high): the shader's search for the
-// value's segment starts there and moves forward, ending where a search from
-// the first point ends. `map` takes a value to its bin.
-std::vector<std::uint32_t> tf_bins(const TransferFunction& tf, glm::vec2& map) {
+// The frame's clip as the shaders take it: half-spaces (normal, offset), at most kClipSlots.
+std::vector<glm::vec4> clip_planes(const FrameContext& ctx) {
+    std::vector<glm::vec4> planes;
+    for (const auto& h : ctx.opt.look.clip.half_spaces())
+        if (planes.size() < kClipSlots) planes.push_back(glm::vec4(glm::vec3(h.normal), float(h.offset)));
+    return planes;
+}
+
+// The values the transfer function's points span, in kTfBins bins: the
+// first bin's start and the bins' width.
+std::pair<double, double> tf_bin_span(const TransferFunction& tf) {
     const auto& pts = tf.points();
-    const double lo = pts.empty() ? 0.0 : pts.front().value, hi = pts.empty() ? 0.0 : pts.back().value;
-    const double width = (hi - lo) / double(kTfBins);
-    map = glm::vec2(width > 0 ? float(1.0 / width) : 0.0f, float(lo));
+    if (pts.empty()) return {0.0, 0.0};
+    return {pts.front().value, (pts.back().value - pts.front().value) / double(kTfBins)};
+}
+
+// What takes a value to its bin in the shader: (value - y) * x.
+glm::vec2 tf_bin_map(const TransferFunction& tf) {
+    const auto [lo, width] = tf_bin_span(tf);
+    return {width > 0 ? float(1.0 / width) : 0.0f, float(lo)};
+}
+
+// Per bin, a point at or below every value of the bin and of the one
+// before (a value's bin is computed in float: it may land one bin high):
+// the shader's search for the value's segment starts there and moves
+// forward, ending where a search from the first point ends.
+std::vector<std::uint32_t> tf_bins(const TransferFunction& tf) {
+    const auto& pts = tf.points();
+    const auto [lo, width] = tf_bin_span(tf);
     std::vector<std::uint32_t> bins(kTfBins, 0);
     for (std::size_t b = 0; b < kTfBins; ++b)
         for (std::size_t i = 0; i < pts.size(); ++i)
@@ -41,14 +58,13 @@ std::vector<std::uint32_t> tf_bins(const TransferFunction& tf, glm::vec2& map) {
     return bins;
 }
 
+// The tables buffer: clip half-spaces, the bins, then the transfer function's points.
 std::vector<glm::vec4> volume_tables(const FrameContext& ctx) {
     std::vector<glm::vec4> t(kClipSlots + kTfBins / 4, glm::vec4(0.0f));
-    const auto half = ctx.opt.look.clip.half_spaces();
-    for (std::size_t i = 0; i < half.size() && i < kClipSlots; ++i)
-        t[i] = glm::vec4(glm::vec3(half[i].normal), float(half[i].offset));
+    const auto planes = clip_planes(ctx);
+    std::copy(planes.begin(), planes.end(), t.begin());
     const TransferFunction& tf = ctx.opt.look.volume.tf;
-    glm::vec2 map;
-    const auto bins = tf_bins(tf, map);
+    const auto bins = tf_bins(tf);
     std::memcpy(&t[kClipSlots], bins.data(), kTfBins * sizeof(std::uint32_t));
     for (std::size_t i = 0; i < tf.points().size(); ++i) {
         t.push_back(glm::vec4(float(tf.points()[i].value), float(tf.points()[i].opacity), 0.0f, 0.0f));
@@ -77,7 +93,7 @@ VolumeParams volume_params(const FrameContext& ctx) {
     p.texel = glm::vec4(1.0f / glm::vec3(v.dims), 0.0f);
     p.vol_near_far = {float(ctx.camera.near_plane), float(ctx.camera.far_plane)};
     p.value_map = v.value_map;
-    tf_bins(look.tf, p.tf_bin_map);
+    p.tf_bin_map = tf_bin_map(look.tf);
     p.vol_image_size = {ctx.width, ctx.height};
     p.step_mm = float(volume_step_mm(ctx));
     p.vol_epsilon = ctx.opt.look.oit_epsilon;
@@ -93,7 +109,7 @@ VolumeParams volume_params(const FrameContext& ctx) {
     p.sample_offset = float(std::fmod(0.5 + spread, 1.0));
     p.mode = look.mode == VolumeMode::Mip ? 1u : look.mode == VolumeMode::Minip ? 2u : 0u;
     p.tf_count = std::uint32_t(pts.size());
-    p.clip_count = std::uint32_t(std::min(ctx.opt.look.clip.half_spaces().size(), kClipSlots));
+    p.clip_count = std::uint32_t(clip_planes(ctx).size());
     p.shading = look.shading && !ctx.opt.look.flat_shading ? 1u : 0u;
     p.skip_empty = look.skip_empty ? 1u : 0u;
     return p;
@@ -105,9 +121,7 @@ std::string clip_define(const FrameContext& ctx) { return ctx.opt.look.clip.acti
 
 void set_clip(const FrameContext& ctx, iso::gl::Program& prog) {
     if (!ctx.opt.look.clip.active()) return;
-    std::vector<glm::vec4> planes;
-    for (const auto& h : ctx.opt.look.clip.half_spaces())
-        if (planes.size() < kClipSlots) planes.push_back(glm::vec4(glm::vec3(h.normal), float(h.offset)));
+    const auto planes = clip_planes(ctx);
     glUniform4fv(prog.uniform("clip_planes"), GLsizei(planes.size()), &planes[0].x);
     glUniform1i(prog.uniform("clip_count"), GLint(planes.size()));
 }
