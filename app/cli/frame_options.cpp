@@ -52,6 +52,21 @@ void parse_disk_blend(const std::string& text, iso::DiskAoSettings& d) {
 
 } // namespace
 
+void add_volume_options(CLI::App* cmd, std::string& volume, std::string& mode) {
+    cmd->add_option("--volume", volume,
+                    "Ray cast the volume with this transfer function: a preset (bone, vessels, skin, soft tissue) or "
+                    "value:opacity:#rrggbb,... (opacity per mm, piecewise linear; combinable with --iso)");
+    cmd->add_option("--volume-mode", mode, "Volume rendering: composite (default), mip or minip");
+}
+
+void apply_volume_options(const std::string& volume, const std::string& mode, iso::VolumeLook& look) {
+    if (!volume.empty()) {
+        look.enabled = true;
+        look.tf = iso::transfer_function_from(volume);
+    }
+    look.mode = iso::volume_mode_from_name(mode);
+}
+
 void add_frame_options(CLI::App* c, FrameArgs& a, bool input_required) {
     auto& req = a.req;
     auto* in = c->add_option("input", a.in, "Volume file, DICOM folder, or mesh (" + iso::mesh_extensions_text() + ")");
@@ -79,10 +94,7 @@ void add_frame_options(CLI::App* c, FrameArgs& a, bool input_required) {
     c->add_option("--oit-epsilon", req.look.oit_epsilon,
                   "Translucent surfaces: stop compositing a pixel below this transmittance (default 1/512)")
         ->check(CLI::Range(0.0, 0.999));
-    c->add_option("--volume", a.volume,
-                  "Ray cast the volume with this transfer function: a preset (bone, vessels, skin, soft tissue) or "
-                  "value:opacity:#rrggbb,... (opacity per mm, piecewise linear; combinable with --iso)");
-    c->add_option("--volume-mode", a.volume_mode, "Volume rendering: composite (default), mip or minip");
+    add_volume_options(c, a.volume, a.volume_mode);
     c->add_option("--volume-step", req.look.volume.step,
                   "Volume rendering: sample step in voxels of the smallest spacing (default 0.5)")
         ->check(CLI::Range(0.01, 8.0));
@@ -106,11 +118,7 @@ iso::core::RenderRequest frame_request(const FrameArgs& a) {
     req.progress = progress_bar();
     if (!a.look.background.empty()) req.look.background = hex_option("--background", a.look.background);
     req.look.flat_shading = a.look.shading == "flat";
-    if (!a.volume.empty()) {
-        req.look.volume.enabled = true;
-        req.look.volume.tf = iso::transfer_function_from(a.volume);
-    }
-    req.look.volume.mode = iso::volume_mode_from_name(a.volume_mode);
+    apply_volume_options(a.volume, a.volume_mode, req.look.volume);
     req.look.volume.skip_empty = !a.no_empty_skipping;
     for (const auto& c : a.clip) req.look.clip.add(c);
     if (a.no_aa) {

@@ -16,6 +16,12 @@ namespace iso::cli {
 // Cone-AO tunables, shared by `render`, `pick` and `view`.
 void add_cone_options(CLI::App* cmd, iso::ConeAoSettings& c);
 
+// Volume rendering's --volume (a preset or value:opacity:#rrggbb,...) and
+// --volume-mode, shared by `render`, `pick` and `view`; and the look they
+// give (a bad text names its setting, which cli_message maps to the flag).
+void add_volume_options(CLI::App* cmd, std::string& volume, std::string& mode);
+void apply_volume_options(const std::string& volume, const std::string& mode, iso::VolumeLook& look);
+
 // What fixes a frame, shared by `render` and `pick`: a pick's pixel is a
 // pixel of the image `render` writes with the same options. The options are
 // bound to the core's request itself (`req`: view, series, iso values, the

@@ -40,11 +40,7 @@ int run_view(ViewArgs a, char* argv0) {
     if (!a.look.background.empty()) a.opt.look.background = hex_option("--background", a.look.background);
     a.opt.look.flat_shading = a.look.shading == "flat";
     a.opt.look.ao = iso::ao_method_from_name(a.ao);
-    if (!a.volume.empty()) {
-        a.opt.look.volume.enabled = true;
-        a.opt.look.volume.tf = iso::transfer_function_from(a.volume);
-    }
-    a.opt.look.volume.mode = iso::volume_mode_from_name(a.volume_mode);
+    apply_volume_options(a.volume, a.volume_mode, a.opt.look.volume);
     iso::validate(a.opt.look); // before the long part
     iso::core::Scene scene;
     open_input(scene, a.in, a.series, a.isos, a.look, "view", a.opt.look.volume.enabled);
@@ -106,10 +102,7 @@ RunFn add_view(CLI::App& cmd, char* argv0) {
     c->add_option("--ao-frames", a.opt.look.ao_frames,
                   "Still frames accumulated with new jitter sets while nothing moves")
         ->check(CLI::Range(1, 4096));
-    c->add_option("--volume", a.volume,
-                  "Ray cast the volume with this transfer function: a preset (bone, vessels, skin, soft tissue) or "
-                  "value:opacity:#rrggbb,... (opacity per mm)");
-    c->add_option("--volume-mode", a.volume_mode, "Volume rendering: composite (default), mip or minip");
+    add_volume_options(c, a.volume, a.volume_mode);
     add_look_options(c, a.look);
     return [args, argv0] { return run_view(*args, argv0); };
 }
