@@ -48,7 +48,7 @@ using namespace iso;
 namespace {
 
 struct Args {
-    std::string out = "bench-out/ao";
+    std::string out = "bench-results/ao";
     std::vector<int> sizes{512, 1024};
     std::vector<std::string> scenes{"ct-skin", "ct-bone", "bunny", "thin"};
     // AO radii in mm for the CT scenes (10: the target; 20: twice

@@ -26,7 +26,7 @@ namespace fs = std::filesystem;
 namespace {
 
 struct Args {
-    std::string out = "dsraa-bench-out";
+    std::string out = "bench-results/dsraa";
     int width = 640, height = 480, frames = 9;
     std::vector<std::string> scenes{"head", "bunny", "thin"};
     std::vector<AoMethod> ao{AoMethod::Off, AoMethod::Cone};

@@ -35,7 +35,7 @@ namespace fs = std::filesystem;
 namespace {
 
 struct Args {
-    std::string out = "image-bench-out";
+    std::string out = "bench-results/image";
     int width = 640, height = 480, reps = 3;
     std::vector<std::string> scenes{"head", "bunny", "thin", "dense"};
     bool quick = false;
