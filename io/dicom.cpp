@@ -1,9 +1,13 @@
 // DICOM series reader: scan, group, split, sort, check geometry, read pixels.
 //
-// Headers are parsed with vtkDICOMParser (one file at a time, errors caught),
-// grouping/sorting/geometry are done here, and pixels are decoded by
-// vtkDICOMReader (GDCM behind it for compressed transfer syntaxes) given the
-// files in our order, with its own sorting, row flipping and rescaling off.
+// Each file's element structure is walked first (io/dicom_structure.hpp:
+// vtk-dicom and GDCM abort on some malformed files), headers are parsed with
+// vtkDICOMParser (one file at a time, errors caught), grouping/sorting/
+// geometry are done here, and pixels are decoded by vtkDICOMReader (GDCM
+// behind it for compressed transfer syntaxes, then in a child process:
+// io/dicom_pixels.hpp) given the files in our order, with its own sorting,
+// row flipping and rescaling off. A file found in a folder that cannot be
+// read is skipped with a warning naming it; a file named alone is an error.
 //
 // Behaviours chosen (see also the comments at each place):
 //  - Series are grouped by SeriesInstanceUID and split by orientation
@@ -40,20 +44,17 @@
 #include <glm/geometric.hpp>
 #include <glm/mat4x4.hpp>
 
-#include <vtkCallbackCommand.h>
-#include <vtkCommand.h>
 #include <vtkDICOMMetaData.h>
 #include <vtkDICOMParser.h>
-#include <vtkDICOMReader.h>
 #include <vtkDICOMValue.h>
 #include <vtkDataArray.h>
-#include <vtkImageData.h>
-#include <vtkIntArray.h>
 #include <vtkNew.h>
-#include <vtkPointData.h>
 #include <vtkSmartPointer.h>
-#include <vtkStringArray.h>
 #include <vtkType.h>
+
+#include "io/dicom_pixels.hpp"
+#include "io/dicom_structure.hpp"
+#include "io/vtk_util.hpp"
 
 namespace iso {
 namespace fs = std::filesystem;
@@ -62,34 +63,6 @@ namespace {
 
 constexpr const char* kWhere = "read_dicom";
 constexpr const char* kStage = "reading DICOM";
-
-// Collects VTK error (and warning) messages of the objects it watches instead
-// of letting VTK print them; messages are stripped of VTK's file/line prefix.
-class VtkMessages {
-public:
-    VtkMessages() {
-        cmd_->SetCallback(&VtkMessages::callback);
-        cmd_->SetClientData(this);
-    }
-    void watch(vtkObject* o) {
-        o->AddObserver(vtkCommand::ErrorEvent, cmd_);
-        o->AddObserver(vtkCommand::WarningEvent, cmd_);
-    }
-    const std::string& errors() const { return errors_; }
-
-private:
-    static void callback(vtkObject*, unsigned long event, void* client, void* call) {
-        auto* self = static_cast<VtkMessages*>(client);
-        if (event != vtkCommand::ErrorEvent || !call) return;
-        std::string m = static_cast<const char*>(call);
-        if (auto p = m.rfind("): "); p != std::string::npos) m = m.substr(p + 3);
-        while (!m.empty() && std::isspace(static_cast<unsigned char>(m.back()))) m.pop_back();
-        if (!self->errors_.empty()) self->errors_ += "; ";
-        self->errors_ += m;
-    }
-    vtkNew<vtkCallbackCommand> cmd_;
-    std::string errors_;
-};
 
 // Everything we need from one file's header.
 struct Slice {
@@ -188,13 +161,13 @@ bool is_uncompressed(const std::string& ts) {
 std::optional<Slice> parse_header(const std::string& path) {
     vtkNew<vtkDICOMParser> parser;
     vtkNew<vtkDICOMMetaData> md;
-    VtkMessages msgs;
-    msgs.watch(parser);
+    vtkNew<VtkMessages> msgs;
+    msgs->watch(parser);
     parser->SetMetaData(md);
     parser->SetFileName(path.c_str());
     parser->Update();
-    if (parser->GetErrorCode() != 0 || !msgs.errors().empty()) {
-        const std::string& m = msgs.errors();
+    if (parser->GetErrorCode() != 0 || msgs->has_error()) {
+        const std::string m = msgs->joined_errors();
         const bool short_file = m.find("end of file") != std::string::npos || m.find("remaining") != std::string::npos;
         throw Error(path, std::string(short_file ? "file is truncated or corrupt" : "cannot read the DICOM header") +
                               (m.empty() ? "" : " (" + m + ")"));
@@ -295,44 +268,73 @@ struct Scan {
     std::string where;              // folder or file to name in messages
 };
 
-void collect_files(const std::vector<std::string>& inputs, std::vector<std::string>& files, std::string& where) {
+// The files to scan, each with whether the caller named it (a file named
+// must be readable; a file found in a folder that is not gets skipped).
+struct Candidate {
+    std::string path;
+    bool named = false;
+};
+
+std::vector<Candidate> collect_files(const std::vector<std::string>& inputs, std::string& where) {
     if (inputs.empty()) throw Error(kWhere, "no files or folder given");
     where = inputs.size() == 1 ? inputs[0] : fs::path(inputs[0]).parent_path().string();
     if (where.empty()) where = inputs[0];
+    std::vector<Candidate> files;
     for (const auto& in : inputs) {
         std::error_code ec;
         if (!fs::exists(in, ec)) throw Error(in, "no such file or folder");
-        if (fs::is_directory(in, ec)) {
-            std::vector<std::string> found;
-            for (auto it = fs::recursive_directory_iterator(in, fs::directory_options::skip_permission_denied, ec);
-                 !ec && it != fs::recursive_directory_iterator(); it.increment(ec)) {
-                std::error_code ec2;
-                if (it->is_regular_file(ec2)) found.push_back(it->path().string());
-            }
-            if (ec) throw Error(in, "cannot list the folder: " + ec.message());
-            if (found.empty()) throw Error(in, "folder is empty (no files found)");
-            std::sort(found.begin(), found.end());
-            files.insert(files.end(), found.begin(), found.end());
-        } else {
-            files.push_back(in);
+        if (!fs::is_directory(in, ec)) {
+            files.push_back({in, true});
+            continue;
         }
+        std::vector<std::string> found;
+        for (auto it = fs::recursive_directory_iterator(in, fs::directory_options::skip_permission_denied, ec);
+             !ec && it != fs::recursive_directory_iterator(); it.increment(ec)) {
+            std::error_code ec2;
+            if (it->is_regular_file(ec2)) found.push_back(it->path().string());
+        }
+        if (ec) throw Error(in, "cannot list the folder: " + ec.message());
+        if (found.empty()) throw Error(in, "folder is empty (no files found)");
+        std::sort(found.begin(), found.end());
+        for (auto& f : found) files.push_back({std::move(f), false});
     }
+    return files;
+}
+
+// What a folder's unreadable files become: one note naming the first few.
+std::string skipped_note(const std::vector<std::string>& bad) {
+    std::string note = "skipped " + std::to_string(bad.size()) + " unreadable DICOM file(s): ";
+    const std::size_t shown = std::min<std::size_t>(bad.size(), 3);
+    for (std::size_t i = 0; i < shown; ++i) note += (i ? "; " : "") + bad[i];
+    if (bad.size() > shown) note += "; and " + std::to_string(bad.size() - shown) + " more";
+    return note;
 }
 
 Scan scan(const std::vector<std::string>& inputs, const ProgressFn& progress) {
     Scan sc;
-    std::vector<std::string> files;
-    collect_files(inputs, files, sc.where);
+    const std::vector<Candidate> files = collect_files(inputs, sc.where);
 
     std::vector<Slice> slices;
+    std::vector<std::string> bad; // what was wrong with each unreadable file
     size_t non_dicom = 0, non_image = 0;
     for (size_t i = 0; i < files.size(); ++i) {
         report(progress, 0.4 * double(i) / double(files.size()), kStage, kWhere);
-        if (!looks_like_dicom(files[i])) {
+        const std::string& file = files[i].path;
+        if (!looks_like_dicom(file)) {
             ++non_dicom;
             continue;
         }
-        auto s = parse_header(files[i]);
+        std::optional<Slice> s;
+        try {
+            // vtk-dicom and GDCM abort on some malformed files: they see only
+            // files whose structure was walked (io/dicom_structure.hpp).
+            check_dicom_structure(file);
+            s = parse_header(file);
+        } catch (const Error& e) {
+            if (files[i].named) throw;
+            bad.push_back(e.what());
+            continue;
+        }
         if (!s) {
             ++non_image;
             continue;
@@ -343,8 +345,10 @@ Scan scan(const std::vector<std::string>& inputs, const ProgressFn& progress) {
         std::string why = "no DICOM images found (" + std::to_string(files.size()) + " file(s) looked at, " +
                           std::to_string(non_dicom) + " not DICOM";
         if (non_image) why += ", " + std::to_string(non_image) + " DICOM file(s) without pixel data";
+        if (!bad.empty()) why += "; " + skipped_note(bad);
         throw Error(sc.where, why + ")");
     }
+    if (!bad.empty()) sc.notes.push_back(skipped_note(bad));
 
     // Group by SeriesInstanceUID, split by orientation / size / spacing.
     std::vector<Group> groups;
@@ -696,69 +700,38 @@ Layout lay_out(Group& g, const std::string& where) {
 
 // A group's pixels as vtk-dicom decodes them (stored values, no rescale),
 // one output slice per file, checked against the size the headers give.
+// Compressed files are decoded in a child process (io/dicom_pixels.hpp).
 struct Pixels {
-    vtkSmartPointer<vtkDICOMReader> reader; // owns the data
-    vtkDataArray* array = nullptr;
+    vtkSmartPointer<vtkDataArray> array;
     std::vector<int> file_of_slice; // output slice k holds g.slices[file_of_slice[k]]
     VoxelType stored = VoxelType::U8;
+    std::vector<std::string> notes; // what the decoder said
 };
 
 Pixels read_pixels(const Group& g, const std::string& where, const ProgressFn& progress) {
     const size_t n = g.slices.size();
     const Slice& first = g.slices.front();
-    vtkNew<vtkStringArray> names;
-    for (const auto& s : g.slices) names->InsertNextValue(s.file);
-    Pixels px;
-    px.reader = vtkSmartPointer<vtkDICOMReader>::New();
-    vtkDICOMReader* reader = px.reader;
-    VtkMessages msgs;
-    msgs.watch(reader);
-    reader->SetFileNames(names);
-    reader->SortingOff();
-    reader->SetMemoryRowOrderToFileNative();
-    reader->AutoRescaleOff();
-    bool cancelled = false;
-    vtkNew<vtkCallbackCommand> on_progress;
-    struct ProgressCtx {
-        const ProgressFn* fn;
-        bool* cancelled;
-        vtkDICOMReader* reader;
-    } ctx{&progress, &cancelled, reader};
-    if (progress) {
-        on_progress->SetClientData(&ctx);
-        on_progress->SetCallback([](vtkObject*, unsigned long, void* client, void* call) {
-            auto* c = static_cast<ProgressCtx*>(client);
-            const double f = call ? *static_cast<double*>(call) : 0.0;
-            if (!(*c->fn)(0.4 + 0.5 * f, kStage)) {
-                *c->cancelled = true;
-                c->reader->AbortExecuteOn();
-            }
-        });
-        reader->AddObserver(vtkCommand::ProgressEvent, on_progress);
+    std::vector<std::string> files;
+    bool isolate = false;
+    for (const auto& s : g.slices) {
+        files.push_back(s.file);
+        isolate = isolate || !dicom_is_native(s.transfer_syntax);
     }
-    reader->Update();
-    reader->RemoveAllObservers(); // they point at this function's locals; the reader lives on with the data
-    if (cancelled) throw Cancelled(kWhere);
-    if (reader->GetErrorCode() != 0 || !msgs.errors().empty())
-        throw Error(where, "cannot read the pixel data" + (msgs.errors().empty() ? "" : ": " + msgs.errors()));
-    vtkImageData* img = reader->GetOutput();
-    int dim[3];
-    img->GetDimensions(dim);
-    vtkDataArray* arr = img->GetPointData() ? img->GetPointData()->GetScalars() : nullptr;
-    if (!arr || dim[0] != first.cols || dim[1] != first.rows || dim[2] != int(n) || arr->GetNumberOfComponents() != 1)
-        throw Error(where, "pixel data does not have the size given by the headers (" + std::to_string(dim[0]) + "x" +
-                               std::to_string(dim[1]) + "x" + std::to_string(dim[2]) + ")");
+    DecodedPixels d = decode_dicom_pixels(files, isolate, where, progress, 0.4, 0.9, kStage);
+    if (d.dims[0] != first.cols || d.dims[1] != first.rows || d.dims[2] != int(n) || d.components != 1)
+        throw Error(where, "pixel data does not have the size given by the headers (" + std::to_string(d.dims[0]) +
+                               "x" + std::to_string(d.dims[1]) + "x" + std::to_string(d.dims[2]) + ")");
     // Map output slices to our files (the reader was told not to sort, but check).
+    Pixels px;
     px.file_of_slice.resize(n);
-    vtkIntArray* fidx = reader->GetFileIndexArray();
     for (size_t k = 0; k < n; ++k) {
-        const int f =
-            fidx && fidx->GetNumberOfTuples() == vtkIdType(n) ? int(fidx->GetComponent(vtkIdType(k), 0)) : int(k);
+        const int f = d.file_index.size() == n ? d.file_index[k] : int(k);
         if (f < 0 || size_t(f) >= n) throw Error(where, "reader returned an unexpected slice order");
         px.file_of_slice[k] = f;
     }
-    px.array = arr;
-    px.stored = voxel_type_of_vtk(arr->GetDataType(), where);
+    px.stored = voxel_type_of_vtk(d.array->GetDataType(), where);
+    px.array = std::move(d.array);
+    px.notes = std::move(d.notes);
     return px;
 }
 
@@ -866,6 +839,7 @@ Volume load_group(Group& g, const Scan& sc, const ProgressFn& progress) {
     vol.meta.series_uid = first.series_uid;
     vol.meta.series_description = first.description;
     vol.meta.warnings = std::move(layout.warnings);
+    vol.meta.warnings.insert(vol.meta.warnings.end(), px.notes.begin(), px.notes.end());
     return vol;
 }
 

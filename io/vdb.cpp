@@ -4,24 +4,13 @@
 //
 // OpenVDB's reader is not hardened against malformed files (the fuzzer found
 // heap overflows inside it), and no other library reads VDB. So every read of
-// a user's file runs in a child process, which hands the grid back through a
-// pipe in OpenVDB's own stream format (written by OpenVDB's writer, so this
-// process only parses what OpenVDB itself produced): a crash, a hang or an
-// exception in the reader becomes an iso::Error naming the file instead of
-// taking the program down.
-//
-// The child is this same program started again (/proc/self/exe with
-// posix_spawn) and recognised before main() by its first argument
-// (kChildFlag; child_entry below is an ELF constructor). Not a bare fork():
-// a forked copy of a process whose worker threads (TBB's, Qt's) held a lock
-// at the fork can deadlock, which hung reads under parallel tests; an exec'd
-// program starts clean. Re-executing ourselves needs no helper executable to
-// install or find, and every program that links this reader (the CLI, the
-// GUI, tests, fuzzers) can read VDB.
+// a user's file runs in a child process (io/child_process.hpp), which hands
+// the grid back through a pipe in OpenVDB's own stream format (written by
+// OpenVDB's writer, so this process only parses what OpenVDB itself
+// produced): a crash, a hang or an exception in the reader becomes an
+// iso::Error naming the file instead of taking the program down.
 #include <algorithm>
-#include <cerrno>
 #include <cmath>
-#include <csignal>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
@@ -32,38 +21,18 @@
 #include <mutex>
 #include <ostream>
 #include <sstream>
-#include <thread>
 
-#include <ext/stdio_filebuf.h> // std::iostreams over a pipe's file descriptor (libstdc++)
-#include <fcntl.h>
-#include <malloc.h>
-#include <spawn.h>
-#include <sys/resource.h>
-#include <sys/wait.h>
-#include <unistd.h>
+#include <ext/stdio_filebuf.h> // std::ostream over the pipe to the reading program (libstdc++)
 
 #include <glm/gtc/matrix_transform.hpp>
 #include <openvdb/openvdb.h>
 #include <openvdb/io/File.h>
 #include <openvdb/io/Stream.h>
 
+#include "io/child_process.hpp"
 #include "io/process.hpp"
 #include "io/sparse.hpp"
 #include "io/volume_io.hpp"
-
-extern char** environ;
-
-// Is this an AddressSanitizer build? (GCC defines __SANITIZE_ADDRESS__, Clang answers __has_feature.)
-#if defined(__SANITIZE_ADDRESS__)
-#define ISOSCOPE_VDB_ASAN 1
-#elif defined(__has_feature)
-#if __has_feature(address_sanitizer)
-#define ISOSCOPE_VDB_ASAN 1
-#endif
-#endif
-#ifndef ISOSCOPE_VDB_ASAN
-#define ISOSCOPE_VDB_ASAN 0
-#endif
 
 namespace iso {
 
@@ -74,9 +43,6 @@ void init_openvdb() {
 }
 
 constexpr const char* kChildFlag = "--isoscope-openvdb-reader";
-// In the child: the product (a grid stream, or the header as text) and the
-// status (\"ok ...\" or the error message).
-constexpr int kOutFd = 3, kStatusFd = 4;
 // Memory of a float leaf node per voxel it covers: 512 values, the value and
 // child masks and node overhead, about 4.3 bytes (the slab planner's price
 // and the reading child's memory cap).
@@ -85,16 +51,6 @@ constexpr double kLeafBytesPerVoxel = 4.3;
 constexpr std::uint32_t kPipeCompression = openvdb::io::COMPRESS_NONE;
 
 // ---- in the child ------------------------------------------------------------
-
-void write_all(int fd, const std::string& s) {
-    std::size_t done = 0;
-    while (done < s.size()) {
-        const ssize_t n = ::write(fd, s.data() + done, s.size() - done);
-        if (n < 0 && errno == EINTR) continue;
-        if (n <= 0) return;
-        done += std::size_t(n);
-    }
-}
 
 // The first float grid's name; the others listed as "name (type), ...".
 std::string first_float_grid(openvdb::io::File& in, std::string& others) {
@@ -121,7 +77,7 @@ openvdb::FloatGrid::Ptr read_float_grid(openvdb::io::File& in, const std::string
 }
 
 void send_grid(const openvdb::FloatGrid::Ptr& grid) {
-    __gnu_cxx::stdio_filebuf<char> buf(kOutFd, std::ios::out, 1 << 16);
+    __gnu_cxx::stdio_filebuf<char> buf(kChildOutFd, std::ios::out, 1 << 16);
     std::ostream os(&buf);
     openvdb::io::Stream out(os);
     out.setCompression(kPipeCompression);
@@ -130,44 +86,14 @@ void send_grid(const openvdb::FloatGrid::Ptr& grid) {
     if (!os) throw std::runtime_error("cannot hand the grid back to the reading program");
 }
 
-// The reader may add at most `cap` bytes to the address space it started
-// with: a malformed file can make OpenVDB allocate without end (a truncated
-// file had it build a string of gigabytes), which then ends as bad_alloc,
-// an error, instead of taking the machine's memory. Slack for the threads'
-// stacks and malloc's arenas (at most two). Not under AddressSanitizer,
-// whose shadow memory is terabytes of address space: run_reader gives its
-// allocator the cap instead.
-void limit_memory(std::size_t cap) {
-#if !ISOSCOPE_VDB_ASAN
-    if (cap == 0) return;
-    mallopt(M_ARENA_MAX, 2);
-    const std::size_t threads = std::max(1u, std::thread::hardware_concurrency());
-    const std::size_t slack = (std::size_t(1) << 30) + threads * (std::size_t(16) << 20);
-    const rlim_t as = rlim_t(process_status_bytes("VmSize:") + slack + cap);
-    struct rlimit r;
-    if (::getrlimit(RLIMIT_AS, &r) == 0 && (r.rlim_max == RLIM_INFINITY || as < r.rlim_max)) {
-        r.rlim_cur = as;
-        ::setrlimit(RLIMIT_AS, &r);
-    }
-#else
-    (void)cap;
-#endif
-}
-
-// argv: flag, mode, path, memory cap in bytes, mode's arguments. Returns the
-// exit status: 0 done, 2 an error whose message went to kStatusFd.
+// argv: as run_child passes it, then the mode, the path and the mode's
+// arguments. Returns the exit status: 0 done, 2 an error whose message went
+// to kChildStatusFd.
 int child_main(int argc, char** argv) {
-    // Default dispositions: a handler inherited from the host program (a
-    // crash reporter, a fuzzer's timer) must not keep the child alive.
-    for (int sig : {SIGALRM, SIGSEGV, SIGBUS, SIGABRT, SIGFPE, SIGILL, SIGPIPE}) std::signal(sig, SIG_DFL);
-    // A malformed file must not hang the reader forever.
-    unsigned limit = 120;
-    if (const char* e = std::getenv("ISOSCOPE_VDB_READ_TIMEOUT")) limit = unsigned(std::max(1, std::atoi(e)));
-    ::alarm(limit);
+    child_begin(argv);
+    argv += kChildFirstArg - 2; // argv[2] the mode, argv[3] the path, as argc counts them below
+    argc -= kChildFirstArg - 2;
     const std::string mode = argv[2], path = argv[3];
-    limit_memory(std::size_t(std::strtoull(argv[4], nullptr, 10)));
-    argv += 1; // the mode's arguments as before the cap
-    argc -= 1;
     try {
         openvdb::initialize();
         std::string others;
@@ -179,7 +105,7 @@ int child_main(int argc, char** argv) {
             const auto grid = read_float_grid(in, name);
             in.close();
             send_grid(grid);
-            write_all(kStatusFd, "ok\n" + others);
+            child_write(kChildStatusFd, "ok\n" + others);
             return 0;
         }
         if (mode == "header" && argc == 4) {
@@ -202,8 +128,8 @@ int child_main(int argc, char** argv) {
             for (int r = 0; r < 4; ++r)
                 for (int c = 0; c < 4; ++c) o << m(r, c) << (c == 3 ? "\n" : " ");
             o << topology << " " << topology + values << "\n";
-            write_all(kOutFd, o.str());
-            write_all(kStatusFd, "ok\n");
+            child_write(kChildOutFd, o.str());
+            child_write(kChildStatusFd, "ok\n");
             return 0;
         }
         if (mode == "slab" && argc == 11) {
@@ -221,16 +147,16 @@ int child_main(int argc, char** argv) {
             const auto grid = read_float_grid(in, argv[4]);
             grid->clip(openvdb::CoordBBox(lo, hi));
             send_grid(grid);
-            write_all(kStatusFd, "ok " + std::to_string(process_status_bytes("VmHWM:")) + "\n");
+            child_write(kChildStatusFd, "ok " + std::to_string(process_status_bytes("VmHWM:")) + "\n");
             return 0;
         }
-        write_all(kStatusFd, "the OpenVDB reader process was started with unknown arguments");
+        child_write(kChildStatusFd, "the OpenVDB reader process was started with unknown arguments");
         return 3;
     } catch (const openvdb::Exception& e) {
-        write_all(kStatusFd, std::string("not a readable OpenVDB file: ") + e.what());
+        child_write(kChildStatusFd, std::string("not a readable OpenVDB file: ") + e.what());
         return 2;
     } catch (const std::exception& e) {
-        write_all(kStatusFd, e.what());
+        child_write(kChildStatusFd, e.what());
         return 2;
     }
 }
@@ -239,7 +165,7 @@ int child_main(int argc, char** argv) {
 // started by run_reader() (first argument kChildFlag) is taken over. glibc
 // passes argc and argv to ELF constructors.
 __attribute__((constructor)) void child_entry(int argc, char** argv, char**) {
-    if (argc >= 5 && argv && argv[1] && std::strcmp(argv[1], kChildFlag) == 0) {
+    if (is_child(argc, argv, kChildFlag)) {
         // No exit handlers, no static destructors of a program that never started.
         ::_exit(child_main(argc, argv));
     }
@@ -247,135 +173,19 @@ __attribute__((constructor)) void child_entry(int argc, char** argv, char**) {
 
 // ---- in the reading program ------------------------------------------------------
 
-// A pipe whose ends are above the descriptors the child's are copied to
-// (kOutFd, kStatusFd), close-on-exec.
-void make_pipe(int fds[2], const std::string& path) {
-    int p[2];
-    if (::pipe2(p, O_CLOEXEC) != 0)
-        throw Error(path, std::string("cannot start the VDB reader process: ") + std::strerror(errno));
-    for (int e = 0; e < 2; ++e) {
-        fds[e] = ::fcntl(p[e], F_DUPFD_CLOEXEC, 10);
-        ::close(p[e]);
-    }
-    if (fds[0] < 0 || fds[1] < 0) {
-        for (int e = 0; e < 2; ++e)
-            if (fds[e] >= 0) ::close(fds[e]);
-        throw Error(path, "cannot start the VDB reader process: no file descriptors left");
-    }
-}
-
-std::string read_all(int fd) {
-    std::string s;
-    char b[4096];
-    for (;;) {
-        const ssize_t n = ::read(fd, b, sizeof b);
-        if (n < 0 && errno == EINTR) continue;
-        if (n <= 0) break;
-        s.append(b, std::size_t(n));
-    }
-    return s;
-}
-
-// What the reader may allocate (limit_memory) when the caller has no better
-// bound: ISOSCOPE_VDB_READ_MEMORY MiB, else half of physical memory (a grid
-// read whole is held twice for a moment: more would not fit anyway).
-std::size_t default_reader_cap() {
-    if (const char* e = std::getenv("ISOSCOPE_VDB_READ_MEMORY")) return std::size_t(std::max(1ll, std::atoll(e))) << 20;
-    const std::size_t phys = physical_memory_bytes();
-    return phys ? phys / 2 : std::size_t(8) << 30;
-}
-
-// Starts the child reader on `path` with `args` (mode first, then the path),
-// allowed to allocate `cap` bytes, hands `consume` an istream over the
-// child's product, and returns the child's status line after "ok". Every
-// failure is an iso::Error naming `path`.
+// Runs the child reader (mode first, then the path and the mode's
+// arguments), allowed to allocate `cap` bytes; see run_child.
 std::string run_reader(const std::string& path, std::vector<std::string> args, std::size_t cap,
                        const std::function<void(std::istream&)>& consume) {
-    args.insert(args.begin() + 2, std::to_string(cap));
-    int out[2], status[2];
-    make_pipe(out, path);
-    try {
-        make_pipe(status, path);
-    } catch (...) {
-        ::close(out[0]);
-        ::close(out[1]);
-        throw;
-    }
-    std::vector<std::string> argv_s{"isoscope-openvdb-reader", kChildFlag};
-    argv_s.insert(argv_s.end(), args.begin(), args.end());
-    std::vector<char*> argv;
-    for (auto& a : argv_s) argv.push_back(a.data());
-    argv.push_back(nullptr);
-    posix_spawn_file_actions_t fa;
-    posix_spawn_file_actions_init(&fa);
-    posix_spawn_file_actions_adddup2(&fa, out[1], kOutFd);
-    posix_spawn_file_actions_adddup2(&fa, status[1], kStatusFd);
-    // The child prints nothing on our standard output (the CLI's JSON goes there).
-    posix_spawn_file_actions_addopen(&fa, STDOUT_FILENO, "/dev/null", O_WRONLY, 0);
-    pid_t pid = -1;
-    std::fflush(nullptr);
-    // The environment as it is; under AddressSanitizer (no address-space cap
-    // there, limit_memory) the child's sanitizer gets the cap instead: single
-    // allocations above it fail (bad_alloc, an error), and a resident size
-    // above it plus the program ends the child.
-    std::vector<std::string> env_s;
-    for (char** e = environ; e && *e; ++e) env_s.emplace_back(*e);
-#if ISOSCOPE_VDB_ASAN
-    {
-        const std::string mib = std::to_string((cap >> 20) + 1);
-        const std::string add = "allocator_may_return_null=1:max_allocation_size_mb=" + mib +
-                                ":hard_rss_limit_mb=" + std::to_string((cap >> 20) + 2048);
-        auto it = std::find_if(env_s.begin(), env_s.end(),
-                               [](const std::string& e) { return e.rfind("ASAN_OPTIONS=", 0) == 0; });
-        if (it == env_s.end())
-            env_s.push_back("ASAN_OPTIONS=" + add);
-        else
-            *it += (it->size() > 13 ? ":" : "") + add;
-    }
-#endif
-    std::vector<char*> envp;
-    for (auto& e : env_s) envp.push_back(e.data());
-    envp.push_back(nullptr);
-    const int rc = ::posix_spawn(&pid, "/proc/self/exe", &fa, nullptr, argv.data(), envp.data());
-    posix_spawn_file_actions_destroy(&fa);
-    ::close(out[1]);
-    ::close(status[1]);
-    if (rc != 0) {
-        ::close(out[0]);
-        ::close(status[0]);
-        throw Error(path, std::string("cannot start the VDB reader process: ") + std::strerror(rc));
-    }
-    std::string consume_error;
-    {
-        // Owns out[0]: closed when the product is consumed or consuming failed
-        // (a child still writing then gets EPIPE and ends).
-        __gnu_cxx::stdio_filebuf<char> buf(out[0], std::ios::in, 1 << 16);
-        std::istream is(&buf);
-        try {
-            consume(is);
-        } catch (const std::exception& e) {
-            consume_error = e.what();
-        }
-    }
-    std::string msg = read_all(status[0]);
-    ::close(status[0]);
-    int st = 0;
-    while (::waitpid(pid, &st, 0) < 0 && errno == EINTR) {}
-    if (WIFEXITED(st) && WEXITSTATUS(st) == 0 && consume_error.empty()) {
-        if (msg.rfind("ok", 0) != 0) throw Error(path, "the VDB reader process gave no result");
-        return msg.substr(std::min<std::size_t>(msg.size(), 3));
-    }
-    if (WIFEXITED(st) && (WEXITSTATUS(st) == 2 || WEXITSTATUS(st) == 3) && !msg.empty()) {
-        if (msg.find("bad_alloc") != std::string::npos)
-            throw Error(path, "OpenVDB's reader needed more than the " + std::to_string(cap >> 20) +
-                                  " MiB allowed to it (corrupt file? ISOSCOPE_VDB_READ_MEMORY sets the limit in MiB)");
-        throw Error(path, msg);
-    }
-    if (WIFSIGNALED(st) && WTERMSIG(st) == SIGALRM)
-        throw Error(path, "OpenVDB did not finish reading the file in time (corrupt?)");
-    if (WIFEXITED(st) && WEXITSTATUS(st) == 0)
-        throw Error(path, "cannot take the grid from the VDB reader process: " + consume_error);
-    throw Error(path, "OpenVDB's reader failed on this file (corrupt or truncated?)");
+    ChildJob job;
+    job.flag = kChildFlag;
+    job.path = path;
+    job.args = std::move(args);
+    job.memory_cap = cap;
+    job.reader = "OpenVDB's reader";
+    job.memory_env = "ISOSCOPE_VDB_READ_MEMORY";
+    job.timeout_env = "ISOSCOPE_VDB_READ_TIMEOUT";
+    return run_child(job, consume);
 }
 
 openvdb::FloatGrid::Ptr receive_grid(std::istream& is) {
@@ -409,8 +219,8 @@ Volume read_vdb(const std::string& path) {
     init_openvdb();
     check_file(path);
     openvdb::FloatGrid::Ptr grid;
-    const std::string others =
-        run_reader(path, {"whole", path}, default_reader_cap(), [&](std::istream& is) { grid = receive_grid(is); });
+    const std::string others = run_reader(path, {"whole", path}, default_child_memory_cap("ISOSCOPE_VDB_READ_MEMORY"),
+                                          [&](std::istream& is) { grid = receive_grid(is); });
     const openvdb::CoordBBox bbox = grid->evalActiveVoxelBoundingBox();
     std::array<std::int64_t, 3> dims{1, 1, 1}, offset{0, 0, 0};
     if (!bbox.empty()) {
@@ -436,7 +246,7 @@ VdbHeader read_vdb_header(const std::string& path) {
     init_openvdb();
     check_file(path);
     std::string text;
-    run_reader(path, {"header", path}, default_reader_cap(),
+    run_reader(path, {"header", path}, default_child_memory_cap("ISOSCOPE_VDB_READ_MEMORY"),
                [&](std::istream& is) { text.assign(std::istreambuf_iterator<char>(is), {}); });
     VdbHeader h;
     std::istringstream in(text);

@@ -1,5 +1,6 @@
 #include "io/vtk_util.hpp"
 
+#include <cctype>
 #include <mutex>
 
 #include <vtkLogger.h>
@@ -31,6 +32,7 @@ void VtkMessages::Execute(vtkObject*, unsigned long event, void* data) {
     const char* text = static_cast<const char*>(data);
     std::string& target = event == vtkCommand::ErrorEvent ? errors : warnings;
     if (text) target += std::string(text) + "\n";
+    if (text && event == vtkCommand::ErrorEvent) error_list.emplace_back(text);
 }
 
 void VtkMessages::watch(vtkObject* o) {
@@ -44,6 +46,16 @@ std::string VtkMessages::first_error() const {
     std::string e = p == std::string::npos ? errors : errors.substr(p + 3);
     e = e.substr(0, e.find('\n'));
     return e.empty() ? "unknown VTK error" : e;
+}
+
+std::string VtkMessages::joined_errors() const {
+    std::string out;
+    for (std::string m : error_list) {
+        if (const auto p = m.rfind("): "); p != std::string::npos) m = m.substr(p + 3);
+        while (!m.empty() && std::isspace(static_cast<unsigned char>(m.back()))) m.pop_back();
+        out += (out.empty() ? "" : "; ") + m;
+    }
+    return out;
 }
 
 } // namespace iso

@@ -5,6 +5,7 @@
 #pragma once
 
 #include <string>
+#include <vector>
 
 #include <vtkCommand.h>
 #include <vtkObject.h>
@@ -23,7 +24,10 @@ public:
     bool has_error() const { return !errors.empty(); }
     // The first error, without VTK's "ERROR: In file, line N, vtkClass (0x...):" prefix.
     std::string first_error() const;
+    // Every error, each without VTK's prefix, joined by "; ".
+    std::string joined_errors() const;
     std::string errors, warnings;
+    std::vector<std::string> error_list; // each error's text as VTK gave it
 };
 
 } // namespace iso

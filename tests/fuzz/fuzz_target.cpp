@@ -38,8 +38,17 @@ void operator delete(void* p, std::size_t) noexcept { std::free(p); }
 void operator delete[](void* p, std::size_t) noexcept { std::free(p); }
 
 namespace {
+// Where the input is written for the loader. The deterministic smoke names
+// the folder (ISOSCOPE_FUZZ_INPUT_DIR, the same on every machine): a path
+// the loaders compare may reach libFuzzer's table of compared bytes, and a
+// random one would make two runs of the same commit mutate differently.
+// Otherwise a fresh folder of its own (parallel workers share nothing).
 std::string input_path() {
     static const std::string path = [] {
+        if (const char* dir = std::getenv("ISOSCOPE_FUZZ_INPUT_DIR"); dir && *dir) {
+            std::filesystem::create_directories(dir);
+            return std::string(dir) + "/input" FUZZ_EXT;
+        }
         char tmpl[] = "/tmp/isoscope-fuzz-XXXXXX";
         const char* dir = ::mkdtemp(tmpl);
         return std::string(dir ? dir : "/tmp") + "/input" FUZZ_EXT;

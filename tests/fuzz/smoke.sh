@@ -1,53 +1,60 @@
 #!/usr/bin/env bash
-# Fuzz smoke pass over every parser.
+# Deterministic fuzz smoke over every parser (the test command runs it).
 #
-#   tests/fuzz/smoke.sh BUILD_DIR            deterministic: fixed seed and a fixed
-#                                            number of inputs per target (CI)
-#   tests/fuzz/smoke.sh BUILD_DIR SECONDS    explore: SECONDS per target, random seed
+#   tests/fuzz/smoke.sh BUILD_DIR [TARGET ...]
 #
-# Each target starts from seeds written by fuzz_seeds plus every input that
-# once crashed a reader (tests/fuzz/regressions/TARGET/, replayed first as
-# part of the corpus). Fails on any crash, leak or sanitizer error, timeout
-# or out-of-memory. libFuzzer writes the failing inputs (crash-*, oom-*,
-# leak-*, timeout-* after the prefix) to BUILD_DIR/artifacts/, never to the
-# working directory: crash-TARGET-KIND-SHA1, the name a regression keeps
-# when it is moved to tests/fuzz/regressions/TARGET/. The folder holds the
-# last run's findings only: a target's files are removed before it runs and
-# again when it passes (the VDB reader's forked child crashes by design on
-# some inputs, the parent reports iso::Error, and libFuzzer's handler in the
-# child still writes the input).
+# Each target first replays its corpus: tests/fuzz/corpus/TARGET/ (committed
+# seeds) and tests/fuzz/regressions/TARGET/ (every input that once crashed,
+# aborted or exhausted a reader); then it mutates that corpus for a fixed
+# number of runs from a fixed seed. The same commit makes the same inputs and
+# so gives the same verdict on every machine. What that rests on: committed
+# seeds (none written at run time), -seed=1 and -runs=N, no corpus reload
+# (-reload=0, which re-runs files on a timer), the input file at the same path
+# everywhere (ISOSCOPE_FUZZ_INPUT_DIR), memory limits checked at each
+# allocation (-malloc_limit_mb) rather than only by the sampled RSS. Each
+# target's final statistics (cov, ft, corp) are printed, so two runs can be
+# compared line by line.
+#
+# Fails on any crash, abort, leak or sanitizer error, timeout or out-of-memory.
+# libFuzzer writes the failing input to BUILD_DIR/artifacts/ as
+# crash-TARGET-KIND-SHA1, the name it keeps when moved to
+# tests/fuzz/regressions/TARGET/. The folder holds the last run's findings
+# only: a target's files are removed before it runs and again when it passes
+# (the VDB reader's forked child crashes by design on some inputs, the parent
+# reports iso::Error, and libFuzzer's handler in the child still writes one).
+#
+# Longer, randomized fuzzing is tests/fuzz/explore.sh (by hand, not in CI).
 set -uo pipefail
-build=${1:?usage: smoke.sh BUILD_DIR [SECONDS]}
-seconds=${2:-}
+build=${1:?usage: smoke.sh BUILD_DIR [TARGET ...]}
+shift
 here=$(cd "$(dirname "$0")" && pwd)
 artifacts=$(mkdir -p "$build/artifacts" && cd "$build/artifacts" && pwd)
 work=$(mktemp -d /tmp/isoscope-fuzz-smoke-XXXXXX)
-trap 'rm -rf "$work"' EXIT
-"$build/tests/fuzz/fuzz_seeds" "$work/seeds" >/dev/null || { echo "fuzz smoke: seed writer failed"; exit 1; }
-# Inputs per target in deterministic mode (about 10 s each on a 2-core
-# machine; the VDB target forks a reader process per input).
-declare -A runs=([nrrd]=20000 [nifti]=20000 [metaimage]=20000 [vti]=10000 [vdb]=60 [dicom]=600
+trap 'rm -rf "$work" /tmp/isoscope-fuzz-smoke-input' EXIT
+# Mutations per target after the replay (about 10-20 s each on a 2-core
+# machine; the VDB target starts a reader process per input).
+declare -A runs=([nrrd]=20000 [nifti]=20000 [metaimage]=20000 [vti]=10000 [vdb]=60 [dicom]=30000
                  [stl]=20000 [ply]=20000 [obj]=20000 [vtp]=10000 [markups]=8000)
 targets=(nrrd nifti metaimage vti vdb dicom stl ply obj vtp markups)
+(($#)) && targets=("$@")
 failed=()
 for target in "${targets[@]}"; do
   exe="$build/tests/fuzz/fuzz_$target"
   corpus="$work/corpus-$target"
   mkdir -p "$corpus"
-  cp -r "$work/seeds/$target/." "$corpus/" 2>/dev/null || true
-  cp -r "$here/regressions/$target/." "$corpus/" 2>/dev/null || true
-  if [[ -n $seconds ]]; then budget=(-max_total_time="$seconds"); else budget=(-seed=1 -runs="${runs[$target]}"); fi
+  cp "$here/corpus/$target/"* "$corpus/" 2>/dev/null
+  cp "$here/regressions/$target/"* "$corpus/" 2>/dev/null
+  seeds=$(ls "$corpus" | wc -l)
   rm -f "$artifacts/crash-$target-"*
-  # -malloc_limit_mb above 4 GiB: a DICOM element may claim up to 4 GiB, which
-  # vtk-dicom reserves without touching (harmless); RSS stays capped at 2 GiB.
   # ASan's leak checker runs at exit, where VTK keeps singletons alive on
   # purpose; the harness replaces operator new (see fuzz_target.cpp), which
   # makes ASan's new/free pairing check meaningless.
-  if ASAN_OPTIONS=detect_leaks=0:alloc_dealloc_mismatch=0 \
-     "$exe" "${budget[@]}" -rss_limit_mb=2048 -malloc_limit_mb=8192 -timeout=10 -print_final_stats=0 \
-       -artifact_prefix="$artifacts/crash-$target-" "$corpus" >"$work/$target.log" 2>&1; then
-    done_runs=$(grep -o 'Done [0-9]* runs' "$work/$target.log" | tail -1)
-    echo "fuzz_$target: ok (${done_runs:-no run count})"
+  start=$SECONDS
+  if ASAN_OPTIONS=detect_leaks=0:alloc_dealloc_mismatch=0 ISOSCOPE_FUZZ_INPUT_DIR=/tmp/isoscope-fuzz-smoke-input/$target \
+     "$exe" -seed=1 -runs="${runs[$target]}" -reload=0 -rss_limit_mb=2048 -malloc_limit_mb=2048 -timeout=30 \
+       -print_final_stats=0 -artifact_prefix="$artifacts/crash-$target-" "$corpus" >"$work/$target.log" 2>&1; then
+    stats=$(grep -aoE '#[0-9]+[[:space:]]+DONE[[:space:]]+cov: [0-9]+ ft: [0-9]+ corp: [0-9]+' "$work/$target.log" | tail -1 | tr -s ' \t' ' ')
+    echo "fuzz_$target: ok ($seeds seeds replayed, ${runs[$target]} runs: ${stats:-no statistics}; $((SECONDS - start)) s)"
     rm -f "$artifacts/crash-$target-"*
   else
     echo "fuzz_$target: FAILED"

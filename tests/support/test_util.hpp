@@ -7,12 +7,15 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <iterator>
 #include <memory>
 #include <string>
 #include <vector>
 
 #include <gtest/gtest.h>
+
+#include "io/error.hpp"
 
 namespace iso::test {
 
@@ -83,5 +86,15 @@ inline CommandResult run_command(const std::string& cmd, bool merge_stderr = fal
 }
 
 inline std::string cli() { return ISOSCOPE_CLI; }
+
+// The message of the iso::Error that `f` throws, or "(no error)".
+inline std::string error_of(const std::function<void()>& f) {
+    try {
+        f();
+    } catch (const iso::Error& e) {
+        return e.what();
+    }
+    return "(no error)";
+}
 
 } // namespace iso::test

@@ -38,6 +38,7 @@
 #include "tests/support/test_util.hpp"
 
 using namespace iso;
+using iso::test::error_of;
 using iso::test::pattern;
 using iso::test::rot_x;
 using iso::test::rot_z;
@@ -172,15 +173,6 @@ std::string all_warnings(const Volume& v) {
     std::string s;
     for (auto& w : v.meta.warnings) s += w + "\n";
     return s;
-}
-
-std::string error_of(const std::function<void()>& f) {
-    try {
-        f();
-    } catch (const Error& e) {
-        return e.what();
-    }
-    return "(no error)";
 }
 
 } // namespace
@@ -576,19 +568,55 @@ TEST(Dicom, BadInputGivesClearErrors) {
     for (auto& f : files) fs::copy_file(f, tmp / ("trunc/" + fs::path(f).filename().string()));
     const std::string cut = tmp / ("trunc/" + fs::path(files[4]).filename().string());
     fs::resize_file(cut, fs::file_size(cut) / 2);
-    const std::string t = error_of([&] { load_volume(tmp / "trunc"); });
+    // The file named: an error. In a folder: skipped, named in the warnings,
+    // and the series loads from the other files.
+    const std::string t = error_of([&] { load_volume(cut); });
     EXPECT_NE(t.find("truncated"), std::string::npos) << t;
     EXPECT_NE(t.find(cut), std::string::npos) << t;
+    const Volume v = load_volume(tmp / "trunc");
+    EXPECT_TRUE(any_warning(v, "skipped 1 unreadable DICOM file(s): " + cut + ": malformed DICOM at byte "))
+        << all_warnings(v);
+    EXPECT_TRUE(any_warning(v, "truncated")) << all_warnings(v);
     // Only slightly short: the header is intact, the pixels are not.
     fs::copy_file(files[4], cut, fs::copy_options::overwrite_existing);
     fs::resize_file(cut, fs::file_size(cut) - 10);
-    const std::string t2 = error_of([&] { load_volume(tmp / "trunc"); });
+    const std::string t2 = error_of([&] { load_volume(cut); });
     EXPECT_NE(t2.find("truncated"), std::string::npos) << t2;
+    // Every file unreadable: the error says why.
+    fs::create_directories(tmp / "allbad");
+    fs::copy_file(cut, tmp / "allbad/a.dcm");
+    const std::string t3 = error_of([&] { load_volume(tmp / "allbad"); });
+    EXPECT_NE(t3.find("no DICOM images found"), std::string::npos) << t3;
+    EXPECT_NE(t3.find("skipped 1 unreadable DICOM file(s)"), std::string::npos) << t3;
 }
 
-TEST(Dicom, CorruptCompressedPixelDataIsAnError) {
-    // Header says JPEG baseline, the pixel data are raw bytes (not encapsulated):
-    // an iso::Error naming the file, no crash.
+TEST(Dicom, AFileThatAbortedTheReaderIsAnErrorAloneAndSkippedInAFolder) {
+    // The 443-byte file that made vtk-dicom assert (issue 42).
+    const std::string crash =
+        std::string(ISOSCOPE_SOURCE_DIR) +
+        "/tests/fuzz/regressions/dicom/crash-dicom-crash-314510707ba2abecdd6ccdea964749af198ea78c";
+    TempDir tmp;
+    const std::string alone = tmp / "bad.dcm";
+    fs::copy_file(crash, alone);
+    const std::string e = error_of([&] { load_volume(alone); });
+    EXPECT_NE(e.find(alone + ": malformed DICOM at byte "), std::string::npos) << e;
+    // The real series with the bad file among its files.
+    fs::create_directories(tmp / "series");
+    for (int i = 1; i <= 3; ++i) {
+        const std::string name = "1-" + std::to_string(i) + ".dcm";
+        fs::copy_file(iso::test::data("dicom-mr-forearm/" + name), tmp / ("series/" + name));
+    }
+    fs::copy_file(crash, tmp / "series/1-2b.dcm");
+    const Volume v = load_volume(tmp / "series");
+    EXPECT_EQ(v.dims[2], 3);
+    EXPECT_TRUE(any_warning(v, "skipped 1 unreadable DICOM file(s): " + (tmp / "series/1-2b.dcm"))) << all_warnings(v);
+}
+
+TEST(Dicom, CorruptCompressedPixelDataIsSkippedInAFolderAndAnErrorAlone) {
+    // Header says JPEG baseline, the pixel data are raw bytes (not the
+    // fragments a compressed transfer syntax needs): the structure walk
+    // refuses it, naming the offset. Alone: an error naming the file. In its
+    // series' folder: skipped, named in the warnings, the slice filled in.
     TempDir tmp;
     write_series(tmp / "w", SeriesSpec{});
     const auto hs = sorted_headers(tmp / "w");
@@ -601,9 +629,48 @@ TEST(Dicom, CorruptCompressedPixelDataIsAnError) {
         else
             fs::copy_file(hs[k].file, dst);
     }
-    const std::string e = error_of([&] { load_volume(tmp / "jpeg"); });
-    EXPECT_NE(e.find(fs::path(hs[2].file).filename().string()), std::string::npos) << e;
-    EXPECT_NE(e.find("corrupt"), std::string::npos) << e;
+    const std::string bad = tmp / ("jpeg/" + fs::path(hs[2].file).filename().string());
+    const std::string e = error_of([&] { load_volume(bad); });
+    EXPECT_NE(e.find(bad + ": malformed DICOM at byte "), std::string::npos) << e;
+    EXPECT_NE(e.find("expected a fragment item"), std::string::npos) << e;
+    const Volume v = load_volume(tmp / "jpeg");
+    EXPECT_EQ(v.dims[2], int(hs.size()));
+    EXPECT_TRUE(any_warning(v, "skipped 1 unreadable DICOM file(s): " + bad)) << all_warnings(v);
+    EXPECT_TRUE(any_warning(v, "missing slice")) << all_warnings(v);
+}
+
+TEST(Dicom, ADecoderThatAbortsIsAnErrorNotACrash) {
+    // A JPEG-LS file whose pixel data element was renamed (7FE0,4910) by the
+    // fuzzer: GDCM, which decodes compressed files, asserted on it and ended
+    // the process. Compressed files are decoded in a child process: its
+    // abort is an error naming the file, with what it said.
+    const std::string f = std::string(ISOSCOPE_SOURCE_DIR) +
+                          "/tests/fuzz/regressions/dicom/crash-dicom-crash-f4d43161c4de314a563f1e1049f8c2f792d2f0f4";
+    TempDir tmp;
+    const std::string copy = tmp / "a.dcm";
+    fs::copy_file(f, copy);
+    const std::string e = error_of([&] { load_volume(copy); });
+    EXPECT_NE(e.find(copy + ": the DICOM decoder failed on this file"), std::string::npos) << e;
+    EXPECT_NE(e.find("Assertion"), std::string::npos) << e;
+}
+
+TEST(Dicom, CompressedSeriesDecodeToTheSameVoxelsAsUncompressed) {
+    // The real header in every transfer syntax (tests/fuzz/corpus/dicom):
+    // lossless ones decoded (in the child, for the compressed) to the same
+    // voxels, and GDCM's chatter as at most one warning per message.
+    const std::string dir = std::string(ISOSCOPE_SOURCE_DIR) + "/tests/fuzz/corpus/dicom/";
+    const Volume ref = load_volume(dir + "mr32.dcm");
+    for (const char* name : {"mr32-implicit.dcm", "mr32-bigendian.dcm", "mr32-jpeg.dcm", "mr32-j2k.dcm",
+                             "mr32-jpegls.dcm", "mr32-rle.dcm"}) {
+        SCOPED_TRACE(name);
+        const Volume v = load_volume(dir + name);
+        ASSERT_EQ(v.dims, ref.dims);
+        for (int j = 0; j < 32; ++j)
+            for (int i = 0; i < 32; ++i) ASSERT_EQ(v.value(i, j, 0), ref.value(i, j, 0)) << i << "," << j;
+        std::size_t gdcm = 0;
+        for (const auto& w : v.meta.warnings) gdcm += w.find("GDCM") != std::string::npos;
+        EXPECT_LE(gdcm, 1u) << all_warnings(v);
+    }
 }
 
 TEST(Dicom, BadGeometryGivesClearErrors) {

@@ -13,19 +13,12 @@
 #include "io/error.hpp"
 #include "renderer/volume/reference.hpp"
 #include "renderer/volume/transfer_function.hpp"
+#include "tests/support/test_util.hpp"
 
 using namespace iso;
+using iso::test::error_of;
 
 namespace {
-
-std::string error_of(const std::function<void()>& f) {
-    try {
-        f();
-    } catch (const Error& e) {
-        return e.what();
-    }
-    return "";
-}
 
 // A dims^3 float volume of one value, spacing s, origin 0.
 Volume constant_volume(int n, float value, double s = 1.0) {
