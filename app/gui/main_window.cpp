@@ -34,6 +34,7 @@
 #include <cmath>
 #include <mutex>
 
+#include "app/gui/load_warnings.hpp"
 #include "app/gui/measure_tools.hpp"
 #include "app/gui/measurements_panel.hpp"
 #include "app/gui/series_dialog.hpp"
@@ -200,6 +201,8 @@ MainWindow::MainWindow(QWidget* parent) : QMainWindow(parent), scene_(std::make_
     resizeDocks({dock, measurements_}, {500, 300}, Qt::Vertical);
 
     add_view_and_help_menus();
+    load_warnings_ = new LoadWarnings(this);
+    statusBar()->addPermanentWidget(load_warnings_);
     statusBar()->showMessage("Ready");
     for (std::size_t i = 0; i < 3; ++i) views_[i]->set_content(scene_.get(), &planes_[i]);
     watch_unsaved_work();
@@ -512,10 +515,12 @@ void MainWindow::set_scene(std::unique_ptr<core::Scene> scene, const QString& pa
     update_3d();
     setWindowTitle("isoscope - " + QFileInfo(path).fileName() + "[*]");
     remember_recent(path);
+    load_warnings_->set(path, scene_->has_volume() ? scene_->volume().meta.warnings : std::vector<std::string>{});
     if (scene_->has_volume()) {
         const auto& v = scene_->volume();
         statusBar()->showMessage(
-            QString("Opened %1: %2 x %3 x %4").arg(path).arg(v.dims[0]).arg(v.dims[1]).arg(v.dims[2]));
+            QString("Opened %1: %2 x %3 x %4").arg(path).arg(v.dims[0]).arg(v.dims[1]).arg(v.dims[2]) +
+            (v.meta.warnings.empty() ? QString() : QString(" (with warnings: see the status bar's right end)")));
     } else {
         statusBar()->showMessage("Opened " + path);
     }

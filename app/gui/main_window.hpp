@@ -59,6 +59,7 @@ struct MarkupsState {
     std::vector<QStringList> sources; // one per markup
 };
 
+class LoadWarnings;
 class MeasureTools;
 class StructureTools;
 class MeasurementsPanel;
@@ -273,6 +274,7 @@ private:
     QUndoStack* undo_ = nullptr;
     QString session_path_;
     MeasureTools* tools_ = nullptr;
+    LoadWarnings* load_warnings_ = nullptr; // what opening the data said
     MeasurementsPanel* measurements_ = nullptr;
     StructureTools* structures_ = nullptr;
     std::shared_ptr<Job> job_;                  // the job the window waits for

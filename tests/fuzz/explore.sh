@@ -33,6 +33,6 @@ ASAN_OPTIONS=detect_leaks=0:alloc_dealloc_mismatch=0 \
   -artifact_prefix="$artifacts/explore-$target-" "$found" "$here/corpus/$target" "$here/regressions/$target" \
   >"$log" 2>&1
 rc=$?
-runs=$(grep -oE '^#[0-9]+' "$log" | tail -1 | tr -d '#')
+runs=$(grep -aoE '^#[0-9]+' "$log" | tail -1 | tr -d '#')
 echo "explore: fuzz_$target exit $rc after ${runs:-?} executions; corpus now $(ls "$found" | wc -l) files"
 ls "$artifacts" | grep "^explore-$target-" || echo "explore: no findings"

@@ -36,6 +36,7 @@
 #include <fstream>
 
 #include "app/gui/export_dialog.hpp"
+#include "app/gui/load_warnings.hpp"
 #include "app/gui/main_window.hpp"
 #include "app/gui/series_dialog.hpp"
 #include "app/gui/surfaces_panel.hpp"
@@ -341,12 +342,35 @@ TEST(GuiPanels, OneDicomFileOpensItsSeries) {
     ASSERT_EQ(core::list_series(file).size(), 1u);
     ASSERT_EQ(core::list_series(file)[0].dims[2], 1) << "the file alone is one slice";
 
+    // A file in the folder that once aborted the DICOM reader (issue 42): skipped, and said so.
+    const std::string crash =
+        std::string(ISOSCOPE_SOURCE_DIR) +
+        "/tests/fuzz/regressions/dicom/crash-dicom-crash-314510707ba2abecdd6ccdea964749af198ea78c";
+    fs::copy_file(crash, t.folder + "/Z-bad.dcm");
+
     gui::MainWindow w;
     w.resize(1200, 900);
     w.show();
     ASSERT_TRUE(QTest::qWaitForWindowExposed(&w));
     open_and_wait(w, file);
     const SeriesInfo& axial = t.list[std::size_t(t.axial)];
+    // The status bar's warnings are the reader's, loaded here independently.
+    LoadOptions opt;
+    opt.series = axial.uid;
+    const Volume direct = core::open_volume(t.folder, opt);
+    auto* warned = w.findChild<gui::LoadWarnings*>("load_warnings");
+    ASSERT_NE(warned, nullptr);
+    EXPECT_TRUE(warned->isVisible());
+    ASSERT_EQ(std::size_t(warned->warnings().size()), direct.meta.warnings.size());
+    for (std::size_t i = 0; i < direct.meta.warnings.size(); ++i)
+        EXPECT_EQ(warned->warnings()[int(i)].toStdString(), direct.meta.warnings[i]);
+    EXPECT_TRUE(warned->toolTip().contains("Z-bad.dcm: malformed DICOM at byte 279"))
+        << warned->toolTip().toStdString();
+    QTest::mouseClick(warned, Qt::LeftButton);
+    auto* list = visible_child<QMessageBox>(w, "load_warnings_list");
+    ASSERT_NE(list, nullptr);
+    EXPECT_TRUE(list->informativeText().contains("Z-bad.dcm")) << list->informativeText().toStdString();
+    list->close();
     EXPECT_EQ(w.scene().volume().dims[0], axial.dims[0]);
     EXPECT_EQ(w.scene().volume().dims[1], axial.dims[1]);
     EXPECT_EQ(w.scene().volume().dims[2], axial.dims[2]);
