@@ -13,9 +13,13 @@
 #include "renderer/core/raytraced_ao.hpp"
 #include "renderer/gl/context.hpp"
 
+#include "isoscope_commit.hpp" // generated: ISOSCOPE_COMMIT
+
 namespace iso::core {
 
 const char* version() { return ISOSCOPE_VERSION; }
+
+const char* commit() { return ISOSCOPE_COMMIT; }
 
 Volume open_volume(const std::string& path, const LoadOptions& opt) { return load_volume(path, opt); }
 

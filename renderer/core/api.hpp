@@ -19,6 +19,9 @@
 namespace iso::core {
 
 const char* version();
+// The git commit it was built from (12 hex digits, "-dirty" when the tree
+// had changes; "unknown" when built outside a git checkout).
+const char* commit();
 
 // Loads a volume (file or DICOM folder). Throws iso::Error.
 Volume open_volume(const std::string& path, const LoadOptions& opt = {});

@@ -181,6 +181,7 @@ ImageMetadata frame_metadata(const FrameRecord& f) {
     ImageMetadata meta;
     auto& t = meta.text;
     t["isoscope:version"] = version();
+    t["isoscope:commit"] = commit();
     // The inputs: one path (and its SHA-256) each, joined by newlines (both keys even when there is none).
     t["isoscope:input"] = t["isoscope:input_sha256"] = "";
     add_files(t, f.scene.sources(), "isoscope:input", "isoscope:input_sha256");

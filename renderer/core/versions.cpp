@@ -12,7 +12,7 @@ namespace iso::core {
 
 std::vector<std::pair<std::string, std::string>> component_versions() {
     const int oiio = OIIO::openimageio_version(); // 10000 * major + 100 * minor + patch
-    return {{"isoscope", version()},
+    return {{"isoscope", std::string(version()) + " (commit " + commit() + ")"},
             {"VTK", vtkVersion::GetVTKVersion()},
             {"OpenVDB", openvdb::getLibraryVersionString()},
             {"Embree", RTC_VERSION_STRING},

@@ -142,6 +142,12 @@ TEST(Cli, VersionNamesTheLibrariesAsInstalled) {
     const auto r = test::run_command(test::cli() + " --version");
     ASSERT_EQ(r.exit_code, 0) << r.out;
     EXPECT_EQ(r.out.rfind("isoscope ", 0), 0u) << r.out;
+    // The commit it was built from, as git says (when the sources are a git checkout).
+    const auto git = test::run_command("git -C " ISOSCOPE_SOURCE_DIR " rev-parse --short=12 HEAD 2>/dev/null");
+    if (git.exit_code == 0 && git.out.size() > 12) {
+        const std::string commit = git.out.substr(0, 12);
+        EXPECT_NE(r.out.substr(0, r.out.find('\n')).find("(commit " + commit), std::string::npos) << r.out;
+    }
     const std::pair<const char*, const char*> packages[] = {{"VTK", "libvtk9.1"},
                                                             {"OpenVDB", "libopenvdb10.0"},
                                                             {"Embree", "libembree3-3"},
