@@ -5,6 +5,7 @@
 #include <memory>
 
 #include <QApplication>
+#include <QIcon>
 #include <QImage>
 #include <QSurfaceFormat>
 #include <QTimer>
@@ -28,6 +29,15 @@ void use_gl45_surfaces() {
     QSurfaceFormat::setDefaultFormat(fmt);
 }
 
+// The windows' icon (the pictures the desktop entry's icon theme gets, as Qt
+// resources) and the desktop entry they belong to (window matching on Wayland).
+void set_app_identity() {
+    QIcon icon;
+    for (int size : {48, 64, 128, 256}) icon.addFile(QString(":/isoscope/isoscope-%1.png").arg(size));
+    QApplication::setWindowIcon(icon);
+    QGuiApplication::setDesktopFileName("isoscope");
+}
+
 struct ViewArgs {
     std::string in, view = "anterior", screenshot, series, ao = "cone", volume, volume_mode = "composite";
     std::vector<double> isos;
@@ -48,6 +58,7 @@ int run_view(ViewArgs a, char* argv0) {
     int qargc = 1;
     char* qargv[] = {argv0, nullptr};
     QApplication qapp(qargc, qargv);
+    set_app_identity();
     iso::gui::Viewer w(scene, initial, a.opt);
     w.setWindowTitle(QString::fromStdString("isoscope - " + a.in));
     w.resize(800, 600);
@@ -116,6 +127,7 @@ int run_gui(const std::string& in, char* argv0) {
     QApplication qapp(qargc, qargv);
     QApplication::setOrganizationName("isoscope");
     QApplication::setApplicationName("isoscope");
+    set_app_identity();
     iso::gui::MainWindow w;
     w.show();
     // Unsaved work of a run that was killed first (ISOSCOPE_RECOVERY=restore
