@@ -838,6 +838,7 @@ Volume load_group(Group& g, const Scan& sc, const ProgressFn& progress) {
     vol.meta.study_uid = first.study_uid;
     vol.meta.series_uid = first.series_uid;
     vol.meta.series_description = first.description;
+    vol.meta.reference_file = first.file;
     vol.meta.warnings = std::move(layout.warnings);
     vol.meta.warnings.insert(vol.meta.warnings.end(), px.notes.begin(), px.notes.end());
     return vol;

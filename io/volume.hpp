@@ -77,6 +77,7 @@ struct Metadata {
     std::string format;   // "DICOM", "NIfTI", "NRRD", "MetaImage", "VTI", "OpenVDB"
     std::string modality; // "CT", "MR", ... when the format says
     std::string patient_name, patient_id, study_uid, series_uid, series_description;
+    std::string reference_file;        // DICOM: a file of the series read (what derived objects copy)
     std::vector<SeriesInfo> series;    // every series in a DICOM folder
     int selected_series = -1;          // index into `series` that was loaded
     std::vector<std::string> warnings; // non-fatal findings (NaN counts, gaps, tilt, ...)

@@ -17,7 +17,7 @@ namespace {
 
 struct RenderArgs {
     FrameArgs frame;
-    std::string out, aov, cache, session;
+    std::string out, aov, cache, session, dicom;
     std::vector<std::string> markups;
     bool stats = false, no_annotations = false, no_legend = false, no_markups = false;
     bool view_given = false, ao_given = false;     // with --session: replace the session's camera / AO method
@@ -54,6 +54,13 @@ void print_stats(const iso::graph::FrameStats& stats, const iso::OitStats& oit) 
                   << std::setprecision(4) << oit.merge_error_max << " (linear colour, per channel)\n";
 }
 
+void print_dicom(const iso::DicomCaptureResult& d) {
+    std::cout << "DICOM Secondary Capture -> " << d.file << "\n  "
+              << (d.source_study ? "in the source's study " : "in a new study (not from DICOM) ") << d.study_uid
+              << "\n  series " << d.series_number << " " << d.series_uid << (d.new_series ? " (new)" : " (added to)")
+              << ", instance " << d.instance_number << "\n";
+}
+
 // `isoscope render --session`: the request comes from core::session_request,
 // as the desktop app's File > Export image builds it; the frame's other
 // options (size, background, AO settings, ...) are the command line's.
@@ -85,12 +92,15 @@ int run_render(const RenderArgs& a) {
         throw iso::Error("isoscope render", "give an INPUT (or --session FILE)");
     if (a.no_markups && a.session.empty())
         throw iso::Error("--no-markups", "only with --session (without it, give no --markups)");
+    if (a.out.empty() && a.dicom.empty()) throw iso::Error("isoscope render", "give -o FILE, --dicom DIR or both");
+    if (!a.dicom.empty() && !a.aov.empty())
+        throw iso::Error("--dicom", "a DICOM figure is the colour image, not an AOV (--aov)");
     std::optional<iso::core::OpenedSession> opened;
     iso::core::RenderRequest req;
     if (a.session.empty()) {
         req = frame_request(a.frame);
     } else {
-        iso::check_writable_destination(a.out);
+        if (!a.out.empty()) iso::check_writable_destination(a.out);
         opened = iso::core::open_session(a.session, progress_bar());
         for (const auto& w : opened->session.warnings) std::cerr << "warning: " << a.session << ": " << w << "\n";
         req = session_render_request(a, *opened);
@@ -102,7 +112,7 @@ int run_render(const RenderArgs& a) {
     req.time_passes = a.stats;
     if (!a.markups.empty() && !a.aov.empty())
         throw iso::Error("--markups", "markups are drawn on the colour image, not on an AOV (--aov)");
-    iso::check_writable_destination(a.out);
+    if (!a.out.empty()) iso::check_writable_destination(a.out);
     // Markups before the volume: a bad file fails fast, naming itself.
     for (const auto& path : a.markups) {
         auto f = iso::load_markups(path);
@@ -112,10 +122,14 @@ int run_render(const RenderArgs& a) {
     }
     iso::core::Scene local;
     if (!opened) open_input(local, a.frame.in, req.series, req.isos, a.frame.look, "render", req.look.volume.enabled);
-    const auto out = iso::core::render_image(opened ? *opened->scene : local, req);
-    iso::core::export_image(out.image, out.meta, a.out);
-    std::cout << "rendered " << out.image.width << "x" << out.image.height << " (" << out.gl_renderer << ") -> "
-              << a.out << "\n";
+    iso::core::Scene& scene = opened ? *opened->scene : local;
+    const auto out = iso::core::render_image(scene, req);
+    if (!a.out.empty()) {
+        iso::core::export_image(out.image, out.meta, a.out);
+        std::cout << "rendered " << out.image.width << "x" << out.image.height << " (" << out.gl_renderer << ") -> "
+                  << a.out << "\n";
+    }
+    if (!a.dicom.empty()) print_dicom(iso::core::export_dicom(scene, out.image, out.meta, a.dicom));
     if (a.stats) {
         print_stats(out.stats, out.oit);
         print_volume_stats(out.volume);
@@ -159,7 +173,10 @@ RunFn add_render(CLI::App& cmd, char*) {
         ->allow_extra_args(false);
     c->add_flag("--transparent", a.frame.req.look.transparent_background, "Transparent background");
     c->add_flag("--stats", a.stats, "Print per-pass statistics");
-    c->add_option("-o,--output", a.out, "Output .png, .tif or .exr")->required();
+    c->add_option("-o,--output", a.out, "Output .png, .tif or .exr");
+    c->add_option("--dicom", a.dicom,
+                  "Also (or only) write the figure as a DICOM Secondary Capture into this folder: in the source's "
+                  "study for a DICOM input (a new study otherwise), in the folder's isoscope series of that study");
     return [args, c] {
         args->view_given = c->get_option("--view")->count() > 0;
         args->ao_given = c->get_option("--ao")->count() > 0;

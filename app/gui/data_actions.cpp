@@ -22,6 +22,7 @@ struct Entry {
 constexpr Entry kEntries[] = {
     {"save_session", Needs::Data, "Save session..."},
     {"export_image", Needs::Data, "Export image..."},
+    {"export_dicom", Needs::Data, "Export to DICOM..."},
     {"save_surfaces", Needs::Surface, "Save surfaces..."},
     {"load_markups", Needs::Data},
     {"save_markups", Needs::Data},

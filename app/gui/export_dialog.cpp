@@ -20,6 +20,7 @@
 namespace iso::gui {
 
 namespace {
+// A file name (a folder with an empty filter) and its Browse button.
 QLineEdit* file_row(QWidget* parent, QFormLayout* form, const QString& file, const QString& filter) {
     auto* row = new QHBoxLayout;
     auto* edit = new QLineEdit(file, parent);
@@ -29,9 +30,10 @@ QLineEdit* file_row(QWidget* parent, QFormLayout* form, const QString& file, con
     browse->setObjectName("browse");
     row->addWidget(edit, 1);
     row->addWidget(browse);
-    form->addRow("File:", row);
+    form->addRow(filter.isEmpty() ? "Folder:" : "File:", row);
     QObject::connect(browse, &QPushButton::clicked, parent, [parent, edit, filter] {
-        const QString f = QFileDialog::getSaveFileName(parent, "Save as", edit->text(), filter);
+        const QString f = filter.isEmpty() ? QFileDialog::getExistingDirectory(parent, "Export into", edit->text())
+                                           : QFileDialog::getSaveFileName(parent, "Save as", edit->text(), filter);
         if (!f.isEmpty()) edit->setText(f);
     });
     return edit;
@@ -57,10 +59,12 @@ QDialogButtonBox* buttons(QDialog* d, const QString& ok) {
 
 // ---- Export image ----------------------------------------------------------------------
 
-ExportDialog::ExportDialog(QSize size, AoMethod ao, const QString& file, const QString& session_note, QWidget* parent)
-    : QDialog(parent) {
-    setWindowTitle("Export image");
-    setObjectName("export_dialog");
+ExportDialog::ExportDialog(QSize size, AoMethod ao, const QString& file, const QString& session_note, QWidget* parent,
+                           Kind kind)
+    : QDialog(parent), kind_(kind) {
+    const bool dicom = kind == Kind::Dicom;
+    setWindowTitle(dicom ? "Export to DICOM" : "Export image");
+    setObjectName(dicom ? "export_dicom_dialog" : "export_dialog");
     auto* col = new QVBoxLayout(this);
     auto* form = new QFormLayout;
     auto* size_row = new QHBoxLayout;
@@ -98,7 +102,10 @@ ExportDialog::ExportDialog(QSize size, AoMethod ao, const QString& file, const Q
     form->addRow("Markups:", markups_);
     transparent_ = new QCheckBox("Transparent background", this);
     transparent_->setObjectName("transparent");
-    form->addRow("Background:", transparent_);
+    if (dicom)
+        transparent_->hide(); // a Secondary Capture is RGB
+    else
+        form->addRow("Background:", transparent_);
     ao_ = new QComboBox(this);
     ao_->setObjectName("ao");
     ao_->addItem("off", "off");
@@ -109,7 +116,7 @@ ExportDialog::ExportDialog(QSize size, AoMethod ao, const QString& file, const Q
     ao_->addItem("ray traced (reference)", "raytraced");
     ao_->setCurrentIndex(std::max(0, ao_->findData(QString(ao_method_name(ao)))));
     form->addRow("Ambient occlusion:", ao_);
-    file_ = file_row(this, form, file, "PNG (*.png);;TIFF (*.tif *.tiff);;OpenEXR (*.exr)");
+    file_ = file_row(this, form, file, dicom ? QString() : "PNG (*.png);;TIFF (*.tif *.tiff);;OpenEXR (*.exr)");
     col->addLayout(form);
     auto* note = new QLabel(session_note, this);
     note->setObjectName("session_note");
@@ -117,7 +124,7 @@ ExportDialog::ExportDialog(QSize size, AoMethod ao, const QString& file, const Q
     col->addWidget(note);
     problem_ = problem_label(this);
     col->addWidget(problem_);
-    col->addWidget(buttons(this, "Export"));
+    col->addWidget(buttons(this, dicom ? "Export to DICOM" : "Export"));
 }
 
 core::RenderRequest ExportDialog::frame() const {
@@ -144,7 +151,10 @@ QString ExportDialog::path() const { return file_->text().trimmed(); }
 void ExportDialog::accept() {
     const QString suffix = QFileInfo(path()).suffix().toLower();
     if (path().isEmpty()) {
-        problem_->setText("Choose a file name.");
+        problem_->setText(kind_ == Kind::Dicom ? "Choose a folder." : "Choose a file name.");
+    } else if (kind_ == Kind::Dicom) {
+        QDialog::accept();
+        return;
     } else if (suffix != "png" && suffix != "tif" && suffix != "tiff" && suffix != "exr") {
         problem_->setText("The file name must end in .png, .tif or .exr.");
     } else {

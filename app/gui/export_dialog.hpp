@@ -25,10 +25,15 @@ namespace iso::gui {
 // AO (off / cone / disk) and the file (.png, .tif, .exr). Widgets are named
 // (width, height, scale, annotations, transparent, markups, ao, file) for
 // tests; OK refuses an empty name or another extension, saying why.
+// File > Export to DICOM uses it too (Kind::Dicom): a folder instead of the
+// file (the DICOM figure's name is the writer's), no transparent background
+// (a Secondary Capture is RGB).
 class ExportDialog : public QDialog {
 public:
+    enum class Kind { Image, Dicom };
     // `ao`: the method the AO box starts at (the 3D view's).
-    ExportDialog(QSize size, AoMethod ao, const QString& file, const QString& session_note, QWidget* parent = nullptr);
+    ExportDialog(QSize size, AoMethod ao, const QString& file, const QString& session_note, QWidget* parent = nullptr,
+                 Kind kind = Kind::Image);
     // The frame chosen (size, scale, annotations, background, AO method)
     // and what of it the session gives (its camera, markups if chosen).
     core::RenderRequest frame() const;
@@ -43,6 +48,7 @@ private:
     QComboBox* ao_;
     QLineEdit* file_;
     QLabel* problem_;
+    Kind kind_;
 };
 
 // Where the save dialogs start (docs/gui.md, "Where files are saved"):

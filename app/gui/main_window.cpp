@@ -493,6 +493,7 @@ void MainWindow::set_scene(std::unique_ptr<core::Scene> scene, const QString& pa
     path_ = path;
     series_ = series;
     session_path_.clear(); // open_session sets it again
+    dicom_series_.clear(); // a new session's DICOM figures go to a new series
     state_ = {};           // measurements belong to what was open
     selected_.reset();
     undo_->clear(); // and so do their edits

@@ -198,6 +198,9 @@ public:
     // the state is unchanged since it was saved or opened, else PATH.session.json
     // written next to the image).
     void export_image(const QString& path, const core::RenderRequest& frame, const core::SessionParts& take);
+    // File > Export to DICOM: the figure as a Secondary Capture into `folder`
+    // (core::export_dicom), in this session's series (dicom_series_).
+    void export_dicom(const QString& folder, const core::RenderRequest& frame, const core::SessionParts& take);
     // File > Save surfaces: one surface in LPS mm (.stl, .ply, .obj, .vtp).
     void save_surface(std::uint32_t id, const QString& path);
 
@@ -273,6 +276,7 @@ private:
     std::optional<std::size_t> selected_;
     QUndoStack* undo_ = nullptr;
     QString session_path_;
+    QString dicom_series_; // the series this session's DICOM figures go to (set by the first)
     MeasureTools* tools_ = nullptr;
     LoadWarnings* load_warnings_ = nullptr; // what opening the data said
     MeasurementsPanel* measurements_ = nullptr;

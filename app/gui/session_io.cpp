@@ -3,6 +3,7 @@
 // Save surfaces. Member functions of MainWindow kept out of main_window.cpp;
 // what they do is the core's (renderer/core/session.hpp, api.hpp, scene.hpp).
 #include <QAction>
+#include <QCoreApplication>
 #include <QDir>
 #include <QFileDialog>
 #include <QFileInfo>
@@ -112,6 +113,25 @@ void MainWindow::add_session_actions(QMenu* file) {
                                    note, this);
         d->setAttribute(Qt::WA_DeleteOnClose);
         connect(d, &QDialog::accepted, this, [this, d] { export_image(d->path(), d->frame(), d->parts()); });
+        d->open();
+    });
+    file->addAction("Export to &DICOM...", this, [this] {
+        if (path_.isEmpty()) {
+            statusBar()->showMessage("Open a volume or mesh first");
+            return;
+        }
+        const bool dicom_source = scene_->has_volume() && scene_->volume().meta.format == "DICOM";
+        const QString note =
+            QString(dicom_source ? "The figure joins the study of the DICOM series open (same patient and Study "
+                                   "Instance UID)"
+                                 : "The figure starts a new study (the data open is not from DICOM)") +
+            ", as a Secondary Capture in the series \"isoscope 3D\" (one per session: later exports add "
+            "images to it), annotations burned in, the settings that made it in its Image Comments.";
+        auto* d = new ExportDialog(viewer_ ? viewer_->image_size() : QSize(1024, 1024), current_session().ao,
+                                   suggested_save_path(path_, last_folder("dicom_folder"), "-dicom"), note, this,
+                                   ExportDialog::Kind::Dicom);
+        d->setAttribute(Qt::WA_DeleteOnClose);
+        connect(d, &QDialog::accepted, this, [this, d] { export_dicom(d->path(), d->frame(), d->parts()); });
         d->open();
     });
     file->addAction("Save s&urfaces...", this, [this] {
@@ -239,6 +259,62 @@ void MainWindow::export_image(const QString& path, const core::RenderRequest& fr
             }
             remember_folder("export_folder", path);
             statusBar()->showMessage("Exported " + path + " (session " + session + ")");
+        });
+}
+
+void MainWindow::export_dicom(const QString& folder, const core::RenderRequest& frame, const core::SessionParts& take) {
+    if (busy()) {
+        statusBar()->showMessage("Busy: wait for the current task or cancel it");
+        return;
+    }
+    if (path_.isEmpty()) {
+        statusBar()->showMessage("Open a volume or mesh first");
+        return;
+    }
+    // As Export image, from the session: the saved one when it is the state
+    // on screen (the figure's provenance names it), else a temporary one (not
+    // named: it would not outlive the export).
+    auto now = std::make_shared<core::Session>(current_session());
+    bool write = false;
+    const QString saved = export_session_path(session_path_, *now, QString(), write);
+    const std::string session_file =
+        write ? QDir::temp()
+                    .filePath(QString("isoscope-dicom-export-%1.isoscope.json").arg(QCoreApplication::applicationPid()))
+                    .toStdString()
+              : saved.toStdString();
+    const std::string dir = folder.toStdString();
+    DicomCaptureOptions opt;
+    opt.series_uid = dicom_series_.toStdString();
+    auto result = std::make_shared<DicomCaptureResult>();
+    run_job(
+        "Exporting to DICOM in " + folder, false,
+        [now, write, session_file, dir, frame, take, opt, result](const ProgressFn& progress) {
+            if (write) core::save_session(*now, session_file);
+            struct Remove {
+                std::string f;
+                ~Remove() {
+                    if (!f.empty()) std::remove(f.c_str());
+                }
+            } remove{write ? session_file : std::string()};
+            const auto opened = core::open_session(session_file, progress);
+            core::RenderRequest req = core::session_request(opened.session, session_file, frame, take);
+            req.progress = progress;
+            auto out = core::render_image(*opened.scene, req);
+            if (write) out.meta.text.erase("isoscope:session"), out.meta.text.erase("isoscope:session_sha256");
+            *result = core::export_dicom(*opened.scene, out.image, out.meta, dir, opt);
+        },
+        [this, folder, result](std::exception_ptr e) {
+            if (e) {
+                show_error("Cannot export to DICOM", "Cannot export to DICOM in " + folder, e);
+                return;
+            }
+            dicom_series_ = QString::fromStdString(result->series_uid);
+            remember_folder("dicom_folder", folder + "/");
+            statusBar()->showMessage(QString("Exported to DICOM: %1 (series %2 \"isoscope 3D\", image %3; %4)")
+                                         .arg(QString::fromStdString(result->file))
+                                         .arg(result->series_number)
+                                         .arg(result->instance_number)
+                                         .arg(result->source_study ? "in the source's study" : "a new study"));
         });
 }
 

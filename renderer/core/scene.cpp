@@ -419,6 +419,17 @@ void export_image(const Image& image, const ImageMetadata& meta, const std::stri
     save_image(image, path, meta);
 }
 
+DicomCaptureResult export_dicom(const Scene& scene, const Image& image, const ImageMetadata& meta,
+                                const std::string& dir, const DicomCaptureOptions& opt) {
+    Metadata source;
+    if (scene.has_volume()) {
+        source = scene.volume().meta;
+    } else if (const auto it = meta.text.find("isoscope:input"); it != meta.text.end()) {
+        source.source = it->second.substr(0, it->second.find('\n')); // a mesh: its (first) file
+    }
+    return write_dicom_capture(image, meta, source, dir, opt);
+}
+
 glm::vec3 surface_color(std::size_t index, std::size_t count) {
     // Outer surfaces (lower CT values) skin-toned, inner ones bone white, then
     // ten other hues: each clearly apart from the one before it, on the slices'

@@ -16,6 +16,7 @@
 
 #include <glm/vec3.hpp>
 
+#include "io/dicom_capture.hpp"
 #include "io/image.hpp"
 #include "io/mesh.hpp"
 #include "io/progress.hpp"
@@ -186,6 +187,13 @@ private:
 // Writes an image (.png, .tif, .exr) with its metadata; never leaves a
 // half-written file.
 void export_image(const Image& image, const ImageMetadata& meta, const std::string& path);
+
+// Writes a figure of the scene as a DICOM Secondary Capture in folder `dir`
+// (io/dicom_capture.hpp): in the source's study when the scene's volume came
+// from DICOM, else a new study; the series the options name, else the
+// folder's isoscope series of that study, else a new one.
+DicomCaptureResult export_dicom(const Scene& scene, const Image& image, const ImageMetadata& meta,
+                                const std::string& dir, const DicomCaptureOptions& opt = {});
 
 // Surface colours for iso values in increasing order (linear RGB): skin,
 // bone, then ten other hues, each clearly apart from the one before (on the

@@ -23,6 +23,8 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <vector>
+#include <algorithm>
 
 #include "app/gui/export_dialog.hpp"
 #include "app/gui/main_window.hpp"
@@ -35,6 +37,12 @@
 #include "renderer/core/api.hpp"
 #include "renderer/core/scene.hpp"
 #include "renderer/core/session.hpp"
+
+#include <vtkDICOMReader.h>
+#include <vtkDataArray.h>
+#include <vtkImageData.h>
+#include <vtkNew.h>
+#include <vtkPointData.h>
 
 using namespace iso;
 namespace fs = std::filesystem;
@@ -317,4 +325,91 @@ TEST(GuiExport, ExportSaveOpenSessionAndSurfaces) {
         EXPECT_EQ(w2.session_path().toStdString(), session);
     }
     step(clock, "dropped session opened");
+}
+
+// File > Export to DICOM: the figure joins the open series' study, one series
+// for the session (a second export adds an image to it, also in another
+// folder); the pixels are what `isoscope render --session ... --dicom` writes
+// for the same session, read back with vtk-dicom.
+TEST(GuiExport, ExportToDicomJoinsTheStudyInOneSeriesPerSession) {
+    ISO_SKIP_WITHOUT_DISPLAY();
+    test::TempDir dir;
+    const auto app = test::make_app("gui_export_test", dir / "config");
+    gui::MainWindow w;
+    w.resize(1200, 900);
+    w.show();
+    ASSERT_TRUE(QTest::qWaitForWindowExposed(&w));
+    w.open_path(QString::fromStdString(test::data("dicom-mr-forearm")));
+    ASSERT_TRUE(wait_until([&] { return !w.busy(); }, 60000));
+    ASSERT_TRUE(w.scene().has_volume()) << w.statusBar()->currentMessage().toStdString();
+    w.add_surface(200);
+    ASSERT_TRUE(wait_until([&] { return !w.busy(); }, 60000));
+    ASSERT_EQ(w.scene().surfaces().size(), 1u);
+    const std::string session = dir / "forearm.isoscope.json";
+    w.save_session(QString::fromStdString(session));
+    ASSERT_TRUE(wait_until([&] { return !w.busy(); }, 60000));
+
+    auto export_into = [&](const std::string& folder) {
+        QAction* action = file_action(w, "Export to &DICOM...");
+        ASSERT_NE(action, nullptr);
+        action->trigger();
+        auto* d = wait_for_child<gui::ExportDialog>(w, "export_dicom_dialog");
+        ASSERT_NE(d, nullptr);
+        EXPECT_FALSE(d->findChild<QCheckBox*>("transparent")->isVisible()) << "a Secondary Capture is RGB";
+        d->findChild<QSpinBox*>("width")->setValue(160);
+        d->findChild<QSpinBox*>("height")->setValue(120);
+        d->findChild<QComboBox*>("ao")->setCurrentIndex(0); // off
+        d->findChild<QLineEdit*>("file")->setText(QString::fromStdString(folder));
+        QTest::mouseClick(d->findChild<QDialogButtonBox*>()->button(QDialogButtonBox::Ok), Qt::LeftButton);
+        ASSERT_TRUE(wait_until(
+            [&] { return !w.busy() && w.findChild<gui::ExportDialog*>("export_dicom_dialog") == nullptr; }, 120000));
+    };
+    export_into(dir / "pacs");
+    export_into(dir / "pacs");
+    export_into(dir / "elsewhere");
+    auto files = [](const std::string& folder) {
+        std::vector<std::string> v;
+        for (const auto& e : fs::directory_iterator(folder)) v.push_back(e.path().string());
+        std::sort(v.begin(), v.end());
+        return v;
+    };
+    const auto pacs = files(dir / "pacs"), elsewhere = files(dir / "elsewhere");
+    ASSERT_EQ(pacs.size(), 2u) << w.statusBar()->currentMessage().toStdString();
+    ASSERT_EQ(elsewhere.size(), 1u);
+    // Read back by vtk-dicom: the core's study, one series, numbered images.
+    // Read back by DCMTK: the core's study, one series, numbered images.
+    std::vector<std::string> dumps;
+    for (const auto& f : {pacs[0], pacs[1], elsewhere[0]}) {
+        const auto back = test::run_command("dcmdump +P StudyInstanceUID +P SeriesInstanceUID +P InstanceNumber " + f);
+        ASSERT_EQ(back.exit_code, 0) << back.out << " (./setup.sh --tests installs dcmtk)";
+        dumps.push_back(back.out);
+    }
+    const std::string study = w.scene().volume().meta.study_uid;
+    auto series_line = [](const std::string& d) { return d.substr(d.find("(0020,000e)"), 80); };
+    for (const auto& d : dumps) {
+        EXPECT_NE(d.find("[" + study + "]"), std::string::npos) << d;
+        EXPECT_EQ(series_line(d), series_line(dumps[0])) << "one series for the session";
+    }
+    EXPECT_NE(dumps[0].find("IS [1]"), std::string::npos) << dumps[0];
+    EXPECT_NE(dumps[1].find("IS [2]"), std::string::npos) << dumps[1];
+    EXPECT_NE(w.statusBar()->currentMessage().indexOf("in the source's study"), -1)
+        << w.statusBar()->currentMessage().toStdString();
+
+    // The same session through the command line: the same pixels.
+    const auto r = test::run_command(
+        test::cli() + " render --session " + session + " --size 160x120 --ao off --dicom " + (dir / "cli"), true);
+    ASSERT_EQ(r.exit_code, 0) << r.out;
+    const auto cli = files(dir / "cli");
+    ASSERT_EQ(cli.size(), 1u);
+    auto pixels = [](const std::string& f) {
+        vtkNew<vtkDICOMReader> reader;
+        reader->SetFileName(f.c_str());
+        reader->Update();
+        auto* a = reader->GetOutput()->GetPointData()->GetScalars();
+        return std::vector<unsigned char>(static_cast<unsigned char*>(a->GetVoidPointer(0)),
+                                          static_cast<unsigned char*>(a->GetVoidPointer(0)) + a->GetNumberOfValues());
+    };
+    const auto a = pixels(pacs[0]), b = pixels(cli[0]);
+    ASSERT_EQ(a.size(), std::size_t(160 * 120 * 3));
+    EXPECT_TRUE(a == b) << "File > Export to DICOM and isoscope render --session --dicom differ";
 }
