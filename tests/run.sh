@@ -1,19 +1,45 @@
 #!/usr/bin/env bash
-# The test command (README, CI): installs what the project needs, builds, runs
-# every CTest test (labels cpu and gl), the same tests under ASan+UBSan, and a
-# short libFuzzer smoke pass over every parser.
+# The test command (README, CI): installs what the project needs, then
+#   1. builds everything (release: the product, every test, the benchmarks)
+#      and runs every CTest test (labels cpu, gl, gui);
+#   2. makes the Debian package and checks it (tests/package/check.sh);
+#   3. builds again with AddressSanitizer + UndefinedBehaviorSanitizer and
+#      runs every test there;
+#   4. runs the deterministic fuzz smoke over every parser (tests/fuzz/smoke.sh).
+# At its end (and when a stage fails) it prints each stage's minutes.
 #
 #   tests/run.sh            everything
-#   tests/run.sh quick      the main build and its tests only
-#
-# Environment: ISOSCOPE_FUZZ_SECONDS=N fuzzes N seconds per target with a
-# random seed instead of the deterministic pass.
+#   tests/run.sh quick      the release build and its tests only
 set -euo pipefail
 cd "$(dirname "$0")/.."
 mode=${1:-all}
 jobs=$(nproc)
 log=$(mktemp /tmp/isoscope-tests-XXXXXX)
-trap 'rm -f "$log"' EXIT
+
+# ---- stage clock: each stage's minutes, printed at the end whatever happens
+stages=()
+stage_name=""
+stage_start=0
+begin() {
+  end_stage
+  stage_name=$1
+  stage_start=$SECONDS
+  echo "== $1"
+}
+end_stage() {
+  if [[ -n $stage_name ]]; then
+    stages+=("$(awk -v s=$((SECONDS - stage_start)) -v n="$stage_name" 'BEGIN { printf "  %-46s %5.1f min", n, s / 60 }')")
+    stage_name=""
+  fi
+}
+report() {
+  end_stage
+  echo "== minutes per stage ($jobs cores)"
+  printf '%s\n' "${stages[@]}"
+  awk -v s=$SECONDS 'BEGIN { printf "  %-46s %5.1f min\n", "total", s / 60 }'
+  rm -f "$log"
+}
+trap report EXIT
 
 # Runs ctest, showing its output, and adds its counts to the totals.
 passed=0
@@ -34,34 +60,38 @@ run_ctest() {
 }
 summary() { echo "tests: $passed passed, $failed failed"; }
 
-./setup.sh
+begin "packages (./setup.sh --tests)"
+./setup.sh --tests
 
-echo "== build (RelWithDebInfo)"
-cmake -S . -B build -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo >/dev/null
+begin "release build (everything)"
+cmake -S . -B build -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DISOSCOPE_BUILD_TESTS=ON >/dev/null
 cmake --build build -j "$jobs"
-echo "== tests"
+begin "release tests"
 run_ctest ctest --test-dir build --output-on-failure -j "$jobs" || { summary; exit 1; }
 
 if [[ $mode == quick ]]; then summary; exit 0; fi
 
-echo "== tests under AddressSanitizer + UndefinedBehaviorSanitizer"
+begin "Debian package (tests/package/check.sh)"
+if tests/package/check.sh build; then passed=$((passed + 1)); else failed=$((failed + 1)); summary; exit 1; fi
+
+begin "ASan+UBSan build"
 cmake -S . -B build-asan -G Ninja -DCMAKE_BUILD_TYPE=Debug -DISOSCOPE_SANITIZE=ON -DISOSCOPE_BUILD_BENCHMARKS=OFF >/dev/null
 cmake --build build-asan -j "$jobs"
+begin "ASan+UBSan tests"
 # VTK and OpenVDB allocate globals that LeakSanitizer reports at exit; leaks
 # are checked by the fuzzers on our own code paths instead.
 run_ctest env ASAN_OPTIONS=detect_leaks=0:abort_on_error=1 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
   ctest --test-dir build-asan --output-on-failure -j "$jobs" || { summary; exit 1; }
 
-if [[ -f tests/fuzz/smoke.sh ]]; then
-  echo "== fuzz smoke"
-  CC=clang CXX=clang++ cmake -S . -B build-fuzz -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DISOSCOPE_FUZZ=ON >/dev/null
-  cmake --build build-fuzz -j "$jobs" --target fuzzers
-  if tests/fuzz/smoke.sh build-fuzz ${ISOSCOPE_FUZZ_SECONDS:-}; then
-    passed=$((passed + 11)) # one per fuzz target (tests/fuzz/smoke.sh)
-  else
-    failed=$((failed + 1))
-    summary
-    exit 1
-  fi
+begin "fuzz build"
+CC=clang CXX=clang++ cmake -S . -B build-fuzz -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DISOSCOPE_FUZZ=ON >/dev/null
+cmake --build build-fuzz -j "$jobs" --target fuzzers
+begin "fuzz smoke (deterministic)"
+if tests/fuzz/smoke.sh build-fuzz; then
+  passed=$((passed + 11)) # one per fuzz target (tests/fuzz/smoke.sh)
+else
+  failed=$((failed + 1))
+  summary
+  exit 1
 fi
 summary

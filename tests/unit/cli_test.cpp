@@ -167,3 +167,31 @@ TEST(Cli, VersionNamesTheLibrariesAsInstalled) {
             << name << " says " << version << ", " << package << " is " << dpkg.out;
     }
 }
+
+TEST(Cli, AJpeg2000SeriesPrintsNoFloodOfLibraryMessages) {
+    // The bundled MR series re-encoded as JPEG 2000 (GDCM's gdcmconv, from
+    // ./setup.sh --tests): GDCM says "Encapsulated stream has more bits
+    // actually stored on disk. correcting." for every file. It decodes in a
+    // child process whose messages come back as one warning with a count:
+    // nothing on stderr, one line on stdout.
+    test::TempDir dir;
+    std::filesystem::create_directories(dir / "j2k");
+    for (int i = 1; i <= 3; ++i) {
+        const std::string name = "1-" + std::to_string(i) + ".dcm";
+        const auto c = test::run_command(
+            "gdcmconv --j2k " + test::data("dicom-mr-forearm/" + name) + " " + (dir / ("j2k/" + name)), true);
+        ASSERT_EQ(c.exit_code, 0) << "gdcmconv (./setup.sh --tests installs libgdcm-tools): " << c.out;
+    }
+    const auto err = test::run_command(test::cli() + " info " + (dir / "j2k") + " 2>&1 >/dev/null");
+    EXPECT_EQ(err.exit_code, 0);
+    EXPECT_EQ(err.out, "") << "stderr of isoscope info";
+    const auto out = test::run_command(test::cli() + " info " + (dir / "j2k"));
+    std::size_t gdcm = 0, pos = 0;
+    while ((pos = out.out.find("the DICOM decoder (GDCM) said", pos)) != std::string::npos) ++gdcm, ++pos;
+    EXPECT_EQ(gdcm, 1u) << out.out;
+    EXPECT_NE(out.out.find("said 3 times"), std::string::npos) << out.out;
+    // The voxels are the uncompressed series' (JPEG 2000 lossless).
+    const auto a = test::run_command(test::cli() + " info --json " + (dir / "j2k"));
+    const auto b = test::run_command(test::cli() + " info --json " + test::data("dicom-mr-forearm"));
+    EXPECT_EQ(nlohmann::json::parse(a.out)["range"], nlohmann::json::parse(b.out)["range"]);
+}
