@@ -33,7 +33,7 @@ work=$(mktemp -d /tmp/isoscope-fuzz-smoke-XXXXXX)
 trap 'rm -rf "$work" /tmp/isoscope-fuzz-smoke-input' EXIT
 # Mutations per target after the replay (about 10-20 s each on a 2-core
 # machine; the VDB target starts a reader process per input).
-declare -A runs=([nrrd]=20000 [nifti]=20000 [metaimage]=20000 [vti]=10000 [vdb]=60 [dicom]=10000
+declare -A runs=([nrrd]=20000 [nifti]=20000 [metaimage]=20000 [vti]=10000 [vdb]=60 [dicom]=3000
                  [stl]=20000 [ply]=20000 [obj]=20000 [vtp]=10000 [markups]=8000)
 targets=(nrrd nifti metaimage vti vdb dicom stl ply obj vtp markups)
 (($#)) && targets=("$@")
