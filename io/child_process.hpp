@@ -15,11 +15,12 @@
 // helper executable to install or find, and every program that links the
 // reader (the CLI, the GUI, tests, fuzzers) has it.
 //
-// The child writes its product to kChildOutFd and "ok ..." or an error
-// message to kChildStatusFd, and gets `input` on its standard input; its
-// standard output goes to /dev/null (the CLI's JSON goes to ours) and its
-// standard error (a library's chatter, an assertion's last words) comes back
-// to the caller as text instead of reaching the user's terminal.
+// The child writes its product to kChildOutFd (a pipe) and "ok ..." or an
+// error message to kChildStatusFd, and reads `input` on its standard input
+// (a file in memory); its standard output goes to /dev/null (the CLI's JSON
+// goes to ours) and its standard error (a library's chatter, an assertion's
+// last words) to a file in memory whose text comes back to the caller instead
+// of reaching the user's terminal.
 #pragma once
 
 #include <cstddef>

@@ -30,14 +30,13 @@
 #include <vtkStringArray.h>
 #include <vtkTriangleFilter.h>
 #include <vtkUnsignedCharArray.h>
-#include <vtkXMLPolyDataReader.h>
 #include <vtkXMLPolyDataWriter.h>
 
 #include "io/atomic_file.hpp"
 #include "io/error.hpp"
 #include "io/mesh_parsers.hpp"
 #include "io/vtk_mesh.hpp"
-#include "io/vtp_check.hpp"
+#include "io/vtp_reader.hpp"
 #include "io/vtk_util.hpp"
 
 namespace iso {
@@ -96,16 +95,6 @@ Fmt format_of(const std::string& path) {
     for (std::size_t i = 0; i < all.size(); ++i)
         if (ext == all[i]) return Fmt(i);
     throw Error(path, "unsupported mesh format '" + ext + "' (expected " + mesh_extensions_text() + ")");
-}
-
-vtkSmartPointer<vtkPolyData> run_reader(vtkAlgorithm* reader, const std::string& path) {
-    vtkNew<VtkMessages> msgs;
-    msgs->watch(reader);
-    reader->Update();
-    if (msgs->has_error()) throw Error(path, msgs->first_error());
-    auto* pd = vtkPolyData::SafeDownCast(reader->GetOutputDataObject(0));
-    if (!pd) throw Error(path, "the reader produced no polygon data");
-    return pd;
 }
 
 } // namespace
@@ -278,18 +267,7 @@ Mesh load_mesh(const std::string& path) {
         case Fmt::Stl: m = detail::parse_stl(path, space); break;
         case Fmt::Ply: m = detail::parse_ply(path, space); break;
         case Fmt::Obj: m = detail::parse_obj(path, space); break;
-        case Fmt::Vtp: {
-            vtkNew<vtkXMLPolyDataReader> r;
-            r->SetFileName(path.c_str());
-            if (!r->CanReadFile(path.c_str())) throw Error(path, "not a VTK XML PolyData file");
-            detail::check_vtk_xml_headers(path);
-            auto pd = run_reader(r, path);
-            if (auto* s = vtkStringArray::SafeDownCast(pd->GetFieldData()->GetAbstractArray("SPACE"));
-                s && s->GetNumberOfValues() > 0)
-                space = s->GetValue(0);
-            m = from_polydata(pd, path);
-            break;
-        }
+        case Fmt::Vtp: m = detail::read_vtp(path, space, size); break;
         }
     } catch (const std::bad_alloc&) {
         throw Error(path, "not enough memory to read this file (a corrupt header announcing a huge size?)");

@@ -114,7 +114,7 @@ std::vector<double> Comm::allgatherv(std::span<const double> mine) const {
     std::vector<int> counts(static_cast<std::size_t>(size_)), offs(std::size_t(size_) + 1, 0);
     check(MPI_Allgather(&n, 1, MPI_INT, counts.data(), 1, MPI_INT, MPI_COMM_WORLD), "MPI_Allgather");
     for (int r = 0; r < size_; ++r) offs[r + 1] = offs[r] + counts[r];
-    std::vector<double> out(std::size_t(offs[size_]));
+    std::vector<double> out(static_cast<std::size_t>(offs[size_]));
     check(
         MPI_Allgatherv(mine.data(), n, MPI_DOUBLE, out.data(), counts.data(), offs.data(), MPI_DOUBLE, MPI_COMM_WORLD),
         "MPI_Allgatherv");

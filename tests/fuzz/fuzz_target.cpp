@@ -94,8 +94,9 @@ extern "C" int LLVMFuzzerInitialize(int*, char***) {
     // A header may legitimately announce a large volume; keep the fuzzer's
     // allocations well under its RSS limit (the check itself is what we test).
     ::setenv("ISOSCOPE_MAX_VOLUME_BYTES", "268435456", 0);
-    // The VDB reader's child process must give up well inside -timeout.
+    // The VDB and VTP readers' child processes must give up well inside -timeout.
     ::setenv("ISOSCOPE_VDB_READ_TIMEOUT", "2", 0);
+    ::setenv("ISOSCOPE_VTP_READ_TIMEOUT", "2", 0);
     return 0;
 }
 

@@ -10,8 +10,13 @@
 # so gives the same verdict on every machine. What that rests on: committed
 # seeds (none written at run time), -seed=1 and -runs=N, no corpus reload
 # (-reload=0, which re-runs files on a timer), the input file at the same path
-# everywhere (ISOSCOPE_FUZZ_INPUT_DIR), memory limits checked at each
-# allocation (-malloc_limit_mb) rather than only by the sampled RSS. Each
+# everywhere (ISOSCOPE_FUZZ_INPUT_DIR), the seeds in a fixed order
+# (-seed_inputs), no mutations from the values compared (-use_cmp=0: pointer
+# comparisons make them depend on where allocations land, which VTK's threads
+# vary) and no address randomization (setarch -R), the child processes' input
+# and messages through files, their plumbing left out of coverage (see
+# io/child_process.cpp), memory limits checked at each allocation
+# (-malloc_limit_mb) rather than only by the sampled RSS. Each
 # target's final statistics (cov, ft, corp) are printed, so two runs can be
 # compared line by line.
 #
@@ -31,30 +36,38 @@ here=$(cd "$(dirname "$0")" && pwd)
 artifacts=$(mkdir -p "$build/artifacts" && cd "$build/artifacts" && pwd)
 work=$(mktemp -d /tmp/isoscope-fuzz-smoke-XXXXXX)
 trap 'rm -rf "$work" /tmp/isoscope-fuzz-smoke-input' EXIT
-# Mutations per target after the replay (about 10-20 s each on a 2-core
-# machine; the VDB target starts a reader process per input).
+# Runs per target, the replay included (about 5-50 s each on a 2-core
+# machine; the VDB and VTP targets start a reader process per input, the
+# DICOM target one for each compressed input).
 declare -A runs=([nrrd]=20000 [nifti]=20000 [metaimage]=20000 [vti]=10000 [vdb]=60 [dicom]=3000
-                 [stl]=20000 [ply]=20000 [obj]=20000 [vtp]=10000 [markups]=8000)
+                 [stl]=20000 [ply]=20000 [obj]=20000 [vtp]=300 [markups]=8000)
 targets=(nrrd nifti metaimage vti vdb dicom stl ply obj vtp markups)
 (($#)) && targets=("$@")
+# The same addresses in every run, where the system allows it.
+fixed=()
+if setarch "$(uname -m)" -R true 2>/dev/null; then fixed=(setarch "$(uname -m)" -R); fi
 failed=()
+shopt -s nullglob
 for target in "${targets[@]}"; do
   exe="$build/tests/fuzz/fuzz_$target"
-  corpus="$work/corpus-$target"
+  # The seeds in a fixed order (the globs sort): as a directory, libFuzzer
+  # would take them in readdir order, which differs between filesystems, and
+  # run equally long ones in that order.
+  seeds=("$here/corpus/$target/"* "$here/regressions/$target/"*)
+  (IFS=,; printf "%s" "${seeds[*]}") >"$work/seeds-$target"
+  corpus="$work/corpus-$target" # what the run adds
   mkdir -p "$corpus"
-  cp "$here/corpus/$target/"* "$corpus/" 2>/dev/null
-  cp "$here/regressions/$target/"* "$corpus/" 2>/dev/null
-  seeds=$(ls "$corpus" | wc -l)
   rm -f "$artifacts/crash-$target-"*
   # ASan's leak checker runs at exit, where VTK keeps singletons alive on
   # purpose; the harness replaces operator new (see fuzz_target.cpp), which
   # makes ASan's new/free pairing check meaningless.
   start=$SECONDS
   if ASAN_OPTIONS=detect_leaks=0:alloc_dealloc_mismatch=0 ISOSCOPE_FUZZ_INPUT_DIR=/tmp/isoscope-fuzz-smoke-input/$target \
-     "$exe" -seed=1 -runs="${runs[$target]}" -reload=0 -rss_limit_mb=2048 -malloc_limit_mb=2048 -timeout=30 \
-       -print_final_stats=0 -artifact_prefix="$artifacts/crash-$target-" "$corpus" >"$work/$target.log" 2>&1; then
+     "${fixed[@]}" "$exe" -seed=1 -runs="${runs[$target]}" -reload=0 -use_cmp=0 -use_memmem=0 -rss_limit_mb=2048 \
+       -malloc_limit_mb=2048 -timeout=30 -print_final_stats=0 -artifact_prefix="$artifacts/crash-$target-" \
+       -seed_inputs=@"$work/seeds-$target" "$corpus" >"$work/$target.log" 2>&1; then
     stats=$(grep -aoE '#[0-9]+[[:space:]]+DONE[[:space:]]+cov: [0-9]+ ft: [0-9]+ corp: [0-9]+' "$work/$target.log" | tail -1 | tr -s ' \t' ' ')
-    echo "fuzz_$target: ok ($seeds seeds replayed, ${runs[$target]} runs: ${stats:-no statistics}; $((SECONDS - start)) s)"
+    echo "fuzz_$target: ok (${#seeds[@]} seeds replayed, ${runs[$target]} runs: ${stats:-no statistics}; $((SECONDS - start)) s)"
     rm -f "$artifacts/crash-$target-"*
   else
     echo "fuzz_$target: FAILED"

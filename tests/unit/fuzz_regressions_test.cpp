@@ -67,6 +67,7 @@ int replay(const std::string& folder) {
     // gives up on a hanging file after 2 s, not 120.
     ::setenv("ISOSCOPE_MAX_VOLUME_BYTES", "268435456", 0);
     ::setenv("ISOSCOPE_VDB_READ_TIMEOUT", "2", 0);
+    ::setenv("ISOSCOPE_VTP_READ_TIMEOUT", "2", 0);
     const fs::path root = fs::path(ISOSCOPE_SOURCE_DIR) / "tests/fuzz" / folder;
     TempDir tmp;
     int n = 0;
