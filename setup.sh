@@ -9,6 +9,8 @@ set -euo pipefail
 PACKAGES=(
   # build; shaders are validated at build time; the manual page is made from --help
   build-essential cmake ninja-build pkg-config glslang-tools help2man
+  # the linker (about three times faster than ld.bfd on our programs)
+  lld
   # I/O
   libvtk9-dev libvtk-dicom-dev libteem-dev
   libopenvdb-dev libtbb-dev libglm-dev

@@ -1,10 +1,11 @@
 #!/usr/bin/env bash
 # The test command (README, CI): installs what the project needs, then
 #   1. builds everything (release: the product, every test, the benchmarks)
-#      and runs every CTest test (labels cpu, gl, gui);
+#      and runs every CTest test (labels cpu, gl, mpi) but the desktop app's
+#      (label gui: they run in 3);
 #   2. makes the Debian package and checks it (tests/package/check.sh);
 #   3. builds again with AddressSanitizer + UndefinedBehaviorSanitizer and
-#      runs every test there;
+#      runs every test there, the desktop app's included;
 #   4. runs the deterministic fuzz smoke over every parser (tests/fuzz/smoke.sh).
 # At its end (and when a stage fails) it prints each stage's minutes.
 #
@@ -66,8 +67,13 @@ begin "packages (./setup.sh --tests)"
 begin "release build (everything)"
 cmake -S . -B build -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DISOSCOPE_BUILD_TESTS=ON >/dev/null
 cmake --build build -j "$jobs"
+# The desktop app's tests (label "gui", half of this stage's time) run once,
+# in the sanitizer stage, where they also check the GUI's threads and
+# widgets for memory errors; `quick` runs them here.
+gui_once=(-LE gui)
+if [[ $mode == quick ]]; then gui_once=(); fi
 begin "release tests"
-run_ctest ctest --test-dir build --output-on-failure -j "$jobs" || { summary; exit 1; }
+run_ctest ctest --test-dir build --output-on-failure -j "$jobs" "${gui_once[@]}" || { summary; exit 1; }
 
 if [[ $mode == quick ]]; then summary; exit 0; fi
 
