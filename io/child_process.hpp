@@ -26,6 +26,8 @@
 #include <cstddef>
 #include <functional>
 #include <istream>
+#include <ostream>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -67,6 +69,19 @@ void child_begin(char** argv);
 void child_write(int fd, const std::string& s);
 // Everything readable from `fd` (the child's standard input, say).
 std::string read_fd(int fd);
+
+// Plain values on the child's product stream (the same program writes and
+// reads them, so no byte order or layout is negotiated). child_get throws
+// std::runtime_error saying "<who>'s output ended early" at a short read.
+template <class T> void child_put(std::ostream& os, const T& v) {
+    os.write(reinterpret_cast<const char*>(&v), sizeof v);
+}
+template <class T> T child_get(std::istream& is, const char* who) {
+    T v{};
+    is.read(reinterpret_cast<char*>(&v), sizeof v);
+    if (!is) throw std::runtime_error(std::string(who) + "'s output ended early");
+    return v;
+}
 
 // What a child may allocate when the caller has no better bound: `env` MiB
 // when set, else half of physical memory.

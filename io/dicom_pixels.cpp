@@ -91,8 +91,6 @@ DecodedPixels from_reader(vtkDICOMReader* reader) {
 // image: dims, VTK type, components, the file index count and indices (all
 // int32), the byte count (uint64) and the bytes.
 
-template <class T> void put(std::ostream& os, T v) { os.write(reinterpret_cast<const char*>(&v), sizeof v); }
-
 int child_main(char** argv) {
     child_begin(argv);
     std::vector<std::string> files;
@@ -102,7 +100,7 @@ int child_main(char** argv) {
     std::ostream os(&buf);
     const ReadOutcome r = run_vtk_dicom(files, [&](double f) {
         os.put('P');
-        put(os, f);
+        child_put(os, f);
         os.flush();
         return bool(os);
     });
@@ -116,14 +114,14 @@ int child_main(char** argv) {
         return 2;
     }
     os.put('D');
-    for (int d : px.dims) put<std::int32_t>(os, d);
-    put<std::int32_t>(os, px.array->GetDataType());
-    put<std::int32_t>(os, px.components);
-    put<std::int32_t>(os, std::int32_t(px.file_index.size()));
-    for (int i : px.file_index) put<std::int32_t>(os, i);
+    for (int d : px.dims) child_put<std::int32_t>(os, d);
+    child_put<std::int32_t>(os, px.array->GetDataType());
+    child_put<std::int32_t>(os, px.components);
+    child_put<std::int32_t>(os, std::int32_t(px.file_index.size()));
+    for (int i : px.file_index) child_put<std::int32_t>(os, i);
     const std::uint64_t bytes =
         std::uint64_t(px.array->GetNumberOfValues()) * std::uint64_t(px.array->GetDataTypeSize());
-    put(os, bytes);
+    child_put(os, bytes);
     os.write(static_cast<const char*>(px.array->GetVoidPointer(0)), std::streamsize(bytes));
     os.flush();
     if (!os) return 3;
@@ -137,28 +135,21 @@ __attribute__((constructor)) void child_entry(int argc, char** argv, char**) {
 
 // ---- in the reading program ------------------------------------------------------
 
-template <class T> T get(std::istream& is) {
-    T v{};
-    is.read(reinterpret_cast<char*>(&v), sizeof v);
-    if (!is) throw std::runtime_error("the decoder's output ended early");
-    return v;
-}
-
 // Reads the child's frames (see child_main) into `px`, reporting progress.
 void receive(std::istream& is, DecodedPixels& px, const std::function<void(double)>& progress) {
     for (int c; (c = is.get()) != EOF;) {
         if (c == 'P') {
-            progress(get<double>(is));
+            progress(child_get<double>(is, "the decoder"));
             continue;
         }
         if (c != 'D') throw std::runtime_error("the decoder's output is garbled");
-        for (int& d : px.dims) d = get<std::int32_t>(is);
-        const int type = get<std::int32_t>(is);
-        px.components = get<std::int32_t>(is);
-        const int n = get<std::int32_t>(is);
+        for (int& d : px.dims) d = child_get<std::int32_t>(is, "the decoder");
+        const int type = child_get<std::int32_t>(is, "the decoder");
+        px.components = child_get<std::int32_t>(is, "the decoder");
+        const int n = child_get<std::int32_t>(is, "the decoder");
         if (n < 0 || n > px.dims[2]) throw std::runtime_error("the decoder's output is garbled");
-        for (int k = 0; k < n; ++k) px.file_index.push_back(get<std::int32_t>(is));
-        const auto bytes = get<std::uint64_t>(is);
+        for (int k = 0; k < n; ++k) px.file_index.push_back(child_get<std::int32_t>(is, "the decoder"));
+        const auto bytes = child_get<std::uint64_t>(is, "the decoder");
         px.array = vtkSmartPointer<vtkDataArray>::Take(vtkDataArray::CreateDataArray(type));
         if (!px.array || px.components < 1 || px.dims[0] < 0 || px.dims[1] < 0 || px.dims[2] < 0)
             throw std::runtime_error("the decoder's output is garbled");

@@ -39,13 +39,12 @@ namespace {
 
 constexpr const char* kChildFlag = "--isoscope-vtp-reader";
 
-template <class T> void put(std::ostream& os, const T& v) { os.write(reinterpret_cast<const char*>(&v), sizeof v); }
 template <class T> void put_all(std::ostream& os, const std::vector<T>& v) {
-    put<std::uint64_t>(os, v.size());
+    child_put<std::uint64_t>(os, v.size());
     if (!v.empty()) os.write(reinterpret_cast<const char*>(v.data()), std::streamsize(v.size() * sizeof(T)));
 }
 void put_text(std::ostream& os, const std::string& s) {
-    put<std::uint64_t>(os, s.size());
+    child_put<std::uint64_t>(os, s.size());
     os.write(s.data(), std::streamsize(s.size()));
 }
 
@@ -84,7 +83,7 @@ int child_main(char** argv) {
         put_all(os, m.colors);
         put_all(os, m.triangles);
         put_text(os, space);
-        put<std::uint64_t>(os, m.warnings.size());
+        child_put<std::uint64_t>(os, m.warnings.size());
         for (const auto& w : m.warnings) put_text(os, w);
         os.flush();
         if (!os) return 3;
@@ -105,16 +104,9 @@ __attribute__((constructor)) void child_entry(int argc, char** argv, char**) {
 
 // ---- in the reading program ------------------------------------------------------
 
-template <class T> T get(std::istream& is) {
-    T v{};
-    is.read(reinterpret_cast<char*>(&v), sizeof v);
-    if (!is) throw std::runtime_error("the reader's output ended early");
-    return v;
-}
-
 // A count the child sent, checked against what the file could hold.
 std::uint64_t count(std::istream& is, std::uint64_t most) {
-    const auto n = get<std::uint64_t>(is);
+    const auto n = child_get<std::uint64_t>(is, "the reader");
     if (n > most) throw std::runtime_error("the reader's output is garbled");
     return n;
 }
