@@ -30,6 +30,7 @@ struct MarkupControlPoint {
     bool selected = true; // Slicer draws selected points in the display's selected colour
     bool locked = false;
     bool visible = true;
+    bool operator==(const MarkupControlPoint&) const = default;
 };
 
 struct MarkupMeasurement {
@@ -39,6 +40,7 @@ struct MarkupMeasurement {
     bool enabled = true;
     std::string description;
     std::string print_format; // printf-style, as Slicer shows it ("%-#4.4g%s"); may be empty
+    bool operator==(const MarkupMeasurement&) const = default;
 };
 
 struct Markup {
@@ -51,6 +53,7 @@ struct Markup {
     // Points are selected by default, so `selected_color` is what Slicer shows.
     std::optional<glm::dvec3> color;
     std::optional<glm::dvec3> selected_color;
+    bool operator==(const Markup&) const = default;
 };
 
 struct MarkupsFile {

@@ -234,6 +234,20 @@ void Scene::restore_surface(SurfaceId id, Mesh m, SurfaceInfo info) {
     e.removed = false;
 }
 
+std::shared_ptr<const Mesh> Scene::shared_mesh(SurfaceId id) const { return impl_->at(id, "Scene::mesh").mesh; }
+
+void Scene::set_surface(SurfaceId id, std::shared_ptr<const Mesh> m, SurfaceInfo info) {
+    if (id == 0 || id > impl_->surfaces.size())
+        throw Error("Scene::set_surface", "no surface with id " + std::to_string(id) + " was ever added");
+    if (!m) throw Error("Scene::set_surface", "surface " + std::to_string(id) + " needs a mesh");
+    if (!(info.opacity >= 0.0f && info.opacity <= 1.0f))
+        throw Error("Scene::set_surface", "opacity of '" + info.name + "' must be between 0 and 1");
+    auto& e = impl_->surfaces[id - 1];
+    if (e.removed || e.mesh != m) impl_->set_mesh(e, std::move(m));
+    e.removed = false;
+    e.info = std::move(info);
+}
+
 bool Scene::has_surface(SurfaceId id) const {
     return id != 0 && id <= impl_->surfaces.size() && !impl_->surfaces[id - 1].removed;
 }

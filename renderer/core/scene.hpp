@@ -45,6 +45,7 @@ struct SurfaceInfo {
     // decimation, keep-largest): a session restores the surface by
     // extracting `value` again with these.
     PostProcessOptions post;
+    bool operator==(const SurfaceInfo&) const = default;
 };
 
 // What a frame draws, taken at one moment: each surface slot's mesh
@@ -147,6 +148,12 @@ public:
     // `id` was never added or is not removed.
     void restore_surface(SurfaceId id, Mesh m, SurfaceInfo info);
     bool has_surface(SurfaceId id) const; // added and not removed
+    // The surface's mesh as the scene shares it (with snapshots, undo steps).
+    std::shared_ptr<const Mesh> shared_mesh(SurfaceId id) const;
+    // Puts surface `id` (added once) into exactly this state: restored when
+    // removed, its mesh replaced when it is another object (the renderer
+    // uploads only then), its properties set. An undo step's way back.
+    void set_surface(SurfaceId id, std::shared_ptr<const Mesh> m, SurfaceInfo info);
 
     std::vector<SurfaceId> surfaces() const; // in the order added (removed ones left out)
     SurfaceInfo& info(SurfaceId id);         // edit freely; the next render shows it

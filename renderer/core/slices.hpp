@@ -63,6 +63,7 @@ struct SlicePlane {
 
     // The plane's signed position along its normal: dot(origin, normal).
     double offset_mm() const;
+    bool operator==(const SlicePlane&) const = default;
 };
 
 // The plane of one orientation for `v`: origin and centre at the centre of
@@ -240,6 +241,7 @@ SliceImage reslice(const Volume& v, const SlicePlane& p, int width, int height, 
 struct WindowLevel {
     double center = 40.0;
     double width = 400.0;
+    bool operator==(const WindowLevel&) const = default;
 };
 
 struct WindowPreset {

@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <limits>
 
+#include "io/color.hpp"
 #include "io/error.hpp"
 #include "renderer/core/surface_name.hpp"
 #include "renderer/surface/analysis.hpp"
@@ -67,7 +68,8 @@ ComponentPlan plan_component(const Scene& scene, SurfaceId surface, const glm::d
     plan.info.name = info.name + " component " + std::to_string(plan.component + 1);
     std::size_t isolated = 0;
     for (const SurfaceId id : scene.surfaces()) isolated += scene.info(id).post.keep_at.has_value();
-    plan.info.color = component_color(isolated);
+    // As a session stores it (8-bit sRGB), so that the colour on screen is the one saved.
+    plan.info.color = linear_from_hex(hex_from_linear(component_color(isolated)));
     plan.info.opacity = 1.0f;
     plan.info.visible = plan.info.pickable = true;
     plan.measures = measure_surface_mesh(scene, plan.info, plan.mesh);

@@ -62,6 +62,7 @@ public:
     // image, in pixels from its top-left corner (pixel i's centre is i + 0.5),
     // as the rasterizer samples it: picking and the ray-traced references.
     Ray pixel_ray(double x, double y, int width, int height) const;
+    bool operator==(const Camera&) const = default;
 };
 
 } // namespace iso

@@ -27,6 +27,7 @@ struct PostProcessOptions {
     // the triangle nearest to it, as measure_surface numbers components.
     // Applied before the largest is kept, smoothing and decimation.
     std::optional<glm::dvec3> keep_at;
+    bool operator==(const PostProcessOptions&) const = default;
 };
 
 bool needs_postprocess(const PostProcessOptions& o);
