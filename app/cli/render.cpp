@@ -168,8 +168,8 @@ RunFn add_render(CLI::App& cmd, char*) {
     c->add_flag("--no-legend", a.no_legend,
                 "No legend (the surfaces' names, colours, opacities and iso values in a corner box)");
     c->add_option("--markups", a.markups,
-                  "3D Slicer markups file (.mrk.json) to draw: points, lines with their length, angles "
-                  "(repeatable; dimmed where a surface hides them)")
+                  "3D Slicer markups file (.mrk.json) to draw: points with their labels, lines and angles "
+                  "with their names and values (repeatable; dimmed where a surface hides them)")
         ->allow_extra_args(false);
     c->add_flag("--transparent", a.frame.req.look.transparent_background, "Transparent background");
     c->add_flag("--stats", a.stats, "Print per-pass statistics");

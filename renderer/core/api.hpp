@@ -75,8 +75,9 @@ struct RenderRequest {
     // colour swatch, opacity and iso value with unit; core/legend.hpp).
     bool legend = true;
     // 3D Slicer markups (LPS mm; io/markups.hpp) drawn over the colour image,
-    // with annotations on or off, never on AOVs: glyphs, labels, lines with
-    // their length, angles with their value; dimmed where a surface hides
+    // with annotations on or off, never on AOVs: glyphs, labels (a point's,
+    // else its list's name), lines with their name and length, angles with
+    // their name and value (markup_label_text); dimmed where a surface hides
     // them (docs/markups.md, "Drawing markups"). `markups_files` names the
     // files they came from, recorded with their SHA-256 in the metadata.
     std::vector<Markup> markups;

@@ -72,6 +72,19 @@ std::string markup_measurement_text(const Markup& m) {
     return b;
 }
 
+std::string markup_label_text(const Markup& m, int point) {
+    if (point >= 0) {
+        if (std::size_t(point) >= m.points.size()) return {};
+        const std::string& own = m.points[std::size_t(point)].label;
+        if (m.type == MarkupType::Fiducial) return own.empty() ? m.name : own;
+        return m.type == MarkupType::Curve || m.type == MarkupType::ClosedCurve ? own : std::string();
+    }
+    if (m.type != MarkupType::Line && m.type != MarkupType::Angle) return {};
+    const std::string value = markup_measurement_text(m);
+    if (m.name.empty() || value.empty()) return m.name.empty() ? value : m.name;
+    return m.name + ": " + value;
+}
+
 glm::vec3 markup_color(const Markup& m, int point) {
     bool selected = false;
     if (point >= 0 && std::size_t(point) < m.points.size()) selected = m.points[std::size_t(point)].selected;
@@ -246,17 +259,17 @@ struct MarkupPainter {
         const auto& pts = m.points;
         const auto defined = [&](std::size_t i) { return i < pts.size() && pts[i].status == PositionStatus::Defined; };
         const glm::vec3 line_rgb = markup_color(m, -1);
-        const std::string value = markup_measurement_text(m);
+        const std::string text = markup_label_text(m); // a Line's or an Angle's name and value
         if (m.type == MarkupType::Line && defined(0) && defined(1)) {
             polylines({{pts[0].position, pts[1].position}}, line_rgb);
-            // The length above the segment's 3D midpoint.
+            // The name and length above the segment's 3D midpoint.
             const auto a = project(pts[0].position), c = project(pts[1].position);
             if (const auto mid = project(0.5 * (pts[0].position + pts[1].position))) {
                 glm::vec2 dir = a && c ? c->px - a->px : glm::vec2(1, 0);
                 if (glm::length(dir) < 1e-3f) dir = {1, 0};
                 glm::vec2 n = glm::normalize(glm::vec2(-dir.y, dir.x));
                 if (n.y > 0) n = -n;
-                label(value, *mid, n, 6.0f * s, line_rgb);
+                label(text, *mid, n, 6.0f * s, line_rgb);
             }
         }
         if (m.type == MarkupType::Angle && defined(0) && defined(1) && defined(2)) {
@@ -276,25 +289,24 @@ struct MarkupPainter {
                 lines.push_back(std::move(arc));
             }
             polylines(lines, line_rgb);
-            // The value beside the vertex, away from both arms.
+            // The name and value beside the vertex, away from both arms.
             if (const auto pv = project(v)) {
                 const auto pa = project(pts[0].position), pc = project(pts[2].position);
                 glm::vec2 bis(0.0f);
                 if (pa && glm::length(pa->px - pv->px) > 1e-3f) bis += glm::normalize(pa->px - pv->px);
                 if (pc && glm::length(pc->px - pv->px) > 1e-3f) bis += glm::normalize(pc->px - pv->px);
                 bis = glm::length(bis) > 1e-3f ? -glm::normalize(bis) : glm::vec2(0.0f, -1.0f);
-                label(value, *pv, bis, 10.0f * s, line_rgb);
+                label(text, *pv, bis, 10.0f * s, line_rgb);
             }
         }
-        // Control points: a glyph each (visible ones), labelled in point lists and curves.
-        const bool labelled =
-            m.type == MarkupType::Fiducial || m.type == MarkupType::Curve || m.type == MarkupType::ClosedCurve;
+        // Control points: a glyph each (visible ones), labelled in point lists
+        // (the point's label, else the markup's name) and curves (the point's label).
         for (std::size_t i = 0; i < pts.size(); ++i) {
             if (!defined(i) || !pts[i].visible) continue;
             if (const auto p = project(pts[i].position)) {
                 const glm::vec3 rgb = markup_color(m, int(i));
                 glyph(*p, rgb);
-                if (labelled && !pts[i].label.empty()) label(pts[i].label, *p, {1, 0}, 10.0f * s, rgb);
+                label(markup_label_text(m, int(i)), *p, {1, 0}, 10.0f * s, rgb);
             }
         }
     }

@@ -1,12 +1,12 @@
 // Annotations drawn over the rendered image: text labels at 3D points, lines
-// and points, 3D Slicer markups (point lists, lines with their length,
-// angles with their value), a scale bar in millimetres, and the patient
-// orientation letters (L/R/A/P/S/I) at the viewport edges. Built on the CPU
-// as triangles in pixel coordinates; all text goes through the text engine
-// (renderer/text: DejaVu Sans through fontconfig and FreeType, sizes in
-// points) as glyph quads into a per-frame atlas, each label over a halo of
-// contrasting colour and placed so that labels do not cover one another
-// (docs/text.md). Everything scales with `scale` so that a 4x export has 4x
+// and points, 3D Slicer markups (point lists, lines with their name and
+// length, angles with their name and value: markup_label_text), a scale bar
+// in millimetres, and the patient orientation letters (L/R/A/P/S/I) at the
+// viewport edges. Built on the CPU as triangles in pixel coordinates; all
+// text goes through the text engine (renderer/text: DejaVu Sans through
+// fontconfig and FreeType, sizes in points) as glyph quads into a per-frame
+// atlas, each label over a halo of contrasting colour and placed so that
+// labels do not cover one another (docs/text.md). Everything scales with `scale` so that a 4x export has 4x
 // thicker lines and larger text. Markup lines and glyphs carry the depth of
 // the 3D point each vertex draws: the overlay pass compares it with the
 // frame's depth and dims (and dashes) what lies behind a surface; labels
@@ -115,6 +115,15 @@ Overlay build_overlay(const Annotations& a, const Camera& cam, int width, int he
 // other types and when there is no value (a point not Defined, a
 // zero-length arm).
 std::string markup_measurement_text(const Markup& m);
+
+// The text of a markup's label as the overlay draws it (as 3D Slicer shows
+// it). `point` -1: a Line's or an Angle's label, its name and its value
+// ("Vessel gap: 36.6 mm"), the value alone when it has no name, the name
+// alone when it has no value (markup_measurement_text). `point` >= 0: that
+// control point's label in a point list (Fiducial), else the markup's name;
+// in a curve the point's own label only. Empty: no label (other types, an
+// unnamed point of an unnamed point list, a point out of range).
+std::string markup_label_text(const Markup& m, int point = -1);
 
 // The colour of a markup's control point `point`, or of its lines (point
 // -1: as if selected when any Defined point is): Slicer's selectedColor

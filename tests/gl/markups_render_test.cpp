@@ -2,8 +2,10 @@
 // projects it to (computed here from the camera's axes and field of view,
 // not through its matrices) at full strength in front of a surface and
 // dimmed behind it; hidden line parts are dimmed and dashed; a line's length
-// and an angle's value are written beside them; --scale scales glyphs and
-// lines; and `isoscope render --markups` end to end, bad files included.
+// and an angle's value are written beside them, with their names (and a
+// point list's name beside an unlabelled point) in exports; --scale
+// scales glyphs and lines; and `isoscope render --markups` end to end, bad files included.
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -12,6 +14,8 @@
 
 #include "gl_test.hpp"
 #include "io/image.hpp"
+#include "renderer/core/api.hpp"
+#include "renderer/core/scene.hpp"
 #include "renderer/frame/annotations.hpp"
 #include "renderer/gpu/renderer.hpp"
 #include "tests/support/pixels.hpp"
@@ -292,4 +296,57 @@ TEST(MarkupsCli, MissingOrMalformedMarkupsFailNamingTheFile) {
                                        true);
     EXPECT_EQ(aov.exit_code, 1);
     EXPECT_NE(aov.out.find("--markups"), std::string::npos) << aov.out;
+}
+
+TEST_F(MarkupsRender, ExportedLabelsCarryTheMarkupsNames) {
+    // Through the core API, as `isoscope render --markups` and File > Export image draw them: a named line
+    // shows its name and length, an unnamed one its length, a named angle its name and angle, a point
+    // without a label its point list's name, a labelled point its label.
+    core::Scene scene;
+    core::SurfaceInfo info;
+    info.name = "wall";
+    info.color = glm::vec3(0.2f);
+    scene.add_mesh(wall(), info);
+    Markup gap = polyline(MarkupType::Line, {{-18.3, -10, 25}, {18.3, -10, 25}}, {0, 1, 1}); // 36.6 mm
+    gap.name = "Vessel gap";
+    const Markup plain = polyline(MarkupType::Line, {{-20, -10, -32}, {20, -10, -32}}, {1, 0.5, 0});     // 40 mm
+    Markup jaw = polyline(MarkupType::Angle, {{-32, -10, 5}, {-22, -10, -5}, {-12, -10, 5}}, {1, 1, 0}); // 90 deg
+    jaw.name = "Jaw";
+    Markup nidus = fiducial({15, -10, 5}, {1, 0, 1});
+    nidus.name = "AVM nidus";
+    MarkupControlPoint feeder;
+    feeder.position = {15, -10, -15};
+    feeder.label = "feeder";
+    nidus.points.push_back(feeder);
+    core::RenderRequest req;
+    req.width = req.height = 320;
+    req.annotations = false; // no letters, scale bar or legend: the markups' labels only
+    req.look.background = {0, 0, 0};
+    req.markups = {gap, plain, jaw, nidus};
+    const core::RenderOutput out = core::render_image(scene, req);
+    req.markups.clear();
+    const core::RenderOutput bare = core::render_image(scene, req);
+    std::vector<std::string> texts;
+    for (const auto& l : out.labels) texts.push_back(l.text);
+    std::sort(texts.begin(), texts.end());
+    EXPECT_EQ(texts,
+              (std::vector<std::string>{"40.0 mm", "AVM nidus", "Jaw: 90.0\xC2\xB0", "Vessel gap: 36.6 mm", "feeder"}));
+    // Each label's text is drawn where its box says, in its markup's colour: its fully covered pixels are
+    // that colour and differ from the frame without markups.
+    for (const auto& l : out.labels) {
+        const Rgb want{int(std::lround(l.color.r * 255)), int(std::lround(l.color.g * 255)),
+                       int(std::lround(l.color.b * 255))};
+        std::size_t ink = 0, coloured = 0, changed = 0;
+        const int w = l.hi.x - l.lo.x;
+        for (int y = std::max(l.lo.y, 0); y < std::min(l.hi.y, out.image.height); ++y)
+            for (int x = std::max(l.lo.x, 0); x < std::min(l.hi.x, out.image.width); ++x)
+                if (l.coverage[std::size_t((y - l.lo.y) * w + (x - l.lo.x))] == 255) {
+                    ++ink;
+                    coloured += near_colour(rgb_at(out.image, x, y), want, 2);
+                    changed += !near_colour(rgb_at(out.image, x, y), rgb_at(bare.image, x, y), 2);
+                }
+        EXPECT_GT(ink, 4u * l.text.size()) << l.text;
+        EXPECT_EQ(coloured, ink) << l.text;
+        EXPECT_EQ(changed, ink) << l.text;
+    }
 }

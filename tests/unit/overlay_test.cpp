@@ -2,9 +2,11 @@
 // shows (the file's value, else computed from the points), the colours,
 // which control points are drawn, what each vertex carries for the depth
 // comparison, labels in Unicode at their size in points, never dimmed,
-// placed apart with leader lines, and the scale.
+// placed apart with leader lines, and the scale; the markups' names in their
+// labels.
 #include "renderer/frame/annotations.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <tuple>
 
@@ -312,4 +314,60 @@ TEST(Overlay, LegendLeftOutWhereItHasNoPlace) {
     a.orientation = a.scale_bar = false;
     const Overlay alone = build_overlay(a, front_camera(), 300, 120, 1.0f);
     EXPECT_EQ(alone.labels.size(), 2u) << "without letters it fits";
+}
+
+TEST(Overlay, MarkupLabelsCarryTheirNames) {
+    // As 3D Slicer labels them: a line its name and length, an angle its name
+    // and angle, a point its own label, else its point list's name.
+    Markup gap = markup(MarkupType::Line, {{-18.3, 0, 20}, {18.3, 0, 20}}); // 36.6 mm
+    gap.name = "Vessel gap";
+    const Markup plain = markup(MarkupType::Line, {{-20, 0, -30}, {20, 0, -30}});      // 40 mm, no name
+    Markup jaw = markup(MarkupType::Angle, {{-30, 0, 0}, {-20, 0, -10}, {-10, 0, 0}}); // a right angle
+    jaw.name = "Jaw";
+    Markup nidus = markup(MarkupType::Fiducial, {{25, 0, 5}});
+    nidus.name = "AVM nidus";
+    nidus.points.push_back(point({25, 0, -15}, "feeder"));
+    const Markup unnamed = markup(MarkupType::Fiducial, {{0, 0, 0}}); // no name, no label: no text
+    const Overlay o = build_overlay(markups_only({gap, plain, jaw, nidus, unnamed}), front_camera(), 400, 300, 1.0f);
+    std::vector<std::string> texts;
+    for (const auto& l : o.labels) texts.push_back(l.text);
+    std::sort(texts.begin(), texts.end());
+    const std::vector<std::string> want{"40.0 mm", "AVM nidus", "Jaw: 90.0\xC2\xB0", "Vessel gap: 36.6 mm", "feeder"};
+    EXPECT_EQ(texts, want);
+    for (const auto& l : o.labels) {
+        std::size_t ink = 0;
+        for (const auto c : l.coverage) ink += c == 255;
+        EXPECT_GT(ink, 8u * l.text.size() / 2) << l.text << ": its glyphs are drawn";
+    }
+    // The point list's name beside its unlabelled point, to its right (the placement rule of a point's label).
+    for (const auto& l : o.labels)
+        if (l.text == "AVM nidus") {
+            EXPECT_FALSE(l.moved);
+            EXPECT_EQ(l.color, markup_color(nidus, 0));
+        }
+}
+
+TEST(Overlay, MarkupLabelTextFollowsSlicer) {
+    Markup line = markup(MarkupType::Line, {{0, 0, 0}, {0, 36.6, 0}});
+    EXPECT_EQ(markup_label_text(line), "36.6 mm") << "unnamed: the length";
+    line.name = "Vessel gap";
+    EXPECT_EQ(markup_label_text(line), "Vessel gap: 36.6 mm");
+    line.points[1].status = PositionStatus::Undefined;
+    EXPECT_EQ(markup_label_text(line), "Vessel gap") << "no value: the name";
+    Markup angle = markup(MarkupType::Angle, {{1, 0, 0}, {0, 0, 0}, {0, 0, 1}});
+    angle.name = "Jaw";
+    EXPECT_EQ(markup_label_text(angle), "Jaw: 90.0\xC2\xB0");
+    Markup points = markup(MarkupType::Fiducial, {{0, 0, 0}, {1, 0, 0}});
+    points.points[1].label = "F-2";
+    EXPECT_EQ(markup_label_text(points, 0), "") << "no label, no name: nothing";
+    points.name = "AVM nidus";
+    EXPECT_EQ(markup_label_text(points, 0), "AVM nidus") << "no label: the list's name";
+    EXPECT_EQ(markup_label_text(points, 1), "F-2") << "the point's own label first";
+    EXPECT_EQ(markup_label_text(points, 2), "") << "no such point";
+    EXPECT_EQ(markup_label_text(points), "") << "a point list has no label of its own";
+    Markup curve = markup(MarkupType::Curve, {{0, 0, 0}});
+    curve.name = "vessel";
+    EXPECT_EQ(markup_label_text(curve, 0), "") << "a curve's points: their own labels only";
+    curve.points[0].label = "C-1";
+    EXPECT_EQ(markup_label_text(curve, 0), "C-1");
 }
