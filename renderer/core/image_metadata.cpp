@@ -53,7 +53,7 @@ void add_markups(Text& t, const FrameRecord& f) {
 }
 
 // The legend, one row a line: name, value, colour (sRGB hex) and opacity;
-// and a note when the image had no place for it.
+// and a note when the image had no place for it, or for only its first rows.
 void add_legend(Text& t, const FrameRecord& f) {
     if (!f.annotations || f.annotations->legend.empty()) return;
     std::string rows;
@@ -64,12 +64,21 @@ void add_legend(Text& t, const FrameRecord& f) {
                 hex_from_linear(e.color) + ", " + opacity;
     }
     t["isoscope:legend"] = rows;
+    // Legend rows with a swatch are entries; the one without, "+ K more" (annotations.hpp).
     bool drawn = false;
-    for (const auto& l : f.result.labels) drawn = drawn || l.legend;
+    std::size_t entries = 0;
+    for (const auto& l : f.result.labels) {
+        drawn = drawn || l.legend;
+        entries += l.legend && l.swatch_hi.x > l.swatch_lo.x;
+    }
+    const std::string size = std::to_string(f.options.width) + "x" + std::to_string(f.options.height);
     if (!drawn)
         t["isoscope:legend_note"] =
-            "not drawn: no place for it clear of the orientation letters and the scale bar at " +
-            std::to_string(f.options.width) + "x" + std::to_string(f.options.height);
+            "not drawn: no place for it clear of the orientation letters and the scale bar at " + size;
+    else if (entries < f.annotations->legend.size())
+        t["isoscope:legend_note"] = "the first " + std::to_string(entries) + " of " +
+                                    std::to_string(f.annotations->legend.size()) +
+                                    " rows drawn, then \"+ K more\": no place for all at " + size;
 }
 
 std::string iso_values_text(const Scene& scene) {

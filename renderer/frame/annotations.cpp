@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <memory>
 #include <optional>
 #include <vector>
 
@@ -453,43 +454,105 @@ void legend_swatch(Builder& b, glm::ivec2 lo, int side, glm::vec3 srgb, float op
     b.rect(mid, q, glm::vec4(srgb, std::clamp(opacity, 0.0f, 1.0f)));
 }
 
-// The legend (Annotations::legend): a dark box with a row per surface, its
-// swatch and its text as a fixed label, the box an obstacle for the labels
-// placed later. Left out when no place is free for it.
+// The legend's text at one size: each entry's row laid out.
+struct LegendText {
+    float px = 0;
+    std::shared_ptr<const text::Font> font;
+    std::vector<text::TextLayout> rows;
+};
+
+LegendText legend_text_at(const std::vector<Annotations::LegendEntry>& entries, float px) {
+    LegendText t{px, text::overlay_font(px), {}};
+    for (const auto& e : entries) t.rows.push_back(text::layout_text(legend_text(e), *t.font));
+    return t;
+}
+
+// One way to draw the legend: the first `shown` entries' rows (and a "+ K
+// more" row, `more`, when that is not all of them) at `text`'s size, in a
+// box of `size` whose top-left corner is `lo`.
+struct LegendLayout {
+    const LegendText* text = nullptr;
+    std::size_t shown = 0;
+    text::TextLayout more;
+    int pad = 0, side = 0, swatch_w = 0, row_h = 0;
+    glm::ivec2 size{0}, lo{0};
+};
+
+std::string legend_more_text(std::size_t k) { return "+ " + std::to_string(k) + " more"; }
+
+LegendLayout legend_layout(const LegendText& t, std::size_t shown, float s) {
+    LegendLayout l{&t, shown};
+    l.pad = int(std::lround(5.0f * s));
+    l.side = std::max(4, int(std::lround(0.8f * t.px)));
+    l.swatch_w = 2 * l.side + int(std::lround(2.0f * s)); // the swatch and a gap before the text's halo
+    glm::ivec2 text_size(0);
+    for (std::size_t i = 0; i < shown; ++i) text_size = glm::max(text_size, t.rows[i].hi - t.rows[i].lo);
+    const std::size_t rows = shown < t.rows.size() ? shown + 1 : shown;
+    if (shown < t.rows.size()) {
+        l.more = text::layout_text(legend_more_text(t.rows.size() - shown), *t.font);
+        text_size = glm::max(text_size, l.more.hi - l.more.lo);
+    }
+    l.row_h = text_size.y;
+    l.size = glm::ivec2(2 * l.pad + l.swatch_w + text_size.x, 2 * l.pad + int(rows) * text_size.y);
+    return l;
+}
+
+// Where the legend goes, and how much of it. The rule: the most rows, then
+// the largest text. All rows at the labels' size when a place is free for
+// them (legend_corner); else all rows at 80 %, then at 65 % of that size
+// (7 pt at 11 pt labels, the smallest drawn); else the first N entries and
+// a last row "+ K more" for the other K, the largest N (at least 1) that has
+// a place at any of those sizes, larger text first. None only when not even
+// one row and the "+ K more" row (or the one entry) fit at 65 % anywhere
+// clear of the letters and the scale bar (an image narrower than a row):
+// then the image's metadata says it was not drawn (isoscope:legend_note).
+std::optional<LegendLayout> fit_legend(const LabelSet& set, const std::vector<LegendText>& sizes, int W, int H,
+                                       float s) {
+    const std::size_t n = sizes.front().rows.size();
+    for (std::size_t shown = n; shown >= 1; --shown)
+        for (const LegendText& t : sizes) {
+            LegendLayout l = legend_layout(t, shown, s);
+            if (l.size.y > H || l.size.x > W) continue;
+            if (const auto corner = legend_corner(set, l.size, W, H, 8.0f * s, 2.0f * s)) {
+                l.lo = *corner;
+                return l;
+            }
+        }
+    return std::nullopt;
+}
+
+// The legend (Annotations::legend): a dark box with a row per surface shown
+// (fit_legend), its swatch and its text as a fixed label, the "+ K more" row
+// without a swatch; the box an obstacle for the labels placed later.
 void legend(Builder& b, LabelSet& set, const std::vector<Annotations::LegendEntry>& entries, int W, int H, float px,
             float s) {
     if (entries.empty()) return;
-    const std::size_t first = set.labels.size();
-    glm::ivec2 text_size(0);
-    for (const auto& e : entries) {
-        const glm::ivec2 size(set.add(legend_text(e), px, kTextColor, {}).size());
-        text_size = glm::max(text_size, size);
-    }
-    const int pad = int(std::lround(5.0f * s)), side = std::max(4, int(std::lround(0.8f * px)));
-    const int swatch_w = 2 * side + int(std::lround(2.0f * s)); // the swatch and a gap before the text's halo
-    const int rows = int(entries.size());
-    const glm::ivec2 size(2 * pad + swatch_w + text_size.x, 2 * pad + rows * text_size.y);
-    const auto corner = legend_corner(set, size, W, H, 8.0f * s, 2.0f * s);
-    if (!corner) {
-        set.labels.erase(set.labels.begin() + std::ptrdiff_t(first), set.labels.end());
-        return;
-    }
-    const glm::ivec2 lo = *corner;
-    b.rect(glm::vec2(lo), glm::vec2(lo + size), {0, 0, 0, 0.55f});
-    set.obstacles.push_back({glm::vec2(lo), glm::vec2(lo + size)});
-    for (int i = 0; i < rows; ++i) {
-        PendingLabel& l = set.labels[first + std::size_t(i)];
-        const auto& e = entries[std::size_t(i)];
-        const glm::ivec2 text_lo = lo + glm::ivec2(pad + swatch_w, pad + i * text_size.y);
-        l.centre = l.anchor = glm::vec2(text_lo) + 0.5f * l.size();
-        l.fixed = l.legend = true;
+    std::vector<LegendText> sizes;
+    for (const float f : {1.0f, 0.8f, 0.65f}) sizes.push_back(legend_text_at(entries, px * f));
+    const auto fit = fit_legend(set, sizes, W, H, s);
+    if (!fit) return;
+    const LegendLayout& l = *fit;
+    const std::size_t n = entries.size(), rows = l.shown < n ? l.shown + 1 : l.shown;
+    b.rect(glm::vec2(l.lo), glm::vec2(l.lo + l.size), {0, 0, 0, 0.55f});
+    set.obstacles.push_back({glm::vec2(l.lo), glm::vec2(l.lo + l.size)});
+    for (std::size_t i = 0; i < rows; ++i) {
+        const bool more = i == l.shown;
+        std::string txt = more ? legend_more_text(n - l.shown) : legend_text(entries[i]);
+        set.labels.push_back({std::move(txt), more ? l.more : l.text->rows[i], kTextColor, {}, {}});
+        PendingLabel& p = set.labels.back();
+        const glm::ivec2 text_lo = l.lo + glm::ivec2(l.pad + l.swatch_w, l.pad + int(i) * l.row_h);
+        p.centre = p.anchor = glm::vec2(text_lo) + 0.5f * p.size();
+        p.fixed = p.legend = true;
+        if (more) continue;
         // The swatch centred on the text's capitals (about 0.73 em above the baseline).
-        const float baseline = float(text_lo.y - l.layout.lo.y);
-        const glm::ivec2 swatch(lo.x + pad, int(std::lround(baseline - 0.365f * px - 0.5f * float(side))));
-        const glm::vec3 srgb(srgb_from_linear(e.color.r), srgb_from_linear(e.color.g), srgb_from_linear(e.color.b));
-        legend_swatch(b, swatch, side, srgb, e.opacity, s);
-        l.swatch_lo = swatch;
-        l.swatch_hi = swatch + glm::ivec2(side);
+        const float baseline = float(text_lo.y - p.layout.lo.y);
+        const glm::ivec2 swatch(l.lo.x + l.pad,
+                                int(std::lround(baseline - 0.365f * l.text->px - 0.5f * float(l.side))));
+        const glm::vec3 c = entries[i].color;
+        legend_swatch(b, swatch, l.side, glm::vec3(srgb_from_linear(c.r), srgb_from_linear(c.g), srgb_from_linear(c.b)),
+                      entries[i].opacity, s);
+        p.swatch_lo = swatch;
+        p.swatch_hi = swatch + glm::ivec2(l.side);
     }
 }
 

@@ -54,8 +54,12 @@ struct Annotations {
     // surface's opacity over a checker) and its text ("iso 500 \u00b7 500 HU
     // \u00b7 35 %": legend_text), in a box in the first corner clear of the
     // orientation letters, the scale bar and the markups' glyphs; fixed, so
-    // labels placed after it keep off it. Empty: no legend. Left out of an
-    // image with no such place (too small for it).
+    // labels placed after it keep off it. Empty: no legend. Where all rows
+    // have no such place, it is drawn smaller (80 %, 65 % of the labels'
+    // size), then as its first rows and a last row "+ K more" (no swatch)
+    // for the K left out: the most rows, then the largest text. Left out
+    // only of an image with no place for even one row and that last row at
+    // 65 % (narrower than a row); the image's metadata says so.
     struct LegendEntry {
         std::string name;      // "iso 500", a mesh file's name
         glm::vec3 color{1.0f}; // linear RGB

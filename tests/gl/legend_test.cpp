@@ -5,7 +5,8 @@
 // surface's opacity over the checker; its text reaches WCAG AA contrast
 // against its halo; it meets no orientation letter, the scale bar's text or a
 // markup's label; it is recorded in the metadata, and absent with the legend
-// or the annotations off.
+// or the annotations off; with many surfaces it is still drawn (smaller, or
+// its first rows and "+ K more").
 #include <cmath>
 #include <cstdio>
 
@@ -194,4 +195,68 @@ TEST_F(Legend, MeshesByNameAndVolumesWithoutAUnitWithoutOne) {
     EXPECT_EQ(rows[0]->text, "iso 500");
     EXPECT_EQ(rows[1]->text, "ball.stl");
     EXPECT_LE(swatch_error(out.image, *rows[1], srgb8(ball.color)), 1);
+}
+
+TEST_F(Legend, ManySurfacesAreListedNotDropped) {
+    // Six and then twelve isosurfaces of the CT head in a 400 x 300 export:
+    // a legend taller than the room beside the left and right letters at
+    // 11 pt, which used to be left out. Now it is drawn: all its rows,
+    // smaller, or its first rows and "+ K more" for the rest.
+    core::Scene scene;
+    Volume v = core::open_volume(test::data("headsq.nhdr"));
+    v.meta.modality = "CT";
+    scene.set_volume(std::move(v), test::data("headsq.nhdr"));
+    std::vector<double> isos;
+    for (int i = 0; i < 12; ++i) isos.push_back(200 + 120 * i);
+    const auto ids = scene.add_isosurfaces(isos);
+    for (const std::size_t visible : {6u, 12u}) {
+        for (std::size_t i = 0; i < ids.size(); ++i) scene.info(ids[i]).visible = i < visible;
+        core::RenderRequest req;
+        req.width = 400;
+        req.height = 300;
+        const core::RenderOutput out = core::render_image(scene, req);
+        req.legend = false;
+        const core::RenderOutput off = core::render_image(scene, req);
+        const auto rows = legend_rows(out.labels);
+        ASSERT_GE(rows.size(), 2u) << visible << " surfaces: a legend is drawn";
+        std::size_t shown = 0;
+        for (; shown < rows.size() && rows[shown]->swatch_hi.x > rows[shown]->swatch_lo.x; ++shown) {
+            const std::string value = std::to_string(int(isos[shown]));
+            EXPECT_EQ(rows[shown]->text, "iso " + value + " \xC2\xB7 " + value + " HU") << "in the scene's order";
+            EXPECT_LE(swatch_error(out.image, *rows[shown], srgb8(scene.info(ids[shown]).color)), 1)
+                << rows[shown]->text;
+        }
+        ASSERT_GE(shown, 1u);
+        std::printf("%zu surfaces: %zu rows shown, %d px high each\n", visible, shown, rows[0]->hi.y - rows[0]->lo.y);
+        if (visible == 12) {
+            // Twelve rows cannot fit in 300 px beside the letters even at 65 % (16 px a row).
+            ASSERT_LT(shown, visible);
+            ASSERT_EQ(rows.size(), shown + 1);
+            EXPECT_EQ(rows.back()->text, "+ " + std::to_string(visible - shown) + " more");
+            EXPECT_EQ(out.meta.text.at("isoscope:legend_note"),
+                      "the first " + std::to_string(shown) + " of 12 rows drawn, then \"+ K more\": no place for " +
+                          "all at 400x300");
+            EXPECT_NE(out.meta.text.at("isoscope:legend").find("iso 1520: 1520 HU"), std::string::npos)
+                << "the metadata lists every row";
+        } else {
+            EXPECT_EQ(rows.size(), visible) << "six rows fit, smaller";
+            EXPECT_EQ(out.meta.text.count("isoscope:legend_note"), 0u);
+        }
+        expect_clear_and_legible(out.labels, out.image);
+        // Every row's text is in the image: where its glyphs are fully covered, the pixels are the text's
+        // colour and differ from the same frame drawn without the legend.
+        for (const LabelBox* r : rows) {
+            std::size_t ink = 0, changed = 0;
+            const int w = r->hi.x - r->lo.x;
+            for (int y = r->lo.y; y < r->hi.y; ++y)
+                for (int x = r->lo.x; x < r->hi.x; ++x)
+                    if (r->coverage[std::size_t((y - r->lo.y) * w + (x - r->lo.x))] == 255) {
+                        ++ink;
+                        const test::Rgb a = test::rgb_at(out.image, x, y), b = test::rgb_at(off.image, x, y);
+                        changed += a.r != b.r || a.g != b.g || a.b != b.b;
+                    }
+            EXPECT_GT(ink, 20u) << r->text;
+            EXPECT_EQ(changed, ink) << r->text;
+        }
+    }
 }

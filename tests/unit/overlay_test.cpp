@@ -3,7 +3,7 @@
 // which control points are drawn, what each vertex carries for the depth
 // comparison, labels in Unicode at their size in points, never dimmed,
 // placed apart with leader lines, and the scale; the markups' names in their
-// labels.
+// labels; the legend, also of many surfaces (compacted, never dropped for that).
 #include "renderer/frame/annotations.hpp"
 
 #include <algorithm>
@@ -370,4 +370,79 @@ TEST(Overlay, MarkupLabelTextFollowsSlicer) {
     EXPECT_EQ(markup_label_text(curve, 0), "") << "a curve's points: their own labels only";
     curve.points[0].label = "C-1";
     EXPECT_EQ(markup_label_text(curve, 0), "C-1");
+}
+
+namespace {
+
+// Legend entries as core::legend_entries makes them for a CT: "iso V", "V HU".
+std::vector<Annotations::LegendEntry> iso_entries(int n) {
+    std::vector<Annotations::LegendEntry> e;
+    for (int i = 0; i < n; ++i) {
+        const std::string v = std::to_string(100 + 150 * i);
+        e.push_back({"iso " + v, glm::vec3(0.1f * float(i % 10), 0.5f, 0.8f), 1.0f, v + " HU"});
+    }
+    return e;
+}
+
+// The legend's rows as drawn, top to bottom.
+std::vector<const LabelBox*> legend_rows(const Overlay& o) {
+    std::vector<const LabelBox*> rows;
+    for (const auto& l : o.labels)
+        if (l.legend) rows.push_back(&l);
+    std::sort(rows.begin(), rows.end(), [](const LabelBox* a, const LabelBox* b) { return a->lo.y < b->lo.y; });
+    return rows;
+}
+
+} // namespace
+
+TEST(Overlay, LegendOfManySurfacesIsDrawnCompactedNotDropped) {
+    // 400 x 300: the left and right letters leave about 125 px above and below them, room for
+    // four rows at 11 pt (24 px a row); before, a taller legend was left out.
+    for (const int n : {6, 8, 12, 40}) {
+        Annotations a;
+        a.legend = iso_entries(n);
+        const Overlay o = build_overlay(a, front_camera(), 400, 300, 1.0f);
+        const auto rows = legend_rows(o);
+        ASSERT_GE(rows.size(), 2u) << n << " surfaces: a legend is drawn";
+        // The first rows are the first entries, in order, with their swatches; a last "+ K more" row stands for the rest.
+        std::size_t shown = 0;
+        while (shown < rows.size() && rows[shown]->swatch_hi.x > rows[shown]->swatch_lo.x) {
+            const std::string v = std::to_string(100 + 150 * shown);
+            EXPECT_EQ(rows[shown]->text, "iso " + v + " \xC2\xB7 " + v + " HU");
+            ++shown;
+        }
+        ASSERT_GE(shown, 1u);
+        if (shown < std::size_t(n)) {
+            ASSERT_EQ(rows.size(), shown + 1) << "one row after the entries";
+            EXPECT_EQ(rows.back()->text, "+ " + std::to_string(n - int(shown)) + " more");
+        } else {
+            EXPECT_EQ(rows.size(), shown);
+        }
+        EXPECT_LT(shown, 40u) << "40 rows do not fit in 300 px";
+        for (const LabelBox* r : rows) {
+            EXPECT_TRUE(r->fixed && !r->moved);
+            EXPECT_TRUE(r->lo.x >= 0 && r->lo.y >= 0 && r->hi.x <= 400 && r->hi.y <= 300) << r->text;
+            std::size_t ink = 0;
+            for (const auto c : r->coverage) ink += c == 255;
+            EXPECT_GT(ink, 20u) << r->text;
+            for (const auto& m : o.labels)
+                if (!m.legend) {
+                    const bool apart = r->hi.x <= m.lo.x || m.hi.x <= r->lo.x || r->hi.y <= m.lo.y || m.hi.y <= r->lo.y;
+                    EXPECT_TRUE(apart) << r->text << " and '" << m.text << "'";
+                }
+        }
+        // Rows one under another, the same height apart.
+        for (std::size_t i = 1; i < rows.size(); ++i)
+            EXPECT_EQ(rows[i]->lo.y - rows[i - 1]->lo.y, rows[1]->lo.y - rows[0]->lo.y) << n;
+    }
+    // Where all rows fit, all are drawn at the labels' size, as two rows are.
+    Annotations a;
+    a.legend = iso_entries(6);
+    const Overlay six = build_overlay(a, front_camera(), 1024, 1024, 1.0f);
+    a.legend = iso_entries(2);
+    const Overlay pair = build_overlay(a, front_camera(), 1024, 1024, 1.0f);
+    const auto big = legend_rows(six), two = legend_rows(pair);
+    ASSERT_EQ(big.size(), 6u);
+    ASSERT_EQ(two.size(), 2u);
+    EXPECT_EQ(big[0]->hi.y - big[0]->lo.y, two[0]->hi.y - two[0]->lo.y);
 }
