@@ -1,11 +1,8 @@
-// The window's actions and controls that need something open (docs/gui.md
-// "What needs data"): disabled, their tooltip saying why, until a volume or
-// a surface exists. A MainWindow member kept out of main_window.cpp; it
-// finds the actions and controls by their object names.
+#include "app/gui/data_actions.hpp"
+
 #include <QAction>
 #include <QWidget>
 
-#include "app/gui/main_window.hpp"
 #include "renderer/core/scene.hpp"
 
 namespace iso::gui {
@@ -13,7 +10,7 @@ namespace iso::gui {
 namespace {
 // What each action or control needs, by object name; the File menu's
 // session entries (session_io.cpp) are found by their text and named here.
-enum class Needs { Data, Volume, Surface };
+enum class Needs { Data, Volume, Surface, Markup };
 struct Entry {
     const char* name;
     Needs needs;
@@ -40,6 +37,7 @@ constexpr Entry kEntries[] = {
     {"window_center", Needs::Volume},
     {"window_width", Needs::Volume},
     {"volume_panel", Needs::Volume},
+    {"clear_measurements", Needs::Markup},
 };
 
 const char* why_not(Needs n) {
@@ -47,6 +45,7 @@ const char* why_not(Needs n) {
     case Needs::Data: return "Open a volume or a mesh first (File > Open)";
     case Needs::Volume: return "Open a volume first (File > Open)";
     case Needs::Surface: return "Add a surface first (Surfaces panel) or open a mesh";
+    case Needs::Markup: return "No measurement to delete";
     }
     return "";
 }
@@ -62,17 +61,21 @@ template <class T> void enable(T* o, bool on, Needs needs) {
 }
 } // namespace
 
-void MainWindow::enable_data_actions() {
-    const bool volume = scene_->has_volume(), surface = !scene_->surfaces().empty();
+void enable_data_actions(QWidget& window, const core::Workspace& workspace) {
+    const core::Scene& scene = workspace.scene();
+    const bool volume = scene.has_volume(), surface = !scene.surfaces().empty();
     for (const auto& e : kEntries) {
-        const bool on = e.needs == Needs::Volume ? volume : e.needs == Needs::Surface ? surface : volume || surface;
-        QAction* a = findChild<QAction*>(e.name);
+        const bool on = e.needs == Needs::Volume    ? volume
+                        : e.needs == Needs::Surface ? surface
+                        : e.needs == Needs::Markup  ? !workspace.markups().empty()
+                                                    : volume || surface;
+        QAction* a = window.findChild<QAction*>(e.name);
         if (!a && e.text)
-            for (QAction* t : findChildren<QAction*>())
+            for (QAction* t : window.findChildren<QAction*>())
                 if (t->text().remove('&') == e.text) (a = t)->setObjectName(e.name);
         if (a)
             enable(a, on, e.needs);
-        else if (auto* w = findChild<QWidget*>(e.name))
+        else if (auto* w = window.findChild<QWidget*>(e.name))
             enable(w, on, e.needs);
     }
 }

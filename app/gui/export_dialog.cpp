@@ -177,21 +177,6 @@ QString data_name(const QString& data) {
     return name.isEmpty() ? "untitled" : name;
 }
 
-QString save_folder(const QString& data, const QString& last) {
-    if (!data.isEmpty()) {
-        const QFileInfo fi(data);
-        // A DICOM folder is left as it is: beside it, not in it.
-        const QFileInfo folder(fi.isDir() ? QFileInfo(fi.absoluteFilePath()).absolutePath() : fi.absolutePath());
-        if (folder.isDir() && folder.isWritable()) return folder.absoluteFilePath();
-    }
-    if (!last.isEmpty() && QFileInfo(last).isDir()) return last;
-    return QDir::homePath();
-}
-
-QString suggested_save_path(const QString& data, const QString& last, const QString& suffix) {
-    return QDir(save_folder(data, last)).filePath(data_name(data) + suffix);
-}
-
 QString surface_file_stem(const QString& surface_name) {
     QString stem;
     for (const QChar c : surface_name.trimmed()) {

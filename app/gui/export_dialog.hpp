@@ -51,17 +51,9 @@ private:
     Kind kind_;
 };
 
-// Where the save dialogs start (docs/gui.md, "Where files are saved"):
-// `data` is what is open (a file, or a DICOM folder), `last` the folder
-// last saved to of that kind (empty: none).
 // The data's name: the file's without its extensions ("headsq" for
 // headsq.nhdr, "ct" for ct.nii.gz), a folder's own name; "untitled" for none.
 QString data_name(const QString& data);
-// The folder: the data's (a file's folder; the folder holding a DICOM
-// folder) when it exists and is writable, else `last`, else the home folder.
-QString save_folder(const QString& data, const QString& last);
-// save_folder / data_name + `suffix` (".png", ".isoscope.json", "-iso500.stl").
-QString suggested_save_path(const QString& data, const QString& last, const QString& suffix);
 // A surface's part of its file name: its name without spaces ("iso 500" ->
 // "iso500"), other characters unfit for file names as '-'.
 QString surface_file_stem(const QString& surface_name);

@@ -1,8 +1,3 @@
-// The View menu (the layout and the slice planes in 3D, layouts.cpp; show or
-// hide each dock and tool bar; a closed dock used to come back only through
-// the tool bar's context menu) and the Help menu
-// (the mouse and keyboard bindings; About with the versions a bug report
-// needs). Part of MainWindow (main_window.hpp).
 #include <QDialog>
 #include <QDialogButtonBox>
 #include <QDockWidget>
@@ -13,26 +8,31 @@
 #include <QToolBar>
 #include <QVBoxLayout>
 
-#include "app/gui/main_window.hpp"
+#include "app/gui/help_menu.hpp"
+
+#include <QMainWindow>
+#include <QMenuBar>
+
+#include "app/gui/layouts.hpp"
 #include "app/gui/viewer.hpp"
 #include "renderer/core/versions.hpp"
 
 namespace iso::gui {
 
-QString MainWindow::about_text() const {
+QString about_text(const Viewer* viewer) {
     QString s = "<p><b>isoscope</b>: inspect CT volumes, reconstruct and render isosurfaces, measure.</p><table "
                 "cellspacing='6'>";
     for (const auto& [name, version] : core::component_versions())
         s += "<tr><td>" + QString::fromStdString(name) + "</td><td>" + QString::fromStdString(version) + "</td></tr>";
     s += "<tr><td>Qt</td><td>" + QString(qVersion()) + "</td></tr>";
-    const std::string gl = viewer_ ? viewer_->gl_renderer() : std::string();
+    const std::string gl = viewer ? viewer->gl_renderer() : std::string();
     s += "<tr><td>GL renderer</td><td>" +
          (gl.empty() ? QString("(the 3D view has not drawn yet)") : QString::fromStdString(gl).toHtmlEscaped()) +
          "</td></tr></table>";
     return s;
 }
 
-QString MainWindow::bindings_html() {
+QString bindings_html() {
     const auto section = [](const QString& title, std::initializer_list<std::pair<const char*, const char*>> rows) {
         QString s = "<h3>" + title + "</h3><table cellspacing='4'>";
         for (const auto& [what, does] : rows) s += QString("<tr><td><b>%1</b></td><td>%2</td></tr>").arg(what, does);
@@ -67,25 +67,28 @@ QString MainWindow::bindings_html() {
                               {"Ctrl+Q", "quit"}});
 }
 
-void MainWindow::add_view_and_help_menus() {
-    // ---- View: the layouts, then every dock and tool bar, listed when the menu opens (docks are added later too)
-    auto* view = menuBar()->addMenu("&View");
+void add_view_menu(QMainWindow& window, Layouts& layouts) {
+    // The layouts, then every dock and tool bar, listed when the menu opens (docks are added later too).
+    auto* view = window.menuBar()->addMenu("&View");
     view->setObjectName("view_menu");
-    add_layout_actions(view);
-    connect(view, &QMenu::aboutToShow, this, [this, view] {
+    view->setToolTipsVisible(true);
+    QObject::connect(view, &QMenu::aboutToShow, &window, [&window, &layouts, view] {
         view->clear();
-        view->addMenu(layout_menu_); // View > Layout and the slice planes toggle: layouts.cpp
-        view->addAction(slice_planes_3d_);
+        view->addMenu(layouts.menu()); // View > Layout and the slice planes toggle
+        view->addAction(layouts.slice_planes_action());
         view->addSeparator();
-        for (auto* dock : findChildren<QDockWidget*>()) view->addAction(dock->toggleViewAction());
+        for (auto* dock : window.findChildren<QDockWidget*>()) view->addAction(dock->toggleViewAction());
         view->addSeparator();
-        for (auto* bar : findChildren<QToolBar*>()) view->addAction(bar->toggleViewAction());
+        for (auto* bar : window.findChildren<QToolBar*>()) view->addAction(bar->toggleViewAction());
     });
-    // ---- Help
-    auto* help = menuBar()->addMenu("&Help");
+}
+
+void add_help_menu(QMainWindow& window, std::function<QString()> about_text) {
+    QMainWindow* w = &window;
+    auto* help = w->menuBar()->addMenu("&Help");
     help->setObjectName("help_menu");
-    auto* bindings = help->addAction("&Mouse and keyboard", QKeySequence::HelpContents, this, [this] {
-        auto* d = new QDialog(this);
+    auto* bindings = help->addAction("&Mouse and keyboard", QKeySequence::HelpContents, w, [w] {
+        auto* d = new QDialog(w);
         d->setObjectName("bindings_dialog");
         d->setWindowTitle("Mouse and keyboard");
         d->setAttribute(Qt::WA_DeleteOnClose);
@@ -94,14 +97,14 @@ void MainWindow::add_view_and_help_menus() {
         text->setHtml(bindings_html());
         layout->addWidget(text);
         auto* buttons = new QDialogButtonBox(QDialogButtonBox::Close, d);
-        connect(buttons, &QDialogButtonBox::rejected, d, &QDialog::close);
+        QObject::connect(buttons, &QDialogButtonBox::rejected, d, &QDialog::close);
         layout->addWidget(buttons);
         d->resize(560, 620);
         d->show(); // not modal: it can stay open beside the views
     });
     bindings->setObjectName("help_bindings");
-    auto* about = help->addAction("&About isoscope", this, [this] {
-        auto* box = new QMessageBox(QMessageBox::Information, "About isoscope", about_text(), QMessageBox::Close, this);
+    auto* about = help->addAction("&About isoscope", w, [w, about_text] {
+        auto* box = new QMessageBox(QMessageBox::Information, "About isoscope", about_text(), QMessageBox::Close, w);
         box->setObjectName("about_box");
         box->setAttribute(Qt::WA_DeleteOnClose);
         box->open();

@@ -1,11 +1,8 @@
 // View > Layout (3D Slicer's Four-Up, Conventional and One-Up layouts) and
 // View > Slice planes in 3D (Slicer's slice intersections in the 3D view).
-// Part of MainWindow (main_window.hpp, docs/gui.md "Layouts"). A layout
-// moves the four views between the cells of the central grid and shows or
-// hides them: nothing is made again, so the 3D view keeps its GL context
-// (re-parenting a QOpenGLWidget would make a new one), its camera and its
-// accumulated AO, and each slice view its plane.
 #include <QAction>
+#include <QMainWindow>
+#include <QSignalBlocker>
 #include <QActionGroup>
 #include <QGridLayout>
 #include <QMenu>
@@ -14,12 +11,9 @@
 #include <array>
 #include <vector>
 
-#include "app/gui/main_window.hpp"
-#include "app/gui/slice_view.hpp"
-#include "app/gui/viewer.hpp"
-#include "renderer/core/scene.hpp"
+#include "app/gui/app_context.hpp"
+#include "app/gui/layouts.hpp"
 #include "renderer/core/session.hpp"
-#include "renderer/core/slices.hpp"
 
 namespace iso::gui {
 
@@ -70,93 +64,67 @@ Arrangement arrangement(core::ViewLayout l) {
 
 } // namespace
 
-core::ViewLayout MainWindow::layout() const { return core::ViewLayout(layout_); }
-
-QAction* MainWindow::layout_action(core::ViewLayout l) const { return layout_actions_[std::size_t(l)]; }
-
-bool MainWindow::slice_planes_in_3d() const { return slice_planes_3d_ && slice_planes_3d_->isChecked(); }
-
-void MainWindow::set_slice_planes_in_3d(bool on) { slice_planes_3d_->setChecked(on); }
-
-void MainWindow::add_layout_actions(QMenu* view) {
-    layout_menu_ = new QMenu("&Layout", this);
-    layout_menu_->setObjectName("layout_menu");
-    layout_menu_->setToolTipsVisible(true);
-    view->setToolTipsVisible(true);
+Layouts::Layouts(AppContext& context, QGridLayout* grid, std::array<QWidget*, 4> cells)
+    : QObject(&context.window), context_(context), grid_(grid), cells_(cells) {
+    QMainWindow& window = context.window;
+    menu_ = new QMenu("&Layout", &window);
+    menu_->setObjectName("layout_menu");
+    menu_->setToolTipsVisible(true);
     auto* group = new QActionGroup(this);
     for (const auto& e : kLayouts) {
-        auto* a = new QAction(e.text, this);
+        auto* a = new QAction(e.text, &window);
         a->setObjectName(QString("layout_") + core::view_layout_name(e.layout));
         a->setToolTip(e.tip);
         a->setStatusTip(e.tip);
         a->setCheckable(true);
         a->setShortcut(QKeySequence(Qt::CTRL | e.key));
         a->setActionGroup(group);
-        connect(a, &QAction::triggered, this, [this, l = e.layout] { set_layout(l); });
-        addAction(a); // its shortcut works before the menu was ever opened
-        layout_menu_->addAction(a);
-        layout_actions_[std::size_t(e.layout)] = a;
+        connect(a, &QAction::triggered, this, [this, l = e.layout] { context_.workspace.set_layout(l); });
+        window.addAction(a); // its shortcut works before the menu was ever opened
+        menu_->addAction(a);
+        actions_[std::size_t(e.layout)] = a;
     }
-    layout_actions_[std::size_t(core::ViewLayout::FourUp)]->setChecked(true);
-
-    slice_planes_3d_ = new QAction("Slice &planes in 3D", this);
-    slice_planes_3d_->setObjectName("slice_planes_3d");
+    slice_planes_ = new QAction("Slice &planes in 3D", &window);
+    slice_planes_->setObjectName("slice_planes_3d");
     const char* tip = "Draw each slice view's plane in the 3D view (its outline in the volume, in the view's "
                       "colour: axial red, coronal green, sagittal yellow) and the crosshair";
-    slice_planes_3d_->setToolTip(tip);
-    slice_planes_3d_->setStatusTip(tip);
-    slice_planes_3d_->setCheckable(true);
-    slice_planes_3d_->setShortcut(QKeySequence(Qt::CTRL | Qt::SHIFT | Qt::Key_P));
-    connect(slice_planes_3d_, &QAction::toggled, this, [this] { update_slice_planes_3d(); });
-    addAction(slice_planes_3d_);
+    slice_planes_->setToolTip(tip);
+    slice_planes_->setStatusTip(tip);
+    slice_planes_->setCheckable(true);
+    slice_planes_->setShortcut(QKeySequence(Qt::CTRL | Qt::SHIFT | Qt::Key_P));
+    connect(slice_planes_, &QAction::toggled, this, [this](bool on) { context_.workspace.set_slice_planes_in_3d(on); });
+    window.addAction(slice_planes_);
+    observer_ = context_.workspace.observe([this](core::Parts p) {
+        if (p & core::Parts(core::Part::Layout)) arrange();
+    });
+    arrange();
 }
 
-void MainWindow::set_layout(core::ViewLayout l) {
-    auto* grid = qobject_cast<QGridLayout*>(centralWidget()->layout());
-    // What the grid holds for each view: the view or the widget around it (a slice view's panel).
-    const auto cell = [this](QWidget* w) {
-        while (w->parentWidget() && w->parentWidget() != centralWidget()) w = w->parentWidget();
-        return w;
-    };
-    QWidget* const views[4] = {cell(view3d_), cell(views_[0]), cell(views_[1]), cell(views_[2])};
-    for (QWidget* w : views) grid->removeWidget(w);
+Layouts::~Layouts() { context_.workspace.unobserve(observer_); }
+
+// The workspace's layout: the views moved into their cells and shown or
+// hidden, the menu's entries checked.
+void Layouts::arrange() {
+    const core::ViewLayout l = context_.workspace.layout();
+    {
+        const QSignalBlocker block(slice_planes_);
+        slice_planes_->setChecked(context_.workspace.slice_planes_in_3d());
+    }
+    if (shown_ && *shown_ == l) return;
+    shown_ = l;
+    for (QWidget* w : cells_) grid_->removeWidget(w);
     const Arrangement a = arrangement(l);
     for (int i = 0; i < 3; ++i) {
-        grid->setRowStretch(i, a.row_stretch[std::size_t(i)]);
-        grid->setColumnStretch(i, a.column_stretch[std::size_t(i)]);
+        grid_->setRowStretch(i, a.row_stretch[std::size_t(i)]);
+        grid_->setColumnStretch(i, a.column_stretch[std::size_t(i)]);
     }
     std::array<bool, 4> shown{};
     for (const Cell& c : a.cells) {
-        grid->addWidget(views[c.view], c.row, c.column, c.rows, c.columns);
+        grid_->addWidget(cells_[std::size_t(c.view)], c.row, c.column, c.rows, c.columns);
         shown[std::size_t(c.view)] = true;
     }
-    for (std::size_t i = 0; i < 4; ++i) views[i]->setVisible(shown[i]);
-    layout_ = std::uint8_t(l);
-    if (auto* action = layout_action(l)) action->setChecked(true);
-}
-
-void MainWindow::set_slice_views(const core::SliceViewsState& s) {
-    if (!scene_->has_volume()) return;
-    core::apply_slice_views(s, planes_);
-    for (auto* v : views_) v->keep_framing(); // the stored pan and zoom, not a fit
-    refresh_slices();
-}
-
-void MainWindow::update_slice_planes_3d() {
-    if (!viewer_) return;
-    std::vector<Annotations::Line> lines;
-    std::vector<glm::dvec3> points;
-    if (slice_planes_in_3d() && scene_->has_volume()) {
-        for (const auto& plane : planes_) {
-            const auto outline = core::slice_outline_3d(scene_->volume(), plane);
-            const glm::vec4 colour(core::slice_color(plane.orientation), 1.0f);
-            for (std::size_t i = 0; i < outline.size(); ++i)
-                lines.push_back({outline[i], outline[(i + 1) % outline.size()], colour});
-        }
-        points.push_back(core::crosshair_point(planes_));
-    }
-    for (auto& line : crop_box_lines()) lines.push_back(line); // the Volume panel's crop box
-    viewer_->set_guides(std::move(lines), std::move(points));
+    for (std::size_t i = 0; i < 4; ++i) cells_[i]->setVisible(shown[i]);
+    actions_[std::size_t(l)]->setChecked(true);
 }
 
 } // namespace iso::gui

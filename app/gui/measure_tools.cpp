@@ -4,6 +4,7 @@
 #include <QActionGroup>
 #include <QKeySequence>
 #include <QLabel>
+#include <QMainWindow>
 #include <QPainter>
 #include <QShortcut>
 #include <QStatusBar>
@@ -15,8 +16,7 @@
 #include <cmath>
 #include <functional>
 
-#include "app/gui/structure_tools.hpp"
-#include "app/gui/main_window.hpp"
+#include "app/gui/app_context.hpp"
 #include "app/gui/slice_view.hpp"
 #include "app/gui/viewer.hpp"
 #include "renderer/core/measure.hpp"
@@ -72,7 +72,8 @@ void draw_text(QPainter& p, QPointF at, const QString& text, const QColor& c) {
 
 } // namespace
 
-MeasureTools::MeasureTools(MainWindow& window) : QObject(&window), window_(window) {
+MeasureTools::MeasureTools(AppContext& context) : QObject(&context.window), context_(context) {
+    QMainWindow& window = context.window;
     auto* bar = window.addToolBar("Measure");
     bar->setObjectName("measure");
     auto* group = new QActionGroup(this);
@@ -103,7 +104,7 @@ MeasureTools::MeasureTools(MainWindow& window) : QObject(&window), window_(windo
         if (pending_.empty()) return;
         pending_.clear();
         redraw();
-        window_.statusBar()->showMessage(tool_name(tool_) + ": points dropped");
+        context_.status(tool_name(tool_) + ": points dropped");
     });
     click_field_ = new QLabel(&window);
     click_field_->setTextInteractionFlags(Qt::TextSelectableByMouse); // copy the coordinates
@@ -116,30 +117,49 @@ MeasureTools::MeasureTools(MainWindow& window) : QObject(&window), window_(windo
     grab_timer_->setSingleShot(true);
     connect(grab_timer_, &QTimer::timeout, this, [this] { viewer_grab_pick(); });
     // An undo or redo while a point is held (the keyboard) ends the drag: the state it started from is gone.
-    connect(window.undo_stack(), &QUndoStack::indexChanged, this, [this] { grab_.reset(); });
+    connect(&context.undo, &QUndoStack::indexChanged, this, [this] { grab_.reset(); });
+    // One tool at a time across the window: another one taken turns these off.
+    context.tool_changed.push_back([this](AppContext::Tool t) {
+        if (t != AppContext::Tool::Ruler && t != AppContext::Tool::Angle && t != AppContext::Tool::Point &&
+            tool_ != Tool::None)
+            set_tool(Tool::None);
+    });
+    context.editing_markup = [this] { return editing(); };
+    // The views draw the markups as the workspace has them.
+    observer_ = context.workspace.observe([this](core::Parts p) {
+        if (core::has(p, core::Part::Data)) reset();
+        if (p & (core::Part::Data | core::Part::Markups | core::Part::Selection)) redraw();
+    });
 }
+
+MeasureTools::~MeasureTools() { context_.workspace.unobserve(observer_); }
 
 void MeasureTools::set_tool(Tool t) {
     tool_ = t;
     // One tool at a time across the window.
-    if (t != Tool::None && window_.structure_tools()) window_.structure_tools()->set_tool(StructureTools::Tool::None);
+    if (t != Tool::None)
+        context_.set_tool(t == Tool::Ruler   ? AppContext::Tool::Ruler
+                          : t == Tool::Angle ? AppContext::Tool::Angle
+                                             : AppContext::Tool::Point);
+    else if (context_.tool() == AppContext::Tool::Ruler || context_.tool() == AppContext::Tool::Angle ||
+             context_.tool() == AppContext::Tool::Point)
+        context_.set_tool(AppContext::Tool::None);
     ruler_->setChecked(t == Tool::Ruler);
     angle_->setChecked(t == Tool::Angle);
     point_->setChecked(t == Tool::Point);
     pending_.clear();
     redraw();
     if (t == Tool::None)
-        window_.statusBar()->showMessage(
+        context_.status(
             "Measuring off: a click shows what is there and moves the crosshair; drag a placed point to move it");
     else if (t == Tool::Point)
-        window_.statusBar()->showMessage("Point: each click in the 3D view (on the visible surface) or on a slice "
-                                         "adds a point to the point list");
+        context_.status("Point: each click in the 3D view (on the visible surface) or on a slice "
+                        "adds a point to the point list");
     else
-        window_.statusBar()->showMessage(
-            QString("%1: click %2 points in the 3D view (on the visible surface) or on a slice%3")
-                .arg(tool_name(t))
-                .arg(points_needed(t))
-                .arg(t == Tool::Angle ? " (arm, vertex, arm)" : ""));
+        context_.status(QString("%1: click %2 points in the 3D view (on the visible surface) or on a slice%3")
+                            .arg(tool_name(t))
+                            .arg(points_needed(t))
+                            .arg(t == Tool::Angle ? " (arm, vertex, arm)" : ""));
 }
 
 void MeasureTools::attach(Viewer& viewer) {
@@ -152,6 +172,13 @@ void MeasureTools::attach(Viewer& viewer) {
 }
 
 void MeasureTools::attach(SliceView& view) {
+    // A click places a point with a tool on; without, it moves the crosshair there and says what is there.
+    view.on_click = [this](SliceView& v, QPointF p) {
+        if (!context_.workspace.scene().has_volume() || slice_click(v, p)) return;
+        context_.status(slice_readout(context_.workspace.scene().volume(), v.grid(), p));
+        context_.workspace.set_crosshair(core::pixel_to_lps(v.grid(), {p.x(), p.y()}));
+    };
+    view.on_paint_overlay = [this](SliceView& v, QPainter& p) { paint_slice(v, p); };
     view.on_press = [this](SliceView& v, QPointF p) { return slice_press(v, p); };
     view.on_grab_move = [this](SliceView& v, QPointF p) { slice_grab_move(v, p); };
     view.on_grab_release = [this](SliceView& v, QPointF p, bool dragged) { slice_grab_release(v, p, dragged); };
@@ -191,29 +218,31 @@ std::optional<glm::dvec3> MeasureTools::pick_and_show(Viewer& v, QPointF pixel, 
         r = v.pick_at(pixel);
     } catch (const std::exception& e) {
         // A pointer at the very edge, a view that cannot draw: say so, nothing else.
-        if (!hover) window_.statusBar()->showMessage(QString("3D pick: ") + e.what());
+        if (!hover) context_.status(QString("3D pick: ") + e.what());
         return std::nullopt;
     }
     last_pick_ms_ = r.frame_ms;
-    window_.statusBar()->showMessage(readout(r));
+    context_.status(readout(r));
     if (!hover) click_field_->setText("Click: " + readout(r));
     if (!r.visible) return std::nullopt;
     return r.layers[*r.visible].lps;
 }
 
 void MeasureTools::viewer_click(Viewer& v, QPointF pixel) {
-    if (window_.busy()) return; // a worker is changing the scene
-    hover_timer_->stop();       // the click's readout is the newer one
+    if (context_.busy()) return; // a worker is changing the scene
+    hover_timer_->stop();        // the click's readout is the newer one
     hover_at_.reset();
-    if (window_.structure_tools() && window_.structure_tools()->viewer_click(v, pixel)) return; // Isolate, Distance
+    if (context_.tool() == AppContext::Tool::Isolate || context_.tool() == AppContext::Tool::Distance) {
+        if (other_tool_click) other_tool_click(v, pixel); // the Structures tools
+        return;
+    }
     const auto lps = pick_and_show(v, pixel, false);
     if (tool_ == Tool::None) {
-        if (lps) window_.set_crosshair(*lps);
+        if (lps) context_.workspace.set_crosshair(*lps);
         return;
     }
     if (!lps) {
-        window_.statusBar()->showMessage(window_.statusBar()->currentMessage() + ": " + tool_name(tool_) +
-                                         " needs a point on a visible surface");
+        context_.status(context_.status_text() + ": " + tool_name(tool_) + " needs a point on a visible surface");
         return;
     }
     add_point(*lps);
@@ -227,7 +256,7 @@ void MeasureTools::viewer_hover(Viewer&, QPointF pixel) {
 }
 
 void MeasureTools::hover_pick() {
-    if (!hover_at_ || !viewer_ || window_.busy() || viewer_ != window_.viewer() || !viewer_->isVisible()) return;
+    if (!hover_at_ || !viewer_ || context_.busy() || viewer_ != context_.viewer() || !viewer_->isVisible()) return;
     const QPointF at = *hover_at_;
     hover_at_.reset();
     ++hover_picks_;
@@ -238,7 +267,7 @@ void MeasureTools::hover_pick() {
 // ---- slice views --------------------------------------------------------------------
 
 bool MeasureTools::slice_click(SliceView& view, QPointF pixel) {
-    if (tool_ == Tool::None || !window_.scene().has_volume() || !view.has_image()) return false;
+    if (tool_ == Tool::None || !context_.workspace.scene().has_volume() || !view.has_image()) return false;
     add_point(core::pixel_to_lps(view.grid(), {pixel.x(), pixel.y()}), &view);
     return true;
 }
@@ -292,10 +321,10 @@ void paint_markup(QPainter& p, const Markup& m, const std::function<std::pair<QP
 } // namespace
 
 void MeasureTools::paint_slice(SliceView& view, QPainter& p) const {
-    if (!window_.scene().has_volume() || !view.has_image()) return;
+    if (!context_.workspace.scene().has_volume() || !view.has_image()) return;
     const core::SliceGrid& g = view.grid();
     // Within half a slice of the plane: on the slice the view shows.
-    const double half = 0.5 * core::slice_step_mm(window_.scene().volume(), g.normal);
+    const double half = 0.5 * core::slice_step_mm(context_.workspace.scene().volume(), g.normal);
     const auto project = [&](const glm::dvec3& lps) {
         const core::SlicePoint s = core::lps_to_pixel(g, lps);
         return std::pair{QPointF(s.pixel.x, s.pixel.y), std::abs(s.distance_mm) <= half};
@@ -315,7 +344,7 @@ void MeasureTools::paint_slice(SliceView& view, QPainter& p) const {
 // ---- placing points ---------------------------------------------------------------------
 
 QString MeasureTools::next_name(MarkupType type) const {
-    const auto& all = window_.markups();
+    const auto& all = context_.workspace.markups();
     const auto taken = [&](const QString& name) {
         return std::any_of(all.begin(), all.end(),
                            [&](const Markup& m) { return QString::fromStdString(m.name) == name; });
@@ -335,7 +364,7 @@ QString MeasureTools::next_name(MarkupType type) const {
 void MeasureTools::add_point(const glm::dvec3& lps, const SliceView* on) {
     // The slice views show where the point lies (the view it was placed on
     // keeps its slice, so the next point lands there too).
-    window_.set_crosshair(lps, on);
+    context_.workspace.set_crosshair(lps, on ? std::optional(on->orientation()) : std::nullopt);
     if (tool_ == Tool::Point) {
         add_list_point(lps);
         return;
@@ -344,11 +373,11 @@ void MeasureTools::add_point(const glm::dvec3& lps, const SliceView* on) {
     const std::size_t need = points_needed(tool_);
     if (pending_.size() < need) {
         redraw();
-        window_.statusBar()->showMessage(QString("%1: point %2 of %3 at %4")
-                                             .arg(tool_name(tool_))
-                                             .arg(pending_.size())
-                                             .arg(need)
-                                             .arg(lps_text(lps)));
+        context_.status(QString("%1: point %2 of %3 at %4")
+                            .arg(tool_name(tool_))
+                            .arg(pending_.size())
+                            .arg(need)
+                            .arg(lps_text(lps)));
         return;
     }
     Markup m;
@@ -361,22 +390,22 @@ void MeasureTools::add_point(const glm::dvec3& lps, const SliceView* on) {
         m.points.push_back(std::move(cp));
     }
     pending_.clear();
-    MarkupsState s = window_.markups_state();
+    MarkupsState s = context_.workspace.markups_state();
     s.markups.push_back(m);
     s.sources.emplace_back();
-    window_.edit_markups("Add " + QString::fromStdString(m.name), std::move(s)); // the views and the panel follow
+    context_.edit("Add " + QString::fromStdString(m.name), core::Parts(core::Part::Markups),
+                  [&] { context_.workspace.set_markups(std::move(s)); }); // the views and the panel follow
     const std::string value = markup_measurement_text(m);
-    window_.statusBar()->showMessage(
-        QString::fromStdString(m.name) + ": " +
-        (value.empty() ? QString("no value (an arm has no length)") : QString::fromStdString(value)));
+    context_.status(QString::fromStdString(m.name) + ": " +
+                    (value.empty() ? QString("no value (an arm has no length)") : QString::fromStdString(value)));
 }
 
 // 3D Slicer's active point list: the one selected in the panel, else the
 // last one, else a new one ("F"); its points are labelled NAME-1, NAME-2, ...
 void MeasureTools::add_list_point(const glm::dvec3& lps) {
-    MarkupsState s = window_.markups_state();
+    MarkupsState s = context_.workspace.markups_state();
     std::optional<std::size_t> list;
-    if (const auto sel = window_.selected_markup(); sel && s.markups[*sel].type == MarkupType::Fiducial) list = sel;
+    if (const auto sel = context_.workspace.selected(); sel && s.markups[*sel].type == MarkupType::Fiducial) list = sel;
     for (std::size_t i = s.markups.size(); !list && i-- > 0;)
         if (s.markups[i].type == MarkupType::Fiducial) list = i;
     if (!list) {
@@ -400,19 +429,21 @@ void MeasureTools::add_list_point(const glm::dvec3& lps) {
     cp.label = prefix + std::to_string(n);
     cp.position = lps;
     m.points.push_back(cp);
-    window_.edit_markups("Add point " + QString::fromStdString(cp.label), std::move(s));
+    context_.edit("Add point " + QString::fromStdString(cp.label), core::Parts(core::Part::Markups),
+                  [&] { context_.workspace.set_markups(std::move(s)); });
     QString msg = QString::fromStdString(cp.label) + ": " + lps_text(lps);
-    if (window_.scene().has_volume()) {
-        const auto v = core::value_at(window_.scene(), lps);
-        msg += ", " + (v ? QString::fromStdString(core::value_readout(v->value, core::value_unit(window_.scene())))
-                         : QString("outside the volume"));
+    if (context_.workspace.scene().has_volume()) {
+        const auto v = core::value_at(context_.workspace.scene(), lps);
+        msg += ", " +
+               (v ? QString::fromStdString(core::value_readout(v->value, core::value_unit(context_.workspace.scene())))
+                  : QString("outside the volume"));
     }
-    window_.statusBar()->showMessage(msg);
+    context_.status(msg);
 }
 
 std::vector<Markup> MeasureTools::drawn_markups() const {
-    std::vector<Markup> drawn = window_.markups();
-    if (const auto sel = window_.selected_markup(); sel && *sel < drawn.size()) {
+    std::vector<Markup> drawn = context_.workspace.markups();
+    if (const auto sel = context_.workspace.selected(); sel && *sel < drawn.size()) {
         Markup& m = drawn[*sel];
         m.selected_color = highlight_color();
         for (auto& p : m.points) p.selected = true;
@@ -423,7 +454,7 @@ std::vector<Markup> MeasureTools::drawn_markups() const {
 void MeasureTools::redraw() {
     escape_->setEnabled(!pending_.empty());
     // The 3D view draws the placed points as a point list next to the markups.
-    if (auto* v = window_.viewer()) {
+    if (auto* v = context_.viewer()) {
         std::vector<Markup> drawn = drawn_markups();
         // Each line's and angle's name (the overlay labels a point list's
         // points itself) by its point furthest right in the view now: the
@@ -455,7 +486,7 @@ void MeasureTools::redraw() {
         v->set_markups(std::move(drawn));
     }
     for (auto o : {core::SliceOrientation::Axial, core::SliceOrientation::Coronal, core::SliceOrientation::Sagittal})
-        window_.slice_view(o)->update();
+        context_.slice_view(o)->update();
 }
 
 } // namespace iso::gui

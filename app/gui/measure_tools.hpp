@@ -4,12 +4,13 @@
 // Angle and Point tools, which take their points from the 3D view's pick
 // (the visible layer) or from a slice view's click, and store the
 // measurement as a 3D Slicer markup (Line, Angle, a point list's point)
-// through MainWindow::edit_markups (one undo step each); and moving a
+// in the workspace (one undo step each); and moving a
 // placed point by dragging it (point_editing.cpp). Presentation only:
 // picking is core::pick_in_frame (through Viewer::pick_at), slice positions
 // core::pixel_to_lps / core::lps_to_pixel, values the core's.
 #pragma once
 
+#include <functional>
 #include <optional>
 #include <vector>
 
@@ -21,7 +22,7 @@
 
 #include <glm/vec3.hpp>
 
-#include "app/gui/main_window.hpp"
+#include "app/gui/app_context.hpp"
 #include "io/markups.hpp"
 
 class QAction;
@@ -46,8 +47,10 @@ class MeasureTools : public QObject {
 public:
     enum class Tool { None, Ruler, Angle, Point };
 
-    // Adds the Measure tool bar (Ruler, Angle, Point: checkable, at most one on) to `window`.
-    explicit MeasureTools(MainWindow& window);
+    // Adds the Measure tool bar (Ruler, Angle, Point: checkable, at most one
+    // on, and off when another tool is taken) to the context's window.
+    explicit MeasureTools(AppContext& context);
+    ~MeasureTools() override;
 
     Tool tool() const { return tool_; }
     // Switching drops the points placed so far.
@@ -60,8 +63,11 @@ public:
 
     // Takes the 3D view's click, hover and point dragging (call for each new viewer).
     void attach(Viewer& viewer);
-    // Takes a slice view's point dragging (the window keeps its clicks).
+    // Takes a slice view's clicks (a point with a tool on; else the
+    // crosshair and the readout), point dragging and overlay.
     void attach(SliceView& view);
+    // A 3D view click while a Structures tool is on (the window wires it to StructureTools).
+    std::function<void(Viewer&, QPointF)> other_tool_click;
     // A left click on a slice view: true when the active tool took it as a
     // point (then the window does nothing else with it).
     bool slice_click(SliceView& view, QPointF pixel);
@@ -78,11 +84,11 @@ public:
     // point within half a slice of its plane, segments whose ends both are,
     // and the value.
     void paint_slice(SliceView& view, QPainter& p) const;
-    // A new scene: points being placed and a pending hover pick are dropped.
+    // New data: points being placed and a pending hover pick are dropped.
     void reset();
     // Shows the markups and the points being placed: the 3D view's overlay
-    // (the points as a point list) and the slice views (the window calls it
-    // when its markups change).
+    // (the points as a point list) and the slice views (the workspace's
+    // changes of the markups call it).
     void redraw();
 
     // The status bar's text for a pick of the 3D view:
@@ -116,7 +122,7 @@ private:
     // release commits one undo step.
     struct Grab {
         std::size_t markup = 0, point = 0;
-        MarkupsState before; // the state at the press: what Undo restores
+        core::MarkupsState before; // the state at the press: what Undo restores
     };
     struct Hit {
         std::size_t markup = 0, point = 0;
@@ -132,7 +138,8 @@ private:
     void move_grabbed(const glm::dvec3& lps);
     void commit_grab();
 
-    MainWindow& window_;
+    AppContext& context_;
+    int observer_ = 0;
     QAction* ruler_ = nullptr;
     QAction* angle_ = nullptr;
     QAction* point_ = nullptr;

@@ -1,9 +1,11 @@
 #include "app/gui/measurements_panel.hpp"
 
 #include <QApplication>
+#include <QDir>
 #include <QFileDialog>
 #include <QFileInfo>
 #include <QHeaderView>
+#include <QMainWindow>
 #include <QMessageBox>
 #include <QStatusBar>
 #include <QTableWidget>
@@ -12,9 +14,11 @@
 #include <QPushButton>
 #include <QShortcut>
 
+#include <algorithm>
 #include <cstdint>
 
-#include "app/gui/main_window.hpp"
+#include "app/gui/app_context.hpp"
+#include "app/gui/files.hpp"
 #include "app/gui/measure_tools.hpp"
 #include "io/error.hpp"
 #include "io/markups.hpp"
@@ -60,7 +64,8 @@ QString value_text(const Markup& m) {
 
 } // namespace
 
-MeasurementsPanel::MeasurementsPanel(MainWindow& window) : QDockWidget("Measurements", &window), window_(window) {
+MeasurementsPanel::MeasurementsPanel(AppContext& context)
+    : QDockWidget("Measurements", &context.window), context_(context) {
     setObjectName("measurements");
     table_ = new QTableWidget(0, 6, this);
     table_->setObjectName("measurements_table");
@@ -99,8 +104,20 @@ MeasurementsPanel::MeasurementsPanel(MainWindow& window) : QDockWidget("Measurem
             refresh();
     });
     setWidget(table_);
+    // The table follows the markups and the selection; what the points lie
+    // on follows the surfaces, once they rest.
+    observer_ = context_.workspace.observe([this](core::Parts p) {
+        if (p & (core::Part::Data | core::Part::Markups)) {
+            refresh();
+        } else {
+            if (core::has(p, core::Part::Selection)) show_selection();
+            if (core::has(p, core::Part::Surfaces)) refresh_soon();
+        }
+    });
     refresh();
 }
+
+MeasurementsPanel::~MeasurementsPanel() { context_.workspace.unobserve(observer_); }
 
 void MeasurementsPanel::add_row(const Row& r, const std::array<QString, 5>& text, const QString& tooltip) {
     const int row = table_->rowCount();
@@ -124,7 +141,7 @@ void MeasurementsPanel::add_row(const Row& r, const std::array<QString, 5>& text
 }
 
 void MeasurementsPanel::add_markup_rows(std::size_t index, const Markup& m) {
-    const bool has_volume = window_.scene().has_volume();
+    const bool has_volume = context_.workspace.scene().has_volume();
     QStringList on;
     for (const auto& p : m.points)
         if (p.status == PositionStatus::Defined) on << surface_text(p.position);
@@ -143,9 +160,10 @@ void MeasurementsPanel::add_markup_rows(std::size_t index, const Markup& m) {
         }
         QString value = "-";
         if (has_volume) {
-            const auto v = core::value_at(window_.scene(), p.position);
-            value = v ? QString::fromStdString(core::value_readout(v->value, core::value_unit(window_.scene())))
-                      : QString("outside the volume");
+            const auto v = core::value_at(context_.workspace.scene(), p.position);
+            value =
+                v ? QString::fromStdString(core::value_readout(v->value, core::value_unit(context_.workspace.scene())))
+                  : QString("outside the volume");
         }
         add_row({index, int(k)},
                 {QString::fromStdString(p.label), "Point", value, surface_text(p.position), lps_text(p.position)}, {});
@@ -157,7 +175,7 @@ void MeasurementsPanel::refresh() {
     refresh_timer_->stop();
     filling_ = true;
     check_cache();
-    const auto& markups = window_.markups();
+    const auto& markups = context_.workspace.markups();
     table_->setRowCount(0);
     rows_.clear();
     for (std::size_t i = 0; i < markups.size(); ++i) add_markup_rows(i, markups[i]);
@@ -166,7 +184,7 @@ void MeasurementsPanel::refresh() {
 }
 
 void MeasurementsPanel::refresh_soon() {
-    if (!window_.markups().empty()) refresh_timer_->start();
+    if (!context_.workspace.markups().empty()) refresh_timer_->start();
 }
 
 int MeasurementsPanel::row_of(std::size_t markup, int point) const {
@@ -176,7 +194,7 @@ int MeasurementsPanel::row_of(std::size_t markup, int point) const {
 }
 
 void MeasurementsPanel::show_selection() {
-    const auto sel = window_.selected_markup();
+    const auto sel = context_.workspace.selected();
     const int row = sel ? row_of(*sel) : -1;
     // Already on a row of that markup (a point list's point): stays.
     const auto current = table_->selectionModel()->selectedRows();
@@ -195,25 +213,29 @@ void MeasurementsPanel::show_selection() {
 void MeasurementsPanel::selection_changed() {
     if (filling_) return;
     const auto selected = table_->selectionModel()->selectedRows();
+    core::Workspace& w = context_.workspace;
     if (selected.isEmpty() || std::size_t(selected.front().row()) >= rows_.size()) {
-        window_.select_markup(std::nullopt);
+        w.select(std::nullopt);
         return;
     }
+    // The markup selected (highlighted in the views); the slice views go to
+    // its first point, or to the point list's point of the row. The 3D
+    // view's camera stays (a selection is no change of the figure).
     const Row r = rows_[std::size_t(selected.front().row())];
-    if (r.point < 0) {
-        window_.select_markup(r.markup);
-        return;
-    }
-    // A point list's point: the views centre on that point.
-    window_.select_markup(r.markup, false);
-    const auto& p = window_.markups()[r.markup].points[std::size_t(r.point)];
-    if (p.status == PositionStatus::Defined) window_.centre_on(p.position);
+    w.select(r.markup);
+    const Markup& m = w.markups()[r.markup];
+    const auto first = std::find_if(m.points.begin(), m.points.end(),
+                                    [](const MarkupControlPoint& p) { return p.status == PositionStatus::Defined; });
+    const MarkupControlPoint* p = r.point >= 0              ? &m.points[std::size_t(r.point)]
+                                  : first != m.points.end() ? &*first
+                                                            : nullptr;
+    if (p && p->status == PositionStatus::Defined) w.set_crosshair(p->position);
 }
 
 void MeasurementsPanel::rename(int row, const QString& name) {
     if (row < 0 || std::size_t(row) >= rows_.size()) return;
     const Row r = rows_[std::size_t(row)];
-    MarkupsState s = window_.markups_state();
+    MarkupsState s = context_.workspace.markups_state();
     if (r.markup >= s.markups.size()) return;
     Markup& m = s.markups[r.markup];
     QString old;
@@ -227,14 +249,15 @@ void MeasurementsPanel::rename(int row, const QString& name) {
     }
     if (old == name) return;
     renaming_ = true;
-    window_.edit_markups("Rename " + (old.isEmpty() ? QString("measurement") : old), std::move(s));
+    context_.edit("Rename " + (old.isEmpty() ? QString("measurement") : old), core::Parts(core::Part::Markups),
+                  [&] { context_.workspace.set_markups(std::move(s)); });
     renaming_ = false;
 }
 
 void MeasurementsPanel::remove(int row) {
     if (row < 0 || std::size_t(row) >= rows_.size()) return;
     const Row r = rows_[std::size_t(row)];
-    MarkupsState s = window_.markups_state();
+    MarkupsState s = context_.workspace.markups_state();
     if (r.markup >= s.markups.size()) return;
     QString name;
     if (r.point < 0) {
@@ -247,8 +270,9 @@ void MeasurementsPanel::remove(int row) {
         pts.erase(pts.begin() + r.point);
     }
     if (name.isEmpty()) name = r.point < 0 ? QString("the measurement") : QString("the point");
-    window_.edit_markups("Delete " + name, std::move(s));
-    window_.statusBar()->showMessage("Deleted " + name + " (Edit > Undo brings it back)");
+    context_.edit("Delete " + name, core::Parts(core::Part::Markups),
+                  [&] { context_.workspace.set_markups(std::move(s)); });
+    context_.status("Deleted " + name + " (Edit > Undo brings it back)");
 }
 
 // ---- where the points lie ------------------------------------------------------------
@@ -256,7 +280,7 @@ void MeasurementsPanel::remove(int row) {
 void MeasurementsPanel::check_cache() {
     // The answers hold while the surfaces do: which, their meshes, visibility and opacity.
     std::string key;
-    const core::Scene& scene = window_.scene();
+    const core::Scene& scene = context_.workspace.scene();
     for (const auto id : scene.surfaces()) {
         const auto& info = scene.info(id);
         const auto& mesh = scene.mesh(id);
@@ -274,11 +298,11 @@ QString MeasurementsPanel::surface_text(const glm::dvec3& p) {
     const std::array<double, 3> key{p.x, p.y, p.z};
     if (const auto it = surface_cache_.find(key); it != surface_cache_.end()) return it->second;
     // While a point is dragged, only the points already known (each query builds a search tree).
-    if (window_.measure_tools()->editing()) return "...";
+    if (context_.editing_markup()) return "...";
     QString text;
     try {
-        const core::SurfacePoint s = core::surface_at(window_.scene(), p);
-        text = s.distance_mm <= kOnSurfaceMm ? QString::fromStdString(window_.scene().info(s.surface).name)
+        const core::SurfacePoint s = core::surface_at(context_.workspace.scene(), p);
+        text = s.distance_mm <= kOnSurfaceMm ? QString::fromStdString(context_.workspace.scene().info(s.surface).name)
                                              : QString("off surface");
     } catch (const Error&) {
         text = "-"; // no visible surface
@@ -293,10 +317,10 @@ QString MeasurementsPanel::crossings_text(const Markup& m) {
     const glm::dvec3 a = m.points[0].position, b = m.points[1].position;
     const std::array<double, 6> key{a.x, a.y, a.z, b.x, b.y, b.z};
     if (const auto it = crossings_cache_.find(key); it != crossings_cache_.end()) return it->second;
-    if (window_.measure_tools()->editing()) return "...";
+    if (context_.editing_markup()) return "...";
     QStringList parts;
     try {
-        for (const core::LineCrossing& c : core::solid_crossings(window_.scene(), a, b))
+        for (const core::LineCrossing& c : core::solid_crossings(context_.workspace.scene(), a, b))
             parts << QString("%1 at %2 mm").arg(QString::fromStdString(c.name)).arg(c.along_mm, 0, 'f', 1);
     } catch (const Error&) {
         // Not finite points (a damaged file): nothing to say about them.
@@ -306,9 +330,10 @@ QString MeasurementsPanel::crossings_text(const Markup& m) {
 }
 
 void MeasurementsPanel::show_error(const QString& what, const QString& reason) {
-    window_.statusBar()->showMessage(what + ": failed");
+    context_.status(what + ": failed");
     // Not exec(): the window keeps running (and tests can find and close the box).
-    auto* box = new QMessageBox(QMessageBox::Critical, "Markups", what + "\n\n" + reason, QMessageBox::Ok, &window_);
+    auto* box =
+        new QMessageBox(QMessageBox::Critical, "Markups", what + "\n\n" + reason, QMessageBox::Ok, &context_.window);
     box->setObjectName("error");
     box->setAttribute(Qt::WA_DeleteOnClose);
     box->open();
@@ -316,25 +341,25 @@ void MeasurementsPanel::show_error(const QString& what, const QString& reason) {
 
 bool MeasurementsPanel::save(const QString& path) {
     const QString what = "Cannot save markups to " + path;
-    if (window_.markups().empty()) {
+    if (context_.workspace.markups().empty()) {
         show_error(what, "there are no measurements to save");
         return false;
     }
     try {
         MarkupsFile f;
-        f.markups = window_.markups();
+        f.markups = context_.workspace.markups();
         save_markups(f, path.toStdString());
     } catch (const std::exception& e) {
         show_error(what, QString::fromStdString(e.what()));
         return false;
     }
     // The file holds them now: loading it again asks whether to replace them.
-    MarkupsState s = window_.markups_state();
+    MarkupsState s = context_.workspace.markups_state();
     const QString file = QFileInfo(path).canonicalFilePath();
     for (auto& from : s.sources)
-        if (!from.contains(file)) from << file;
-    window_.show_markups(std::move(s));
-    window_.statusBar()->showMessage(QString("Saved %1 measurement(s) to %2").arg(window_.markups().size()).arg(path));
+        if (std::find(from.begin(), from.end(), file.toStdString()) == from.end()) from.push_back(file.toStdString());
+    context_.workspace.set_markups(std::move(s));
+    context_.status(QString("Saved %1 measurement(s) to %2").arg(context_.workspace.markups().size()).arg(path));
     return true;
 }
 
@@ -360,9 +385,10 @@ bool MeasurementsPanel::load(const QString& path) {
     // by comparing names and points: a markup moved or renamed since still
     // came from the file, and two files may hold equal markups.
     const QString file = QFileInfo(path).canonicalFilePath();
-    const auto& sources = window_.markups_state().sources;
-    const auto from_file =
-        std::count_if(sources.begin(), sources.end(), [&](const QStringList& s) { return s.contains(file); });
+    const auto& sources = context_.workspace.markups_state().sources;
+    const auto from_file = std::count_if(sources.begin(), sources.end(), [&](const std::vector<std::string>& s) {
+        return std::find(s.begin(), s.end(), file.toStdString()) != s.end();
+    });
     if (from_file == 0) {
         add_loaded(f, path, LoadMode::Add);
         return true;
@@ -374,7 +400,7 @@ bool MeasurementsPanel::load(const QString& path) {
             .arg(from_file)
             .arg(QFileInfo(path).fileName())
             .arg(f.markups.size()),
-        QMessageBox::NoButton, &window_);
+        QMessageBox::NoButton, &context_.window);
     box->setObjectName("reload");
     auto* replace = box->addButton("Replace", QMessageBox::AcceptRole);
     replace->setObjectName("replace");
@@ -389,7 +415,7 @@ bool MeasurementsPanel::load(const QString& path) {
         else if (b == add)
             add_loaded(f, path, LoadMode::Add);
         else
-            window_.statusBar()->showMessage("Loading " + path + ": cancelled");
+            context_.status("Loading " + path + ": cancelled");
     });
     box->open(); // window-modal, not exec(): the event loop (and tests) go on
     return true;
@@ -397,11 +423,12 @@ bool MeasurementsPanel::load(const QString& path) {
 
 void MeasurementsPanel::add_loaded(const MarkupsFile& f, const QString& path, LoadMode mode) {
     const QString file = QFileInfo(path).canonicalFilePath();
-    const MarkupsState& now = window_.markups_state();
+    const MarkupsState& now = context_.workspace.markups_state();
     MarkupsState s;
     std::optional<std::size_t> at; // Replace: where the first of the file's markups was
     for (std::size_t i = 0; i < now.markups.size(); ++i) {
-        if (mode == LoadMode::Replace && now.sources[i].contains(file)) {
+        if (mode == LoadMode::Replace &&
+            std::find(now.sources[i].begin(), now.sources[i].end(), file.toStdString()) != now.sources[i].end()) {
             if (!at) at = s.markups.size();
             continue;
         }
@@ -411,27 +438,29 @@ void MeasurementsPanel::add_loaded(const MarkupsFile& f, const QString& path, Lo
     const std::size_t dropped = now.markups.size() - s.markups.size();
     const std::size_t pos = at.value_or(s.markups.size());
     s.markups.insert(s.markups.begin() + std::ptrdiff_t(pos), f.markups.begin(), f.markups.end());
-    s.sources.insert(s.sources.begin() + std::ptrdiff_t(pos), f.markups.size(), QStringList{file});
+    s.sources.insert(s.sources.begin() + std::ptrdiff_t(pos), f.markups.size(),
+                     std::vector<std::string>{file.toStdString()});
     const QString name = QFileInfo(path).fileName();
-    window_.edit_markups((mode == LoadMode::Replace ? "Replace markups from " : "Load markups from ") + name,
-                         std::move(s));
+    context_.edit((mode == LoadMode::Replace ? "Replace markups from " : "Load markups from ") + name,
+                  core::Parts(core::Part::Markups), [&] { context_.workspace.set_markups(std::move(s)); });
     QString msg =
         mode == LoadMode::Replace
             ? QString("Replaced %1 measurement(s) with the %2 of %3").arg(dropped).arg(f.markups.size()).arg(path)
             : QString("Loaded %1 measurement(s) from %2").arg(f.markups.size()).arg(path);
     for (const auto& w : f.warnings) msg += "; " + QString::fromStdString(w);
-    window_.statusBar()->showMessage(msg);
+    context_.status(msg);
 }
 
 void MeasurementsPanel::save_dialog() {
-    QString f = QFileDialog::getSaveFileName(&window_, "Save markups", QString(), "3D Slicer markups (*.mrk.json)");
+    const QString start = QDir(Files::start_folder("markups")).filePath("measurements.mrk.json");
+    QString f = QFileDialog::getSaveFileName(&context_.window, "Save markups", start, "3D Slicer markups (*.mrk.json)");
     if (f.isEmpty()) return;
     if (!f.endsWith(".json", Qt::CaseInsensitive)) f += ".mrk.json";
-    save(f);
+    if (save(f)) Files::remember_folder("markups", f);
 }
 
 void MeasurementsPanel::load_dialog() {
-    const QString f = QFileDialog::getOpenFileName(&window_, "Load markups", QString(),
+    const QString f = QFileDialog::getOpenFileName(&context_.window, "Load markups", Files::start_folder("markups"),
                                                    "3D Slicer markups (*.mrk.json *.json);;All files (*)");
     if (!f.isEmpty()) load(f);
 }

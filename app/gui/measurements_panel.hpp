@@ -1,16 +1,16 @@
 // The Measurements dock (docs/gui.md "Pick and measure"): a table
-// of the window's markups (MainWindow::markups(): rulers, angles, point
+// of the workspace's markups (rulers, angles, point
 // lists, and what a loaded .mrk.json holds) with the name (editable), the
 // kind, the value (mm or degrees, computed by the core from the points each
 // time the markups change), the surface each point lies on
 // (core::surface_at), what a ruler passes through (core::solid_crossings)
 // and a delete button; a point list's points have rows of their own (label,
 // value of the volume there, surface, LPS). Selecting a row selects the
-// markup (MainWindow::select_markup: highlighted and centred in the views).
+// markup (highlighted in the views; the slice views go to its point).
 // File > Save markups... / Load markups... through io/markups.hpp (3D
 // Slicer's .mrk.json, LPS), errors in a dialog naming the file; loading a
 // file some markups came from asks whether to replace them. Every edit is
-// an undo step (MainWindow::edit_markups). Presentation only.
+// an undo step (AppContext::edit). Presentation only.
 #pragma once
 
 #include <array>
@@ -32,21 +32,21 @@ class QTimer;
 
 namespace iso::gui {
 
-class MainWindow;
+class AppContext;
 
 class MeasurementsPanel : public QDockWidget {
 public:
     enum Column { Name = 0, Kind = 1, Value = 2, Surface = 3, Notes = 4, Delete = 5 };
 
-    explicit MeasurementsPanel(MainWindow& window);
+    explicit MeasurementsPanel(AppContext& context);
+    ~MeasurementsPanel() override;
 
-    // Rebuilds the table from MainWindow::markups() (the window calls it
-    // whenever they change).
+    // Rebuilds the table from the workspace's markups (their changes call it).
     void refresh();
     // refresh() once the surfaces rest (a slider being dragged changes them
     // at every step; the surface and notes columns query every point).
     void refresh_soon();
-    // Selects the row of MainWindow::selected_markup() (none: no row).
+    // Selects the row of the workspace's selected markup (none: no row).
     void show_selection();
     QTableWidget* table() const { return table_; }
     // The row of a markup (point -1) or of one of a point list's points; -1: none.
@@ -86,7 +86,8 @@ private:
     QString crossings_text(const Markup& m);
     void check_cache();
 
-    MainWindow& window_;
+    AppContext& context_;
+    int observer_ = 0;
     QTableWidget* table_ = nullptr;
     QTimer* refresh_timer_ = nullptr;
     std::vector<Row> rows_;

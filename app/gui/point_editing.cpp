@@ -12,7 +12,7 @@
 #include <cmath>
 #include <limits>
 
-#include "app/gui/main_window.hpp"
+#include "app/gui/app_context.hpp"
 #include "app/gui/measure_tools.hpp"
 #include "app/gui/slice_view.hpp"
 #include "app/gui/viewer.hpp"
@@ -57,18 +57,18 @@ QString point_name(const Markup& m, std::size_t point) {
 
 bool MeasureTools::grab(const std::optional<Hit>& hit) {
     if (!hit) return false;
-    grab_ = Grab{hit->markup, hit->point, window_.markups_state()};
-    window_.statusBar()->showMessage("Moving " + point_name(window_.markups()[hit->markup], hit->point) +
-                                     ": release to place it (Edit > Undo puts it back)");
+    grab_ = Grab{hit->markup, hit->point, context_.workspace.markups_state()};
+    context_.status("Moving " + point_name(context_.workspace.markups()[hit->markup], hit->point) +
+                    ": release to place it (Edit > Undo puts it back)");
     return true;
 }
 
 void MeasureTools::move_grabbed(const glm::dvec3& lps) {
     if (!grab_) return;
-    MarkupsState s = window_.markups_state();
+    MarkupsState s = context_.workspace.markups_state();
     if (grab_->markup >= s.markups.size() || grab_->point >= s.markups[grab_->markup].points.size()) return;
     s.markups[grab_->markup].points[grab_->point].position = lps;
-    window_.show_markups(std::move(s)); // the views and the panel's value follow
+    context_.workspace.set_markups(std::move(s)); // the views and the panel's value follow
 }
 
 void MeasureTools::commit_grab() {
@@ -76,30 +76,37 @@ void MeasureTools::commit_grab() {
     Grab g = std::move(*grab_);
     grab_.reset();
     // The markups may have changed under the drag (Edit > Undo from the keyboard): nothing to commit then.
-    const auto& now = window_.markups();
+    const auto& now = context_.workspace.markups();
     if (g.markup >= now.size() || g.point >= now[g.markup].points.size() || now.size() != g.before.markups.size() ||
         now[g.markup].points.size() != g.before.markups[g.markup].points.size())
         return;
     const bool moved = g.before.markups[g.markup].points[g.point].position != now[g.markup].points[g.point].position;
     if (!moved) {
-        window_.show_markups(window_.markups_state()); // the panel's columns left out while dragging
+        context_.workspace.set_markups(
+            context_.workspace.markups_state()); // the panel's columns left out while dragging
         return;
     }
-    const Markup& m = window_.markups()[g.markup];
+    const Markup& m = context_.workspace.markups()[g.markup];
     const std::string value = markup_measurement_text(m);
     const QString msg = "Moved " + point_name(m, g.point) + " to " + lps_text(m.points[g.point].position) +
                         (value.empty() ? QString() : ": " + QString::fromStdString(value));
-    window_.edit_markups("Move point", window_.markups_state(), std::move(g.before));
-    window_.statusBar()->showMessage(msg);
+    // One undo step from the state at the press to the state now (the drag's steps were shown unrecorded).
+    core::WorkspaceEdit e;
+    e.text = "Move point";
+    e.parts = core::Parts(core::Part::Markups);
+    e.before.markups = std::move(g.before);
+    e.after.markups = context_.workspace.markups_state();
+    context_.push(std::move(e));
+    context_.status(msg);
 }
 
 // ---- the 3D view -------------------------------------------------------------------
 
 bool MeasureTools::viewer_press(Viewer& v, QPointF pixel) {
-    if (tool_ != Tool::None || window_.busy()) return false;
+    if (tool_ != Tool::None || context_.busy()) return false;
     const double radius = kGrabRadiusPx * v.devicePixelRatioF();
-    const auto hit =
-        nearest_point(window_.markups(), pixel, radius, [&](const glm::dvec3& p) { return v.image_pixel(p); });
+    const auto hit = nearest_point(context_.workspace.markups(), pixel, radius,
+                                   [&](const glm::dvec3& p) { return v.image_pixel(p); });
     return grab(hit ? std::optional<Hit>(Hit{hit->first, hit->second}) : std::nullopt);
 }
 
@@ -111,13 +118,13 @@ void MeasureTools::viewer_grab_move(QPointF pixel) {
 }
 
 void MeasureTools::viewer_grab_pick() {
-    if (!grab_ || !grab_at_ || !viewer_ || window_.busy()) return;
+    if (!grab_ || !grab_at_ || !viewer_ || context_.busy()) return;
     const QPointF at = *grab_at_;
     grab_at_.reset();
     if (const auto lps = pick_and_show(*viewer_, at, true))
         move_grabbed(*lps);
     else
-        window_.statusBar()->showMessage("Background: the point stays where it was");
+        context_.status("Background: the point stays where it was");
 }
 
 void MeasureTools::viewer_grab_release(Viewer& v, QPointF pixel, bool dragged) {
@@ -136,11 +143,12 @@ void MeasureTools::viewer_grab_release(Viewer& v, QPointF pixel, bool dragged) {
 // ---- slice views --------------------------------------------------------------------
 
 bool MeasureTools::slice_press(SliceView& view, QPointF pixel) {
-    if (tool_ != Tool::None || window_.busy() || !window_.scene().has_volume() || !view.has_image()) return false;
+    if (tool_ != Tool::None || context_.busy() || !context_.workspace.scene().has_volume() || !view.has_image())
+        return false;
     const core::SliceGrid& g = view.grid();
     // Only the points the view draws: within half a slice of its plane.
-    const double half = 0.5 * core::slice_step_mm(window_.scene().volume(), g.normal);
-    const auto hit = nearest_point(window_.markups(), pixel, kGrabRadiusPx, [&](const glm::dvec3& p) {
+    const double half = 0.5 * core::slice_step_mm(context_.workspace.scene().volume(), g.normal);
+    const auto hit = nearest_point(context_.workspace.markups(), pixel, kGrabRadiusPx, [&](const glm::dvec3& p) {
         const core::SlicePoint s = core::lps_to_pixel(g, p);
         return std::abs(s.distance_mm) <= half ? std::optional<QPointF>(QPointF(s.pixel.x, s.pixel.y)) : std::nullopt;
     });
@@ -151,7 +159,7 @@ void MeasureTools::slice_grab_move(SliceView& view, QPointF pixel) {
     if (!grab_ || !view.has_image()) return;
     const glm::dvec3 lps = core::pixel_to_lps(view.grid(), {pixel.x(), pixel.y()});
     move_grabbed(lps);
-    window_.statusBar()->showMessage("Moving to " + lps_text(lps));
+    context_.status("Moving to " + lps_text(lps));
 }
 
 void MeasureTools::slice_grab_release(SliceView& view, QPointF pixel, bool dragged) {

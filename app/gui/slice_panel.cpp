@@ -44,10 +44,10 @@ SlicePanel::SlicePanel(core::SliceOrientation orientation, QWidget* parent) : QW
     connect(fit_, &QToolButton::clicked, this, [this] { view_->fit(); });
     connect(slider_, &QSlider::valueChanged, this, [this](int value) {
         const core::SlicePlane* p = view_->plane();
-        if (syncing_ || !p || !view_->on_scroll) return;
+        if (syncing_ || !p) return;
         // The steps from the slice shown now: the plane keeps its place between slices.
         const int steps = value - core::slice_index(range_, p->offset_mm());
-        if (steps != 0) view_->on_scroll(*view_, double(steps));
+        if (steps != 0) view_->scroll(double(steps));
     });
     view_->on_refresh = [this](SliceView&) { sync(); };
     sync();
@@ -55,7 +55,7 @@ SlicePanel::SlicePanel(core::SliceOrientation orientation, QWidget* parent) : QW
 
 void SlicePanel::sync() {
     const core::SlicePlane* p = view_->plane();
-    const bool volume = p && view_->scene() && view_->scene()->has_volume();
+    const bool volume = p != nullptr;
     syncing_ = true;
     slider_->setEnabled(volume);
     fit_->setEnabled(volume);

@@ -12,6 +12,7 @@
 
 #include "io/color.hpp"
 #include "renderer/core/scene.hpp"
+#include "renderer/core/workspace.hpp"
 #include "renderer/core/value_unit.hpp"
 
 namespace iso::gui {
@@ -42,17 +43,54 @@ QString slice_readout(const Volume& v, const core::SliceGrid& g, QPointF pixel) 
     return msg + ", outside the volume";
 }
 
-void SliceView::set_content(const core::Scene* scene, core::SlicePlane* plane) {
-    scene_ = scene;
-    plane_ = plane;
+SliceView::~SliceView() { set_workspace(nullptr); }
+
+void SliceView::set_workspace(core::Workspace* workspace) {
+    if (workspace_) workspace_->unobserve(observer_);
+    workspace_ = workspace;
     fitted_ = user_framed_ = false;
     range_.reset();
+    if (workspace_) {
+        observer_ = workspace_->observe([this](core::Parts p) {
+            if (core::has(p, core::Part::Data)) { // new data: fitted again, its own range
+                fitted_ = user_framed_ = false;
+                range_.reset();
+            } else if (core::has(p, core::Part::Slices) && fitted_ && plane() && plane()->pixel_mm != fit_pixel_mm_) {
+                user_framed_ = true; // framed elsewhere (a session, an undo): resizes keep it
+            }
+            if (p & (core::Part::Data | core::Part::Window)) set_window(workspace_->window());
+            if (p & (core::Part::Data | core::Part::Slices | core::Part::Surfaces)) refresh();
+        });
+        window_ = workspace_->window();
+    }
     refresh();
+}
+
+const core::Scene* SliceView::scene() const { return workspace_ ? &workspace_->scene() : nullptr; }
+
+const core::SlicePlane* SliceView::plane() const {
+    return workspace_ && workspace_->scene().has_volume() ? &workspace_->planes()[std::size_t(orientation_)] : nullptr;
+}
+
+void SliceView::set_plane(const core::SlicePlane& p) {
+    auto planes = workspace_->planes();
+    planes[std::size_t(orientation_)] = p;
+    workspace_->set_planes(planes); // notifies: every view refreshes
 }
 
 void SliceView::keep_framing() {
     fitted_ = user_framed_ = true;
     refresh();
+}
+
+void SliceView::scroll(double steps) {
+    if (!plane()) return;
+    auto planes = workspace_->planes();
+    auto& p = planes[std::size_t(orientation_)];
+    core::scroll_slices(p, steps);
+    // The other views' crosshair lines follow the moved slice.
+    core::set_crosshair(planes, p.origin);
+    workspace_->set_planes(planes);
 }
 
 void SliceView::set_window(const core::WindowLevel& w) {
@@ -73,23 +111,31 @@ std::size_t SliceView::outline_segments() const {
 void SliceView::refresh() {
     image_ = QImage();
     outlines_.clear();
-    if (!scene_ || !plane_ || !scene_->has_volume() || width() < 1 || height() < 1) {
+    const core::SlicePlane* plane = this->plane();
+    if (!plane || width() < 1 || height() < 1) {
         update();
         return;
     }
+    const core::Scene& scene = workspace_->scene();
     try {
         if (!fitted_) {
-            core::zoom_to_fit(*plane_, width(), height());
             fitted_ = true;
+            core::SlicePlane fitted = *plane;
+            core::zoom_to_fit(fitted, width(), height());
+            fit_pixel_mm_ = fitted.pixel_mm;
+            if (!(fitted == *plane)) {
+                set_plane(fitted); // its notification refreshes
+                return;
+            }
         }
-        grid_ = core::slice_grid(*plane_, width(), height());
-        core::reslice(scene_->volume(), grid_, core::Interp::Linear, values_);
+        grid_ = core::slice_grid(*plane, width(), height());
+        core::reslice(scene.volume(), grid_, core::Interp::Linear, values_);
         grey_ = core::apply_window(values_, window_, core::PixelFormat::Grey8);
         image_ = QImage(grey_.data(), values_.width, values_.height, values_.width, QImage::Format_Grayscale8).copy();
-        for (auto id : scene_->surfaces()) {
-            const auto& info = scene_->info(id);
+        for (auto id : scene.surfaces()) {
+            const auto& info = scene.info(id);
             if (!info.visible) continue;
-            outlines_.push_back({core::mesh_outline(scene_->mesh(id), grid_), to_qcolor(info.color)});
+            outlines_.push_back({core::mesh_outline(scene.mesh(id), grid_), to_qcolor(info.color)});
         }
     } catch (const std::exception& e) {
         // Nothing escapes into Qt's event loop.
@@ -102,25 +148,30 @@ void SliceView::refresh() {
 }
 
 void SliceView::fit() {
-    if (!scene_ || !plane_ || !scene_->has_volume()) return;
-    core::fit_view(*plane_, scene_->volume(), width(), height());
+    const core::SlicePlane* plane = this->plane();
+    if (!plane) return;
+    core::SlicePlane p = *plane;
+    core::fit_view(p, workspace_->scene().volume(), width(), height());
+    fit_pixel_mm_ = p.pixel_mm;
     fitted_ = true;
     user_framed_ = false; // fitted again: a resize fits it again too
-    refresh();
+    set_plane(p);
+    refresh(); // unchanged planes notify nothing
 }
 
 void SliceView::update_probe() {
     probe_.clear();
-    if (hover_ && !image_.isNull() && scene_ && scene_->has_volume())
-        probe_ = slice_readout(scene_->volume(), grid_, *hover_);
+    if (hover_ && !image_.isNull() && plane()) probe_ = slice_readout(workspace_->scene().volume(), grid_, *hover_);
 }
 
 QString SliceView::edge_letter(core::SliceEdge e) const {
-    return image_.isNull() || !plane_ ? QString() : QString::fromStdString(core::slice_edge_letter(*plane_, e));
+    const core::SlicePlane* plane = this->plane();
+    return image_.isNull() || !plane ? QString() : QString::fromStdString(core::slice_edge_letter(*plane, e));
 }
 
 double SliceView::scale_bar_mm() const {
-    return image_.isNull() || !plane_ ? 0.0 : core::slice_scale_bar_mm(*plane_, grid_.width);
+    const core::SlicePlane* plane = this->plane();
+    return image_.isNull() || !plane ? 0.0 : core::slice_scale_bar_mm(*plane, grid_.width);
 }
 
 double SliceView::scale_bar_pixels() const { return image_.isNull() ? 0.0 : scale_bar_mm() / grid_.pixel_mm; }
@@ -135,14 +186,14 @@ void SliceView::paintEvent(QPaintEvent*) {
         p.setPen(QPen(o.color, 1.5));
         for (const auto& s : o.segments) p.drawLine(QPointF(s.a.x, s.a.y), QPointF(s.b.x, s.b.y));
     }
-    const auto c = core::lps_to_pixel(grid_, plane_->origin).pixel;
+    const core::SlicePlane& plane = *this->plane(); // an image: a plane
+    const auto c = core::lps_to_pixel(grid_, plane.origin).pixel;
     p.setPen(QPen(QColor(255, 200, 0, 160), 1.0, Qt::DashLine));
     p.drawLine(QPointF(c.x, 0), QPointF(c.x, height()));
     p.drawLine(QPointF(0, c.y), QPointF(width(), c.y));
     p.setPen(Qt::yellow);
-    p.drawText(
-        QPointF(6, 16),
-        QString("%1  %2 mm").arg(core::slice_orientation_name(orientation_)).arg(plane_->offset_mm(), 0, 'f', 1));
+    p.drawText(QPointF(6, 16),
+               QString("%1  %2 mm").arg(core::slice_orientation_name(orientation_)).arg(plane.offset_mm(), 0, 'f', 1));
     if (on_paint_overlay) on_paint_overlay(*this, p);
     paint_annotations(p);
 }
@@ -240,7 +291,8 @@ void SliceView::mouseMoveEvent(QMouseEvent* e) {
         update();
         return;
     }
-    if (image_.isNull() || !plane_) return;
+    const core::SlicePlane* plane = this->plane();
+    if (image_.isNull() || !plane) return;
     if (!drag_.follow(e->position())) return;
     const QPointF d = drag_.step(e->position());
     if (grabbing_) { // a markup point follows the pointer; the window stays
@@ -248,36 +300,36 @@ void SliceView::mouseMoveEvent(QMouseEvent* e) {
         return;
     }
     if (e->buttons() & Qt::LeftButton) {
-        if (!range_) range_ = scene_->volume().value_range();
+        if (!range_) range_ = workspace_->scene().volume().value_range();
         const QPointF total = e->position() - drag_.press;
-        const auto w = core::drag_window(window_at_press_, {total.x(), -total.y()}, *range_);
-        set_window(w);
-        if (on_window) on_window(*this, w);
+        workspace_->set_window(core::drag_window(window_at_press_, {total.x(), -total.y()}, *range_));
     } else if (e->buttons() & Qt::MiddleButton) {
-        core::pan_pixels(*plane_, {d.x(), d.y()});
+        core::SlicePlane p = *plane;
+        core::pan_pixels(p, {d.x(), d.y()});
         user_framed_ = true;
-        refresh();
+        set_plane(p);
     } else if (e->buttons() & Qt::RightButton) {
-        core::zoom_about(*plane_, width(), height(), {drag_.press.x(), drag_.press.y()},
+        core::SlicePlane p = *plane;
+        core::zoom_about(p, width(), height(), {drag_.press.x(), drag_.press.y()},
                          core::drag_zoom_factor(-d.y(), height()));
         user_framed_ = true;
-        refresh();
+        set_plane(p);
     }
 }
 
 void SliceView::wheelEvent(QWheelEvent* e) {
     wheel_ += e->angleDelta().y();
     const double steps = std::trunc(wheel_ / 120.0);
-    if (steps != 0 && on_scroll) {
+    if (steps != 0) {
         wheel_ -= steps * 120.0;
-        on_scroll(*this, steps);
+        scroll(steps);
     }
     e->accept();
 }
 
 void SliceView::keyPressEvent(QKeyEvent* e) {
-    if ((e->key() == Qt::Key_PageUp || e->key() == Qt::Key_PageDown) && on_scroll) {
-        on_scroll(*this, e->key() == Qt::Key_PageUp ? 1.0 : -1.0);
+    if (e->key() == Qt::Key_PageUp || e->key() == Qt::Key_PageDown) {
+        scroll(e->key() == Qt::Key_PageUp ? 1.0 : -1.0);
         return;
     }
     if (e->key() == Qt::Key_F && e->modifiers() == Qt::NoModifier) {

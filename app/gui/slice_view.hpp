@@ -3,9 +3,10 @@
 // core::apply_window), the surfaces' outlines (core::mesh_outline), the
 // crosshair, the patient directions at its edges (core::slice_edge_letter),
 // a scale bar (core::slice_scale_bar_mm) and the hover probe's readout
-// (core::sample_at_pixel). Presentation only: the plane belongs to the main window, which
-// also decides what a click or a scroll does (core::set_crosshair,
-// core::scroll_slices). The geometry is the core's (renderer/core/slices.hpp).
+// (core::sample_at_pixel). Its plane, the crosshair and the window/level
+// are the workspace's: the view shows them, follows their changes, and its
+// own gestures (pan, zoom, fit, scroll, a window drag) change them there.
+// The geometry is the core's (renderer/core/slices.hpp).
 #pragma once
 
 #include <array>
@@ -26,7 +27,8 @@ namespace iso {
 class Volume;
 namespace core {
 class Scene;
-}
+class Workspace;
+} // namespace core
 } // namespace iso
 
 namespace iso::gui {
@@ -35,24 +37,28 @@ class SliceView : public QWidget {
 public:
     SliceView(core::SliceOrientation orientation, QWidget* parent = nullptr);
 
-    // What to show: the scene (its volume and visible surfaces; null: nothing)
-    // and this view's plane (owned by the main window, outliving the view).
-    void set_content(const core::Scene* scene, core::SlicePlane* plane);
-    void set_window(const core::WindowLevel& w);
-    // Recomputes the image and outlines from the plane (call after it changed).
+    ~SliceView() override;
+    // What to show: the workspace's scene (its volume and visible surfaces),
+    // this view's plane of its planes, and its window/level (null: nothing).
+    // The view follows the workspace's changes from then on.
+    void set_workspace(core::Workspace* workspace);
+    // Recomputes the image and outlines from the plane (the workspace's changes call it).
     void refresh();
     // Keeps the plane's framing (centre and pixel size) as it is, through
     // resizes too, as after a pan or zoom (a session restored it); until
-    // then, and again after set_content, a resize fits the plane's field of
+    // then, and again with new data, a resize fits the plane's field of
     // view to the view.
     void keep_framing();
+    // Scrolls `steps` slices (the wheel, PageUp/PageDown, the slider): the
+    // plane moves along its normal and the other views' crosshair follows.
+    void scroll(double steps);
 
     core::SliceOrientation orientation() const { return orientation_; }
     // The image's grid (one image pixel per widget pixel); valid after refresh
     // with content.
     const core::SliceGrid& grid() const { return grid_; }
-    const core::Scene* scene() const { return scene_; }
-    core::SlicePlane* plane() const { return plane_; }
+    const core::Scene* scene() const;
+    const core::SlicePlane* plane() const;
     // Fit: re-centres on the volume and zooms to fit (core::fit_view; key F
     // or a left double-click), keeping the slice and the crosshair.
     void fit();
@@ -71,13 +77,8 @@ public:
     std::size_t outline_segments() const;
 
     // A left click (press and release within a few pixels, no drag) at
-    // continuous pixel coordinates, and scroll steps (wheel notches,
-    // PageUp/PageDown).
+    // continuous pixel coordinates.
     std::function<void(SliceView&, QPointF)> on_click;
-    std::function<void(SliceView&, double)> on_scroll;
-    // A left drag changed the window (3D Slicer's: horizontal = width,
-    // vertical = level, core::drag_window); the view already shows it.
-    std::function<void(SliceView&, const core::WindowLevel&)> on_window;
     // A left press: true when the handler takes it (a markup point grabbed).
     // Then the moves until the release go to on_grab_move (no window drag)
     // and the release to on_grab_release (`dragged`: beyond the click slop;
@@ -107,12 +108,16 @@ private:
         std::vector<core::SliceSegment> segments;
         QColor color;
     };
+    // The plane changed by the view's own gesture: into the workspace.
+    void set_plane(const core::SlicePlane& p);
+    void set_window(const core::WindowLevel& w);
     core::SliceOrientation orientation_;
-    const core::Scene* scene_ = nullptr;
-    core::SlicePlane* plane_ = nullptr;
+    core::Workspace* workspace_ = nullptr;
+    int observer_ = 0;
     core::WindowLevel window_;
     bool fitted_ = false;
     bool user_framed_ = false; // panned, zoomed or restored: resizes keep the framing
+    double fit_pixel_mm_ = 0;  // the pixel size this view's last fit gave
     core::SliceGrid grid_;
     core::SliceImage values_;
     std::vector<std::uint8_t> grey_;

@@ -1,17 +1,22 @@
 // Structures in the main window (docs/gui.md "Structures"): the Isolate
 // tool (click a surface in the 3D view: the connected component under the
-// cursor becomes a surface of its own, 3D Slicer's "keep selected island")
-// and the Distance tool (click two surfaces, or two components of one: the
-// exact shortest distance between them, drawn as a ruler between the two
-// closest points, one undo step). The isolated components are listed with
-// their area, volume (mL, with the uncertainty), closed or open and bounds
-// in the Measurements dock. Presentation only: the work is the core's
-// (core::plan_component / add_component through the Surfaces panel,
-// core::surface_gap), off the GUI thread.
+// cursor becomes a surface of its own and its parent is hidden, 3D Slicer's
+// "keep selected island", one undo step; a component isolated already is
+// shown, not added twice) and the Distance tool (click two separate
+// structures, two surfaces or two components of one: the exact shortest
+// distance between them, drawn as a ruler between the two closest points,
+// one undo step; two clicks on one connected structure are refused). The
+// workspace's isolated components are listed with their area, volume (mL,
+// with the uncertainty), closed or open and bounds in the Measurements
+// dock. Presentation only: the work is the core's (core::plan_component,
+// core::Workspace::isolate, core::surface_gap), off the GUI thread.
 #pragma once
 
 #include <cstdint>
+#include <map>
+#include <memory>
 #include <optional>
+#include <utility>
 #include <vector>
 
 #include <QObject>
@@ -23,13 +28,12 @@
 class QAction;
 class QTableWidget;
 
-namespace iso::core {
-struct IsolatedComponent;
-}
+#include "io/mesh.hpp"
+#include "renderer/core/measure.hpp"
 
 namespace iso::gui {
 
-class MainWindow;
+class AppContext;
 class Viewer;
 
 class StructureTools : public QObject {
@@ -38,9 +42,10 @@ public:
     enum Column { Name = 0, Area = 1, Volume = 2, Closed = 3, Bounds = 4 };
 
     // Adds the Structures tool bar (Isolate, Distance: checkable, at most
-    // one on, and off when a Measure tool is taken) and the table of
+    // one on, and off when another tool is taken) and the table of
     // isolated components (table(): the window puts it in the Measurements dock).
-    explicit StructureTools(MainWindow& window);
+    explicit StructureTools(AppContext& context);
+    ~StructureTools() override;
 
     Tool tool() const { return tool_; }
     void set_tool(Tool t);
@@ -50,19 +55,18 @@ public:
 
     // A click of the 3D view: true when the active tool took it.
     bool viewer_click(Viewer& v, QPointF pixel);
-    // A component was isolated (the Surfaces panel's report): its row.
-    void add_component(const core::IsolatedComponent& c);
-    // A new scene: the table and a half-placed distance are cleared; the
-    // rows of the scene's isolated components (a session's) are measured again.
-    void reset();
-    // Distances computed so far (tests wait on it).
+    // Isolate's work for surface `id` at `at` (what a click does).
+    void isolate(std::uint32_t id, const glm::dvec3& at);
+    // Distances and isolations finished so far, refused or failed ones too (tests wait on them).
     int distances() const { return distances_; }
+    int isolations() const { return isolations_; }
 
 private:
-    void measure_again(const std::vector<std::uint32_t>& ids);
+    void update_table();
     void measure_distance(std::uint32_t a, const glm::dvec3& at_a, std::uint32_t b, const glm::dvec3& at_b);
 
-    MainWindow& window_;
+    AppContext& context_;
+    int observer_ = 0;
     QAction* isolate_ = nullptr;
     QAction* distance_ = nullptr;
     QTableWidget* table_ = nullptr;
@@ -72,7 +76,10 @@ private:
         glm::dvec3 at{0.0};
     };
     std::optional<First> first_; // the Distance tool's first click
-    int distances_ = 0;
+    int distances_ = 0, isolations_ = 0;
+    // Each isolated surface's measurement, with the mesh it was made of.
+    std::map<std::uint32_t, std::pair<std::shared_ptr<const Mesh>, core::SurfaceMeasurement>> measured_;
+    bool measuring_ = false;
 };
 
 } // namespace iso::gui

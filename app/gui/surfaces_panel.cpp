@@ -1,5 +1,5 @@
-// The Surfaces panel (surfaces_panel.hpp): its rows, one named step per line of a row, and the
-// background re-extractions behind them.
+// The Surfaces panel (surfaces_panel.hpp): its rows, one named step per line of a row, the
+// background re-extractions behind them, and the rows following the workspace.
 #include "app/gui/surfaces_panel.hpp"
 
 #include <QCheckBox>
@@ -23,8 +23,11 @@
 #include <stdexcept>
 #include <cmath>
 
+#include "app/gui/app_context.hpp"
+#include "app/gui/jobs.hpp"
 #include "app/gui/slice_view.hpp"
 #include "io/error.hpp"
+#include "renderer/core/presets.hpp"
 #include "renderer/core/scene.hpp"
 #include "renderer/core/structures.hpp"
 #include "renderer/core/value_unit.hpp"
@@ -32,21 +35,6 @@
 namespace iso::gui {
 
 namespace {
-
-// Iso values the panel offers. The bundled head CT (datasets/headsq, VTK's
-// "headsq") is not in HU: its skin is at ~500 and its bone at ~1150 (the
-// README's command). The HU values are common rules of thumb for calibrated
-// CT, not tuned on a dataset here (docs/gui.md); the number edits any of them.
-struct IsoPreset {
-    const char* name;
-    double value;
-    bool hu;
-};
-constexpr IsoPreset kIsoPresets[] = {
-    {"skin (headsq)", 500, false}, {"bone (headsq)", 1150, false},
-    {"skin", -500, true},          {"soft tissue", 20, true},
-    {"bone", 300, true},           {"contrast-filled vessels", 200, true},
-};
 
 // " HU" after the numbers of a volume in Hounsfield units (core::value_unit), else nothing.
 QString unit_suffix(const core::Scene* scene) {
@@ -67,6 +55,8 @@ struct SurfacesPanel::Worker {
     double iso = 0;
     PostProcessOptions post;
     unsigned generation = 0;
+    int drag = 0;          // the slider drag it was asked in (0: none): its edit merges with the drag's others
+    const char* what = ""; // "Change iso value of"
     std::atomic<bool> cancel{false};
     Mesh mesh;
     std::exception_ptr error;
@@ -87,12 +77,18 @@ struct SurfacesPanel::Row {
     // What the user asked for last, and the re-extraction under way (null: none).
     double wanted = 0;
     PostProcessOptions wanted_post;
+    int wanted_drag = 0;
+    const char* what = "Change iso value of";
     std::shared_ptr<Worker> worker;
+    // The mesh's value and post-processing the row last showed: a change of
+    // them from elsewhere (an undo) replaces the row's request.
+    double shown_value = 0;
+    PostProcessOptions shown_post;
     int to_slider(double v) const { return int(std::clamp(std::lround((v - lo) / step), 0L, long(steps))); }
     double from_slider(int s) const { return std::min(hi, lo + double(s) * step); }
 };
 
-SurfacesPanel::SurfacesPanel(QWidget* parent) : QWidget(parent) {
+SurfacesPanel::SurfacesPanel(AppContext& context, QWidget* parent) : QWidget(parent), context_(context) {
     auto* col = new QVBoxLayout(this);
     preset_ = new QComboBox(this);
     preset_->setObjectName("iso_preset");
@@ -105,7 +101,6 @@ SurfacesPanel::SurfacesPanel(QWidget* parent) : QWidget(parent) {
     iso_->setToolTip("The value the new surface passes through (within the volume's values)");
     iso_->setRange(-1e6, 1e6);
     iso_->setDecimals(1);
-    iso_->setValue(kIsoPresets[0].value);
     add_row->addWidget(iso_, 1);
     auto* add = new QPushButton("Add surface", this);
     add->setObjectName("add_surface");
@@ -132,7 +127,7 @@ SurfacesPanel::SurfacesPanel(QWidget* parent) : QWidget(parent) {
     col->addWidget(range_);
     connect(preset_, &QComboBox::activated, this, [this](int i) {
         const int p = preset_->itemData(i).toInt();
-        iso_->setValue(kIsoPresets[p].value);
+        if (p >= 0 && std::size_t(p) < preset_values_.size()) iso_->setValue(preset_values_[std::size_t(p)]);
     });
     connect(add, &QPushButton::clicked, this, [this] {
         PostProcessOptions post;
@@ -154,13 +149,101 @@ SurfacesPanel::SurfacesPanel(QWidget* parent) : QWidget(parent) {
     scroll->setWidget(list);
     scroll->setMinimumHeight(9 * fontMetrics().height()); // about one row
     col->addWidget(scroll, 1);
+    observer_ = context_.workspace.observe([this](core::Parts p) { watched(p); });
     update_presets();
+    sync_rows();
 }
 
-SurfacesPanel::~SurfacesPanel() { stop_workers(); }
+SurfacesPanel::~SurfacesPanel() {
+    context_.workspace.unobserve(observer_);
+    stop_workers();
+}
 
-void SurfacesPanel::notify(bool outlines) {
-    if (changed) changed(outlines);
+// ---- following the workspace ------------------------------------------------------------
+
+void SurfacesPanel::watched(core::Parts parts) {
+    if (core::has(parts, core::Part::Data)) {
+        // The workers read the old scene's volume: they end before it goes.
+        stop_workers();
+        ++generation_;
+        for (auto& r : rows_) delete r->widget;
+        rows_.clear();
+        update_presets();
+    }
+    if (parts & (core::Part::Data | core::Part::Surfaces)) sync_rows();
+}
+
+// One row per surface, in the scene's order, each showing its surface.
+void SurfacesPanel::sync_rows() {
+    const core::Scene& scene = context_.workspace.scene();
+    const auto ids = scene.surfaces();
+    for (std::size_t i = 0; i < rows_.size();)
+        if (std::find(ids.begin(), ids.end(), rows_[i]->id) == ids.end()) {
+            // A re-extraction still running for it stops; its result is dropped.
+            if (rows_[i]->worker) rows_[i]->worker->cancel = true;
+            rows_[i]->widget->hide();
+            rows_[i]->widget->deleteLater();
+            rows_.erase(rows_.begin() + std::ptrdiff_t(i));
+        } else {
+            ++i;
+        }
+    for (std::size_t i = 0; i < ids.size(); ++i) {
+        if (!find(ids[i])) add_row(ids[i]);
+        Row* r = find(ids[i]);
+        rows_layout_->removeWidget(r->widget);
+        rows_layout_->insertWidget(int(i), r->widget); // the scene's order, above the stretch
+        show_row(*r);
+    }
+}
+
+// The row's controls from its surface, making no edit of their own.
+void SurfacesPanel::show_row(Row& r) {
+    const core::SurfaceInfo& info = context_.workspace.scene().info(r.id);
+    r.syncing = true;
+    if (auto* visible = r.widget->findChild<QCheckBox*>("visible")) {
+        const QSignalBlocker block(visible);
+        visible->setChecked(info.visible);
+        visible->setText(QString::fromStdString(info.name));
+    }
+    if (auto* color = r.widget->findChild<QPushButton*>("color"))
+        color->setStyleSheet("background-color: " + to_qcolor(info.color).name());
+    if (auto* opacity = r.widget->findChild<QSlider*>("opacity")) {
+        const QSignalBlocker block(opacity);
+        opacity->setValue(int(std::lround(info.opacity * 100)));
+        if (auto* percent = r.widget->findChild<QSpinBox*>("opacity_value")) {
+            const QSignalBlocker block_number(percent);
+            percent->setValue(opacity->value());
+        }
+    }
+    if (r.slider && (info.value != r.shown_value || !same_post(info.post, r.shown_post))) {
+        // Changed from elsewhere (an undo, a redo): that is what the row asks for now.
+        if (r.worker) r.worker->cancel = true;
+        r.wanted = info.value;
+        r.wanted_post = info.post;
+        r.value->setValue(info.value);
+        r.slider->setValue(r.to_slider(info.value));
+        r.smooth->setValue(info.post.smooth);
+        r.largest->setChecked(info.post.keep_largest);
+    }
+    r.shown_value = info.value;
+    r.shown_post = info.post;
+    r.syncing = false;
+}
+
+void SurfacesPanel::edit_info(std::uint32_t id, const char* what,
+                              const std::function<void(core::SurfaceInfo&)>& change) {
+    core::Workspace& w = context_.workspace;
+    if (!w.scene().has_surface(id)) return;
+    core::SurfaceInfo info = w.scene().info(id);
+    change(info);
+    const QString text = QString(what) + " " + QString::fromStdString(info.name);
+    context_.edit(
+        text, core::Parts(core::Part::Surfaces), [&] { w.set_surface_info(id, info); },
+        drag_ ? merge_key(what, id) : QString());
+}
+
+QString SurfacesPanel::merge_key(const char* what, std::uint32_t id) const {
+    return QString("%1 %2 drag %3").arg(what).arg(id).arg(drag_);
 }
 
 // ---- the scene ------------------------------------------------------------------------
@@ -178,144 +261,81 @@ void SurfacesPanel::stop_workers() {
     workers_.clear();
 }
 
-void SurfacesPanel::set_scene(core::Scene* scene) {
-    stop_workers();
-    ++generation_;
-    for (auto& r : rows_) delete r->widget;
-    rows_.clear();
-    scene_ = scene;
-    update_presets();
-    if (scene_)
-        for (auto id : scene_->surfaces()) add_row(id);
-}
-
+// The presets the core offers for this volume (core::iso_presets: CT's in
+// HU, or thresholds of its own histogram), the first that fits chosen.
 void SurfacesPanel::update_presets() {
-    // CT in Hounsfield units: the HU presets first and the numbers marked HU.
-    // Without a unit the HU presets stay listed but disabled, saying why;
-    // so does a preset outside the volume's values.
-    const QString unit = unit_suffix(scene_);
-    const bool hu = !unit.isEmpty();
-    const bool volume = scene_ && scene_->has_volume();
-    const ValueRange range = volume ? scene_->value_range() : ValueRange{-1e6, 1e6};
+    const core::Scene& scene = context_.workspace.scene();
+    const QString unit = unit_suffix(&scene);
+    const bool volume = scene.has_volume();
+    const ValueRange range = volume ? scene.value_range() : ValueRange{-1e6, 1e6};
+    const auto presets = core::iso_presets(scene);
     preset_->clear();
+    preset_values_.clear();
     auto* model = qobject_cast<QStandardItemModel*>(preset_->model());
     int first = -1;
-    for (int pass = 0; pass < 2; ++pass)
-        for (int i = 0; i < int(std::size(kIsoPresets)); ++i) {
-            const auto& p = kIsoPresets[i];
-            if ((pass == 0) != (p.hu == hu)) continue;
-            QString why;
-            if (p.hu && !hu)
-                why = "For CT in Hounsfield units; this volume's values have no unit";
-            else if (p.value < range.min || p.value > range.max)
-                why = QString("Outside this volume's values (%1 to %2%3)").arg(range.min).arg(range.max).arg(unit);
-            preset_->addItem(QString("%1: %2%3%4")
-                                 .arg(p.name)
-                                 .arg(p.value)
-                                 .arg(p.hu ? " HU" : "")
-                                 .arg(p.hu && !hu && volume ? " (CT only)" : ""),
-                             i);
-            auto* item = model->item(preset_->count() - 1);
-            item->setToolTip(why);
-            item->setEnabled(why.isEmpty() || !volume);
-            if (first < 0 && (why.isEmpty() || !volume)) first = preset_->count() - 1;
-        }
+    for (const auto& p : presets) {
+        preset_->addItem(QString("%1: %2%3").arg(QString::fromStdString(p.name)).arg(p.value).arg(p.hu ? " HU" : ""),
+                         int(preset_values_.size()));
+        preset_values_.push_back(p.value);
+        auto* item = model->item(preset_->count() - 1);
+        item->setToolTip(QString::fromStdString(p.why_not));
+        item->setEnabled(p.enabled);
+        if (first < 0 && p.enabled) first = preset_->count() - 1;
+    }
     // The number stays within the volume's values, starting at the first
     // preset that fits (none: the middle of the range).
     iso_->setRange(range.min, range.max);
     iso_->setDecimals(range.max - range.min < 10 ? 3 : 1);
     iso_->setSuffix(unit);
-    preset_->setPlaceholderText("No preset fits this volume");
+    preset_->setPlaceholderText(volume ? "No preset fits this volume" : "Open a volume first");
     preset_->setCurrentIndex(first); // -1 (none): the placeholder
-    iso_->setValue(first >= 0 ? kIsoPresets[preset_->itemData(first).toInt()].value : 0.5 * (range.min + range.max));
-    if (volume) {
-        range_->setText(QString("Values %1 to %2%3").arg(range.min).arg(range.max).arg(unit));
-    } else {
-        range_->setText("Open a volume to add surfaces");
-    }
+    iso_->setValue(first >= 0 ? preset_values_[std::size_t(first)] : 0.5 * (range.min + range.max));
+    range_->setText(volume ? QString("Values %1 to %2%3").arg(range.min).arg(range.max).arg(unit)
+                           : QString("Open a volume to add surfaces"));
 }
 
 // ---- adding ----------------------------------------------------------------------------
 
 void SurfacesPanel::add_surface(double iso, const PostProcessOptions& post) {
-    if (busy && busy()) {
-        if (message) message("Busy: wait for the current task or cancel it");
+    if (context_.busy(true)) return;
+    core::Workspace& ws = context_.workspace;
+    if (!ws.scene().has_volume()) {
+        context_.status("Open a volume first");
         return;
     }
-    if (!scene_ || !scene_->has_volume()) {
-        if (message) message("Open a volume first");
-        return;
-    }
-    if (const auto r = scene_->value_range(); !(iso >= r.min && iso <= r.max)) {
+    if (const auto r = ws.scene().value_range(); !(iso >= r.min && iso <= r.max)) {
         // No surface would cross it: nothing is added.
-        const auto sources = scene_->sources();
-        const QString file = sources.empty() ? QString("the volume") : QString::fromStdString(sources.front());
+        const QString file = QString::fromStdString(ws.scene().volume_source());
         const QString why = QString("The iso value %1 is outside the values of %2 (%3 to %4%5); "
                                     "no surface would be found there.")
                                 .arg(iso)
-                                .arg(file)
+                                .arg(file.isEmpty() ? QString("the volume") : file)
                                 .arg(r.min)
                                 .arg(r.max)
-                                .arg(unit_suffix(scene_));
-        if (message) message("Not added: " + why);
-        if (error)
-            error("Cannot add the surface", QString("Cannot add the isosurface at %1").arg(iso),
-                  std::make_exception_ptr(std::runtime_error(why.toStdString())));
+                                .arg(unit_suffix(&ws.scene()));
+        context_.status("Not added: " + why);
+        context_.error("Cannot add the surface", QString("Cannot add the isosurface at %1").arg(iso),
+                       std::make_exception_ptr(std::runtime_error(why.toStdString())));
         return;
     }
     // The worker only reads the volume; the mesh joins the scene on the GUI thread.
     auto mesh = std::make_shared<Mesh>();
-    core::Scene* s = scene_;
+    const core::Scene* s = &ws.scene();
     const unsigned generation = generation_;
-    run_job(
-        QString("Extracting the isosurface at %1").arg(iso),
+    context_.jobs.run(
+        QString("Extracting the isosurface at %1").arg(iso), false,
         [s, iso, post, mesh](const ProgressFn& progress) { *mesh = s->extract_isosurface(iso, {}, post, progress); },
         [this, s, iso, post, mesh, generation](std::exception_ptr e) {
             if (e) {
-                if (error)
-                    error("Surface extraction failed", QString("Cannot extract the isosurface at %1").arg(iso), e);
+                context_.error("Surface extraction failed", QString("Cannot extract the isosurface at %1").arg(iso), e);
                 return;
             }
-            if (s != scene_ || generation != generation_) return; // another scene meanwhile
+            core::Workspace& ws = context_.workspace;
+            if (s != &ws.scene() || generation != generation_) return; // another scene meanwhile
             const std::size_t triangles = mesh->triangles.size();
-            const auto id = scene_->add_isosurface(std::move(*mesh), iso, post);
-            add_row(id);
-            notify(true);
-            if (message) message(QString("Added the isosurface at %1: %2 triangles").arg(iso).arg(triangles));
-            if (added) added(id);
-        });
-}
-
-void SurfacesPanel::isolate(std::uint32_t id, const glm::dvec3& at) {
-    if (busy && busy()) {
-        if (message) message("Busy: wait for the current task or cancel it");
-        return;
-    }
-    if (!scene_ || !scene_->has_surface(id)) return;
-    // The worker only reads the scene (the surface's mesh, the volume); the
-    // component joins the scene on the GUI thread.
-    auto plan = std::make_shared<core::ComponentPlan>();
-    core::Scene* s = scene_;
-    const unsigned generation = generation_;
-    const QString name = QString::fromStdString(scene_->info(id).name);
-    run_job(
-        "Isolating a component of " + name,
-        [s, id, at, plan](const ProgressFn&) { *plan = core::plan_component(*s, id, at); },
-        [this, s, plan, generation, name](std::exception_ptr e) {
-            if (e) {
-                if (error) error("Isolate failed", "Cannot isolate a component of " + name, e);
-                return;
-            }
-            if (s != scene_ || generation != generation_) return; // another scene meanwhile
-            const core::IsolatedComponent c = core::add_component(*scene_, std::move(*plan));
-            add_row(c.surface);
-            notify(true);
-            if (message)
-                message(QString("Isolated %1 (%2 of %3 components)")
-                            .arg(QString::fromStdString(c.measured.name))
-                            .arg(c.component + 1)
-                            .arg(c.components));
-            if (isolated) isolated(c);
+            context_.edit(QString("Add iso %1").arg(iso), core::Parts(core::Part::Surfaces),
+                          [&] { ws.add_isosurface(std::move(*mesh), iso, post); });
+            context_.status(QString("Added the isosurface at %1: %2 triangles").arg(iso).arg(triangles));
         });
 }
 
@@ -333,12 +353,13 @@ QWidget* SurfacesPanel::row(std::uint32_t id) const {
 }
 
 void SurfacesPanel::add_row(std::uint32_t id) {
-    const auto& info = scene_->info(id);
+    const core::Scene& scene = context_.workspace.scene();
+    const auto& info = scene.info(id);
     auto row = std::make_unique<Row>();
     Row* r = row.get();
     r->id = id;
-    r->wanted = info.value;
-    r->wanted_post = info.post;
+    r->wanted = r->shown_value = info.value;
+    r->wanted_post = r->shown_post = info.post;
     r->widget = new QFrame(this);
     r->widget->setObjectName(QString("surface_%1").arg(id));
     r->widget->setFrameShape(QFrame::StyledPanel);
@@ -348,7 +369,7 @@ void SurfacesPanel::add_row(std::uint32_t id) {
     add_opacity_line(*r, grid);
     // Lines 3 and 4, isosurfaces only: the iso slider and number (range: the
     // volume's values), smoothing and keep-largest.
-    if (info.kind == core::SurfaceInfo::Kind::Iso && scene_->has_volume()) {
+    if (info.kind == core::SurfaceInfo::Kind::Iso && scene.has_volume()) {
         add_iso_line(*r, grid);
         add_post_line(*r, grid);
     }
@@ -359,7 +380,7 @@ void SurfacesPanel::add_row(std::uint32_t id) {
 // Line 1: visibility and name, colour, Remove.
 void SurfacesPanel::add_title_line(Row& r, QGridLayout* grid) {
     const std::uint32_t id = r.id;
-    const auto& info = scene_->info(id);
+    const auto& info = context_.workspace.scene().info(id);
     auto* visible = new QCheckBox(QString::fromStdString(info.name), r.widget);
     visible->setObjectName("visible");
     visible->setToolTip("Show or hide this surface (3D view and slice outlines)");
@@ -380,34 +401,20 @@ void SurfacesPanel::add_title_line(Row& r, QGridLayout* grid) {
     grid->addLayout(line1, 0, 0, 1, 3);
 
     connect(visible, &QCheckBox::toggled, this, [this, id](bool on) {
-        const SurfaceSettings before = settings(id);
-        scene_->info(id).visible = on;
-        notify(true);
-        record(id, "change visibility", before);
+        edit_info(id, on ? "Show" : "Hide", [on](core::SurfaceInfo& i) { i.visible = on; });
     });
-    connect(color, &QPushButton::clicked, this, [this, id, paint_button] {
-        const QColor c = QColorDialog::getColor(to_qcolor(scene_->info(id).color), this, "Surface colour");
-        if (!c.isValid()) return;
-        const SurfaceSettings before = settings(id);
-        scene_->info(id).color = from_qcolor(c);
-        paint_button(c);
-        notify(true);
-        record(id, "change colour", before);
+    connect(color, &QPushButton::clicked, this, [this, id] {
+        const QColor c =
+            QColorDialog::getColor(to_qcolor(context_.workspace.scene().info(id).color), this, "Surface colour");
+        if (c.isValid()) edit_info(id, "Change colour of", [c](core::SurfaceInfo& i) { i.color = from_qcolor(c); });
     });
     connect(remove, &QPushButton::clicked, this, [this, id] {
-        if (remove_requested)
-            remove_requested(id);
-        else
-            remove_surface(id);
+        core::Workspace& w = context_.workspace;
+        if (!w.scene().has_surface(id)) return;
+        const QString name = QString::fromStdString(w.scene().info(id).name);
+        if (context_.edit("Remove " + name, core::Parts(core::Part::Surfaces), [&] { w.remove_surface(id); }))
+            context_.status("Removed " + name + " (Edit > Undo brings it back)");
     });
-}
-
-void SurfacesPanel::remove_surface(std::uint32_t id) {
-    const QString name = QString::fromStdString(scene_->info(id).name);
-    remove_row(id);
-    scene_->remove_surface(id);
-    notify(true);
-    if (message) message("Removed " + name);
 }
 
 // Line 2: opacity, 0..100 %: a slider and a number, kept in step.
@@ -419,7 +426,7 @@ void SurfacesPanel::add_opacity_line(Row& r, QGridLayout* grid) {
     opacity->setToolTip("Opacity: 100 % opaque; lower shows what lies behind (exact order-independent transparency)");
     opacity->setRange(0, 100);
     opacity->setPageStep(10);
-    opacity->setValue(int(std::lround(scene_->info(id).opacity * 100)));
+    opacity->setValue(int(std::lround(context_.workspace.scene().info(id).opacity * 100)));
     auto* percent = new QSpinBox(r.widget);
     percent->setObjectName("opacity_value");
     percent->setToolTip("Opacity in per cent");
@@ -430,11 +437,13 @@ void SurfacesPanel::add_opacity_line(Row& r, QGridLayout* grid) {
     grid->addWidget(percent, 1, 2);
     track_drag(opacity);
     connect(opacity, &QSlider::valueChanged, this, [this, id, percent](int v) {
-        const SurfaceSettings before = settings(id);
-        percent->setValue(v); // the number follows (its own signal then finds nothing to do)
-        scene_->info(id).opacity = float(v) / 100.0f;
-        notify(false);
-        record(id, "change opacity", before);
+        Row* row = find(id);
+        if (!row || row->syncing) return;
+        {
+            const QSignalBlocker block(percent);
+            percent->setValue(v); // the number follows
+        }
+        edit_info(id, "Change opacity of", [v](core::SurfaceInfo& i) { i.opacity = float(v) / 100.0f; });
     });
     connect(percent, &QSpinBox::valueChanged, opacity, &QSlider::setValue);
 }
@@ -457,17 +466,18 @@ double nice_step(double x) {
 // (a click beside the handle, Page Up/Down) is about a twentieth.
 void SurfacesPanel::add_iso_line(Row& r, QGridLayout* grid) {
     const std::uint32_t id = r.id;
-    const double value = scene_->info(id).value;
-    const auto range = scene_->value_range();
-    const auto type = scene_->volume().type;
-    const bool integral = type != VoxelType::F32 && type != VoxelType::F64 && !scene_->volume().is_sparse();
+    const core::Scene& scene = context_.workspace.scene();
+    const double value = scene.info(id).value;
+    const auto range = scene.value_range();
+    const auto type = scene.volume().type;
+    const bool integral = type != VoxelType::F32 && type != VoxelType::F64 && !scene.volume().is_sparse();
     const double span = std::max(range.max - range.min, 1e-9);
     r.lo = range.min;
     r.hi = range.max;
     r.step = nice_step(span / 1000);
     if (integral) r.step = std::max(r.step, 1.0);
     r.steps = int(std::ceil(span / r.step - 1e-9));
-    const QString unit = unit_suffix(scene_);
+    const QString unit = unit_suffix(&scene);
     grid->addWidget(new QLabel("Iso"), 2, 0);
     r.slider = new QSlider(Qt::Horizontal, r.widget);
     r.slider->setObjectName("iso_slider");
@@ -503,29 +513,25 @@ void SurfacesPanel::add_iso_line(Row& r, QGridLayout* grid) {
     connect(r.slider, &QSlider::valueChanged, this, [this, id](int s) {
         Row* row = find(id);
         if (!row || row->syncing) return;
-        const SurfaceSettings before = settings(id);
         row->syncing = true;
         row->value->setValue(row->from_slider(s));
         row->syncing = false;
         set_iso(id, row->value->value());
-        record(id, "change iso value", before);
     });
     connect(r.value, &QDoubleSpinBox::valueChanged, this, [this, id](double v) {
         Row* row = find(id);
         if (!row || row->syncing) return;
-        const SurfaceSettings before = settings(id);
         row->syncing = true;
         row->slider->setValue(row->to_slider(v));
         row->syncing = false;
         set_iso(id, v);
-        record(id, "change iso value", before);
     });
 }
 
 // Line 4: smoothing and keep-largest, the post-processing a re-extraction applies.
 void SurfacesPanel::add_post_line(Row& r, QGridLayout* grid) {
     const std::uint32_t id = r.id;
-    const PostProcessOptions& post = scene_->info(id).post;
+    const PostProcessOptions& post = context_.workspace.scene().info(id).post;
     grid->addWidget(new QLabel("Smoothing"), 4, 0);
     r.smooth = new QDoubleSpinBox(r.widget);
     r.smooth->setObjectName("smoothing");
@@ -548,26 +554,13 @@ void SurfacesPanel::add_post_line(Row& r, QGridLayout* grid) {
     const auto post_changed = [this, id] {
         Row* row = find(id);
         if (!row || row->syncing) return;
-        const SurfaceSettings before = settings(id);
         PostProcessOptions p = row->wanted_post;
         p.smooth = row->smooth->value();
         p.keep_largest = row->largest->isChecked();
         set_post(id, p);
-        record(id, p.keep_largest != before.post.keep_largest ? "change keep largest" : "change smoothing", before);
     };
     connect(r.smooth, &QDoubleSpinBox::valueChanged, this, post_changed);
     connect(r.largest, &QCheckBox::toggled, this, post_changed);
-}
-
-void SurfacesPanel::remove_row(std::uint32_t id) {
-    for (auto it = rows_.begin(); it != rows_.end(); ++it)
-        if ((*it)->id == id) {
-            // A re-extraction still running for it stops; its result is dropped.
-            if ((*it)->worker) (*it)->worker->cancel = true;
-            (*it)->widget->deleteLater();
-            rows_.erase(it);
-            return;
-        }
 }
 
 // ---- re-extraction ---------------------------------------------------------------------
@@ -583,6 +576,8 @@ void SurfacesPanel::set_iso(std::uint32_t id, double value) {
         r->syncing = false;
     }
     r->wanted = value;
+    r->wanted_drag = drag_;
+    r->what = "Change iso value of";
     request(*r);
 }
 
@@ -593,7 +588,9 @@ void SurfacesPanel::set_post(std::uint32_t id, const PostProcessOptions& post) {
     r->smooth->setValue(post.smooth);
     r->largest->setChecked(post.keep_largest);
     r->syncing = false;
+    r->what = post.keep_largest != r->wanted_post.keep_largest ? "Change keep largest of" : "Change smoothing of";
     r->wanted_post = post;
+    r->wanted_drag = 0;
     request(*r);
 }
 
@@ -610,7 +607,7 @@ void SurfacesPanel::request(Row& r) {
         if (r.worker->iso != r.wanted || !same_post(r.worker->post, r.wanted_post)) r.worker->cancel = true;
         return;
     }
-    const auto& info = scene_->info(r.id);
+    const auto& info = context_.workspace.scene().info(r.id);
     if (info.value == r.wanted && same_post(info.post, r.wanted_post)) return; // already shown
     start(r);
 }
@@ -620,8 +617,10 @@ void SurfacesPanel::start(Row& r) {
     w->iso = r.wanted;
     w->post = r.wanted_post;
     w->generation = generation_;
+    w->drag = r.wanted_drag;
+    w->what = r.what;
     Worker* raw = w.get();
-    const core::Scene* s = scene_;
+    const core::Scene* s = &context_.workspace.scene();
     // Reads only the volume and its cached range index (core::Scene::extract_isosurface):
     // the views keep drawing the scene meanwhile.
     w->thread = QThread::create([raw, s] {
@@ -657,89 +656,36 @@ void SurfacesPanel::finished(std::uint32_t id, const std::shared_ptr<Worker>& w)
         } catch (const Cancelled&) {
             cancelled = true;
         } catch (...) {}
-        if (!cancelled && current && error)
-            error("Surface extraction failed", QString("Cannot extract the isosurface at %1").arg(w->iso), w->error);
+        if (!cancelled && current)
+            context_.error("Surface extraction failed", QString("Cannot extract the isosurface at %1").arg(w->iso),
+                           w->error);
     } else if (current) {
-        // Swap the new mesh in on the GUI thread; the next frame uploads it.
-        scene_->replace_surface(id, std::move(w->mesh), w->iso, w->post);
+        // Swap the new mesh in on the GUI thread, one undo step (the steps
+        // of one slider drag merge); the next frame uploads it.
+        core::Workspace& ws = context_.workspace;
+        const QString name = QString::fromStdString(ws.scene().info(id).name);
+        r->shown_value = w->iso; // the panel's own change: the row keeps its request
+        r->shown_post = w->post;
+        context_.edit(
+            QString(w->what) + " " + name, core::Parts(core::Part::Surfaces),
+            [&] { ws.replace_surface(id, std::move(w->mesh), w->iso, w->post); },
+            w->drag ? QString("%1 %2 drag %3").arg(w->what).arg(id).arg(w->drag) : QString());
         ++swaps_;
-        if (auto* visible = r->widget->findChild<QCheckBox*>("visible"))
-            visible->setText(QString::fromStdString(scene_->info(id).name));
-        notify(true);
-        if (message)
-            message(QString("%1: %2 triangles")
-                        .arg(QString::fromStdString(scene_->info(id).name))
-                        .arg(scene_->mesh(id).triangles.size()));
+        r = find(id); // the edit's notification may have rebuilt rows
+        if (!r) return;
+        context_.status(QString("%1: %2 triangles")
+                            .arg(QString::fromStdString(ws.scene().info(id).name))
+                            .arg(ws.scene().mesh(id).triangles.size()));
     }
     // A newer value came in meanwhile: extract it now (unless it is what is shown).
     if (!current) {
-        const auto& info = scene_->info(id);
+        const auto& info = context_.workspace.scene().info(id);
         if (info.value != r->wanted || !same_post(info.post, r->wanted_post)) {
             start(*r);
             return;
         }
     }
     r->busy->setVisible(false);
-}
-
-// ---- undo ------------------------------------------------------------------------------
-
-SurfaceSettings SurfacesPanel::settings(std::uint32_t id) const {
-    const auto& info = scene_->info(id);
-    SurfaceSettings s{info.color, info.opacity, info.visible, info.value, info.post};
-    if (const Row* r = find(id)) { // what the user asked for last, perhaps still extracting
-        s.iso = r->wanted;
-        s.post = r->wanted_post;
-    }
-    return s;
-}
-
-void SurfacesPanel::apply(std::uint32_t id, const SurfaceSettings& s) {
-    Row* r = find(id);
-    if (!r || !scene_->has_surface(id)) return;
-    auto& info = scene_->info(id);
-    info.color = s.color;
-    info.opacity = s.opacity;
-    info.visible = s.visible;
-    // The row's controls show it without making an edit of their own.
-    if (auto* visible = r->widget->findChild<QCheckBox*>("visible")) {
-        const QSignalBlocker block(visible);
-        visible->setChecked(s.visible);
-    }
-    if (auto* color = r->widget->findChild<QPushButton*>("color"))
-        color->setStyleSheet("background-color: " + to_qcolor(s.color).name());
-    if (auto* opacity = r->widget->findChild<QSlider*>("opacity")) {
-        const QSignalBlocker block(opacity);
-        opacity->setValue(int(std::lround(s.opacity * 100)));
-        if (auto* percent = r->widget->findChild<QSpinBox*>("opacity_value")) {
-            const QSignalBlocker block_number(percent);
-            percent->setValue(opacity->value());
-        }
-    }
-    if (r->slider) {
-        if (s.iso != r->wanted) set_iso(id, s.iso);
-        if (!same_post(s.post, r->wanted_post)) set_post(id, s.post);
-    }
-    notify(true);
-}
-
-void SurfacesPanel::restore_surface(std::uint32_t id, Mesh mesh, const core::SurfaceInfo& info) {
-    scene_->restore_surface(id, std::move(mesh), info);
-    add_row(id);
-    // Back in its place among the rows: before the row of the next surface in the scene's order.
-    const auto ids = scene_->surfaces();
-    for (auto it = std::find(ids.begin(), ids.end(), id); it != ids.end(); ++it)
-        if (const Row* next = *it != id ? find(*it) : nullptr) {
-            QWidget* w = find(id)->widget;
-            rows_layout_->removeWidget(w);
-            rows_layout_->insertWidget(rows_layout_->indexOf(next->widget), w);
-            break;
-        }
-    notify(true);
-}
-
-void SurfacesPanel::record(std::uint32_t id, const char* what, const SurfaceSettings& before) {
-    if (edited) edited(id, QString(what) + " of " + QString::fromStdString(scene_->info(id).name), before, drag_);
 }
 
 void SurfacesPanel::track_drag(QSlider* slider) {

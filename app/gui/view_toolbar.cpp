@@ -3,12 +3,14 @@
 #include <QAction>
 #include <QActionGroup>
 #include <QMenu>
+#include <QSignalBlocker>
 #include <QToolButton>
+
+#include "app/gui/app_context.hpp"
 
 namespace iso::gui {
 
-ViewToolBar::ViewToolBar(std::function<Viewer*()> viewer, QWidget* parent)
-    : QToolBar("3D view", parent), viewer_(std::move(viewer)) {
+ViewToolBar::ViewToolBar(AppContext& context, QWidget* parent) : QToolBar("3D view", parent), context_(context) {
     setObjectName("view_toolbar");
     struct Button {
         PatientView view;
@@ -30,7 +32,7 @@ ViewToolBar::ViewToolBar(std::function<Viewer*()> viewer, QWidget* parent)
         a->setObjectName(QString("view_") + patient_view_name(b.view));
         const PatientView v = b.view;
         connect(a, &QAction::triggered, this, [this, v] {
-            if (Viewer* w = viewer_()) w->set_view(v);
+            if (Viewer* w = context_.viewer()) w->set_view(v);
         });
         views_[int(v)] = a;
     }
@@ -38,7 +40,7 @@ ViewToolBar::ViewToolBar(std::function<Viewer*()> viewer, QWidget* parent)
     reset_->setObjectName("reset_view");
     reset_->setToolTip("Back to the anterior view, fitted to the visible surfaces");
     connect(reset_, &QAction::triggered, this, [this] {
-        if (Viewer* w = viewer_()) w->set_view(PatientView::Anterior);
+        if (Viewer* w = context_.viewer()) w->set_view(PatientView::Anterior);
     });
     addSeparator();
     ao_ = addAction("AO");
@@ -71,7 +73,13 @@ ViewToolBar::ViewToolBar(std::function<Viewer*()> viewer, QWidget* parent)
     transparency_->setChecked(ViewerOptions{}.look.transparency);
     connect(ao_, &QAction::toggled, this, [this] { apply_toggles(); });
     connect(transparency_, &QAction::toggled, this, [this] { apply_toggles(); });
+    observer_ = context_.workspace.observe([this](core::Parts p) {
+        if (p & core::Parts(core::Part::Look)) show_look();
+    });
+    show_look();
 }
+
+ViewToolBar::~ViewToolBar() { context_.workspace.unobserve(observer_); }
 
 FrameLook ViewToolBar::look(FrameLook base) const {
     base.ao = !ao_->isChecked() ? AoMethod::Off : ao_raytraced_->isChecked() ? AoMethod::Raytraced : AoMethod::Cone;
@@ -79,23 +87,27 @@ FrameLook ViewToolBar::look(FrameLook base) const {
     return base;
 }
 
-void ViewToolBar::attach(Viewer& v) const {
-    ViewerOptions o = v.options();
-    o.look = look(o.look);
-    v.set_options(o);
-    // The O key in the view: the button follows (and, through toggled, sets the same again).
-    v.on_options_changed = [this](Viewer& w) { ao_->setChecked(w.options().look.ao != AoMethod::Off); };
-}
-
 void ViewToolBar::set_ao(AoMethod m) {
-    if (m == AoMethod::Raytraced) ao_raytraced_->setChecked(true);
-    if (m == AoMethod::Cone) ao_cone_->setChecked(true);
-    ao_->setChecked(m != AoMethod::Off); // toggled: applies it
-    apply_toggles();
+    FrameLook l = context_.workspace.look();
+    l.ao = m;
+    context_.workspace.set_look(l);
 }
 
+// The toggles into the workspace's look (a view setting: no undo step).
 void ViewToolBar::apply_toggles() {
-    if (Viewer* w = viewer_()) attach(*w);
+    if (showing_) return;
+    context_.workspace.set_look(look(context_.workspace.look()));
+}
+
+// The workspace's look in the toggles (a session's, the O key's).
+void ViewToolBar::show_look() {
+    const FrameLook& l = context_.workspace.look();
+    showing_ = true;
+    if (l.ao == AoMethod::Raytraced) ao_raytraced_->setChecked(true);
+    if (l.ao == AoMethod::Cone) ao_cone_->setChecked(true);
+    ao_->setChecked(l.ao != AoMethod::Off);
+    transparency_->setChecked(l.transparency);
+    showing_ = false;
 }
 
 } // namespace iso::gui

@@ -4,8 +4,8 @@
 // occlusion toggle (the look's AO: off, or on with the method its menu
 // chooses: cone traced or ray traced) and a transparency toggle
 // (FrameLook::transparency: off draws every surface opaque without
-// touching the surfaces' opacities). The main window recreates its viewer
-// with each scene; the bar keeps the toggles and applies them to each new one.
+// touching the surfaces' opacities). The toggles show and set the
+// workspace's look (view settings, not undo steps); every 3D view draws it.
 #pragma once
 
 #include <functional>
@@ -18,16 +18,16 @@ class QAction;
 
 namespace iso::gui {
 
+class AppContext;
+
 class ViewToolBar : public QToolBar {
 public:
-    // `viewer` returns the window's current 3D view (null while there is none).
-    explicit ViewToolBar(std::function<Viewer*()> viewer, QWidget* parent = nullptr);
+    explicit ViewToolBar(AppContext& context, QWidget* parent = nullptr);
+    ~ViewToolBar() override;
 
-    // Gives a newly made viewer the bar's toggles.
-    void attach(Viewer& v) const;
     // The bar's toggles applied to `base` (AO off, cone or raytraced; transparency).
     FrameLook look(FrameLook base = ViewerOptions{}.look) const;
-    // Sets the AO toggle and method (a session's): off, or on with cone or raytraced.
+    // Sets the workspace's AO method: off, cone or raytraced (the toggles follow).
     void set_ao(AoMethod m);
     QAction* view_action(PatientView v) const { return views_[int(v)]; }
     QAction* reset_action() const { return reset_; }
@@ -38,7 +38,10 @@ public:
 
 private:
     void apply_toggles();
-    std::function<Viewer*()> viewer_;
+    void show_look();
+    AppContext& context_;
+    int observer_ = 0;
+    bool showing_ = false;
     QAction* views_[6] = {};
     QAction* reset_ = nullptr;
     QAction* ao_ = nullptr;

@@ -63,8 +63,10 @@ double Viewer::aspect() const { return double(std::max(1, width())) / double(std
 // surfaces that are not (keeping the direction) once they appear; later
 // surfaces leave the camera where the user put it.
 void Viewer::initializeGL() {
+    const bool framed = !camera_set_;
     if (!camera_set_) camera_ = scene_.camera(initial_view_, aspect(), options_.look);
     framed_empty_ = !camera_set_ && scene_.bounds(options_.look).empty();
+    if (framed && on_camera_moved) on_camera_moved(camera_);
 }
 
 void Viewer::paintGL() {
@@ -173,6 +175,7 @@ void Viewer::frame_camera() {
         else
             camera_ = scene_.camera(initial_view_, aspect(), options_.look);
         framed_empty_ = false;
+        if (on_camera_moved) on_camera_moved(camera_);
     }
     camera_.fit_planes(shown);
 }
@@ -365,10 +368,12 @@ void Viewer::schedule_still_frame() {
 }
 
 void Viewer::set_camera(const Camera& c) {
+    const bool moved = !(c == camera_);
     camera_ = c;
     camera_set_ = true;
     framed_empty_ = false;
     update();
+    if (moved && on_camera_moved) on_camera_moved(camera_);
 }
 
 void Viewer::set_view(PatientView v) { set_camera(scene_.camera(v, aspect(), options_.look)); }
@@ -481,11 +486,13 @@ void Viewer::mouseMoveEvent(QMouseEvent* e) {
     else if (e->buttons() & Qt::RightButton)
         camera_.zoom(core::drag_zoom_factor(-double(d.y()), height()));
     update();
+    if (on_camera_moved) on_camera_moved(camera_);
 }
 
 void Viewer::wheelEvent(QWheelEvent* e) {
     camera_.zoom(std::pow(1.0015, e->angleDelta().y()));
     update();
+    if (on_camera_moved) on_camera_moved(camera_);
 }
 
 void Viewer::keyPressEvent(QKeyEvent* e) {

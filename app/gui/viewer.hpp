@@ -141,6 +141,9 @@ public:
     std::function<void(Viewer&, QPointF, bool dragged)> on_grab_release;
     // The view changed its own options (the O key toggled AO), so a tool bar can follow.
     std::function<void(Viewer&)> on_options_changed;
+    // The camera moved (a drag, the wheel, a view key or button, set_camera),
+    // or the view framed what it shows: a workspace keeps it.
+    std::function<void(const Camera&)> on_camera_moved;
     // The size of the image the view draws (device pixels).
     QSize image_size() const;
 

@@ -7,12 +7,15 @@
 #include <QHBoxLayout>
 #include <QLabel>
 #include <QPushButton>
+#include <QStandardItemModel>
 #include <QVBoxLayout>
 
 #include <algorithm>
 #include <cmath>
 
+#include "app/gui/app_context.hpp"
 #include "app/gui/tf_editor.hpp"
+#include "renderer/core/presets.hpp"
 #include "renderer/core/scene.hpp"
 #include "renderer/core/value_unit.hpp"
 
@@ -20,18 +23,17 @@ namespace iso::gui {
 
 namespace {
 constexpr int kBins = 128;
-constexpr std::int64_t kHistogramSamples = 2'000'000; // at most this many voxels read (a regular subsample)
 const char* const kModes[] = {"Composite", "MIP", "MinIP"};
 const char* const kAxes[] = {"L", "P", "S"};
 } // namespace
 
 Clip VolumeState::clip() const {
     Clip c;
-    if (crop) c.box = std::pair{glm::min(box.first, box.second), glm::max(box.first, box.second)};
+    if (crop) c.box = box;
     return c;
 }
 
-VolumePanel::VolumePanel(QWidget* parent) : QWidget(parent) {
+VolumePanel::VolumePanel(AppContext& context, QWidget* parent) : QWidget(parent), context_(context) {
     setObjectName("volume_panel");
     auto* layout = new QVBoxLayout(this);
     layout->setContentsMargins(6, 6, 6, 6);
@@ -45,18 +47,42 @@ VolumePanel::VolumePanel(QWidget* parent) : QWidget(parent) {
     hint->setObjectName("tf_hint");
     layout->addWidget(hint);
     layout->addWidget(make_crop_rows());
+    // A drag in the editor shows each step (no undo step), its release is one step from where it began.
     editor_->on_live = [this](const TransferFunction& tf) {
-        state_.look.tf = tf;
-        if (changed) changed(state_);
+        FrameLook l = context_.workspace.look();
+        l.volume.tf = tf;
+        showing_tf_ = true;
+        context_.workspace.set_look(l);
+        showing_tf_ = false;
     };
     editor_->on_edit = [this](const QString& text, const TransferFunction& before, const TransferFunction& after) {
-        VolumeState b = state_, a = state_;
-        b.look.tf = before;
-        a.look.tf = after;
-        state_ = b; // edit() reports the step from here
-        edit(text, a);
+        core::WorkspaceEdit e;
+        e.text = text.toStdString();
+        e.parts = core::Parts(core::Part::Look);
+        e.before.look = e.after.look = context_.workspace.look();
+        e.before.look.volume.tf = before;
+        e.after.look.volume.tf = after;
+        showing_tf_ = true;
+        context_.workspace.restore(e.after, e.parts);
+        showing_tf_ = false;
+        context_.push(std::move(e));
     };
-    set_scene(nullptr);
+    observer_ = context_.workspace.observe([this](core::Parts p) {
+        if (core::has(p, core::Part::Data)) new_data();
+        if (p & (core::Part::Data | core::Part::Look)) show_state();
+    });
+    new_data();
+}
+
+VolumePanel::~VolumePanel() { context_.workspace.unobserve(observer_); }
+
+VolumeState VolumePanel::state() const {
+    VolumeState s;
+    const FrameLook& l = context_.workspace.look();
+    s.look = l.volume;
+    s.crop = l.clip.box.has_value();
+    s.box = l.clip.box.value_or(box_);
+    return s;
 }
 
 // Show volume, the preset and the mode.
@@ -82,14 +108,14 @@ QWidget* VolumePanel::make_look_rows() {
     grid->setColumnStretch(1, 1);
     connect(show_, &QCheckBox::toggled, this, [this](bool on) {
         if (showing_) return;
-        VolumeState a = state_;
+        VolumeState a = state();
         a.look.enabled = on;
         edit(on ? "Show volume" : "Hide volume", a);
     });
     connect(preset_, &QComboBox::activated, this, [this](int i) { preset_chosen(i); });
     connect(mode_, &QComboBox::currentIndexChanged, this, [this](int i) {
         if (showing_ || i < 0) return;
-        VolumeState a = state_;
+        VolumeState a = state();
         a.look.mode = VolumeMode(i);
         edit(QString("Volume mode ") + kModes[i], a);
     });
@@ -137,14 +163,14 @@ QWidget* VolumePanel::make_crop_rows() {
     grid->setColumnStretch(2, 1);
     connect(crop_, &QCheckBox::toggled, this, [this](bool on) {
         if (showing_) return;
-        VolumeState a = state_;
+        VolumeState a = state();
         a.crop = on;
         edit(on ? "Crop" : "No crop", a);
     });
     connect(fit_, &QPushButton::clicked, this, [this] {
-        VolumeState a = state_;
+        VolumeState a = state();
         a.box = volume_box_;
-        if (a == state_) return;
+        if (a == state()) return;
         edit("Fit crop box to volume", a);
     });
     return box;
@@ -152,62 +178,59 @@ QWidget* VolumePanel::make_crop_rows() {
 
 void VolumePanel::crop_spin_changed(const QString& what) {
     if (showing_) return;
-    VolumeState a = state_;
+    VolumeState a = state();
     for (int i = 0; i < 3; ++i) {
         a.box.first[i] = spins_[std::size_t(i)]->value();
         a.box.second[i] = spins_[std::size_t(i + 3)]->value();
+        if (a.box.first[i] > a.box.second[i]) {
+            // Inside out: nothing would be left. Said, and the numbers go back.
+            context_.status(QString("Crop box: the %1 minimum (%2 mm) cannot be above its maximum (%3 mm)")
+                                .arg(kAxes[i])
+                                .arg(a.box.first[i])
+                                .arg(a.box.second[i]));
+            show_state();
+            return;
+        }
     }
-    if (a == state_) return;
+    if (a == state()) return;
     edit(what, a, true); // a run of steps of one number: one undo step
 }
 
-TransferFunction VolumePanel::default_tf(double lo, double hi) {
-    if (!(hi > lo)) hi = lo + 1;
-    const auto at = [&](double f) { return lo + f * (hi - lo); };
-    return TransferFunction({{at(0.0), 0.0, "#000000"},
-                             {at(0.3), 0.0, "#c08060"},
-                             {at(0.5), 0.02, "#e0b090"},
-                             {at(0.8), 0.2, "#f0e0c8"},
-                             {at(1.0), 0.5, "#ffffff"}});
-}
-
-TransferFunction VolumePanel::initial_tf() const {
-    if (ct_) return transfer_function_from("bone");
-    if (!scene_ || !scene_->has_volume()) return transfer_function_from("bone");
-    const ValueRange r = scene_->value_range();
-    return default_tf(r.min, r.max);
-}
-
-// The presets that fit the volume: the default from its range first for
-// a volume that is not CT, then the CT presets, and "custom".
+// The presets: for a volume CT's presets do not fit (core::ct_in_hu), the
+// default made from its value range first and the CT presets listed but
+// disabled, saying why; then "custom".
 void VolumePanel::fill_presets() {
     preset_->clear();
     if (!ct_) preset_->addItem("default (value range)");
-    for (const auto& name : transfer_function_presets()) preset_->addItem(QString::fromStdString(name));
+    auto* model = qobject_cast<QStandardItemModel*>(preset_->model());
+    for (const auto& name : transfer_function_presets()) {
+        preset_->addItem(QString::fromStdString(name));
+        if (ct_) continue;
+        model->item(preset_->count() - 1)->setEnabled(false);
+        model->item(preset_->count() - 1)->setToolTip("For CT in Hounsfield units; this volume's values are not HU");
+    }
     preset_->addItem("custom");
 }
 
 void VolumePanel::preset_chosen(int index) {
     if (showing_ || index < 0 || index == preset_->count() - 1) return;
-    VolumeState a = state_;
+    VolumeState a = state();
     const QString name = preset_->itemText(index);
     if (!ct_ && index == 0)
-        a.look.tf = initial_tf();
+        a.look.tf = core::initial_transfer_function(context_.workspace.scene());
     else
         a.look.tf = transfer_function_from(name.toStdString());
-    if (a == state_) return;
+    if (a == state()) return;
     edit("Volume preset " + name, a);
 }
 
-void VolumePanel::set_scene(const core::Scene* scene) {
-    scene_ = scene && scene->has_volume() ? scene : nullptr;
-    ct_ = false;
-    if (scene_) {
-        const ValueRange r = scene_->value_range();
-        ct_ = !core::value_unit(*scene_).empty() && r.min >= -1100 && r.max <= 5000;
-    }
-    const Bounds b = scene_ ? scene_->volume_bounds() : Bounds{};
+// New data: the presets that fit it, the crop box's ranges, the histogram.
+void VolumePanel::new_data() {
+    const core::Scene& scene = context_.workspace.scene();
+    ct_ = core::ct_in_hu(scene);
+    const Bounds b = scene.has_volume() ? scene.volume_bounds() : Bounds{};
     volume_box_ = b.empty() ? std::pair{glm::dvec3(0.0), glm::dvec3(0.0)} : std::pair{b.min, b.max};
+    box_ = volume_box_;
     for (int i = 0; i < 6; ++i) {
         const int a = i % 3;
         const double margin = std::max(1.0, volume_box_.second[a] - volume_box_.first[a]);
@@ -217,68 +240,59 @@ void VolumePanel::set_scene(const core::Scene* scene) {
     }
     fill_presets();
     make_histogram();
-    VolumeState s;
-    s.look.tf = initial_tf();
-    s.box = volume_box_;
-    set_state(s);
 }
 
 // Counts over the volume's value range from a regular subsample of at
 // most kHistogramSamples voxels (cheap enough for the GUI thread).
 void VolumePanel::make_histogram() {
-    if (!scene_) {
+    const core::Scene& scene = context_.workspace.scene();
+    if (!scene.has_volume()) {
         editor_->set_histogram({}, 0, 1);
         return;
     }
-    const Volume& v = scene_->volume();
-    const ValueRange r = scene_->value_range();
-    const double n = double(std::max<std::int64_t>(1, v.voxel_count()));
-    const auto stride = std::max<std::int64_t>(1, std::int64_t(std::ceil(std::cbrt(n / double(kHistogramSamples)))));
-    std::vector<double> counts(kBins, 0.0);
+    const ValueRange r = scene.value_range();
     const double width = r.max > r.min ? r.max - r.min : 1.0;
-    for (std::int64_t k = 0; k < v.dims[2]; k += stride)
-        for (std::int64_t j = 0; j < v.dims[1]; j += stride)
-            for (std::int64_t i = 0; i < v.dims[0]; i += stride) {
-                const double x = v.value(i, j, k);
-                if (!std::isfinite(x)) continue;
-                counts[std::size_t(std::clamp(int((x - r.min) / width * kBins), 0, kBins - 1))] += 1;
-            }
-    editor_->set_histogram(std::move(counts), r.min, r.min + width);
+    editor_->set_histogram(core::value_histogram(scene.volume(), r.min, r.min + width, kBins), r.min, r.min + width);
 }
 
 void VolumePanel::set_state(const VolumeState& s) {
-    state_ = s;
-    show_state();
-    if (changed) changed(state_);
+    box_ = s.box;
+    FrameLook l = context_.workspace.look();
+    l.volume = s.look;
+    l.clip = s.clip();
+    context_.workspace.set_look(l);
 }
 
-// The widgets from state_ (no edits while they are set).
+// The widgets from the workspace's look (no edits while they are set).
 void VolumePanel::show_state() {
+    const VolumeState st = state();
     showing_ = true;
-    show_->setChecked(state_.look.enabled);
-    mode_->setCurrentIndex(int(state_.look.mode));
+    show_->setChecked(st.look.enabled);
+    mode_->setCurrentIndex(int(st.look.mode));
     int preset = preset_->count() - 1; // custom
     for (int i = 0; i + 1 < preset_->count(); ++i) {
-        const TransferFunction tf =
-            !ct_ && i == 0 ? initial_tf() : transfer_function_from(preset_->itemText(i).toStdString());
-        if (tf == state_.look.tf) preset = i;
+        const TransferFunction tf = !ct_ && i == 0 ? core::initial_transfer_function(context_.workspace.scene())
+                                                   : transfer_function_from(preset_->itemText(i).toStdString());
+        if (tf == st.look.tf) preset = i;
     }
     preset_->setCurrentIndex(preset);
-    editor_->set_tf(state_.look.tf);
-    crop_->setChecked(state_.crop);
+    if (!showing_tf_) editor_->set_tf(st.look.tf); // not under the editor's own drag
+    crop_->setChecked(st.crop);
     for (int i = 0; i < 3; ++i) {
-        spins_[std::size_t(i)]->setValue(state_.box.first[i]);
-        spins_[std::size_t(i + 3)]->setValue(state_.box.second[i]);
+        spins_[std::size_t(i)]->setValue(st.box.first[i]);
+        spins_[std::size_t(i + 3)]->setValue(st.box.second[i]);
     }
     showing_ = false;
 }
 
 void VolumePanel::edit(const QString& text, VolumeState after, bool merge) {
-    const VolumeState before = state_;
-    state_ = std::move(after);
-    show_state();
-    if (changed) changed(state_);
-    if (edited) edited(text, before, state_, merge);
+    box_ = after.box;
+    FrameLook l = context_.workspace.look();
+    l.volume = after.look;
+    l.clip = after.clip();
+    context_.edit(
+        text, core::Parts(core::Part::Look), [&] { context_.workspace.set_look(l); },
+        merge ? "volume " + text : QString());
 }
 
 } // namespace iso::gui

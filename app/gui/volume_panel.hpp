@@ -3,9 +3,10 @@
 // preset (the CT presets; for a volume that is not CT also a default made
 // from its value range), the mode (Composite, MIP, MinIP), the transfer
 // function editor (tf_editor.hpp) over the volume's histogram, and a crop
-// box (LPS mm) that cuts surfaces and volume alike. Presentation only: it
-// holds the 3D view's VolumeLook and Clip; the window applies them to the
-// view and makes each edit an undo step.
+// box (LPS mm) that cuts surfaces and volume alike. It shows the
+// workspace's look (its volume and crop box) and each of its changes is an
+// edit of it (one undo step; a spin box's run of steps merges into one).
+// Which presets fit is the core's rule (core/presets.hpp).
 #pragma once
 
 #include <array>
@@ -24,12 +25,11 @@ class QComboBox;
 class QDoubleSpinBox;
 class QPushButton;
 
-namespace iso::core {
-class Scene;
-}
+#include "renderer/core/workspace.hpp"
 
 namespace iso::gui {
 
+class AppContext;
 class TfEditor;
 
 // What the panel edits and an undo step restores: the volume's look and
@@ -45,30 +45,16 @@ struct VolumeState {
 
 class VolumePanel : public QWidget {
 public:
-    explicit VolumePanel(QWidget* parent = nullptr);
+    VolumePanel(AppContext& context, QWidget* parent = nullptr);
+    ~VolumePanel() override;
 
-    // A new scene (null: none): the volume off, its default transfer
-    // function, the crop box the volume's box, the histogram made.
-    void set_scene(const core::Scene* scene);
-    const VolumeState& state() const { return state_; }
-    // Shows `s` in the widgets and reports it through `changed` (an undo
-    // step, a session).
+    // The workspace's volume look and crop box (the box kept while cropping is off).
+    VolumeState state() const;
+    // Sets it in the workspace without an undo step (a script, a test).
     void set_state(const VolumeState& s);
-    // The transfer function a new volume starts with: "bone" for CT in HU,
-    // else default_tf(range).
-    TransferFunction initial_tf() const;
-    // For values [lo, hi] that are not CT: transparent below a third of the
-    // range, rising to a faint warm colour and to opaque white at the top.
-    static TransferFunction default_tf(double lo, double hi);
-    // The volume is CT in HU with HU-like values: the CT presets fit it.
+    // CT's presets fit the volume (core::ct_in_hu).
     bool ct() const { return ct_; }
     TfEditor* editor() const { return editor_; }
-
-    // The state changed (apply it to the 3D view).
-    std::function<void(const VolumeState&)> changed;
-    // An edit by the user, already shown: one undo step from `before`.
-    // `merge`: consecutive edits with the same text may become one step.
-    std::function<void(const QString& text, const VolumeState& before, const VolumeState& after, bool merge)> edited;
 
 private:
     QWidget* make_look_rows();
@@ -79,11 +65,14 @@ private:
     void preset_chosen(int index);
     void crop_spin_changed(const QString& what);
     void make_histogram();
+    void new_data();
 
-    const core::Scene* scene_ = nullptr;
-    VolumeState state_;
+    AppContext& context_;
+    int observer_ = 0;
+    std::pair<glm::dvec3, glm::dvec3> box_{glm::dvec3(0.0), glm::dvec3(0.0)}; // the box while cropping is off
     bool ct_ = false;
-    bool showing_ = false; // the widgets are being set from state_: no edits
+    bool showing_ = false;    // the widgets are being set from the workspace: no edits
+    bool showing_tf_ = false; // the editor's own change: it shows it already
     std::pair<glm::dvec3, glm::dvec3> volume_box_{glm::dvec3(0.0), glm::dvec3(0.0)};
     QCheckBox* show_ = nullptr;
     QComboBox* preset_ = nullptr;

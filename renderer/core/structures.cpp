@@ -103,7 +103,8 @@ SurfaceGap surface_gap(const Scene& scene, SurfaceId a, SurfaceId b, const std::
     g.name_a = scene.info(a).name;
     g.name_b = scene.info(b).name;
     // One component of a surface: a hierarchy over its triangles only.
-    const auto part = [](const Mesh& m, const std::optional<glm::dvec3>& at, std::string& name) {
+    const auto part = [](const Mesh& m, const std::optional<glm::dvec3>& at, std::string& name,
+                         std::optional<std::size_t>& component) {
         if (!at) return TriangleBvh(m);
         if (!finite(*at)) throw Error("surface distance", "a component's point is not finite");
         const NearestComponent near = nearest_component(m, *at);
@@ -111,9 +112,11 @@ SurfaceGap surface_gap(const Scene& scene, SurfaceId a, SurfaceId b, const std::
         for (std::uint32_t t = 0; t < near.triangle_component.size(); ++t)
             if (near.triangle_component[t] == near.component) tris.push_back(t);
         name += " component " + std::to_string(near.component + 1);
+        component = near.component;
         return TriangleBvh(m, std::move(tris));
     };
-    const TriangleBvh ba = part(ma, at_a, g.name_a), bb = part(mb, at_b, g.name_b);
+    const TriangleBvh ba = part(ma, at_a, g.name_a, g.component_a), bb = part(mb, at_b, g.name_b, g.component_b);
+    g.same_structure = a == b && g.component_a == g.component_b;
     g.distance = surface_distance(ba, bb);
     return g;
 }
@@ -146,6 +149,7 @@ nlohmann::json gap_json(const SurfaceGap& g) {
             {"points", {vec(g.distance.pair.a), vec(g.distance.pair.b)}},
             {"triangles", {g.distance.triangle_a, g.distance.triangle_b}},
             {"touching", g.distance.touching},
+            {"same_structure", g.same_structure},
             {"triangle_pairs_measured", g.distance.triangle_pairs}};
 }
 

@@ -69,6 +69,12 @@ struct SurfaceGap {
     SurfaceId a = 0, b = 0;
     std::string name_a, name_b; // "iso 500", "iso 1150 component 2"
     SurfaceDistance distance;   // pair.a on a, pair.b on b
+    // The components the points chose (none: the whole surface), and whether
+    // both ends are one connected structure (one surface, the same
+    // component or the whole of it twice): its distance to itself is 0, no
+    // gap between two structures (the desktop app refuses it).
+    std::optional<std::size_t> component_a, component_b;
+    bool same_structure = false;
 };
 SurfaceGap surface_gap(const Scene& scene, SurfaceId a, SurfaceId b, const std::optional<glm::dvec3>& at_a = {},
                        const std::optional<glm::dvec3>& at_b = {});

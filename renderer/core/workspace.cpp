@@ -78,6 +78,9 @@ Workspace::~Workspace() = default;
 // ---- what is open ---------------------------------------------------------------------
 
 void Workspace::reset(std::unique_ptr<Scene> scene, std::string input, std::string series) {
+    // The old scene lives until the observers heard of the new one: a view
+    // releases its GPU copies through it, a worker reading it stops.
+    std::unique_ptr<Scene> old = std::move(scene_);
     scene_ = scene ? std::move(scene) : std::make_unique<Scene>();
     input_ = std::move(input);
     series_ = std::move(series);
@@ -99,6 +102,7 @@ void Workspace::reset(std::unique_ptr<Scene> scene, std::string input, std::stri
     saved_ = capture(kEditedParts);
     force_modified_ = false;
     notify(Parts(~0u));
+    old.reset();
 }
 
 void Workspace::adopt(OpenedSession opened, const std::string& session_path) {
@@ -122,7 +126,7 @@ void Workspace::adopt(OpenedSession opened, const std::string& session_path) {
     session_path_ = session_path;
     saved_ = capture(kEditedParts);
     force_modified_ = session_path.empty();
-    notify(Parts(~0u));
+    notify(Parts(~0u) & ~Parts(Part::Data)); // the data's notification was reset()'s
 }
 
 Session Workspace::session() const {
@@ -142,7 +146,14 @@ void Workspace::mark_saved(const std::string& path) {
     notify(Parts(Part::File));
 }
 
-bool Workspace::modified() const { return force_modified_ || !same_parts(saved_, capture(kEditedParts), kEditedParts); }
+bool Workspace::modified() const {
+    if (force_modified_) return true;
+    const WorkspaceState now = capture(kEditedParts);
+    // Of the look, what the Volume panel edits: the view's AO and
+    // transparency toggles are view settings (kept, not edits).
+    return !same_parts(saved_, now, kEditedParts & ~Parts(Part::Look)) || !(saved_.look.volume == now.look.volume) ||
+           !(saved_.look.clip == now.look.clip);
+}
 
 void Workspace::mark_unsaved() {
     force_modified_ = true;
@@ -380,9 +391,24 @@ void Workspace::unobserve(int handle) {
 void Workspace::notify(Parts parts) {
     ++notifications_;
     if (parts & kPictureParts) ++picture_key_;
-    // A copy: an observer may observe or unobserve.
-    const auto observers = observers_;
-    for (const auto& [handle, o] : observers) o(parts);
+    // A change an observer makes while hearing of another is told after it,
+    // so that every observer hears of the changes in the order they happened.
+    if (notifying_) {
+        pending_ |= parts;
+        return;
+    }
+    notifying_ = true;
+    struct Done {
+        bool& flag;
+        ~Done() { flag = false; }
+    } done{notifying_};
+    for (Parts next = parts; next; next = std::exchange(pending_, 0)) {
+        // A copy: an observer may observe or unobserve.
+        const auto observers = observers_;
+        for (const auto& [handle, o] : observers)
+            if (std::any_of(observers_.begin(), observers_.end(), [h = handle](const auto& p) { return p.first == h; }))
+                o(next);
+    }
 }
 
 std::unique_ptr<Workspace> open_workspace(const std::string& session_path, FrameLook look, const ProgressFn& progress) {

@@ -139,8 +139,9 @@ public:
     const std::string& session_path() const { return session_path_; }
     // Saved to (or opened from) `path`: the state now is the saved one.
     void mark_saved(const std::string& path);
-    // Unsaved work: the edited parts (kEditedParts) differ from the state
-    // last saved or opened (an edit undone back to it is not a change).
+    // Unsaved work: the edited parts (kEditedParts; of the look, the volume
+    // look and the crop box) differ from the state last saved or opened (an
+    // edit undone back to it is not a change).
     bool modified() const;
     // Makes the state unsaved work whatever it is (a recovered session).
     void mark_unsaved();
@@ -234,6 +235,8 @@ private:
     std::vector<std::pair<int, Observer>> observers_;
     int next_observer_ = 1;
     std::uint64_t picture_key_ = 0, notifications_ = 0;
+    bool notifying_ = false;
+    Parts pending_ = 0; // changes made by observers while notifying, told next
 };
 
 // Opens a session file into a new workspace (load_session, open_session, adopt).

@@ -17,6 +17,7 @@
 #include <vector>
 
 #include "app/gui/main_window.hpp"
+#include "app/gui/surfaces_panel.hpp"
 #include "io/atomic_file.hpp"
 #include "io/error.hpp"
 #include "renderer/core/scene.hpp"
@@ -65,7 +66,7 @@ inline std::string open_head(gui::MainWindow& w, const std::string& input) {
     w.open_path(QString::fromStdString(input));
     if (!wait_until([&] { return !w.busy(); }, 120000) || !w.scene().has_volume()) return "cannot open " + input;
     for (double iso : {500.0, 1150.0}) {
-        w.add_surface(iso);
+        w.surfaces_panel()->add_surface(iso);
         if (!wait_until([&] { return !w.busy(); }, 300000)) return "the extraction did not finish";
     }
     if (w.scene().surfaces().size() != 2) return "expected the skin and the bone surfaces";

@@ -138,7 +138,11 @@ int main(int argc, char** argv) {
             o.look.ao_frames = 1; // every rotation frame is a first frame; no extra still frames in between
             o.look.transparency = true;
             v->set_options(o);
-            w.scene().info(ids[0]).opacity = c.translucent ? 0.3f : 1.0f;
+            {
+                core::SurfaceInfo info = w.scene().info(ids[0]);
+                info.opacity = c.translucent ? 0.3f : 1.0f;
+                w.workspace().set_surface_info(ids[0], info);
+            }
             if (round == 0) v->set_view(PatientView::Anterior);
             for (int i = 0; i < 3; ++i) timed_frame(*v, 360.0 / steps); // warm-up after the switch (pool sizes)
             const int n = steps / rounds + (round < steps % rounds ? 1 : 0);

@@ -192,7 +192,9 @@ int main(int argc, char** argv) {
     w.statusBar()->addPermanentWidget(&button);
     if (const std::string why = bench::open_head(w, input); !why.empty()) return fail(why);
     const auto ids = w.scene().surfaces();
-    w.scene().info(ids[0]).opacity = 0.3f;
+    core::SurfaceInfo skin = w.scene().info(ids[0]);
+    skin.opacity = 0.3f;
+    w.workspace().set_surface_info(ids[0], skin);
     gui::Viewer* v = w.viewer();
     if (!v || !wait_until([&] { return v->frames() > 0 || !v->error().empty(); }, 60000)) return fail("no 3D frame");
     if (!v->error().empty()) return fail(v->error());

@@ -111,9 +111,9 @@ TEST_F(GuiEdit, CheekRulerOnTheFrontSkinDragUndoRedo) {
     w.measure_tools()->ruler_action()->trigger();
     QTest::mouseClick(viewer, Qt::LeftButton, {}, *cheek[0]);
     QTest::mouseClick(viewer, Qt::LeftButton, {}, *cheek[1]);
-    ASSERT_EQ(w.markups().size(), 1u) << w.statusBar()->currentMessage().toStdString();
+    ASSERT_EQ(w.workspace().markups().size(), 1u) << w.statusBar()->currentMessage().toStdString();
     w.measure_tools()->set_tool(gui::MeasureTools::Tool::None);
-    const Markup ruler = w.markups()[0];
+    const Markup ruler = w.workspace().markups()[0];
     for (int k = 0; k < 2; ++k) {
         const glm::dvec3 p = ruler.points[std::size_t(k)].position;
         // The front skin: the layer nearest the eye, the face's front (smallest y,
@@ -168,7 +168,7 @@ TEST_F(GuiEdit, CheekRulerOnTheFrontSkinDragUndoRedo) {
     EXPECT_EQ(viewer->camera().target, camera.target);
     const core::PickResult at_release = oracle.pick(release);
     ASSERT_FALSE(at_release.layers.empty());
-    const glm::dvec3 moved = w.markups()[0].points[0].position;
+    const glm::dvec3 moved = w.workspace().markups()[0].points[0].position;
     EXPECT_NEAR(glm::length(moved - seen(at_release).lps), 0.0, 1e-6) << "not the release pixel's point";
     const QString moved_value = cell(w, 0, gui::MeasurementsPanel::Value);
     EXPECT_NE(moved_value, value);
@@ -182,22 +182,22 @@ TEST_F(GuiEdit, CheekRulerOnTheFrontSkinDragUndoRedo) {
     // ---- undo, redo: exactly the old and the new point
     edit_action(w, "undo")->trigger();
     EXPECT_EQ(w.statusBar()->currentMessage(), "Undone: Move point");
-    EXPECT_EQ(w.markups()[0].points[0].position, ruler.points[0].position);
+    EXPECT_EQ(w.workspace().markups()[0].points[0].position, ruler.points[0].position);
     EXPECT_EQ(cell(w, 0, gui::MeasurementsPanel::Value), value);
     edit_action(w, "redo")->trigger();
-    EXPECT_EQ(w.markups()[0].points[0].position, moved);
+    EXPECT_EQ(w.workspace().markups()[0].points[0].position, moved);
     EXPECT_EQ(cell(w, 0, gui::MeasurementsPanel::Value), moved_value);
 
     // ---- delete and undo
     auto* del = qobject_cast<QToolButton*>(panel_table(w)->cellWidget(0, gui::MeasurementsPanel::Delete));
     ASSERT_NE(del, nullptr);
     del->click();
-    ASSERT_TRUE(wait_until([&] { return w.markups().empty(); }, 5000)) << "the delete button did nothing";
+    ASSERT_TRUE(wait_until([&] { return w.workspace().markups().empty(); }, 5000)) << "the delete button did nothing";
     EXPECT_EQ(edit_action(w, "undo")->text(), "&Undo Delete Line 1");
     edit_action(w, "undo")->trigger();
-    ASSERT_EQ(w.markups().size(), 1u);
-    EXPECT_EQ(w.markups()[0].points[0].position, moved);
-    EXPECT_EQ(w.markups()[0].points[1].position, ruler.points[1].position);
+    ASSERT_EQ(w.workspace().markups().size(), 1u);
+    EXPECT_EQ(w.workspace().markups()[0].points[0].position, moved);
+    EXPECT_EQ(w.workspace().markups()[0].points[1].position, ruler.points[1].position);
 }
 
 // A point dragged on the axial view moves in its plane; the window does not
@@ -212,24 +212,24 @@ TEST_F(GuiEdit, SliceDragMovesThePointInThePlane) {
     const std::vector<QPoint> a = ruler_pixels(w);
     ASSERT_NO_FATAL_FAILURE(click_on_axial(w, gui::MeasureTools::Tool::Ruler, a));
     w.measure_tools()->set_tool(gui::MeasureTools::Tool::None);
-    ASSERT_EQ(w.markups().size(), 1u);
-    const Markup before = w.markups()[0];
-    const core::WindowLevel wl = w.window_level();
+    ASSERT_EQ(w.workspace().markups().size(), 1u);
+    const Markup before = w.workspace().markups()[0];
+    const core::WindowLevel wl = w.workspace().window();
     const QPoint to = a[1] + QPoint(-20, 35);
     drag(axial, a[1] + QPoint(3, -2), to); // within the grab radius of the point
     const glm::dvec3 expected = core::pixel_to_lps(axial->grid(), {double(to.x()), double(to.y())});
-    EXPECT_NEAR(glm::length(w.markups()[0].points[1].position - expected), 0.0, 1e-9);
-    EXPECT_EQ(w.markups()[0].points[0].position, before.points[0].position);
-    EXPECT_EQ(w.window_level().center, wl.center) << "a point drag changed the window";
-    EXPECT_EQ(w.window_level().width, wl.width);
+    EXPECT_NEAR(glm::length(w.workspace().markups()[0].points[1].position - expected), 0.0, 1e-9);
+    EXPECT_EQ(w.workspace().markups()[0].points[0].position, before.points[0].position);
+    EXPECT_EQ(w.workspace().window().center, wl.center) << "a point drag changed the window";
+    EXPECT_EQ(w.workspace().window().width, wl.width);
     EXPECT_NEAR(parse_value(cell(w, 0, gui::MeasurementsPanel::Value)),
                 iso::distance_mm(before.points[0].position, expected), kPrinted);
     w.undo_stack()->undo();
-    EXPECT_EQ(w.markups()[0].points[1].position, before.points[1].position);
+    EXPECT_EQ(w.workspace().markups()[0].points[1].position, before.points[1].position);
     // A press away from every point is the window drag it always was.
     drag(axial, axial_pixel(w, 100, 100), axial_pixel(w, 140, 80));
-    EXPECT_NE(w.window_level().width, wl.width);
-    EXPECT_EQ(w.markups()[0].points[1].position, before.points[1].position);
+    EXPECT_NE(w.workspace().window().width, wl.width);
+    EXPECT_EQ(w.workspace().markups()[0].points[1].position, before.points[1].position);
 }
 
 // The Point tool: one point list (F) whose points F-1, F-2 are where the
@@ -255,8 +255,8 @@ TEST_F(GuiEdit, PointListInThePanelAndTheFile) {
     const QPoint on_slice = axial_pixel(w, 20, -30);
     const glm::dvec3 clicked = lps_of(axial->grid(), on_slice);
     QTest::mouseClick(axial, Qt::LeftButton, {}, on_slice);
-    ASSERT_EQ(w.markups().size(), 1u);
-    const Markup& list = w.markups()[0];
+    ASSERT_EQ(w.workspace().markups().size(), 1u);
+    const Markup& list = w.workspace().markups()[0];
     EXPECT_EQ(list.type, MarkupType::Fiducial);
     EXPECT_EQ(list.name, "F");
     ASSERT_EQ(list.points.size(), 2u);
@@ -315,7 +315,7 @@ TEST_F(GuiEdit, LoadingAFileAgainAsksReplaceAddOrCancel) {
     const std::string path = dir() / "two.mrk.json";
     {
         MarkupsFile f;
-        f.markups = w.markups();
+        f.markups = w.workspace().markups();
         save_markups(f, path); // written by io, not by the window: the markups are
                                // from no file yet
     }
@@ -323,7 +323,7 @@ TEST_F(GuiEdit, LoadingAFileAgainAsksReplaceAddOrCancel) {
     const QString qpath = QString::fromStdString(path);
     ASSERT_TRUE(panel->load(qpath));
     EXPECT_EQ(w.findChild<QMessageBox*>("reload"), nullptr) << "a file not loaded before needs no question";
-    ASSERT_EQ(w.markups().size(), 4u);
+    ASSERT_EQ(w.workspace().markups().size(), 4u);
 
     const auto answer = [&](const char* button) {
         ASSERT_TRUE(panel->load(qpath));
@@ -336,29 +336,30 @@ TEST_F(GuiEdit, LoadingAFileAgainAsksReplaceAddOrCancel) {
         ASSERT_TRUE(wait_until([&] { return w.findChild<QMessageBox*>("reload") == nullptr; }, 5000));
     };
     ASSERT_NO_FATAL_FAILURE(answer("cancel"));
-    EXPECT_EQ(w.markups().size(), 4u);
+    EXPECT_EQ(w.workspace().markups().size(), 4u);
     ASSERT_NO_FATAL_FAILURE(answer("add"));
-    ASSERT_EQ(w.markups().size(), 6u);
+    ASSERT_EQ(w.workspace().markups().size(), 6u);
     // Move one of the loaded ones: Replace still drops it (it came from the
     // file).
-    gui::MarkupsState s = w.markups_state();
+    gui::MarkupsState s = w.workspace().markups_state();
     s.markups[2].points[0].position += glm::dvec3(5, 0, 0);
-    w.edit_markups("Move point", s);
+    w.context().edit("Move point", core::Parts(core::Part::Markups), [&] { w.workspace().set_markups(s); });
     ASSERT_NO_FATAL_FAILURE(answer("replace"));
-    ASSERT_EQ(w.markups().size(), 4u);
+    ASSERT_EQ(w.workspace().markups().size(), 4u);
     const MarkupsFile file = load_markups(path);
     for (std::size_t i = 0; i < 2; ++i) {
-        EXPECT_EQ(w.markups()[2 + i].name, file.markups[i].name);
+        EXPECT_EQ(w.workspace().markups()[2 + i].name, file.markups[i].name);
         for (std::size_t k = 0; k < file.markups[i].points.size(); ++k)
-            EXPECT_EQ(w.markups()[2 + i].points[k].position, file.markups[i].points[k].position);
+            EXPECT_EQ(w.workspace().markups()[2 + i].points[k].position, file.markups[i].points[k].position);
     }
     EXPECT_EQ(w.undo_stack()->undoText(), "Replace markups from two.mrk.json");
     w.undo_stack()->undo();
-    EXPECT_EQ(w.markups().size(), 6u);
+    EXPECT_EQ(w.workspace().markups().size(), 6u);
 }
 
-// Selecting a row highlights the markup and centres the views on its first
-// point.
+// Selecting a row highlights the markup and takes the slice views to its
+// first point; the 3D view's camera stays (a selection is no change of the
+// figure: the next export is framed as the user left it).
 TEST_F(GuiEdit, SelectingARowHighlightsAndCentres) {
     gui::MainWindow& w = window();
     ASSERT_NO_FATAL_FAILURE(click_on_axial(w, gui::MeasureTools::Tool::Ruler, ruler_pixels(w)));
@@ -368,16 +369,17 @@ TEST_F(GuiEdit, SelectingARowHighlightsAndCentres) {
     const Camera before = viewer->camera();
     const double distance = glm::length(before.eye - before.target);
     panel_table(w)->selectRow(1);
-    ASSERT_EQ(w.selected_markup(), std::optional<std::size_t>(1));
-    const glm::dvec3 first = w.markups()[1].points[0].position;
+    ASSERT_EQ(w.workspace().selected(), std::optional<std::size_t>(1));
+    const glm::dvec3 first = w.workspace().markups()[1].points[0].position;
     for (auto o : {core::SliceOrientation::Axial, core::SliceOrientation::Coronal, core::SliceOrientation::Sagittal}) {
         const core::SliceGrid& g = w.slice_view(o)->grid();
         EXPECT_NEAR(glm::dot(first, g.normal), g.offset_mm, 1e-9) << core::slice_orientation_name(o);
     }
-    EXPECT_NEAR(glm::length(viewer->camera().target - first), 0.0, 1e-9);
+    EXPECT_EQ(viewer->camera().target, before.target);
+    EXPECT_EQ(viewer->camera().eye, before.eye);
     EXPECT_NEAR(glm::length(viewer->camera().eye - viewer->camera().target), distance, 1e-9);
-    EXPECT_NEAR(glm::length(glm::normalize(viewer->camera().target - viewer->camera().eye) - before.forward()), 0.0,
-                1e-9);
+    ASSERT_TRUE(w.workspace().camera());
+    EXPECT_EQ(w.workspace().camera()->target, before.target) << "the session's camera stays too";
     // Drawn in the highlight colour: the views' markups, and the axial view's
     // pixels at the vertex.
     const auto drawn = w.measure_tools()->drawn_markups();
@@ -397,9 +399,9 @@ TEST_F(GuiEdit, SelectingARowHighlightsAndCentres) {
                 found |= magenta(img.pixelColor(int(at.pixel.x) + dx, int(at.pixel.y) + dy));
         return found;
     };
-    const bool found = magenta_near(w.markups()[1].points[1].position);
-    EXPECT_FALSE(magenta_near(w.markups()[0].points[0].position)) << "the ruler is not selected";
+    const bool found = magenta_near(w.workspace().markups()[1].points[1].position);
+    EXPECT_FALSE(magenta_near(w.workspace().markups()[0].points[0].position)) << "the ruler is not selected";
     EXPECT_TRUE(found) << "the selected angle is not drawn in the highlight colour";
     panel_table(w)->clearSelection();
-    EXPECT_FALSE(w.selected_markup());
+    EXPECT_FALSE(w.workspace().selected());
 }

@@ -27,6 +27,7 @@
 #include <algorithm>
 
 #include "app/gui/export_dialog.hpp"
+#include "app/gui/files.hpp"
 #include "app/gui/main_window.hpp"
 #include "app/gui/surfaces_panel.hpp"
 #include "app/gui/view_toolbar.hpp"
@@ -91,7 +92,7 @@ TEST(GuiExport, ExportSaveOpenSessionAndSurfaces) {
     ASSERT_TRUE(wait_until([&] { return !w.busy(); }, 60000));
     ASSERT_TRUE(w.scene().has_volume()) << w.statusBar()->currentMessage().toStdString();
     for (double iso : {500.0, 1150.0}) {
-        w.add_surface(iso);
+        w.surfaces_panel()->add_surface(iso);
         ASSERT_TRUE(wait_until([&] { return !w.busy(); }, 120000));
     }
     const auto ids = w.scene().surfaces();
@@ -104,7 +105,11 @@ TEST(GuiExport, ExportSaveOpenSessionAndSurfaces) {
         [&] { return !w.surfaces_panel()->reextracting() && w.scene().info(ids[1]).post.keep_largest; }, 60000));
     step(clock, "opened headsq, added skin and bone");
     // Skin at 0.3 through the core (the Surfaces panel is another part's).
-    w.scene().info(ids[0]).opacity = 0.3f;
+    {
+        core::SurfaceInfo info = w.scene().info(ids[0]);
+        info.opacity = 0.3f;
+        w.workspace().set_surface_info(ids[0], info);
+    }
     ASSERT_NE(w.viewer(), nullptr);
     ASSERT_TRUE(wait_until([&] { return w.viewer()->frames() > 0; }, 60000));
     // Rotate the 3D view.
@@ -118,7 +123,7 @@ TEST(GuiExport, ExportSaveOpenSessionAndSurfaces) {
     ruler.points.resize(2);
     ruler.points[0].position = orbited.target + glm::dvec3(-50, 0, 30);
     ruler.points[1].position = orbited.target + glm::dvec3(45, -10, -20);
-    w.set_markups({ruler});
+    w.workspace().set_markups({{ruler}, {}});
     ASSERT_TRUE(wait_until([&] { return w.viewer()->frames() > 2; }, 60000));
     screenshot(w, "window.png");
     step(clock, "skin 0.3, orbited, ruler drawn");
@@ -192,16 +197,16 @@ TEST(GuiExport, ExportSaveOpenSessionAndSurfaces) {
     w.view_toolbar()->transparency_action()->trigger();
     ASSERT_FALSE(w.viewer()->options().look.transparency);
     const std::string session = dir / "study.isoscope.json";
-    w.save_session(QString::fromStdString(session));
+    w.files()->save_session(QString::fromStdString(session));
     ASSERT_TRUE(wait_until([&] { return !w.busy(); }, 60000));
     ASSERT_TRUE(fs::exists(session)) << w.statusBar()->currentMessage().toStdString();
-    EXPECT_EQ(w.session_path().toStdString(), session);
+    EXPECT_EQ(w.workspace().session_path(), session);
     core::RenderRequest small;
     small.width = 96;
     small.height = 72;
     core::SessionParts parts;
     parts.ao = false; // small.look.ao: off
-    w.export_image(QString::fromStdString(dir / "again.png"), small, parts);
+    w.files()->export_image(QString::fromStdString(dir / "again.png"), small, parts);
     ASSERT_TRUE(wait_until([&] { return !w.busy(); }, 120000));
     ImageMetadata again;
     load_image(dir / "again.png", &again);
@@ -211,7 +216,7 @@ TEST(GuiExport, ExportSaveOpenSessionAndSurfaces) {
     // An export into a folder that does not exist: a dialog names the file, nothing is written.
     {
         const std::string nowhere = dir / "no/such/folder/x.png";
-        w.export_image(QString::fromStdString(nowhere), small, parts);
+        w.files()->export_image(QString::fromStdString(nowhere), small, parts);
         ASSERT_TRUE(wait_until([&] { return !w.busy(); }, 60000));
         QMessageBox* box = nullptr;
         ASSERT_TRUE(wait_until([&] { return (box = w.findChild<QMessageBox*>("error")) && box->isVisible(); }, 10000));
@@ -248,7 +253,7 @@ TEST(GuiExport, ExportSaveOpenSessionAndSurfaces) {
     ASSERT_TRUE(wait_until([&] { return !w2.busy(); }, 120000));
     ASSERT_EQ(w2.scene().surfaces().size(), 2u) << w2.statusBar()->currentMessage().toStdString();
     step(clock, "opened the session in a fresh window");
-    EXPECT_EQ(w2.path().toStdString(), fs::absolute(test::data("headsq.nhdr")).lexically_normal().string());
+    EXPECT_EQ(w2.workspace().input(), fs::absolute(test::data("headsq.nhdr")).lexically_normal().string());
     for (std::size_t i = 0; i < 2; ++i) {
         const auto& a = w.scene().info(ids[i]);
         const auto& b = w2.scene().info(w2.scene().surfaces()[i]);
@@ -274,15 +279,15 @@ TEST(GuiExport, ExportSaveOpenSessionAndSurfaces) {
     EXPECT_EQ(w2.viewer()->options().look.ao, w.viewer()->options().look.ao);
     EXPECT_FALSE(w2.viewer()->options().look.transparency);
     EXPECT_FALSE(w2.view_toolbar()->transparency_action()->isChecked());
-    EXPECT_EQ(w2.window_level().center, w.window_level().center);
-    EXPECT_EQ(w2.window_level().width, w.window_level().width);
-    ASSERT_EQ(w2.markups().size(), 1u);
-    EXPECT_EQ(w2.markups()[0].name, "ruler");
+    EXPECT_EQ(w2.workspace().window().center, w.workspace().window().center);
+    EXPECT_EQ(w2.workspace().window().width, w.workspace().window().width);
+    ASSERT_EQ(w2.workspace().markups().size(), 1u);
+    EXPECT_EQ(w2.workspace().markups()[0].name, "ruler");
     for (int p = 0; p < 2; ++p)
         for (int k = 0; k < 3; ++k)
-            EXPECT_NEAR(w2.markups()[0].points[p].position[k], ruler.points[p].position[k], 1e-9);
-    EXPECT_EQ(w2.session_path().toStdString(), session);
-    EXPECT_TRUE(core::same_state(w2.current_session(), w.current_session()));
+            EXPECT_NEAR(w2.workspace().markups()[0].points[p].position[k], ruler.points[p].position[k], 1e-9);
+    EXPECT_EQ(w2.workspace().session_path(), session);
+    EXPECT_TRUE(core::same_state(w2.workspace().session(), w.workspace().session()));
     screenshot(w2, "reopened.png");
 
     // ---- a broken session: a dialog names the file and the field, the window stays
@@ -307,7 +312,7 @@ TEST(GuiExport, ExportSaveOpenSessionAndSurfaces) {
     EXPECT_TRUE(w2.isVisible());
     EXPECT_EQ(&w2.scene(), shown);
     EXPECT_EQ(w2.scene().surfaces().size(), 2u);
-    EXPECT_EQ(w2.session_path().toStdString(), session);
+    EXPECT_EQ(w2.workspace().session_path(), session);
     step(clock, "broken session refused");
 
     // ---- a session dropped on the window opens as a session
@@ -321,8 +326,8 @@ TEST(GuiExport, ExportSaveOpenSessionAndSurfaces) {
         ASSERT_TRUE(wait_until([&] { return &w2.scene() != shown && !w2.busy(); }, 60000))
             << w2.statusBar()->currentMessage().toStdString();
         EXPECT_EQ(w2.scene().surfaces().size(), 2u);
-        EXPECT_EQ(w2.markups().size(), 1u);
-        EXPECT_EQ(w2.session_path().toStdString(), session);
+        EXPECT_EQ(w2.workspace().markups().size(), 1u);
+        EXPECT_EQ(w2.workspace().session_path(), session);
     }
     step(clock, "dropped session opened");
 }
@@ -342,11 +347,11 @@ TEST(GuiExport, ExportToDicomJoinsTheStudyInOneSeriesPerSession) {
     w.open_path(QString::fromStdString(test::data("dicom-mr-forearm")));
     ASSERT_TRUE(wait_until([&] { return !w.busy(); }, 60000));
     ASSERT_TRUE(w.scene().has_volume()) << w.statusBar()->currentMessage().toStdString();
-    w.add_surface(200);
+    w.surfaces_panel()->add_surface(200);
     ASSERT_TRUE(wait_until([&] { return !w.busy(); }, 60000));
     ASSERT_EQ(w.scene().surfaces().size(), 1u);
     const std::string session = dir / "forearm.isoscope.json";
-    w.save_session(QString::fromStdString(session));
+    w.files()->save_session(QString::fromStdString(session));
     ASSERT_TRUE(wait_until([&] { return !w.busy(); }, 60000));
 
     auto export_into = [&](const std::string& folder) {

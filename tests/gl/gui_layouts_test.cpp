@@ -40,7 +40,7 @@ void drag(QWidget* w, Qt::MouseButton button, QPoint from, QPoint by) {
 // plane `i`'s outline (projected with the view's camera) have a pixel of
 // the plane's colour within 2 pixels, out of how many were in the image.
 std::pair<int, int> outline_pixels_in_colour(gui::MainWindow& w, const QImage& img, std::size_t i) {
-    const auto& plane = w.planes()[i];
+    const auto& plane = w.workspace().planes()[i];
     const auto outline = core::slice_outline_3d(w.scene().volume(), plane);
     const glm::vec3 c = core::slice_color(plane.orientation) * 255.0f;
     int hit = 0, tried = 0;
@@ -83,7 +83,7 @@ TEST_F(GuiLayouts, LayoutsMoveTheViewsWithoutMakingThemAgain) {
     gui::Viewer* viewer = w.viewer();
     QOpenGLContext* context = viewer->context();
     const Camera camera = viewer->camera();
-    const auto planes = w.planes();
+    const auto planes = w.workspace().planes();
     // The grid's cells: the 3D view's stack (the viewer or its hint), each slice view's panel.
     const auto cell = [&w](QWidget* v) {
         while (v->parentWidget() != w.centralWidget()) v = v->parentWidget();
@@ -96,17 +96,17 @@ TEST_F(GuiLayouts, LayoutsMoveTheViewsWithoutMakingThemAgain) {
     const QRect area = w.centralWidget()->contentsRect();
     const auto settle = [] { QTest::qWait(50); };
 
-    EXPECT_EQ(w.layout(), core::ViewLayout::FourUp);
-    EXPECT_TRUE(w.layout_action(core::ViewLayout::FourUp)->isChecked());
+    EXPECT_EQ(w.workspace().layout(), core::ViewLayout::FourUp);
+    EXPECT_TRUE(w.layouts()->layout_action(core::ViewLayout::FourUp)->isChecked());
     EXPECT_LT(view3d->x(), axial->x());
     EXPECT_EQ(view3d->y(), axial->y());
     EXPECT_EQ(coronal->x(), view3d->x());
     EXPECT_GT(coronal->y(), view3d->y());
     EXPECT_EQ(sagittal->y(), coronal->y());
 
-    w.layout_action(core::ViewLayout::Conventional)->trigger();
+    w.layouts()->layout_action(core::ViewLayout::Conventional)->trigger();
     settle();
-    EXPECT_EQ(w.layout(), core::ViewLayout::Conventional);
+    EXPECT_EQ(w.workspace().layout(), core::ViewLayout::Conventional);
     for (QWidget* v :
          {view3d, static_cast<QWidget*>(axial), static_cast<QWidget*>(coronal), static_cast<QWidget*>(sagittal)})
         EXPECT_TRUE(v->isVisible());
@@ -122,9 +122,9 @@ TEST_F(GuiLayouts, LayoutsMoveTheViewsWithoutMakingThemAgain) {
                                                            {core::ViewLayout::Coronal, coronal},
                                                            {core::ViewLayout::Sagittal, sagittal}};
     for (const auto& [layout, shown] : alone) {
-        w.layout_action(layout)->trigger();
+        w.layouts()->layout_action(layout)->trigger();
         settle();
-        EXPECT_EQ(w.layout(), layout);
+        EXPECT_EQ(w.workspace().layout(), layout);
         for (QWidget* v :
              {view3d, static_cast<QWidget*>(axial), static_cast<QWidget*>(coronal), static_cast<QWidget*>(sagittal)})
             EXPECT_EQ(v->isVisible(), v == shown) << core::view_layout_name(layout);
@@ -142,12 +142,12 @@ TEST_F(GuiLayouts, LayoutsMoveTheViewsWithoutMakingThemAgain) {
     ASSERT_TRUE(QTest::qWaitForWindowActive(&w));
     QTest::keyClick(&w, Qt::Key_4, Qt::ControlModifier);
     settle();
-    EXPECT_EQ(w.layout(), core::ViewLayout::Axial);
+    EXPECT_EQ(w.workspace().layout(), core::ViewLayout::Axial);
     EXPECT_TRUE(axial->isVisible());
     EXPECT_FALSE(view3d->isVisible());
     QTest::keyClick(&w, Qt::Key_1, Qt::ControlModifier);
     settle();
-    EXPECT_EQ(w.layout(), core::ViewLayout::FourUp);
+    EXPECT_EQ(w.workspace().layout(), core::ViewLayout::FourUp);
 
     // Nothing was made again: the same viewer, context and camera; it still draws.
     EXPECT_EQ(w.viewer(), viewer);
@@ -159,8 +159,8 @@ TEST_F(GuiLayouts, LayoutsMoveTheViewsWithoutMakingThemAgain) {
     EXPECT_TRUE(wait_until([&] { return viewer->frames() > frames; }, 30000));
     EXPECT_TRUE(viewer->error().empty()) << viewer->error();
     for (std::size_t i = 0; i < 3; ++i) {
-        EXPECT_EQ(w.planes()[i].origin, planes[i].origin);
-        EXPECT_EQ(w.planes()[i].offset_mm(), planes[i].offset_mm());
+        EXPECT_EQ(w.workspace().planes()[i].origin, planes[i].origin);
+        EXPECT_EQ(w.workspace().planes()[i].offset_mm(), planes[i].offset_mm());
     }
 }
 
@@ -169,34 +169,34 @@ TEST_F(GuiLayouts, LayoutsMoveTheViewsWithoutMakingThemAgain) {
 // opening it shows the same (values from the core's planes).
 TEST_F(GuiLayouts, SessionRestoresTheLayoutSliceViewsAndCrosshair) {
     gui::MainWindow& w = window();
-    w.layout_action(core::ViewLayout::Conventional)->trigger();
-    w.slice_planes_action()->trigger();
-    ASSERT_TRUE(w.slice_planes_in_3d());
+    w.layouts()->layout_action(core::ViewLayout::Conventional)->trigger();
+    w.layouts()->slice_planes_action()->trigger();
+    ASSERT_TRUE(w.workspace().slice_planes_in_3d());
     QTest::qWait(50);
     // The crosshair to a point, then the axial view two slices up: the crosshair follows its slice.
     const auto defaults = core::default_planes(w.scene().volume());
     const glm::dvec3 pick = defaults[0].origin + glm::dvec3(12.25, -20.5, -8.0);
-    w.set_crosshair(pick);
+    w.workspace().set_crosshair(pick);
     auto* axial = w.slice_view(SliceOrientation::Axial);
     axial->setFocus();
     QTest::keyClick(axial, Qt::Key_PageUp);
     QTest::keyClick(axial, Qt::Key_PageUp);
     const glm::dvec3 crosshair = pick + glm::dvec3(0, 0, 2.0 * defaults[0].step_mm);
-    EXPECT_LT(glm::length(core::crosshair_point(w.planes()) - crosshair), 1e-9);
-    EXPECT_NEAR(w.planes()[0].offset_mm(), crosshair.z, 1e-9);
+    EXPECT_LT(glm::length(core::crosshair_point(w.workspace().planes()) - crosshair), 1e-9);
+    EXPECT_NEAR(w.workspace().planes()[0].offset_mm(), crosshair.z, 1e-9);
     // The coronal view zoomed (a right drag up), the sagittal one panned (a middle drag).
     auto* coronal = w.slice_view(SliceOrientation::Coronal);
     auto* sagittal = w.slice_view(SliceOrientation::Sagittal);
-    const double coronal_pixel = w.planes()[1].pixel_mm;
-    const glm::dvec3 sagittal_centre = w.planes()[2].center;
+    const double coronal_pixel = w.workspace().planes()[1].pixel_mm;
+    const glm::dvec3 sagittal_centre = w.workspace().planes()[2].center;
     drag(coronal, Qt::RightButton, {coronal->width() / 2, coronal->height() / 2}, {0, -40});
     drag(sagittal, Qt::MiddleButton, {sagittal->width() / 2, sagittal->height() / 2}, {30, 20});
-    EXPECT_LT(w.planes()[1].pixel_mm, coronal_pixel * 0.9);
-    EXPECT_GT(glm::length(w.planes()[2].center - sagittal_centre), 1.0);
-    const auto saved = w.planes();
+    EXPECT_LT(w.workspace().planes()[1].pixel_mm, coronal_pixel * 0.9);
+    EXPECT_GT(glm::length(w.workspace().planes()[2].center - sagittal_centre), 1.0);
+    const auto saved = w.workspace().planes();
 
     const std::string session = dir() / "layout.isoscope.json";
-    w.save_session(QString::fromStdString(session));
+    w.files()->save_session(QString::fromStdString(session));
     ASSERT_TRUE(wait_until([&] { return !w.busy(); }, 60000));
     ASSERT_TRUE(fs::exists(session)) << w.statusBar()->currentMessage().toStdString();
     const core::Session file = core::read_session(session);
@@ -212,14 +212,14 @@ TEST_F(GuiLayouts, SessionRestoresTheLayoutSliceViewsAndCrosshair) {
     ASSERT_TRUE(wait_until([&] { return !w2.busy(); }, 120000));
     ASSERT_EQ(w2.scene().surfaces().size(), 2u) << w2.statusBar()->currentMessage().toStdString();
     QTest::qWait(100); // the layout settles: resizes keep the restored framing
-    EXPECT_EQ(w2.layout(), core::ViewLayout::Conventional);
-    EXPECT_TRUE(w2.layout_action(core::ViewLayout::Conventional)->isChecked());
-    EXPECT_TRUE(w2.slice_planes_in_3d());
-    EXPECT_TRUE(w2.slice_planes_action()->isChecked());
-    EXPECT_LT(glm::length(core::crosshair_point(w2.planes()) - crosshair), 1e-9);
+    EXPECT_EQ(w2.workspace().layout(), core::ViewLayout::Conventional);
+    EXPECT_TRUE(w2.layouts()->layout_action(core::ViewLayout::Conventional)->isChecked());
+    EXPECT_TRUE(w2.workspace().slice_planes_in_3d());
+    EXPECT_TRUE(w2.layouts()->slice_planes_action()->isChecked());
+    EXPECT_LT(glm::length(core::crosshair_point(w2.workspace().planes()) - crosshair), 1e-9);
     for (std::size_t i = 0; i < 3; ++i) {
         const auto& a = saved[i];
-        const auto& b = w2.planes()[i];
+        const auto& b = w2.workspace().planes()[i];
         EXPECT_EQ(b.origin, a.origin) << i;
         EXPECT_NEAR(b.offset_mm(), a.offset_mm(), 1e-12) << i;
         EXPECT_LT(glm::length(b.center - a.center), 1e-9) << i;
@@ -239,10 +239,14 @@ TEST_F(GuiLayouts, SlicePlanesAreDrawnInTheirColoursIn3d) {
     gui::MainWindow& w = window();
     gui::Viewer* viewer = w.viewer();
     // Surfaces in a neutral blue, so no surface pixel passes for a plane's colour.
-    for (auto id : w.scene().surfaces()) w.scene().info(id).color = {0.05f, 0.08f, 0.3f};
+    for (auto id : w.scene().surfaces()) {
+        core::SurfaceInfo info = w.scene().info(id);
+        info.color = {0.05f, 0.08f, 0.3f};
+        w.workspace().set_surface_info(id, info);
+    }
     // An oblique camera: every plane's outline is a polygon on screen, not an edge-on line.
     Camera c = viewer->camera();
-    const glm::dvec3 centre = core::crosshair_point(w.planes());
+    const glm::dvec3 centre = core::crosshair_point(w.workspace().planes());
     c.target = centre;
     c.eye = centre + glm::dvec3(-260.0, -420.0, 300.0);
     c.up = {0, 0, 1};
@@ -254,8 +258,8 @@ TEST_F(GuiLayouts, SlicePlanesAreDrawnInTheirColoursIn3d) {
         EXPECT_GE(tried, 6) << i;
         EXPECT_EQ(hit, 0) << "plane " << i << " drawn with the toggle off";
     }
-    w.slice_planes_action()->trigger();
-    ASSERT_TRUE(w.slice_planes_in_3d());
+    w.layouts()->slice_planes_action()->trigger();
+    ASSERT_TRUE(w.workspace().slice_planes_in_3d());
     QImage on = next_frame(viewer);
     for (std::size_t i = 0; i < 3; ++i) {
         const auto [hit, tried] = outline_pixels_in_colour(w, on, i);
@@ -264,16 +268,16 @@ TEST_F(GuiLayouts, SlicePlanesAreDrawnInTheirColoursIn3d) {
     }
     // The axial view ten slices up: its outline is drawn at its new height.
     auto* axial = w.slice_view(SliceOrientation::Axial);
-    const double before = w.planes()[0].offset_mm();
+    const double before = w.workspace().planes()[0].offset_mm();
     axial->setFocus();
     for (int k = 0; k < 10; ++k) QTest::keyClick(axial, Qt::Key_PageUp);
-    ASSERT_GT(w.planes()[0].offset_mm(), before + 5.0);
+    ASSERT_GT(w.workspace().planes()[0].offset_mm(), before + 5.0);
     on = next_frame(viewer);
     const auto [hit, tried] = outline_pixels_in_colour(w, on, 0);
     EXPECT_GE(tried, 6);
     EXPECT_GE(hit, tried * 3 / 4) << hit << " of " << tried;
-    w.slice_planes_action()->trigger();
-    EXPECT_FALSE(w.slice_planes_in_3d());
+    w.layouts()->slice_planes_action()->trigger();
+    EXPECT_FALSE(w.workspace().slice_planes_in_3d());
     off = next_frame(viewer);
     EXPECT_EQ(outline_pixels_in_colour(w, off, 0).first, 0);
 }

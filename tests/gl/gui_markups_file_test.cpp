@@ -34,21 +34,22 @@ TEST_F(GuiMarkupsFile, RenameDeleteSaveAndLoadInAFreshWindow) {
     ASSERT_NO_FATAL_FAILURE(
         click_on_axial(w, gui::MeasureTools::Tool::Ruler, {axial_pixel(w, -30, 40), axial_pixel(w, 30, 60)}));
     w.measure_tools()->set_tool(gui::MeasureTools::Tool::None);
-    ASSERT_EQ(w.markups().size(), 3u);
+    ASSERT_EQ(w.workspace().markups().size(), 3u);
     const double distance = iso::distance_mm(lps(a[0]), lps(a[1]));
     const double angle = iso::angle_deg(lps(b[0]), lps(b[1]), lps(b[2]));
 
     // ---- rename one (what the table's editor commits), delete one
     QTableWidget* table = panel_table(w);
     table->item(0, gui::MeasurementsPanel::Name)->setText("head width");
-    EXPECT_EQ(w.markups()[0].name, "head width");
+    EXPECT_EQ(w.workspace().markups()[0].name, "head width");
     auto* del = qobject_cast<QToolButton*>(table->cellWidget(2, gui::MeasurementsPanel::Delete));
     ASSERT_NE(del, nullptr);
     del->click();
-    ASSERT_TRUE(wait_until([&] { return w.markups().size() == 2; }, 5000)) << "the delete button did nothing";
+    ASSERT_TRUE(wait_until([&] { return w.workspace().markups().size() == 2; }, 5000))
+        << "the delete button did nothing";
     EXPECT_EQ(table->rowCount(), 2);
     EXPECT_EQ(table->item(0, gui::MeasurementsPanel::Name)->text(), "head width");
-    const std::string angle_name = w.markups()[1].name;
+    const std::string angle_name = w.workspace().markups()[1].name;
 
     // ---- save as .mrk.json, read back through io/markups
     const std::string saved = dir() / "measurements.mrk.json";
@@ -60,9 +61,10 @@ TEST_F(GuiMarkupsFile, RenameDeleteSaveAndLoadInAFreshWindow) {
     EXPECT_EQ(f.markups[0].type, MarkupType::Line);
     EXPECT_EQ(f.markups[1].type, MarkupType::Angle);
     for (std::size_t i = 0; i < 2; ++i) {
-        ASSERT_EQ(f.markups[i].points.size(), w.markups()[i].points.size());
+        ASSERT_EQ(f.markups[i].points.size(), w.workspace().markups()[i].points.size());
         for (std::size_t k = 0; k < f.markups[i].points.size(); ++k)
-            EXPECT_NEAR(glm::length(f.markups[i].points[k].position - w.markups()[i].points[k].position), 0.0, 1e-9);
+            EXPECT_NEAR(glm::length(f.markups[i].points[k].position - w.workspace().markups()[i].points[k].position),
+                        0.0, 1e-9);
     }
     EXPECT_NEAR(glm::length(f.markups[1].points[2].position - lps(b[2])), 0.0, 1e-9);
 
@@ -75,7 +77,7 @@ TEST_F(GuiMarkupsFile, RenameDeleteSaveAndLoadInAFreshWindow) {
         EXPECT_TRUE(box->text().contains("m.mrk.json")) << box->text().toStdString();
         box->close();
         QTest::qWait(50);
-        EXPECT_EQ(w.markups().size(), 2u);
+        EXPECT_EQ(w.workspace().markups().size(), 2u);
     }
 
     // ---- a fresh window loads them: the panel lists them with the same values
@@ -93,7 +95,7 @@ TEST_F(GuiMarkupsFile, RenameDeleteSaveAndLoadInAFreshWindow) {
     ASSERT_TRUE(wait_until([&] { return (box = w2.findChild<QMessageBox*>("error")) && box->isVisible(); }, 5000));
     EXPECT_TRUE(box->text().contains("broken.mrk.json")) << box->text().toStdString();
     box->close();
-    EXPECT_TRUE(w2.markups().empty());
+    EXPECT_TRUE(w2.workspace().markups().empty());
 
     ASSERT_TRUE(w2.measurements_panel()->load(QString::fromStdString(saved)));
     QTableWidget* t2 = panel_table(w2);
@@ -103,7 +105,7 @@ TEST_F(GuiMarkupsFile, RenameDeleteSaveAndLoadInAFreshWindow) {
     EXPECT_NEAR(parse_value(t2->item(0, gui::MeasurementsPanel::Value)->text()), distance, kPrinted);
     EXPECT_NEAR(parse_value(t2->item(1, gui::MeasurementsPanel::Value)->text()), angle, kPrinted);
     // On the axial slice they were measured on, the ruler is drawn again.
-    w2.set_crosshair(lps(a[0]));
+    w2.workspace().set_crosshair(lps(a[0]));
     QTest::qWait(50);
     auto* axial2 = w2.slice_view(core::SliceOrientation::Axial);
     EXPECT_NEAR(axial2->grid().offset_mm, axial_offset, 1e-6);

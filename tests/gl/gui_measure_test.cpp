@@ -40,11 +40,11 @@ TEST_F(GuiMeasure, RulerAndAngleOnTheAxialView) {
     ASSERT_EQ(tools->tool(), gui::MeasureTools::Tool::Ruler);
     QTest::mouseClick(axial, Qt::LeftButton, {}, a[0]);
     EXPECT_EQ(tools->pending().size(), 1u);
-    EXPECT_TRUE(w.markups().empty());
+    EXPECT_TRUE(w.workspace().markups().empty());
     QTest::mouseClick(axial, Qt::LeftButton, {}, a[1]);
-    ASSERT_EQ(w.markups().size(), 1u);
+    ASSERT_EQ(w.workspace().markups().size(), 1u);
     {
-        const Markup& m = w.markups()[0];
+        const Markup& m = w.workspace().markups()[0];
         EXPECT_EQ(m.type, MarkupType::Line);
         ASSERT_EQ(m.points.size(), 2u);
         EXPECT_NEAR(glm::length(m.points[0].position - lps(a[0])), 0.0, 1e-9);
@@ -71,8 +71,8 @@ TEST_F(GuiMeasure, RulerAndAngleOnTheAxialView) {
     EXPECT_TRUE(tools->pending().empty()) << "Escape did not drop the point";
     EXPECT_EQ(tools->tool(), gui::MeasureTools::Tool::Angle);
     for (const QPoint& p : b) QTest::mouseClick(axial, Qt::LeftButton, {}, p);
-    ASSERT_EQ(w.markups().size(), 2u);
-    EXPECT_EQ(w.markups()[1].type, MarkupType::Angle);
+    ASSERT_EQ(w.workspace().markups().size(), 2u);
+    EXPECT_EQ(w.workspace().markups()[1].type, MarkupType::Angle);
     const double angle = iso::angle_deg(lps(b[0]), lps(b[1]), lps(b[2]));
 
     // The panel lists both, with the core's values (to the printed decimals).
@@ -94,7 +94,7 @@ TEST_F(GuiMeasure, RulerAndAngleOnTheAxialView) {
     QTest::qWait(50);
     const QImage img = axial->grab().toImage();
     const QColor c = img.pixelColor((a[0].x() + a[1].x()) / 2, a[0].y());
-    const glm::vec3 want = markup_color(w.markups()[0]) * 255.0f;
+    const glm::vec3 want = markup_color(w.workspace().markups()[0]) * 255.0f;
     EXPECT_NEAR(c.red(), want.r, 40) << "no ruler drawn on the axial view";
     EXPECT_NEAR(c.green(), want.g, 40);
     EXPECT_NEAR(c.blue(), want.b, 40);
@@ -114,14 +114,14 @@ TEST_F(GuiMeasure, RulerInThe3DViewIsOnThePickedPoints) {
     // The window as in docs/gui.md's screenshot: a ruler and an angle on the axial slice too.
     ASSERT_NO_FATAL_FAILURE(click_on_axial(w, gui::MeasureTools::Tool::Ruler, ruler_pixels(w)));
     ASSERT_NO_FATAL_FAILURE(click_on_axial(w, gui::MeasureTools::Tool::Angle, angle_pixels(w)));
-    ASSERT_EQ(w.markups().size(), 2u);
+    ASSERT_EQ(w.workspace().markups().size(), 2u);
 
     auto* tools = w.measure_tools();
     tools->ruler_action()->trigger();
     QTest::mouseClick(viewer, Qt::LeftButton, {}, c0);
     QTest::mouseClick(viewer, Qt::LeftButton, {}, c1);
-    ASSERT_EQ(w.markups().size(), 3u) << w.statusBar()->currentMessage().toStdString();
-    const Markup& m = w.markups()[2];
+    ASSERT_EQ(w.workspace().markups().size(), 3u) << w.statusBar()->currentMessage().toStdString();
+    const Markup& m = w.workspace().markups()[2];
     ASSERT_EQ(m.points.size(), 2u);
     EXPECT_NEAR(glm::length(m.points[0].position - expected), 0.0, 1e-6) << "the 3D point is not core::pick's";
     const auto p1 = viewer->pick_at(QPointF(c1) + QPointF(0.5, 0.5));

@@ -22,6 +22,7 @@
 #include <nlohmann/json.hpp>
 
 #include "app/gui/main_window.hpp"
+#include "app/gui/surfaces_panel.hpp"
 #include "app/gui/measure_tools.hpp"
 #include "app/gui/measurements_panel.hpp"
 #include "app/gui/slice_view.hpp"
@@ -80,7 +81,7 @@ inline void open_head_with_surfaces(gui::MainWindow& w) {
     ASSERT_TRUE(wait_until([&] { return !w.busy(); }, 60000)) << "the load did not finish";
     ASSERT_TRUE(w.scene().has_volume());
     for (const double iso : {500.0, 1150.0}) {
-        w.add_surface(iso);
+        w.surfaces_panel()->add_surface(iso);
         ASSERT_TRUE(wait_until([&] { return !w.busy(); }, 120000)) << "the extraction did not finish";
     }
     ASSERT_EQ(w.scene().surfaces().size(), 2u);

@@ -97,24 +97,24 @@ TEST_F(GuiMenus, ViewMenuHasTheLayoutsAndTheSlicePlanesToggle) {
         EXPECT_FALSE(a->toolTip().isEmpty());
         EXPECT_NE(a->toolTip(), a->text().remove('&')) << "a tooltip that says more than the entry";
         EXPECT_EQ(a->shortcut(), QKeySequence(Qt::CTRL | Qt::Key(Qt::Key_1 + i)));
-        EXPECT_EQ(a, w.layout_action(core::ViewLayout(i)));
+        EXPECT_EQ(a, w.layouts()->layout_action(core::ViewLayout(i)));
     }
     layouts[3]->trigger();
-    EXPECT_EQ(w.layout(), core::ViewLayout::Axial);
+    EXPECT_EQ(w.workspace().layout(), core::ViewLayout::Axial);
     int checked = 0;
     for (QAction* a : layouts) checked += a->isChecked();
     EXPECT_EQ(checked, 1);
     EXPECT_TRUE(layouts[3]->isChecked());
     layouts[0]->trigger();
-    EXPECT_EQ(w.layout(), core::ViewLayout::FourUp);
+    EXPECT_EQ(w.workspace().layout(), core::ViewLayout::FourUp);
     QAction* planes = action_named(view, "Slice planes in 3D");
     ASSERT_NE(planes, nullptr);
-    EXPECT_EQ(planes, w.slice_planes_action());
+    EXPECT_EQ(planes, w.layouts()->slice_planes_action());
     EXPECT_TRUE(planes->isCheckable());
     EXPECT_FALSE(planes->toolTip().isEmpty());
-    EXPECT_FALSE(w.slice_planes_in_3d());
+    EXPECT_FALSE(w.workspace().slice_planes_in_3d());
     planes->trigger();
-    EXPECT_TRUE(w.slice_planes_in_3d());
+    EXPECT_TRUE(w.workspace().slice_planes_in_3d());
 }
 
 // About names isoscope's and its libraries' versions, Qt's and the GL

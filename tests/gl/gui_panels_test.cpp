@@ -14,10 +14,12 @@
 #include <QComboBox>
 #include <QDialogButtonBox>
 #include <QDir>
+#include <QFileInfo>
 #include <QDockWidget>
 #include <QDoubleSpinBox>
 #include <QLabel>
 #include <QLineEdit>
+#include <QStandardPaths>
 #include <QMenuBar>
 #include <QMessageBox>
 #include <QPushButton>
@@ -195,17 +197,34 @@ TEST(GuiPanels, IsoValueStaysWithinTheVolumesValues) {
     iso->setValue(500);
     EXPECT_EQ(iso->value(), range.max) << "typed 500 is kept to the volume's values";
 
-    // Presets: the headsq ones (500, 1150) lie outside, the HU ones are for CT: none may be chosen.
+    // Presets (core::iso_presets, one rule with the Volume panel): the HU
+    // ones are for CT, listed but disabled, saying why; the ones made from
+    // this volume's own histogram (Otsu) come first, within its values, and
+    // none is named after a dataset.
     auto* presets = w.surfaces_panel()->findChild<QComboBox*>("iso_preset");
     ASSERT_NE(presets, nullptr);
-    ASSERT_GT(presets->count(), 0);
+    ASSERT_GT(presets->count(), 4);
+    auto* model = qobject_cast<QStandardItemModel*>(presets->model());
+    int own = 0;
     for (int i = 0; i < presets->count(); ++i) {
-        EXPECT_FALSE(item_enabled(presets, i)) << presets->itemText(i).toStdString();
-        if (presets->itemText(i).contains(" HU")) EXPECT_TRUE(presets->itemText(i).contains("CT only"));
+        const QString text = presets->itemText(i);
+        EXPECT_FALSE(text.contains("headsq")) << text.toStdString();
+        if (text.contains(" HU")) {
+            EXPECT_FALSE(item_enabled(presets, i)) << text.toStdString();
+            EXPECT_TRUE(model->item(i)->toolTip().contains("Hounsfield")) << model->item(i)->toolTip().toStdString();
+            continue;
+        }
+        ++own;
+        EXPECT_TRUE(item_enabled(presets, i)) << text.toStdString();
+        const double v = text.section(": ", -1).toDouble();
+        EXPECT_GT(v, range.min) << text.toStdString();
+        EXPECT_LT(v, range.max) << text.toStdString();
     }
+    EXPECT_EQ(own, 2) << "the two-class and three-class Otsu thresholds";
+    EXPECT_EQ(presets->currentIndex(), 0);
 
     // ---- adding 500 (the window's own call, as `isoscope view --iso` would) is refused
-    w.add_surface(500);
+    w.surfaces_panel()->add_surface(500);
     EXPECT_FALSE(w.busy());
     const QString box = take_error_box(w);
     EXPECT_TRUE(box.contains("outside")) << box.toStdString();
@@ -327,7 +346,7 @@ TEST(GuiPanels, SeriesChooserPreselectsTheSeriesFor3D) {
     ASSERT_TRUE(wait_until([&] { return !w.busy() && w.scene().has_volume(); }, 30000))
         << w.statusBar()->currentMessage().toStdString();
     EXPECT_EQ(w.scene().volume().dims[2], t.list[std::size_t(t.axial)].dims[2]);
-    EXPECT_EQ(w.series().toStdString(), t.list[std::size_t(t.axial)].uid);
+    EXPECT_EQ(w.workspace().series(), t.list[std::size_t(t.axial)].uid);
 }
 
 // One .dcm file opens its whole series from its folder, by the file's UID.
@@ -374,8 +393,8 @@ TEST(GuiPanels, OneDicomFileOpensItsSeries) {
     EXPECT_EQ(w.scene().volume().dims[0], axial.dims[0]);
     EXPECT_EQ(w.scene().volume().dims[1], axial.dims[1]);
     EXPECT_EQ(w.scene().volume().dims[2], axial.dims[2]);
-    EXPECT_EQ(w.series().toStdString(), axial.uid);
-    EXPECT_EQ(fs::path(w.path().toStdString()), fs::absolute(t.folder));
+    EXPECT_EQ(w.workspace().series(), axial.uid);
+    EXPECT_EQ(fs::path(w.workspace().input()), fs::absolute(t.folder));
     EXPECT_EQ(visible_child<gui::SeriesDialog>(w, "series_chooser"), nullptr);
 
     // A file that is not DICOM inside says so, naming the file (no crash, nothing replaced).
@@ -384,7 +403,7 @@ TEST(GuiPanels, OneDicomFileOpensItsSeries) {
     w.open_path(QString::fromStdString(bad));
     ASSERT_TRUE(wait_until([&] { return !w.busy(); }, 30000));
     EXPECT_TRUE(take_error_box(w).contains(QString::fromStdString(bad)));
-    EXPECT_EQ(w.series().toStdString(), axial.uid);
+    EXPECT_EQ(w.workspace().series(), axial.uid);
 }
 
 // The 3D view's hint says what to do next; the window preset shows "custom"
@@ -419,9 +438,9 @@ TEST(GuiPanels, HintAndPresetsFollowTheData) {
     const core::WindowLevel def = core::default_window(w.scene().volume());
     center->setValue(def.center + 17);
     EXPECT_EQ(preset->currentText(), "custom");
-    EXPECT_EQ(w.window_level().center, def.center + 17);
+    EXPECT_EQ(w.workspace().window().center, def.center + 17);
     preset->setCurrentIndex(0);
-    EXPECT_EQ(w.window_level().center, def.center);
+    EXPECT_EQ(w.workspace().window().center, def.center);
     EXPECT_EQ(preset->currentText(), "default");
 
     // ---- a CT series (HU): the CT presets can be chosen, and name their numbers
@@ -430,8 +449,8 @@ TEST(GuiPanels, HintAndPresetsFollowTheData) {
     open_and_wait(w, dir / "ct");
     for (int i = 1; i <= n; ++i) EXPECT_TRUE(item_enabled(preset, i)) << preset->itemText(i).toStdString();
     preset->setCurrentIndex(n); // the last CT preset
-    EXPECT_EQ(w.window_level().center, core::ct_window_presets()[std::size_t(n - 1)].window.center);
-    EXPECT_EQ(w.window_level().width, core::ct_window_presets()[std::size_t(n - 1)].window.width);
+    EXPECT_EQ(w.workspace().window().center, core::ct_window_presets()[std::size_t(n - 1)].window.center);
+    EXPECT_EQ(w.workspace().window().width, core::ct_window_presets()[std::size_t(n - 1)].window.width);
     auto* width = w.findChild<QDoubleSpinBox*>("window_width");
     width->setValue(width->value() + 1);
     EXPECT_EQ(preset->currentText(), "custom");
@@ -516,9 +535,10 @@ TEST(GuiPanels, IsoSliderStepsAndOpacityNumber) {
     EXPECT_TRUE(w.grab().save(QString::fromStdString((out / "iso_row.png").string())));
 }
 
-// Save dialogs start next to the data, named after it; beside a DICOM
-// folder; in the last folder used when the data's folder cannot be written.
-TEST(GuiPanels, SaveLocationsFollowTheData) {
+// Save dialogs start in the folder last used for their kind, else in the
+// documents folder, named after the data; never in the data's folder (a
+// read-only share, issue 38).
+TEST(GuiPanels, SaveDialogsStartInTheLastFolderUsedElseTheDocumentsFolder) {
     ISO_SKIP_WITHOUT_DISPLAY();
     test::TempDir dir;
     const auto app = test::make_app("gui_panels_test", dir / "config");
@@ -533,14 +553,20 @@ TEST(GuiPanels, SaveLocationsFollowTheData) {
     EXPECT_EQ(gui::data_name(headsq), "headsq");
     EXPECT_EQ(gui::data_name(d + "/data/ct.nii.gz"), "ct");
     EXPECT_EQ(gui::data_name(d + "/data"), "data");
-    EXPECT_EQ(gui::suggested_save_path(headsq, last, ".png"), d + "/data/headsq.png");
-    EXPECT_EQ(gui::suggested_save_path(headsq, last, ".isoscope.json"), d + "/data/headsq.isoscope.json");
-    EXPECT_EQ(gui::suggested_save_path(headsq, {}, "-iso500.stl"), d + "/data/headsq-iso500.stl");
-    // A DICOM folder: beside it, named after it.
-    EXPECT_EQ(gui::suggested_save_path(d + "/data", last, ".png"), d + "/data.png");
-    // A folder that cannot be written (here: gone): the last one used, else home.
-    EXPECT_EQ(gui::suggested_save_path(d + "/gone/x.nrrd", last, ".png"), last + "/x.png");
-    EXPECT_EQ(gui::suggested_save_path(d + "/gone/x.nrrd", {}, ".png"), QDir::home().filePath("x.png"));
+    // Where a save dialog starts: the folder last used for that kind, else
+    // the documents folder (else home), never the data's folder (a
+    // read-only share would fail).
+    const QString documents = QStandardPaths::writableLocation(QStandardPaths::DocumentsLocation);
+    const QString first = QFileInfo(documents).isDir() ? documents : QDir::homePath();
+    EXPECT_EQ(gui::Files::start_folder("surface"), first);
+    gui::Files::remember_folder("export", last + "/figure.png");
+    EXPECT_EQ(gui::Files::start_folder("export"), last);
+    EXPECT_EQ(gui::Files::start_folder("surface"), first) << "each kind its own";
+    fs::create_directories(dir / "gone");
+    gui::Files::remember_folder("dicom", d + "/gone");
+    EXPECT_EQ(gui::Files::start_folder("dicom"), d + "/gone");
+    fs::remove(dir / "gone");
+    EXPECT_EQ(gui::Files::start_folder("dicom"), first) << "a folder that went: the documents folder";
     EXPECT_EQ(gui::surface_file_stem("iso 500"), "iso500");
     EXPECT_EQ(gui::surface_file_stem("iso 12.5"), "iso12.5");
     EXPECT_EQ(gui::surface_file_stem("a/b"), "a-b");
@@ -558,13 +584,13 @@ TEST(GuiPanels, SaveLocationsFollowTheData) {
     gui::SaveSurfacesDialog* sd = nullptr;
     ASSERT_TRUE(
         wait_until([&] { return (sd = visible_child<gui::SaveSurfacesDialog>(w, "save_surfaces_dialog")); }, 30000));
-    EXPECT_EQ(sd->findChild<QLineEdit*>("file")->text(), d + "/data/headsq-iso500.stl");
+    EXPECT_EQ(sd->findChild<QLineEdit*>("file")->text(), QDir(first).filePath("headsq-iso500.stl"));
     sd->reject();
     QAction* exp = file_action(w, "&Export image...");
     ASSERT_NE(exp, nullptr);
     exp->trigger();
     gui::ExportDialog* ed = nullptr;
     ASSERT_TRUE(wait_until([&] { return (ed = visible_child<gui::ExportDialog>(w, "export_dialog")); }, 30000));
-    EXPECT_EQ(ed->findChild<QLineEdit*>("file")->text(), d + "/data/headsq.png");
+    EXPECT_EQ(ed->findChild<QLineEdit*>("file")->text(), last + "/headsq.png") << "the last folder exported to";
     ed->reject();
 }

@@ -67,27 +67,55 @@ TEST_F(GuiStructures, IsolateListsTheComponentMeasureGivesAndDistanceIsTheCores)
     EXPECT_EQ(w.scene().mesh(made).triangles.size(), listed.triangles);
     const auto measured = core::measure_surfaces(w.scene(), {made}).front().measures;
     EXPECT_NEAR(measured.volume_ml, listed.volume_ml, 1e-9 * std::abs(listed.volume_ml) + 1e-12);
+    // The structure alone on screen: its parent hidden.
+    EXPECT_TRUE(w.scene().info(made).visible);
+    EXPECT_FALSE(w.scene().info(ids[1]).visible);
     // The dock's row: name, volume to 3 decimals with its uncertainty.
     QTableWidget* table = tools->table();
-    ASSERT_EQ(table->rowCount(), 1);
+    ASSERT_TRUE(QTest::qWaitFor([&] { return table->rowCount() == 1 && !w.busy(); }, 600000));
     EXPECT_EQ(table->item(0, gui::StructureTools::Name)->text().toStdString(), w.scene().info(made).name);
     const QString volume = table->item(0, gui::StructureTools::Volume)->text();
     EXPECT_TRUE(volume.contains(QString::number(listed.volume_ml, 'f', 3))) << volume.toStdString();
     EXPECT_TRUE(volume.contains(QString::fromUtf8("\u00b1"))) << "an isosurface component has an uncertainty";
     EXPECT_EQ(table->item(0, gui::StructureTools::Closed)->text(), listed.closed ? "closed" : "open");
 
+    // ---- Isolate is one undo step: undone, the component goes and its
+    // parent shows again; redone, back under its id. Isolating it again (a
+    // click on it) adds nothing.
+    EXPECT_EQ(w.undo_stack()->undoText().toStdString(), "Isolate " + w.scene().info(made).name);
+    w.undo_stack()->undo();
+    EXPECT_FALSE(w.scene().has_surface(made));
+    EXPECT_TRUE(w.scene().info(ids[1]).visible);
+    w.undo_stack()->redo();
+    ASSERT_TRUE(w.scene().has_surface(made));
+    EXPECT_EQ(w.scene().mesh(made).triangles.size(), listed.triangles);
+    QTest::qWait(100); // a frame with the component drawn
+    const auto again = find_pixel(o, size, "iso 1150", 0.45);
+    QTest::mouseClick(viewer, Qt::LeftButton, {}, again->first);
+    ASSERT_TRUE(QTest::qWaitFor([&] { return tools->isolations() == 2 && !w.busy(); }, 600000));
+    EXPECT_EQ(w.scene().surfaces().size(), before + 1) << "the same component is not added twice";
+    EXPECT_TRUE(w.statusBar()->currentMessage().contains("one structure already"))
+        << w.statusBar()->currentMessage().toStdString();
+
     // ---- Distance: skin (a cheek, skin only) to that bone component
-    w.scene().info(made).visible = false; // the view as before: the isolated copy off
+    {
+        core::SurfaceInfo info = w.scene().info(made);
+        info.visible = false;
+        w.workspace().set_surface_info(made, info);
+        info = w.scene().info(ids[1]);
+        info.visible = true;
+        w.workspace().set_surface_info(ids[1], info);
+    } // the view as before: the isolated copy off, the bone on
     const auto skin = find_pixel(o, size, "iso 500", 0.55);
     ASSERT_TRUE(skin) << "no pixel sees only skin";
     tools->distance_action()->trigger();
-    const std::size_t markups = w.markups().size();
+    const std::size_t markups = w.workspace().markups().size();
     QTest::mouseClick(viewer, Qt::LeftButton, {}, skin->first);
     QTest::mouseClick(viewer, Qt::LeftButton, {}, bone->first);
     ASSERT_TRUE(QTest::qWaitFor([&] { return tools->distances() == 1; }, 600000))
         << w.statusBar()->currentMessage().toStdString();
-    ASSERT_EQ(w.markups().size(), markups + 1);
-    const Markup& line = w.markups().back();
+    ASSERT_EQ(w.workspace().markups().size(), markups + 1);
+    const Markup& line = w.workspace().markups().back();
     const core::SurfaceGap gap = core::surface_gap(o.scene(), ids[0], ids[1], skin->second.lps, bone->second.lps);
     EXPECT_EQ(line.name, gap.name_a + " to " + gap.name_b);
     ASSERT_EQ(line.points.size(), 2u);
@@ -98,5 +126,14 @@ TEST_F(GuiStructures, IsolateListsTheComponentMeasureGivesAndDistanceIsTheCores)
                 line.name.c_str(), gap.distance.pair.distance_mm);
     // One undo step.
     w.undo_stack()->undo();
-    EXPECT_EQ(w.markups().size(), markups);
+    EXPECT_EQ(w.workspace().markups().size(), markups);
+
+    // ---- Two clicks on one connected structure: refused, no 0 mm ruler.
+    QTest::mouseClick(viewer, Qt::LeftButton, {}, bone->first);
+    QTest::mouseClick(viewer, Qt::LeftButton, {}, bone->first + QPoint(3, 0));
+    ASSERT_TRUE(QTest::qWaitFor([&] { return tools->distances() == 2 && !w.busy(); }, 600000));
+    EXPECT_EQ(w.workspace().markups().size(), markups);
+    EXPECT_TRUE(w.statusBar()->currentMessage().contains("one connected structure"))
+        << w.statusBar()->currentMessage().toStdString();
+    EXPECT_TRUE(core::surface_gap(o.scene(), ids[1], ids[1], bone->second.lps, bone->second.lps).same_structure);
 }

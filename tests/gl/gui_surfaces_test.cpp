@@ -21,6 +21,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "app/gui/files.hpp"
 #include "app/gui/main_window.hpp"
 #include "app/gui/slice_view.hpp"
 #include "app/gui/surfaces_panel.hpp"
@@ -233,7 +234,7 @@ TEST(GuiSurfaces, AddOpacitySliderLargestRemoveAndCancel) {
     ASSERT_TRUE(wait_until([&] { return !w.busy(); }, 60000)) << "the load did not finish";
     ASSERT_EQ(w.scene().volume().dims, (std::array<std::int64_t, 3>{512, 512, 400}));
     EXPECT_TRUE(w.scene().surfaces().empty());
-    w.add_surface(500);
+    w.surfaces_panel()->add_surface(500);
     ASSERT_TRUE(w.busy());
     QProgressDialog* progress = nullptr;
     for (auto* d : w.findChildren<QProgressDialog*>("progress"))
@@ -290,7 +291,7 @@ TEST(GuiSurfaces, PickedColourIsStoredAndSavedAsPicked) {
     EXPECT_EQ(w.scene().info(id).color, glm::vec3(linear));
 
     const std::string session = dir / "picked.isoscope.json";
-    w.save_session(QString::fromStdString(session));
+    w.files()->save_session(QString::fromStdString(session));
     ASSERT_TRUE(wait_until([&] { return !w.busy(); }, 60000));
     std::ifstream in(session);
     ASSERT_TRUE(in) << w.statusBar()->currentMessage().toStdString();

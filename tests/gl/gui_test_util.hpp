@@ -22,7 +22,12 @@
 
 #include <gtest/gtest.h>
 
+#include "app/gui/app_context.hpp"
+#include "app/gui/files.hpp"
+#include "app/gui/layouts.hpp"
 #include "app/gui/main_window.hpp"
+#include "app/gui/surfaces_panel.hpp"
+#include "app/gui/unsaved_work.hpp"
 #include "app/gui/surfaces_panel.hpp"
 #include "tests/support/test_util.hpp"
 

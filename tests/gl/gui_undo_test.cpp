@@ -24,7 +24,9 @@
 #include <fstream>
 #include <thread>
 
+#include "app/gui/files.hpp"
 #include "app/gui/main_window.hpp"
+#include "app/gui/unsaved_work.hpp"
 #include "app/gui/slice_view.hpp"
 #include "app/gui/surfaces_panel.hpp"
 #include "app/gui/viewer.hpp"
@@ -150,7 +152,7 @@ TEST(GuiUndo, SurfaceEditsUndoAndRedo) {
     QUndoStack* undo = w.undo_stack();
     auto* undo_action = w.findChild<QAction*>("undo");
     ASSERT_NE(undo_action, nullptr);
-    EXPECT_FALSE(w.modified());
+    EXPECT_FALSE(w.workspace().modified());
     EXPECT_FALSE(w.isWindowModified());
 
     // Add: one step; undo removes the surface, redo puts it back with its mesh.
@@ -159,13 +161,13 @@ TEST(GuiUndo, SurfaceEditsUndoAndRedo) {
     const auto id = w.scene().surfaces()[0];
     const std::size_t at500 = triangles_at(w.scene(), 500);
     EXPECT_EQ(w.scene().mesh(id).triangles.size(), at500);
-    EXPECT_EQ(undo->undoText(), "add iso 500");
-    EXPECT_TRUE(w.modified());
+    EXPECT_EQ(undo->undoText(), "Add iso 500");
+    EXPECT_TRUE(w.workspace().modified());
     EXPECT_TRUE(w.isWindowModified());
     undo->undo();
     EXPECT_TRUE(w.scene().surfaces().empty());
     EXPECT_EQ(w.surfaces_panel()->row(id), nullptr);
-    EXPECT_FALSE(w.modified()) << "back at the state opened";
+    EXPECT_FALSE(w.workspace().modified()) << "back at the state opened";
     undo->redo();
     ASSERT_TRUE(w.scene().has_surface(id)) << "redone under its id";
     EXPECT_EQ(w.scene().mesh(id).triangles.size(), at500);
@@ -177,7 +179,7 @@ TEST(GuiUndo, SurfaceEditsUndoAndRedo) {
     drag(child<QSlider>(row, "opacity"), {90, 70, 55, 40});
     EXPECT_EQ(undo->count(), steps + 1) << "the drag's steps merge";
     EXPECT_FLOAT_EQ(w.scene().info(id).opacity, 0.40f);
-    EXPECT_EQ(undo_action->text(), "&Undo change opacity of iso 500");
+    EXPECT_EQ(undo_action->text(), "&Undo Change opacity of iso 500");
     undo->undo();
     EXPECT_FLOAT_EQ(w.scene().info(id).opacity, 1.0f);
     EXPECT_EQ(child<QSlider>(row, "opacity")->value(), 100) << "the row shows the undone value";
@@ -191,7 +193,7 @@ TEST(GuiUndo, SurfaceEditsUndoAndRedo) {
     // Visibility.
     child<QCheckBox>(row, "visible")->setChecked(false);
     EXPECT_FALSE(w.scene().info(id).visible);
-    EXPECT_EQ(undo->undoText(), "change visibility of iso 500");
+    EXPECT_EQ(undo->undoText(), "Hide iso 500");
     undo->undo();
     EXPECT_TRUE(w.scene().info(id).visible);
     EXPECT_TRUE(child<QCheckBox>(row, "visible")->isChecked());
@@ -204,7 +206,7 @@ TEST(GuiUndo, SurfaceEditsUndoAndRedo) {
     answer_colour_dialog(w, QColor("#3366cc"));
     QTest::mouseClick(child<QPushButton>(row, "color"), Qt::LeftButton);
     EXPECT_EQ(gui::to_qcolor(w.scene().info(id).color).name(), "#3366cc");
-    EXPECT_EQ(undo->undoText(), "change colour of iso 500");
+    EXPECT_EQ(undo->undoText(), "Change colour of iso 500");
     undo->undo();
     EXPECT_EQ(w.scene().info(id).color, colour);
     undo->redo();
@@ -215,12 +217,12 @@ TEST(GuiUndo, SurfaceEditsUndoAndRedo) {
     settle(w);
     EXPECT_EQ(w.scene().info(id).value, 700.0);
     EXPECT_EQ(w.scene().mesh(id).triangles.size(), triangles_at(w.scene(), 700));
-    EXPECT_EQ(undo->undoText(), "change iso value of iso 500");
+    EXPECT_EQ(undo->undoText(), "Change iso value of iso 500");
     const int before_drag = undo->count();
     auto* slider = child<QSlider>(row, "iso_slider");
     drag(slider, {slider->value() + 50, slider->value() + 100, slider->value() + 150});
-    EXPECT_EQ(undo->count(), before_drag + 1);
-    settle(w);
+    settle(w); // the step is the mesh swapped in: when its extraction is done
+    EXPECT_EQ(undo->count(), before_drag + 1) << "the drag's re-extractions make one step";
     const double dragged = w.scene().info(id).value;
     EXPECT_NE(dragged, 700.0);
     undo->undo();
@@ -240,7 +242,7 @@ TEST(GuiUndo, SurfaceEditsUndoAndRedo) {
     child<QDoubleSpinBox>(row, "smoothing")->setValue(0.5);
     settle(w);
     EXPECT_DOUBLE_EQ(w.scene().info(id).post.smooth, 0.5);
-    EXPECT_EQ(undo->undoText(), QString("change smoothing of ") + QString::fromStdString(w.scene().info(id).name));
+    EXPECT_EQ(undo->undoText(), QString("Change smoothing of ") + QString::fromStdString(w.scene().info(id).name));
     child<QCheckBox>(row, "keep_largest")->setChecked(true);
     settle(w);
     EXPECT_TRUE(w.scene().info(id).post.keep_largest);
@@ -262,7 +264,7 @@ TEST(GuiUndo, SurfaceEditsUndoAndRedo) {
     const std::size_t kept_triangles = w.scene().mesh(id).triangles.size();
     QTest::mouseClick(child<QPushButton>(w.surfaces_panel()->row(id), "remove"), Qt::LeftButton);
     EXPECT_FALSE(w.scene().has_surface(id));
-    EXPECT_EQ(undo->undoText(), QString::fromStdString("remove " + kept.name));
+    EXPECT_EQ(undo->undoText(), QString::fromStdString("Remove " + kept.name));
     undo->undo();
     ASSERT_TRUE(w.scene().has_surface(id));
     EXPECT_EQ(w.scene().surfaces().front(), id) << "back in its place";
@@ -290,7 +292,7 @@ TEST(GuiUndo, SurfaceEditsUndoAndRedo) {
         settle(w);
     }
     EXPECT_TRUE(w.scene().surfaces().empty());
-    EXPECT_FALSE(w.modified());
+    EXPECT_FALSE(w.workspace().modified());
 }
 
 TEST(GuiUndo, AskBeforeQuittingOrOpening) {
@@ -308,13 +310,13 @@ TEST(GuiUndo, AskBeforeQuittingOrOpening) {
     ASSERT_TRUE(QTest::qWaitForWindowExposed(&w));
 
     add_through_panel(w, 500);
-    ASSERT_TRUE(w.modified());
+    ASSERT_TRUE(w.workspace().modified());
     // Quit, Cancel: the window and its surface stay.
     EXPECT_FALSE(w.close());
     answer(w, "unsaved", QMessageBox::Cancel);
     EXPECT_TRUE(w.isVisible());
     EXPECT_EQ(w.scene().surfaces().size(), 1u);
-    EXPECT_TRUE(w.modified());
+    EXPECT_TRUE(w.workspace().modified());
 
     // File > Recent files (another file), Cancel: nothing opens.
     QAction* recent = recent_action(w, headsq);
@@ -327,11 +329,11 @@ TEST(GuiUndo, AskBeforeQuittingOrOpening) {
 
     // Open, Save: the session is saved (to the current session file), then the file opens.
     const std::string session = dir / "work.isoscope.json";
-    w.save_session(QString::fromStdString(session));
+    w.files()->save_session(QString::fromStdString(session));
     ASSERT_TRUE(wait_until([&] { return !w.busy(); }, 60000));
-    EXPECT_FALSE(w.modified()) << "saved";
+    EXPECT_FALSE(w.workspace().modified()) << "saved";
     drag(child<QSlider>(w.surfaces_panel()->row(w.scene().surfaces()[0]), "opacity"), {60, 30});
-    ASSERT_TRUE(w.modified());
+    ASSERT_TRUE(w.workspace().modified());
     recent_action(w, headsq)->trigger();
     answer(w, "unsaved", QMessageBox::Save);
     ASSERT_TRUE(wait_until([&] { return !w.busy() && w.scene().surfaces().empty(); }, 60000))
@@ -340,18 +342,18 @@ TEST(GuiUndo, AskBeforeQuittingOrOpening) {
     ASSERT_EQ(saved.surfaces.size(), 1u);
     EXPECT_EQ(saved.surfaces[0].value, 500.0);
     EXPECT_FLOAT_EQ(saved.surfaces[0].opacity, 0.30f) << "the session holds the last edit";
-    EXPECT_FALSE(w.modified());
+    EXPECT_FALSE(w.workspace().modified());
 
     // Open, Discard: the file opens, the surfaces go.
     add_through_panel(w, 1150);
     recent_action(w, headsq)->trigger();
     answer(w, "unsaved", QMessageBox::Discard);
     ASSERT_TRUE(wait_until([&] { return !w.busy() && w.scene().surfaces().empty(); }, 60000));
-    EXPECT_FALSE(w.modified());
+    EXPECT_FALSE(w.workspace().modified());
 
     // Quit, Save: saved to the session file, then the window closes; Discard closes.
     add_through_panel(w, 900);
-    w.save_session(QString::fromStdString(session));
+    w.files()->save_session(QString::fromStdString(session));
     ASSERT_TRUE(wait_until([&] { return !w.busy(); }, 60000));
     child<QCheckBox>(w.surfaces_panel()->row(w.scene().surfaces()[0]), "visible")->setChecked(false);
     w.close();
@@ -378,7 +380,7 @@ TEST(GuiUndoChild, EditAndWaitForTheKill) {
     const std::filesystem::path dir = dir_env;
     const auto app = test::make_app("gui_undo_test", dir / "config");
     gui::MainWindow w;
-    w.set_autosave_interval(200);
+    w.unsaved_work()->set_autosave_interval(200);
     w.show();
     ASSERT_TRUE(QTest::qWaitForWindowExposed(&w));
     open_headsq(w);
@@ -389,22 +391,22 @@ TEST(GuiUndoChild, EditAndWaitForTheKill) {
     drag(child<QSlider>(w.surfaces_panel()->row(ids[1]), "opacity"), {70, 45});
     child<QDoubleSpinBox>(w.surfaces_panel()->row(ids[0]), "iso_value")->setValue(650);
     settle(w);
-    gui::MarkupsState s = w.markups_state();
+    gui::MarkupsState s = w.workspace().markups_state();
     s.markups.push_back(ruler({10, 20, 30}, {40, 50, 60}));
-    w.edit_markups("Add ruler", s);
+    w.context().edit("Add ruler", core::Parts(core::Part::Markups), [&] { w.workspace().set_markups(s); });
     // An autosave that started before the last edit holds less: wait for one with the ruler.
-    const std::string recovery = gui::MainWindow::recovery_path().toStdString();
+    const std::string recovery = gui::UnsavedWork::recovery_path().toStdString();
     ASSERT_TRUE(wait_until(
         [&] {
             try {
-                return w.autosaves() > 0 && core::read_session(recovery).markups.size() == 1;
+                return w.unsaved_work()->autosaves() > 0 && core::read_session(recovery).markups.size() == 1;
             } catch (const std::exception&) {
                 return false;
             }
         },
         30000))
         << "no autosave";
-    core::save_session(w.current_session(), dir / "made.json");
+    core::save_session(w.workspace().session(), dir / "made.json");
     std::ofstream(dir / "ready") << "ready\n";
     wait_until([] { return false; }, 120000); // killed meanwhile
     FAIL() << "not killed";
@@ -435,7 +437,7 @@ TEST(GuiUndo, AutosaveKillAndRestore) {
 
     // Started again: the offer; Restore brings the work back, as unsaved work.
     const auto app = test::make_app("gui_undo_test", dir / "config");
-    ASSERT_EQ(gui::MainWindow::recovery_path().toStdString(), recovery.string());
+    ASSERT_EQ(gui::UnsavedWork::recovery_path().toStdString(), recovery.string());
     gui::MainWindow w;
     w.show();
     ASSERT_TRUE(QTest::qWaitForWindowExposed(&w));
@@ -446,15 +448,15 @@ TEST(GuiUndo, AutosaveKillAndRestore) {
     QTest::mouseClick(box->findChild<QPushButton*>("restore"), Qt::LeftButton);
     ASSERT_TRUE(wait_until([&] { return !w.busy() && !w.scene().surfaces().empty(); }, 60000));
     EXPECT_FALSE(otherwise);
-    const core::Session now = w.current_session();
+    const core::Session now = w.workspace().session();
     expect_same_surfaces(now, made);
     expect_same_markups(now.markups, made.markups);
     ASSERT_EQ(now.surfaces.size(), 2u);
     EXPECT_EQ(now.surfaces[0].value, 650.0);
     EXPECT_FLOAT_EQ(now.surfaces[1].opacity, 0.45f);
     EXPECT_EQ(w.scene().mesh(w.scene().surfaces()[0]).triangles.size(), triangles_at(w.scene(), 650));
-    EXPECT_TRUE(w.modified()) << "restored work is unsaved";
-    EXPECT_TRUE(w.session_path().isEmpty()) << "the recovery file is not the session";
+    EXPECT_TRUE(w.workspace().modified()) << "restored work is unsaved";
+    EXPECT_TRUE(w.workspace().session_path().empty()) << "the recovery file is not the session";
     EXPECT_TRUE(std::filesystem::exists(recovery)) << "kept until saved or quit";
 
     // A clean exit (Discard) removes it; with none, the offer runs `otherwise` at once.

@@ -27,6 +27,7 @@
 #include <glm/geometric.hpp>
 
 #include "app/gui/main_window.hpp"
+#include "app/gui/surfaces_panel.hpp"
 #include "app/gui/series_dialog.hpp"
 #include "app/gui/slice_view.hpp"
 #include "app/gui/view_toolbar.hpp"
@@ -137,7 +138,7 @@ void check_drawn(const gui::MainWindow& w, const gui::SliceView* view, const cha
     for (int r = 3; r < g.height; r += 17)
         for (int c = 5; c < g.width; c += 19) {
             const auto s = sample_volume(v, core::pixel_to_lps(g, {c + 0.5, r + 0.5}));
-            const int want = s ? core::window_grey(s->value, w.window_level()) : 0;
+            const int want = s ? core::window_grey(s->value, w.workspace().window()) : 0;
             // 1 grey level: the image is resliced in float32.
             ASSERT_NEAR(int(img.constScanLine(r)[c]), want, 1) << core::slice_orientation_name(view->orientation())
                                                                << ", " << when << ": pixel (" << c << ", " << r << ")";
@@ -230,7 +231,7 @@ TEST(GuiViews, TwoSeriesFolderShowsTheChooser) {
     EXPECT_EQ(v.dims[1], expected[1].dims[1]);
     EXPECT_EQ(v.dims[2], expected[1].dims[2]);
     EXPECT_EQ(v.meta.series_description, "second: smaller");
-    EXPECT_EQ(w.series().toStdString(), expected[1].uid);
+    EXPECT_EQ(w.workspace().series(), expected[1].uid);
     EXPECT_EQ(v.meta.warnings, expected[1].warnings);
     EXPECT_TRUE(w.slice_view(core::SliceOrientation::Axial)->has_image());
 
@@ -244,7 +245,7 @@ TEST(GuiViews, TwoSeriesFolderShowsTheChooser) {
     EXPECT_EQ(visible_chooser(w), nullptr);
     EXPECT_FALSE(w.busy());
     EXPECT_EQ(&w.scene(), shown);
-    EXPECT_EQ(w.series().toStdString(), expected[1].uid);
+    EXPECT_EQ(w.workspace().series(), expected[1].uid);
 
     // ---- a folder with one series opens directly, as before
     const std::string single = dir / "one";
@@ -255,7 +256,7 @@ TEST(GuiViews, TwoSeriesFolderShowsTheChooser) {
     EXPECT_EQ(visible_chooser(w), nullptr);
     ASSERT_TRUE(w.scene().has_volume());
     EXPECT_EQ(w.scene().volume().dims[2], 8);
-    EXPECT_TRUE(w.series().isEmpty());
+    EXPECT_TRUE(w.workspace().series().empty());
 
     // ---- a slice click on this CT reads out its value in HU (core::value_readout, as the 3D readout does)
     auto* axial = w.slice_view(core::SliceOrientation::Axial);
@@ -334,12 +335,12 @@ TEST(GuiViews, ObliqueVolumeSliceClicksPanZoomAndWindow) {
     // ---- left drag: window (right = wider) and level (up = higher), Slicer's gain; no click
     auto* axial = w.slice_view(core::SliceOrientation::Axial);
     const QString status = w.statusBar()->currentMessage();
-    const core::WindowLevel start = w.window_level();
+    const core::WindowLevel start = w.workspace().window();
     const QPointF from(axial->width() / 2.0, axial->height() / 2.0);
     drag(axial, Qt::LeftButton, from, from + QPointF(60, -25));
     const core::WindowLevel want = core::drag_window(start, {60, 25}, v.value_range());
-    EXPECT_NEAR(w.window_level().width, want.width, 1e-9);
-    EXPECT_NEAR(w.window_level().center, want.center, 1e-9);
+    EXPECT_NEAR(w.workspace().window().width, want.width, 1e-9);
+    EXPECT_NEAR(w.workspace().window().center, want.center, 1e-9);
     EXPECT_NE(want.width, start.width);
     // The tool bar's numbers follow (one decimal shown).
     EXPECT_NEAR(w.findChild<QDoubleSpinBox*>("window_width")->value(), want.width, 0.051);
@@ -367,7 +368,7 @@ TEST(GuiViews, ThreeDViewMouseAndToolBar) {
     ASSERT_TRUE(QTest::qWaitForWindowExposed(&w));
     w.open_path(QString::fromStdString(file));
     ASSERT_TRUE(wait_until([&] { return w.scene().has_volume() && !w.busy(); }, 30000));
-    w.add_surface(500);
+    w.surfaces_panel()->add_surface(500);
     ASSERT_TRUE(wait_until([&] { return !w.busy(); }, 60000));
     gui::Viewer* viewer = w.viewer();
     ASSERT_NE(viewer, nullptr);
@@ -495,7 +496,11 @@ TEST(GuiViews, ThreeDViewMouseAndToolBar) {
     // (the frames compared pixel for pixel; AO is off, so each frame is final)
     bar->reset_action()->trigger();
     const auto id = w.scene().surfaces().front();
-    w.scene().info(id).opacity = 0.3f;
+    {
+        core::SurfaceInfo info = w.scene().info(id);
+        info.opacity = 0.3f;
+        w.workspace().set_surface_info(id, info);
+    }
     ASSERT_TRUE(bar->transparency_action()->isChecked());
     const QImage translucent = viewer->grabFramebuffer();
     bar->transparency_action()->trigger();
@@ -503,7 +508,11 @@ TEST(GuiViews, ThreeDViewMouseAndToolBar) {
     const QImage forced = viewer->grabFramebuffer();
     EXPECT_EQ(w.scene().info(id).opacity, 0.3f) << "the toggle must not edit the surface";
     bar->transparency_action()->trigger();
-    w.scene().info(id).opacity = 1.0f;
+    {
+        core::SurfaceInfo info = w.scene().info(id);
+        info.opacity = 1.0f;
+        w.workspace().set_surface_info(id, info);
+    }
     const QImage opaque = viewer->grabFramebuffer();
     ASSERT_EQ(forced.size(), opaque.size());
     long differ_opaque = 0, differ_translucent = 0;

@@ -20,6 +20,7 @@
 #include <functional>
 
 #include "app/gui/main_window.hpp"
+#include "app/gui/surfaces_panel.hpp"
 #include "app/gui/slice_view.hpp"
 #include "app/gui/viewer.hpp"
 #include "renderer/core/scene.hpp"
@@ -124,17 +125,17 @@ TEST(MainWindow, OpenSlicesClickSurfaceAndBrokenFile) {
     EXPECT_NEAR(axial->grid().offset_mm, before + core::default_plane(v, core::SliceOrientation::Axial).step_mm, 1e-6);
 
     // ---- window presets set the numbers
-    w.set_window_level(*core::ct_window_preset("bone"));
-    EXPECT_EQ(w.window_level().center, core::ct_window_preset("bone")->center);
+    w.workspace().set_window(*core::ct_window_preset("bone"));
+    EXPECT_EQ(w.workspace().window().center, core::ct_window_preset("bone")->center);
 
     // ---- add the skin surface (iso 500 on this CT) in the background
-    w.add_surface(500);
+    w.surfaces_panel()->add_surface(500);
     ASSERT_TRUE(wait_until([&] { return !w.busy(); }, 120000)) << "the extraction did not finish";
     const auto ids = w.scene().surfaces();
     ASSERT_EQ(ids.size(), 1u) << w.statusBar()->currentMessage().toStdString();
     EXPECT_EQ(w.scene().info(ids[0]).value, 500.0);
     EXPECT_GT(w.scene().mesh(ids[0]).triangles.size(), 10000u);
-    w.set_window_level(core::default_window(v));
+    w.workspace().set_window(core::default_window(v));
     for (auto o : {core::SliceOrientation::Axial, core::SliceOrientation::Coronal, core::SliceOrientation::Sagittal})
         EXPECT_GT(w.slice_view(o)->outline_segments(), 50u) << core::slice_orientation_name(o) << ": no skin outline";
     ASSERT_NE(w.viewer(), nullptr);
