@@ -14,6 +14,7 @@
 #include "app/cli/frame_options.hpp"
 #include "app/gui/main_window.hpp"
 #include "app/gui/viewer.hpp"
+#include "renderer/core/workspace.hpp"
 
 namespace iso::cli {
 
@@ -52,14 +53,17 @@ int run_view(ViewArgs a, char* argv0) {
     a.opt.look.ao = iso::ao_method_from_name(a.ao);
     apply_volume_options(a.volume, a.volume_mode, a.opt.look.volume);
     iso::validate(a.opt.look); // before the long part
-    iso::core::Scene scene;
-    open_input(scene, a.in, a.series, a.isos, a.look, "view", a.opt.look.volume.enabled);
+    auto scene = std::make_unique<iso::core::Scene>();
+    open_input(*scene, a.in, a.series, a.isos, a.look, "view", a.opt.look.volume.enabled);
+    // The view draws a workspace (its camera and picture key are the workspace's).
+    iso::core::Workspace workspace(a.opt.look);
+    workspace.reset(std::move(scene), a.in, a.series);
     use_gl45_surfaces();
     int qargc = 1;
     char* qargv[] = {argv0, nullptr};
     QApplication qapp(qargc, qargv);
     set_app_identity();
-    iso::gui::Viewer w(scene, initial, a.opt);
+    iso::gui::Viewer w(workspace, initial, a.opt);
     w.setWindowTitle(QString::fromStdString("isoscope - " + a.in));
     w.resize(800, 600);
     w.show();

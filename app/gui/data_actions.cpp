@@ -9,7 +9,7 @@ namespace iso::gui {
 
 namespace {
 // What each action or control needs, by object name; the File menu's
-// session entries (session_io.cpp) are found by their text and named here.
+// session entries (files.cpp, exports.cpp) are found by their text and named here.
 enum class Needs { Data, Volume, Surface, Markup };
 struct Entry {
     const char* name;

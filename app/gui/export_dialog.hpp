@@ -1,6 +1,6 @@
 // File > Export image and File > Save surfaces (docs/gui.md, "Export"):
 // dialogs that only collect the user's choices. What they choose is done by
-// MainWindow::export_image / save_surface through the core
+// Files::export_image / save_surface (files.hpp) through the core
 // (core::session_request, core::render_image, core::export_image,
 // core::Scene::export_mesh).
 #pragma once

@@ -2,8 +2,10 @@
 // work"): work on a worker thread with a progress dialog (after 300 ms)
 // whose Cancel reaches the work through its ProgressFn, and a result
 // handed to the GUI thread. Loading, extraction, isolation, distances,
-// saving and exports all run through it; autosave and still frames use it
-// without a dialog (quiet jobs). At most one job with a dialog at a time:
+// saving and exports all run through it; autosave uses it without a dialog
+// (a quiet job). (The 3D view's still frames have a thread of their own with
+// its GL context, still_frames.hpp; a surface row's re-extractions, the
+// latest value winning, run on threads of the Surfaces panel.) At most one job with a dialog at a time:
 // busy() says whether one runs, and the window's edits wait for it.
 #pragma once
 

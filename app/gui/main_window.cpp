@@ -13,6 +13,7 @@
 #include <QTableWidget>
 #include <QVBoxLayout>
 
+#include "app/gui/crop_box.hpp"
 #include "app/gui/data_actions.hpp"
 #include "app/gui/files.hpp"
 #include "app/gui/help_menu.hpp"
@@ -71,7 +72,11 @@ MainWindow::MainWindow(QWidget* parent) : QMainWindow(parent) {
     // The tools take the views' clicks: each new 3D view, and the slice views now.
     view3d_->viewer_made.push_back([this](Viewer& v) { measure_->attach(v); });
     measure_->other_tool_click = [this](Viewer& v, QPointF p) { structures_->viewer_click(v, p); };
-    for (SliceView* v : context_->slices) measure_->attach(*v);
+    crop_ = new CropBoxOnSlices(*context_);
+    for (SliceView* v : context_->slices) {
+        measure_->attach(*v); // a markup point first, then the crop box's sides
+        crop_->attach(*v);
+    }
     observer_ = workspace_->observe([this](core::Parts p) { watched(p); });
     watched(core::Parts(core::Part::Data));
 }

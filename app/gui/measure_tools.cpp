@@ -2,6 +2,7 @@
 
 #include <QAction>
 #include <QActionGroup>
+#include <QFontMetricsF>
 #include <QKeySequence>
 #include <QLabel>
 #include <QMainWindow>
@@ -63,7 +64,17 @@ void draw_segment(QPainter& p, QPointF a, QPointF b, const QColor& c) {
     p.drawLine(a, b);
 }
 
-void draw_text(QPainter& p, QPointF at, const QString& text, const QColor& c) {
+// A label at `at` (its baseline's left end), kept inside the view: one that
+// would run past the right edge goes to the left of its point (`anchor`)
+// instead, and one past the top or bottom edge moves in (labels near the
+// edge used to be cut off).
+void draw_text(QPainter& p, QPointF at, const QString& text, const QColor& c, QPointF anchor) {
+    const QRectF view = p.viewport();
+    const QFontMetricsF fm(p.font());
+    const double w = fm.horizontalAdvance(text);
+    if (at.x() + w > view.right() - 2) at.setX(std::max(view.left() + 2, 2 * anchor.x() - at.x() - w));
+    at.setX(std::max(at.x(), view.left() + 2));
+    at.setY(std::clamp(at.y(), view.top() + fm.ascent() + 2, view.bottom() - fm.descent() - 2));
     p.setPen(QColor(0, 0, 0, 220));
     p.drawText(at + QPointF(1, 1), text);
     p.setPen(c);
@@ -178,10 +189,10 @@ void MeasureTools::attach(SliceView& view) {
         context_.status(slice_readout(context_.workspace.scene().volume(), v.grid(), p));
         context_.workspace.set_crosshair(core::pixel_to_lps(v.grid(), {p.x(), p.y()}));
     };
-    view.on_paint_overlay = [this](SliceView& v, QPainter& p) { paint_slice(v, p); };
-    view.on_press = [this](SliceView& v, QPointF p) { return slice_press(v, p); };
-    view.on_grab_move = [this](SliceView& v, QPointF p) { slice_grab_move(v, p); };
-    view.on_grab_release = [this](SliceView& v, QPointF p, bool dragged) { slice_grab_release(v, p, dragged); };
+    view.add_overlay([this](SliceView& v, QPainter& p) { paint_slice(v, p); });
+    view.add_grabber({[this](SliceView& v, QPointF p) { return slice_press(v, p); },
+                      [this](SliceView& v, QPointF p) { slice_grab_move(v, p); },
+                      [this](SliceView& v, QPointF p, bool dragged) { slice_grab_release(v, p, dragged); }});
 }
 
 void MeasureTools::reset() {
@@ -304,17 +315,19 @@ void paint_markup(QPainter& p, const Markup& m, const std::function<std::pair<QP
         if (!near || !m.points[i].visible) continue;
         const QColor pc = srgb(markup_color(m, int(i)));
         draw_cross(p, at, pc);
-        if (m.type == MarkupType::Fiducial && !m.points[i].label.empty())
-            draw_text(p, at + QPointF(9, 4), QString::fromStdString(m.points[i].label), pc);
+        // A point list's point: its label, else the list's name (as exports label it: markup_label_text).
+        if (const std::string label = m.type == MarkupType::Fiducial ? markup_label_text(m, int(i)) : std::string();
+            !label.empty())
+            draw_text(p, at + QPointF(9, 4), QString::fromStdString(label), pc, at);
     }
     // The name below-right of the first point (a point list's points carry their own labels).
     if (m.type != MarkupType::Fiducial && !m.name.empty() && !pts.empty() && pts[0].second)
-        draw_text(p, pts[0].first + QPointF(9, 16), QString::fromStdString(m.name), c);
+        draw_text(p, pts[0].first + QPointF(9, 16), QString::fromStdString(m.name), c, pts[0].first);
     // The value where the whole measurement lies on this slice.
     const std::string value = markup_measurement_text(m);
     if (all_near && all_defined && !value.empty()) {
         const QPointF at = m.type == MarkupType::Line ? (pts[0].first + pts[1].first) / 2.0 : pts[1].first;
-        draw_text(p, at + QPointF(8, -8), QString::fromStdString(value), c);
+        draw_text(p, at + QPointF(8, -8), QString::fromStdString(value), c, at);
     }
 }
 

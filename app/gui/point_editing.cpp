@@ -135,8 +135,9 @@ void MeasureTools::viewer_grab_release(Viewer& v, QPointF pixel, bool dragged) {
         grab_.reset();
         return;
     }
-    // Where the pointer was let go, exactly (the throttled steps may lag behind).
-    if (const auto lps = pick_and_show(v, pixel, false)) move_grabbed(*lps);
+    // Where the pointer was let go, exactly (the throttled steps may lag behind);
+    // a readout, not a click: the last click's field keeps what was clicked.
+    if (const auto lps = pick_and_show(v, pixel, true)) move_grabbed(*lps);
     commit_grab();
 }
 

@@ -3,7 +3,7 @@
 // one step is what core::scroll_slices moves), the slice's number and
 // offset in mm, and a Fit button (SliceView::fit). The slider follows the
 // plane whatever moved it (wheel, PageUp/PageDown, the crosshair), and
-// moving it scrolls through the view's on_scroll as the wheel does.
+// moving it scrolls the view (SliceView::scroll) as the wheel does.
 #pragma once
 
 #include <QWidget>

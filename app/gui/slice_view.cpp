@@ -194,7 +194,7 @@ void SliceView::paintEvent(QPaintEvent*) {
     p.setPen(Qt::yellow);
     p.drawText(QPointF(6, 16),
                QString("%1  %2 mm").arg(core::slice_orientation_name(orientation_)).arg(plane.offset_mm(), 0, 'f', 1));
-    if (on_paint_overlay) on_paint_overlay(*this, p);
+    for (const auto& paint : overlays_) paint(*this, p);
     paint_annotations(p);
 }
 
@@ -255,8 +255,13 @@ void SliceView::mousePressEvent(QMouseEvent* e) {
     swallow_release_ = false;
     drag_.start(e->position());
     window_at_press_ = window_;
-    grabbing_ = e->button() == Qt::LeftButton && e->buttons() == Qt::LeftButton && !image_.isNull() && on_press &&
-                on_press(*this, e->position());
+    grabbing_ = nullptr;
+    if (e->button() == Qt::LeftButton && e->buttons() == Qt::LeftButton && !image_.isNull())
+        for (const auto& g : grabbers_)
+            if (g.press && g.press(*this, e->position())) {
+                grabbing_ = &g;
+                break;
+            }
 }
 
 void SliceView::mouseReleaseEvent(QMouseEvent* e) {
@@ -265,8 +270,8 @@ void SliceView::mouseReleaseEvent(QMouseEvent* e) {
         return;
     }
     if (grabbing_ && e->button() == Qt::LeftButton) {
-        grabbing_ = false;
-        if (on_grab_release) on_grab_release(*this, e->position(), drag_.dragged);
+        const Grabber* g = std::exchange(grabbing_, nullptr);
+        if (g->release) g->release(*this, e->position(), drag_.dragged);
     }
     if (e->button() == Qt::LeftButton && !drag_.dragged && on_click && !image_.isNull()) on_click(*this, e->position());
 }
@@ -295,8 +300,8 @@ void SliceView::mouseMoveEvent(QMouseEvent* e) {
     if (image_.isNull() || !plane) return;
     if (!drag_.follow(e->position())) return;
     const QPointF d = drag_.step(e->position());
-    if (grabbing_) { // a markup point follows the pointer; the window stays
-        if (on_grab_move) on_grab_move(*this, e->position());
+    if (grabbing_) { // what was grabbed follows the pointer; the window stays
+        if (grabbing_->move) grabbing_->move(*this, e->position());
         return;
     }
     if (e->buttons() & Qt::LeftButton) {

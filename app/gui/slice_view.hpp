@@ -79,16 +79,21 @@ public:
     // A left click (press and release within a few pixels, no drag) at
     // continuous pixel coordinates.
     std::function<void(SliceView&, QPointF)> on_click;
-    // A left press: true when the handler takes it (a markup point grabbed).
-    // Then the moves until the release go to on_grab_move (no window drag)
-    // and the release to on_grab_release (`dragged`: beyond the click slop;
-    // a release without a drag is also a click).
-    std::function<bool(SliceView&, QPointF)> on_press;
-    std::function<void(SliceView&, QPointF)> on_grab_move;
-    std::function<void(SliceView&, QPointF, bool dragged)> on_grab_release;
-    // Draws over the slice after the outlines and the crosshair (the
-    // measurements); the painter's coordinates are the grid's pixels.
-    std::function<void(SliceView&, QPainter&)> on_paint_overlay;
+    // What a left press may grab (a markup point, a crop box edge): `press`
+    // returns true when it takes the press; then the moves until the
+    // release go to its `move` (no window drag) and the release to its
+    // `release` (`dragged`: beyond the click slop; a release without a drag
+    // is also a click). Asked in the order added.
+    struct Grabber {
+        std::function<bool(SliceView&, QPointF)> press;
+        std::function<void(SliceView&, QPointF)> move;
+        std::function<void(SliceView&, QPointF, bool dragged)> release;
+    };
+    void add_grabber(Grabber g) { grabbers_.push_back(std::move(g)); }
+    // Drawn over the slice after the outlines and the crosshair (the
+    // measurements, the crop box), in the order added; the painter's
+    // coordinates are the grid's pixels.
+    void add_overlay(std::function<void(SliceView&, QPainter&)> paint) { overlays_.push_back(std::move(paint)); }
     // After each refresh (the plane may have moved: a slider follows).
     std::function<void(SliceView&)> on_refresh;
 
@@ -127,7 +132,9 @@ private:
     // A drag (3D Slicer's slice view): left window/level, middle pan, right
     // zoom (core::pan_pixels, core::zoom_about on the plane's framing).
     PointerDrag drag_;
-    bool grabbing_ = false; // on_press took the press
+    std::vector<Grabber> grabbers_;
+    std::vector<std::function<void(SliceView&, QPainter&)>> overlays_;
+    const Grabber* grabbing_ = nullptr; // the grabber that took the press
     core::WindowLevel window_at_press_;
     std::optional<ValueRange> range_; // the volume's, for the window drag's gain (computed once per content)
     std::optional<QPointF> hover_;    // the pointer over the view, no button held

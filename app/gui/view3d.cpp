@@ -73,10 +73,9 @@ void View3D::show_or_hint() {
         ViewerOptions o;
         o.look = w.look();
         o.look.volume.enabled = volume_shown;
-        viewer_ = new Viewer(context_.workspace.scene(), PatientView::Anterior, o);
+        viewer_ = new Viewer(context_.workspace, PatientView::Anterior, o);
         viewer_->setObjectName("viewer");
         if (w.camera()) viewer_->set_camera(*w.camera());
-        viewer_->on_camera_moved = [this](const Camera& c) { context_.workspace.set_camera(c); };
         viewer_->on_options_changed = [this](Viewer& v) { // the O key: AO on or off
             FrameLook look = context_.workspace.look();
             look.ao = v.options().look.ao;

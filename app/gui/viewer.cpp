@@ -18,13 +18,14 @@
 #include "renderer/core/legend.hpp"
 #include "renderer/core/pick.hpp"
 #include "renderer/core/scene.hpp"
+#include "renderer/core/workspace.hpp"
 #include "renderer/core/slices.hpp"
 #include "renderer/frame/annotations.hpp"
 
 namespace iso::gui {
 
-Viewer::Viewer(core::Scene& scene, PatientView view, ViewerOptions options, QWidget* parent)
-    : QOpenGLWidget(parent), scene_(scene), initial_view_(view), options_(options),
+Viewer::Viewer(core::Workspace& workspace, PatientView view, ViewerOptions options, QWidget* parent)
+    : QOpenGLWidget(parent), workspace_(workspace), scene_(workspace.scene()), initial_view_(view), options_(options),
       annotations_(std::make_unique<Annotations>()) {
     setFocusPolicy(Qt::StrongFocus);
     setMinimumSize(320, 240);
@@ -66,7 +67,7 @@ void Viewer::initializeGL() {
     const bool framed = !camera_set_;
     if (!camera_set_) camera_ = scene_.camera(initial_view_, aspect(), options_.look);
     framed_empty_ = !camera_set_ && scene_.bounds(options_.look).empty();
-    if (framed && on_camera_moved) on_camera_moved(camera_);
+    if (framed) camera_moved();
 }
 
 void Viewer::paintGL() {
@@ -160,8 +161,13 @@ void Viewer::take_batch(const RaytracedBatch& b) {
     if (!refiner_ || b.job != refiner_->job() || refiner_->current_key().empty()) return; // stale
     raytraced_ = b.image;
     raytraced_stats_ = b.stats;
+    ++raytraced_version_;
     update();
 }
+
+// The camera moved: the workspace keeps it (sessions, exports), and its
+// picture key changes with it.
+void Viewer::camera_moved() { workspace_.set_camera(camera_); }
 
 // The camera framed for what is visible now (see initializeGL): the
 // visible surfaces and the volume when it is ray cast (Scene::bounds(look)),
@@ -175,7 +181,7 @@ void Viewer::frame_camera() {
         else
             camera_ = scene_.camera(initial_view_, aspect(), options_.look);
         framed_empty_ = false;
-        if (on_camera_moved) on_camera_moved(camera_);
+        camera_moved();
     }
     camera_.fit_planes(shown);
 }
@@ -215,33 +221,18 @@ void Viewer::draw() {
     draw_here(opt, false);
 }
 
-// What a frame shows apart from its jitter: the camera, the image, the
-// surfaces (mesh versions, colours, names), the overlay and the AO image;
-// the look is compared on its own.
-std::vector<double> Viewer::frame_key(const RenderOptions& opt, const core::SceneSnapshot& scene) const {
-    const Camera& c = camera_;
-    std::vector<double> k{c.eye.x,
-                          c.eye.y,
-                          c.eye.z,
-                          c.target.x,
-                          c.target.y,
-                          c.target.z,
-                          c.up.x,
-                          c.up.y,
-                          c.up.z,
-                          c.fov_y_degrees,
-                          c.near_plane,
-                          c.far_plane,
-                          double(opt.width),
-                          double(opt.height),
-                          double(opt.scale),
-                          double(opt.accumulate),
-                          double(annotations_version_),
-                          double(reinterpret_cast<std::uintptr_t>(opt.ao_image))};
-    for (const auto& s : scene.surfaces)
-        k.insert(k.end(), {double(s.version), double(std::hash<std::string>{}(s.object.name) >> 11), s.object.color.r,
-                           s.object.color.g, s.object.color.b, s.object.opacity, double(s.object.visible)});
-    return k;
+// What a frame shows apart from its jitter and its look (compared on its
+// own): the workspace's picture key (its surfaces, camera, look, markups,
+// ... : every change the picture depends on notifies it), the image, the
+// overlay drawn on top and the ray-traced AO batch lighting it.
+std::vector<double> Viewer::frame_key(const RenderOptions& opt) const {
+    return {double(workspace_.picture_key()),
+            double(opt.width),
+            double(opt.height),
+            double(opt.scale),
+            double(opt.accumulate),
+            double(annotations_version_),
+            double(opt.ao_image ? raytraced_version_ : 0)};
 }
 
 bool Viewer::use_still_thread() {
@@ -257,12 +248,11 @@ bool Viewer::use_still_thread() {
 // for; its latest frame for this view is blitted (true). False: none yet,
 // the caller shows a plain frame meanwhile.
 bool Viewer::show_still(const RenderOptions& opt) {
-    core::SceneSnapshot scene = scene_.snapshot();
-    std::vector<double> key = frame_key(opt, scene);
+    std::vector<double> key = frame_key(opt);
     if (key != still_key_ || !(opt.look == still_look_)) {
         StillRequest r;
         r.id = ++still_id_;
-        r.scene = std::move(scene);
+        r.scene = scene_.snapshot();
         r.camera = camera_;
         r.opt = opt;
         r.annotations = std::make_shared<const Annotations>(*annotations_);
@@ -310,7 +300,7 @@ void Viewer::take_still(const StillFrame& f) {
 // frame standing in for the thread's (`stand_in`), or every still frame
 // without the thread. A plain frame already on screen is not drawn again.
 void Viewer::draw_here(const RenderOptions& opt, bool stand_in) {
-    std::vector<double> key = frame_key(opt, scene_.snapshot());
+    std::vector<double> key = frame_key(opt);
     if (stand_in && key == shown_key_ && opt.look == shown_look_) return;
     auto r = scene_.render(camera_, opt);
     shown_key_ = std::move(key);
@@ -373,7 +363,7 @@ void Viewer::set_camera(const Camera& c) {
     camera_set_ = true;
     framed_empty_ = false;
     update();
-    if (moved && on_camera_moved) on_camera_moved(camera_);
+    if (moved) camera_moved();
 }
 
 void Viewer::set_view(PatientView v) { set_camera(scene_.camera(v, aspect(), options_.look)); }
@@ -486,13 +476,13 @@ void Viewer::mouseMoveEvent(QMouseEvent* e) {
     else if (e->buttons() & Qt::RightButton)
         camera_.zoom(core::drag_zoom_factor(-double(d.y()), height()));
     update();
-    if (on_camera_moved) on_camera_moved(camera_);
+    camera_moved();
 }
 
 void Viewer::wheelEvent(QWheelEvent* e) {
     camera_.zoom(std::pow(1.0015, e->angleDelta().y()));
     update();
-    if (on_camera_moved) on_camera_moved(camera_);
+    camera_moved();
 }
 
 void Viewer::keyPressEvent(QKeyEvent* e) {

@@ -26,6 +26,7 @@ namespace iso {
 struct RenderOptions;
 namespace core {
 class Scene;
+class Workspace;
 struct PickResult;
 struct SceneSnapshot;
 } // namespace core
@@ -75,8 +76,11 @@ struct ViewerOptions {
 
 class Viewer : public QOpenGLWidget {
 public:
-    // The scene must outlive the widget.
-    explicit Viewer(core::Scene& scene, PatientView view, ViewerOptions options = {}, QWidget* parent = nullptr);
+    // The 3D view of the workspace's scene (the workspace, and that scene,
+    // must outlive the widget). The camera it draws with is the workspace's:
+    // each move of its own goes there.
+    explicit Viewer(core::Workspace& workspace, PatientView view, ViewerOptions options = {},
+                    QWidget* parent = nullptr);
     ~Viewer() override;
     int frames() const { return frames_; }
     // True once the picture stopped changing: no cone AO, or its still
@@ -141,9 +145,6 @@ public:
     std::function<void(Viewer&, QPointF, bool dragged)> on_grab_release;
     // The view changed its own options (the O key toggled AO), so a tool bar can follow.
     std::function<void(Viewer&)> on_options_changed;
-    // The camera moved (a drag, the wheel, a view key or button, set_camera),
-    // or the view framed what it shows: a workspace keeps it.
-    std::function<void(const Camera&)> on_camera_moved;
     // The size of the image the view draws (device pixels).
     QSize image_size() const;
 
@@ -177,7 +178,8 @@ protected:
     void frame_camera();
     void draw_here(const RenderOptions& opt, bool stand_in);
     bool show_still(const RenderOptions& opt);
-    std::vector<double> frame_key(const RenderOptions& opt, const core::SceneSnapshot& scene) const;
+    std::vector<double> frame_key(const RenderOptions& opt) const;
+    void camera_moved();
     RenderOptions frame_options() const;
     void mousePressEvent(QMouseEvent* e) override;
     void mouseMoveEvent(QMouseEvent* e) override;
@@ -187,7 +189,8 @@ protected:
     bool eventFilter(QObject* watched, QEvent* e) override;
 
 private:
-    core::Scene& scene_;
+    core::Workspace& workspace_;
+    core::Scene& scene_; // the workspace's (a new scene: a new viewer)
     PatientView initial_view_;
     ViewerOptions options_;
     std::string error_;
@@ -212,6 +215,7 @@ private:
     std::shared_ptr<const Image> raytraced_;
     ProgressiveAoStats raytraced_stats_;
     bool raytraced_drawn_ = false;         // the last frame was lit with raytraced_
+    std::uint64_t raytraced_version_ = 0;  // batches taken so far
     AoMethod ao_when_on_ = AoMethod::Cone; // what the O key turns AO back on with
     void follow_raytraced();
     void take_batch(const RaytracedBatch& b);

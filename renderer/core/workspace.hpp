@@ -14,7 +14,7 @@
 // Edits: `record(text, parts, change)` runs `change` (any sequence of the
 // setters below) and returns a WorkspaceEdit, the state of the parts before
 // and after; `restore(edit.before, edit.parts)` undoes it. The desktop app
-// keeps them on its one QUndoStack (app/gui/workspace_command.hpp); a
+// keeps them on its one QUndoStack (app/gui/app_context.hpp, WorkspaceCommand); a
 // display-free caller keeps them in an EditHistory (below). One command
 // type, written once: no edit knows how to undo itself.
 #pragma once

@@ -36,6 +36,7 @@
 #include <cstdio>
 #include <fstream>
 #include <functional>
+#include <memory>
 #include <random>
 #include <string>
 #include <vector>
@@ -121,12 +122,11 @@ bool trial(gui::MainWindow& w, Way& way, QPushButton& button, std::mt19937& rng)
     if (!wait_until([&] { return !v.dragging() && v.ao_frames() > 0; }, 120000)) return false;
     way.first_still.push_back(now_ms() - released);
     // The user goes on working while the still frames accumulate.
-    double painted = 0;
-    const auto overlay = axial.on_paint_overlay;
-    axial.on_paint_overlay = [&](gui::SliceView& s, QPainter& p) {
-        if (overlay) overlay(s, p);
-        painted = now_ms();
-    };
+    // The time the axial view last painted (an overlay of the bench's own,
+    // after the window's; it outlives this run, so it keeps a shared cell).
+    auto painted_at = std::make_shared<double>(0.0);
+    axial.add_overlay([painted_at](gui::SliceView&, QPainter&) { *painted_at = now_ms(); });
+    double& painted = *painted_at;
     double clicked = 0;
     const auto c = QObject::connect(&button, &QPushButton::clicked, [&] { clicked = now_ms(); });
     std::uniform_int_distribution<int> gap(200, 400);
@@ -154,7 +154,6 @@ bool trial(gui::MainWindow& w, Way& way, QPushButton& button, std::mt19937& rng)
         way.inputs_during_accumulation += accumulating ? 1 : 0;
     }
     QObject::disconnect(c);
-    axial.on_paint_overlay = overlay;
     if (!wait_until([&] { return v.converged(); }, 300000)) return false;
     way.converged.push_back(now_ms() - released);
     way.stall.insert(way.stall.end(), probe.late.begin(), probe.late.end());

@@ -182,3 +182,50 @@ TEST_F(GuiMenus, EveryControlHasATooltip) {
     EXPECT_GT(checked, 20);
     for (const auto& m : missing) ADD_FAILURE() << "no tooltip: " << m;
 }
+
+// At the window's default size (1280 x 900) no tool is hidden in a tool
+// bar's overflow (the Distance tool was); Edit > Delete all measurements is
+// enabled only with a measurement; the title names the session once there
+// is one, else the data, with "*" while there is unsaved work.
+TEST(GuiMenusDefault, ToolsShowDeleteAllFollowsTheMeasurementsTitleNamesTheSession) {
+    ISO_SKIP_WITHOUT_DISPLAY();
+    TempDir dir;
+    const auto app = make_app("gui_menus_default", dir / "config");
+    gui::MainWindow w;
+    w.show();
+    ASSERT_TRUE(QTest::qWaitForWindowExposed(&w));
+    ASSERT_EQ(w.size(), QSize(1280, 900));
+    for (QToolBar* bar : w.findChildren<QToolBar*>())
+        for (QAction* a : bar->actions()) {
+            if (a->isSeparator() || !a->isVisible()) continue;
+            QWidget* button = bar->widgetForAction(a);
+            ASSERT_NE(button, nullptr) << a->text().toStdString();
+            EXPECT_TRUE(button->isVisible()) << bar->objectName().toStdString() << ": " << a->text().toStdString()
+                                             << " is in the tool bar's overflow";
+        }
+    auto* clear = w.findChild<QAction*>("clear_measurements");
+    ASSERT_NE(clear, nullptr);
+    EXPECT_FALSE(clear->isEnabled()) << "nothing open";
+    EXPECT_EQ(w.windowTitle(), "isoscope[*]");
+    w.open_path(QString::fromStdString(headsq()));
+    ASSERT_TRUE(wait_until([&] { return !w.busy(); }, 60000));
+    EXPECT_FALSE(clear->isEnabled()) << "a volume, no measurement";
+    EXPECT_TRUE(clear->toolTip().contains("No measurement")) << clear->toolTip().toStdString();
+    EXPECT_EQ(w.windowTitle(), "isoscope - headsq.nhdr[*]");
+    Markup m;
+    m.type = MarkupType::Fiducial;
+    m.name = "AVM nidus";
+    m.points.resize(1);
+    w.context().edit("Add AVM nidus", core::Parts(core::Part::Markups), [&] { w.workspace().set_markups({{m}, {}}); });
+    EXPECT_TRUE(clear->isEnabled());
+    EXPECT_TRUE(w.isWindowModified());
+    const std::string session = dir / "day one.isoscope.json";
+    w.files()->save_session(QString::fromStdString(session));
+    ASSERT_TRUE(wait_until([&] { return !w.busy(); }, 60000));
+    EXPECT_EQ(w.windowTitle(), "isoscope - day one.isoscope.json[*]");
+    EXPECT_FALSE(w.isWindowModified());
+    clear->trigger();
+    EXPECT_TRUE(w.workspace().markups().empty());
+    EXPECT_FALSE(clear->isEnabled());
+    EXPECT_TRUE(w.isWindowModified());
+}

@@ -14,6 +14,7 @@
 #include "gui_test_util.hpp"
 #include "renderer/core/raytraced_ao.hpp"
 #include "renderer/core/scene.hpp"
+#include "renderer/core/workspace.hpp"
 
 using namespace iso;
 
@@ -30,13 +31,15 @@ TEST(GuiRaytraced, StillFramesRefineToTheCoresRayTracedAoWhileEventsFlow) {
     ISO_SKIP_WITHOUT_DISPLAY();
     test::TempDir dir;
     const auto app = test::make_app("gui_raytraced_test", dir / "config");
-    core::Scene scene;
-    open_skin(scene);
+    auto skin = std::make_unique<core::Scene>();
+    open_skin(*skin);
+    core::Workspace workspace;
+    workspace.reset(std::move(skin), test::data("headsq.nhdr"), "");
     gui::ViewerOptions o;
     o.look.ao = AoMethod::Raytraced;
     o.look.ao_error = 0.01; // tighter than the view's 0.02: the refinement lasts long enough to time events
     o.look.ao_rays = 1024;
-    gui::Viewer view(scene, PatientView::Left, o);
+    gui::Viewer view(workspace, PatientView::Left, o);
     view.resize(320, 240);
     view.show();
     // How late a timer due every 20 ms runs while the view refines: what a

@@ -11,6 +11,7 @@
 #include <QComboBox>
 #include <QDoubleSpinBox>
 #include <QLabel>
+#include <QMouseEvent>
 #include <QStatusBar>
 #include <QTest>
 #include <QUndoStack>
@@ -20,6 +21,7 @@
 #include <cstdio>
 #include <thread>
 
+#include "app/gui/slice_view.hpp"
 #include "app/gui/tf_editor.hpp"
 #include "app/gui/viewer.hpp"
 #include "app/gui/volume_panel.hpp"
@@ -27,6 +29,7 @@
 #include "renderer/core/pick.hpp"
 #include "renderer/core/scene.hpp"
 #include "renderer/core/session.hpp"
+#include "renderer/core/slices.hpp"
 
 using namespace iso;
 using namespace iso::test;
@@ -65,6 +68,21 @@ QImage core_picture(const FrameLook& look, const Camera& camera, QSize size, std
                   .convertToFormat(QImage::Format_RGB32);
     });
     return out;
+}
+
+// A left drag delivered straight to the widget, the event loop running between steps.
+void drag_widget(QWidget* w, QPoint from, QPoint to, int steps = 5) {
+    const auto send = [&](QEvent::Type type, QPoint at, Qt::MouseButtons held) {
+        const Qt::MouseButton button = type == QEvent::MouseMove ? Qt::NoButton : Qt::LeftButton;
+        QMouseEvent e(type, QPointF(at), w->mapToGlobal(QPointF(at)), button, held, Qt::NoModifier);
+        QCoreApplication::sendEvent(w, &e);
+    };
+    send(QEvent::MouseButtonPress, from, Qt::LeftButton);
+    for (int k = 1; k <= steps; ++k) {
+        send(QEvent::MouseMove, from + (to - from) * k / steps, Qt::LeftButton);
+        QTest::qWait(20);
+    }
+    send(QEvent::MouseButtonRelease, to, Qt::NoButton);
 }
 
 struct Box {
@@ -408,4 +426,59 @@ TEST_F(GuiVolume, ClickOnTheVolumeIsTheCorePick) {
     ASSERT_TRUE(here.visible.has_value());
     EXPECT_TRUE(here.layers[*here.visible].volume);
     EXPECT_LT(glm::length(here.layers[*here.visible].lps - layer.lps), 1e-6);
+}
+
+// While cropping, each slice view draws the box's section with its plane
+// (where the core's plane_box_section puts it), and dragging a side moves
+// that face of the box to the point under the pointer (core::pixel_to_lps),
+// never past the opposite face; the release is one undo step.
+TEST_F(GuiVolume, TheCropBoxIsDrawnAndDraggedOnTheSliceViews) {
+    gui::MainWindow& w = window();
+    const Bounds vb = w.scene().volume_bounds();
+    QTest::mouseClick(panel_->findChild<QCheckBox*>("volume_crop"), Qt::LeftButton, {}, QPoint(8, 8));
+    const double mid_l = 0.5 * (vb.min.x + vb.max.x);
+    panel_->findChild<QDoubleSpinBox*>("crop_l_min")->setValue(mid_l);
+    ASSERT_TRUE(w.workspace().look().clip.box);
+    const auto box = *w.workspace().look().clip.box;
+    auto* axial = w.slice_view(core::SliceOrientation::Axial);
+    QTest::qWait(50);
+    const core::SliceGrid g = axial->grid();
+    // The core's section: the side on the L-min face (both ends at L = mid_l).
+    std::array<glm::dvec3, 8> c{};
+    for (int i = 0; i < 8; ++i)
+        c[std::size_t(i)] = {i & 1 ? box.second.x : box.first.x, i & 2 ? box.second.y : box.first.y,
+                             i & 4 ? box.second.z : box.first.z};
+    const auto poly = core::plane_box_section(c, g.normal, g.offset_mm);
+    ASSERT_GE(poly.size(), 4u);
+    std::optional<std::pair<glm::dvec3, glm::dvec3>> side;
+    for (std::size_t i = 0; i < poly.size(); ++i) {
+        const glm::dvec3 &p = poly[i], &q = poly[(i + 1) % poly.size()];
+        if (std::abs(p.x - mid_l) < 1e-6 && std::abs(q.x - mid_l) < 1e-6) side = {p, q};
+    }
+    ASSERT_TRUE(side) << "no side on the L-min face";
+    const auto pa = core::lps_to_pixel(g, side->first).pixel, pb = core::lps_to_pixel(g, side->second).pixel;
+    const QPoint mid(int(std::lround(0.5 * (pa.x + pb.x))), int(std::lround(0.5 * (pa.y + pb.y))));
+    // Drawn there in orange (dashed: some of the pixels along it).
+    const QImage img = axial->grab().toImage();
+    int orange = 0;
+    for (int k = -20; k <= 20; ++k) {
+        const glm::dvec2 at = glm::mix(pa, pb, 0.5 + 0.01 * k);
+        const QColor px = img.pixelColor(int(at.x), int(at.y));
+        orange += px.red() > 200 && px.green() > 100 && px.green() < 180 && px.blue() < 80;
+    }
+    EXPECT_GT(orange, 5) << "the L-min side is not drawn";
+    // Dragged 25 pixels towards +L (the axial view's right is the patient's left).
+    const QPoint to = mid + QPoint(25, 0);
+    drag_widget(axial, mid, to);
+    const double expected = core::pixel_to_lps(g, {double(to.x()), double(to.y())}).x;
+    ASSERT_TRUE(w.workspace().look().clip.box);
+    EXPECT_NEAR(w.workspace().look().clip.box->first.x, expected, 1e-9);
+    EXPECT_EQ(w.workspace().look().clip.box->second, box.second) << "only that face moved";
+    EXPECT_NEAR(panel_->findChild<QDoubleSpinBox*>("crop_l_min")->value(), expected, 0.05) << "the panel follows";
+    EXPECT_EQ(w.undo_stack()->undoText(), "Move crop box L min");
+    w.undo_stack()->undo();
+    EXPECT_NEAR(w.workspace().look().clip.box->first.x, mid_l, 1e-9);
+    // Never past the opposite face.
+    drag_widget(axial, mid, QPoint(axial->width() - 2, mid.y()));
+    EXPECT_LE(w.workspace().look().clip.box->first.x, w.workspace().look().clip.box->second.x);
 }
