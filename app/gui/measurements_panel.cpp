@@ -18,6 +18,7 @@
 #include <cstdint>
 
 #include "app/gui/app_context.hpp"
+#include "app/gui/column_fit.hpp"
 #include "app/gui/files.hpp"
 #include "app/gui/measure_tools.hpp"
 #include "io/error.hpp"
@@ -74,7 +75,8 @@ MeasurementsPanel::MeasurementsPanel(AppContext& context)
     auto* header = table_->horizontalHeader();
     for (int c : {Name, Kind, Value, Surface, Notes, Delete})
         header->setSectionResizeMode(c, QHeaderView::ResizeToContents);
-    header->setStretchLastSection(false);
+    // Within the dock's width: the widest columns give way, elided (whole in the tooltips).
+    fit_ = new ColumnFit(table_);
     table_->setSelectionBehavior(QAbstractItemView::SelectRows);
     table_->setSelectionMode(QAbstractItemView::SingleSelection);
     table_->setEditTriggers(QAbstractItemView::DoubleClicked | QAbstractItemView::EditKeyPressed |
@@ -126,7 +128,10 @@ void MeasurementsPanel::add_row(const Row& r, const std::array<QString, 5>& text
     for (int col = Name; col <= Notes; ++col) {
         auto* item = new QTableWidgetItem(text[std::size_t(col)]);
         if (col != Name) item->setFlags(item->flags() & ~Qt::ItemIsEditable);
-        item->setToolTip(col == Name ? "Double-click to rename" : tooltip);
+        item->setToolTip(col == Name ? "Double-click to rename"
+                         : col == Notes
+                             ? (tooltip.isEmpty() ? text[std::size_t(col)] : text[std::size_t(col)] + "\n" + tooltip)
+                             : tooltip);
         table_->setItem(row, col, item);
     }
     auto* del = new QToolButton(table_);
@@ -179,6 +184,7 @@ void MeasurementsPanel::refresh() {
     table_->setRowCount(0);
     rows_.clear();
     for (std::size_t i = 0; i < markups.size(); ++i) add_markup_rows(i, markups[i]);
+    fit_->refit();
     filling_ = false;
     show_selection();
 }

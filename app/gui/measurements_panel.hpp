@@ -33,6 +33,7 @@ class QTimer;
 namespace iso::gui {
 
 class AppContext;
+class ColumnFit;
 
 class MeasurementsPanel : public QDockWidget {
 public:
@@ -89,6 +90,7 @@ private:
     AppContext& context_;
     int observer_ = 0;
     QTableWidget* table_ = nullptr;
+    ColumnFit* fit_ = nullptr;
     QTimer* refresh_timer_ = nullptr;
     std::vector<Row> rows_;
     bool filling_ = false;  // the table is being rebuilt: its item changes are not edits

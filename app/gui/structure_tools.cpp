@@ -13,6 +13,7 @@
 #include <QToolBar>
 
 #include "app/gui/app_context.hpp"
+#include "app/gui/column_fit.hpp"
 #include "app/gui/jobs.hpp"
 #include "app/gui/viewer.hpp"
 #include "renderer/core/pick.hpp"
@@ -42,6 +43,7 @@ void add_row(QTableWidget* t, const core::SurfaceMeasurement& m) {
     t->insertRow(row);
     const auto cell = [&](int col, const QString& text) {
         auto* item = new QTableWidgetItem(text);
+        item->setToolTip(text);
         item->setFlags(Qt::ItemIsSelectable | Qt::ItemIsEnabled);
         t->setItem(row, col, item);
     };
@@ -86,7 +88,8 @@ StructureTools::StructureTools(AppContext& context) : QObject(&context.window), 
     table_ = new QTableWidget(0, 5);
     table_->setObjectName("structures_table");
     table_->setHorizontalHeaderLabels({"Isolated structure", "Area", "Volume", "Closed", "Bounds (LPS mm)"});
-    table_->horizontalHeader()->setSectionResizeMode(QHeaderView::ResizeToContents);
+    // Within the dock's width: the widest columns give way, elided (whole in the tooltips).
+    fit_ = new ColumnFit(table_);
     table_->verticalHeader()->hide();
     table_->setSelectionBehavior(QAbstractItemView::SelectRows);
     table_->setMinimumHeight(5 * table_->fontMetrics().height()); // a few rows visible, not one
@@ -228,6 +231,10 @@ void StructureTools::update_table() {
         if (it == measured_.end() || it->second.first != scene.shared_mesh(id)) unmeasured.push_back(id);
     }
     table_->setRowCount(0);
+    struct Refit {
+        ColumnFit* f;
+        ~Refit() { f->refit(); }
+    } refit{fit_};
     for (const auto id : ids)
         if (const auto it = measured_.find(id); it != measured_.end() && it->second.first == scene.shared_mesh(id)) {
             core::SurfaceMeasurement m = it->second.second;

@@ -34,6 +34,7 @@ class QTableWidget;
 namespace iso::gui {
 
 class AppContext;
+class ColumnFit;
 class Viewer;
 
 class StructureTools : public QObject {
@@ -70,6 +71,7 @@ private:
     QAction* isolate_ = nullptr;
     QAction* distance_ = nullptr;
     QTableWidget* table_ = nullptr;
+    ColumnFit* fit_ = nullptr;
     Tool tool_ = Tool::None;
     struct First {
         std::uint32_t surface = 0;

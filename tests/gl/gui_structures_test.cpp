@@ -7,11 +7,13 @@
 // the core on a scene of the test's own (core::pick with every layer,
 // core::measure_surfaces, core::surface_gap), not from the window.
 #include <QAction>
+#include <QScrollBar>
 #include <QStatusBar>
 #include <QTableWidget>
 #include <QTest>
 #include <QUndoStack>
 
+#include "app/gui/measurements_panel.hpp"
 #include "app/gui/structure_tools.hpp"
 #include "gui_measure_util.hpp"
 #include "renderer/core/measure.hpp"
@@ -78,6 +80,8 @@ TEST_F(GuiStructures, IsolateListsTheComponentMeasureGivesAndDistanceIsTheCores)
     EXPECT_TRUE(volume.contains(QString::number(listed.volume_ml, 'f', 3))) << volume.toStdString();
     EXPECT_TRUE(volume.contains(QString::fromUtf8("\u00b1"))) << "an isosurface component has an uncertainty";
     EXPECT_EQ(table->item(0, gui::StructureTools::Closed)->text(), listed.closed ? "closed" : "open");
+    EXPECT_EQ(table->horizontalScrollBar()->maximum(), 0) << "no column cut off behind a scroll bar";
+    EXPECT_GE(table->viewport()->height(), 3 * table->rowHeight(0)) << "more than one row shows";
 
     // ---- Isolate is one undo step: undone, the component goes and its
     // parent shows again; redone, back under its id. Isolating it again (a
@@ -122,6 +126,8 @@ TEST_F(GuiStructures, IsolateListsTheComponentMeasureGivesAndDistanceIsTheCores)
     EXPECT_NEAR(glm::length(line.points[0].position - gap.distance.pair.a), 0.0, 1e-9);
     EXPECT_NEAR(glm::length(line.points[1].position - gap.distance.pair.b), 0.0, 1e-9);
     EXPECT_NEAR(line_length_mm(line.points[0].position, line.points[1].position), gap.distance.pair.distance_mm, 1e-9);
+    EXPECT_EQ(w.measurements_panel()->table()->horizontalScrollBar()->maximum(), 0)
+        << "the Measurements table's columns fit the dock";
     std::printf("isolated %s: %s; %s: %.4f mm\n", w.scene().info(made).name.c_str(), volume.toStdString().c_str(),
                 line.name.c_str(), gap.distance.pair.distance_mm);
     // One undo step.
