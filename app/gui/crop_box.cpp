@@ -6,11 +6,13 @@
 #include <QUndoStack>
 
 #include <array>
+#include <memory>
 #include <cmath>
 #include <vector>
 
 #include "app/gui/app_context.hpp"
 #include "app/gui/slice_view.hpp"
+#include "app/gui/viewer.hpp"
 #include "renderer/core/slices.hpp"
 
 namespace iso::gui {
@@ -33,7 +35,7 @@ std::array<glm::dvec3, 8> corners(const std::pair<glm::dvec3, glm::dvec3>& b) {
 // pixels) and the face of the box it lies on (none: it lies on no single face).
 struct Side {
     QPointF a, b;
-    std::optional<CropBoxOnSlices::Face> face;
+    std::optional<CropBoxTool::Face> face;
 };
 
 std::vector<Side> section(const std::pair<glm::dvec3, glm::dvec3>& box, const core::SliceGrid& g) {
@@ -49,7 +51,7 @@ std::vector<Side> section(const std::pair<glm::dvec3, glm::dvec3>& box, const co
         for (int a = 0; a < 3 && !s.face; ++a)
             for (const bool max : {false, true}) {
                 const double v = max ? box.second[a] : box.first[a];
-                if (std::abs(p[a] - v) <= eps && std::abs(q[a] - v) <= eps) s.face = CropBoxOnSlices::Face{a, max};
+                if (std::abs(p[a] - v) <= eps && std::abs(q[a] - v) <= eps) s.face = CropBoxTool::Face{a, max};
             }
         sides.push_back(s);
     }
@@ -66,7 +68,7 @@ double distance_to_segment(QPointF p, QPointF a, QPointF b) {
 
 } // namespace
 
-CropBoxOnSlices::CropBoxOnSlices(AppContext& context) : QObject(&context.window), context_(context) {
+CropBoxTool::CropBoxTool(AppContext& context) : QObject(&context.window), context_(context) {
     // The views draw the box as the workspace has it (an undo, the panel's numbers).
     observer_ = context_.workspace.observe([this](core::Parts p) {
         if (!(p & (core::Part::Look | core::Part::Data))) return;
@@ -78,13 +80,13 @@ CropBoxOnSlices::CropBoxOnSlices(AppContext& context) : QObject(&context.window)
     connect(&context.undo, &QUndoStack::indexChanged, this, [this] { grab_.reset(); });
 }
 
-CropBoxOnSlices::~CropBoxOnSlices() { context_.workspace.unobserve(observer_); }
+CropBoxTool::~CropBoxTool() { context_.workspace.unobserve(observer_); }
 
-std::optional<CropBoxOnSlices::Face> CropBoxOnSlices::dragging() const {
+std::optional<CropBoxTool::Face> CropBoxTool::dragging() const {
     return grab_ ? std::optional<Face>(grab_->face) : std::nullopt;
 }
 
-void CropBoxOnSlices::attach(SliceView& view) {
+void CropBoxTool::attach(SliceView& view) {
     view.add_overlay([this](SliceView& v, QPainter& p) {
         const auto& box = context_.workspace.look().clip.box;
         if (!box || !v.has_image()) return;
@@ -101,7 +103,7 @@ void CropBoxOnSlices::attach(SliceView& view) {
                       [this](SliceView& v, QPointF p, bool dragged) { release(v, p, dragged); }});
 }
 
-bool CropBoxOnSlices::press(SliceView& view, QPointF pixel) {
+bool CropBoxTool::press(SliceView& view, QPointF pixel) {
     const auto& box = context_.workspace.look().clip.box;
     if (!box || !view.has_image() || context_.busy() || context_.tool() != AppContext::Tool::None) return false;
     std::optional<Face> best;
@@ -120,18 +122,21 @@ bool CropBoxOnSlices::press(SliceView& view, QPointF pixel) {
     return true;
 }
 
-void CropBoxOnSlices::move(SliceView& view, QPointF pixel) {
+void CropBoxTool::move(SliceView& view, QPointF pixel) {
     if (!grab_ || !view.has_image()) return;
+    move_face(core::pixel_to_lps(view.grid(), {pixel.x(), pixel.y()})[grab_->face.axis]);
+}
+
+void CropBoxTool::move_face(double value) {
     FrameLook look = context_.workspace.look();
-    if (!look.clip.box) return;
+    if (!grab_ || !look.clip.box || !std::isfinite(value)) return;
     auto& [lo, hi] = *look.clip.box;
     const int a = grab_->face.axis;
-    const double at = core::pixel_to_lps(view.grid(), {pixel.x(), pixel.y()})[a];
     // Never past the opposite face: the box stays a box.
     if (grab_->face.max)
-        hi[a] = std::max(at, lo[a]);
+        hi[a] = std::max(value, lo[a]);
     else
-        lo[a] = std::min(at, hi[a]);
+        lo[a] = std::min(value, hi[a]);
     context_.workspace.set_look(look); // shown at once; the release makes the undo step
     context_.status(QString("Crop box %1 %2: %3 mm")
                         .arg(kAxes[a])
@@ -139,9 +144,14 @@ void CropBoxOnSlices::move(SliceView& view, QPointF pixel) {
                         .arg(grab_->face.max ? hi[a] : lo[a], 0, 'f', 1));
 }
 
-void CropBoxOnSlices::release(SliceView& view, QPointF pixel, bool dragged) {
+void CropBoxTool::release(SliceView& view, QPointF pixel, bool dragged) {
     if (!grab_) return;
     if (dragged) move(view, pixel); // where the pointer was let go
+    finish();
+}
+
+void CropBoxTool::finish() {
+    if (!grab_) return;
     const Grab g = *grab_;
     grab_.reset();
     core::WorkspaceEdit e;
@@ -151,6 +161,87 @@ void CropBoxOnSlices::release(SliceView& view, QPointF pixel, bool dragged) {
     e.after.look = context_.workspace.look();
     context_.push(std::move(e)); // nothing when it did not move
     for (SliceView* v : context_.slices) v->update();
+}
+
+// ---- the 3D view ------------------------------------------------------------------------
+
+void CropBoxTool::attach(Viewer& viewer) {
+    // After the hooks set before (a markup point under the pointer first).
+    auto press = viewer.on_press;
+    auto move = viewer.on_grab_move;
+    auto release = viewer.on_grab_release;
+    auto mine = std::make_shared<bool>(false);
+    viewer.on_press = [this, press, mine](Viewer& v, QPointF p) {
+        *mine = false;
+        if (press && press(v, p)) return true;
+        return *mine = press_3d(v, p);
+    };
+    viewer.on_grab_move = [this, move, mine](Viewer& v, QPointF p) {
+        if (*mine)
+            move_3d(v, p);
+        else if (move)
+            move(v, p);
+    };
+    viewer.on_grab_release = [this, release, mine](Viewer& v, QPointF p, bool dragged) {
+        if (!*mine) {
+            if (release) release(v, p, dragged);
+            return;
+        }
+        if (dragged) move_3d(v, p);
+        finish();
+    };
+}
+
+bool CropBoxTool::press_3d(Viewer& v, QPointF pixel) {
+    const auto& box = context_.workspace.look().clip.box;
+    if (!box || context_.busy() || context_.tool() != AppContext::Tool::None) return false;
+    std::optional<Face> best;
+    double best_d = kHandleRadiusPx * v.devicePixelRatioF();
+    for (const auto& [face, centre] : face_centres(*box)) {
+        const auto at = v.image_pixel(centre);
+        if (!at) continue;
+        if (const double d = std::hypot(at->x() - pixel.x(), at->y() - pixel.y()); d <= best_d) {
+            best_d = d;
+            best = face;
+        }
+    }
+    if (!best) return false;
+    grab_ = Grab{*best, context_.workspace.look()};
+    context_.status(QString("Moving the crop box's %1 %2: release to place it (Edit > Undo puts it back)")
+                        .arg(kAxes[best->axis])
+                        .arg(best->max ? "max" : "min"));
+    return true;
+}
+
+// The face's axis through the grabbed handle, and the ray under the
+// pointer: the axis point nearest the ray is where the face goes (none when
+// the view looks along the axis).
+void CropBoxTool::move_3d(Viewer& v, QPointF pixel) {
+    const auto& box = context_.workspace.look().clip.box;
+    if (!grab_ || !box) return;
+    const int a = grab_->face.axis;
+    glm::dvec3 centre = 0.5 * (box->first + box->second), axis(0.0);
+    axis[a] = 1.0;
+    const QSize size = v.image_size();
+    const Ray r = v.camera().pixel_ray(pixel.x(), pixel.y(), size.width(), size.height());
+    const glm::dvec3 d = glm::normalize(r.dir), w0 = centre - r.origin;
+    const double b = glm::dot(axis, d), denom = 1.0 - b * b;
+    if (denom < 1e-6) return; // looking along the axis: no point is nearer than another
+    const double t = (b * glm::dot(d, w0) - glm::dot(axis, w0)) / denom;
+    move_face(centre[a] + t);
+}
+
+std::vector<std::pair<CropBoxTool::Face, glm::dvec3>>
+CropBoxTool::face_centres(const std::pair<glm::dvec3, glm::dvec3>& box) {
+    std::vector<std::pair<Face, glm::dvec3>> out;
+    const glm::dvec3 mid = 0.5 * (box.first + box.second);
+    for (int a = 0; a < 3; ++a)
+        for (const bool max : {false, true}) {
+            glm::dvec3 c = mid;
+            c[a] = max ? box.second[a] : box.first[a];
+            out.push_back({Face{a, max}, c});
+        }
+    return out;
 }
 
 } // namespace iso::gui

@@ -70,9 +70,12 @@ MainWindow::MainWindow(QWidget* parent) : QMainWindow(parent) {
     statusBar()->addPermanentWidget(load_warnings_);
     statusBar()->showMessage("Ready");
     // The tools take the views' clicks: each new 3D view, and the slice views now.
-    view3d_->viewer_made.push_back([this](Viewer& v) { measure_->attach(v); });
+    view3d_->viewer_made.push_back([this](Viewer& v) {
+        measure_->attach(v); // a markup point first, then the crop box's handles
+        crop_->attach(v);
+    });
     measure_->other_tool_click = [this](Viewer& v, QPointF p) { structures_->viewer_click(v, p); };
-    crop_ = new CropBoxOnSlices(*context_);
+    crop_ = new CropBoxTool(*context_);
     for (SliceView* v : context_->slices) {
         measure_->attach(*v); // a markup point first, then the crop box's sides
         crop_->attach(*v);

@@ -26,7 +26,7 @@ class QUndoStack;
 
 namespace iso::gui {
 
-class CropBoxOnSlices;
+class CropBoxTool;
 class Files;
 class Jobs;
 class Layouts;
@@ -97,7 +97,7 @@ public:
     MeasurementsPanel* measurements_panel() const { return measurements_; }
     StructureTools* structure_tools() const { return structures_; }
     Layouts* layouts() const { return layouts_; }
-    CropBoxOnSlices* crop_box() const { return crop_; }
+    CropBoxTool* crop_box() const { return crop_; }
 
     // Help > About's text (versions, the 3D view's GL renderer once it has
     // drawn) and Help > Mouse and keyboard's (help_menu.hpp).
@@ -124,7 +124,7 @@ private:
     MeasurementsPanel* measurements_ = nullptr;
     StructureTools* structures_ = nullptr;
     Layouts* layouts_ = nullptr;
-    CropBoxOnSlices* crop_ = nullptr;
+    CropBoxTool* crop_ = nullptr;
     Files* files_ = nullptr;
     UnsavedWork* unsaved_ = nullptr;
     LoadWarnings* load_warnings_ = nullptr;

@@ -3,6 +3,7 @@
 #include <QLabel>
 
 #include "app/gui/app_context.hpp"
+#include "app/gui/crop_box.hpp"
 #include "app/gui/viewer.hpp"
 #include "renderer/core/scene.hpp"
 #include "renderer/core/slices.hpp"
@@ -101,7 +102,7 @@ void View3D::apply_look() {
 }
 
 // The slice planes' outlines and the crosshair (View > Slice planes in 3D),
-// and the crop box's 12 edges while cropping.
+// and the crop box's 12 edges and its 6 face handles while cropping.
 void View3D::update_guides() {
     const core::Workspace& w = context_.workspace;
     const core::Scene& scene = w.scene();
@@ -125,6 +126,8 @@ void View3D::update_guides() {
         for (int i = 0; i < 8; ++i)
             for (int bit : {1, 2, 4})
                 if (!(i & bit)) lines.push_back({corner(i), corner(i | bit), colour});
+        // The handles a drag moves the faces by (CropBoxTool).
+        for (const auto& [face, centre] : CropBoxTool::face_centres(*box)) points.push_back(centre);
     }
     viewer_->set_guides(std::move(lines), std::move(points));
 }

@@ -320,7 +320,8 @@ TEST_F(GuiVolume, TheCropBoxCuts) {
     std::string error;
     const QImage background = core_picture(off, v->camera(), v->image_size(), error);
     ASSERT_EQ(error, "");
-    const Box whole = projected(*v, {vb.min, vb.max}, 0), cut = projected(*v, box, 3);
+    // (Grown by the face handles the view draws on the box while cropping.)
+    const Box whole = projected(*v, {vb.min, vb.max}, 0), cut = projected(*v, box, 8);
     const Diff outside = compare(
         shown, background, [&](int x, int y) { return whole.contains(x, y) && !cut.contains(x, y); }, 2);
     const Diff inside = compare(
@@ -481,4 +482,40 @@ TEST_F(GuiVolume, TheCropBoxIsDrawnAndDraggedOnTheSliceViews) {
     // Never past the opposite face.
     drag_widget(axial, mid, QPoint(axial->width() - 2, mid.y()));
     EXPECT_LE(w.workspace().look().clip.box->first.x, w.workspace().look().clip.box->second.x);
+}
+
+// In the 3D view the crop box has a handle at the centre of each face; a
+// handle dragged moves its face along its axis to the axis point nearest the
+// ray under the pointer (computed here from the camera's pixel ray), one
+// undo step.
+TEST_F(GuiVolume, TheCropBoxFacesAreDraggedByTheirHandlesIn3d) {
+    gui::MainWindow& w = window();
+    gui::Viewer* v = show_volume();
+    ASSERT_NE(v, nullptr);
+    QTest::mouseClick(panel_->findChild<QCheckBox*>("volume_crop"), Qt::LeftButton, {}, QPoint(8, 8));
+    ASSERT_TRUE(w.workspace().look().clip.box);
+    const auto box = *w.workspace().look().clip.box;
+    settle(v);
+    // The L max face's handle, where the view draws it.
+    const glm::dvec3 mid = 0.5 * (box.first + box.second);
+    const glm::dvec3 handle(box.second.x, mid.y, mid.z);
+    const auto at = v->image_pixel(handle);
+    ASSERT_TRUE(at);
+    const double dpr = v->devicePixelRatioF();
+    const QPoint from(int(std::lround(at->x() / dpr)), int(std::lround(at->y() / dpr)));
+    const QPoint to = from - QPoint(40, 0); // towards the box's middle on screen
+    drag_widget(v, from, to);
+    // The core's answer: the point of the axis through the handle nearest the release's ray.
+    const QSize size = v->image_size();
+    const Ray r = v->camera().pixel_ray(to.x() * dpr, to.y() * dpr, size.width(), size.height());
+    const glm::dvec3 d = glm::normalize(r.dir), w0 = mid - r.origin, axis(1, 0, 0);
+    const double b = glm::dot(axis, d);
+    const double t = (b * glm::dot(d, w0) - glm::dot(axis, w0)) / (1.0 - b * b);
+    ASSERT_TRUE(w.workspace().look().clip.box);
+    EXPECT_NEAR(w.workspace().look().clip.box->second.x, mid.x + t, 1e-6);
+    EXPECT_LT(w.workspace().look().clip.box->second.x, box.second.x) << "the face moved in";
+    EXPECT_EQ(w.workspace().look().clip.box->first, box.first) << "only that face moved";
+    EXPECT_EQ(w.undo_stack()->undoText(), "Move crop box L max");
+    w.undo_stack()->undo();
+    EXPECT_EQ(*w.workspace().look().clip.box, box);
 }
