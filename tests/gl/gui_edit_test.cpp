@@ -163,7 +163,9 @@ TEST_F(GuiEdit, CheekRulerOnTheFrontSkinDragUndoRedo) {
     ASSERT_TRUE(from);
     const QPoint press = from->toPoint(), release = press + QPoint(-4, 30);
     const Camera camera = viewer->camera();
+    const QString clicked = w.measure_tools()->click_readout();
     drag(viewer, press, release);
+    EXPECT_EQ(w.measure_tools()->click_readout(), clicked) << "a drag's release read as a click";
     EXPECT_EQ(viewer->camera().eye, camera.eye) << "the camera turned while a point was dragged";
     EXPECT_EQ(viewer->camera().target, camera.target);
     const core::PickResult at_release = oracle.pick(release);
@@ -404,4 +406,34 @@ TEST_F(GuiEdit, SelectingARowHighlightsAndCentres) {
     EXPECT_TRUE(found) << "the selected angle is not drawn in the highlight colour";
     panel_table(w)->clearSelection();
     EXPECT_FALSE(w.workspace().selected());
+}
+
+// A point's label near a slice view's right edge goes to the left of the
+// point rather than off the view (labels were cut off at the edge); where the
+// point is comes from the core (core::pixel_to_lps / lps_to_pixel).
+TEST_F(GuiEdit, SliceLabelsStayInsideTheView) {
+    gui::MainWindow& w = window();
+    auto* axial = w.slice_view(core::SliceOrientation::Axial);
+    const core::SliceGrid& g = axial->grid();
+    const glm::dvec2 px(g.width - 6.5, 0.5 * g.height);
+    Markup m;
+    m.type = MarkupType::Fiducial;
+    m.name = "AVM nidus";
+    m.points.resize(1);
+    m.points[0].position = core::pixel_to_lps(g, px);
+    w.workspace().set_markups({{m}, {}});
+    QTest::qWait(50);
+    const QImage img = axial->grab().toImage();
+    const glm::dvec3 c = markup_color(m, 0);
+    const QColor colour = QColor::fromRgbF(float(c.r), float(c.g), float(c.b));
+    const auto near = [&](QColor p) {
+        return std::abs(p.red() - colour.red()) + std::abs(p.green() - colour.green()) +
+                   std::abs(p.blue() - colour.blue()) <
+               60;
+    };
+    const glm::dvec2 at = core::lps_to_pixel(g, m.points[0].position).pixel;
+    int left = 0;
+    for (int y = int(at.y) - 12; y <= int(at.y) + 12; ++y)
+        for (int x = int(at.x) - 140; x < int(at.x) - 9; ++x) left += near(img.pixelColor(x, y));
+    EXPECT_GT(left, 20) << "the label is not drawn to the left of a point at the right edge";
 }
