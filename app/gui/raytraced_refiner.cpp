@@ -43,34 +43,6 @@ RaytracedRefiner::~RaytracedRefiner() {
     reap(true);
 }
 
-std::vector<double> RaytracedRefiner::key(const core::Scene& scene, const Camera& cam, int width, int height,
-                                          const FrameLook& look) {
-    std::vector<double> k{cam.eye.x,
-                          cam.eye.y,
-                          cam.eye.z,
-                          cam.target.x,
-                          cam.target.y,
-                          cam.target.z,
-                          cam.up.x,
-                          cam.up.y,
-                          cam.up.z,
-                          cam.fov_y_degrees,
-                          cam.near_plane,
-                          cam.far_plane,
-                          double(width),
-                          double(height),
-                          look.cone.radius_mm,
-                          look.ao_error,
-                          double(look.ao_rays),
-                          double(look.transparency)};
-    for (const Mesh* m : core::raytraced_ao_meshes(scene, look))
-        for (const double v : {double(reinterpret_cast<std::uintptr_t>(m->positions.data())),
-                               double(reinterpret_cast<std::uintptr_t>(m->triangles.data())),
-                               double(m->positions.size()), double(m->triangles.size())})
-            k.push_back(v);
-    return k;
-}
-
 void RaytracedRefiner::ensure(const std::vector<double>& key, const core::Scene& scene, const Camera& cam, int width,
                               int height, const FrameLook& look) {
     if (running_ && key == key_) return;

@@ -44,11 +44,8 @@ public:
     RaytracedRefiner(const RaytracedRefiner&) = delete;
     RaytracedRefiner& operator=(const RaytracedRefiner&) = delete;
 
-    // What a job is for: the camera, the size, the look's AO settings and
-    // the surfaces ray-traced AO sees (their meshes' identity and sizes).
-    static std::vector<double> key(const core::Scene& scene, const Camera& cam, int width, int height,
-                                   const FrameLook& look);
-    // Starts refining for `key` unless the current job has it: the previous
+    // Starts refining for `key` (what the job is for: the caller's key of
+    // what the AO depends on) unless the current job has it: the previous
     // job is cancelled (it stops within one image row of rays). The visible
     // opaque meshes are copied here (the worker never reads the scene);
     // the BVH is rebuilt only when they changed.

@@ -150,7 +150,17 @@ void Viewer::follow_raytraced() {
     if (!refiner_)
         refiner_ = std::make_unique<RaytracedRefiner>(this, [this](const RaytracedBatch& b) { take_batch(b); });
     const QSize size = image_size();
-    const auto key = RaytracedRefiner::key(scene_, camera_, size.width(), size.height(), options_.look);
+    // What the AO depends on: the workspace's data, surfaces, camera and look
+    // (their notifications), the image's size and the view's AO settings.
+    const FrameLook& l = options_.look;
+    const std::vector<double> key{
+        double(workspace_.revision(core::Part::Data | core::Part::Surfaces | core::Part::Camera | core::Part::Look)),
+        double(size.width()),
+        double(size.height()),
+        l.cone.radius_mm,
+        l.ao_error,
+        double(l.ao_rays),
+        double(l.transparency)};
     if (key == refiner_->current_key()) return;
     raytraced_.reset();
     raytraced_stats_ = {};

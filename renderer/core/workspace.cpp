@@ -379,6 +379,13 @@ void Workspace::restore(const WorkspaceState& s, Parts parts) {
 
 // ---- observers ----------------------------------------------------------------------
 
+std::uint64_t Workspace::revision(Parts parts) const {
+    std::uint64_t r = 0;
+    for (std::size_t bit = 0; bit < revisions_.size(); ++bit)
+        if (parts & (Parts(1) << bit)) r += revisions_[bit];
+    return r;
+}
+
 int Workspace::observe(Observer o) {
     observers_.emplace_back(next_observer_, std::move(o));
     return next_observer_++;
@@ -390,7 +397,8 @@ void Workspace::unobserve(int handle) {
 
 void Workspace::notify(Parts parts) {
     ++notifications_;
-    if (parts & kPictureParts) ++picture_key_;
+    for (std::size_t bit = 0; bit < revisions_.size(); ++bit)
+        if (parts & (Parts(1) << bit)) ++revisions_[bit];
     // A change an observer makes while hearing of another is told after it,
     // so that every observer hears of the changes in the order they happened.
     if (notifying_) {

@@ -218,9 +218,13 @@ public:
     // Called after every change with the parts it touched; returns a handle for unobserve.
     int observe(Observer o);
     void unobserve(int handle);
-    // Changes with each notification of a part in kPictureParts: what the
-    // 3D picture depends on (accumulated frames restart when it changes).
-    std::uint64_t picture_key() const { return picture_key_; }
+    // Counts the notifications of any of `parts` (it changes whenever one of
+    // them does): a key for what depends on those parts, derived from the
+    // notifications (the 3D view's ray-traced AO: data, surfaces, camera, look).
+    std::uint64_t revision(Parts parts) const;
+    // revision(kPictureParts): what the 3D picture depends on (the 3D view's
+    // still frames restart when it changes).
+    std::uint64_t picture_key() const { return revision(kPictureParts); }
     // Each notification's count (tests).
     std::uint64_t notifications() const { return notifications_; }
 
@@ -234,7 +238,8 @@ private:
     bool force_modified_ = false;
     std::vector<std::pair<int, Observer>> observers_;
     int next_observer_ = 1;
-    std::uint64_t picture_key_ = 0, notifications_ = 0;
+    std::array<std::uint64_t, 16> revisions_{}; // per Part bit: its notifications
+    std::uint64_t notifications_ = 0;
     bool notifying_ = false;
     Parts pending_ = 0; // changes made by observers while notifying, told next
 };
