@@ -10,15 +10,18 @@
 
 namespace iso::gui {
 
-ColumnFit::ColumnFit(QTableWidget* table, int floor_px) : QObject(table), table_(table), floor_(floor_px) {
+ColumnFit::ColumnFit(QTableWidget* table, int floor_px)
+    : QObject(table), table_(table), viewport_(table->viewport()), floor_(floor_px) {
     table_->horizontalHeader()->setSectionResizeMode(QHeaderView::Interactive);
     table_->horizontalHeader()->setStretchLastSection(false);
     table_->setTextElideMode(Qt::ElideRight);
-    table_->viewport()->installEventFilter(this);
+    viewport_->installEventFilter(this);
 }
 
+// Only a resize of the viewport (it also sends events while the table is
+// being destroyed: nothing of the table is called for those).
 bool ColumnFit::eventFilter(QObject* watched, QEvent* e) {
-    if (watched == table_->viewport() && e->type() == QEvent::Resize) refit();
+    if (e->type() == QEvent::Resize && watched == viewport_) refit();
     return QObject::eventFilter(watched, e);
 }
 

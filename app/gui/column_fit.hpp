@@ -23,6 +23,7 @@ protected:
 
 private:
     QTableWidget* table_;
+    QObject* viewport_; // compared, never called: it outlives the table's destructor's start
     int floor_;
 };
 
