@@ -54,22 +54,6 @@ double min_y(const core::PickResult& r) {
     return y;
 }
 
-// A left drag delivered straight to the widget (QTest::mouseMove moves the X
-// pointer, whose events arrive later), the event loop running between steps.
-void drag(QWidget* w, QPoint from, QPoint to, int steps = 5) {
-    const auto send = [&](QEvent::Type type, QPoint at, Qt::MouseButtons held) {
-        const Qt::MouseButton button = type == QEvent::MouseMove ? Qt::NoButton : Qt::LeftButton;
-        QMouseEvent e(type, QPointF(at), w->mapToGlobal(QPointF(at)), button, held, Qt::NoModifier);
-        QCoreApplication::sendEvent(w, &e);
-    };
-    send(QEvent::MouseButtonPress, from, Qt::LeftButton);
-    for (int k = 1; k <= steps; ++k) {
-        send(QEvent::MouseMove, from + (to - from) * k / steps, Qt::LeftButton);
-        QTest::qWait(30);
-    }
-    send(QEvent::MouseButtonRelease, to, Qt::NoButton);
-}
-
 QAction* edit_action(gui::MainWindow& w, const char* name) { return w.findChild<QAction*>(name); }
 
 QString cell(gui::MainWindow& w, int row, int col) { return panel_table(w)->item(row, col)->text(); }
@@ -164,7 +148,7 @@ TEST_F(GuiEdit, CheekRulerOnTheFrontSkinDragUndoRedo) {
     const QPoint press = from->toPoint(), release = press + QPoint(-4, 30);
     const Camera camera = viewer->camera();
     const QString clicked = w.measure_tools()->click_readout();
-    drag(viewer, press, release);
+    drag_widget(viewer, press, release);
     EXPECT_EQ(w.measure_tools()->click_readout(), clicked) << "a drag's release read as a click";
     EXPECT_EQ(viewer->camera().eye, camera.eye) << "the camera turned while a point was dragged";
     EXPECT_EQ(viewer->camera().target, camera.target);
@@ -218,7 +202,7 @@ TEST_F(GuiEdit, SliceDragMovesThePointInThePlane) {
     const Markup before = w.workspace().markups()[0];
     const core::WindowLevel wl = w.workspace().window();
     const QPoint to = a[1] + QPoint(-20, 35);
-    drag(axial, a[1] + QPoint(3, -2), to); // within the grab radius of the point
+    drag_widget(axial, a[1] + QPoint(3, -2), to); // within the grab radius of the point
     const glm::dvec3 expected = core::pixel_to_lps(axial->grid(), {double(to.x()), double(to.y())});
     EXPECT_NEAR(glm::length(w.workspace().markups()[0].points[1].position - expected), 0.0, 1e-9);
     EXPECT_EQ(w.workspace().markups()[0].points[0].position, before.points[0].position);
@@ -229,7 +213,7 @@ TEST_F(GuiEdit, SliceDragMovesThePointInThePlane) {
     w.undo_stack()->undo();
     EXPECT_EQ(w.workspace().markups()[0].points[1].position, before.points[1].position);
     // A press away from every point is the window drag it always was.
-    drag(axial, axial_pixel(w, 100, 100), axial_pixel(w, 140, 80));
+    drag_widget(axial, axial_pixel(w, 100, 100), axial_pixel(w, 140, 80));
     EXPECT_NE(w.workspace().window().width, wl.width);
     EXPECT_EQ(w.workspace().markups()[0].points[1].position, before.points[1].position);
 }

@@ -10,6 +10,7 @@
 #include <QDoubleSpinBox>
 #include <QElapsedTimer>
 #include <QImage>
+#include <QMouseEvent>
 #include <QPushButton>
 #include <QSurfaceFormat>
 #include <QTest>
@@ -28,7 +29,6 @@
 #include "app/gui/main_window.hpp"
 #include "app/gui/surfaces_panel.hpp"
 #include "app/gui/unsaved_work.hpp"
-#include "app/gui/surfaces_panel.hpp"
 #include "tests/support/test_util.hpp"
 
 namespace iso::test {
@@ -57,6 +57,22 @@ inline void add_through_panel(gui::MainWindow& w, double iso) {
 }
 
 // Pixels brighter than black: the picture shows something, not an empty frame.
+// A left drag delivered straight to the widget (QTest::mouseMove moves the X
+// pointer, whose events arrive later), the event loop running between steps.
+inline void drag_widget(QWidget* w, QPoint from, QPoint to, int steps = 5, int pause_ms = 30) {
+    const auto send = [&](QEvent::Type type, QPoint at, Qt::MouseButtons held) {
+        const Qt::MouseButton button = type == QEvent::MouseMove ? Qt::NoButton : Qt::LeftButton;
+        QMouseEvent e(type, QPointF(at), w->mapToGlobal(QPointF(at)), button, held, Qt::NoModifier);
+        QCoreApplication::sendEvent(w, &e);
+    };
+    send(QEvent::MouseButtonPress, from, Qt::LeftButton);
+    for (int k = 1; k <= steps; ++k) {
+        send(QEvent::MouseMove, from + (to - from) * k / steps, Qt::LeftButton);
+        QTest::qWait(pause_ms);
+    }
+    send(QEvent::MouseButtonRelease, to, Qt::NoButton);
+}
+
 inline double lit_fraction(const QImage& img) {
     if (img.isNull()) return 0;
     const QImage g = img.convertToFormat(QImage::Format_Grayscale8);

@@ -70,21 +70,6 @@ QImage core_picture(const FrameLook& look, const Camera& camera, QSize size, std
     return out;
 }
 
-// A left drag delivered straight to the widget, the event loop running between steps.
-void drag_widget(QWidget* w, QPoint from, QPoint to, int steps = 5) {
-    const auto send = [&](QEvent::Type type, QPoint at, Qt::MouseButtons held) {
-        const Qt::MouseButton button = type == QEvent::MouseMove ? Qt::NoButton : Qt::LeftButton;
-        QMouseEvent e(type, QPointF(at), w->mapToGlobal(QPointF(at)), button, held, Qt::NoModifier);
-        QCoreApplication::sendEvent(w, &e);
-    };
-    send(QEvent::MouseButtonPress, from, Qt::LeftButton);
-    for (int k = 1; k <= steps; ++k) {
-        send(QEvent::MouseMove, from + (to - from) * k / steps, Qt::LeftButton);
-        QTest::qWait(20);
-    }
-    send(QEvent::MouseButtonRelease, to, Qt::NoButton);
-}
-
 struct Box {
     int x0 = 0, y0 = 0, x1 = -1, y1 = -1; // inclusive pixels
     bool contains(int x, int y) const { return x >= x0 && x <= x1 && y >= y0 && y <= y1; }
