@@ -33,6 +33,10 @@ void AppContext::error(const QString& title, const QString& what, std::exception
     } catch (...) {
         reason = "unknown error";
     }
+    error(title, what, reason);
+}
+
+void AppContext::error(const QString& title, const QString& what, const QString& reason) const {
     status(what + ": failed");
     auto* box = new QMessageBox(QMessageBox::Critical, title, what + "\n\n" + reason, QMessageBox::Ok, &window);
     box->setObjectName("error");

@@ -44,6 +44,7 @@ public:
     void status(const QString& text) const;
     QString status_text() const;
     void error(const QString& title, const QString& what, std::exception_ptr e) const;
+    void error(const QString& title, const QString& what, const QString& reason) const; // a reason of our own
     // A job with a dialog runs: edits wait (the status bar says so when `say`).
     bool busy(bool say = false) const;
 

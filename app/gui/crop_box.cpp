@@ -21,16 +21,6 @@ namespace {
 
 const char* const kAxes[] = {"L", "P", "S"};
 
-// The box's corners as core::volume_corners orders them (corner i at the
-// high end of axis a when bit a of i is set).
-std::array<glm::dvec3, 8> corners(const std::pair<glm::dvec3, glm::dvec3>& b) {
-    std::array<glm::dvec3, 8> c{};
-    for (int i = 0; i < 8; ++i)
-        c[std::size_t(i)] = {i & 1 ? b.second.x : b.first.x, i & 2 ? b.second.y : b.first.y,
-                             i & 4 ? b.second.z : b.first.z};
-    return c;
-}
-
 // One side of the box's section with a view's plane: its ends (image
 // pixels) and the face of the box it lies on (none: it lies on no single face).
 struct Side {
@@ -39,7 +29,7 @@ struct Side {
 };
 
 std::vector<Side> section(const std::pair<glm::dvec3, glm::dvec3>& box, const core::SliceGrid& g) {
-    const auto poly = core::plane_box_section(corners(box), g.normal, g.offset_mm);
+    const auto poly = core::plane_box_section(core::box_corners(box), g.normal, g.offset_mm);
     std::vector<Side> sides;
     const double eps = 1e-6 * (1.0 + glm::length(box.second - box.first));
     for (std::size_t i = 0; i < poly.size(); ++i) {

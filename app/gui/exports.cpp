@@ -48,6 +48,12 @@ QSize view_size(const AppContext& c) {
 
 } // namespace
 
+bool Files::data_open() const {
+    if (context_.workspace.has_data()) return true;
+    context_.status("Open a volume or mesh first");
+    return false;
+}
+
 void Files::add_export_actions(QMenu* file) {
     file->addAction("&Export image...", this, [this] { export_image_dialog(); });
     file->addAction("Export to &DICOM...", this, [this] { export_dicom_dialog(); });
@@ -56,10 +62,7 @@ void Files::add_export_actions(QMenu* file) {
 
 void Files::export_image_dialog() {
     const core::Workspace& w = context_.workspace;
-    if (!w.has_data()) {
-        context_.status("Open a volume or mesh first");
-        return;
-    }
+    if (!data_open()) return;
     bool write = false;
     const QString image = QDir(start_folder("export")).filePath(data_name(QString::fromStdString(w.input())) + ".png");
     const QString named = export_session_path(w.session_path(), w.session(), image, write);
@@ -75,10 +78,7 @@ void Files::export_image_dialog() {
 
 void Files::export_dicom_dialog() {
     const core::Workspace& w = context_.workspace;
-    if (!w.has_data()) {
-        context_.status("Open a volume or mesh first");
-        return;
-    }
+    if (!data_open()) return;
     const bool dicom_source = w.scene().has_volume() && w.scene().volume().meta.format == "DICOM";
     const QString note =
         QString(dicom_source ? "The figure joins the study of the DICOM series open (same patient and Study "
@@ -111,10 +111,7 @@ void Files::save_surfaces_dialog() {
 void Files::export_image(const QString& path, const core::RenderRequest& frame, const core::SessionParts& take) {
     if (context_.busy(true)) return;
     const core::Workspace& w = context_.workspace;
-    if (!w.has_data()) {
-        context_.status("Open a volume or mesh first");
-        return;
-    }
+    if (!data_open()) return;
     auto now = std::make_shared<core::Session>(w.session());
     bool write = false;
     const QString session = export_session_path(w.session_path(), *now, path, write);
@@ -146,10 +143,7 @@ void Files::export_image(const QString& path, const core::RenderRequest& frame, 
 void Files::export_dicom(const QString& folder, const core::RenderRequest& frame, const core::SessionParts& take) {
     if (context_.busy(true)) return;
     const core::Workspace& w = context_.workspace;
-    if (!w.has_data()) {
-        context_.status("Open a volume or mesh first");
-        return;
-    }
+    if (!data_open()) return;
     // As Export image, from the session: the saved one when it is the state
     // on screen (the figure's provenance names it), else a temporary one (not
     // named: it would not outlive the export).

@@ -198,15 +198,16 @@ void Files::add_session_actions(QMenu* file) {
         });
     });
     file->addAction("Sa&ve session...", QKeySequence::Save, this, [this] {
-        const core::Workspace& w = context_.workspace;
-        const QString start = w.session_path().empty()
-                                  ? QDir(start_folder("session"))
-                                        .filePath(data_name(QString::fromStdString(w.input())) + ".isoscope.json")
-                                  : QString::fromStdString(w.session_path());
-        const QString f =
-            QFileDialog::getSaveFileName(&context_.window, "Save session", start, "isoscope sessions (*.json)");
+        const QString f = QFileDialog::getSaveFileName(&context_.window, "Save session", session_save_start(),
+                                                       "isoscope sessions (*.json)");
         if (!f.isEmpty()) save_session(f);
     });
+}
+
+QString Files::session_save_start() const {
+    const core::Workspace& w = context_.workspace;
+    if (!w.session_path().empty()) return QString::fromStdString(w.session_path());
+    return QDir(start_folder("session")).filePath(data_name(QString::fromStdString(w.input())) + ".isoscope.json");
 }
 
 void Files::save_session(const QString& path, std::function<void()> then) {
@@ -281,13 +282,9 @@ void Files::ask_to_save(const QString& doing, std::function<void()> proceed) {
             if (discarded) discarded();
             proceed();
         } else if (answer == QMessageBox::Save) {
-            const QString start = w.session_path().empty()
-                                      ? QDir(start_folder("session"))
-                                            .filePath(data_name(QString::fromStdString(w.input())) + ".isoscope.json")
-                                      : QString();
             const QString path = w.session_path().empty()
-                                     ? QFileDialog::getSaveFileName(&context_.window, "Save session", start,
-                                                                    "isoscope sessions (*.json)")
+                                     ? QFileDialog::getSaveFileName(&context_.window, "Save session",
+                                                                    session_save_start(), "isoscope sessions (*.json)")
                                      : QString::fromStdString(w.session_path());
             if (path.isEmpty()) return; // no file chosen: as Cancel
             save_session(path, proceed);

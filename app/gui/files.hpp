@@ -74,6 +74,11 @@ public:
     static void remember_folder(const char* kind, const QString& file_or_folder);
 
 private:
+    // Something is open (else the status bar says to open something first).
+    bool data_open() const;
+    // Where a Save session dialog starts: the session file, else the data's
+    // name in the folder last used for sessions (start_folder).
+    QString session_save_start() const;
     void choose_series(const QString& folder);
     void load(const QString& path, const QString& series);
     void loaded(const QString& path);

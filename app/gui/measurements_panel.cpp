@@ -335,20 +335,10 @@ QString MeasurementsPanel::crossings_text(const Markup& m) {
     return crossings_cache_[key] = text;
 }
 
-void MeasurementsPanel::show_error(const QString& what, const QString& reason) {
-    context_.status(what + ": failed");
-    // Not exec(): the window keeps running (and tests can find and close the box).
-    auto* box =
-        new QMessageBox(QMessageBox::Critical, "Markups", what + "\n\n" + reason, QMessageBox::Ok, &context_.window);
-    box->setObjectName("error");
-    box->setAttribute(Qt::WA_DeleteOnClose);
-    box->open();
-}
-
 bool MeasurementsPanel::save(const QString& path) {
     const QString what = "Cannot save markups to " + path;
     if (context_.workspace.markups().empty()) {
-        show_error(what, "there are no measurements to save");
+        context_.error("Markups", what, "there are no measurements to save");
         return false;
     }
     try {
@@ -356,7 +346,7 @@ bool MeasurementsPanel::save(const QString& path) {
         f.markups = context_.workspace.markups();
         save_markups(f, path.toStdString());
     } catch (const std::exception& e) {
-        show_error(what, QString::fromStdString(e.what()));
+        context_.error("Markups", what, QString::fromStdString(e.what()));
         return false;
     }
     // The file holds them now: loading it again asks whether to replace them.
@@ -374,7 +364,7 @@ bool MeasurementsPanel::load(const QString& path) {
     try {
         f = load_markups(path.toStdString());
     } catch (const std::exception& e) {
-        show_error("Cannot load markups from " + path, QString::fromStdString(e.what()));
+        context_.error("Markups", "Cannot load markups from " + path, QString::fromStdString(e.what()));
         return false;
     }
     // Slicer does not write names: it names a node after its file.

@@ -77,7 +77,6 @@ private:
     void rename(int row, const QString& name);
     void remove(int row);
     void selection_changed();
-    void show_error(const QString& what, const QString& reason);
     enum class LoadMode { Add, Replace };
     void add_loaded(const MarkupsFile& f, const QString& path, LoadMode mode);
     // The names of the surfaces the points lie on (within 0.5 mm), and what a

@@ -42,11 +42,6 @@ QString unit_suffix(const core::Scene* scene) {
     return unit.empty() ? QString() : " " + QString::fromUtf8(unit.data(), qsizetype(unit.size()));
 }
 
-bool same_post(const PostProcessOptions& a, const PostProcessOptions& b) {
-    return a.smooth == b.smooth && a.decimate == b.decimate && a.keep_largest == b.keep_largest &&
-           a.keep_at == b.keep_at;
-}
-
 } // namespace
 
 // One re-extraction on its own thread.
@@ -215,7 +210,7 @@ void SurfacesPanel::show_row(Row& r) {
             percent->setValue(opacity->value());
         }
     }
-    if (r.slider && (info.value != r.shown_value || !same_post(info.post, r.shown_post))) {
+    if (r.slider && (info.value != r.shown_value || !(info.post == r.shown_post))) {
         // Changed from elsewhere (an undo, a redo): that is what the row asks for now.
         if (r.worker) r.worker->cancel = true;
         r.wanted = info.value;
@@ -314,8 +309,7 @@ void SurfacesPanel::add_surface(double iso, const PostProcessOptions& post) {
                                 .arg(r.max)
                                 .arg(unit_suffix(&ws.scene()));
         context_.status("Not added: " + why);
-        context_.error("Cannot add the surface", QString("Cannot add the isosurface at %1").arg(iso),
-                       std::make_exception_ptr(std::runtime_error(why.toStdString())));
+        context_.error("Cannot add the surface", QString("Cannot add the isosurface at %1").arg(iso), why);
         return;
     }
     // The worker only reads the volume; the mesh joins the scene on the GUI thread.
@@ -604,11 +598,11 @@ void SurfacesPanel::request(Row& r) {
     if (r.worker) {
         // The latest value wins: stop the running one (its ProgressFn says
         // no); when it has ended, finished() starts the wanted value.
-        if (r.worker->iso != r.wanted || !same_post(r.worker->post, r.wanted_post)) r.worker->cancel = true;
+        if (r.worker->iso != r.wanted || !(r.worker->post == r.wanted_post)) r.worker->cancel = true;
         return;
     }
     const auto& info = context_.workspace.scene().info(r.id);
-    if (info.value == r.wanted && same_post(info.post, r.wanted_post)) return; // already shown
+    if (info.value == r.wanted && info.post == r.wanted_post) return; // already shown
     start(r);
 }
 
@@ -648,7 +642,7 @@ void SurfacesPanel::finished(std::uint32_t id, const std::shared_ptr<Worker>& w)
     Row* r = find(id);
     if (!r || r->worker != w) return; // removed meanwhile
     r->worker.reset();
-    const bool current = w->iso == r->wanted && same_post(w->post, r->wanted_post);
+    const bool current = w->iso == r->wanted && w->post == r->wanted_post;
     if (w->error) {
         bool cancelled = false;
         try {
@@ -680,7 +674,7 @@ void SurfacesPanel::finished(std::uint32_t id, const std::shared_ptr<Worker>& w)
     // A newer value came in meanwhile: extract it now (unless it is what is shown).
     if (!current) {
         const auto& info = context_.workspace.scene().info(id);
-        if (info.value != r->wanted || !same_post(info.post, r->wanted_post)) {
+        if (info.value != r->wanted || !(info.post == r->wanted_post)) {
             start(*r);
             return;
         }

@@ -118,14 +118,11 @@ void View3D::update_guides() {
         points.push_back(core::crosshair_point(w.planes()));
     }
     if (const auto& box = w.look().clip.box; box && scene.has_volume()) {
-        const auto [lo, hi] = *box;
         const glm::vec4 colour(1.0f, 0.55f, 0.1f, 1.0f); // orange: none of the slice planes' colours
-        const auto corner = [&](int i) {
-            return glm::dvec3(i & 1 ? hi.x : lo.x, i & 2 ? hi.y : lo.y, i & 4 ? hi.z : lo.z);
-        };
-        for (int i = 0; i < 8; ++i)
-            for (int bit : {1, 2, 4})
-                if (!(i & bit)) lines.push_back({corner(i), corner(i | bit), colour});
+        const auto corner = core::box_corners(*box);
+        for (std::size_t i = 0; i < 8; ++i)
+            for (std::size_t bit : {1u, 2u, 4u})
+                if (!(i & bit)) lines.push_back({corner[i], corner[i | bit], colour});
         // The handles a drag moves the faces by (CropBoxTool).
         for (const auto& [face, centre] : CropBoxTool::face_centres(*box)) points.push_back(centre);
     }

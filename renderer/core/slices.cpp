@@ -554,6 +554,14 @@ std::array<glm::dvec3, 8> volume_corners(const Volume& v) {
     return c;
 }
 
+std::array<glm::dvec3, 8> box_corners(const std::pair<glm::dvec3, glm::dvec3>& b) {
+    std::array<glm::dvec3, 8> c{};
+    for (int i = 0; i < 8; ++i)
+        c[std::size_t(i)] = {i & 1 ? b.second.x : b.first.x, i & 2 ? b.second.y : b.first.y,
+                             i & 4 ? b.second.z : b.first.z};
+    return c;
+}
+
 std::vector<glm::dvec3> plane_box_section(const std::array<glm::dvec3, 8>& corners, const glm::dvec3& normal,
                                           double offset_mm) {
     std::array<double, 8> d{};

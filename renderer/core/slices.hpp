@@ -156,6 +156,8 @@ glm::vec3 slice_color(SliceOrientation o);
 // through the index -> LPS affine (a parallelepiped for an oblique or
 // sheared grid). Corner i is at the high end of axis a when bit a of i is set.
 std::array<glm::dvec3, 8> volume_corners(const Volume& v);
+// The corners of an LPS box (min, max: a crop box), ordered as volume_corners orders them.
+std::array<glm::dvec3, 8> box_corners(const std::pair<glm::dvec3, glm::dvec3>& box);
 
 // The plane dot(p, normal) == offset_mm (normal unit) cut through the
 // parallelepiped of `corners` (ordered as volume_corners orders them): the

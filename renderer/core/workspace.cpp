@@ -35,6 +35,21 @@ std::optional<std::size_t> kept_selection(std::optional<std::size_t> sel, const 
     return sel;
 }
 
+// The parts held as plain values (all but the surfaces, which are the
+// scene's, and the markups and selection, which keep each other in step):
+// copied from one state to another, the one list capture and restore share.
+constexpr Parts kPlainParts = Part::Look | Part::Camera | Part::Window | Part::Slices | Part::Layout;
+void copy_plain_parts(const WorkspaceState& from, WorkspaceState& to, Parts parts) {
+    if (has(parts, Part::Look)) to.look = from.look;
+    if (has(parts, Part::Camera)) to.camera = from.camera;
+    if (has(parts, Part::Window)) to.window = from.window;
+    if (has(parts, Part::Slices)) to.planes = from.planes;
+    if (has(parts, Part::Layout)) {
+        to.layout = from.layout;
+        to.slice_planes_in_3d = from.slice_planes_in_3d;
+    }
+}
+
 void check_crop(const Clip& clip) {
     if (!clip.box) return;
     const auto& [lo, hi] = *clip.box;
@@ -105,6 +120,9 @@ void Workspace::reset(std::unique_ptr<Scene> scene, std::string input, std::stri
     old.reset();
 }
 
+// Two notifications: reset()'s (new data: the views start afresh, the slice
+// views fit their default planes), then the session's parts over it (the
+// slice views keep the session's framing because it comes after their fit).
 void Workspace::adopt(OpenedSession opened, const std::string& session_path) {
     const Session& s = opened.session;
     reset(std::move(opened.scene), s.input, s.series);
@@ -165,14 +183,7 @@ WorkspaceState Workspace::capture(Parts parts) const {
     if (has(parts, Part::Surfaces))
         for (const SurfaceId id : scene_->surfaces())
             s.surfaces.push_back({id, scene_->info(id), scene_->shared_mesh(id)});
-    if (has(parts, Part::Look)) s.look = live_.look;
-    if (has(parts, Part::Camera)) s.camera = live_.camera;
-    if (has(parts, Part::Window)) s.window = live_.window;
-    if (has(parts, Part::Slices)) s.planes = live_.planes;
-    if (has(parts, Part::Layout)) {
-        s.layout = live_.layout;
-        s.slice_planes_in_3d = live_.slice_planes_in_3d;
-    }
+    copy_plain_parts(live_, s, parts & kPlainParts);
     if (has(parts, Part::Markups)) s.markups = live_.markups;
     if (has(parts, Part::Selection)) s.selected = live_.selected;
     return s;
@@ -357,14 +368,7 @@ void Workspace::restore_surfaces(const std::vector<WorkspaceState::Surface>& sur
 
 void Workspace::restore(const WorkspaceState& s, Parts parts) {
     if (has(parts, Part::Surfaces)) restore_surfaces(s.surfaces);
-    if (has(parts, Part::Look)) live_.look = s.look;
-    if (has(parts, Part::Camera)) live_.camera = s.camera;
-    if (has(parts, Part::Window)) live_.window = s.window;
-    if (has(parts, Part::Slices)) live_.planes = s.planes;
-    if (has(parts, Part::Layout)) {
-        live_.layout = s.layout;
-        live_.slice_planes_in_3d = s.slice_planes_in_3d;
-    }
+    copy_plain_parts(s, live_, parts & kPlainParts);
     if (has(parts, Part::Markups)) {
         if (!has(parts, Part::Selection)) {
             const auto sel = kept_selection(live_.selected, live_.markups, s.markups);
