@@ -18,6 +18,8 @@ PACKAGES=(
   # GL, GUI
   libepoxy-dev libegl-dev libegl-mesa0 libgl1-mesa-dri libgl-dev
   qt6-base-dev libqt6opengl6-dev
+  # clusters and levels of detail of massive meshes (the simplifier)
+  libmeshoptimizer-dev
   # ray-traced ambient occlusion (and the tests' ground truth)
   libembree-dev
   # overlay text: FreeType rasterises DejaVu Sans, which fontconfig finds

@@ -107,6 +107,16 @@ void add_frame_options(CLI::App* c, FrameArgs& a, bool input_required) {
     c->add_option("--oit-memory", req.look.oit_memory_mib,
                   "Translucent surfaces: fragment pool cap in MiB (default 256)")
         ->check(CLI::Range(1.0, 65536.0));
+    c->add_option("--lod", a.lod,
+                  "Levels of detail of large surfaces: auto (default: coarser where the error projects to at most "
+                  "--lod-error pixels) or off (every triangle)")
+        ->check(CLI::IsMember({"auto", "off"}));
+    c->add_option("--lod-error", req.look.lod.error_px,
+                  "Levels of detail: the largest projected geometric error, pixels (default 0.5)")
+        ->check(CLI::Range(0.01, 64.0));
+    c->add_option("--culling", a.culling,
+                  "Levels of detail: cull clusters outside the view, facing away or hidden (on, default) or not (off)")
+        ->check(CLI::IsMember({"on", "off"}));
 }
 
 iso::core::RenderRequest frame_request(const FrameArgs& a) {
@@ -121,6 +131,8 @@ iso::core::RenderRequest frame_request(const FrameArgs& a) {
     apply_volume_options(a.volume, a.volume_mode, req.look.volume);
     req.look.volume.skip_empty = !a.no_empty_skipping;
     for (const auto& c : a.clip) req.look.clip.add(c);
+    req.look.lod.enabled = a.lod != "off";
+    req.look.lod.culling = a.culling != "off";
     if (a.no_aa) {
         req.look.aa.samples = 1;
         req.look.aa.frames = 1;

@@ -34,6 +34,7 @@ struct FrameArgs {
     std::string volume, volume_mode = "composite";
     std::vector<std::string> clip;
     bool no_empty_skipping = false;
+    std::string lod = "auto", culling = "on"; // levels of detail (docs/lod.md)
     iso::core::RenderRequest req;
 };
 

@@ -54,6 +54,16 @@ void print_stats(const iso::graph::FrameStats& stats, const iso::OitStats& oit) 
                   << std::setprecision(4) << oit.merge_error_max << " (linear colour, per channel)\n";
 }
 
+void print_lod_stats(const iso::LodStats& s, const char* which) {
+    if (!s.used) return;
+    std::cout << "levels of detail (" << which << " frame): " << s.triangles_drawn << " of " << s.triangles_full
+              << " triangles drawn; clusters " << s.clusters << ", tested " << s.tested << ", culled "
+              << s.culled_frustum << " outside the view, " << s.culled_backface << " facing away, "
+              << s.culled_occlusion << " hidden; drawn " << s.drawn << " in " << s.phases << " phases";
+    if (s.build_seconds > 0) std::cout << "; levels built in " << std::setprecision(2) << s.build_seconds << " s";
+    std::cout << "\n";
+}
+
 void print_dicom(const iso::DicomCaptureResult& d) {
     std::cout << "DICOM Secondary Capture -> " << d.file << "\n  "
               << (d.source_study ? "in the source's study " : "in a new study (not from DICOM) ") << d.study_uid
@@ -131,8 +141,15 @@ int run_render(const RenderArgs& a) {
     }
     if (!a.dicom.empty()) print_dicom(iso::core::export_dicom(scene, out.image, out.meta, a.dicom));
     if (a.stats) {
+        if (out.aa_frames > 1) {
+            std::cout << "first frame of " << out.aa_frames << ":\n";
+            print_stats(out.first_stats, {});
+            std::cout << "last frame:\n";
+        }
         print_stats(out.stats, out.oit);
         print_volume_stats(out.volume);
+        print_lod_stats(out.lod_first, "first");
+        print_lod_stats(out.lod, "last");
     }
     if (out.oit.merged > 0)
         std::cerr << "warning: " << out.oit.merged << " translucent fragments in " << out.oit.merged_pixels

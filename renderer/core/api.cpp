@@ -164,7 +164,11 @@ RenderResult render_converged(Scene& scene, const Camera& cam, RenderOptions ro,
         r = scene.render(cam, ro);
         if (r.cancelled) throw Cancelled("disk AO");
         out.frames = n;
-        if (n == 1) out.samples = r.aa_samples;
+        if (n == 1) {
+            out.samples = r.aa_samples;
+            out.first.stats = r.stats;
+            out.first.lod = r.lod;
+        }
         if (n >= most) break;
         report(req.progress, double(n) / most, "anti-aliasing", "render");
         // At 2, 4, 8, ... frames the mean of n against that of n / 2; stops from 4 on.
@@ -256,6 +260,10 @@ RenderOutput render_image(Scene& scene, const RenderRequest& req) {
     out.stats = std::move(r.stats);
     out.oit = r.oit;
     out.volume = r.volume;
+    out.lod = r.lod;
+    out.lod_first = aa.first.lod;
+    out.lod.build_seconds = aa.first.lod.build_seconds;
+    out.first_stats = aa.first.stats;
     out.pick = std::move(r.pick);
     out.labels = std::move(r.labels);
     out.gl_renderer = r.gl_renderer;

@@ -120,12 +120,18 @@ struct RenderOutput {
     std::vector<LabelBox> labels; // the overlay's labels as placed and drawn (docs/text.md)
     int aa_frames = 1;            // jittered frames averaged (look.aa)
     double aa_change = 0;         // the last change of their mean (sRGB units; look.aa.tolerance)
+    // Levels of detail and culling (docs/lod.md): the first frame's and the
+    // last one's statistics (build_seconds: the levels built for this render),
+    // and the first frame's passes (stats are the last one's).
+    LodStats lod_first, lod;
+    graph::FrameStats first_stats;
 };
 
 // How an export's accumulation ended: frames averaged and the last change
 // of their mean between N/2 and N frames (RMS over the pixels that changed,
 // sRGB units), and the words the image metadata records.
 struct Convergence {
+    RenderResult first; // the first frame's statistics (no image)
     int frames = 1;
     int samples = 1; // DSRAA's sub-samples in the first frame (the GL's limit may lower look.aa.samples)
     double change = 0;

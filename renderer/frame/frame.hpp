@@ -32,6 +32,10 @@ struct SceneObject {
     glm::vec3 color{0.9f, 0.85f, 0.8f}; // linear RGB albedo
     float opacity = 1.0f;
     bool visible = true, pickable = true;
+    // Every edge joins two triangles and the triangles wind outward (a
+    // closed surface): its clusters that face away from an eye outside its
+    // bounds may be culled (docs/lod.md). False when not known.
+    bool closed = false;
 };
 
 enum class Aov { None, Depth, Normal, Id, Ao };
@@ -69,6 +73,21 @@ struct AntiAliasing {
     float normal_cos = 0.8f; // DSRAA: a neighbour's normal matches a sub-sample's within acos(normal_cos)
     bool operator==(const AntiAliasing&) const = default;
 };
+
+// Levels of detail and culling of massive surfaces (docs/lod.md): a
+// surface of at least kLodMinTriangles triangles is cut into clusters with
+// coarser levels; each frame draws, per cell, the coarsest level whose
+// geometric error projects to at most `error_px` pixels, and culls the
+// clusters outside the view, facing away (closed surfaces seen from
+// outside) or hidden behind what is drawn. Picks, rulers, measurement and
+// surface distance always use the full geometry.
+struct LodSettings {
+    bool enabled = true;   // auto; off: every triangle of every surface is drawn
+    double error_px = 0.5; // the bound on the projected geometric error, pixels
+    bool culling = true;   // frustum, back-facing and occlusion culling of clusters (with enabled)
+    bool operator==(const LodSettings&) const = default;
+};
+constexpr std::size_t kLodMinTriangles = 262144;
 
 // How a frame shades its surfaces: the one description that the CLI's
 // options, the 3D view, sessions, image exports and the renderer all read
@@ -108,6 +127,7 @@ struct FrameLook {
     VolumeLook volume;
     // A crop that cuts the surfaces and the volume alike (LPS mm).
     Clip clip;
+    LodSettings lod;
     bool operator==(const FrameLook&) const = default;
 };
 
@@ -243,6 +263,18 @@ struct VolumeStats {
     bool uploaded = false;           // the texture was (re)made this frame
 };
 
+// What the cluster culling did this frame (docs/lod.md): clusters of the
+// surfaces with levels, those at each cell's selected level (tested) and
+// what culled them; triangles drawn against the full meshes' (surfaces
+// without levels count whole).
+struct LodStats {
+    bool used = false;
+    std::uint64_t clusters = 0, tested = 0, culled_frustum = 0, culled_backface = 0, culled_occlusion = 0, drawn = 0;
+    std::uint64_t triangles_drawn = 0, triangles_full = 0;
+    int phases = 0;           // draw phases of the G-buffer (2: with last frame's visibility)
+    double build_seconds = 0; // levels built this frame (the first that asked for them)
+};
+
 // A label the overlay drew (a markup's name or value, one of
 // Annotations::labels, an orientation letter, the scale bar's length): where
 // it went and, so that what was drawn can be checked against the image, its
@@ -275,6 +307,7 @@ struct RenderResult {
     double ao_guard = 0;    // guard band used by the slicemap, fraction of the viewport per side
     OitStats oit;
     VolumeStats volume;
+    LodStats lod;
     std::vector<std::uint32_t> oit_lists; // with RenderHooks::read_oit_lists
     PickList pick;                        // with RenderOptions::pick
     // Disk AO: the hierarchy was built (some surface's on the CPU) and

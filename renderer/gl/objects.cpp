@@ -29,16 +29,18 @@ void Buffer::read(std::size_t offset, std::size_t bytes, void* out) const {
 }
 
 // One level, nearest filtering, clamped: what the passes sample.
-Texture Texture::create(GLenum target, GLenum internal_format, int width, int height, int depth) {
+Texture Texture::create(GLenum target, GLenum internal_format, int width, int height, int depth, int levels) {
     GLuint id = 0;
     glCreateTextures(target, 1, &id);
     Texture t;
     static_cast<Object<TextureTraits>&>(t) = Object<TextureTraits>(id);
     if (target == GL_TEXTURE_2D)
-        glTextureStorage2D(id, 1, internal_format, width, height);
+        glTextureStorage2D(id, levels, internal_format, width, height);
     else
         glTextureStorage3D(id, 1, internal_format, width, height, depth);
-    glTextureParameteri(id, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
+    // A texture with levels is read level by level (texelFetch): its
+    // filter must be a mipmap one for the levels above 0 to count.
+    glTextureParameteri(id, GL_TEXTURE_MIN_FILTER, levels > 1 ? GL_NEAREST_MIPMAP_NEAREST : GL_NEAREST);
     glTextureParameteri(id, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
     glTextureParameteri(id, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
     glTextureParameteri(id, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
@@ -52,6 +54,10 @@ Texture Texture::create(GLenum target, GLenum internal_format, int width, int he
 
 Texture Texture::create_2d(GLenum internal_format, int width, int height) {
     return create(GL_TEXTURE_2D, internal_format, width, height, 1);
+}
+
+Texture Texture::create_2d_levels(GLenum internal_format, int width, int height, int levels) {
+    return create(GL_TEXTURE_2D, internal_format, width, height, 1, levels);
 }
 
 Texture Texture::create_2d_array(GLenum internal_format, int width, int height, int layers) {

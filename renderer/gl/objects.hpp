@@ -90,6 +90,8 @@ public:
     Texture() = default;
     // 2D texture with one level of `internal_format` (e.g. GL_RGBA8, GL_DEPTH_COMPONENT32F).
     static Texture create_2d(GLenum internal_format, int width, int height);
+    // 2D texture with `levels` mip levels (nearest filtering; a depth pyramid).
+    static Texture create_2d_levels(GLenum internal_format, int width, int height, int levels);
     // 2D array texture (layers >= 1), one level, nearest filtering.
     static Texture create_2d_array(GLenum internal_format, int width, int height, int layers);
     // 3D texture, one level, nearest filtering.
@@ -102,7 +104,7 @@ public:
     GLenum format() const { return format_; }
 
 private:
-    static Texture create(GLenum target, GLenum internal_format, int width, int height, int depth);
+    static Texture create(GLenum target, GLenum internal_format, int width, int height, int depth, int levels = 1);
     int w_ = 0, h_ = 0, d_ = 1;
     GLenum format_ = 0;
 };

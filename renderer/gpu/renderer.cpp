@@ -17,6 +17,7 @@
 #include "renderer/passes/disk_state.hpp"
 #include "renderer/passes/build_frame.hpp"
 #include "renderer/passes/gl_resources.hpp"
+#include "renderer/passes/lod_draw.hpp"
 
 namespace iso {
 
@@ -35,6 +36,9 @@ struct GpuMesh {
     // a new version.
     std::shared_ptr<const DiskHierarchy> disk;
     std::uint64_t version = 0;
+    // Clusters and levels of detail (a large mesh, built on the first frame
+    // that asks for them; docs/lod.md); the element buffer is then theirs.
+    std::unique_ptr<passes::GpuLod> lod;
 };
 
 std::vector<glm::vec3> vertex_normals(const Mesh& m) {
@@ -66,6 +70,7 @@ struct Renderer::Impl {
     std::size_t oit_next_capacity = 0; // VOIT pool nodes for the next frame (0: none drawn yet)
     bool oit_cut = false;              // the last frame at the VOIT cap needed the depth cut: start with it
     GpuVolume volume;
+    passes::CullState cull;
 };
 
 Renderer::Renderer() : impl_(std::make_unique<Impl>()) {}
@@ -115,6 +120,48 @@ Mesh read_back(const GpuMesh& g) {
     g.indices.read(0, m.triangles.size() * 12, m.triangles.data());
     return m;
 }
+// Builds the clusters and levels of the large visible meshes that lack them
+// when the frame asks for levels of detail (from the mesh read back: the
+// renderer keeps no CPU copy); returns the seconds spent.
+double prepare_lod(std::vector<GpuMesh>& meshes, const RenderOptions& opt) {
+    if (!opt.look.lod.enabled || opt.pick) return 0.0;
+    double seconds = 0.0;
+    for (auto& g : meshes) {
+        if (g.lod || !g.object.visible || std::size_t(g.count) / 3 < kLodMinTriangles) continue;
+        const lod::ClusterLod c = lod::build_cluster_lod(read_back(g));
+        g.lod = std::make_unique<passes::GpuLod>(passes::upload_lod(c, g.vao.id(), g.indices));
+        seconds += c.build_seconds;
+    }
+    return seconds;
+}
+
+std::vector<const passes::DrawItem*> draws_of(const passes::FrameContext& ctx) {
+    std::vector<const passes::DrawItem*> v;
+    for (const auto& d : ctx.draws) v.push_back(&d);
+    for (const auto& d : ctx.translucent) v.push_back(&d);
+    return v;
+}
+
+// The frame's cluster statistics, read back from each surface's counters.
+void lod_stats(const passes::FrameContext& ctx, LodStats& s) {
+    for (const passes::DrawItem* d : draws_of(ctx)) {
+        s.triangles_full += std::uint64_t(d->count) / 3;
+        if (!d->lod || (!ctx.opt.look.lod.enabled && !ctx.pick)) {
+            s.triangles_drawn += std::uint64_t(d->count) / 3;
+            continue;
+        }
+        std::uint32_t c[16] = {};
+        d->lod->counts.read(0, sizeof c, c);
+        s.clusters += d->lod->cluster_count;
+        s.tested += c[8];
+        s.culled_frustum += c[9];
+        s.culled_backface += c[10];
+        s.culled_occlusion += c[11];
+        s.drawn += c[12];
+        s.triangles_drawn += c[13];
+    }
+}
+
 } // namespace
 
 std::uint32_t Renderer::add(const Mesh& m, const SceneObject& o) {
@@ -165,12 +212,14 @@ RenderResult Renderer::render(const Camera& camera, const RenderOptions& opt, co
                                   " is out of range (1..16384)");
     validate(opt.look);
     Impl& im = *impl_;
+    const double lod_seconds = prepare_lod(im.meshes, opt);
     std::vector<passes::DrawItem> draws;
     for (std::size_t i = 0; i < im.meshes.size(); ++i) {
-        const auto& m = im.meshes[i];
+        auto& m = im.meshes[i];
         if (!m.object.visible || m.count == 0) continue;
         draws.push_back({m.vao.id(), m.count, std::uint32_t(i + 1), m.object.color,
-                         opt.look.transparency ? std::clamp(m.object.opacity, 0.0f, 1.0f) : 1.0f, m.bounds});
+                         opt.look.transparency ? std::clamp(m.object.opacity, 0.0f, 1.0f) : 1.0f, m.bounds, m.lod.get(),
+                         m.object.closed});
     }
     const Bounds b = bounds();
     // The VOIT pool: sized from the last frame's fragment count; a frame that
@@ -197,6 +246,7 @@ RenderResult Renderer::render(const Camera& camera, const RenderOptions& opt, co
     }
     ctx.ao = &im.ao;
     ctx.disk = &im.disk;
+    ctx.cull = &im.cull;
     // The volume serves the colour image only (picks march it on the CPU: core/pick.hpp).
     if (opt.look.volume.enabled && opt.image && opt.aov == Aov::None) ctx.volume = &im.volume.prepare(opt.look.volume);
     for (const auto& d : ctx.draws) {
@@ -234,7 +284,11 @@ RenderResult Renderer::render(const Camera& camera, const RenderOptions& opt, co
         graph::FrameGraph fg;
         if (opt.time_passes) fg.set_pass_epilogue([] { glFinish(); });
         passes::build_frame(fg, ctx);
+        for (const auto& d : draws_of(ctx))
+            if (d->lod) d->lod->counts.clear_u32(0);
         result.stats = fg.execute(im.pool);
+        lod_stats(ctx, result.lod);
+        result.lod.build_seconds = lod_seconds;
         // Without an image the resolve did not run: no fragment count to size the pool from, nothing to redraw.
         if (ctx.translucent.empty() || !opt.image) return result;
         // Sizes are powers of two and shrink only when four times too large,

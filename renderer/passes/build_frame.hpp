@@ -37,6 +37,8 @@ namespace iso::passes {
 
 class GlResources;
 struct DiskState;
+struct GpuLod;
+struct CullState;
 
 // A VOIT list node (OitNode in shaders/render/oit_common.glsl): five 32-bit
 // words, the link to the next node last.
@@ -50,6 +52,10 @@ struct DrawItem {
     glm::vec3 color{1.0f};  // linear albedo
     float opacity = 1.0f;
     Bounds bounds; // LPS mm: orders the translucent draws near to far
+    // Its clusters and levels (lod_draw.hpp; null: drawn whole), and
+    // whether it is closed (back-facing clusters may be culled).
+    GpuLod* lod = nullptr;
+    bool closed = false;
 };
 
 // What the AO passes keep between frames besides their history resources.
@@ -125,6 +131,7 @@ struct FrameContext {
     AoHistory* ao = nullptr;                // required when the AO passes run
     std::vector<DiskSurface> disk_surfaces; // the opaque draws' meshes, for disk AO
     DiskState* disk = nullptr;              // required when the disk AO passes run
+    CullState* cull = nullptr;              // the depth pyramid of the cluster culling (lod_draw.hpp)
     RenderResult* result = nullptr;         // what passes report back (image, AO state, slicemap)
     const VolumeInput* volume = nullptr;    // the volume to ray cast in the colour image (null: none)
 };

@@ -14,6 +14,7 @@
 
 #include "renderer/passes/gbuffer_layout.hpp"
 #include "renderer/passes/gl_resources.hpp"
+#include "renderer/passes/lod_draw.hpp"
 #include "renderer/passes/std140.hpp"
 
 namespace iso::passes {
@@ -48,7 +49,8 @@ void clear_gbuffer(GLuint fb, bool primitive) {
     glClearNamedFramebufferfv(fb, GL_DEPTH, 0, &far_depth);
 }
 
-void draw_meshes(const FrameContext& ctx, GlResources& gl, const graph::Resources& r, const GBuffer& d, bool vis) {
+void draw_meshes(const FrameContext& ctx, GlResources& gl, const graph::Resources& r, const GBuffer& d, bool vis,
+                 GLuint depth, int samples) {
     glClipControl(GL_LOWER_LEFT, GL_ZERO_TO_ONE);
     glEnable(GL_DEPTH_TEST);
     glDepthFunc(GL_GREATER);
@@ -71,12 +73,17 @@ void draw_meshes(const FrameContext& ctx, GlResources& gl, const graph::Resource
     set_clip(ctx, prog);
     bind_params(gl, r, d.params, GBufferParams{ctx.raster_view_projection});
     const GLint id_loc = prog.uniform("object_id"), albedo_loc = prog.uniform("albedo");
-    for (const auto& m : ctx.draws) {
-        glUniform1ui(id_loc, m.id);
-        glUniform3fv(albedo_loc, 1, &m.color.x);
-        glBindVertexArray(m.vao);
-        glDrawElements(GL_TRIANGLES, m.count, GL_UNSIGNED_INT, nullptr);
-    }
+    // Surfaces with levels of detail are culled by clusters, which runs
+    // compute steps between the draws: each draw binds the program again.
+    draw_surfaces(
+        ctx, gl, ctx.draws, DrawSet::Visible,
+        [&](const DrawItem& m) {
+            prog.use();
+            glUniform1ui(id_loc, m.id);
+            glUniform3fv(albedo_loc, 1, &m.color.x);
+            if (d.primitive.valid()) bind_triangle_order(m, prog.id());
+        },
+        depth, samples);
     glBindVertexArray(0);
     glDisable(GL_DEPTH_TEST);
     glClipControl(GL_LOWER_LEFT, GL_NEGATIVE_ONE_TO_ONE);
@@ -143,12 +150,12 @@ GBuffer gbuffer(graph::FrameGraph& fg, const FrameContext& ctx) {
                 const float far_depth = 0.0f; // reversed Z
                 glClearNamedFramebufferuiv(ms_fb, GL_COLOR, 0, zero_u);
                 glClearNamedFramebufferfv(ms_fb, GL_DEPTH, 0, &far_depth);
-                draw_meshes(ctx, gl, r, d, true);
+                draw_meshes(ctx, gl, r, d, true, gl.texture(r, d.ms_depth), S);
                 copy_sample0(ctx, gl, r, d, fb);
             } else {
                 glBindFramebuffer(GL_FRAMEBUFFER, fb);
                 clear_gbuffer(fb, d.primitive.valid());
-                draw_meshes(ctx, gl, r, d, false);
+                draw_meshes(ctx, gl, r, d, false, gl.texture(r, d.depth), 1);
             }
             glBindFramebuffer(GL_FRAMEBUFFER, 0);
         });

@@ -10,6 +10,7 @@
 
 #include "renderer/passes/build_frame.hpp"
 #include "renderer/passes/gl_resources.hpp"
+#include "renderer/passes/lod_draw.hpp"
 #include "renderer/passes/std140.hpp"
 
 namespace iso::passes {
@@ -40,11 +41,11 @@ void draw_translucent(GlResources& gl, const FrameContext& ctx, GLuint depth, is
     glDepthMask(GL_FALSE);
     glDisable(GL_CULL_FACE);
     const GLint id_loc = prog.uniform("object_id");
-    for (const auto& m : ctx.translucent) {
+    draw_surfaces(ctx, gl, ctx.translucent, DrawSet::InView, [&](const DrawItem& m) {
+        prog.use();
         glUniform1ui(id_loc, m.id);
-        glBindVertexArray(m.vao);
-        glDrawElements(GL_TRIANGLES, m.count, GL_UNSIGNED_INT, nullptr);
-    }
+        bind_triangle_order(m, prog.id());
+    });
     glBindVertexArray(0);
     glDepthMask(GL_TRUE);
     glDisable(GL_DEPTH_TEST);

@@ -4,6 +4,7 @@
 // (ao_plan.cpp).
 #include "renderer/passes/build_frame.hpp"
 #include "renderer/passes/gl_resources.hpp"
+#include "renderer/passes/lod_draw.hpp"
 #include "renderer/passes/std140.hpp"
 
 namespace iso::passes {
@@ -46,21 +47,15 @@ graph::TextureHandle voxelize(graph::FrameGraph& fg, const FrameContext& ctx, co
                             VoxelizeParams{plan->sm_view_projection, plan->view, plan->scene_far, plan->near_margin,
                                            plan->radius});
                 glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, gl.buffer(r, d.range));
-                for (const auto& m : ctx.draws) {
-                    glBindVertexArray(m.vao);
-                    glDrawElements(GL_TRIANGLES, m.count, GL_UNSIGNED_INT, nullptr);
-                }
+                // Levels of detail drawn whole (occluders outside the view count).
+                draw_surfaces(ctx, gl, ctx.draws, DrawSet::Complete, [&](const DrawItem&) { prog.use(); });
                 if (plan->settings.surface_voxels) {
                     // OR in the voxels next to every surface, on its solid's side
                     // (slicemap_surface.frag): walls thinner than a voxel in z stay.
                     glLogicOp(GL_OR);
-                    gl.program({"ao/slicemap.vert", "ao/slicemap_surface.frag"},
-                               "#define LAYERS " + std::to_string(layers) + "\n")
-                        .use();
-                    for (const auto& m : ctx.draws) {
-                        glBindVertexArray(m.vao);
-                        glDrawElements(GL_TRIANGLES, m.count, GL_UNSIGNED_INT, nullptr);
-                    }
+                    auto& surface = gl.program({"ao/slicemap.vert", "ao/slicemap_surface.frag"},
+                                               "#define LAYERS " + std::to_string(layers) + "\n");
+                    draw_surfaces(ctx, gl, ctx.draws, DrawSet::Complete, [&](const DrawItem&) { surface.use(); });
                 }
                 glBindVertexArray(0);
                 glClipControl(GL_LOWER_LEFT, GL_NEGATIVE_ONE_TO_ONE);

@@ -2,13 +2,14 @@
 #extension GL_GOOGLE_include_directive : require
 // Writes the world normal, the object id and the albedo; depth goes to the
 // (reversed-Z, float) depth attachment. With GB_PRIMITIVE (a pick rides on
-// this frame), the triangle too (gl_PrimitiveID): the pick's opaque layer
+// this frame), the triangle too (mesh_triangle()): the pick's opaque layer
 // (docs/picking.md). With GB_VIS (DSRAA's multisample visibility
 // sub-samples), only the object id and the octahedral normal, in one RG32UI
 // output: the albedo follows from the id. No side effects, so the depth
 // test stays early.
 #include "octahedral.glsl"
 #include "clip.glsl"
+#include "lod_pick.glsl"
 
 in vec3 world_normal;
 
@@ -46,7 +47,7 @@ void main() {
     out_id = object_id;
     out_albedo = vec4(albedo, 1.0);
 #ifdef GB_PRIMITIVE
-    out_primitive = uint(gl_PrimitiveID);
+    out_primitive = mesh_triangle();
 #endif
 #endif
 }

@@ -20,6 +20,7 @@
 #include "oit_params.glsl"
 #include "oit_common.glsl"
 #include "clip.glsl"
+#include "lod_pick.glsl"
 #ifdef OIT_MERGE
 #include "shading.glsl"
 #endif
@@ -91,7 +92,7 @@ void main() {
     }
     oit_nodes[index].depth = gl_FragCoord.z;
     oit_nodes[index].object = object_id;
-    oit_nodes[index].primitive = uint(gl_PrimitiveID);
+    oit_nodes[index].primitive = mesh_triangle();
     oit_nodes[index].normal = pack_normal(n);
     oit_nodes[index].next = imageAtomicExchange(heads, ivec2(gl_FragCoord.xy), index);
 }

@@ -8,7 +8,7 @@
 struct PickEntry {
     float depth;          // reversed Z: larger is nearer
     uint object;          // 1-based object id
-    uint primitive;       // gl_PrimitiveID: the triangle in the object's mesh
+    uint primitive;       // mesh_triangle(): the triangle in the object's mesh
     float alpha;          // the object's opacity
     uint next;            // the pixel's next entry; 0xFFFFFFFF ends it
     float transmittance;  // before this entry, front to back (pick_resolve.comp)
@@ -32,7 +32,7 @@ void pick_append(uint object, float alpha) {
     if (k >= pick_capacity) return;   // counted: the read-back reports how many did not fit
     pick_entries[k].depth = gl_FragCoord.z;
     pick_entries[k].object = object;
-    pick_entries[k].primitive = uint(gl_PrimitiveID);
+    pick_entries[k].primitive = mesh_triangle();
     pick_entries[k].alpha = alpha;
     pick_entries[k].transmittance = 1.0;
     pick_entries[k].next = atomicExchange(pick_heads[uint(q.y) * uint(pick_rect.z) + uint(q.x)], k);

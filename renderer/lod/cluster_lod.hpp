@@ -1,0 +1,98 @@
+// Clusters and levels of detail of one surface, for drawing massive meshes
+// (docs/lod.md): the mesh is cut into cells (compact groups of about
+// LodBuildOptions::cell_triangles triangles, by median splits of their
+// centroids), each cell is simplified into coarser levels with its border
+// locked (libmeshoptimizer's meshopt_simplify with meshopt_SimplifyLockBorder),
+// so any two neighbouring cells at any two levels meet on the same border
+// vertices: no cracks, whatever level each cell is drawn at. Every level of
+// every cell is cut again into clusters of at most cluster_triangles
+// triangles with their bounds and normal cone: the unit the GPU culls
+// (renderer/passes/lod_draw.cpp, shaders/render/cull.comp).
+//
+// All levels index the mesh's own vertices (the simplifier keeps a subset):
+// the vertex buffer is drawn as it is, with the original normals. Level 0
+// is the whole mesh, its triangles reordered by cluster; `triangle_order`
+// maps them back, so that a pick on level 0 names the mesh's triangle.
+#pragma once
+
+#include <array>
+#include <cstddef>
+#include <cstdint>
+#include <vector>
+
+#include <glm/vec3.hpp>
+
+#include "io/mesh.hpp"
+#include "io/progress.hpp"
+
+namespace iso::lod {
+
+constexpr int kMaxLevels = 8;
+
+// std430 layouts of shaders/render/cull.comp (LodCell, LodCluster).
+struct alignas(16) Cell {
+    glm::vec3 lo{0.0f};
+    std::uint32_t levels = 1; // levels built (1: level 0 only)
+    glm::vec3 hi{0.0f};
+    std::uint32_t first_cluster = 0;
+    // Geometric error of each level against level 0 (mm; error[0] = 0): the
+    // simplifier's error of each step, summed along the chain, an upper bound.
+    std::array<float, kMaxLevels> error{};
+};
+static_assert(sizeof(Cell) == 64);
+
+struct alignas(16) Cluster {
+    glm::vec3 lo{0.0f};
+    std::uint32_t cell = 0;
+    glm::vec3 hi{0.0f};
+    std::uint32_t level = 0;
+    // Normal cone: every triangle's unit normal (by its winding) is within
+    // acos(cos_angle) of `axis`; cos_angle <= 0: no cone (never culled as
+    // back-facing).
+    glm::vec3 axis{0.0f, 0.0f, 1.0f};
+    float cos_angle = -1.0f;
+    glm::vec3 centre{0.0f}; // of the bounds, and the bounding sphere's radius
+    float radius = 0.0f;
+    std::uint32_t first_index = 0, index_count = 0;
+    std::uint32_t pad[2] = {0, 0};
+};
+static_assert(sizeof(Cluster) == 80);
+
+struct BuildOptions {
+    std::size_t cell_triangles = 32768;   // a cell's level 0, at most
+    std::size_t cluster_triangles = 2048; // a cluster, at most
+    // Each level asks for this fraction of the level before; levels stop when
+    // a step keeps more than `min_reduction` of its input (the locked border
+    // is then most of the cell) or at kMaxLevels.
+    double level_ratio = 0.25, min_reduction = 0.8;
+};
+
+struct ClusterLod {
+    std::vector<std::uint32_t> indices; // every level's triangles, cluster by cluster
+    std::size_t level0_indices = 0;     // the first ones: level 0, the whole mesh
+    // Level 0's triangle i (indices[3i..3i+2]) is the mesh's triangle triangle_order[i].
+    std::vector<std::uint32_t> triangle_order;
+    std::vector<Cell> cells;
+    std::vector<Cluster> clusters; // by cell, then level
+    // Triangles of all cells at each level (a cell with fewer levels counts
+    // its coarsest in the levels after it): what a frame draws at one level.
+    std::array<std::size_t, kMaxLevels> level_triangles{};
+    int max_levels = 1;
+    double build_seconds = 0;
+    std::size_t memory_bytes() const;
+};
+
+// Builds the clusters and levels of `m` (its triangles; the vertices are
+// not copied). Runs on every core (TBB); `progress` gets the cells done.
+// A mesh of fewer than two cells' triangles gets one cell.
+ClusterLod build_cluster_lod(const Mesh& m, const BuildOptions& o = {}, const ProgressFn& progress = {});
+
+// The level of `cell` drawn for a view: the coarsest whose error, projected
+// at the cell's nearest point to `eye`, is at most `max_error_px` pixels;
+// `pixels_per_mm_at_1mm` is the image height over 2 tan(fov_y / 2) (a
+// length L at distance d spans L * pixels_per_mm_at_1mm / d pixels). The
+// same rule as cull.comp's (tests compare them).
+std::uint32_t select_level(const Cell& cell, const glm::vec3& eye, float pixels_per_mm_at_1mm, float max_error_px,
+                           float near_plane);
+
+} // namespace iso::lod

@@ -1,0 +1,266 @@
+// Culled, indirect drawing of surfaces with levels of detail (lod_draw.hpp).
+#include "renderer/passes/lod_draw.hpp"
+
+#include <algorithm>
+#include <bit>
+#include <cmath>
+#include <limits>
+
+#include <glm/glm.hpp>
+
+#include "renderer/passes/build_frame.hpp"
+#include "renderer/passes/gl_resources.hpp"
+
+namespace iso::passes {
+
+namespace {
+
+// Slots of a surface's command buffer: the G-buffer's phases, then the other sets.
+constexpr std::uint32_t kSlots = 8, kInViewSlot = 4, kCompleteSlot = 5, kPickSlot = 6;
+// Counts buffer: per-slot draw counts, then the statistics (lod_cull.comp's C_*).
+enum LodCounter : std::uint32_t {
+    kSelected = 8,
+    kFrustum,
+    kBackface,
+    kOccluded,
+    kDrawn,
+    kTriangles,
+    kOtherLevel,
+    kCounters
+};
+constexpr std::uint32_t kModeAll = 0, kModeFirst = 1, kModeTest = 2, kModeFinal = 3;
+constexpr std::size_t kCommandBytes = 20; // DrawElementsIndirectCommand
+
+struct CullCall {
+    std::uint32_t mode = kModeAll, slot = 0;
+    bool history = false, backface = false, frustum = true, count_tests = false, count_draws = false;
+    float max_error_px = 0;
+    glm::vec2 batch{0.0f, std::numeric_limits<float>::infinity()};
+};
+
+// Runs lod_cull.comp over one surface's clusters.
+void cull(const FrameContext& ctx, GlResources& gl, const GpuLod& lod, const CullCall& c, const CullState* pyramid) {
+    const GLuint zero = 0;
+    glClearNamedBufferSubData(lod.counts.id(), GL_R32UI, c.slot * 4, 4, GL_RED_INTEGER, GL_UNSIGNED_INT, &zero);
+    auto& prog = gl.program({"render/lod_cull.comp"});
+    prog.use();
+    const GLuint p = prog.id();
+    const double aspect_h = double(ctx.height);
+    const float px_per_mm = float(aspect_h / (2.0 * std::tan(glm::radians(ctx.camera.fov_y_degrees) / 2.0)));
+    glProgramUniformMatrix4fv(p, prog.uniform("view_projection"), 1, GL_FALSE, &ctx.raster_view_projection[0][0]);
+    const glm::vec3 eye(ctx.camera.eye);
+    glProgramUniform3fv(p, prog.uniform("eye"), 1, &eye.x);
+    glProgramUniform1f(p, prog.uniform("px_per_mm_at_1mm"), px_per_mm);
+    glProgramUniform1f(p, prog.uniform("max_error_px"), c.max_error_px);
+    glProgramUniform1f(p, prog.uniform("near_plane"), float(ctx.camera.near_plane));
+    glProgramUniform1ui(p, prog.uniform("cluster_count"), lod.cluster_count);
+    glProgramUniform1ui(p, prog.uniform("mode"), c.mode);
+    glProgramUniform1ui(p, prog.uniform("slot"), c.slot);
+    glProgramUniform1i(p, prog.uniform("history"), c.history);
+    glProgramUniform2f(p, prog.uniform("batch"), c.batch.x, c.batch.y);
+    glProgramUniform1i(p, prog.uniform("backface"), c.backface);
+    glProgramUniform1i(p, prog.uniform("frustum"), c.frustum);
+    glProgramUniform1i(p, prog.uniform("count_tests"), c.count_tests);
+    glProgramUniform1i(p, prog.uniform("count_draws"), c.count_draws);
+    glProgramUniform2f(p, prog.uniform("viewport"), float(ctx.width), float(ctx.height));
+    glm::vec4 region(0.0f);
+    if (ctx.pick) {
+        const glm::ivec4 r = pick_rect_gl(ctx);
+        region = glm::vec4(r.x, r.y, r.x + r.z, r.y + r.w);
+    }
+    glProgramUniform4fv(p, prog.uniform("region"), 1, &region.x);
+    glProgramUniform1i(p, prog.uniform("pyramid_levels"), pyramid ? pyramid->levels : 1);
+    glProgramUniform2i(p, prog.uniform("pyramid_size"), pyramid ? pyramid->width : 1, pyramid ? pyramid->height : 1);
+    if (pyramid) glBindTextureUnit(14, pyramid->pyramid.id());
+    lod.cells.bind_base(GL_SHADER_STORAGE_BUFFER, 20);
+    lod.clusters.bind_base(GL_SHADER_STORAGE_BUFFER, 21);
+    lod.state.bind_base(GL_SHADER_STORAGE_BUFFER, 22);
+    lod.commands.bind_base(GL_SHADER_STORAGE_BUFFER, 23);
+    lod.counts.bind_base(GL_SHADER_STORAGE_BUFFER, 24);
+    glDispatchCompute((lod.cluster_count + 63) / 64, 1, 1);
+    glMemoryBarrier(GL_COMMAND_BARRIER_BIT | GL_SHADER_STORAGE_BARRIER_BIT);
+}
+
+// Draws what cull() appended to `slot`.
+void draw_slot(const DrawItem& item, const GpuLod& lod, std::uint32_t slot) {
+    glBindVertexArray(item.vao);
+    glBindBuffer(GL_DRAW_INDIRECT_BUFFER, lod.commands.id());
+    glBindBuffer(GL_PARAMETER_BUFFER_ARB, lod.counts.id());
+    glMultiDrawElementsIndirectCountARB(
+        GL_TRIANGLES, GL_UNSIGNED_INT,
+        reinterpret_cast<const void*>(std::uintptr_t(slot) * lod.cluster_count * kCommandBytes), GLintptr(slot * 4),
+        GLsizei(lod.cluster_count), GLsizei(kCommandBytes));
+    glBindBuffer(GL_PARAMETER_BUFFER_ARB, 0);
+    glBindBuffer(GL_DRAW_INDIRECT_BUFFER, 0);
+}
+
+void draw_whole(const DrawItem& item) {
+    glBindVertexArray(item.vao);
+    glDrawElements(GL_TRIANGLES, item.count, GL_UNSIGNED_INT, nullptr);
+}
+
+// The pyramid of the depth drawn so far (depth_pyramid.comp).
+void build_pyramid(const FrameContext& ctx, GlResources& gl, CullState& s, GLuint depth, int samples) {
+    const int w = int(std::bit_ceil(unsigned(ctx.width))), h = int(std::bit_ceil(unsigned(ctx.height)));
+    if (s.width != w || s.height != h) {
+        s.levels = std::bit_width(unsigned(std::max(w, h)));
+        s.pyramid = gl::Texture::create_2d_levels(GL_R32F, w, h, s.levels);
+        s.width = w;
+        s.height = h;
+    }
+    const GLuint tex = s.pyramid.id();
+    auto& first = gl.program({"render/depth_pyramid.comp"},
+                             "#define FROM_DEPTH 1\n" +
+                                 (samples > 1 ? "#define SAMPLES " + std::to_string(samples) + "\n" : std::string()));
+    first.use();
+    glProgramUniform2i(first.id(), first.uniform("image_size"), ctx.width, ctx.height);
+    glBindTextureUnit(15, depth);
+    glBindImageTexture(7, tex, 0, GL_FALSE, 0, GL_WRITE_ONLY, GL_R32F);
+    glDispatchCompute(GLuint((w + 7) / 8), GLuint((h + 7) / 8), 1);
+    auto& down = gl.program({"render/depth_pyramid.comp"});
+    down.use();
+    for (int l = 1; l < s.levels; ++l) {
+        glMemoryBarrier(GL_SHADER_IMAGE_ACCESS_BARRIER_BIT);
+        glBindImageTexture(6, tex, l - 1, GL_FALSE, 0, GL_READ_ONLY, GL_R32F);
+        glBindImageTexture(7, tex, l, GL_FALSE, 0, GL_WRITE_ONLY, GL_R32F);
+        const int lw = std::max(1, w >> l), lh = std::max(1, h >> l);
+        glDispatchCompute(GLuint((lw + 7) / 8), GLuint((lh + 7) / 8), 1);
+    }
+    glMemoryBarrier(GL_TEXTURE_FETCH_BARRIER_BIT | GL_SHADER_IMAGE_ACCESS_BARRIER_BIT);
+}
+
+float lod_error(const FrameContext& ctx) { return ctx.opt.look.lod.enabled ? float(ctx.opt.look.lod.error_px) : 0.0f; }
+
+bool backface_ok(const FrameContext& ctx, const DrawItem& item) {
+    // A closed surface seen from outside its bounds, uncut: what faces away is hidden behind what faces the eye.
+    const glm::dvec3 e = ctx.camera.eye;
+    const bool inside =
+        glm::all(glm::greaterThanEqual(e, item.bounds.min)) && glm::all(glm::lessThanEqual(e, item.bounds.max));
+    return item.closed && !ctx.opt.look.clip.active() && !inside;
+}
+
+// Without a last frame: the nearest distance of each quarter of the cells.
+std::array<float, 5> batches(const FrameContext& ctx, const std::vector<const DrawItem*>& items) {
+    std::vector<float> d;
+    const glm::vec3 eye(ctx.camera.eye);
+    for (const DrawItem* it : items)
+        for (const auto& c : it->lod->cpu_cells) d.push_back(glm::length(eye - glm::clamp(eye, c.lo, c.hi)));
+    std::sort(d.begin(), d.end());
+    const float inf = std::numeric_limits<float>::infinity();
+    std::array<float, 5> b{0.0f, inf, inf, inf, inf};
+    if (d.empty()) return b;
+    for (int q = 1; q < 4; ++q) b[std::size_t(q)] = d[d.size() * std::size_t(q) / 4];
+    return b;
+}
+
+// The G-buffer's surfaces in the two-pass occlusion scheme (lod_draw.hpp).
+void draw_visible(const FrameContext& ctx, GlResources& gl, const std::vector<DrawItem>& items,
+                  const std::function<void(const DrawItem&)>& bind, GLuint depth, int samples) {
+    std::vector<const DrawItem*> lod;
+    bool history = true;
+    for (const auto& it : items)
+        if (it.lod) {
+            lod.push_back(&it);
+            history = history && it.lod->frames > 0;
+        }
+    const auto b = batches(ctx, lod);
+    const int phases = history ? 2 : 4;
+    ctx.result->lod.phases = phases;
+    CullState& pyramid = *ctx.cull;
+    for (int phase = 0; phase < phases; ++phase) {
+        if (phase > 0) build_pyramid(ctx, gl, pyramid, depth, samples);
+        for (const auto& it : items) {
+            if (!it.lod) {
+                if (phase == 0) {
+                    bind(it);
+                    draw_whole(it);
+                }
+                continue;
+            }
+            CullCall c;
+            c.mode = phase == 0 ? kModeFirst : kModeTest;
+            c.slot = std::uint32_t(phase);
+            c.history = history;
+            c.backface = backface_ok(ctx, it);
+            c.count_draws = true;
+            c.max_error_px = lod_error(ctx);
+            c.batch = history ? glm::vec2(0.0f, b[4])
+                              : glm::vec2(phase == 0 ? 0.0f : b[std::size_t(phase)], b[std::size_t(phase) + 1]);
+            cull(ctx, gl, *it.lod, c, phase > 0 ? &pyramid : nullptr);
+            bind(it);
+            draw_slot(it, *it.lod, c.slot);
+        }
+    }
+    if (lod.empty()) return;
+    build_pyramid(ctx, gl, pyramid, depth, samples);
+    for (const DrawItem* it : lod) {
+        CullCall c;
+        c.mode = kModeFinal;
+        c.slot = kSlots - 1;
+        c.backface = backface_ok(ctx, *it);
+        c.count_tests = true;
+        c.max_error_px = lod_error(ctx);
+        cull(ctx, gl, *it->lod, c, &pyramid);
+        ++it->lod->frames;
+    }
+}
+
+} // namespace
+
+GpuLod upload_lod(const lod::ClusterLod& c, std::uint32_t vao, gl::Buffer& indices) {
+    GpuLod g;
+    indices = gl::Buffer(c.indices.size() * 4, c.indices.data(), 0);
+    glVertexArrayElementBuffer(vao, indices.id());
+    g.cells = gl::Buffer(c.cells.size() * sizeof(lod::Cell), c.cells.data(), 0);
+    g.clusters = gl::Buffer(c.clusters.size() * sizeof(lod::Cluster), c.clusters.data(), 0);
+    g.order = gl::Buffer(std::max<std::size_t>(c.triangle_order.size(), 1) * 4, c.triangle_order.data(), 0);
+    g.cluster_count = std::uint32_t(c.clusters.size());
+    g.state = gl::Buffer(std::max<std::size_t>(g.cluster_count, 1) * 4, nullptr, 0);
+    g.state.clear_u32(0);
+    g.commands = gl::Buffer(std::max<std::size_t>(g.cluster_count, 1) * kSlots * kCommandBytes, nullptr, 0);
+    g.counts = gl::Buffer(16 * 4, nullptr, 0); // kCounters, padded to 16 words (read back whole)
+    g.counts.clear_u32(0);
+    g.cpu_cells = c.cells;
+    g.level_triangles = c.level_triangles;
+    g.levels = c.max_levels;
+    g.full_triangles = c.level0_indices / 3;
+    g.bytes = indices.size() + g.cells.size() + g.clusters.size() + g.order.size() + g.state.size() +
+              g.commands.size() + g.counts.size();
+    g.build_seconds = c.build_seconds;
+    return g;
+}
+
+void draw_surfaces(const FrameContext& ctx, GlResources& gl, const std::vector<DrawItem>& items, DrawSet set,
+                   const std::function<void(const DrawItem&)>& bind, std::uint32_t depth, int samples) {
+    const bool any_lod = std::any_of(items.begin(), items.end(), [](const DrawItem& d) { return d.lod != nullptr; });
+    const bool culled = ctx.opt.look.lod.enabled && ctx.opt.look.lod.culling;
+    if (any_lod && ctx.result) ctx.result->lod.used = true;
+    if (set == DrawSet::Visible && any_lod && !ctx.pick && culled && ctx.cull && depth)
+        return draw_visible(ctx, gl, items, bind, depth, samples);
+    for (const auto& it : items) {
+        if (!it.lod || (!ctx.pick && !ctx.opt.look.lod.enabled)) {
+            bind(it);
+            draw_whole(it);
+            continue;
+        }
+        // A pick: level 0 in the pick region. Else the levels, in view
+        // (translucent; the G-buffer without culling) or all (voxelization).
+        CullCall c;
+        c.slot = ctx.pick ? kPickSlot : set == DrawSet::Complete ? kCompleteSlot : kInViewSlot;
+        c.max_error_px = ctx.pick ? 0.0f : lod_error(ctx);
+        c.frustum = set != DrawSet::Complete && (culled || ctx.pick);
+        c.backface = false;
+        c.count_tests = c.count_draws = set != DrawSet::Complete;
+        cull(ctx, gl, *it.lod, c, nullptr);
+        bind(it);
+        draw_slot(it, *it.lod, c.slot);
+    }
+}
+
+void bind_triangle_order(const DrawItem& item, std::uint32_t program) {
+    const GLint loc = glGetUniformLocation(program, "reordered");
+    if (loc >= 0) glProgramUniform1i(program, loc, item.lod ? 1 : 0);
+    if (item.lod) item.lod->order.bind_base(GL_SHADER_STORAGE_BUFFER, 7);
+}
+
+} // namespace iso::passes

@@ -1,0 +1,40 @@
+#version 450
+// The depth pyramid that the cluster culling tests against
+// (lod_cull.comp): level 0 is the frame's depth (reversed Z; with
+// sub-samples, the farthest of a pixel's), each level above the farthest
+// (smallest) of the 2x2 texels below it. Texels beyond the image hold the
+// nearest depth (1): a culling rectangle is clamped to the image, so they
+// never make a cluster look visible or hidden.
+layout(local_size_x = 8, local_size_y = 8) in;
+
+#ifdef FROM_DEPTH
+#ifdef SAMPLES
+layout(binding = 15) uniform sampler2DMS depth;
+#else
+layout(binding = 15) uniform sampler2D depth;
+#endif
+uniform ivec2 image_size;
+#else
+layout(binding = 6, r32f) readonly uniform image2D below;
+#endif
+layout(binding = 7, r32f) writeonly uniform image2D level_out;
+
+void main() {
+    ivec2 p = ivec2(gl_GlobalInvocationID.xy);
+    if (any(greaterThanEqual(p, imageSize(level_out)))) return;
+    float d = 1.0;
+#ifdef FROM_DEPTH
+    if (all(lessThan(p, image_size))) {
+#ifdef SAMPLES
+        for (int s = 0; s < SAMPLES; ++s) d = min(d, texelFetch(depth, p, s).r);
+#else
+        d = texelFetch(depth, p, 0).r;
+#endif
+    }
+#else
+    ivec2 q = 2 * p;
+    d = min(min(imageLoad(below, q).r, imageLoad(below, q + ivec2(1, 0)).r),
+            min(imageLoad(below, q + ivec2(0, 1)).r, imageLoad(below, q + ivec2(1, 1)).r));
+#endif
+    imageStore(level_out, p, vec4(d));
+}
