@@ -75,7 +75,7 @@ struct AntiAliasing {
 };
 
 // Levels of detail and culling of massive surfaces (docs/lod.md): a
-// surface of at least kLodMinTriangles triangles is cut into clusters with
+// surface of at least min_triangles triangles is cut into clusters with
 // coarser levels; each frame draws, per cell, the coarsest level whose
 // geometric error projects to at most `error_px` pixels, and culls the
 // clusters outside the view, facing away (closed surfaces seen from
@@ -85,9 +85,11 @@ struct LodSettings {
     bool enabled = true;   // auto; off: every triangle of every surface is drawn
     double error_px = 0.5; // the bound on the projected geometric error, pixels
     bool culling = true;   // frustum, back-facing and occlusion culling of clusters (with enabled)
+    // Surfaces with fewer triangles are drawn whole (their clusters would
+    // cost more than they save); tests lower it.
+    std::size_t min_triangles = 262144;
     bool operator==(const LodSettings&) const = default;
 };
-constexpr std::size_t kLodMinTriangles = 262144;
 
 // How a frame shades its surfaces: the one description that the CLI's
 // options, the 3D view, sessions, image exports and the renderer all read

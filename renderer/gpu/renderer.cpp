@@ -127,7 +127,7 @@ double prepare_lod(std::vector<GpuMesh>& meshes, const RenderOptions& opt) {
     if (!opt.look.lod.enabled || opt.pick) return 0.0;
     double seconds = 0.0;
     for (auto& g : meshes) {
-        if (g.lod || !g.object.visible || std::size_t(g.count) / 3 < kLodMinTriangles) continue;
+        if (g.lod || !g.object.visible || std::size_t(g.count) / 3 < opt.look.lod.min_triangles) continue;
         const lod::ClusterLod c = lod::build_cluster_lod(read_back(g));
         g.lod = std::make_unique<passes::GpuLod>(passes::upload_lod(c, g.vao.id(), g.indices));
         seconds += c.build_seconds;
@@ -150,15 +150,16 @@ void lod_stats(const passes::FrameContext& ctx, LodStats& s) {
             s.triangles_drawn += std::uint64_t(d->count) / 3;
             continue;
         }
-        std::uint32_t c[16] = {};
-        d->lod->counts.read(0, sizeof c, c);
+        std::uint32_t w[passes::kCountWords] = {};
+        d->lod->counts.read(0, sizeof w, w);
+        const std::uint32_t* c = w + passes::kStatsWord; // lod_cull.comp's C_SELECTED ...
         s.clusters += d->lod->cluster_count;
-        s.tested += c[8];
-        s.culled_frustum += c[9];
-        s.culled_backface += c[10];
-        s.culled_occlusion += c[11];
-        s.drawn += c[12];
-        s.triangles_drawn += c[13];
+        s.tested += c[0];
+        s.culled_frustum += c[1];
+        s.culled_backface += c[2];
+        s.culled_occlusion += c[3];
+        s.drawn += c[4];
+        s.triangles_drawn += c[5];
     }
 }
 

@@ -35,11 +35,17 @@ struct alignas(16) Cell {
     std::uint32_t levels = 1; // levels built (1: level 0 only)
     glm::vec3 hi{0.0f};
     std::uint32_t first_cluster = 0;
-    // Geometric error of each level against level 0 (mm; error[0] = 0): the
-    // simplifier's error of each step, summed along the chain, an upper bound.
+    // The error of drawing each level instead of level 0 (mm; error[0] = 0):
+    // the larger of its geometric error (the simplifier's error of each
+    // step, summed along the chain, an upper bound) and half the RMS length
+    // of its edges, because a triangle interpolates the normals of its
+    // corners: what it smooths away of the shading is about its own size,
+    // so a level whose triangles stay under a pixel keeps the shading's
+    // detail within that pixel (docs/lod.md, "What the error bounds").
     std::array<float, kMaxLevels> error{};
+    std::array<float, kMaxLevels> geometric{}; // the geometric part alone (statistics)
 };
-static_assert(sizeof(Cell) == 64);
+static_assert(sizeof(Cell) == 96);
 
 struct alignas(16) Cluster {
     glm::vec3 lo{0.0f};

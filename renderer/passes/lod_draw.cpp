@@ -16,10 +16,10 @@ namespace iso::passes {
 namespace {
 
 // Slots of a surface's command buffer: the G-buffer's phases, then the other sets.
-constexpr std::uint32_t kSlots = 8, kInViewSlot = 4, kCompleteSlot = 5, kPickSlot = 6;
+constexpr std::uint32_t kSlots = 12, kInViewSlot = 8, kCompleteSlot = 9, kPickSlot = 10;
 // Counts buffer: per-slot draw counts, then the statistics (lod_cull.comp's C_*).
 enum LodCounter : std::uint32_t {
-    kSelected = 8,
+    kSelected = kStatsWord,
     kFrustum,
     kBackface,
     kOccluded,
@@ -28,6 +28,7 @@ enum LodCounter : std::uint32_t {
     kOtherLevel,
     kCounters
 };
+static_assert(kCounters <= kCountWords);
 constexpr std::uint32_t kModeAll = 0, kModeFirst = 1, kModeTest = 2, kModeFinal = 3;
 constexpr std::size_t kCommandBytes = 20; // DrawElementsIndirectCommand
 
@@ -139,17 +140,23 @@ bool backface_ok(const FrameContext& ctx, const DrawItem& item) {
     return item.closed && !ctx.opt.look.clip.active() && !inside;
 }
 
-// Without a last frame: the nearest distance of each quarter of the cells.
-std::array<float, 5> batches(const FrameContext& ctx, const std::vector<const DrawItem*>& items) {
+// Without a last frame: the nearest distance of each eighth of the cells
+// (each batch is tested against the pyramid of the nearer ones: eight cost
+// eight pyramids, and cull more of what lies behind the nearest surfaces
+// than four on the 1024^3 phantom; docs/lod.md).
+constexpr std::size_t kBatches = 8;
+std::array<float, kBatches + 1> batches(const FrameContext& ctx, const std::vector<const DrawItem*>& items) {
     std::vector<float> d;
     const glm::vec3 eye(ctx.camera.eye);
     for (const DrawItem* it : items)
         for (const auto& c : it->lod->cpu_cells) d.push_back(glm::length(eye - glm::clamp(eye, c.lo, c.hi)));
     std::sort(d.begin(), d.end());
     const float inf = std::numeric_limits<float>::infinity();
-    std::array<float, 5> b{0.0f, inf, inf, inf, inf};
+    std::array<float, kBatches + 1> b;
+    b.fill(inf);
+    b[0] = 0.0f;
     if (d.empty()) return b;
-    for (int q = 1; q < 4; ++q) b[std::size_t(q)] = d[d.size() * std::size_t(q) / 4];
+    for (std::size_t q = 1; q < kBatches; ++q) b[q] = d[d.size() * q / kBatches];
     return b;
 }
 
@@ -164,7 +171,7 @@ void draw_visible(const FrameContext& ctx, GlResources& gl, const std::vector<Dr
             history = history && it.lod->frames > 0;
         }
     const auto b = batches(ctx, lod);
-    const int phases = history ? 2 : 4;
+    const int phases = history ? 2 : int(kBatches);
     ctx.result->lod.phases = phases;
     CullState& pyramid = *ctx.cull;
     for (int phase = 0; phase < phases; ++phase) {
@@ -218,7 +225,7 @@ GpuLod upload_lod(const lod::ClusterLod& c, std::uint32_t vao, gl::Buffer& indic
     g.state = gl::Buffer(std::max<std::size_t>(g.cluster_count, 1) * 4, nullptr, 0);
     g.state.clear_u32(0);
     g.commands = gl::Buffer(std::max<std::size_t>(g.cluster_count, 1) * kSlots * kCommandBytes, nullptr, 0);
-    g.counts = gl::Buffer(16 * 4, nullptr, 0); // kCounters, padded to 16 words (read back whole)
+    g.counts = gl::Buffer(kCountWords * 4, nullptr, 0);
     g.counts.clear_u32(0);
     g.cpu_cells = c.cells;
     g.level_triangles = c.level_triangles;

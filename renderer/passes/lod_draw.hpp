@@ -27,6 +27,10 @@ struct FrameContext;
 struct DrawItem;
 class GlResources;
 
+// Words of a surface's counts buffer: per-slot draw counts, then the
+// statistics from word kStatsWord on (lod_cull.comp: C_SELECTED ...).
+constexpr std::uint32_t kCountWords = 20, kStatsWord = 12;
+
 // One surface's clusters on the GPU (kept by the Renderer with its mesh).
 struct GpuLod {
     gl::Buffer cells, clusters, state, commands, counts, order;

@@ -33,7 +33,8 @@ struct Cell {
     uint levels;
     vec3 hi;
     uint first_cluster;
-    float error[8];
+    float error[8];      // mm: geometric error or half the RMS edge, whichever is larger
+    float geometric[8];  // (statistics only)
 };
 struct Cluster {
     vec3 lo;
@@ -61,7 +62,7 @@ layout(std430, binding = 20) readonly buffer Cells { Cell cells[]; };
 layout(std430, binding = 21) readonly buffer Clusters { Cluster clusters[]; };
 layout(std430, binding = 22) buffer State { uint state[]; }; // bit 0: visible last frame; bit 1: drawn this frame
 layout(std430, binding = 23) writeonly buffer Commands { Command commands[]; };
-// [0..7]: draws per slot; then the statistics (lod_draw.cpp, LodCounter).
+// [0..11]: draws per slot; then the statistics (lod_draw.cpp, LodCounter).
 layout(std430, binding = 24) buffer Counts { uint counts[]; };
 layout(binding = 14) uniform sampler2D pyramid; // reversed-Z farthest depth, level 0 at pixel size
 
@@ -87,8 +88,8 @@ uniform int pyramid_levels;
 // lookups into too few texels, and clusters on the screen went missing.
 uniform ivec2 pyramid_size;
 
-const uint C_SELECTED = 8u, C_FRUSTUM = 9u, C_BACKFACE = 10u, C_OCCLUDED = 11u, C_DRAWN = 12u, C_TRIANGLES = 13u,
-           C_OTHER_LEVEL = 14u;
+const uint C_SELECTED = 12u, C_FRUSTUM = 13u, C_BACKFACE = 14u, C_OCCLUDED = 15u, C_DRAWN = 16u, C_TRIANGLES = 17u,
+           C_OTHER_LEVEL = 18u;
 
 uint select_level(Cell c) {
     if (max_error_px <= 0.0) return 0u;
