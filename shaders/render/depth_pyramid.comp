@@ -1,8 +1,8 @@
 #version 450
 // The depth pyramid that the cluster culling tests against
-// (lod_cull.comp): level 0 is the frame's depth (reversed Z; with
-// sub-samples, the farthest of a pixel's), each level above the farthest
-// (smallest) of the 2x2 texels below it. Texels beyond the image hold the
+// (lod_cull.comp): level 0 is the farthest depth (reversed Z: the smallest)
+// of each 2x2 pixels of the frame (with sub-samples, of all their samples),
+// each level above the farthest of the 2x2 texels below it. Texels beyond the image hold the
 // nearest depth (1): a culling rectangle is clamped to the image, so they
 // never make a cluster look visible or hidden.
 layout(local_size_x = 8, local_size_y = 8) in;
@@ -24,11 +24,14 @@ void main() {
     if (any(greaterThanEqual(p, imageSize(level_out)))) return;
     float d = 1.0;
 #ifdef FROM_DEPTH
-    if (all(lessThan(p, image_size))) {
+    // Level 0 at half the image's resolution: a texel is 2x2 pixels.
+    for (int k = 0; k < 4; ++k) {
+        ivec2 q = 2 * p + ivec2(k & 1, k >> 1);
+        if (any(greaterThanEqual(q, image_size))) continue;
 #ifdef SAMPLES
-        for (int s = 0; s < SAMPLES; ++s) d = min(d, texelFetch(depth, p, s).r);
+        for (int s = 0; s < SAMPLES; ++s) d = min(d, texelFetch(depth, q, s).r);
 #else
-        d = texelFetch(depth, p, 0).r;
+        d = min(d, texelFetch(depth, q, 0).r);
 #endif
     }
 #else

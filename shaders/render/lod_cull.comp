@@ -64,7 +64,7 @@ layout(std430, binding = 22) buffer State { uint state[]; }; // bit 0: visible l
 layout(std430, binding = 23) writeonly buffer Commands { Command commands[]; };
 // [0..11]: draws per slot; then the statistics (lod_draw.cpp, LodCounter).
 layout(std430, binding = 24) buffer Counts { uint counts[]; };
-layout(binding = 14) uniform sampler2D pyramid; // reversed-Z farthest depth, level 0 at pixel size
+layout(binding = 14) uniform sampler2D pyramid; // reversed-Z farthest depth, level 0 at 2x2 pixels
 
 uniform mat4 view_projection;
 uniform vec3 eye;
@@ -145,10 +145,12 @@ bool back_facing(Cluster c) {
 
 bool occluded(vec4 rect, float nearest) {
     vec2 lo = clamp(rect.xy, vec2(0.0), viewport - 1.0), hi = clamp(rect.zw, vec2(0.0), viewport - 1.0);
-    vec2 size = max(hi - lo, vec2(1.0));
-    int level = clamp(int(ceil(log2(max(size.x, size.y)))), 0, pyramid_levels - 1);
+    // Level 0's texels are 2x2 pixels: the level whose texels are at least
+    // the rectangle's size, where it spans at most 2x2 of them.
+    vec2 size = max(hi - lo, vec2(2.0));
+    int level = clamp(int(ceil(log2(max(size.x, size.y)))) - 1, 0, pyramid_levels - 1);
     ivec2 top = max(pyramid_size >> level, ivec2(1)) - 1;
-    ivec2 a = min(ivec2(floor(lo)) >> level, top), b = min(ivec2(floor(hi)) >> level, top);
+    ivec2 a = min(ivec2(floor(lo)) >> (level + 1), top), b = min(ivec2(floor(hi)) >> (level + 1), top);
     float farthest = 1.0;
     for (int y = a.y; y <= b.y; ++y)
         for (int x = a.x; x <= b.x; ++x) farthest = min(farthest, texelFetch(pyramid, ivec2(x, y), level).r);
