@@ -74,6 +74,7 @@ void StillFrames::run() {
 #endif
     std::unique_ptr<gl::HeadlessContext> context;
     core::SnapshotRenderer renderer;
+    renderer.set_background_lod(true); // shared with the 3D view's frames: built once, off both threads
     std::string failed;
     try {
         context = std::make_unique<gl::HeadlessContext>();

@@ -30,6 +30,9 @@ Viewer::Viewer(core::Workspace& workspace, PatientView view, ViewerOptions optio
       annotations_(std::make_unique<Annotations>()) {
     setFocusPolicy(Qt::StrongFocus);
     setMinimumSize(320, 240);
+    // A large surface's levels of detail are built off the GUI thread; its
+    // frames draw every triangle meanwhile (docs/lod.md).
+    scene_.set_background_lod(true);
     setMouseTracking(true); // hover readout
     // The framebuffer keeps its picture between paints: a plain frame
     // already on screen is not drawn again (draw_here), and a grab reads it.

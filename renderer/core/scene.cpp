@@ -18,6 +18,7 @@ struct Scene::Impl {
     struct Entry {
         SurfaceInfo info;
         std::shared_ptr<const Mesh> mesh; // shared with snapshots: replaced, never changed in place
+        std::shared_ptr<SurfaceLod> lod;  // the mesh's levels of detail (built when a frame first asks)
         Bounds bounds;
         std::uint64_t version = 0; // a new one with each mesh (and removal)
         bool removed = false;      // the id stays taken: ids equal the renderer's object ids
@@ -30,6 +31,7 @@ struct Scene::Impl {
         e.bounds = Bounds{};
         if (m)
             for (const auto& p : m->positions) e.bounds.add(glm::dvec3(p));
+        e.lod = m ? std::make_shared<SurfaceLod>(m) : nullptr;
         e.mesh = std::move(m);
         e.version = ++versions;
     }
@@ -288,7 +290,7 @@ std::vector<SurfaceId> Scene::add_extracted(std::vector<Mesh> meshes, SurfaceInf
 SurfaceId Scene::add_mesh(Mesh m, SurfaceInfo info) {
     if (!(info.opacity >= 0.0f && info.opacity <= 1.0f))
         throw Error("Scene::add_mesh", "opacity of '" + info.name + "' must be between 0 and 1");
-    impl_->surfaces.push_back({std::move(info), nullptr, Bounds{}, 0, false});
+    impl_->surfaces.push_back({std::move(info), nullptr, nullptr, Bounds{}, 0, false});
     impl_->set_mesh(impl_->surfaces.back(), std::make_shared<const Mesh>(std::move(m)));
     return SurfaceId(impl_->surfaces.size());
 }
@@ -352,7 +354,7 @@ SceneSnapshot Scene::snapshot() const {
         o.opacity = e.info.opacity;
         o.visible = e.info.visible && !e.removed;
         o.pickable = e.info.pickable && !e.removed;
-        s.surfaces.push_back({e.mesh, e.version, std::move(o)});
+        s.surfaces.push_back({e.mesh, e.version, std::move(o), e.removed ? nullptr : e.lod});
     }
     s.bounds = bounds();
     if (impl_->volume) {
@@ -380,6 +382,8 @@ RenderResult Scene::render(const Camera& camera, const RenderOptions& opt) {
 
 void Scene::release_gpu() { impl_->gpu.release(); }
 
+void Scene::set_background_lod(bool on) { impl_->gpu.set_background_lod(on); }
+
 Renderer& Scene::renderer() { return impl_->gpu.renderer(); }
 
 SnapshotRenderer::SnapshotRenderer() = default;
@@ -397,6 +401,7 @@ Renderer& SnapshotRenderer::renderer() {
 void SnapshotRenderer::release() {
     renderer_.reset();
     uploaded_.clear();
+    lod_uploaded_.clear();
     volume_version_ = 0;
 }
 
@@ -420,11 +425,39 @@ RenderResult SnapshotRenderer::render(const SceneSnapshot& s, const Camera& came
         }
         ren.object(std::uint32_t(i + 1)) = e.object;
     }
+    RenderResult pre;
+    upload_lod(s, opt, pre);
     if (s.volume && s.volume_version != volume_version_) {
         ren.set_volume(s.volume, s.volume_index);
         volume_version_ = s.volume_version;
     }
-    return ren.render(camera, opt);
+    RenderOptions o = opt;
+    o.build_lod = false; // the scene's SurfaceLod builds them, once for every renderer
+    RenderResult r = ren.render(camera, o);
+    r.lod.build_seconds += pre.lod.build_seconds;
+    return r;
+}
+
+// Hands the renderer the levels of detail of the large visible surfaces
+// that the frame asks for, building them first (or starting them in the
+// background) when nobody has yet.
+void SnapshotRenderer::upload_lod(const SceneSnapshot& s, const RenderOptions& opt, RenderResult& r) {
+    lod_uploaded_.resize(s.surfaces.size(), nullptr);
+    for (std::size_t i = 0; i < s.surfaces.size(); ++i) {
+        const auto& e = s.surfaces[i];
+        if (!e.lod || !e.mesh || !e.object.visible) continue;
+        if (lod_uploaded_[i] && renderer_->has_lod(std::uint32_t(i + 1))) continue;
+        if (!opt.look.lod.enabled || opt.pick || e.mesh->triangles.size() < opt.look.lod.min_triangles) continue;
+        auto l = e.lod->get();
+        if (!l && background_lod_) e.lod->build_in_background();
+        if (!l && !background_lod_) {
+            r.lod.build_seconds += e.lod->build_now();
+            l = e.lod->get();
+        }
+        if (!l) continue;
+        renderer_->set_lod(std::uint32_t(i + 1), *l);
+        lod_uploaded_[i] = l.get();
+    }
 }
 
 void Scene::export_mesh(SurfaceId id, const std::string& path) const { save_mesh(mesh(id), path); }

@@ -19,6 +19,7 @@
 #include "io/dicom_capture.hpp"
 #include "io/image.hpp"
 #include "io/mesh.hpp"
+#include "renderer/core/surface_lod.hpp"
 #include "io/progress.hpp"
 #include "io/volume.hpp"
 #include "io/volume_io.hpp"
@@ -58,6 +59,7 @@ struct SceneSnapshot {
         std::shared_ptr<const Mesh> mesh; // null: removed
         std::uint64_t version = 0;
         SceneObject object;
+        std::shared_ptr<SurfaceLod> lod; // its levels of detail, built once for every renderer (null: removed)
     };
     std::vector<Surface> surfaces; // slot i is surface id i + 1
     Bounds bounds;                 // of the visible surfaces (Scene::bounds)
@@ -80,10 +82,17 @@ public:
     RenderResult render(const SceneSnapshot& s, const Camera& camera, const RenderOptions& opt);
     Renderer& renderer(); // made on first use in the current context
     void release();       // with the context current, before it goes
+    // Levels of detail a frame asks for and lacks are built in the
+    // background (interactive views: the frames meanwhile draw every
+    // triangle) instead of inside the frame (the CLI, exports).
+    void set_background_lod(bool on) { background_lod_ = on; }
 
 private:
+    void upload_lod(const SceneSnapshot& s, const RenderOptions& opt, RenderResult& r);
     std::unique_ptr<Renderer> renderer_;
     std::vector<std::uint64_t> uploaded_; // per slot: the version on the GPU
+    std::vector<const void*> lod_uploaded_; // per slot: the levels on the GPU (null: none)
+    bool background_lod_ = false;
     std::uint64_t volume_version_ = 0;    // of the volume handed to the renderer
 };
 
@@ -177,6 +186,9 @@ public:
     // release_gpu() with it current before the context goes.
     RenderResult render(const Camera& camera, const RenderOptions& opt);
     void release_gpu();
+    // Interactive views: levels of detail are built in the background, not
+    // inside a frame (SnapshotRenderer::set_background_lod).
+    void set_background_lod(bool on);
     // The surfaces as they are now, for a renderer on another thread.
     SceneSnapshot snapshot() const;
     // The GPU renderer (tests, benchmarks); made on first use in the current context.

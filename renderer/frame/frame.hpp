@@ -208,6 +208,11 @@ struct RenderOptions {
     // width x height, rows from the top as Image stores them; the frame
     // uploads it and lights with it. Required for such a frame's image.
     const Image* ao_image = nullptr;
+    // Build the clusters and levels of detail of large surfaces that lack
+    // them inside this frame (look.lod; from the meshes read back). Off: only
+    // those handed over are used (core::SnapshotRenderer builds them once per
+    // surface, for every renderer, in the background for interactive views).
+    bool build_lod = true;
 };
 
 // Test and benchmark hooks, apart from what a user asks for.

@@ -124,7 +124,7 @@ Mesh read_back(const GpuMesh& g) {
 // when the frame asks for levels of detail (from the mesh read back: the
 // renderer keeps no CPU copy); returns the seconds spent.
 double prepare_lod(std::vector<GpuMesh>& meshes, const RenderOptions& opt) {
-    if (!opt.look.lod.enabled || opt.pick) return 0.0;
+    if (!opt.look.lod.enabled || opt.pick || !opt.build_lod) return 0.0;
     double seconds = 0.0;
     for (auto& g : meshes) {
         if (g.lod || !g.object.visible || std::size_t(g.count) / 3 < opt.look.lod.min_triangles) continue;
@@ -189,6 +189,18 @@ void Renderer::remove(std::uint32_t id) {
 }
 
 std::size_t Renderer::object_count() const { return impl_->meshes.size(); }
+
+void Renderer::set_lod(std::uint32_t id, const lod::ClusterLod& c) {
+    auto& g = impl_->meshes.at(id - 1);
+    if (c.level0_indices != std::size_t(g.count))
+        throw Error("levels of detail", "object " + std::to_string(id) + " has " + std::to_string(g.count / 3) +
+                                            " triangles, its levels " + std::to_string(c.level0_indices / 3));
+    g.lod = std::make_unique<passes::GpuLod>(passes::upload_lod(c, g.vao.id(), g.indices));
+}
+
+bool Renderer::has_lod(std::uint32_t id) const {
+    return id >= 1 && id <= impl_->meshes.size() && impl_->meshes[id - 1].lod != nullptr;
+}
 
 void Renderer::set_volume(std::shared_ptr<const Volume> v, std::shared_ptr<const ChunkIndex> index) {
     impl_->volume.set(std::move(v), std::move(index));

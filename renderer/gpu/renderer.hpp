@@ -19,6 +19,9 @@
 namespace iso {
 
 class ChunkIndex;
+namespace lod {
+struct ClusterLod;
+}
 
 class Renderer {
 public:
@@ -36,6 +39,11 @@ public:
     // theirs) and draws nothing from now on.
     void remove(std::uint32_t id);
     std::size_t object_count() const;
+    // Hands object `id` its clusters and levels of detail (built from its
+    // mesh: docs/lod.md); its element buffer becomes theirs. Frames with
+    // look.lod draw by them. A new mesh (replace) drops them.
+    void set_lod(std::uint32_t id, const lod::ClusterLod& c);
+    bool has_lod(std::uint32_t id) const;
     // The volume that frames with look.volume.enabled ray cast (null: none),
     // with its range index (per-chunk min/max) when one was made (else the
     // renderer makes one); uploaded as a 3D texture on the first such frame
