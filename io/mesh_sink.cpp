@@ -16,6 +16,7 @@
 #include <unordered_map>
 
 #include <glm/glm.hpp>
+#include <tbb/parallel_for.h>
 #include <vtkFieldData.h>
 #include <vtkCellArray.h>
 #include <vtkFloatArray.h>
@@ -93,15 +94,34 @@ struct SurfaceState {
             c0 = glm::dvec3(p.mesh.positions[0]);
             have_c0 = true;
         }
-        for (const auto& t : p.mesh.triangles) {
-            const TriangleTerms tt =
-                triangle_terms(c0, p.mesh.positions[t[0]], p.mesh.positions[t[1]], p.mesh.positions[t[2]]);
-            area += tt.area;
-            det_sum += tt.det;
-            w += tt.moment;
-        }
+        add_terms(p.mesh);
         triangles += p.mesh.triangles.size();
         return id;
+    }
+    // The piece's triangle terms about c0, summed in fixed blocks in parallel
+    // and added in block order (the same sums whatever the thread count).
+    void add_terms(const Mesh& m) {
+        constexpr std::size_t kBlock = 16384;
+        struct Sum {
+            double area = 0, det = 0;
+            glm::dvec3 w{0.0};
+        };
+        std::vector<Sum> sums((m.triangles.size() + kBlock - 1) / kBlock);
+        tbb::parallel_for(std::size_t(0), sums.size(), [&](std::size_t blk) {
+            Sum& b = sums[blk];
+            for (std::size_t i = blk * kBlock, e = std::min(m.triangles.size(), i + kBlock); i < e; ++i) {
+                const auto& t = m.triangles[i];
+                const TriangleTerms tt = triangle_terms(c0, m.positions[t[0]], m.positions[t[1]], m.positions[t[2]]);
+                b.area += tt.area;
+                b.det += tt.det;
+                b.w += tt.moment;
+            }
+        });
+        for (const Sum& b : sums) {
+            area += b.area;
+            det_sum += b.det;
+            w += b.w;
+        }
     }
     MeshStats stats() const {
         MeshStats s;

@@ -9,6 +9,8 @@
 #include "renderer/surface/arena.hpp"
 #include "renderer/surface/analysis.hpp"
 #include "renderer/surface/atomic.hpp"
+#include "renderer/surface/component_sums.hpp"
+#include "renderer/surface/edges.hpp"
 #include "renderer/surface/union_find.hpp"
 
 #include <algorithm>
@@ -246,47 +248,6 @@ ComponentBounds component_bounds(const std::vector<glm::vec3>& P, const std::vec
     return b;
 }
 
-// The edges of the non-collapsed triangles, bucketed by their lower vertex
-// (counting sort): bucket l is entries[offset[l], offset[l + 1]). An entry
-// is (upper << 1) | 1 when the triangle runs lower -> upper (vertices < 2^31:
-// 32 bits).
-struct EdgeBuckets {
-    std::vector<std::uint32_t> offset, entries;
-};
-
-EdgeBuckets bucket_edges(const std::vector<Triangle>& W, std::size_t nv) {
-    const std::size_t nt = W.size();
-    EdgeBuckets e;
-    auto& off = e.offset;
-    off.assign(nv + 1, 0);
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nt, 1 << 14), [&](const auto& r) {
-        for (std::size_t t = r.begin(); t != r.end(); ++t) {
-            const auto& w = W[t];
-            if (collapsed(w)) continue;
-            for (int k = 0; k < 3; ++k)
-                std::atomic_ref<std::uint32_t>(off[std::min(w[k], w[(k + 1) % 3]) + 1])
-                    .fetch_add(1, std::memory_order_relaxed);
-        }
-    });
-    std::partial_sum(off.begin(), off.end(), off.begin());
-    e.entries.resize(off[nv]);
-    std::vector<std::uint32_t> cursor(off.begin(), off.end() - 1);
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nt, 1 << 14), [&](const auto& r) {
-        for (std::size_t t = r.begin(); t != r.end(); ++t) {
-            const auto& w = W[t];
-            if (collapsed(w)) continue;
-            for (int k = 0; k < 3; ++k) {
-                const std::uint32_t a = w[k], b = w[(k + 1) % 3];
-                const std::uint32_t l = std::min(a, b), u = std::max(a, b);
-                const std::uint32_t slot =
-                    std::atomic_ref<std::uint32_t>(cursor[l]).fetch_add(1, std::memory_order_relaxed);
-                e.entries[slot] = (u << 1) | std::uint32_t(a < b);
-            }
-        }
-    });
-    return e;
-}
-
 struct BoundaryEdge {
     std::uint32_t from, to;
     bool operator<(const BoundaryEdge& o) const { return from != o.from ? from < o.from : to < o.to; }
@@ -302,7 +263,7 @@ struct EdgeCounts {
 
 // Each bucket sorted and its runs (one edge each) classified, in parallel.
 EdgeCounts classify_edges(const std::vector<Triangle>& W, const Components& comps, std::size_t nv) {
-    EdgeBuckets buckets = bucket_edges(W, nv);
+    EdgeBuckets buckets = bucket_edges(W, nv, true); // the non-collapsed triangles' edges
     struct EdgeLocal {
         std::size_t boundary = 0, non_manifold = 0, misoriented = 0;
         std::vector<BoundaryEdge> chain;
@@ -357,61 +318,32 @@ struct Accum {
     std::size_t triangles = 0, degenerate = 0;
 };
 
-// Step 4: area and volume per component. The triangles ordered by component
-// (counting sort), summed by fixed blocks in parallel, the blocks' partial
-// sums added in order (deterministic whatever the thread count).
+// Step 4: area and volume per component, summed in a way that does not
+// depend on the thread count (sum_by_component).
 std::vector<Accum> component_sums(const std::vector<glm::vec3>& P, const std::vector<Triangle>& W,
                                   const Components& comps, const std::vector<glm::dvec3>& ref) {
-    const std::size_t nt = W.size();
-    const std::uint32_t ncomp = comps.count;
-    std::vector<std::uint32_t> first(ncomp + 1, 0);
-    for (const auto& w : W) ++first[comps.of(w[0]) + 1];
-    std::partial_sum(first.begin(), first.end(), first.begin());
-    std::vector<std::uint32_t> order(nt);
-    if (ncomp == 1) {
-        std::iota(order.begin(), order.end(), 0u);
-    } else {
-        std::vector<std::uint32_t> cur(first.begin(), first.end() - 1);
-        for (std::uint32_t t = 0; t < nt; ++t) order[cur[comps.of(W[t][0])]++] = t;
-    }
-    struct Partial {
-        std::uint32_t comp;
-        Accum a;
+    const auto comp = [&](std::size_t t) { return comps.of(W[t][0]); };
+    const auto add = [&](Accum& a, std::size_t t) {
+        const auto& w = W[t];
+        ++a.triangles;
+        if (collapsed(w)) {
+            ++a.degenerate;
+            return;
+        }
+        const glm::dvec3& r = ref[comps.of(w[0])];
+        const glm::dvec3 p0 = glm::dvec3(P[w[0]]) - r, p1 = glm::dvec3(P[w[1]]) - r, p2 = glm::dvec3(P[w[2]]) - r;
+        const double area = 0.5 * glm::length(glm::cross(p1 - p0, p2 - p0));
+        if (area == 0.0) ++a.degenerate;
+        a.area += area;
+        a.volume += glm::dot(p0, glm::cross(p1, p2)) / 6.0;
     };
-    constexpr std::size_t kBlock = 16384;
-    const std::size_t nblocks = (nt + kBlock - 1) / kBlock;
-    std::vector<std::vector<Partial>> partials(nblocks);
-    tbb::parallel_for(std::size_t(0), nblocks, [&](std::size_t blk) {
-        auto& out_p = partials[blk];
-        const std::size_t b = blk * kBlock, e = std::min(nt, b + kBlock);
-        for (std::size_t o = b; o < e; ++o) {
-            const auto& w = W[order[o]];
-            const std::uint32_t c = comps.of(w[0]);
-            if (out_p.empty() || out_p.back().comp != c) out_p.push_back({c, {}});
-            Accum& a = out_p.back().a;
-            ++a.triangles;
-            if (collapsed(w)) {
-                ++a.degenerate;
-                continue;
-            }
-            const glm::dvec3 p0 = glm::dvec3(P[w[0]]) - ref[c], p1 = glm::dvec3(P[w[1]]) - ref[c],
-                             p2 = glm::dvec3(P[w[2]]) - ref[c];
-            const double area = 0.5 * glm::length(glm::cross(p1 - p0, p2 - p0));
-            if (area == 0.0) ++a.degenerate;
-            a.area += area;
-            a.volume += glm::dot(p0, glm::cross(p1, p2)) / 6.0;
-        }
-    });
-    std::vector<Accum> acc(ncomp);
-    for (const auto& blk : partials)
-        for (const auto& part : blk) {
-            Accum& a = acc[part.comp];
-            a.area += part.a.area;
-            a.volume += part.a.volume;
-            a.triangles += part.a.triangles;
-            a.degenerate += part.a.degenerate;
-        }
-    return acc;
+    const auto merge = [](Accum& a, const Accum& part) {
+        a.area += part.area;
+        a.volume += part.volume;
+        a.triangles += part.triangles;
+        a.degenerate += part.degenerate;
+    };
+    return sum_by_component<Accum>(W.size(), comps.count, comp, add, merge);
 }
 
 // Step 5: per component, its boundary loops, their length and the volume of
