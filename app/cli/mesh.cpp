@@ -65,9 +65,20 @@ void print_streamed(const iso::core::StreamedDetails& d) {
     std::cout << "\n";
     char steps[256];
     std::snprintf(steps, sizeof steps,
-                  "index %.2f, read %.2f, extract %.2f, weld %.2f, write %.2f, extraction waited %.2f", s.index_seconds,
-                  s.read_seconds - s.index_seconds, s.extract_seconds, s.weld_seconds, s.write_seconds, s.wait_seconds);
+                  "index %.2f, read %.2f, extract %.2f, weld %.2f, write %.2f, analysis %.2f, extraction waited %.2f",
+                  s.index_seconds, s.read_seconds - s.index_seconds, s.extract_seconds, s.weld_seconds, s.write_seconds,
+                  s.analysis_seconds, s.wait_seconds);
     std::cout << "streaming steps (busy seconds" << (s.plan.overlap ? ", overlapped" : "") << "): " << steps << "\n";
+}
+
+void print_in_memory(const iso::core::InMemoryDetails& d) {
+    char post[64] = "";
+    if (d.postprocess_seconds > 0) std::snprintf(post, sizeof post, "post-processing %.2f, ", d.postprocess_seconds);
+    char steps[256];
+    std::snprintf(steps, sizeof steps, "read %.2f, index %.2f, extract %.2f, weld %.2f, %swrite %.2f, analysis %.2f",
+                  d.read_seconds, d.index_seconds, d.extract_seconds, d.weld_seconds, post, d.write_seconds,
+                  d.analysis_seconds);
+    std::cout << "steps (busy seconds): " << steps << "\n";
 }
 
 void print_ranks(const iso::core::RankDetails& d) {
@@ -91,6 +102,7 @@ void print_result(const iso::core::MeshResult& r, bool json) {
     if (r.ranks) print_ranks(*r.ranks);
     for (const auto& s : r.surfaces) print_surface(s, r);
     if (r.streamed) print_streamed(*r.streamed);
+    if (r.in_memory) print_in_memory(*r.in_memory);
 }
 
 #ifdef ISOSCOPE_MPI

@@ -69,6 +69,16 @@ struct StreamedDetails {
     std::size_t reader_peak_bytes = 0; // OpenVDB read slab by slab: the reading child's peak
 };
 
+// The in-memory route's figures: the seconds each step was busy, named as the
+// streamed route's (StreamStats): reading the volume; its range index
+// (per-chunk min/max) and value range; marching cubes; welding the chunks;
+// post-processing; writing the files; the analysis behind the summary
+// (measure_surface: closed or open, volume, components).
+struct InMemoryDetails {
+    double read_seconds = 0, index_seconds = 0, extract_seconds = 0, weld_seconds = 0, postprocess_seconds = 0,
+           write_seconds = 0, analysis_seconds = 0;
+};
+
 // The MPI route's figures, per rank.
 struct RankDetails {
     int ranks = 1;
@@ -79,6 +89,7 @@ struct MeshResult {
     MeshRoute route = MeshRoute::InMemory;
     std::vector<MeshedSurface> surfaces;
     std::vector<std::string> warnings; // of the volume (and of the streaming engine)
+    std::optional<InMemoryDetails> in_memory;
     std::optional<StreamedDetails> streamed;
     std::optional<RankDetails> ranks;
 };
@@ -96,6 +107,7 @@ MeshedSurface summarized_surface(const std::string& name, const std::string& pat
 // iso or label, path, triangles, vertices, area_mm2, closed, boundary_edges,
 // volume_ml, volume_mm3 and volume_kind (null where not known),
 // components {count, largest}, warnings; pieces under MPI), "warnings",
+// "busy_seconds" (each step's, in memory and streamed; null under MPI),
 // "streaming" and "mpi" (their figures, or null).
 nlohmann::json mesh_json(const MeshResult& r);
 

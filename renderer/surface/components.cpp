@@ -2,6 +2,7 @@
 #include "renderer/surface/components.hpp"
 
 #include <algorithm>
+#include <chrono>
 #include <cstring>
 #include <limits>
 #include <numeric>
@@ -360,9 +361,11 @@ void SummarizingSink::piece(MeshPiece&& p) {
     sp.mesh = std::move(p.mesh);
     sp.seam = p.lower;
     sp.seam.insert(sp.seam.end(), p.upper.begin(), p.upper.end());
+    const auto t = std::chrono::steady_clock::now();
     std::sort(sp.seam.begin(), sp.seam.end());
     sp.seam.erase(std::unique(sp.seam.begin(), sp.seam.end()), sp.seam.end());
     pieces_[p.surface].push_back(summarize_piece(sp, origin_));
+    seconds_ += std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
     p.mesh = std::move(sp.mesh);
     next_.piece(std::move(p));
 }
