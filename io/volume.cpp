@@ -13,6 +13,8 @@
 #include <unistd.h>
 
 #include <glm/gtc/matrix_transform.hpp>
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_reduce.h>
 
 namespace iso {
 
@@ -160,29 +162,48 @@ glm::dvec3 Volume::index_to_world(const glm::dvec3& ijk) const {
 ValueRange Volume::value_range() const {
     if (sparse_) return sparse_value_range(*sparse_);
     ValueRange r;
-    bool any = false;
     dispatch_voxel_type(type, [&](auto t) {
         using T = decltype(t);
         auto s = as<T>();
-        T lo = std::numeric_limits<T>::max(), hi = std::numeric_limits<T>::lowest();
-        for (T x : s) {
-            if constexpr (std::is_floating_point_v<T>) {
-                if (std::isnan(x)) {
-                    ++r.nan_count;
-                    continue;
+        // In parallel: minima, maxima and counts are exact in any order.
+        struct Part {
+            T lo = std::numeric_limits<T>::max(), hi = std::numeric_limits<T>::lowest();
+            std::size_t nan = 0, inf = 0, samples = 0;
+        };
+        const Part p = tbb::parallel_reduce(
+            tbb::blocked_range<std::size_t>(0, s.size(), std::size_t(1) << 20), Part{},
+            [&](const tbb::blocked_range<std::size_t>& range, Part q) {
+                for (std::size_t i = range.begin(); i != range.end(); ++i) {
+                    const T x = s[i];
+                    if constexpr (std::is_floating_point_v<T>) {
+                        if (std::isnan(x)) {
+                            ++q.nan;
+                            continue;
+                        }
+                        if (std::isinf(x)) {
+                            ++q.inf;
+                            continue;
+                        }
+                    }
+                    q.lo = x < q.lo ? x : q.lo;
+                    q.hi = x > q.hi ? x : q.hi;
                 }
-                if (std::isinf(x)) {
-                    ++r.inf_count;
-                    continue;
-                }
-            }
-            lo = x < lo ? x : lo;
-            hi = x > hi ? x : hi;
-            any = true;
-        }
-        if (any) {
-            r.min = double(lo);
-            r.max = double(hi);
+                q.samples += range.size();
+                return q;
+            },
+            [](Part a, const Part& b) {
+                a.lo = b.lo < a.lo ? b.lo : a.lo;
+                a.hi = b.hi > a.hi ? b.hi : a.hi;
+                a.nan += b.nan;
+                a.inf += b.inf;
+                a.samples += b.samples;
+                return a;
+            });
+        r.nan_count = p.nan;
+        r.inf_count = p.inf;
+        if (p.samples > p.nan + p.inf) { // some finite sample
+            r.min = double(p.lo);
+            r.max = double(p.hi);
         }
         return 0;
     });
