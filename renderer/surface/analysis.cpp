@@ -203,22 +203,30 @@ struct Components {
     std::uint32_t of(std::uint32_t canonical) const { return label[canonical]; }
 };
 
-// Union-find (collapsed triangles connect too). Every set's root is its
-// smallest member, so the components are numbered in the order of their
-// smallest vertex (deterministic), and a vertex's root is labelled before it.
+// Union-find in parallel (collapsed triangles connect too). Every set's root
+// is its smallest member, whatever the order of the unions, so the
+// components are numbered in the order of their smallest vertex
+// (deterministic), and a vertex's root is labelled before it.
 Components connected_components(const std::vector<Triangle>& W, std::size_t nv) {
     Components c;
     c.used.assign(nv, 0);
-    UnionFind sets(nv);
-    for (const auto& w : W) {
-        c.used[w[0]] = c.used[w[1]] = c.used[w[2]] = 1;
-        sets.unite(w[0], w[1]);
-        sets.unite(w[0], w[2]);
-    }
+    ConcurrentUnionFind sets(nv);
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, W.size(), 1 << 14), [&](const auto& r) {
+        for (std::size_t t = r.begin(); t != r.end(); ++t) {
+            const auto& w = W[t];
+            for (const auto v : w) std::atomic_ref<std::uint8_t>(c.used[v]).store(1, std::memory_order_relaxed);
+            sets.unite(w[0], w[1]);
+            sets.unite(w[0], w[2]);
+        }
+    });
     c.label.assign(nv, kNone);
-    for (std::uint32_t v = 0; v < nv; ++v) {
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nv, 1 << 16), [&](const auto& r) {
+        for (std::size_t v = r.begin(); v != r.end(); ++v)
+            if (c.used[v]) c.label[v] = sets.find(std::uint32_t(v));
+    });
+    for (std::uint32_t v = 0; v < nv; ++v) { // roots to numbers; a root comes before its members
         if (!c.used[v]) continue;
-        const std::uint32_t root = sets.find(v);
+        const std::uint32_t root = c.label[v];
         c.label[v] = root == v ? c.count++ : c.label[root];
     }
     return c;
@@ -231,20 +239,35 @@ struct ComponentBounds {
     std::size_t vertices = 0;
 };
 
+// In parallel (sum_by_component over the used canonical vertices: minima
+// and maxima are exact in any order).
 ComponentBounds component_bounds(const std::vector<glm::vec3>& P, const std::vector<std::uint32_t>& canon,
                                  const Components& comps) {
-    const std::uint32_t ncomp = comps.count;
-    ComponentBounds b{std::vector<glm::dvec3>(ncomp, glm::dvec3(std::numeric_limits<double>::max())),
-                      std::vector<glm::dvec3>(ncomp, glm::dvec3(std::numeric_limits<double>::lowest())),
-                      std::vector<glm::dvec3>(ncomp)};
-    for (std::uint32_t v = 0; v < P.size(); ++v) {
-        if (!comps.used[v] || canon[v] != v) continue;
-        const std::uint32_t c = comps.of(v);
-        b.lo[c] = glm::min(b.lo[c], glm::dvec3(P[v]));
-        b.hi[c] = glm::max(b.hi[c], glm::dvec3(P[v]));
+    struct Box {
+        glm::dvec3 lo{std::numeric_limits<double>::max()}, hi{std::numeric_limits<double>::lowest()};
+        std::size_t vertices = 0;
+    };
+    const auto comp = [&](std::size_t v) {
+        return comps.used[v] && canon[v] == v ? comps.of(std::uint32_t(v)) : kNotInAComponent;
+    };
+    const auto add = [&](Box& b, std::size_t v) {
+        b.lo = glm::min(b.lo, glm::dvec3(P[v]));
+        b.hi = glm::max(b.hi, glm::dvec3(P[v]));
         ++b.vertices;
+    };
+    const auto merge = [](Box& b, const Box& part) {
+        b.lo = glm::min(b.lo, part.lo);
+        b.hi = glm::max(b.hi, part.hi);
+        b.vertices += part.vertices;
+    };
+    const std::vector<Box> boxes = sum_by_component<Box>(P.size(), comps.count, comp, add, merge);
+    ComponentBounds b;
+    for (const Box& box : boxes) {
+        b.lo.push_back(box.lo);
+        b.hi.push_back(box.hi);
+        b.ref.push_back(0.5 * (box.lo + box.hi));
+        b.vertices += box.vertices;
     }
-    for (std::uint32_t c = 0; c < ncomp; ++c) b.ref[c] = 0.5 * (b.lo[c] + b.hi[c]);
     return b;
 }
 
@@ -524,8 +547,10 @@ Analysis analyse(const Mesh& mesh) {
     const std::vector<std::uint32_t> rank = order_components(component_parts(bounds, edges, acc, loops), m);
     add_totals(m);
     out.vertex_component.assign(nv, kNone);
-    for (std::uint32_t v = 0; v < nv; ++v)
-        if (comps.used[welded.canon[v]]) out.vertex_component[v] = rank[comps.of(welded.canon[v])];
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nv, 1 << 16), [&](const auto& r) {
+        for (std::size_t v = r.begin(); v != r.end(); ++v)
+            if (comps.used[welded.canon[v]]) out.vertex_component[v] = rank[comps.of(welded.canon[v])];
+    });
     add_topology_warnings(m, loops.open_chain);
     return out;
 }

@@ -13,7 +13,10 @@
 
 namespace iso {
 
-// Per component c < ncomp, `add(sum, t)` over its triangles t (comp(t) == c):
+inline constexpr std::uint32_t kNotInAComponent = ~std::uint32_t(0);
+
+// Per component c < ncomp, `add(sum, t)` over its triangles t (comp(t) == c;
+// items t of comp(t) == kNotInAComponent are left out):
 // the triangles ordered by component (a stable counting sort), summed in
 // fixed blocks of 16384 in parallel, each block's runs of one component kept
 // as partial sums and the partials merged (`merge(into, partial)`) in block
@@ -24,10 +27,14 @@ std::vector<Sum> sum_by_component(std::size_t nt, std::uint32_t ncomp, Comp comp
     std::vector<std::uint32_t> order;
     if (ncomp > 1) {
         std::vector<std::size_t> next(std::size_t(ncomp) + 1, 0);
-        for (std::size_t t = 0; t < nt; ++t) ++next[comp(t) + 1];
+        std::size_t kept = 0;
+        for (std::size_t t = 0; t < nt; ++t)
+            if (const std::uint32_t c = comp(t); c != kNotInAComponent) ++next[c + 1], ++kept;
         std::partial_sum(next.begin(), next.end(), next.begin());
-        order.resize(nt);
-        for (std::size_t t = 0; t < nt; ++t) order[next[comp(t)]++] = std::uint32_t(t);
+        order.resize(kept);
+        for (std::size_t t = 0; t < nt; ++t)
+            if (const std::uint32_t c = comp(t); c != kNotInAComponent) order[next[c]++] = std::uint32_t(t);
+        nt = kept;
     }
     struct Partial {
         std::uint32_t comp;
@@ -40,6 +47,7 @@ std::vector<Sum> sum_by_component(std::size_t nt, std::uint32_t ncomp, Comp comp
         for (std::size_t o = blk * kBlock, e = std::min(nt, o + kBlock); o < e; ++o) {
             const std::size_t t = order.empty() ? o : order[o];
             const std::uint32_t c = comp(t);
+            if (c == kNotInAComponent) continue;
             if (out.empty() || out.back().comp != c) out.push_back({c, Sum{}});
             add(out.back().sum, t);
         }
