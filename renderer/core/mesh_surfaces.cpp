@@ -2,6 +2,8 @@
 #include "renderer/core/mesh_surfaces.hpp"
 
 #include <chrono>
+#include <exception>
+#include <thread>
 
 #include "io/atomic_file.hpp"
 #include "io/mesh.hpp"
@@ -132,12 +134,29 @@ MeshResult mesh_in_memory(const MeshRequest& req) {
     for (const auto id : ids) {
         const SurfaceInfo& info = scene.info(id);
         const std::string path = surface_output_path(req.output, info.value, req.labels, ids.size());
+        // The file is written on a thread of its own while the surface is
+        // analysed: writing waits on the kernel and the disk, the analysis
+        // on the cores, and both only read the mesh.
+        std::exception_ptr failed;
+        std::thread writer([&] {
+            const auto tw = std::chrono::steady_clock::now();
+            try {
+                scene.export_mesh(id, path);
+            } catch (...) {
+                failed = std::current_exception();
+            }
+            d.write_seconds += seconds_since(tw);
+        });
         t = std::chrono::steady_clock::now();
-        scene.export_mesh(id, path);
-        d.write_seconds += seconds_since(t);
-        t = std::chrono::steady_clock::now();
-        r.surfaces.push_back(measured_surface(info, path, scene.mesh(id)));
+        try {
+            r.surfaces.push_back(measured_surface(info, path, scene.mesh(id)));
+        } catch (...) {
+            writer.join();
+            throw;
+        }
         d.analysis_seconds += seconds_since(t);
+        writer.join();
+        if (failed) std::rethrow_exception(failed);
     }
     d.index_seconds = xs.index;
     d.extract_seconds = xs.extract;

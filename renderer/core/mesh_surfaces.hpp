@@ -73,7 +73,9 @@ struct StreamedDetails {
 // streamed route's (StreamStats): reading the volume; its range index
 // (per-chunk min/max) and value range; marching cubes; welding the chunks;
 // post-processing; writing the files; the analysis behind the summary
-// (measure_surface: closed or open, volume, components).
+// (measure_surface: closed or open, volume, components). A surface's file is
+// written on a thread of its own while it is analysed: those two overlap,
+// and the seconds add up to more than the wall time.
 struct InMemoryDetails {
     double read_seconds = 0, index_seconds = 0, extract_seconds = 0, weld_seconds = 0, postprocess_seconds = 0,
            write_seconds = 0, analysis_seconds = 0;
