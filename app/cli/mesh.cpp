@@ -4,6 +4,7 @@
 #include <cstdio>
 #include <iostream>
 #include <memory>
+#include <sstream>
 
 #include "app/cli/commands.hpp"
 #include "app/cli/common.hpp"
@@ -27,6 +28,18 @@ struct MeshArgs {
     double memory_mib = 0; // per rank under mpirun (0: default_rank_budget())
 };
 
+// A signed volume as what it is: never negative, a cavity's wall says so
+// (iso::encloses_cavity).
+std::string volume_text(double ml, bool lower_bound) {
+    std::ostringstream o;
+    const char* const at_least = lower_bound ? ">= " : "";
+    if (iso::encloses_cavity(ml))
+        o << "encloses a cavity of " << at_least << -ml << " mL (" << -ml * 1000.0 << " mm^3)";
+    else
+        o << "volume " << at_least << ml * 1000.0 << " mm^3";
+    return o.str();
+}
+
 // The volume part of a surface's line: only a volume that means what it says.
 void print_volume(const iso::core::MeshedSurface& s) {
     using iso::VolumeKind;
@@ -36,9 +49,9 @@ void print_volume(const iso::core::MeshedSurface& s) {
     else if (*s.volume_kind == VolumeKind::Undefined)
         std::cout << ", volume undefined (misoriented triangles)";
     else if (*s.volume_kind == VolumeKind::LowerBound)
-        std::cout << ", volume >= " << *s.volume_ml * 1000.0 << " mm^3 (lower bound: the boundary loops capped)";
+        std::cout << ", " << volume_text(*s.volume_ml, true) << " (lower bound: the boundary loops capped)";
     else
-        std::cout << ", volume " << *s.volume_ml * 1000.0 << " mm^3";
+        std::cout << ", " << volume_text(*s.volume_ml, false);
 }
 
 // The summary line of one written surface (the same for every route).
@@ -48,7 +61,7 @@ void print_surface(const iso::core::MeshedSurface& s, const iso::core::MeshResul
     print_volume(s);
     std::cout << ", " << s.components << " components (largest: " << s.largest.triangles << " triangles, area "
               << s.largest.area << " mm^2";
-    if (s.largest_volume_ml) std::cout << ", volume " << *s.largest_volume_ml * 1000.0 << " mm^3";
+    if (s.largest_volume_ml) std::cout << ", " << volume_text(*s.largest_volume_ml, false);
     std::cout << ") -> " << s.path;
     if (r.ranks) std::cout << " (" << s.pieces << " pieces from " << r.ranks->ranks << " ranks)";
     std::cout << "\n";

@@ -2,6 +2,7 @@
 #include "renderer/core/mesh_surfaces.hpp"
 
 #include <chrono>
+#include <cmath>
 #include <exception>
 #include <thread>
 
@@ -170,6 +171,16 @@ nlohmann::json number_or_null(const std::optional<double>& v) {
     return v ? nlohmann::json(*v) : nlohmann::json(nullptr);
 }
 
+// A signed volume as shown: its size (a cavity's wall: the cavity's), or null.
+std::optional<double> shown(const std::optional<double>& signed_volume, double scale = 1.0) {
+    if (!signed_volume) return std::nullopt;
+    return std::abs(*signed_volume) * scale;
+}
+
+nlohmann::json cavity_or_null(const std::optional<double>& signed_volume) {
+    return signed_volume ? nlohmann::json(encloses_cavity(*signed_volume)) : nlohmann::json(nullptr);
+}
+
 nlohmann::json surface_json(const MeshedSurface& s) {
     nlohmann::json j;
     j["name"] = s.name;
@@ -180,14 +191,16 @@ nlohmann::json surface_json(const MeshedSurface& s) {
     j["area_mm2"] = s.area_mm2;
     j["closed"] = s.closed;
     j["boundary_edges"] = s.boundary_edges;
-    j["volume_ml"] = number_or_null(s.volume_ml);
-    j["volume_mm3"] = number_or_null(s.volume_ml ? std::optional<double>(*s.volume_ml * 1000.0) : std::nullopt);
+    j["volume_ml"] = number_or_null(shown(s.volume_ml));
+    j["volume_mm3"] = number_or_null(shown(s.volume_ml, 1000.0));
     j["volume_kind"] = s.volume_kind ? nlohmann::json(volume_kind_name(*s.volume_kind)) : nlohmann::json(nullptr);
+    j["cavity"] = cavity_or_null(s.volume_ml);
     j["components"] = {{"count", s.components},
                        {"largest",
                         {{"triangles", s.largest.triangles},
                          {"area_mm2", s.largest.area},
-                         {"volume_ml", number_or_null(s.largest_volume_ml)}}}};
+                         {"volume_ml", number_or_null(shown(s.largest_volume_ml))},
+                         {"cavity", cavity_or_null(s.largest_volume_ml)}}}};
     if (s.pieces) j["pieces"] = s.pieces;
     j["warnings"] = s.warnings;
     return j;
