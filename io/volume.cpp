@@ -159,6 +159,42 @@ glm::dvec3 Volume::index_to_world(const glm::dvec3& ijk) const {
     return glm::dvec3(index_to_lps * glm::dvec4(ijk, 1.0));
 }
 
+namespace {
+
+// Minimum and maximum of the finite samples [b, e) into `lo`/`hi`, NaN and
+// infinite ones counted. Integers in runs of 64: a fixed trip count that the
+// compiler vectorizes at -O2 (a 2 GiB volume's range took ~1 s of CPU).
+template <class T> void range_of(const T* b, const T* e, T& lo, T& hi, std::size_t& nan, std::size_t& inf) {
+    if constexpr (std::is_floating_point_v<T>) {
+        for (; b != e; ++b) {
+            const T x = *b;
+            if (std::isnan(x)) {
+                ++nan;
+            } else if (std::isinf(x)) {
+                ++inf;
+            } else {
+                lo = x < lo ? x : lo;
+                hi = x > hi ? x : hi;
+            }
+        }
+    } else {
+        T l = lo, h = hi;
+        for (; e - b >= 64; b += 64)
+            for (int k = 0; k < 64; ++k) {
+                l = b[k] < l ? b[k] : l;
+                h = b[k] > h ? b[k] : h;
+            }
+        for (; b != e; ++b) {
+            l = *b < l ? *b : l;
+            h = *b > h ? *b : h;
+        }
+        lo = l;
+        hi = h;
+    }
+}
+
+} // namespace
+
 ValueRange Volume::value_range() const {
     if (sparse_) return sparse_value_range(*sparse_);
     ValueRange r;
@@ -173,21 +209,7 @@ ValueRange Volume::value_range() const {
         const Part p = tbb::parallel_reduce(
             tbb::blocked_range<std::size_t>(0, s.size(), std::size_t(1) << 20), Part{},
             [&](const tbb::blocked_range<std::size_t>& range, Part q) {
-                for (std::size_t i = range.begin(); i != range.end(); ++i) {
-                    const T x = s[i];
-                    if constexpr (std::is_floating_point_v<T>) {
-                        if (std::isnan(x)) {
-                            ++q.nan;
-                            continue;
-                        }
-                        if (std::isinf(x)) {
-                            ++q.inf;
-                            continue;
-                        }
-                    }
-                    q.lo = x < q.lo ? x : q.lo;
-                    q.hi = x > q.hi ? x : q.hi;
-                }
+                range_of(s.data() + range.begin(), s.data() + range.end(), q.lo, q.hi, q.nan, q.inf);
                 q.samples += range.size();
                 return q;
             },

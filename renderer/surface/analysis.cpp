@@ -28,6 +28,7 @@
 #include <tbb/blocked_range.h>
 #include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
+#include <tbb/parallel_reduce.h>
 #include <tbb/parallel_sort.h>
 #include <tbb/task_arena.h>
 
@@ -179,18 +180,31 @@ void check_input(const Mesh& mesh) {
     if (bad_vertex.load() < nv) throw Error(kWhere, "vertex " + std::to_string(bad_vertex.load()) + " is not finite");
 }
 
-// Step 1: the triangles over canonical vertices (equal positions are one vertex).
+// Step 1: the triangles over canonical vertices (equal positions are one
+// vertex). Where no vertex is renamed (an extracted surface: its vertices
+// are distinct), the mesh's own triangles, not a copy of them.
 struct Welded {
     std::vector<std::uint32_t> canon; // per input vertex: weld_positions
-    std::vector<Triangle> triangles;
+    std::vector<Triangle> renamed;    // the triangles with renamed vertices, if any was
+    bool any_renamed = false;
+    const std::vector<Triangle>& triangles(const Mesh& m) const { return any_renamed ? renamed : m.triangles; }
 };
 
 Welded weld_triangles(const Mesh& mesh) {
     const auto& T = mesh.triangles;
-    Welded w{weld_positions(mesh.positions), std::vector<Triangle>(T.size())};
+    Welded w{weld_positions(mesh.positions), {}, false};
+    w.any_renamed = tbb::parallel_reduce(
+        tbb::blocked_range<std::size_t>(0, w.canon.size(), 1 << 16), false,
+        [&](const auto& r, bool any) {
+            for (std::size_t v = r.begin(); v != r.end() && !any; ++v) any = w.canon[v] != v;
+            return any;
+        },
+        [](bool a, bool b) { return a || b; });
+    if (!w.any_renamed) return w;
+    w.renamed.resize(T.size());
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, T.size(), 1 << 14), [&](const auto& r) {
         for (std::size_t t = r.begin(); t != r.end(); ++t)
-            w.triangles[t] = {w.canon[T[t][0]], w.canon[T[t][1]], w.canon[T[t][2]]};
+            w.renamed[t] = {w.canon[T[t][0]], w.canon[T[t][1]], w.canon[T[t][2]]};
     });
     return w;
 }
@@ -530,10 +544,11 @@ Analysis analyse(const Mesh& mesh) {
     const auto& P = mesh.positions;
     const std::size_t nv = P.size();
     const Welded welded = weld_triangles(mesh);
-    const Components comps = connected_components(welded.triangles, nv);
+    const std::vector<Triangle>& W = welded.triangles(mesh);
+    const Components comps = connected_components(W, nv);
     const ComponentBounds bounds = component_bounds(P, welded.canon, comps);
-    const EdgeCounts edges = classify_edges(welded.triangles, comps, nv);
-    const std::vector<Accum> acc = component_sums(P, welded.triangles, comps, bounds.ref);
+    const EdgeCounts edges = classify_edges(W, comps, nv);
+    const std::vector<Accum> acc = component_sums(P, W, comps, bounds.ref);
     const BoundaryLoops loops = boundary_loops(P, edges.chain, comps, bounds.ref);
 
     Analysis out;
