@@ -10,9 +10,11 @@
 #include <filesystem>
 #include <limits>
 #include <memory>
+#include <type_traits>
 
 #include <fcntl.h>
 #include <nifti1_io.h>
+#include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 #include <unistd.h>
 #include <zlib.h>
@@ -190,7 +192,8 @@ VolumeHeader header_of(const std::string& path, const nifti_image* nim) {
 // into the volume, in parallel pieces of 64 MiB (two threads fault in and
 // copy twice as fast), instead of into nifti_clib's buffer and then copied:
 // half the memory touched, which on a 2 GiB volume was seconds of page faults
-// (issue 39). The same samples as nifti_image_load gives.
+// (issue 39). The same samples as nifti_image_load gives: it sets NaN and
+// infinite float samples to 0 (nifti_read_buffer), and so does this.
 Volume read_raw_samples(const VolumeHeader& h) {
     Volume v = Volume::dense(h.dims, h.stored, h.index_to_lps);
     const int fd = ::open(h.data_file.c_str(), O_RDONLY | O_CLOEXEC);
@@ -208,6 +211,18 @@ Volume read_raw_samples(const VolumeHeader& h) {
         }
     });
     ::close(fd);
+    if (!error)
+        dispatch_voxel_type(h.stored, [&](auto tag) {
+            using T = decltype(tag);
+            if constexpr (std::is_floating_point_v<T>) {
+                const auto s = v.as<T>();
+                tbb::parallel_for(tbb::blocked_range<std::size_t>(0, s.size(), 1 << 16), [&](const auto& r) {
+                    for (std::size_t i = r.begin(); i != r.end(); ++i)
+                        if (!std::isfinite(s[i])) s[i] = T(0);
+                });
+            }
+            return 0;
+        });
     if (error)
         throw Error(h.path, error < 0 ? std::string("truncated: the data ends before ") + std::to_string(n) + " bytes"
                                       : std::string("cannot read the data: ") + std::strerror(error.load()));
