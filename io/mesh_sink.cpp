@@ -363,12 +363,6 @@ public:
             }
         }
     }
-    // Removes what is left of the temporaries (all of them before finish()).
-    ~AssembledSink() override {
-        std::error_code ec;
-        for (const auto& f : files_)
-            for (const auto& t : f.temporaries) fs::remove(t, ec);
-    }
     void piece(MeshPiece&& p) override {
         auto& st = state(p);
         auto& f = files_[p.surface];
@@ -429,6 +423,12 @@ private:
         detail::OutFile out;   // STL: the output itself; PLY: the vertices
         detail::OutFile faces; // PLY: the faces
         std::vector<std::string> temporaries;
+        // Removes what is left of the temporaries (all of them before finish(),
+        // also when the sink's constructor throws).
+        ~Files() {
+            std::error_code ec;
+            for (const auto& t : temporaries) fs::remove(t, ec);
+        }
     };
 
     // The layout save_mesh() wrote through VTK, with normals where the pieces
