@@ -4,7 +4,8 @@
 // crash on malformed input); VTP goes through VTK's XML reader. The coordinate
 // system is read from Slicer's "SPACE=RAS|LPS" tag where the format has a
 // header or comment, and written as SPACE=LPS. OBJ is written here because
-// VTK 9.1's vtkOBJWriter cannot add a comment line.
+// VTK 9.1's vtkOBJWriter cannot add a comment line; binary STL and PLY by
+// io/mesh_writers.cpp (VTK's bytes, formatted in parallel).
 #include "io/mesh.hpp"
 
 #include <algorithm>
@@ -21,11 +22,9 @@
 #include <vtkFieldData.h>
 #include <vtkFloatArray.h>
 #include <vtkNew.h>
-#include <vtkPLYWriter.h>
 #include <vtkPointData.h>
 #include <vtkPoints.h>
 #include <vtkPolyData.h>
-#include <vtkSTLWriter.h>
 #include <vtkSmartPointer.h>
 #include <vtkStringArray.h>
 #include <vtkTriangleFilter.h>
@@ -35,6 +34,7 @@
 #include "io/atomic_file.hpp"
 #include "io/error.hpp"
 #include "io/mesh_parsers.hpp"
+#include "io/mesh_writers.hpp"
 #include "io/vtk_mesh.hpp"
 #include "io/vtp_reader.hpp"
 #include "io/vtk_util.hpp"
@@ -303,45 +303,24 @@ void save_mesh(const Mesh& m, const std::string& path) {
     for (const auto& t : m.triangles)
         if (t[0] >= n || t[1] >= n || t[2] >= n) throw Error(path, "mesh has a triangle index out of range");
     write_atomically(path, [&](const std::string& tmp) {
+        // .stl and .ply by hand (mesh_writers.cpp): the bytes VTK's writers
+        // wrote, formatted in parallel and written in blocks.
         if (fmt == Fmt::Obj) return write_obj(m, tmp);
-        auto pd = to_polydata(m, fmt != Fmt::Stl);
+        if (fmt == Fmt::Stl) return detail::write_stl(m, tmp, path);
+        if (fmt == Fmt::Ply) return detail::write_ply(m, tmp, path);
+        auto pd = to_polydata(m, true);
+        vtkNew<vtkStringArray> space;
+        space->SetName("SPACE");
+        space->InsertNextValue("LPS");
+        pd->GetFieldData()->AddArray(space);
         vtkNew<VtkMessages> msgs;
-        int ok = 1;
-        if (fmt == Fmt::Stl) {
-            vtkNew<vtkSTLWriter> w;
-            msgs->watch(w);
-            w->SetInputData(pd);
-            w->SetFileName(tmp.c_str());
-            w->SetFileTypeToBinary();
-            w->SetHeader("SPACE=LPS isoscope mesh, millimetres");
-            ok = w->Write();
-        } else if (fmt == Fmt::Ply) {
-            vtkNew<vtkPLYWriter> w;
-            msgs->watch(w);
-            w->SetInputData(pd);
-            w->SetFileName(tmp.c_str());
-            w->SetFileTypeToBinary();
-            w->AddComment("SPACE=LPS");
-            w->AddComment("written by isoscope; coordinates in millimetres");
-            if (!m.colors.empty()) {
-                w->SetArrayName("RGBA");
-                w->SetColorModeToDefault();
-                w->EnableAlphaOn();
-            }
-            ok = w->Write();
-        } else {
-            vtkNew<vtkStringArray> space;
-            space->SetName("SPACE");
-            space->InsertNextValue("LPS");
-            pd->GetFieldData()->AddArray(space);
-            vtkNew<vtkXMLPolyDataWriter> w;
-            msgs->watch(w);
-            w->SetInputData(pd);
-            w->SetFileName(tmp.c_str());
-            w->SetDataModeToAppended();
-            w->SetCompressorTypeToZLib();
-            ok = w->Write();
-        }
+        vtkNew<vtkXMLPolyDataWriter> w;
+        msgs->watch(w);
+        w->SetInputData(pd);
+        w->SetFileName(tmp.c_str());
+        w->SetDataModeToAppended();
+        w->SetCompressorTypeToZLib();
+        const int ok = w->Write();
         if (!ok || msgs->has_error()) throw Error(path, "cannot write: " + msgs->first_error());
     });
 }

@@ -1,24 +1,22 @@
 // Piece-by-piece surface writers (mesh_sink.hpp).
 //
-// The assembled .ply and .stl files are written here by hand: VTK's writers
-// (vtkPLYWriter, vtkSTLWriter) take a whole vtkPolyData, i.e. the whole mesh
-// in memory, which is what out-of-core extraction must avoid, and no Debian
-// package writes these formats incrementally. The layouts are the ones
-// save_mesh() writes through VTK (binary little-endian PLY with x y z nx ny nz
-// and "vertex_indices" as uchar/int lists; binary STL with facet normals as
-// vtkTriangle::ComputeNormal gives them), tagged SPACE=LPS the same way.
+// The assembled .ply and .stl files are written piece by piece (no Debian
+// package writes these formats incrementally; save_mesh() needs the whole
+// mesh), with the records of io/mesh_writers.hpp: binary little-endian PLY
+// with x y z (nx ny nz where the pieces have normals) and "vertex_indices"
+// as uchar/int lists, without VTK's comment and obj_info lines; binary STL
+// as save_mesh() writes it; both tagged SPACE=LPS.
 // The pieces of a .pvtp are written with VTK's vtkXMLPPolyDataWriter.
 #include "io/mesh_sink.hpp"
 
 #include <algorithm>
-#include <cstdio>
 #include <cstring>
 #include <filesystem>
-#include <fstream>
 #include <limits>
 #include <unordered_map>
 
 #include <glm/glm.hpp>
+#include <tbb/parallel_for.h>
 #include <vtkFieldData.h>
 #include <vtkCellArray.h>
 #include <vtkFloatArray.h>
@@ -32,6 +30,7 @@
 #include <vtkXMLPolyDataWriter.h>
 
 #include "io/atomic_file.hpp"
+#include "io/mesh_writers.hpp"
 #include "io/vtk_mesh.hpp"
 #include "io/vtk_util.hpp"
 
@@ -95,15 +94,34 @@ struct SurfaceState {
             c0 = glm::dvec3(p.mesh.positions[0]);
             have_c0 = true;
         }
-        for (const auto& t : p.mesh.triangles) {
-            const TriangleTerms tt =
-                triangle_terms(c0, p.mesh.positions[t[0]], p.mesh.positions[t[1]], p.mesh.positions[t[2]]);
-            area += tt.area;
-            det_sum += tt.det;
-            w += tt.moment;
-        }
+        add_terms(p.mesh);
         triangles += p.mesh.triangles.size();
         return id;
+    }
+    // The piece's triangle terms about c0, summed in fixed blocks in parallel
+    // and added in block order (the same sums whatever the thread count).
+    void add_terms(const Mesh& m) {
+        constexpr std::size_t kBlock = 16384;
+        struct Sum {
+            double area = 0, det = 0;
+            glm::dvec3 w{0.0};
+        };
+        std::vector<Sum> sums((m.triangles.size() + kBlock - 1) / kBlock);
+        tbb::parallel_for(std::size_t(0), sums.size(), [&](std::size_t blk) {
+            Sum& b = sums[blk];
+            for (std::size_t i = blk * kBlock, e = std::min(m.triangles.size(), i + kBlock); i < e; ++i) {
+                const auto& t = m.triangles[i];
+                const TriangleTerms tt = triangle_terms(c0, m.positions[t[0]], m.positions[t[1]], m.positions[t[2]]);
+                b.area += tt.area;
+                b.det += tt.det;
+                b.w += tt.moment;
+            }
+        });
+        for (const Sum& b : sums) {
+            area += b.area;
+            det_sum += b.det;
+            w += b.w;
+        }
     }
     MeshStats stats() const {
         MeshStats s;
@@ -317,70 +335,31 @@ private:
 };
 
 // ---- .ply / .stl assembled on disk -------------------------------------------
-
-class SpillFile {
-public:
-    SpillFile() = default;
-    void open(const std::string& path) {
-        path_ = path;
-        f_ = std::fopen(path.c_str(), "w+b");
-        if (!f_) throw Error(path, std::string("cannot create a temporary file: ") + std::strerror(errno));
-        std::setvbuf(f_, nullptr, _IOFBF, 1 << 20);
-    }
-    ~SpillFile() { close(true); }
-    void put(const void* p, std::size_t n) {
-        if (n && std::fwrite(p, 1, n, f_) != n) throw Error(path_, std::string("write error: ") + std::strerror(errno));
-        size_ += n;
-    }
-    // Appends everything written here to `out`.
-    void copy_to(SpillFile& out) {
-        if (std::fflush(f_) != 0 || std::fseek(f_, 0, SEEK_SET) != 0)
-            throw Error(path_, "cannot re-read the temporary file");
-        std::vector<char> buf(1 << 20);
-        std::size_t n;
-        while ((n = std::fread(buf.data(), 1, buf.size(), f_)) > 0) out.put(buf.data(), n);
-        if (std::ferror(f_)) throw Error(path_, "read error in the temporary file");
-    }
-    void seek_put(long at, const void* p, std::size_t n) {
-        if (std::fseek(f_, at, SEEK_SET) != 0 || std::fwrite(p, 1, n, f_) != n) throw Error(path_, "write error");
-        std::fseek(f_, 0, SEEK_END);
-    }
-    void close(bool remove) {
-        if (f_) {
-            const bool bad = std::fclose(f_) != 0;
-            f_ = nullptr;
-            if (bad && !remove) throw Error(path_, "write error while closing");
-        }
-        if (remove && !path_.empty()) {
-            std::error_code ec;
-            fs::remove(path_, ec);
-            path_.clear();
-        }
-    }
-    const std::string& path() const { return path_; }
-    std::uint64_t size() const { return size_; }
-
-private:
-    std::FILE* f_ = nullptr;
-    std::string path_;
-    std::uint64_t size_ = 0;
-};
+//
+// Each piece's records are formatted in parallel into 4 MiB blocks and each
+// block written with one write(2) (detail::BlockWriter), not a stdio call per
+// record. STL facets go straight into the output (the count patched at the
+// end). PLY needs the vertex count in its header and all vertices before
+// the faces, neither known until the last piece: vertices and faces are
+// spilled to two temporaries, and finish() writes the header and appends
+// both with copy_file_range(2), in the kernel, instead of reading them back.
 
 class AssembledSink final : public SinkBase {
 public:
     explicit AssembledSink(std::vector<std::string> paths) : SinkBase(std::move(paths)), files_(paths_.size()) {
         for (std::size_t s = 0; s < paths_.size(); ++s) {
-            files_[s].stl = lower_ext(paths_[s]) == ".stl";
+            auto& f = files_[s];
+            f.stl = lower_ext(paths_[s]) == ".stl";
             const std::string tmp = temp_path_for(paths_[s]);
-            files_[s].out.open(tmp);
-            if (files_[s].stl) {
-                char header[80] = {};
-                std::snprintf(header, sizeof header, "SPACE=LPS isoscope mesh, millimetres");
-                files_[s].out.put(header, 80);
-                const std::uint32_t zero = 0;
-                files_[s].out.put(&zero, 4);
+            f.temporaries.push_back(tmp);
+            f.out.open(tmp, paths_[s]);
+            if (f.stl) {
+                unsigned char header[detail::kStlHeaderBytes];
+                detail::stl_header(header, 0);
+                f.out.write(header, sizeof header);
             } else {
-                files_[s].faces.open(tmp + ".faces");
+                f.temporaries.push_back(tmp + ".faces");
+                f.faces.open(tmp + ".faces", paths_[s]);
             }
         }
     }
@@ -388,45 +367,21 @@ public:
         auto& st = state(p);
         auto& f = files_[p.surface];
         std::vector<std::uint8_t> is_new;
+        const std::uint64_t first_new = st.vertices;
         const auto id = st.map(p, is_new);
-        if (!p.mesh.normals.empty()) f.normals = true;
-        if (f.stl) {
-            // Facets carry their own coordinates: a seam vertex's position is
-            // the same in both pieces, so no welding is needed to write them.
-            std::vector<float> rec;
-            for (const auto& t : p.mesh.triangles) {
-                float buf[12];
-                const glm::vec3 a = p.mesh.positions[t[0]], b = p.mesh.positions[t[1]], c = p.mesh.positions[t[2]];
-                // As vtkTriangle::ComputeNormal: (b - a) x (c - a) in double, normalized.
-                glm::dvec3 n = glm::cross(glm::dvec3(c) - glm::dvec3(b), glm::dvec3(a) - glm::dvec3(b));
-                const double len = glm::length(n);
-                if (len != 0.0) n /= len;
-                buf[0] = float(n.x), buf[1] = float(n.y), buf[2] = float(n.z);
-                std::memcpy(buf + 3, &a, 12);
-                std::memcpy(buf + 6, &b, 12);
-                std::memcpy(buf + 9, &c, 12);
-                f.out.put(buf, 48);
-                const std::uint16_t attr = 0;
-                f.out.put(&attr, 2);
-            }
-            return;
-        }
+        if (f.stl) return write_facets(f, p.mesh);
         // PLY: new vertices in global order, faces with global indices (spilled).
-        if (f.vertex_bytes == 0) f.vertex_bytes = f.normals ? 24 : 12;
-        if ((f.vertex_bytes == 24) != !p.mesh.normals.empty() && !p.mesh.positions.empty())
-            throw Error(paths_[p.surface], "pieces with and without normals");
-        for (std::size_t v = 0; v < p.mesh.positions.size(); ++v) {
-            if (!is_new[v]) continue;
-            f.verts_spill().put(&p.mesh.positions[v], 12);
-            if (f.vertex_bytes == 24) f.verts_spill().put(&p.mesh.normals[v], 12);
+        if (!p.mesh.positions.empty()) {
+            if (f.vertex_bytes == 0) f.vertex_bytes = p.mesh.normals.empty() ? 12 : 24;
+            if ((f.vertex_bytes == 24) != !p.mesh.normals.empty())
+                throw Error(paths_[p.surface], "pieces with and without normals");
         }
-        for (const auto& t : p.mesh.triangles) {
-            unsigned char rec[13];
-            rec[0] = 3;
-            const std::int32_t ids[3] = {std::int32_t(id[t[0]]), std::int32_t(id[t[1]]), std::int32_t(id[t[2]])};
-            std::memcpy(rec + 1, ids, 12);
-            f.faces.put(rec, 13);
-        }
+        write_vertices(f, p.mesh, id, is_new, first_new, st.vertices);
+        const auto& T = p.mesh.triangles;
+        writer_.write(f.faces, T.size(), detail::kPlyFaceBytes, [&](std::size_t b, std::size_t e, unsigned char* out) {
+            for (std::size_t i = b; i < e; ++i, out += detail::kPlyFaceBytes)
+                detail::ply_face(id[T[i][0]], id[T[i][1]], id[T[i][2]], out);
+        });
     }
     void finish() override {
         for (std::size_t s = 0; s < paths_.size(); ++s) {
@@ -436,52 +391,87 @@ public:
                 if (st.triangles > 0xFFFFFFFFull)
                     throw Error(paths_[s], "more than 4 billion triangles do not fit an STL file");
                 const std::uint32_t n = std::uint32_t(st.triangles);
-                f.out.seek_put(80, &n, 4);
-            } else {
-                // Header, then the vertices (written to `out` after the
-                // header), then the faces.
-                SpillFile final_file;
-                final_file.open(f.out.path() + ".ply");
-                std::string h = "ply\nformat binary_little_endian 1.0\ncomment SPACE=LPS\n"
-                                "comment written by isoscope; coordinates in millimetres\n";
-                h += "element vertex " + std::to_string(st.vertices) +
-                     "\nproperty float x\nproperty float y\nproperty float z\n";
-                if (f.vertex_bytes == 24) h += "property float nx\nproperty float ny\nproperty float nz\n";
-                h += "element face " + std::to_string(st.triangles) +
-                     "\nproperty list uchar int vertex_indices\nend_header\n";
-                final_file.put(h.data(), h.size());
-                f.out.copy_to(final_file);
-                f.faces.copy_to(final_file);
-                f.faces.close(true);
-                f.out.close(true);
-                final_file.close(false);
-                rename_into_place(final_file.path(), paths_[s]);
+                f.out.write_at(80, &n, 4);
+                f.out.close();
+                rename_into_place(f.out.path(), paths_[s]);
                 continue;
             }
-            const std::string tmp = f.out.path();
-            f.out.close(false);
-            rename_into_place(tmp, paths_[s]);
+            // Header, then the vertices, then the faces, into a third file.
+            detail::OutFile whole;
+            f.temporaries.push_back(f.out.path() + ".ply");
+            whole.open(f.temporaries.back(), paths_[s]);
+            const std::string h = ply_header(st.vertices, st.triangles, f.vertex_bytes == 24);
+            whole.write(h.data(), h.size());
+            whole.append_copy_of(f.out);
+            whole.append_copy_of(f.faces);
+            whole.close();
+            rename_into_place(whole.path(), paths_[s]);
+            std::error_code ec;
+            fs::remove(f.out.path(), ec);
+            fs::remove(f.faces.path(), ec);
         }
     }
-    std::size_t memory_bytes() const override { return SinkBase::memory_bytes() + files_.size() * (3u << 20); }
+    std::size_t memory_bytes() const override {
+        // The two blocks being formatted and written, at most 4 MiB each.
+        return SinkBase::memory_bytes() + (std::size_t(8) << 20);
+    }
 
 private:
+    struct Files {
+        bool stl = false;
+        std::size_t vertex_bytes = 0;
+        detail::OutFile out;   // STL: the output itself; PLY: the vertices
+        detail::OutFile faces; // PLY: the faces
+        std::vector<std::string> temporaries;
+        // Removes what is left of the temporaries (all of them before finish(),
+        // also when the sink's constructor throws).
+        ~Files() {
+            std::error_code ec;
+            for (const auto& t : temporaries) fs::remove(t, ec);
+        }
+    };
+
+    // The layout save_mesh() wrote through VTK, with normals where the pieces
+    // have them (vtkPLYWriter left them out).
+    static std::string ply_header(std::uint64_t vertices, std::uint64_t faces, bool normals) {
+        std::string h = "ply\nformat binary_little_endian 1.0\ncomment SPACE=LPS\n"
+                        "comment written by isoscope; coordinates in millimetres\n";
+        h += "element vertex " + std::to_string(vertices) + "\nproperty float x\nproperty float y\nproperty float z\n";
+        if (normals) h += "property float nx\nproperty float ny\nproperty float nz\n";
+        h += "element face " + std::to_string(faces) + "\nproperty list uchar int vertex_indices\nend_header\n";
+        return h;
+    }
+    // Facets carry their own coordinates: a seam vertex's position is the
+    // same in both pieces, so no welding is needed to write them.
+    void write_facets(Files& f, const Mesh& m) {
+        const auto& P = m.positions;
+        const auto& T = m.triangles;
+        writer_.write(f.out, T.size(), detail::kStlFacetBytes, [&](std::size_t b, std::size_t e, unsigned char* out) {
+            for (std::size_t i = b; i < e; ++i, out += detail::kStlFacetBytes)
+                detail::stl_facet(P[T[i][0]], P[T[i][1]], P[T[i][2]], out);
+        });
+    }
+    // The piece's new vertices, numbered [first, end) by map(), in that order.
+    void write_vertices(Files& f, const Mesh& m, const std::vector<std::uint32_t>& id,
+                        const std::vector<std::uint8_t>& is_new, std::uint64_t first, std::uint64_t end) {
+        std::vector<std::uint32_t> local(std::size_t(end - first));
+        for (std::size_t v = 0; v < is_new.size(); ++v)
+            if (is_new[v]) local[std::size_t(id[v] - first)] = std::uint32_t(v);
+        const std::size_t vb = f.vertex_bytes;
+        writer_.write(f.out, local.size(), vb, [&](std::size_t b, std::size_t e, unsigned char* out) {
+            for (std::size_t i = b; i < e; ++i, out += vb) {
+                std::memcpy(out, &m.positions[local[i]], 12);
+                if (vb == 24) std::memcpy(out + 12, &m.normals[local[i]], 12);
+            }
+        });
+    }
     static void rename_into_place(const std::string& tmp, const std::string& path) {
         std::error_code ec;
         fs::rename(tmp, path, ec);
-        if (ec) {
-            fs::remove(tmp, ec);
-            throw Error(path, "cannot move the written file into place: " + ec.message());
-        }
+        if (ec) throw Error(path, "cannot move the written file into place: " + ec.message());
     }
-    struct Files {
-        bool stl = false, normals = false;
-        std::size_t vertex_bytes = 0;
-        SpillFile out;   // STL: the output itself; PLY: the vertices
-        SpillFile faces; // PLY: the faces
-        SpillFile& verts_spill() { return out; }
-    };
     std::vector<Files> files_;
+    detail::BlockWriter writer_;
 };
 
 } // namespace

@@ -44,6 +44,10 @@ public:
     virtual std::size_t memory_bytes() const { return 0; }
     // Statistics of what was written, per surface (vertices after welding).
     virtual std::vector<MeshStats> stats() const = 0;
+    // Of the time piece() took so far, the seconds spent analysing the pieces
+    // rather than writing them (a summarizing sink's components and volumes):
+    // the streaming driver reports them as their own step.
+    virtual double analysis_seconds() const { return 0; }
 };
 
 // `paths[s]` is surface s's output: .pvtp (one .vtp per piece, written with

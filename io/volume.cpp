@@ -13,6 +13,8 @@
 #include <unistd.h>
 
 #include <glm/gtc/matrix_transform.hpp>
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_reduce.h>
 
 namespace iso {
 
@@ -157,32 +159,73 @@ glm::dvec3 Volume::index_to_world(const glm::dvec3& ijk) const {
     return glm::dvec3(index_to_lps * glm::dvec4(ijk, 1.0));
 }
 
+namespace {
+
+// Minimum and maximum of the finite samples [b, e) into `lo`/`hi`, NaN and
+// infinite ones counted. Integers in runs of 64: a fixed trip count that the
+// compiler vectorizes at -O2 (a 2 GiB volume's range took ~1 s of CPU).
+template <class T> void range_of(const T* b, const T* e, T& lo, T& hi, std::size_t& nan, std::size_t& inf) {
+    if constexpr (std::is_floating_point_v<T>) {
+        for (; b != e; ++b) {
+            const T x = *b;
+            if (std::isnan(x)) {
+                ++nan;
+            } else if (std::isinf(x)) {
+                ++inf;
+            } else {
+                lo = x < lo ? x : lo;
+                hi = x > hi ? x : hi;
+            }
+        }
+    } else {
+        T l = lo, h = hi;
+        for (; e - b >= 64; b += 64)
+            for (int k = 0; k < 64; ++k) {
+                l = b[k] < l ? b[k] : l;
+                h = b[k] > h ? b[k] : h;
+            }
+        for (; b != e; ++b) {
+            l = *b < l ? *b : l;
+            h = *b > h ? *b : h;
+        }
+        lo = l;
+        hi = h;
+    }
+}
+
+} // namespace
+
 ValueRange Volume::value_range() const {
     if (sparse_) return sparse_value_range(*sparse_);
     ValueRange r;
-    bool any = false;
     dispatch_voxel_type(type, [&](auto t) {
         using T = decltype(t);
         auto s = as<T>();
-        T lo = std::numeric_limits<T>::max(), hi = std::numeric_limits<T>::lowest();
-        for (T x : s) {
-            if constexpr (std::is_floating_point_v<T>) {
-                if (std::isnan(x)) {
-                    ++r.nan_count;
-                    continue;
-                }
-                if (std::isinf(x)) {
-                    ++r.inf_count;
-                    continue;
-                }
-            }
-            lo = x < lo ? x : lo;
-            hi = x > hi ? x : hi;
-            any = true;
-        }
-        if (any) {
-            r.min = double(lo);
-            r.max = double(hi);
+        // In parallel: minima, maxima and counts are exact in any order.
+        struct Part {
+            T lo = std::numeric_limits<T>::max(), hi = std::numeric_limits<T>::lowest();
+            std::size_t nan = 0, inf = 0, samples = 0;
+        };
+        const Part p = tbb::parallel_reduce(
+            tbb::blocked_range<std::size_t>(0, s.size(), std::size_t(1) << 20), Part{},
+            [&](const tbb::blocked_range<std::size_t>& range, Part q) {
+                range_of(s.data() + range.begin(), s.data() + range.end(), q.lo, q.hi, q.nan, q.inf);
+                q.samples += range.size();
+                return q;
+            },
+            [](Part a, const Part& b) {
+                a.lo = b.lo < a.lo ? b.lo : a.lo;
+                a.hi = b.hi > a.hi ? b.hi : a.hi;
+                a.nan += b.nan;
+                a.inf += b.inf;
+                a.samples += b.samples;
+                return a;
+            });
+        r.nan_count = p.nan;
+        r.inf_count = p.inf;
+        if (p.samples > p.nan + p.inf) { // some finite sample
+            r.min = double(p.lo);
+            r.max = double(p.hi);
         }
         return 0;
     });

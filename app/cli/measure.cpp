@@ -4,6 +4,7 @@
 #include <iomanip>
 #include <iostream>
 #include <memory>
+#include <sstream>
 
 #include "app/cli/commands.hpp"
 #include "app/cli/common.hpp"
@@ -68,18 +69,26 @@ nlohmann::json measure_structures(iso::core::Scene& scene, const MeasureArgs& a,
     return j;
 }
 
+// "volume X mL" or, for the wall of a cavity, "encloses a cavity of X mL"
+// (">= X" for a lower bound), from a surface's or component's JSON.
+std::string volume_text(const nlohmann::json& s) {
+    std::ostringstream o;
+    o << std::fixed << std::setprecision(3);
+    o << (s["cavity"].get<bool>() ? "encloses a cavity of " : "volume ")
+      << (s["volume_kind"].get<std::string>() == "lower bound" ? ">= " : "") << s["volume_ml"].get<double>() << " mL";
+    return o.str();
+}
+
 void print_structures(const nlohmann::json& j) {
     for (const auto& c : j["components"]) {
         std::cout << c["surface"].get<std::string>() << " (" << c["component"].get<std::size_t>() << " of "
                   << c["of_components"].get<std::size_t>() << " in " << c["from"].get<std::string>() << "): area "
                   << std::setprecision(1) << c["area_mm2"].get<double>() << " mm2";
         if (!c["area_uncertainty_mm2"].is_null()) std::cout << " +- " << c["area_uncertainty_mm2"].get<double>();
-        const std::string kind = c["volume_kind"].get<std::string>();
         if (c["volume_ml"].is_null())
             std::cout << ", volume undefined";
         else
-            std::cout << ", volume " << (kind == "lower bound" ? ">= " : "") << std::setprecision(3)
-                      << c["volume_ml"].get<double>() << " mL";
+            std::cout << ", " << volume_text(c) << std::setprecision(3);
         if (!c["volume_uncertainty_ml"].is_null()) std::cout << " +- " << c["volume_uncertainty_ml"].get<double>();
         std::cout << (c["closed"].get<bool>() ? ", closed" : ", open") << ", bounds LPS";
         for (const auto& b : c["bounds_lps"])
@@ -135,8 +144,7 @@ int run_measure(const MeasureArgs& a) {
             if (s["volume_ml"].is_null())
                 std::cout << ", volume undefined (" << kind << ")";
             else
-                std::cout << ", volume " << (kind == "lower bound" ? ">= " : "") << std::setprecision(3)
-                          << s["volume_ml"].get<double>() << " mL";
+                std::cout << ", " << volume_text(s) << std::setprecision(3);
             if (!s["volume_uncertainty_ml"].is_null()) std::cout << " +- " << s["volume_uncertainty_ml"].get<double>();
             if (!s["volume_extrapolated_ml"].is_null() && kind == "enclosed")
                 std::cout << " (extrapolated to zero voxel size: " << s["volume_extrapolated_ml"].get<double>() << ")";

@@ -4,6 +4,7 @@
 #include <cstdio>
 #include <iostream>
 #include <memory>
+#include <sstream>
 
 #include "app/cli/commands.hpp"
 #include "app/cli/common.hpp"
@@ -27,6 +28,18 @@ struct MeshArgs {
     double memory_mib = 0; // per rank under mpirun (0: default_rank_budget())
 };
 
+// A signed volume as what it is: never negative, a cavity's wall says so
+// (iso::encloses_cavity).
+std::string volume_text(double ml, bool lower_bound) {
+    std::ostringstream o;
+    const char* const at_least = lower_bound ? ">= " : "";
+    if (iso::encloses_cavity(ml))
+        o << "encloses a cavity of " << at_least << -ml << " mL (" << -ml * 1000.0 << " mm^3)";
+    else
+        o << "volume " << at_least << ml * 1000.0 << " mm^3";
+    return o.str();
+}
+
 // The volume part of a surface's line: only a volume that means what it says.
 void print_volume(const iso::core::MeshedSurface& s) {
     using iso::VolumeKind;
@@ -36,9 +49,9 @@ void print_volume(const iso::core::MeshedSurface& s) {
     else if (*s.volume_kind == VolumeKind::Undefined)
         std::cout << ", volume undefined (misoriented triangles)";
     else if (*s.volume_kind == VolumeKind::LowerBound)
-        std::cout << ", volume >= " << *s.volume_ml * 1000.0 << " mm^3 (lower bound: the boundary loops capped)";
+        std::cout << ", " << volume_text(*s.volume_ml, true) << " (lower bound: the boundary loops capped)";
     else
-        std::cout << ", volume " << *s.volume_ml * 1000.0 << " mm^3";
+        std::cout << ", " << volume_text(*s.volume_ml, false);
 }
 
 // The summary line of one written surface (the same for every route).
@@ -48,7 +61,7 @@ void print_surface(const iso::core::MeshedSurface& s, const iso::core::MeshResul
     print_volume(s);
     std::cout << ", " << s.components << " components (largest: " << s.largest.triangles << " triangles, area "
               << s.largest.area << " mm^2";
-    if (s.largest_volume_ml) std::cout << ", volume " << *s.largest_volume_ml * 1000.0 << " mm^3";
+    if (s.largest_volume_ml) std::cout << ", " << volume_text(*s.largest_volume_ml, false);
     std::cout << ") -> " << s.path;
     if (r.ranks) std::cout << " (" << s.pieces << " pieces from " << r.ranks->ranks << " ranks)";
     std::cout << "\n";
@@ -65,9 +78,20 @@ void print_streamed(const iso::core::StreamedDetails& d) {
     std::cout << "\n";
     char steps[256];
     std::snprintf(steps, sizeof steps,
-                  "index %.2f, read %.2f, extract %.2f, weld %.2f, write %.2f, extraction waited %.2f", s.index_seconds,
-                  s.read_seconds - s.index_seconds, s.extract_seconds, s.weld_seconds, s.write_seconds, s.wait_seconds);
+                  "index %.2f, read %.2f, extract %.2f, weld %.2f, write %.2f, analysis %.2f, extraction waited %.2f",
+                  s.index_seconds, s.read_seconds - s.index_seconds, s.extract_seconds, s.weld_seconds, s.write_seconds,
+                  s.analysis_seconds, s.wait_seconds);
     std::cout << "streaming steps (busy seconds" << (s.plan.overlap ? ", overlapped" : "") << "): " << steps << "\n";
+}
+
+void print_in_memory(const iso::core::InMemoryDetails& d) {
+    char post[64] = "";
+    if (d.postprocess_seconds > 0) std::snprintf(post, sizeof post, "post-processing %.2f, ", d.postprocess_seconds);
+    char steps[256];
+    std::snprintf(steps, sizeof steps, "read %.2f, index %.2f, extract %.2f, weld %.2f, %swrite %.2f, analysis %.2f",
+                  d.read_seconds, d.index_seconds, d.extract_seconds, d.weld_seconds, post, d.write_seconds,
+                  d.analysis_seconds);
+    std::cout << "steps (busy seconds): " << steps << "\n";
 }
 
 void print_ranks(const iso::core::RankDetails& d) {
@@ -91,6 +115,7 @@ void print_result(const iso::core::MeshResult& r, bool json) {
     if (r.ranks) print_ranks(*r.ranks);
     for (const auto& s : r.surfaces) print_surface(s, r);
     if (r.streamed) print_streamed(*r.streamed);
+    if (r.in_memory) print_in_memory(*r.in_memory);
 }
 
 #ifdef ISOSCOPE_MPI

@@ -49,12 +49,15 @@ void add_row(QTableWidget* t, const core::SurfaceMeasurement& m) {
     };
     cell(StructureTools::Name, QString::fromStdString(m.name));
     cell(StructureTools::Area, with_uncertainty(s.area_mm2, s.area_uncertainty_mm2, 1, QString::fromUtf8("mm\u00b2")));
+    // Never a negative volume: the wall of a cavity says what it encloses (encloses_cavity).
+    const QString at_least = s.volume_kind == VolumeKind::LowerBound ? QString::fromUtf8("\u2265 ") : QString();
     if (s.volume_kind == VolumeKind::Undefined)
         cell(StructureTools::Volume, "undefined (inconsistent orientation)");
-    else
+    else if (encloses_cavity(s.volume_ml))
         cell(StructureTools::Volume,
-             with_uncertainty(s.volume_ml, s.volume_uncertainty_ml, 3, "mL",
-                              s.volume_kind == VolumeKind::LowerBound ? QString::fromUtf8("\u2265 ") : QString()));
+             with_uncertainty(-s.volume_ml, s.volume_uncertainty_ml, 3, "mL", "encloses a cavity of " + at_least));
+    else
+        cell(StructureTools::Volume, with_uncertainty(s.volume_ml, s.volume_uncertainty_ml, 3, "mL", at_least));
     cell(StructureTools::Closed, s.closed ? "closed" : "open");
     cell(StructureTools::Bounds, point_text(s.bounds_min) + QString::fromUtf8(" \u2013 ") + point_text(s.bounds_max));
 }

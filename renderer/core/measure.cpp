@@ -54,10 +54,15 @@ nlohmann::json vec(const glm::dvec3& v) { return nlohmann::json::array({v.x, v.y
 // NaN is not JSON: an absent uncertainty is null.
 nlohmann::json number(double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(nullptr); }
 
+// A signed volume as shown: its size (a cavity's wall: the cavity's, with
+// "cavity" true; encloses_cavity), never negative.
+nlohmann::json size(double signed_volume) { return number(std::abs(signed_volume)); }
+
 nlohmann::json part_json(const SurfacePart& p) {
     return {{"triangles", p.triangles},
             {"area_mm2", p.area_mm2},
-            {"volume_ml", number(p.volume_ml)},
+            {"volume_ml", size(p.volume_ml)},
+            {"cavity", encloses_cavity(p.volume_ml)},
             {"volume_kind", volume_kind_name(p.volume_kind)},
             {"closed", p.closed},
             {"boundary_loops", p.boundary_loops},
@@ -83,7 +88,8 @@ nlohmann::json measure_json(const Scene& scene, const std::vector<SurfaceMeasure
         if (s.kind == SurfaceInfo::Kind::Label) o["label"] = s.value;
         o["triangles"] = m.triangles;
         o["area_mm2"] = m.area_mm2;
-        o["volume_ml"] = number(m.volume_ml);
+        o["volume_ml"] = size(m.volume_ml);
+        o["cavity"] = encloses_cavity(m.volume_ml);
         o["volume_kind"] = volume_kind_name(m.volume_kind);
         o["closed"] = m.closed;
         o["boundary"] = {{"edges", m.boundary_edges}, {"loops", m.boundary_loops}, {"length_mm", m.boundary_length_mm}};
@@ -94,7 +100,7 @@ nlohmann::json measure_json(const Scene& scene, const std::vector<SurfaceMeasure
         o["area_uncertainty_mm2"] = number(m.area_uncertainty_mm2);
         o["volume_uncertainty_ml"] = number(m.volume_uncertainty_ml);
         o["area_extrapolated_mm2"] = number(m.area_extrapolated_mm2);
-        o["volume_extrapolated_ml"] = number(m.volume_extrapolated_ml);
+        o["volume_extrapolated_ml"] = size(m.volume_extrapolated_ml);
         json parts = json::array();
         for (const auto& p : m.components) parts.push_back(part_json(p));
         o["components"] = std::move(parts);

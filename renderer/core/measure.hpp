@@ -48,8 +48,10 @@ struct PointMeasurements {
 };
 
 // JSON of `isoscope measure --json`: "surfaces" (per surface: name, iso,
-// area_mm2, volume_ml, volume_kind, closed, boundary, components,
-// uncertainty, warnings), "distances", "angles", "values" (per point: point,
+// area_mm2, volume_ml, cavity, volume_kind, closed, boundary, components,
+// uncertainty, warnings; volumes never negative: the wall of a cavity gives
+// the cavity's volume and cavity true, encloses_cavity), "distances",
+// "angles", "values" (per point: point,
 // value, unit (value_unit; null without one or without a value), voxel).
 nlohmann::json measure_json(const Scene& scene, const std::vector<SurfaceMeasurement>& surfaces,
                             const PointMeasurements& points);

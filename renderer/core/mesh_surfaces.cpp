@@ -1,6 +1,11 @@
 // The route of `isoscope mesh` and its per-surface summary (mesh_surfaces.hpp).
 #include "renderer/core/mesh_surfaces.hpp"
 
+#include <chrono>
+#include <cmath>
+#include <exception>
+#include <thread>
+
 #include "io/atomic_file.hpp"
 #include "io/mesh.hpp"
 #include "io/mesh_sink.hpp"
@@ -69,22 +74,44 @@ MeshResult mesh_streamed(const MeshRequest& req, std::size_t budget) {
     return r;
 }
 
-// The in-memory summary: the counts and components of summarize_mesh (as
-// the streamed route's), closed/open and the volume of measure_surface (as
-// `isoscope measure`: an open surface's volume is its lower bound).
+// The in-memory summary, all of it from measure_surface (as `isoscope
+// measure`: an open surface's volume is its lower bound): counts, closed or
+// open, the volume, and the components (joined where they share a vertex
+// position; an extracted surface's vertices are distinct, so these are the
+// streamed route's components); the largest picked as the streamed route
+// picks it: by triangles, then area.
 MeshedSurface measured_surface(const SurfaceInfo& info, const std::string& path, const Mesh& m) {
-    MeshedSurface s =
-        summarized_surface(info.name, path, info.kind == SurfaceInfo::Kind::Label, info.value, summarize_mesh(m));
     const SurfaceMeasures ms = measure_surface(m);
-    s.area_mm2 = ms.area_mm2; // the same sum as `isoscope measure`'s
+    MeshedSurface s;
+    s.name = info.name;
+    s.path = path;
+    s.label = info.kind == SurfaceInfo::Kind::Label;
+    s.value = info.value;
+    s.triangles = m.triangles.size();
+    s.vertices = m.positions.size();
+    s.area_mm2 = ms.area_mm2;
     s.closed = ms.closed;
     s.boundary_edges = ms.boundary_edges;
     s.volume_kind = ms.volume_kind;
-    s.volume_ml.reset();
     if (ms.volume_kind != VolumeKind::Undefined) s.volume_ml = ms.volume_ml;
-    if (!ms.closed) s.largest_volume_ml.reset();
+    s.components = ms.components.size();
+    const SurfacePart* largest = nullptr;
+    for (const auto& c : ms.components)
+        if (!largest || c.triangles > largest->triangles ||
+            (c.triangles == largest->triangles && c.area_mm2 > largest->area_mm2))
+            largest = &c;
+    if (largest) {
+        s.largest.triangles = largest->triangles;
+        s.largest.area = largest->area_mm2;
+        s.largest.volume = largest->volume_ml * 1000.0;
+        if (ms.closed) s.largest_volume_ml = largest->volume_ml;
+    }
     s.warnings = m.warnings;
     return s;
+}
+
+double seconds_since(std::chrono::steady_clock::time_point t) {
+    return std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
 }
 
 MeshResult mesh_in_memory(const MeshRequest& req) {
@@ -95,23 +122,63 @@ MeshResult mesh_in_memory(const MeshRequest& req) {
     lo.series = req.series;
     lo.progress = req.progress;
     Scene scene;
+    InMemoryDetails d;
+    auto t = std::chrono::steady_clock::now();
     if (scene.open(req.input, lo) != 0)
         throw Error(req.input, "is a mesh; isoscope mesh extracts surfaces from volumes");
+    d.read_seconds = seconds_since(t);
     MeshResult r;
     r.warnings = scene.volume().meta.warnings;
-    const auto ids = req.labels ? scene.add_label_surfaces(req.label_values, req.extract, req.post, req.progress)
-                                : scene.add_isosurfaces(req.isos, req.extract, req.post, req.progress);
+    ExtractSeconds xs;
+    const auto ids = req.labels ? scene.add_label_surfaces(req.label_values, req.extract, req.post, req.progress, &xs)
+                                : scene.add_isosurfaces(req.isos, req.extract, req.post, req.progress, &xs);
     for (const auto id : ids) {
         const SurfaceInfo& info = scene.info(id);
         const std::string path = surface_output_path(req.output, info.value, req.labels, ids.size());
-        scene.export_mesh(id, path);
-        r.surfaces.push_back(measured_surface(info, path, scene.mesh(id)));
+        // The file is written on a thread of its own while the surface is
+        // analysed: writing waits on the kernel and the disk, the analysis
+        // on the cores, and both only read the mesh.
+        std::exception_ptr failed;
+        std::thread writer([&] {
+            const auto tw = std::chrono::steady_clock::now();
+            try {
+                scene.export_mesh(id, path);
+            } catch (...) {
+                failed = std::current_exception();
+            }
+            d.write_seconds += seconds_since(tw);
+        });
+        t = std::chrono::steady_clock::now();
+        try {
+            r.surfaces.push_back(measured_surface(info, path, scene.mesh(id)));
+        } catch (...) {
+            writer.join();
+            throw;
+        }
+        d.analysis_seconds += seconds_since(t);
+        writer.join();
+        if (failed) std::rethrow_exception(failed);
     }
+    d.index_seconds = xs.index;
+    d.extract_seconds = xs.extract;
+    d.weld_seconds = xs.weld;
+    d.postprocess_seconds = xs.postprocess;
+    r.in_memory = d;
     return r;
 }
 
 nlohmann::json number_or_null(const std::optional<double>& v) {
     return v ? nlohmann::json(*v) : nlohmann::json(nullptr);
+}
+
+// A signed volume as shown: its size (a cavity's wall: the cavity's), or null.
+std::optional<double> shown(const std::optional<double>& signed_volume, double scale = 1.0) {
+    if (!signed_volume) return std::nullopt;
+    return std::abs(*signed_volume) * scale;
+}
+
+nlohmann::json cavity_or_null(const std::optional<double>& signed_volume) {
+    return signed_volume ? nlohmann::json(encloses_cavity(*signed_volume)) : nlohmann::json(nullptr);
 }
 
 nlohmann::json surface_json(const MeshedSurface& s) {
@@ -124,17 +191,36 @@ nlohmann::json surface_json(const MeshedSurface& s) {
     j["area_mm2"] = s.area_mm2;
     j["closed"] = s.closed;
     j["boundary_edges"] = s.boundary_edges;
-    j["volume_ml"] = number_or_null(s.volume_ml);
-    j["volume_mm3"] = number_or_null(s.volume_ml ? std::optional<double>(*s.volume_ml * 1000.0) : std::nullopt);
+    j["volume_ml"] = number_or_null(shown(s.volume_ml));
+    j["volume_mm3"] = number_or_null(shown(s.volume_ml, 1000.0));
     j["volume_kind"] = s.volume_kind ? nlohmann::json(volume_kind_name(*s.volume_kind)) : nlohmann::json(nullptr);
+    j["cavity"] = cavity_or_null(s.volume_ml);
     j["components"] = {{"count", s.components},
                        {"largest",
                         {{"triangles", s.largest.triangles},
                          {"area_mm2", s.largest.area},
-                         {"volume_ml", number_or_null(s.largest_volume_ml)}}}};
+                         {"volume_ml", number_or_null(shown(s.largest_volume_ml))},
+                         {"cavity", cavity_or_null(s.largest_volume_ml)}}}};
     if (s.pieces) j["pieces"] = s.pieces;
     j["warnings"] = s.warnings;
     return j;
+}
+
+nlohmann::json streamed_busy_json(const StreamStats& s) {
+    return {{"index", s.index_seconds},           {"read", s.read_seconds - s.index_seconds},
+            {"extract", s.extract_seconds},       {"weld", s.weld_seconds},
+            {"write", s.write_seconds},           {"analysis", s.analysis_seconds},
+            {"extraction_waited", s.wait_seconds}};
+}
+
+nlohmann::json in_memory_busy_json(const InMemoryDetails& d) {
+    return {{"read", d.read_seconds},
+            {"index", d.index_seconds},
+            {"extract", d.extract_seconds},
+            {"weld", d.weld_seconds},
+            {"postprocess", d.postprocess_seconds},
+            {"write", d.write_seconds},
+            {"analysis", d.analysis_seconds}};
 }
 
 nlohmann::json streamed_json(const StreamedDetails& d) {
@@ -150,13 +236,7 @@ nlohmann::json streamed_json(const StreamedDetails& d) {
             {"engine_peak_bytes", s.peak_bytes},
             {"resident_peak_bytes", d.resident_peak_bytes},
             {"reader_peak_bytes", d.reader_peak_bytes},
-            {"busy_seconds",
-             {{"index", s.index_seconds},
-              {"read", s.read_seconds - s.index_seconds},
-              {"extract", s.extract_seconds},
-              {"weld", s.weld_seconds},
-              {"write", s.write_seconds},
-              {"extraction_waited", s.wait_seconds}}}};
+            {"busy_seconds", streamed_busy_json(s)}};
 }
 
 } // namespace
@@ -175,6 +255,9 @@ nlohmann::json mesh_json(const MeshResult& r) {
     j["surfaces"] = nlohmann::json::array();
     for (const auto& s : r.surfaces) j["surfaces"].push_back(surface_json(s));
     j["warnings"] = r.warnings;
+    j["busy_seconds"] = r.streamed    ? streamed_busy_json(r.streamed->stats)
+                        : r.in_memory ? in_memory_busy_json(*r.in_memory)
+                                      : nlohmann::json(nullptr);
     j["streaming"] = r.streamed ? streamed_json(*r.streamed) : nlohmann::json(nullptr);
     if (r.ranks)
         j["mpi"] = {{"ranks", r.ranks->ranks},

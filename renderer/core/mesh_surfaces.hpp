@@ -51,11 +51,11 @@ struct MeshedSurface {
     double area_mm2 = 0;
     bool closed = true; // no edge used by one triangle
     std::size_t boundary_edges = 0;
-    std::optional<double> volume_ml;         // read with volume_kind
+    std::optional<double> volume_ml;         // signed (encloses_cavity); read with volume_kind
     std::optional<VolumeKind> volume_kind;   // none where no volume is known
     std::size_t components = 0;              // connected through shared vertices
     ComponentStats largest;                  // by triangles, then area (its volume: see largest_volume_ml)
-    std::optional<double> largest_volume_ml; // a closed surface's only (then every component is closed)
+    std::optional<double> largest_volume_ml; // signed; a closed surface's only (then every component is closed)
     std::size_t pieces = 0;                  // MPI: the .vtp files the .pvtp lists
     std::vector<std::string> warnings;       // of its extraction
 };
@@ -69,6 +69,18 @@ struct StreamedDetails {
     std::size_t reader_peak_bytes = 0; // OpenVDB read slab by slab: the reading child's peak
 };
 
+// The in-memory route's figures: the seconds each step was busy, named as the
+// streamed route's (StreamStats): reading the volume; its range index
+// (per-chunk min/max) and value range; marching cubes; welding the chunks;
+// post-processing; writing the files; the analysis behind the summary
+// (measure_surface: closed or open, volume, components). A surface's file is
+// written on a thread of its own while it is analysed: those two overlap,
+// and the seconds add up to more than the wall time.
+struct InMemoryDetails {
+    double read_seconds = 0, index_seconds = 0, extract_seconds = 0, weld_seconds = 0, postprocess_seconds = 0,
+           write_seconds = 0, analysis_seconds = 0;
+};
+
 // The MPI route's figures, per rank.
 struct RankDetails {
     int ranks = 1;
@@ -79,6 +91,7 @@ struct MeshResult {
     MeshRoute route = MeshRoute::InMemory;
     std::vector<MeshedSurface> surfaces;
     std::vector<std::string> warnings; // of the volume (and of the streaming engine)
+    std::optional<InMemoryDetails> in_memory;
     std::optional<StreamedDetails> streamed;
     std::optional<RankDetails> ranks;
 };
@@ -94,8 +107,11 @@ MeshedSurface summarized_surface(const std::string& name, const std::string& pat
 
 // JSON of `isoscope mesh --json`: "route", "surfaces" (per surface: name,
 // iso or label, path, triangles, vertices, area_mm2, closed, boundary_edges,
-// volume_ml, volume_mm3 and volume_kind (null where not known),
-// components {count, largest}, warnings; pieces under MPI), "warnings",
+// volume_ml, volume_mm3, volume_kind and cavity (null where not known; the
+// volume never negative: a cavity's wall gives the cavity's volume and
+// cavity true, encloses_cavity), components {count, largest {triangles,
+// area_mm2, volume_ml, cavity}}, warnings; pieces under MPI), "warnings",
+// "busy_seconds" (each step's, in memory and streamed; null under MPI),
 // "streaming" and "mpi" (their figures, or null).
 nlohmann::json mesh_json(const MeshResult& r);
 

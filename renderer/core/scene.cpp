@@ -1,6 +1,7 @@
 #include "renderer/core/scene.hpp"
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <iterator>
 #include <cstdio>
@@ -132,6 +133,13 @@ void warn_outside_range(Mesh& m, double iso, const ValueRange& range) {
     }
 }
 
+// Adds the seconds since `t` to `*to` (when the caller asked for them) and restarts `t`.
+void lap(std::chrono::steady_clock::time_point& t, double* to) {
+    const auto now = std::chrono::steady_clock::now();
+    if (to) *to += std::chrono::duration<double>(now - t).count();
+    t = now;
+}
+
 ExtractOptions with_share(ExtractOptions eo, const ProgressFn& progress, double share) {
     if (progress)
         eo.progress = [progress, share](double f, std::string_view stage) { return progress(f * share, stage); };
@@ -141,24 +149,31 @@ ExtractOptions with_share(ExtractOptions eo, const ProgressFn& progress, double 
 } // namespace
 
 std::vector<SurfaceId> Scene::add_isosurfaces(std::vector<double> isos, const ExtractOptions& extract,
-                                              const PostProcessOptions& post, ProgressFn progress) {
+                                              const PostProcessOptions& post, ProgressFn progress,
+                                              ExtractSeconds* seconds) {
     const Volume& v = volume();
     if (isos.empty()) throw Error("isosurface extraction of " + impl_->volume_source, "no iso value given");
     std::sort(isos.begin(), isos.end());
     const bool pp = needs_postprocess(post);
     const double share = pp ? 0.6 : 1.0;
     std::vector<Mesh> meshes;
+    auto t = std::chrono::steady_clock::now();
     {
         const Extractor x = impl_->extractor(v, with_share(extract, progress, share));
+        lap(t, seconds ? &seconds->index : nullptr);
         auto chunked = x.extract(isos);
+        lap(t, seconds ? &seconds->extract : nullptr);
         for (auto& c : chunked) {
             meshes.push_back(weld(c, x.options().threads));
             c = ChunkedSurface{}; // free the chunks as soon as they are welded
         }
+        lap(t, seconds ? &seconds->weld : nullptr);
     }
     const auto range = value_range();
+    lap(t, seconds ? &seconds->index : nullptr);
     for (std::size_t i = 0; i < meshes.size(); ++i) warn_outside_range(meshes[i], isos[i], range);
     if (pp) postprocess_all(meshes, post, progress, share);
+    lap(t, seconds && pp ? &seconds->postprocess : nullptr);
     report(progress, 1.0, "done", "isosurface extraction");
     return add_extracted(std::move(meshes), SurfaceInfo::Kind::Iso, isos, post);
 }
@@ -255,14 +270,17 @@ bool Scene::has_surface(SurfaceId id) const {
 }
 
 std::vector<SurfaceId> Scene::add_label_surfaces(const std::vector<double>& labels, const ExtractOptions& extract,
-                                                 const PostProcessOptions& post, ProgressFn progress) {
+                                                 const PostProcessOptions& post, ProgressFn progress,
+                                                 ExtractSeconds* seconds) {
     const Volume& v = volume();
     const bool pp = needs_postprocess(post);
     const double share = pp ? 0.6 : 1.0;
-    auto found = extract_labels(v, labels, with_share(extract, progress, share));
+    auto found = extract_labels(v, labels, with_share(extract, progress, share), seconds);
     std::vector<Mesh> meshes;
     for (auto& ls : found) meshes.push_back(std::move(ls.mesh));
+    auto t = std::chrono::steady_clock::now();
     if (pp) postprocess_all(meshes, post, progress, share);
+    lap(t, seconds && pp ? &seconds->postprocess : nullptr);
     report(progress, 1.0, "done", "label surface extraction");
     std::vector<double> values;
     for (const auto& ls : found) values.push_back(ls.label);

@@ -116,11 +116,14 @@ public:
     const std::string& volume_source() const;
     // Isosurfaces of the volume, in increasing iso order, coloured skin to
     // bone; each gets an empty-surface warning when outside the value range.
+    // `seconds`, when given, gets each step's time added (isoscope mesh).
     std::vector<SurfaceId> add_isosurfaces(std::vector<double> isos, const ExtractOptions& extract = {},
-                                           const PostProcessOptions& post = {}, ProgressFn progress = {});
+                                           const PostProcessOptions& post = {}, ProgressFn progress = {},
+                                           ExtractSeconds* seconds = nullptr);
     // One surface per label (empty: every non-zero label) of a label map.
     std::vector<SurfaceId> add_label_surfaces(const std::vector<double>& labels, const ExtractOptions& extract = {},
-                                              const PostProcessOptions& post = {}, ProgressFn progress = {});
+                                              const PostProcessOptions& post = {}, ProgressFn progress = {},
+                                              ExtractSeconds* seconds = nullptr);
     SurfaceId add_mesh(Mesh m, SurfaceInfo info);
 
     // ---- surfaces made off the GUI thread ----------------------------------

@@ -9,6 +9,8 @@
 #include "renderer/surface/arena.hpp"
 #include "renderer/surface/analysis.hpp"
 #include "renderer/surface/atomic.hpp"
+#include "renderer/surface/component_sums.hpp"
+#include "renderer/surface/edges.hpp"
 #include "renderer/surface/union_find.hpp"
 
 #include <algorithm>
@@ -26,6 +28,7 @@
 #include <tbb/blocked_range.h>
 #include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
+#include <tbb/parallel_reduce.h>
 #include <tbb/parallel_sort.h>
 #include <tbb/task_arena.h>
 
@@ -177,18 +180,31 @@ void check_input(const Mesh& mesh) {
     if (bad_vertex.load() < nv) throw Error(kWhere, "vertex " + std::to_string(bad_vertex.load()) + " is not finite");
 }
 
-// Step 1: the triangles over canonical vertices (equal positions are one vertex).
+// Step 1: the triangles over canonical vertices (equal positions are one
+// vertex). Where no vertex is renamed (an extracted surface: its vertices
+// are distinct), the mesh's own triangles, not a copy of them.
 struct Welded {
     std::vector<std::uint32_t> canon; // per input vertex: weld_positions
-    std::vector<Triangle> triangles;
+    std::vector<Triangle> renamed;    // the triangles with renamed vertices, if any was
+    bool any_renamed = false;
+    const std::vector<Triangle>& triangles(const Mesh& m) const { return any_renamed ? renamed : m.triangles; }
 };
 
 Welded weld_triangles(const Mesh& mesh) {
     const auto& T = mesh.triangles;
-    Welded w{weld_positions(mesh.positions), std::vector<Triangle>(T.size())};
+    Welded w{weld_positions(mesh.positions), {}, false};
+    w.any_renamed = tbb::parallel_reduce(
+        tbb::blocked_range<std::size_t>(0, w.canon.size(), 1 << 16), false,
+        [&](const auto& r, bool any) {
+            for (std::size_t v = r.begin(); v != r.end() && !any; ++v) any = w.canon[v] != v;
+            return any;
+        },
+        [](bool a, bool b) { return a || b; });
+    if (!w.any_renamed) return w;
+    w.renamed.resize(T.size());
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, T.size(), 1 << 14), [&](const auto& r) {
         for (std::size_t t = r.begin(); t != r.end(); ++t)
-            w.triangles[t] = {w.canon[T[t][0]], w.canon[T[t][1]], w.canon[T[t][2]]};
+            w.renamed[t] = {w.canon[T[t][0]], w.canon[T[t][1]], w.canon[T[t][2]]};
     });
     return w;
 }
@@ -201,22 +217,30 @@ struct Components {
     std::uint32_t of(std::uint32_t canonical) const { return label[canonical]; }
 };
 
-// Union-find (collapsed triangles connect too). Every set's root is its
-// smallest member, so the components are numbered in the order of their
-// smallest vertex (deterministic), and a vertex's root is labelled before it.
+// Union-find in parallel (collapsed triangles connect too). Every set's root
+// is its smallest member, whatever the order of the unions, so the
+// components are numbered in the order of their smallest vertex
+// (deterministic), and a vertex's root is labelled before it.
 Components connected_components(const std::vector<Triangle>& W, std::size_t nv) {
     Components c;
     c.used.assign(nv, 0);
-    UnionFind sets(nv);
-    for (const auto& w : W) {
-        c.used[w[0]] = c.used[w[1]] = c.used[w[2]] = 1;
-        sets.unite(w[0], w[1]);
-        sets.unite(w[0], w[2]);
-    }
+    ConcurrentUnionFind sets(nv);
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, W.size(), 1 << 14), [&](const auto& r) {
+        for (std::size_t t = r.begin(); t != r.end(); ++t) {
+            const auto& w = W[t];
+            for (const auto v : w) std::atomic_ref<std::uint8_t>(c.used[v]).store(1, std::memory_order_relaxed);
+            sets.unite(w[0], w[1]);
+            sets.unite(w[0], w[2]);
+        }
+    });
     c.label.assign(nv, kNone);
-    for (std::uint32_t v = 0; v < nv; ++v) {
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nv, 1 << 16), [&](const auto& r) {
+        for (std::size_t v = r.begin(); v != r.end(); ++v)
+            if (c.used[v]) c.label[v] = sets.find(std::uint32_t(v));
+    });
+    for (std::uint32_t v = 0; v < nv; ++v) { // roots to numbers; a root comes before its members
         if (!c.used[v]) continue;
-        const std::uint32_t root = sets.find(v);
+        const std::uint32_t root = c.label[v];
         c.label[v] = root == v ? c.count++ : c.label[root];
     }
     return c;
@@ -229,62 +253,36 @@ struct ComponentBounds {
     std::size_t vertices = 0;
 };
 
+// In parallel (sum_by_component over the used canonical vertices: minima
+// and maxima are exact in any order).
 ComponentBounds component_bounds(const std::vector<glm::vec3>& P, const std::vector<std::uint32_t>& canon,
                                  const Components& comps) {
-    const std::uint32_t ncomp = comps.count;
-    ComponentBounds b{std::vector<glm::dvec3>(ncomp, glm::dvec3(std::numeric_limits<double>::max())),
-                      std::vector<glm::dvec3>(ncomp, glm::dvec3(std::numeric_limits<double>::lowest())),
-                      std::vector<glm::dvec3>(ncomp)};
-    for (std::uint32_t v = 0; v < P.size(); ++v) {
-        if (!comps.used[v] || canon[v] != v) continue;
-        const std::uint32_t c = comps.of(v);
-        b.lo[c] = glm::min(b.lo[c], glm::dvec3(P[v]));
-        b.hi[c] = glm::max(b.hi[c], glm::dvec3(P[v]));
+    struct Box {
+        glm::dvec3 lo{std::numeric_limits<double>::max()}, hi{std::numeric_limits<double>::lowest()};
+        std::size_t vertices = 0;
+    };
+    const auto comp = [&](std::size_t v) {
+        return comps.used[v] && canon[v] == v ? comps.of(std::uint32_t(v)) : kNotInAComponent;
+    };
+    const auto add = [&](Box& b, std::size_t v) {
+        b.lo = glm::min(b.lo, glm::dvec3(P[v]));
+        b.hi = glm::max(b.hi, glm::dvec3(P[v]));
         ++b.vertices;
+    };
+    const auto merge = [](Box& b, const Box& part) {
+        b.lo = glm::min(b.lo, part.lo);
+        b.hi = glm::max(b.hi, part.hi);
+        b.vertices += part.vertices;
+    };
+    const std::vector<Box> boxes = sum_by_component<Box>(P.size(), comps.count, comp, add, merge);
+    ComponentBounds b;
+    for (const Box& box : boxes) {
+        b.lo.push_back(box.lo);
+        b.hi.push_back(box.hi);
+        b.ref.push_back(0.5 * (box.lo + box.hi));
+        b.vertices += box.vertices;
     }
-    for (std::uint32_t c = 0; c < ncomp; ++c) b.ref[c] = 0.5 * (b.lo[c] + b.hi[c]);
     return b;
-}
-
-// The edges of the non-collapsed triangles, bucketed by their lower vertex
-// (counting sort): bucket l is entries[offset[l], offset[l + 1]). An entry
-// is (upper << 1) | 1 when the triangle runs lower -> upper (vertices < 2^31:
-// 32 bits).
-struct EdgeBuckets {
-    std::vector<std::uint32_t> offset, entries;
-};
-
-EdgeBuckets bucket_edges(const std::vector<Triangle>& W, std::size_t nv) {
-    const std::size_t nt = W.size();
-    EdgeBuckets e;
-    auto& off = e.offset;
-    off.assign(nv + 1, 0);
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nt, 1 << 14), [&](const auto& r) {
-        for (std::size_t t = r.begin(); t != r.end(); ++t) {
-            const auto& w = W[t];
-            if (collapsed(w)) continue;
-            for (int k = 0; k < 3; ++k)
-                std::atomic_ref<std::uint32_t>(off[std::min(w[k], w[(k + 1) % 3]) + 1])
-                    .fetch_add(1, std::memory_order_relaxed);
-        }
-    });
-    std::partial_sum(off.begin(), off.end(), off.begin());
-    e.entries.resize(off[nv]);
-    std::vector<std::uint32_t> cursor(off.begin(), off.end() - 1);
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nt, 1 << 14), [&](const auto& r) {
-        for (std::size_t t = r.begin(); t != r.end(); ++t) {
-            const auto& w = W[t];
-            if (collapsed(w)) continue;
-            for (int k = 0; k < 3; ++k) {
-                const std::uint32_t a = w[k], b = w[(k + 1) % 3];
-                const std::uint32_t l = std::min(a, b), u = std::max(a, b);
-                const std::uint32_t slot =
-                    std::atomic_ref<std::uint32_t>(cursor[l]).fetch_add(1, std::memory_order_relaxed);
-                e.entries[slot] = (u << 1) | std::uint32_t(a < b);
-            }
-        }
-    });
-    return e;
 }
 
 struct BoundaryEdge {
@@ -302,7 +300,7 @@ struct EdgeCounts {
 
 // Each bucket sorted and its runs (one edge each) classified, in parallel.
 EdgeCounts classify_edges(const std::vector<Triangle>& W, const Components& comps, std::size_t nv) {
-    EdgeBuckets buckets = bucket_edges(W, nv);
+    EdgeBuckets buckets = bucket_edges(W, nv, true); // the non-collapsed triangles' edges
     struct EdgeLocal {
         std::size_t boundary = 0, non_manifold = 0, misoriented = 0;
         std::vector<BoundaryEdge> chain;
@@ -357,61 +355,32 @@ struct Accum {
     std::size_t triangles = 0, degenerate = 0;
 };
 
-// Step 4: area and volume per component. The triangles ordered by component
-// (counting sort), summed by fixed blocks in parallel, the blocks' partial
-// sums added in order (deterministic whatever the thread count).
+// Step 4: area and volume per component, summed in a way that does not
+// depend on the thread count (sum_by_component).
 std::vector<Accum> component_sums(const std::vector<glm::vec3>& P, const std::vector<Triangle>& W,
                                   const Components& comps, const std::vector<glm::dvec3>& ref) {
-    const std::size_t nt = W.size();
-    const std::uint32_t ncomp = comps.count;
-    std::vector<std::uint32_t> first(ncomp + 1, 0);
-    for (const auto& w : W) ++first[comps.of(w[0]) + 1];
-    std::partial_sum(first.begin(), first.end(), first.begin());
-    std::vector<std::uint32_t> order(nt);
-    if (ncomp == 1) {
-        std::iota(order.begin(), order.end(), 0u);
-    } else {
-        std::vector<std::uint32_t> cur(first.begin(), first.end() - 1);
-        for (std::uint32_t t = 0; t < nt; ++t) order[cur[comps.of(W[t][0])]++] = t;
-    }
-    struct Partial {
-        std::uint32_t comp;
-        Accum a;
+    const auto comp = [&](std::size_t t) { return comps.of(W[t][0]); };
+    const auto add = [&](Accum& a, std::size_t t) {
+        const auto& w = W[t];
+        ++a.triangles;
+        if (collapsed(w)) {
+            ++a.degenerate;
+            return;
+        }
+        const glm::dvec3& r = ref[comps.of(w[0])];
+        const glm::dvec3 p0 = glm::dvec3(P[w[0]]) - r, p1 = glm::dvec3(P[w[1]]) - r, p2 = glm::dvec3(P[w[2]]) - r;
+        const double area = 0.5 * glm::length(glm::cross(p1 - p0, p2 - p0));
+        if (area == 0.0) ++a.degenerate;
+        a.area += area;
+        a.volume += glm::dot(p0, glm::cross(p1, p2)) / 6.0;
     };
-    constexpr std::size_t kBlock = 16384;
-    const std::size_t nblocks = (nt + kBlock - 1) / kBlock;
-    std::vector<std::vector<Partial>> partials(nblocks);
-    tbb::parallel_for(std::size_t(0), nblocks, [&](std::size_t blk) {
-        auto& out_p = partials[blk];
-        const std::size_t b = blk * kBlock, e = std::min(nt, b + kBlock);
-        for (std::size_t o = b; o < e; ++o) {
-            const auto& w = W[order[o]];
-            const std::uint32_t c = comps.of(w[0]);
-            if (out_p.empty() || out_p.back().comp != c) out_p.push_back({c, {}});
-            Accum& a = out_p.back().a;
-            ++a.triangles;
-            if (collapsed(w)) {
-                ++a.degenerate;
-                continue;
-            }
-            const glm::dvec3 p0 = glm::dvec3(P[w[0]]) - ref[c], p1 = glm::dvec3(P[w[1]]) - ref[c],
-                             p2 = glm::dvec3(P[w[2]]) - ref[c];
-            const double area = 0.5 * glm::length(glm::cross(p1 - p0, p2 - p0));
-            if (area == 0.0) ++a.degenerate;
-            a.area += area;
-            a.volume += glm::dot(p0, glm::cross(p1, p2)) / 6.0;
-        }
-    });
-    std::vector<Accum> acc(ncomp);
-    for (const auto& blk : partials)
-        for (const auto& part : blk) {
-            Accum& a = acc[part.comp];
-            a.area += part.a.area;
-            a.volume += part.a.volume;
-            a.triangles += part.a.triangles;
-            a.degenerate += part.a.degenerate;
-        }
-    return acc;
+    const auto merge = [](Accum& a, const Accum& part) {
+        a.area += part.area;
+        a.volume += part.volume;
+        a.triangles += part.triangles;
+        a.degenerate += part.degenerate;
+    };
+    return sum_by_component<Accum>(W.size(), comps.count, comp, add, merge);
 }
 
 // Step 5: per component, its boundary loops, their length and the volume of
@@ -575,10 +544,11 @@ Analysis analyse(const Mesh& mesh) {
     const auto& P = mesh.positions;
     const std::size_t nv = P.size();
     const Welded welded = weld_triangles(mesh);
-    const Components comps = connected_components(welded.triangles, nv);
+    const std::vector<Triangle>& W = welded.triangles(mesh);
+    const Components comps = connected_components(W, nv);
     const ComponentBounds bounds = component_bounds(P, welded.canon, comps);
-    const EdgeCounts edges = classify_edges(welded.triangles, comps, nv);
-    const std::vector<Accum> acc = component_sums(P, welded.triangles, comps, bounds.ref);
+    const EdgeCounts edges = classify_edges(W, comps, nv);
+    const std::vector<Accum> acc = component_sums(P, W, comps, bounds.ref);
     const BoundaryLoops loops = boundary_loops(P, edges.chain, comps, bounds.ref);
 
     Analysis out;
@@ -592,8 +562,10 @@ Analysis analyse(const Mesh& mesh) {
     const std::vector<std::uint32_t> rank = order_components(component_parts(bounds, edges, acc, loops), m);
     add_totals(m);
     out.vertex_component.assign(nv, kNone);
-    for (std::uint32_t v = 0; v < nv; ++v)
-        if (comps.used[welded.canon[v]]) out.vertex_component[v] = rank[comps.of(welded.canon[v])];
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nv, 1 << 16), [&](const auto& r) {
+        for (std::size_t v = r.begin(); v != r.end(); ++v)
+            if (comps.used[welded.canon[v]]) out.vertex_component[v] = rank[comps.of(welded.canon[v])];
+    });
     add_topology_warnings(m, loops.open_chain);
     return out;
 }

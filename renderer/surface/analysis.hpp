@@ -77,6 +77,15 @@ enum class VolumeKind : std::uint8_t {
 };
 const char* volume_kind_name(VolumeKind k); // "enclosed", "lower bound", "undefined"
 
+// A surface (or component) whose signed volume is negative faces into what it
+// encloses: it is the wall of a cavity (the inner wall of a hollow structure,
+// an air pocket; or a mesh whose triangles face inwards), and what it
+// encloses is a cavity of |volume|. The measures keep the sign (the sum over
+// a hollow structure's walls is its material's volume); what is shown to a
+// user (the CLI, the JSON, the desktop app) is never a negative volume but
+// "encloses a cavity of |volume|", with a `cavity` flag in the JSON.
+inline bool encloses_cavity(double signed_volume) { return signed_volume < 0; }
+
 inline constexpr double kNoUncertainty = std::numeric_limits<double>::quiet_NaN();
 
 // One connected component (triangles connected through shared vertices).

@@ -2,14 +2,22 @@
 #include "renderer/surface/components.hpp"
 
 #include <algorithm>
+#include <chrono>
 #include <cstring>
 #include <limits>
+#include <numeric>
 #include <tuple>
 #include <unordered_map>
 
 #include <glm/glm.hpp>
+#include <tbb/blocked_range.h>
+#include <tbb/enumerable_thread_specific.h>
+#include <tbb/parallel_for.h>
+#include <tbb/parallel_reduce.h>
 
 #include "io/error.hpp"
+#include "renderer/surface/component_sums.hpp"
+#include "renderer/surface/edges.hpp"
 #include "renderer/surface/union_find.hpp"
 
 namespace iso {
@@ -130,12 +138,22 @@ SurfacePiece weld_piece(const ChunkedSurface& s, ChunkRange range, const std::ar
 }
 
 std::pair<glm::dvec3, glm::dvec3> piece_bounds(const Mesh& m) {
-    glm::dvec3 lo(std::numeric_limits<double>::infinity()), hi(-std::numeric_limits<double>::infinity());
-    for (const auto& p : m.positions) {
-        lo = glm::min(lo, glm::dvec3(p));
-        hi = glm::max(hi, glm::dvec3(p));
-    }
-    return {lo, hi};
+    using Bounds = std::pair<glm::dvec3, glm::dvec3>;
+    const Bounds none{glm::dvec3(std::numeric_limits<double>::infinity()),
+                      glm::dvec3(-std::numeric_limits<double>::infinity())};
+    // Minima and maxima are exact in any order: the same bounds from any split.
+    return tbb::parallel_reduce(
+        tbb::blocked_range<std::size_t>(0, m.positions.size(), 1 << 16), none,
+        [&](const tbb::blocked_range<std::size_t>& r, Bounds b) {
+            for (std::size_t i = r.begin(); i != r.end(); ++i) {
+                b.first = glm::min(b.first, glm::dvec3(m.positions[i]));
+                b.second = glm::max(b.second, glm::dvec3(m.positions[i]));
+            }
+            return b;
+        },
+        [](const Bounds& x, const Bounds& y) {
+            return Bounds{glm::min(x.first, y.first), glm::max(x.second, y.second)};
+        });
 }
 
 glm::dvec3 volume_origin(const glm::dvec3& lo, const glm::dvec3& hi) {
@@ -144,54 +162,109 @@ glm::dvec3 volume_origin(const glm::dvec3& lo, const glm::dvec3& hi) {
 }
 
 namespace {
-// The piece's edges used by one triangle (PieceSummary::boundary_edges and seam_boundary).
+
+// The piece's edges used by one triangle (PieceSummary::boundary_edges and
+// seam_boundary): the edges bucketed by their lower vertex (edges.hpp) and
+// each bucket's runs read in parallel; every triangle's edges count, also
+// those of a triangle with a repeated vertex.
 void summarize_boundary(const SurfacePiece& p, PieceSummary& s) {
     constexpr std::uint64_t kOffSeam = ~std::uint64_t(0);
-    std::vector<std::uint64_t> key(p.mesh.positions.size(), kOffSeam);
+    const std::size_t nv = p.mesh.positions.size();
+    std::vector<std::uint64_t> key(nv, kOffSeam);
     for (const auto& [k, v] : p.seam) key[v] = k;
-    std::vector<std::pair<std::uint32_t, std::uint32_t>> edges;
-    edges.reserve(3 * p.mesh.triangles.size());
-    for (const auto& t : p.mesh.triangles)
-        for (int e = 0; e < 3; ++e) edges.push_back(std::minmax(t[e], t[(e + 1) % 3]));
-    std::sort(edges.begin(), edges.end());
-    for (std::size_t i = 0; i < edges.size();) {
-        std::size_t j = i + 1;
-        while (j < edges.size() && edges[j] == edges[i]) ++j;
-        if (j - i == 1) {
-            const auto [a, b] = edges[i];
-            if (key[a] == kOffSeam || key[b] == kOffSeam)
-                ++s.boundary_edges;
-            else
-                s.seam_boundary.push_back(std::minmax(key[a], key[b]));
+    EdgeBuckets edges = bucket_edges(p.mesh.triangles, nv, false);
+    struct Local {
+        std::size_t boundary = 0;
+        std::vector<std::pair<std::uint64_t, std::uint64_t>> seam;
+    };
+    tbb::enumerable_thread_specific<Local> locals;
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nv, 4096), [&](const auto& r) {
+        Local& L = locals.local();
+        for (std::size_t l = r.begin(); l != r.end(); ++l) {
+            std::uint32_t* b = edges.entries.data() + edges.offset[l];
+            std::uint32_t* const e = edges.entries.data() + edges.offset[l + 1];
+            std::sort(b, e);
+            while (b != e) {
+                const std::uint32_t upper = *b >> 1;
+                std::uint32_t* run = b + 1;
+                while (run != e && (*run >> 1) == upper) ++run;
+                if (run - b == 1) {
+                    if (key[l] == kOffSeam || key[upper] == kOffSeam)
+                        ++L.boundary;
+                    else
+                        L.seam.push_back(std::minmax(key[l], key[upper]));
+                }
+                b = run;
+            }
         }
-        i = j;
+    });
+    for (auto& L : locals) {
+        s.boundary_edges += L.boundary;
+        s.seam_boundary.insert(s.seam_boundary.end(), L.seam.begin(), L.seam.end());
     }
     std::sort(s.seam_boundary.begin(), s.seam_boundary.end());
 }
+
+// Per triangle, its component: the triangles' vertices united in parallel
+// (roots are smallest members: the same sets in any order), the roots
+// numbered in the order of their first triangle. Returns the count;
+// `vertex_component` gets each root's number (kNoComponent elsewhere).
+std::uint32_t triangle_components(const Mesh& m, ConcurrentUnionFind& sets, std::vector<std::uint32_t>& tri_comp,
+                                  std::vector<std::uint32_t>& vertex_component) {
+    const auto& T = m.triangles;
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, T.size(), 1 << 14), [&](const auto& r) {
+        for (std::size_t t = r.begin(); t != r.end(); ++t) {
+            sets.unite(T[t][0], T[t][1]);
+            sets.unite(T[t][0], T[t][2]);
+        }
+    });
+    tri_comp.resize(T.size());
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, T.size(), 1 << 14), [&](const auto& r) {
+        for (std::size_t t = r.begin(); t != r.end(); ++t) tri_comp[t] = sets.find(T[t][0]);
+    });
+    vertex_component.assign(m.positions.size(), kNoComponent);
+    std::uint32_t n = 0;
+    for (auto& c : tri_comp) {
+        auto& number = vertex_component[c];
+        if (number == kNoComponent) number = n++;
+        c = number;
+    }
+    return n;
+}
+
+// Each component's triangles, area, volume and moment about `origin`,
+// summed in a way that does not depend on the thread count (sum_by_component).
+std::vector<ComponentStats> component_sums(const Mesh& m, const std::vector<std::uint32_t>& tri_comp,
+                                           std::uint32_t ncomp, const glm::dvec3& origin) {
+    const auto add = [&](ComponentStats& c, std::size_t t) {
+        const auto& tri = m.triangles[t];
+        ++c.triangles;
+        add_triangle(origin, m.positions[tri[0]], m.positions[tri[1]], m.positions[tri[2]], c);
+    };
+    const auto merge = [](ComponentStats& c, const ComponentStats& part) {
+        c.triangles += part.triangles;
+        c.area += part.area;
+        c.volume += part.volume;
+        c.moment += part.moment;
+    };
+    return sum_by_component<ComponentStats>(
+        tri_comp.size(), ncomp, [&](std::size_t t) { return tri_comp[t]; }, add, merge);
+}
+
 } // namespace
 
 PieceSummary summarize_piece(const SurfacePiece& p, const glm::dvec3& origin) {
     const Mesh& m = p.mesh;
+    if (!EdgeBuckets::fits(m.positions.size(), m.triangles.size()))
+        throw Error("piece summary", "a piece of 2^31 vertices or 2^30 triangles or more: lower the memory budget");
     PieceSummary s;
     s.triangles = m.triangles.size();
     s.vertices = m.positions.size();
-    UnionFind sets(m.positions.size());
-    for (const auto& t : m.triangles) {
-        sets.unite(t[0], t[1]);
-        sets.unite(t[0], t[2]);
-    }
-    // Number the roots that carry triangles.
-    std::vector<std::uint32_t> comp(m.positions.size(), kNoComponent);
-    for (const auto& t : m.triangles) {
-        const auto r = sets.find(t[0]);
-        if (comp[r] == kNoComponent) {
-            comp[r] = std::uint32_t(s.components.size());
-            s.components.emplace_back();
-        }
-        auto& c = s.components[comp[r]];
-        ++c.triangles;
-        add_triangle(origin, m.positions[t[0]], m.positions[t[1]], m.positions[t[2]], c);
-    }
+    ConcurrentUnionFind sets(m.positions.size());
+    std::vector<std::uint32_t> tri_comp, comp;
+    const std::uint32_t ncomp = triangle_components(m, sets, tri_comp, comp);
+    s.components = component_sums(m, tri_comp, ncomp, origin);
+    tri_comp = {};
     s.origin = origin;
     std::tie(s.bounds_min, s.bounds_max) = piece_bounds(m);
     for (const auto& c : s.components) {
@@ -288,9 +361,11 @@ void SummarizingSink::piece(MeshPiece&& p) {
     sp.mesh = std::move(p.mesh);
     sp.seam = p.lower;
     sp.seam.insert(sp.seam.end(), p.upper.begin(), p.upper.end());
+    const auto t = std::chrono::steady_clock::now();
     std::sort(sp.seam.begin(), sp.seam.end());
     sp.seam.erase(std::unique(sp.seam.begin(), sp.seam.end()), sp.seam.end());
     pieces_[p.surface].push_back(summarize_piece(sp, origin_));
+    seconds_ += std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
     p.mesh = std::move(sp.mesh);
     next_.piece(std::move(p));
 }

@@ -129,6 +129,8 @@ public:
     void finish() override { next_.finish(); }
     std::size_t memory_bytes() const override;
     std::vector<MeshStats> stats() const override { return next_.stats(); }
+    // The summaries' seconds (summarize_piece), and the next sink's own.
+    double analysis_seconds() const override { return seconds_ + next_.analysis_seconds(); }
     // Per surface: triangles, welded vertices, area, volume, components, the largest.
     std::vector<SurfaceSummary> summaries() const;
 
@@ -136,6 +138,7 @@ private:
     MeshSink& next_;
     glm::dvec3 origin_;
     std::vector<std::vector<PieceSummary>> pieces_;
+    double seconds_ = 0;
 };
 
 // A byte string for sending a summary between processes, and back.

@@ -2,6 +2,7 @@
 #include "renderer/surface/extract.hpp"
 
 #include <algorithm>
+#include <chrono>
 #include <atomic>
 #include <cmath>
 #include <cstring>
@@ -1011,21 +1012,35 @@ std::vector<ChunkedSurface> extract_label_chunks(const VolumeWindow& w, const Ch
     return label_chunks(w, index, o, labels, ids);
 }
 
-std::vector<LabelSurface> extract_labels(const Volume& v, std::span<const double> wanted,
-                                         const ExtractOptions& opt_in) {
+std::vector<LabelSurface> extract_labels(const Volume& v, std::span<const double> wanted, const ExtractOptions& opt_in,
+                                         ExtractSeconds* seconds) {
+    using Clock = std::chrono::steady_clock;
+    const auto since = [](Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); };
+    ExtractSeconds took;
+    auto t = Clock::now();
     std::vector<double> labels(wanted.begin(), wanted.end());
     if (labels.empty()) labels = distinct_labels(v);
     std::sort(labels.begin(), labels.end());
     labels.erase(std::unique(labels.begin(), labels.end()), labels.end());
     Extractor x(v, opt_in);
     const auto& idx = x.index();
+    took.index = since(t);
+    t = Clock::now();
     std::vector<std::size_t> ids;
     for (std::size_t id = 0; id < idx.chunk_count(); ++id) ids.push_back(id);
     auto surfaces = label_chunks(VolumeWindow::whole(v), idx, x.options(), labels, ids);
+    took.extract = since(t);
+    t = Clock::now();
     std::vector<LabelSurface> out;
     for (std::size_t l = 0; l < labels.size(); ++l) {
         out.push_back({labels[l], weld(surfaces[l], x.options().threads)});
         surfaces[l] = ChunkedSurface{};
+    }
+    took.weld = since(t);
+    if (seconds) {
+        seconds->index += took.index;
+        seconds->extract += took.extract;
+        seconds->weld += took.weld;
     }
     return out;
 }

@@ -197,6 +197,15 @@ struct ExtractStats {
     int threads = 0, chunk_size = 0;
 };
 
+// Seconds the steps of an in-memory extraction took, added to (`isoscope
+// mesh --json`'s busy_seconds, named as the streamed route's steps): the
+// range index (per-chunk min/max, and the volume's value range where it is
+// computed for the surfaces' warnings), marching cubes over the chunks, the
+// welding of the chunks into meshes, the post-processing.
+struct ExtractSeconds {
+    double index = 0, extract = 0, weld = 0, postprocess = 0;
+};
+
 class Extractor {
 public:
     // Keeps a reference to `volume`: it must outlive the extractor.
@@ -267,7 +276,7 @@ struct LabelSurface {
     Mesh mesh;
 };
 std::vector<LabelSurface> extract_labels(const Volume& v, std::span<const double> labels = {},
-                                         const ExtractOptions& opt = {});
+                                         const ExtractOptions& opt = {}, ExtractSeconds* seconds = nullptr);
 // The label surfaces' chunks `ids` of a window (streaming): one chunked
 // surface per label in `labels` (sorted, as given), to weld by the caller.
 std::vector<ChunkedSurface> extract_label_chunks(const VolumeWindow& w, const ChunkIndex& index,

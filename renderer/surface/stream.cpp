@@ -108,6 +108,7 @@ void run_slabs(VolumeStream& src, MeshSink& sink, const std::shared_ptr<const Ch
     st.extract_seconds = steps.seconds.extract;
     st.weld_seconds = steps.seconds.weld;
     st.write_seconds = steps.seconds.write;
+    st.analysis_seconds = steps.seconds.analysis;
     st.wait_seconds = n.wait_seconds;
     st.peak_bytes = std::max(st.peak_bytes, meter.peak());
     st.source_restarts = src.restarts();

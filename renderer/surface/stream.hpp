@@ -78,11 +78,12 @@ struct StreamStats {
     std::size_t peak_bytes = 0;
     // Seconds each step was busy (read_seconds includes index_seconds, the
     // index pass; extract_seconds excludes weld_seconds, the welding of the
-    // pieces). With overlap the steps run at once and add up to more than the
-    // wall time; wait_seconds is how long the extraction waited for the
-    // reader or the writer.
+    // pieces; write_seconds excludes analysis_seconds, the sink's summaries
+    // of the pieces: MeshSink::analysis_seconds). With overlap the steps run
+    // at once and add up to more than the wall time; wait_seconds is how long
+    // the extraction waited for the reader or the writer.
     double read_seconds = 0, extract_seconds = 0, write_seconds = 0;
-    double index_seconds = 0, weld_seconds = 0, wait_seconds = 0;
+    double index_seconds = 0, weld_seconds = 0, wait_seconds = 0, analysis_seconds = 0;
     std::size_t source_restarts = 0; // gzip streams rewound (VolumeStream::restarts())
     std::vector<double> values;      // the iso values or labels, one per surface
     std::vector<std::string> warnings;

@@ -129,8 +129,11 @@ void SlabSteps::write_surface(SlabOutput& out, std::size_t s) {
     meter_.sub(piece.bytes);
     seconds.weld += seconds_since(t);
     t = Clock::now();
+    const double analysed = sink_.analysis_seconds();
     sink_.piece(std::move(mp));
-    seconds.write += seconds_since(t);
+    const double analysis = sink_.analysis_seconds() - analysed; // the sink's summaries, not its writing
+    seconds.analysis += analysis;
+    seconds.write += seconds_since(t) - analysis;
     // The sink's seam maps (read here only: piece() and memory_bytes() stay on one thread).
     const std::size_t now = sink_.memory_bytes();
     meter_.change(sink_bytes_, now);

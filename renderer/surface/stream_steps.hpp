@@ -82,7 +82,7 @@ struct SlabOutput {
 
 // Seconds each step was busy (StreamStats).
 struct StepSeconds {
-    double read = 0, extract = 0, weld = 0, write = 0;
+    double read = 0, extract = 0, weld = 0, write = 0, analysis = 0;
 };
 
 // Reading, extracting and welding/writing one slab, each counting what it

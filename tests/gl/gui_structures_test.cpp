@@ -77,7 +77,9 @@ TEST_F(GuiStructures, IsolateListsTheComponentMeasureGivesAndDistanceIsTheCores)
     ASSERT_TRUE(QTest::qWaitFor([&] { return table->rowCount() == 1 && !w.busy(); }, 600000));
     EXPECT_EQ(table->item(0, gui::StructureTools::Name)->text().toStdString(), w.scene().info(made).name);
     const QString volume = table->item(0, gui::StructureTools::Volume)->text();
-    EXPECT_TRUE(volume.contains(QString::number(listed.volume_ml, 'f', 3))) << volume.toStdString();
+    EXPECT_TRUE(volume.contains(QString::number(std::abs(listed.volume_ml), 'f', 3))) << volume.toStdString();
+    EXPECT_EQ(volume.startsWith("encloses a cavity of "), encloses_cavity(listed.volume_ml)) << volume.toStdString();
+    EXPECT_FALSE(volume.contains("-")) << "never a negative volume";
     EXPECT_TRUE(volume.contains(QString::fromUtf8("\u00b1"))) << "an isosurface component has an uncertainty";
     EXPECT_EQ(table->item(0, gui::StructureTools::Closed)->text(), listed.closed ? "closed" : "open");
     EXPECT_EQ(table->horizontalScrollBar()->maximum(), 0) << "no column cut off behind a scroll bar";

@@ -103,6 +103,12 @@ TEST(Cli, MeshJsonOpenSurfaceVolumeIsMeasuresLowerBound) {
     const auto sj = nlohmann::json::parse(ms.out);
     EXPECT_EQ(mj["route"], "in memory");
     EXPECT_TRUE(mj["streaming"].is_null());
+    // Each step's busy seconds, as the streamed route reports its own.
+    for (const char* step : {"read", "index", "extract", "weld", "postprocess", "write", "analysis"}) {
+        ASSERT_TRUE(mj["busy_seconds"][step].is_number()) << step;
+        EXPECT_GE(mj["busy_seconds"][step].get<double>(), 0.0) << step;
+    }
+    EXPECT_GT(mj["busy_seconds"]["extract"].get<double>(), 0.0);
     ASSERT_EQ(mj["surfaces"].size(), 1u);
     ASSERT_EQ(sj["surfaces"].size(), 1u);
     const auto& a = mj["surfaces"][0];
@@ -134,6 +140,7 @@ TEST(Cli, MeshJsonOpenSurfaceVolumeIsMeasuresLowerBound) {
         << t.out;
     EXPECT_NE(t.out.find(", open, volume >= "), std::string::npos) << t.out;
     EXPECT_NE(t.out.find("(lower bound"), std::string::npos) << t.out;
+    EXPECT_NE(t.out.find("steps (busy seconds): read "), std::string::npos) << t.out;
 }
 
 // --version: isoscope's own, then each library's as the installed Debian

@@ -11,6 +11,7 @@
 
 #include <glm/glm.hpp>
 #include <gtest/gtest.h>
+#include <tbb/task_arena.h>
 
 #include "io/mesh.hpp"
 #include "io/volume_io.hpp"
@@ -355,6 +356,29 @@ TEST(Components, BundledCtAtATieAndOffIt) {
             EXPECT_NEAR(sp.merged.volume, ref.volume, 1e-12 * std::abs(ref.volume));
             expect_consistent_seams(sp, whole);
         }
+    }
+}
+
+// summarize_piece runs in parallel (the unions, the edges, the sums in fixed
+// blocks): its summary is the same bit for bit on one thread and on four, for
+// pieces of several blocks with seams, many components and a boundary.
+TEST(Components, APieceSummaryDoesNotDependOnTheThreadCount) {
+    const Volume v = load_volume(ISOSCOPE_DATA_DIR "/headsq.nhdr");
+    ExtractOptions eo;
+    eo.chunk_size = 8;
+    const Extractor x(v, eo);
+    const ChunkedSurface s = x.extract(500.0);
+    const Split sp = split(x, s, 2);
+    for (const SurfacePiece& p : sp.pieces) {
+        ASSERT_GT(p.mesh.triangles.size(), 16384u) << "more than one block of sums";
+        ASSERT_FALSE(p.seam.empty());
+        PieceSummary one, four;
+        tbb::task_arena(1).execute([&] { one = summarize_piece(p, glm::dvec3(3.0, -4.0, 5.0)); });
+        tbb::task_arena(4).execute([&] { four = summarize_piece(p, glm::dvec3(3.0, -4.0, 5.0)); });
+        EXPECT_GT(one.components.size(), 1u);
+        EXPECT_GT(one.boundary_edges, 0u);
+        EXPECT_FALSE(one.seam_boundary.empty());
+        EXPECT_EQ(serialize(one), serialize(four)) << "the same numbers, bit for bit";
     }
 }
 

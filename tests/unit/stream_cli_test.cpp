@@ -239,6 +239,14 @@ TEST(StreamCli, MeshJsonStreamedEqualsInMemory) {
                jq = nlohmann::json::parse(mea.out);
     EXPECT_EQ(js["route"], "streamed");
     ASSERT_TRUE(js["streaming"].is_object());
+    // Each step's busy seconds at the top level on both routes (the streamed
+    // route's also under "streaming"); the summaries' time is the analysis.
+    EXPECT_EQ(js["busy_seconds"], js["streaming"]["busy_seconds"]);
+    for (const char* step : {"index", "read", "extract", "weld", "write", "analysis", "extraction_waited"})
+        EXPECT_TRUE(js["busy_seconds"][step].is_number()) << step;
+    EXPECT_GT(js["busy_seconds"]["analysis"].get<double>(), 0.0);
+    for (const char* step : {"read", "index", "extract", "weld", "write", "analysis"})
+        EXPECT_TRUE(jm["busy_seconds"][step].is_number()) << step;
     EXPECT_GT(js["streaming"]["slabs_read"].get<int>(), 1) << "several slabs";
     const auto& a = jm["surfaces"][0];
     const auto& b = js["surfaces"][0];

@@ -8,6 +8,9 @@
 #include <vector>
 
 #include <gtest/gtest.h>
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
 
 #include "renderer/surface/union_find.hpp"
 
@@ -36,6 +39,14 @@ std::vector<std::uint32_t> smallest_reachable(std::size_t n,
                 }
     }
     return out;
+}
+
+// density x n edges between vertices picked at random.
+std::vector<std::pair<std::uint32_t, std::uint32_t>> random_edges(std::mt19937& rng, std::size_t n, double density) {
+    std::uniform_int_distribution<std::uint32_t> pick(0, std::uint32_t(n - 1));
+    std::vector<std::pair<std::uint32_t, std::uint32_t>> edges(std::size_t(density * double(n)));
+    for (auto& e : edges) e = {pick(rng), pick(rng)};
+    return edges;
 }
 
 } // namespace
@@ -68,13 +79,34 @@ TEST(UnionFind, RandomGraphsMatchABreadthFirstSearch) {
     for (const std::size_t n : {1u, 2u, 50u, 2000u}) {
         for (const double density : {0.2, 0.5, 1.0, 3.0}) {
             SCOPED_TRACE(::testing::Message() << n << " vertices, " << density << " edges per vertex");
-            std::uniform_int_distribution<std::uint32_t> pick(0, std::uint32_t(n - 1));
-            std::vector<std::pair<std::uint32_t, std::uint32_t>> edges(std::size_t(density * double(n)));
-            for (auto& e : edges) e = {pick(rng), pick(rng)};
+            const auto edges = random_edges(rng, n, density);
             UnionFind sets(n);
             for (const auto& [a, b] : edges) sets.unite(a, b);
             const auto expected = smallest_reachable(n, edges);
             for (std::uint32_t v = 0; v < n; ++v) ASSERT_EQ(sets.find(v), expected[v]) << "vertex " << v;
+        }
+    }
+}
+
+// The concurrent sets (ConcurrentUnionFind): the unions made by many threads
+// at once in any order give UnionFind's roots exactly, on graphs large enough
+// that the threads race on the same roots.
+TEST(UnionFind, ConcurrentUnionsGiveTheSameRootsAsSerialOnes) {
+    std::mt19937 rng(11);
+    for (const std::size_t n : {1u, 1000u, 200000u}) {
+        for (const double density : {0.3, 1.0, 4.0}) {
+            SCOPED_TRACE(::testing::Message() << n << " vertices, " << density << " edges per vertex");
+            const auto edges = random_edges(rng, n, density);
+            UnionFind serial(n);
+            for (const auto& [a, b] : edges) serial.unite(a, b);
+            ConcurrentUnionFind sets(n);
+            tbb::task_arena arena(4);
+            arena.execute([&] {
+                tbb::parallel_for(tbb::blocked_range<std::size_t>(0, edges.size(), 64), [&](const auto& r) {
+                    for (std::size_t i = r.begin(); i != r.end(); ++i) sets.unite(edges[i].first, edges[i].second);
+                });
+            });
+            for (std::uint32_t v = 0; v < n; ++v) ASSERT_EQ(sets.find(v), serial.find(v)) << "vertex " << v;
         }
     }
 }
