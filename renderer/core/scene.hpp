@@ -90,10 +90,10 @@ public:
 private:
     void upload_lod(const SceneSnapshot& s, const RenderOptions& opt, RenderResult& r);
     std::unique_ptr<Renderer> renderer_;
-    std::vector<std::uint64_t> uploaded_; // per slot: the version on the GPU
+    std::vector<std::uint64_t> uploaded_;   // per slot: the version on the GPU
     std::vector<const void*> lod_uploaded_; // per slot: the levels on the GPU (null: none)
     bool background_lod_ = false;
-    std::uint64_t volume_version_ = 0;    // of the volume handed to the renderer
+    std::uint64_t volume_version_ = 0; // of the volume handed to the renderer
 };
 
 class Scene {

@@ -65,7 +65,7 @@ struct alignas(16) Cluster {
 static_assert(sizeof(Cluster) == 80);
 
 struct BuildOptions {
-    std::size_t cell_triangles = 32768;   // a cell's level 0, at most
+    std::size_t cell_triangles = 32768; // a cell's level 0, at most
     // A cluster, at most: on the 1024^3 phantom at 1920x1080 (llvmpipe),
     // 2048 drew 5.5 M triangles a frame after the first, 1024 4.1 M, 512
     // 2.9 M (G-buffer 2.4 s -> 0.25 s), 256 2.5 M with twice the draws.

@@ -105,7 +105,8 @@ Errors compare(const Frame& a, const Frame& ref) {
     const std::size_t n = std::size_t(ref.image.width) * std::size_t(ref.image.height);
     for (std::size_t p = 0; p < n; ++p)
         for (int c = 0; c < 3; ++c) {
-            const double d = (double(a.image.bytes[4 * p + std::size_t(c)]) - ref.image.bytes[4 * p + std::size_t(c)]) / 255.0;
+            const double d =
+                (double(a.image.bytes[4 * p + std::size_t(c)]) - ref.image.bytes[4 * p + std::size_t(c)]) / 255.0;
             s += d * d;
         }
     e.rmse = std::sqrt(s / double(3 * n));
@@ -147,10 +148,10 @@ void run_peer(const Args& a, const std::string& name, const std::string& mesh, c
     std::ostringstream cmd;
     cmd << "xvfb-run -a -s '-screen 0 " << a.width + 64 << "x" << a.height + 64 << "x24' " << ISOSCOPE_LOD_PEER
         << " --mesh '" << mesh << "' --eye " << cam.eye.x << "," << cam.eye.y << "," << cam.eye.z << " --target "
-        << cam.target.x << "," << cam.target.y << "," << cam.target.z << " --up " << cam.up.x << "," << cam.up.y
-        << "," << cam.up.z << " --fov " << cam.fov_y_degrees << " --near " << cam.near_plane << " --far "
-        << cam.far_plane << " --size " << a.width << "x" << a.height << " --background 0.08,0.09,0.11 --out '"
-        << dir.string() << "' --divisions " << a.divisions << " --frames 3";
+        << cam.target.x << "," << cam.target.y << "," << cam.target.z << " --up " << cam.up.x << "," << cam.up.y << ","
+        << cam.up.z << " --fov " << cam.fov_y_degrees << " --near " << cam.near_plane << " --far " << cam.far_plane
+        << " --size " << a.width << "x" << a.height << " --background 0.08,0.09,0.11 --out '" << dir.string()
+        << "' --divisions " << a.divisions << " --frames 3";
     const std::string line = bench::capture(cmd.str());
     nlohmann::json j;
     try {
@@ -218,8 +219,8 @@ void write_outputs(const Args& a, const std::vector<Row>& rows) {
     f << "scene,config,gbuffer_first_ms,gbuffer_ms,frame_ms,build_s,triangles_first,triangles,image_rmse,"
          "depth_mean_mm,depth_max_mm,coverage_pct\n";
     for (const auto& r : rows)
-        f << r.scene << "," << r.config << "," << r.f.gbuffer_first << "," << r.f.gbuffer_next << ","
-          << r.f.frame_next << "," << r.f.build_s << "," << (r.f.drawn_first ? r.f.drawn_first : r.f.full) << ","
+        f << r.scene << "," << r.config << "," << r.f.gbuffer_first << "," << r.f.gbuffer_next << "," << r.f.frame_next
+          << "," << r.f.build_s << "," << (r.f.drawn_first ? r.f.drawn_first : r.f.full) << ","
           << (r.f.drawn_next ? r.f.drawn_next : r.f.full) << "," << r.e.rmse << "," << r.e.depth_mean << ","
           << r.e.depth_max << "," << 100.0 * r.e.coverage << "\n";
     std::ofstream gp(fs::path(a.out) / "lod_bench.gp");
@@ -279,8 +280,8 @@ int main(int argc, char** argv) {
         fs::create_directories(a.out);
         const gl::ScopedCurrent context;
         std::vector<Row> rows;
-        std::printf("%-10s %-22s %9s %9s %9s %6s %11s %11s %8s %8s %8s %7s\n", "scene", "config", "gb1st ms",
-                    "gb ms", "frame ms", "build", "tris 1st", "tris", "RMSE", "dz mean", "dz max", "cov %");
+        std::printf("%-10s %-22s %9s %9s %9s %6s %11s %11s %8s %8s %8s %7s\n", "scene", "config", "gb1st ms", "gb ms",
+                    "frame ms", "build", "tris 1st", "tris", "RMSE", "dz mean", "dz max", "cov %");
         if (a.ct) {
             // The bundled CT resampled 3x per axis (trilinear): a real CT's
             // surfaces at micro-CT triangle counts.

@@ -97,7 +97,7 @@ TEST_F(Lod, CullingAtLevelZeroDrawsWhatEveryTriangleDraws) {
         if (std::string(c.name).find("anterior") != std::string::npos) {
             EXPECT_GT(a.lod.culled_occlusion, 0u) << "the skin hides the bone";
             EXPECT_EQ(a.lod.phases, 2) << "frames after the first use the last one's visibility";
-            EXPECT_EQ(a.lod_first.phases, 8);
+            EXPECT_EQ(a.lod_first.phases, 16);
         }
     }
 }
