@@ -152,15 +152,14 @@ LevelOut clusters_of(const std::vector<std::uint32_t>& tris, const std::vector<s
     return out;
 }
 
-// The RMS length of the edges of `tris` (each edge once per triangle).
-float rms_edge(const std::vector<std::uint32_t>& tris, const std::vector<glm::vec3>& pos) {
-    double sum = 0.0;
+// The longest edge of `tris`.
+float longest_edge(const std::vector<std::uint32_t>& tris, const std::vector<glm::vec3>& pos) {
+    float longest = 0.0f;
     for (std::size_t i = 0; i < tris.size(); i += 3)
-        for (int k = 0; k < 3; ++k) {
-            const glm::vec3 d = pos[tris[i + std::size_t(k)]] - pos[tris[i + std::size_t((k + 1) % 3)]];
-            sum += double(glm::dot(d, d));
-        }
-    return tris.empty() ? 0.0f : float(std::sqrt(sum / double(tris.size())));
+        for (int k = 0; k < 3; ++k)
+            longest = std::max(longest,
+                               glm::distance(pos[tris[i + std::size_t(k)]], pos[tris[i + std::size_t((k + 1) % 3)]]));
+    return longest;
 }
 
 struct CellOut {
@@ -192,7 +191,7 @@ CellOut build_cell(const Mesh& m, const Key* tri, std::size_t n, const BuildOpti
         // Never below the finer level's (coarser levels are chosen only farther away).
         if (l > 0)
             out.cell.error[std::size_t(l)] =
-                std::max({error, 0.5f * rms_edge(level, local_pos), out.cell.error[std::size_t(l - 1)]});
+                std::max({error, 0.5f * longest_edge(level, local_pos), out.cell.error[std::size_t(l - 1)]});
         out.levels.push_back(
             clusters_of(level, l == 0 ? ids : std::vector<std::uint32_t>{}, local_pos, o.cluster_triangles));
         out.cell.levels = std::uint32_t(l + 1);

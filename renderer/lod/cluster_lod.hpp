@@ -37,11 +37,14 @@ struct alignas(16) Cell {
     std::uint32_t first_cluster = 0;
     // The error of drawing each level instead of level 0 (mm; error[0] = 0):
     // the larger of its geometric error (the simplifier's error of each
-    // step, summed along the chain, an upper bound) and half the RMS length
-    // of its edges, because a triangle interpolates the normals of its
-    // corners: what it smooths away of the shading is about its own size,
-    // so a level whose triangles stay under a pixel keeps the shading's
-    // detail within that pixel (docs/lod.md, "What the error bounds").
+    // step, summed along the chain, an upper bound) and half its longest
+    // edge, because a triangle interpolates the normals of its corners:
+    // what it smooths away of the shading is about its own size, so a level
+    // whose triangles all stay under a pixel keeps the shading's detail
+    // within that pixel (docs/lod.md, "What the error bounds"). The longest,
+    // not a mean: the simplifier makes large triangles where the surface is
+    // flat, and a few of them showed as facets in the desktop app's small
+    // view while the mean edge still allowed the level.
     std::array<float, kMaxLevels> error{};
     std::array<float, kMaxLevels> geometric{}; // the geometric part alone (statistics)
 };

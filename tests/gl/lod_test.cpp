@@ -146,7 +146,10 @@ TEST_F(Lod, PicksStayOnTheFullGeometry) {
 
 TEST_F(Lod, ASmallViewDrawsCoarserLevelsCloseToTheFullImage) {
     core::Scene& scene = head();
-    auto req = request(128, 128); // the head spans ~120 px: its triangles are about a pixel
+    auto req = request(128, 128);
+    Camera cam = scene.camera(PatientView::Anterior, 1.0);
+    cam.zoom(0.25); // four times farther: the head spans ~30 px, its triangles far below a pixel
+    req.camera = cam;
     req.look.aa.samples = 1;
     req.look.aa.frames = 1;
     req.look.lod.culling = false; // the levels alone
