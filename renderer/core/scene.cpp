@@ -402,6 +402,11 @@ void Scene::release_gpu() { impl_->gpu.release(); }
 
 void Scene::set_background_lod(bool on) { impl_->gpu.set_background_lod(on); }
 
+bool Scene::lod_ready(SurfaceId id) const {
+    const auto& e = impl_->surfaces.at(id - 1);
+    return e.lod && e.lod->get() != nullptr;
+}
+
 Renderer& Scene::renderer() { return impl_->gpu.renderer(); }
 
 SnapshotRenderer::SnapshotRenderer() = default;

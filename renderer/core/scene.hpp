@@ -192,6 +192,8 @@ public:
     // Interactive views: levels of detail are built in the background, not
     // inside a frame (SnapshotRenderer::set_background_lod).
     void set_background_lod(bool on);
+    // Whether surface `id`'s levels of detail are built (benchmarks wait for them).
+    bool lod_ready(SurfaceId id) const;
     // The surfaces as they are now, for a renderer on another thread.
     SceneSnapshot snapshot() const;
     // The GPU renderer (tests, benchmarks); made on first use in the current context.

@@ -73,6 +73,15 @@ inline std::string open_head(gui::MainWindow& w, const std::string& input) {
     return {};
 }
 
+// Shows the window and opens a mesh file in it; an error's text, or empty.
+inline std::string open_mesh(gui::MainWindow& w, const std::string& path) {
+    w.show();
+    if (!wait_until([&] { return w.isVisible(); }, 10000)) return "the window did not show";
+    w.open_path(QString::fromStdString(path));
+    if (!wait_until([&] { return !w.busy(); }, 300000) || w.scene().surfaces().empty()) return "cannot open " + path;
+    return {};
+}
+
 // Writes `text` to `path` atomically; throws iso::Error.
 inline void write_text(const std::string& path, const std::string& text) {
     write_atomically(path, [&](const std::string& tmp) {
