@@ -10,7 +10,8 @@
 // depth pyramid of what was drawn, then the rest, each tested against it;
 // a last pyramid marks what is visible for the next frame. A surface
 // without a last frame (its first, or after a pick) starts instead with
-// its nearest quarter of clusters, then tests the next quarters in turn.
+// the clusters of its nearest sixteenth of cells, then tests the next
+// sixteenths in turn.
 #pragma once
 
 #include <array>
