@@ -9,7 +9,7 @@
 // scheme: first the clusters that were visible in the last frame, then a
 // depth pyramid of what was drawn, then the rest, each tested against it;
 // a last pyramid marks what is visible for the next frame. A surface
-// without a last frame (its first, or after a pick) starts instead with
+// without a last frame (its first on this renderer) starts instead with
 // the clusters of its nearest sixteenth of cells, then tests the next
 // sixteenths in turn.
 #pragma once
