@@ -372,7 +372,7 @@ SceneSnapshot Scene::snapshot() const {
         o.opacity = e.info.opacity;
         o.visible = e.info.visible && !e.removed;
         o.pickable = e.info.pickable && !e.removed;
-        s.surfaces.push_back({e.mesh, e.version, std::move(o), e.removed ? nullptr : e.lod});
+        s.surfaces.push_back({e.mesh, e.version, std::move(o), e.lod}); // a removed slot has neither
     }
     s.bounds = bounds();
     if (impl_->volume) {
@@ -448,23 +448,21 @@ RenderResult SnapshotRenderer::render(const SceneSnapshot& s, const Camera& came
         }
         ren.object(std::uint32_t(i + 1)) = e.object;
     }
-    RenderResult pre;
-    upload_lod(s, opt, pre);
+    const double lod_seconds = upload_lod(s, opt);
     if (s.volume && s.volume_version != volume_version_) {
         ren.set_volume(s.volume, s.volume_index);
         volume_version_ = s.volume_version;
     }
-    RenderOptions o = opt;
-    o.build_lod = false; // the scene's SurfaceLod builds them, once for every renderer
-    RenderResult r = ren.render(camera, o);
-    r.lod.build_seconds += pre.lod.build_seconds;
+    RenderResult r = ren.render(camera, opt);
+    r.lod.build_seconds = lod_seconds;
     return r;
 }
 
 // Hands the renderer the levels of detail of the large visible surfaces
 // that the frame asks for, building them first (or starting them in the
-// background) when nobody has yet.
-void SnapshotRenderer::upload_lod(const SceneSnapshot& s, const RenderOptions& opt, RenderResult& r) {
+// background) when nobody has yet; returns the seconds spent building here.
+double SnapshotRenderer::upload_lod(const SceneSnapshot& s, const RenderOptions& opt) {
+    double seconds = 0.0;
     lod_uploaded_.resize(s.surfaces.size(), nullptr);
     for (std::size_t i = 0; i < s.surfaces.size(); ++i) {
         const auto& e = s.surfaces[i];
@@ -474,13 +472,14 @@ void SnapshotRenderer::upload_lod(const SceneSnapshot& s, const RenderOptions& o
         auto l = e.lod->get();
         if (!l && background_lod_) e.lod->build_in_background();
         if (!l && !background_lod_) {
-            r.lod.build_seconds += e.lod->build_now();
+            seconds += e.lod->build_now();
             l = e.lod->get();
         }
         if (!l) continue;
         renderer_->set_lod(std::uint32_t(i + 1), *l);
         lod_uploaded_[i] = l.get();
     }
+    return seconds;
 }
 
 void Scene::export_mesh(SurfaceId id, const std::string& path) const { save_mesh(mesh(id), path); }

@@ -88,7 +88,7 @@ public:
     void set_background_lod(bool on) { background_lod_ = on; }
 
 private:
-    void upload_lod(const SceneSnapshot& s, const RenderOptions& opt, RenderResult& r);
+    double upload_lod(const SceneSnapshot& s, const RenderOptions& opt);
     std::unique_ptr<Renderer> renderer_;
     std::vector<std::uint64_t> uploaded_;   // per slot: the version on the GPU
     std::vector<const void*> lod_uploaded_; // per slot: the levels on the GPU (null: none)

@@ -76,8 +76,8 @@ struct AntiAliasing {
 
 // Levels of detail and culling of massive surfaces (docs/lod.md): a
 // surface of at least min_triangles triangles is cut into clusters with
-// coarser levels; each frame draws, per cell, the coarsest level whose
-// geometric error projects to at most `error_px` pixels, and culls the
+// coarser levels (core::SurfaceLod builds them, Renderer::set_lod takes
+// them); each frame draws, per cell, the coarsest level whose error projects to at most `error_px` pixels, and culls the
 // clusters outside the view, facing away (closed surfaces seen from
 // outside) or hidden behind what is drawn. Picks, rulers, measurement and
 // surface distance always use the full geometry.
@@ -208,11 +208,6 @@ struct RenderOptions {
     // width x height, rows from the top as Image stores them; the frame
     // uploads it and lights with it. Required for such a frame's image.
     const Image* ao_image = nullptr;
-    // Build the clusters and levels of detail of large surfaces that lack
-    // them inside this frame (look.lod; from the meshes read back). Off: only
-    // those handed over are used (core::SnapshotRenderer builds them once per
-    // surface, for every renderer, in the background for interactive views).
-    bool build_lod = true;
 };
 
 // Test and benchmark hooks, apart from what a user asks for.
@@ -279,7 +274,7 @@ struct LodStats {
     std::uint64_t clusters = 0, tested = 0, culled_frustum = 0, culled_backface = 0, culled_occlusion = 0, drawn = 0;
     std::uint64_t triangles_drawn = 0, triangles_full = 0;
     int phases = 0;           // draw phases of the G-buffer (2: with last frame's visibility)
-    double build_seconds = 0; // levels built this frame (the first that asked for them)
+    double build_seconds = 0; // levels built for this frame (by core::SnapshotRenderer, for the first that asks)
 };
 
 // A label the overlay drew (a markup's name or value, one of

@@ -36,8 +36,8 @@ struct GpuMesh {
     // a new version.
     std::shared_ptr<const DiskHierarchy> disk;
     std::uint64_t version = 0;
-    // Clusters and levels of detail (a large mesh, built on the first frame
-    // that asks for them; docs/lod.md); the element buffer is then theirs.
+    // Clusters and levels of detail (set_lod: core::SurfaceLod builds them;
+    // docs/lod.md); the element buffer is then theirs.
     std::unique_ptr<passes::GpuLod> lod;
 };
 
@@ -120,21 +120,6 @@ Mesh read_back(const GpuMesh& g) {
     g.indices.read(0, m.triangles.size() * 12, m.triangles.data());
     return m;
 }
-// Builds the clusters and levels of the large visible meshes that lack them
-// when the frame asks for levels of detail (from the mesh read back: the
-// renderer keeps no CPU copy); returns the seconds spent.
-double prepare_lod(std::vector<GpuMesh>& meshes, const RenderOptions& opt) {
-    if (!opt.look.lod.enabled || opt.pick || !opt.build_lod) return 0.0;
-    double seconds = 0.0;
-    for (auto& g : meshes) {
-        if (g.lod || !g.object.visible || std::size_t(g.count) / 3 < opt.look.lod.min_triangles) continue;
-        const lod::ClusterLod c = lod::build_cluster_lod(read_back(g));
-        g.lod = std::make_unique<passes::GpuLod>(passes::upload_lod(c, g.vao.id(), g.indices));
-        seconds += c.build_seconds;
-    }
-    return seconds;
-}
-
 std::vector<const passes::DrawItem*> draws_of(const passes::FrameContext& ctx) {
     std::vector<const passes::DrawItem*> v;
     for (const auto& d : ctx.draws) v.push_back(&d);
@@ -225,7 +210,6 @@ RenderResult Renderer::render(const Camera& camera, const RenderOptions& opt, co
                                   " is out of range (1..16384)");
     validate(opt.look);
     Impl& im = *impl_;
-    const double lod_seconds = prepare_lod(im.meshes, opt);
     std::vector<passes::DrawItem> draws;
     for (std::size_t i = 0; i < im.meshes.size(); ++i) {
         auto& m = im.meshes[i];
@@ -301,7 +285,6 @@ RenderResult Renderer::render(const Camera& camera, const RenderOptions& opt, co
             if (d->lod) d->lod->counts.clear_u32(0);
         result.stats = fg.execute(im.pool);
         lod_stats(ctx, result.lod);
-        result.lod.build_seconds = lod_seconds;
         // Without an image the resolve did not run: no fragment count to size the pool from, nothing to redraw.
         if (ctx.translucent.empty() || !opt.image) return result;
         // Sizes are powers of two and shrink only when four times too large,

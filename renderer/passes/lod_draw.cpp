@@ -48,8 +48,7 @@ void cull(const FrameContext& ctx, GlResources& gl, const GpuLod& lod, const Cul
     auto& prog = gl.program({"render/lod_cull.comp"});
     prog.use();
     const GLuint p = prog.id();
-    const double aspect_h = double(ctx.height);
-    const float px_per_mm = float(aspect_h / (2.0 * std::tan(glm::radians(ctx.camera.fov_y_degrees) / 2.0)));
+    const float px_per_mm = float(double(ctx.height) / (2.0 * std::tan(glm::radians(ctx.camera.fov_y_degrees) / 2.0)));
     glProgramUniformMatrix4fv(p, prog.uniform("view_projection"), 1, GL_FALSE, &ctx.raster_view_projection[0][0]);
     const glm::vec3 eye(ctx.camera.eye);
     glProgramUniform3fv(p, prog.uniform("eye"), 1, &eye.x);
@@ -208,8 +207,7 @@ void draw_visible(const FrameContext& ctx, GlResources& gl, const std::vector<Dr
             c.backface = backface_ok(ctx, it);
             c.count_draws = true;
             c.max_error_px = lod_error(ctx);
-            c.batch = history ? glm::vec2(0.0f, b[4])
-                              : glm::vec2(phase == 0 ? 0.0f : b[std::size_t(phase)], b[std::size_t(phase) + 1]);
+            if (!history) c.batch = {b[std::size_t(phase)], b[std::size_t(phase) + 1]}; // with history: every distance
             cull(ctx, gl, *it.lod, c, phase > 0 ? &pyramid : nullptr);
             bind(it);
             draw_slot(it, *it.lod, c.slot);
@@ -245,12 +243,7 @@ GpuLod upload_lod(const lod::ClusterLod& c, std::uint32_t vao, gl::Buffer& indic
     g.counts = gl::Buffer(kCountWords * 4, nullptr, 0);
     g.counts.clear_u32(0);
     g.cpu_cells = c.cells;
-    g.level_triangles = c.level_triangles;
-    g.levels = c.max_levels;
     g.full_triangles = c.level0_indices / 3;
-    g.bytes = indices.size() + g.cells.size() + g.clusters.size() + g.order.size() + g.state.size() +
-              g.commands.size() + g.counts.size();
-    g.build_seconds = c.build_seconds;
     return g;
 }
 

@@ -37,10 +37,7 @@ struct GpuLod {
     gl::Buffer cells, clusters, state, commands, counts, order;
     std::uint32_t cluster_count = 0;
     std::vector<lod::Cell> cpu_cells; // the batches of a frame without history
-    std::array<std::size_t, lod::kMaxLevels> level_triangles{};
-    int levels = 1;
-    std::size_t full_triangles = 0, bytes = 0;
-    double build_seconds = 0;
+    std::size_t full_triangles = 0;
     // Culled frames drawn so far: the state's visibility is the last one's when > 0.
     int frames = 0;
 };
