@@ -103,7 +103,7 @@ ClusterLod build_cluster_lod(const Mesh& m, const BuildOptions& o = {}, const Pr
 // at the cell's nearest point to `eye`, is at most `max_error_px` pixels;
 // `pixels_per_mm_at_1mm` is the image height over 2 tan(fov_y / 2) (a
 // length L at distance d spans L * pixels_per_mm_at_1mm / d pixels). The
-// same rule as cull.comp's (tests compare them).
+// same rule as lod_cull.comp's select_level (no test compares the two yet).
 std::uint32_t select_level(const Cell& cell, const glm::vec3& eye, float pixels_per_mm_at_1mm, float max_error_px,
                            float near_plane);
 

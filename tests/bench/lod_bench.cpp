@@ -37,6 +37,7 @@
 #include "renderer/gl/context.hpp"
 #include "renderer/surface/analysis.hpp"
 #include "tests/bench/bench_util.hpp"
+#include "tests/bench/image_error.hpp"
 
 using namespace iso;
 namespace fs = std::filesystem;
@@ -101,15 +102,8 @@ struct Errors {
 
 Errors compare(const Frame& a, const Frame& ref) {
     Errors e;
-    double s = 0;
+    e.rmse = bench::compare(a.image, ref.image).rmse;
     const std::size_t n = std::size_t(ref.image.width) * std::size_t(ref.image.height);
-    for (std::size_t p = 0; p < n; ++p)
-        for (int c = 0; c < 3; ++c) {
-            const double d =
-                (double(a.image.bytes[4 * p + std::size_t(c)]) - ref.image.bytes[4 * p + std::size_t(c)]) / 255.0;
-            s += d * d;
-        }
-    e.rmse = std::sqrt(s / double(3 * n));
     std::size_t both = 0, differ = 0;
     for (std::size_t p = 0; p < n; ++p) {
         const float x = a.depth.floats[p], y = ref.depth.floats[p];
@@ -173,13 +167,7 @@ void run_peer(const Args& a, const std::string& name, const std::string& mesh, c
         q.f.build_s = l["build_s"].get<double>();
         q.f.drawn_next = q.f.drawn_first = l["triangles"].get<std::uint64_t>();
         const Image img = load_image((dir / ("lod" + std::to_string(d) + ".png")).string());
-        double s = 0;
-        const std::size_t n = std::size_t(full.width) * std::size_t(full.height) * std::size_t(full.channels);
-        for (std::size_t i = 0; i < n && i < img.bytes.size(); ++i) {
-            const double x = (double(img.bytes[i]) - full.bytes[i]) / 255.0;
-            s += x * x;
-        }
-        q.e.rmse = std::sqrt(s / double(n));
+        q.e.rmse = bench::compare(img, full).rmse;
         rows.push_back(q);
         print(rows.back());
     }
