@@ -25,7 +25,9 @@ begin() {
   end_stage
   stage_name=$1
   stage_start=$SECONDS
-  echo "== $1"
+  # The free disk at each stage: the sanitizer build needs a few GB, and a
+  # full disk shows up as a linker dying of SIGBUS, not as "no space".
+  echo "== $1 ($(df -h --output=avail . | tail -1 | tr -d ' ') free on this disk)"
 }
 end_stage() {
   if [[ -n $stage_name ]]; then
