@@ -209,8 +209,13 @@ bool needs_still_frames(const RenderOptions& opt) {
 }
 
 // The plain frame shown until the still-frame thread's first one arrives:
-// what a drag draws (no AO but ray-traced AO already traced, one sample).
+// what a drag draws (no AO but ray-traced AO already traced, one sample,
+// the moving camera's coarser levels of detail and volume step). It holds
+// the GUI thread, so it costs what a drag frame costs: on a 32 M-triangle
+// surface at the error bound of still frames it took most of a second on
+// llvmpipe, and every release and wheel notch waited for it.
 RenderOptions plain(RenderOptions opt) {
+    opt.moving = true;
     if (!(opt.look.ao == AoMethod::Raytraced && opt.ao_image)) {
         opt.look.ao = AoMethod::Off;
         opt.ao_image = nullptr;

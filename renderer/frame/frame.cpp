@@ -63,6 +63,7 @@ void validate(const FrameLook& look) {
         throw Error("clip", "at most " + std::to_string(kMaxClipHalfSpaces - 6) + " planes");
     check_range("ambient occlusion error", look.ao_error, 1e-4, 0.5);
     check_range("level-of-detail error", look.lod.error_px, 0.01, 64.0);
+    check_range("level-of-detail error while moving", look.lod.moving_error_px, 0.01, 64.0);
     // A method's settings are checked when it is asked for (the cone's
     // radius is every method's R; disk frames trace translucent surfaces'
     // AO with the cone's settings).

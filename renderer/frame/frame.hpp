@@ -84,6 +84,11 @@ struct AntiAliasing {
 struct LodSettings {
     bool enabled = true;   // auto; off: every triangle of every surface is drawn
     double error_px = 0.5; // the bound on the projected geometric error, pixels
+    // The bound while the camera moves (RenderOptions::moving: the 3D view's
+    // drag frames and the plain frame standing in for its still frames),
+    // when larger: as ParaView's interactive LOD, a moving view is drawn
+    // coarser and the still frames after it restore error_px.
+    double moving_error_px = 2.0;
     bool culling = true;   // frustum, back-facing and occlusion culling of clusters (with enabled)
     // Surfaces with fewer triangles are drawn whole (their clusters would
     // cost more than they save); tests lower it.
@@ -196,7 +201,8 @@ struct RenderOptions {
     // look, annotations). RenderResult::aa_frames counts the frames in it.
     bool accumulate = false;
     // The camera is moving (the 3D view's drag frames): the volume is
-    // sampled at look.volume.moving_step instead of look.volume.step.
+    // sampled at look.volume.moving_step instead of look.volume.step, and
+    // massive surfaces drawn to look.lod.moving_error_px.
     bool moving = false;
     bool restart_accumulation = false; // this frame starts the average (an export's first frame)
     // The sub-pixel offset of this frame instead of the renderer's sequence,

@@ -132,7 +132,11 @@ void build_pyramid(const FrameContext& ctx, GlResources& gl, CullState& s, GLuin
     glMemoryBarrier(GL_TEXTURE_FETCH_BARRIER_BIT | GL_SHADER_IMAGE_ACCESS_BARRIER_BIT);
 }
 
-float lod_error(const FrameContext& ctx) { return ctx.opt.look.lod.enabled ? float(ctx.opt.look.lod.error_px) : 0.0f; }
+float lod_error(const FrameContext& ctx) {
+    const LodSettings& l = ctx.opt.look.lod;
+    if (!l.enabled) return 0.0f;
+    return float(ctx.opt.moving ? std::max(l.error_px, l.moving_error_px) : l.error_px);
+}
 
 bool backface_ok(const FrameContext& ctx, const DrawItem& item) {
     // A closed surface seen from outside its bounds, uncut: what faces away is hidden behind what faces the eye.

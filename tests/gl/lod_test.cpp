@@ -11,7 +11,8 @@
 //   - picks stay on the full geometry: a pick with levels of detail equals
 //     a pick without, triangle for triangle, bit for bit;
 //   - coarser levels are drawn where the view allows (a small image), and
-//     then the image stays close to the full one.
+//     then the image stays close to the full one;
+//   - a moving camera draws to the coarser bound of moving frames.
 #include <cmath>
 #include <cstdio>
 
@@ -93,7 +94,9 @@ TEST_F(Lod, CullingAtLevelZeroDrawsWhatEveryTriangleDraws) {
         expect_counts_add_up(a.lod);
         EXPECT_EQ(a.lod.triangles_full, b.lod.triangles_full);
         EXPECT_LT(a.lod.triangles_drawn, a.lod.triangles_full) << "culling drew every triangle";
-        if (std::string(c.name).find("zoomed") != std::string::npos) EXPECT_GT(a.lod.culled_frustum, 0u);
+        if (std::string(c.name).find("zoomed") != std::string::npos) {
+            EXPECT_GT(a.lod.culled_frustum, 0u);
+        }
         if (std::string(c.name).find("anterior") != std::string::npos) {
             EXPECT_GT(a.lod.culled_occlusion, 0u) << "the skin hides the bone";
             EXPECT_EQ(a.lod.phases, 2) << "frames after the first use the last one's visibility";
@@ -164,4 +167,33 @@ TEST_F(Lod, ASmallViewDrawsCoarserLevelsCloseToTheFullImage) {
                 c.mean);
     EXPECT_LT(c.off_fraction(), 0.02);
     EXPECT_LT(c.mean, 1.5);
+}
+
+// A moving camera (the 3D view's drag frames and stand-ins: RenderOptions::
+// moving) draws to LodSettings::moving_error_px where that is coarser than
+// error_px, and to error_px where it is not.
+TEST_F(Lod, AMovingCameraDrawsToTheMovingBound) {
+    core::Scene& scene = head();
+    RenderOptions opt;
+    opt.width = 160;
+    opt.height = 160;
+    opt.look.lod.min_triangles = 1000;
+    opt.look.lod.culling = false; // the levels alone
+    opt.look.aa.samples = 1;
+    opt.look.lod.error_px = 0.5;
+    opt.look.lod.moving_error_px = 4.0;
+    Camera cam = scene.camera(PatientView::Anterior, 1.0);
+    cam.zoom(0.5);
+    const auto still = scene.render(cam, opt);
+    auto moving_opt = opt;
+    moving_opt.moving = true;
+    const auto moving = scene.render(cam, moving_opt);
+    ASSERT_TRUE(still.lod.used);
+    ASSERT_TRUE(moving.lod.used);
+    EXPECT_LT(double(moving.lod.triangles_drawn), 0.8 * double(still.lod.triangles_drawn)); // 57 % here
+    auto coarse_still = opt;
+    coarse_still.look.lod.error_px = 4.0; // the same bound in a still frame: the same levels
+    EXPECT_EQ(scene.render(cam, coarse_still).lod.triangles_drawn, moving.lod.triangles_drawn);
+    moving_opt.look.lod.moving_error_px = 0.25; // finer than error_px: error_px holds
+    EXPECT_EQ(scene.render(cam, moving_opt).lod.triangles_drawn, still.lod.triangles_drawn);
 }
