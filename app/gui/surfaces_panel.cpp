@@ -79,6 +79,16 @@ struct SurfacesPanel::Row {
     // them from elsewhere (an undo) replaces the row's request.
     double shown_value = 0;
     PostProcessOptions shown_post;
+    int decimals = 3; // the iso box's at least: 0 for integer voxels
+    // Shows `v` in the iso box with as many decimals as it needs (up to
+    // three): a surface at 300.5 on integer voxels reads 300.5, not 301,
+    // and leaving the box does not extract it again at the rounded value.
+    void show_value(double v) {
+        int d = decimals;
+        while (d < 3 && std::abs(v * std::pow(10.0, d) - std::round(v * std::pow(10.0, d))) > 1e-6) ++d;
+        value->setDecimals(d);
+        value->setValue(v);
+    }
     int to_slider(double v) const { return int(std::clamp(std::lround((v - lo) / step), 0L, long(steps))); }
     double from_slider(int s) const { return std::min(hi, lo + double(s) * step); }
 };
@@ -215,7 +225,7 @@ void SurfacesPanel::show_row(Row& r) {
         if (r.worker) r.worker->cancel = true;
         r.wanted = info.value;
         r.wanted_post = info.post;
-        r.value->setValue(info.value);
+        r.show_value(info.value);
         r.slider->setValue(r.to_slider(info.value));
         r.smooth->setValue(info.post.smooth);
         r.largest->setChecked(info.post.keep_largest);
@@ -489,11 +499,11 @@ void SurfacesPanel::add_iso_line(Row& r, QGridLayout* grid) {
     r.value->setObjectName("iso_value");
     r.value->setToolTip("This surface's iso value: Enter, the arrows or leaving the box extract it again");
     r.value->setRange(range.min, range.max);
-    r.value->setDecimals(integral ? 0 : 3);
+    r.decimals = integral ? 0 : 3;
     r.value->setSingleStep(r.step);
     r.value->setKeyboardTracking(false); // on Enter, arrows or leaving the box
     r.value->setSuffix(unit);
-    r.value->setValue(value);
+    r.show_value(value);
     r.busy = new QLabel("extracting...", r.widget);
     r.busy->setObjectName("busy");
     r.busy->setVisible(false);
@@ -565,7 +575,7 @@ void SurfacesPanel::set_iso(std::uint32_t id, double value) {
     if (r->value->value() != value) {
         // Called directly (not from the row's controls): show the value.
         r->syncing = true;
-        r->value->setValue(value);
+        r->show_value(value);
         r->slider->setValue(r->to_slider(value));
         r->syncing = false;
     }

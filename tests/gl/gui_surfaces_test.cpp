@@ -299,3 +299,33 @@ TEST(GuiSurfaces, PickedColourIsStoredAndSavedAsPicked) {
     ASSERT_EQ(j.at("surfaces").size(), 1u);
     EXPECT_EQ(j["surfaces"][0].at("color"), "#1a1a1a");
 }
+
+// An iso value between two integers, the usual choice on integer voxels
+// (no voxel sits on it): the row shows it as it is (300.5 once read 301),
+// and leaving its box (which extracts a changed value again) changes
+// nothing.
+TEST(GuiSurfaces, AHalfwayIsoValueOnIntegerVoxelsIsShownAsItIs) {
+    ISO_SKIP_WITHOUT_DISPLAY();
+    test::TempDir dir;
+    const auto app = test::make_app("gui_surfaces_test", dir / "config");
+    gui::MainWindow w;
+    w.resize(1500, 1000);
+    w.show();
+    ASSERT_TRUE(QTest::qWaitForWindowExposed(&w));
+    w.open_path(QString::fromStdString(test::data("headsq.nhdr")));
+    ASSERT_TRUE(wait_until([&] { return !w.busy(); }, 60000)) << "the load did not finish";
+    add_through_panel(w, 500.5);
+    ASSERT_EQ(w.scene().surfaces().size(), 1u);
+    const auto id = w.scene().surfaces()[0];
+    EXPECT_EQ(w.scene().info(id).value, 500.5);
+    auto* number = child<QDoubleSpinBox>(w.surfaces_panel()->row(id), "iso_value");
+    ASSERT_NE(number, nullptr);
+    EXPECT_EQ(number->value(), 500.5);
+    EXPECT_TRUE(number->text().startsWith("500.5")) << number->text().toStdString();
+    const int swaps = w.surfaces_panel()->swaps();
+    emit number->editingFinished();
+    QTest::qWait(50);
+    EXPECT_FALSE(w.surfaces_panel()->reextracting(id));
+    EXPECT_EQ(w.surfaces_panel()->swaps(), swaps);
+    EXPECT_EQ(w.scene().info(id).value, 500.5);
+}
