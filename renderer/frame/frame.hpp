@@ -89,7 +89,7 @@ struct LodSettings {
     // when larger: as ParaView's interactive LOD, a moving view is drawn
     // coarser and the still frames after it restore error_px.
     double moving_error_px = 2.0;
-    bool culling = true;   // frustum, back-facing and occlusion culling of clusters (with enabled)
+    bool culling = true; // frustum, back-facing and occlusion culling of clusters (with enabled)
     // Surfaces with fewer triangles are drawn whole (their clusters would
     // cost more than they save); tests lower it.
     std::size_t min_triangles = 262144;
