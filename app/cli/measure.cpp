@@ -23,7 +23,7 @@ struct MeasureArgs {
     std::string in, series, out;
     std::vector<double> isos;
     std::vector<std::string> distance, angle, values;
-    std::vector<std::string> component_at, surface_distance;
+    std::vector<std::string> component_at, surface_distance, within;
     bool json = false;
 };
 
@@ -48,19 +48,38 @@ SurfaceChoice choose_surface(const iso::core::Scene& scene, const std::string& t
                      "no surface is named '" + text + "' (the scene has: " + names + "), and it is not a point x,y,z");
 }
 
-// The structures asked for: isolated components and distances between surfaces (core/structures.hpp).
+// The box of the i-th --component-at: "box=x0,y0,z0,x1,y1,z1", or "none";
+// one --within applies to every --component-at, else one each.
+std::optional<iso::LpsBox> within_box(const MeasureArgs& a, std::size_t i) {
+    if (a.within.empty()) return std::nullopt;
+    if (a.within.size() != 1 && a.within.size() != a.component_at.size())
+        throw iso::Error("--within", "give one (for every --component-at) or one per --component-at, not " +
+                                         std::to_string(a.within.size()) + " for " +
+                                         std::to_string(a.component_at.size()));
+    const std::string& t = a.within[a.within.size() == 1 ? 0 : i];
+    if (t == "none") return std::nullopt;
+    if (t.rfind("box=", 0) != 0)
+        throw iso::Error("--within", "expected box=x0,y0,z0,x1,y1,z1 (LPS mm) or none, got '" + t + "'");
+    return iso::parse_box("--within", t.substr(4));
+}
+
+// The structures asked for: isolated components (or their parts within
+// boxes) and distances between surfaces (core/structures.hpp). The parts
+// come first: a distance can name one ("iso 300 component 1 within box").
 nlohmann::json measure_structures(iso::core::Scene& scene, const MeasureArgs& a, iso::MarkupsFile& markups) {
     nlohmann::json j{{"components", nlohmann::json::array()}, {"surface_distances", nlohmann::json::array()}};
+    if (!a.within.empty() && a.component_at.empty()) throw iso::Error("--within", "needs --component-at");
+    for (std::size_t i = 0; i < a.component_at.size(); ++i) {
+        const glm::dvec3 p = iso::core::parse_point("--component-at", a.component_at[i]);
+        const auto c =
+            iso::core::isolate_component(scene, iso::core::surface_at(scene, p).surface, p, within_box(a, i));
+        j["components"].push_back(iso::core::component_json(scene, c));
+    }
     std::vector<iso::core::SurfaceGap> gaps;
     for (std::size_t i = 0; i + 1 < a.surface_distance.size(); i += 2) {
         const SurfaceChoice x = choose_surface(scene, a.surface_distance[i]);
         const SurfaceChoice y = choose_surface(scene, a.surface_distance[i + 1]);
         gaps.push_back(iso::core::surface_gap(scene, x.surface, y.surface, x.at, y.at));
-    }
-    for (const auto& t : a.component_at) {
-        const glm::dvec3 p = iso::core::parse_point("--component-at", t);
-        const auto c = iso::core::isolate_component(scene, iso::core::surface_at(scene, p).surface, p);
-        j["components"].push_back(iso::core::component_json(scene, c));
     }
     for (const auto& g : gaps) {
         j["surface_distances"].push_back(iso::core::gap_json(g));
@@ -90,7 +109,14 @@ void print_structures(const nlohmann::json& j) {
         else
             std::cout << ", " << volume_text(c) << std::setprecision(3);
         if (!c["volume_uncertainty_ml"].is_null()) std::cout << " +- " << c["volume_uncertainty_ml"].get<double>();
-        std::cout << (c["closed"].get<bool>() ? ", closed" : ", open") << ", bounds LPS";
+        std::cout << (c["closed"].get<bool>() ? ", closed" : ", open");
+        if (c.contains("within")) {
+            std::cout << ", within the box";
+            for (const auto& f : c["within"]["faces_cut"])
+                std::cout << ", cut at its " << f["face"].get<std::string>() << " face (cap " << std::setprecision(1)
+                          << f["cap_area_mm2"].get<double>() << " mm2)";
+        }
+        std::cout << ", bounds LPS";
         for (const auto& b : c["bounds_lps"])
             std::cout << " (" << std::setprecision(1) << b[0].get<double>() << ", " << b[1].get<double>() << ", "
                       << b[2].get<double>() << ")";
@@ -196,6 +222,11 @@ RunFn add_measure(CLI::App& cmd, char*) {
         ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll);
     c->add_option("--component-at", a.component_at,
                   "Isolate and measure the connected component of the surface nearest to X,Y,Z (LPS mm; repeatable)")
+        ->expected(1)
+        ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll);
+    c->add_option("--within", a.within,
+                  "Of --component-at, only the part inside an LPS box, cut at its faces and capped: "
+                  "box=x0,y0,z0,x1,y1,z1 (mm), or none; one for every --component-at, or one each")
         ->expected(1)
         ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll);
     c->add_option("--surface-distance", a.surface_distance,

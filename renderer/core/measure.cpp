@@ -5,6 +5,7 @@
 
 #include "io/error.hpp"
 #include "renderer/core/value_unit.hpp"
+#include "renderer/surface/box_clip.hpp"
 
 namespace iso::core {
 
@@ -13,7 +14,10 @@ SurfaceMeasures measure_surface_mesh(const Scene& scene, const SurfaceInfo& info
     // label surfaces and meshes are measured as they are.
     if (info.kind == SurfaceInfo::Kind::Iso && scene.has_volume()) {
         MeasureOptions opt;
-        opt.components_only = info.post.keep_largest || info.post.keep_at;
+        opt.components_only = info.post.keep_largest || info.post.keep_at || info.post.keep_within;
+        // A part cut by a box is compared with the coarse isosurfaces cut by the same box.
+        if (const auto box = info.post.keep_within)
+            opt.coarse_post = [b = *box](const Mesh& m) { return clip_to_box(m, b); };
         return measure_isosurface(scene.volume(), info.value, mesh, opt);
     }
     return measure_surface(mesh);

@@ -225,6 +225,15 @@ private:
         s.post.keep_largest = boolean(item, "keep_largest", where + ".keep_largest", false);
         if (item.contains("keep_at") && !item["keep_at"].is_null())
             s.post.keep_at = vec3(item["keep_at"], where + ".keep_at");
+        if (item.contains("keep_within") && !item["keep_within"].is_null()) {
+            const json& b = item["keep_within"];
+            if (!b.is_object()) fail(where + ".keep_within", "must be an object {\"lo\": [x,y,z], \"hi\": [x,y,z]}");
+            LpsBox box{vec3(b.value("lo", json()), where + ".keep_within.lo"),
+                       vec3(b.value("hi", json()), where + ".keep_within.hi")};
+            for (int i = 0; i < 3; ++i)
+                if (!(box.lo[i] < box.hi[i])) fail(where + ".keep_within", "lo must be below hi on every axis");
+            s.post.keep_within = box;
+        }
         return s;
     }
 
@@ -391,6 +400,8 @@ ordered_json session_json(const Session& s, const std::string& session_path) {
             o["keep_largest"] = ss.post.keep_largest;
         }
         if (ss.post.keep_at) o["keep_at"] = vec_json(*ss.post.keep_at);
+        if (ss.post.keep_within)
+            o["keep_within"] = {{"lo", vec_json(ss.post.keep_within->lo)}, {"hi", vec_json(ss.post.keep_within->hi)}};
         j["surfaces"].push_back(o);
     }
     if (s.camera)
@@ -512,11 +523,14 @@ OpenedSession open_session(const Session& s, const ProgressFn& progress) {
             "surface " + std::to_string(i + 1) + (ss.name.empty() ? std::string() : " ('" + ss.name + "')");
         const ProgressFn p = part(0.3 + 0.7 * double(i) / double(n), 0.3 + 0.7 * double(i + 1) / double(n));
         std::vector<SurfaceId> ids;
-        if (ss.kind == SurfaceInfo::Kind::Mesh && ss.post.keep_at && !meshes.empty()) {
-            // A component isolated from the mesh input: made again from it.
+        if (ss.kind == SurfaceInfo::Kind::Mesh && (ss.post.keep_at || ss.post.keep_within) && !meshes.empty()) {
+            // A component (or a part within a box) isolated from the mesh input: made again from it.
             SurfaceInfo info = scene.info(meshes.front());
             info.post = ss.post;
-            ids = {scene.add_mesh(component_at(scene.mesh(meshes.front()), *ss.post.keep_at), info)};
+            PostProcessOptions part;
+            part.keep_at = ss.post.keep_at;
+            part.keep_within = ss.post.keep_within;
+            ids = {scene.add_mesh(postprocess(scene.mesh(meshes.front()), part), info)};
         } else if (ss.kind == SurfaceInfo::Kind::Mesh) {
             if (next_mesh >= meshes.size())
                 throw Error(s.input, where + ": a mesh surface, but the input is not a mesh file");

@@ -8,6 +8,7 @@
 #include "io/error.hpp"
 #include "renderer/core/surface_name.hpp"
 #include "renderer/surface/analysis.hpp"
+#include "renderer/surface/box_clip.hpp"
 #include "renderer/surface/postprocess.hpp"
 
 namespace iso::core {
@@ -49,7 +50,8 @@ SurfacePoint surface_at(const Scene& scene, const glm::dvec3& lps) {
     return best;
 }
 
-ComponentPlan plan_component(const Scene& scene, SurfaceId surface, const glm::dvec3& at) {
+ComponentPlan plan_component(const Scene& scene, SurfaceId surface, const glm::dvec3& at,
+                             const std::optional<LpsBox>& within) {
     if (!finite(at)) throw Error("isolate", "the point is not finite");
     const Mesh& parent = surface_mesh(scene, surface, "isolate");
     const SurfaceInfo& info = scene.info(surface);
@@ -66,6 +68,15 @@ ComponentPlan plan_component(const Scene& scene, SurfaceId surface, const glm::d
     plan.info = info;
     plan.info.post.keep_at = near.nearest.point;
     plan.info.name = info.name + " component " + std::to_string(plan.component + 1);
+    if (within) {
+        plan.mesh = clip_to_box(plan.mesh, *within);
+        // The cut may leave pieces of the component apart in the box: the one at the point.
+        if (!plan.mesh.empty()) plan.mesh = component_at(plan.mesh, at);
+        if (plan.mesh.empty())
+            throw Error("isolate within a box", plan.info.name + " of " + info.name + " has no part within the box");
+        plan.info.post.keep_within = within;
+        plan.info.name += " within box";
+    }
     std::size_t isolated = 0;
     for (const SurfaceId id : scene.surfaces()) isolated += scene.info(id).post.keep_at.has_value();
     // As a session stores it (8-bit sRGB), so that the colour on screen is the one saved.
@@ -89,8 +100,9 @@ IsolatedComponent add_component(Scene& scene, ComponentPlan plan) {
     return out;
 }
 
-IsolatedComponent isolate_component(Scene& scene, SurfaceId surface, const glm::dvec3& at) {
-    return add_component(scene, plan_component(scene, surface, at));
+IsolatedComponent isolate_component(Scene& scene, SurfaceId surface, const glm::dvec3& at,
+                                    const std::optional<LpsBox>& within) {
+    return add_component(scene, plan_component(scene, surface, at, within));
 }
 
 SurfaceGap surface_gap(const Scene& scene, SurfaceId a, SurfaceId b, const std::optional<glm::dvec3>& at_a,
@@ -158,8 +170,21 @@ nlohmann::json component_json(const Scene& scene, const IsolatedComponent& c) {
     j["from"] = scene.info(c.from).name;
     j["component"] = c.component + 1;
     j["of_components"] = c.components;
-    const auto& at = scene.info(c.surface).post.keep_at;
-    j["at"] = at ? vec(*at) : nlohmann::json(nullptr);
+    const auto& post = scene.info(c.surface).post;
+    j["at"] = post.keep_at ? vec(*post.keep_at) : nlohmann::json(nullptr);
+    if (post.keep_within) {
+        const LpsBox& b = *post.keep_within;
+        const auto caps = cap_areas(scene.mesh(c.surface), b);
+        nlohmann::json cut = nlohmann::json::array();
+        double total = 0;
+        for (int f = 0; f < 6; ++f)
+            if (caps[std::size_t(f)] > 0) {
+                cut.push_back({{"face", box_face_name(f)}, {"cap_area_mm2", caps[std::size_t(f)]}});
+                total += caps[std::size_t(f)];
+            }
+        j["within"] = {
+            {"box_lps", {vec(b.lo), vec(b.hi)}}, {"cut", !cut.empty()}, {"faces_cut", cut}, {"cap_area_mm2", total}};
+    }
     return j;
 }
 

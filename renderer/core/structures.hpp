@@ -47,7 +47,16 @@ struct IsolatedComponent {
 // colour of its own, opaque. The parent is left as it is (hide it to see
 // the component alone). Throws iso::Error naming the surface for an unknown
 // or empty one.
-IsolatedComponent isolate_component(Scene& scene, SurfaceId surface, const glm::dvec3& at);
+//
+// With `within` (3D Slicer's islands within an ROI, made exact): only the
+// part of that component inside the LPS box, cut at the box's faces and
+// capped (clip_to_box), and of that part the piece nearest `at`: a
+// structure cut off the tree it touches, measured as a closed surface
+// (PostProcessOptions::keep_within records the box; named "... component
+// <k> within box"). Throws iso::Error when nothing of the component is
+// within the box.
+IsolatedComponent isolate_component(Scene& scene, SurfaceId surface, const glm::dvec3& at,
+                                    const std::optional<LpsBox>& within = {});
 
 // isolate_component in two steps, for a caller that works off its GUI
 // thread: plan_component only reads the scene (the surface's mesh and the
@@ -60,7 +69,8 @@ struct ComponentPlan {
     SurfaceInfo info;
     SurfaceMeasures measures;
 };
-ComponentPlan plan_component(const Scene& scene, SurfaceId surface, const glm::dvec3& at);
+ComponentPlan plan_component(const Scene& scene, SurfaceId surface, const glm::dvec3& at,
+                             const std::optional<LpsBox>& within = {});
 IsolatedComponent add_component(Scene& scene, ComponentPlan plan);
 
 // The shortest distance between two surfaces, or between the components of
@@ -96,7 +106,8 @@ std::vector<LineCrossing> solid_crossings(const Scene& scene, const glm::dvec3& 
 
 // JSON of a gap (surfaces, distance_mm, points LPS, triangles, touching) and
 // of an isolated component (the measure JSON of its surface, plus its parent
-// and index).
+// and index, and for a part within a box how it was cut: the box, and the
+// cap's area on each face it cuts).
 nlohmann::json gap_json(const SurfaceGap& g);
 nlohmann::json component_json(const Scene& scene, const IsolatedComponent& c);
 

@@ -714,7 +714,8 @@ void compare_coarse_grid(const Volume& v, double iso, int g, const MeasureOption
     ExtractOptions eo;
     eo.normals = false;
     eo.threads = opt.threads;
-    const Mesh cm = extract_isosurface(coarse, iso, eo);
+    Mesh cm = extract_isosurface(coarse, iso, eo);
+    if (opt.coarse_post) cm = opt.coarse_post(cm);
     const Analysis co = analyse(cm);
     const double k = 3.0 / (r * r - 1.0); // Fs / (r^p - 1), Fs = 3, p = 2
     const std::size_t nf = fine.components.size();

@@ -13,6 +13,7 @@
 #include <array>
 #include <cstdint>
 #include <limits>
+#include <functional>
 #include <optional>
 #include <string>
 #include <vector>
@@ -177,6 +178,10 @@ struct MeasureOptions {
     // the coarse components matched to them, not with the whole coarse
     // isosurface (its uncertainty is then its components' one).
     bool components_only = false;
+    // measure_isosurface: what the surface's post-processing did that the
+    // coarse isosurfaces must do too before they are compared (a part cut
+    // by a box: the same cut); none: nothing.
+    std::function<Mesh(const Mesh&)> coarse_post;
 };
 
 // Measures a mesh in the units of its positions (LPS mm). O(n): vertices are

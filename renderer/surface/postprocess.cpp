@@ -23,7 +23,7 @@
 namespace iso {
 
 bool needs_postprocess(const PostProcessOptions& o) {
-    return o.smooth > 0.0 || o.decimate > 0.0 || o.keep_largest || o.keep_at.has_value();
+    return o.smooth > 0.0 || o.decimate > 0.0 || o.keep_largest || o.keep_at.has_value() || o.keep_within.has_value();
 }
 
 Mesh component_at(const Mesh& m, const glm::dvec3& at) {
@@ -39,20 +39,27 @@ Mesh postprocess(const Mesh& in, const PostProcessOptions& o, const ProgressFn& 
         throw Error("component point", "the point is not finite");
     if (!needs_postprocess(o) || in.empty()) return in;
     int step = 0;
-    const int steps =
-        (o.keep_at ? 1 : 0) + (o.keep_largest ? 1 : 0) + (o.smooth > 0 ? 1 : 0) + (o.decimate > 0 ? 1 : 0) + 1;
+    const int steps = (o.keep_at ? 1 : 0) + (o.keep_within ? 1 : 0) + (o.keep_largest ? 1 : 0) +
+                      (o.smooth > 0 ? 1 : 0) + (o.decimate > 0 ? 1 : 0) + 1;
     auto next = [&](const char* stage) { report(progress, double(step++) / steps, stage, "postprocess"); };
     Mesh kept;
+    const bool keeps = o.keep_at || o.keep_within;
     if (o.keep_at) {
         next("keeping the component at a point");
         kept = component_at(in, *o.keep_at);
-        // Nothing else asked: the component as extracted (its normals, its exact triangles).
-        if (!o.keep_largest && !(o.smooth > 0) && !(o.decimate > 0)) {
-            report(progress, 1.0, "done", "postprocess");
-            return kept;
-        }
     }
-    vtkSmartPointer<vtkPolyData> pd = to_polydata(o.keep_at ? kept : in, false);
+    if (o.keep_within) {
+        next("cutting it at the box");
+        kept = clip_to_box(o.keep_at ? kept : in, *o.keep_within);
+        // The cut may leave pieces of the component apart: the one at the point.
+        if (o.keep_at) kept = component_at(kept, *o.keep_at);
+    }
+    // Nothing else asked: the part as extracted (its normals, its exact triangles).
+    if (keeps && !o.keep_largest && !(o.smooth > 0) && !(o.decimate > 0)) {
+        report(progress, 1.0, "done", "postprocess");
+        return kept;
+    }
+    vtkSmartPointer<vtkPolyData> pd = to_polydata(keeps ? kept : in, false);
 
     if (o.keep_largest) {
         next("keeping the largest component");

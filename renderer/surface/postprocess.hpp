@@ -9,6 +9,7 @@
 
 #include "io/mesh.hpp"
 #include "io/progress.hpp"
+#include "renderer/surface/box_clip.hpp"
 
 namespace iso {
 
@@ -27,6 +28,11 @@ struct PostProcessOptions {
     // the triangle nearest to it, as measure_surface numbers components.
     // Applied before the largest is kept, smoothing and decimation.
     std::optional<glm::dvec3> keep_at;
+    // Keep only the part within this LPS box, cut at its faces and capped
+    // (clip_to_box); with keep_at, the piece of that part nearest the point
+    // (a structure separated from the tree it touches). Applied after
+    // keep_at, before the rest.
+    std::optional<LpsBox> keep_within;
     bool operator==(const PostProcessOptions&) const = default;
 };
 
