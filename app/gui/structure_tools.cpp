@@ -157,7 +157,10 @@ bool StructureTools::viewer_click(Viewer& v, QPointF pixel) {
 // The connected component under the click, planned off the GUI thread
 // (core::plan_component: components and measurement), made a surface of
 // its own in one undo step (core::Workspace::isolate: its parent hidden;
-// a component that is a surface already is shown, not added again).
+// a component that is a surface already is shown, not added again). With
+// the crop box on, only the part of the component within it, cut and
+// capped (3D Slicer's islands within an ROI; docs/measure.md "Structures
+// within a box").
 void StructureTools::isolate(std::uint32_t id, const glm::dvec3& at) {
     core::Workspace& w = context_.workspace;
     if (!w.scene().has_surface(id)) return;
@@ -165,9 +168,11 @@ void StructureTools::isolate(std::uint32_t id, const glm::dvec3& at) {
     const std::shared_ptr<const Mesh> mesh = w.scene().shared_mesh(id);
     const core::Scene* scene = &w.scene();
     const QString name = QString::fromStdString(w.scene().info(id).name);
+    std::optional<LpsBox> within;
+    if (const auto& box = w.look().clip.box) within = LpsBox{box->first, box->second};
     context_.jobs.run(
-        "Isolating a component of " + name, false,
-        [scene, id, at, plan](const ProgressFn&) { *plan = core::plan_component(*scene, id, at); },
+        "Isolating a component of " + name + (within ? " within the crop box" : ""), false,
+        [scene, id, at, plan, within](const ProgressFn&) { *plan = core::plan_component(*scene, id, at, within); },
         [this, scene, mesh, id, plan, name](std::exception_ptr e) {
             core::Workspace& w = context_.workspace;
             if (e) {

@@ -303,8 +303,9 @@ void Workspace::remove_surface(SurfaceId id) {
 }
 
 std::optional<SurfaceId> Workspace::existing_component(const ComponentPlan& plan) const {
-    // A single isolated component isolated again is itself.
-    if (scene_->has_surface(plan.from) && plan.components == 1 && scene_->info(plan.from).post.keep_at)
+    // A single isolated component isolated again (within the same box, or none) is itself.
+    if (scene_->has_surface(plan.from) && plan.components == 1 && scene_->info(plan.from).post.keep_at &&
+        scene_->info(plan.from).post.keep_within == plan.info.post.keep_within)
         return plan.from;
     for (const SurfaceId id : scene_->surfaces()) {
         if (id == plan.from) continue;

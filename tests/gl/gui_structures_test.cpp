@@ -145,3 +145,46 @@ TEST_F(GuiStructures, IsolateListsTheComponentMeasureGivesAndDistanceIsTheCores)
         << w.statusBar()->currentMessage().toStdString();
     EXPECT_TRUE(core::surface_gap(o.scene(), ids[1], ids[1], bone->second.lps, bone->second.lps).same_structure);
 }
+
+// With the crop box on, Isolate keeps the part of the component within it,
+// cut and capped: the part the core makes with that box (its triangles and
+// volume), named "... within box", closed; the crop box kept with it. (The
+// click's pick is the test above's; here Isolate is given the point, a
+// vertex of the bone, and the expected part comes from the core.)
+TEST_F(GuiStructures, IsolateWithTheCropBoxOnKeepsThePartWithinIt) {
+    gui::MainWindow& w = window();
+    const core::SurfaceId bone = w.scene().surfaces()[1];
+    ASSERT_EQ(w.scene().info(bone).name, "iso 1150");
+    const Mesh& m = w.scene().mesh(bone);
+    const glm::dvec3 p(m.positions[m.triangles[m.triangles.size() / 2][0]]);
+    const LpsBox box{p - glm::dvec3(25, 15, 20), p + glm::dvec3(25, 40, 20)};
+    const auto plan = core::plan_component(w.scene(), bone, p, box);
+    FrameLook look = w.workspace().look();
+    look.clip.box = std::make_pair(box.lo, box.hi);
+    w.workspace().set_look(look);
+    const std::size_t before = w.scene().surfaces().size();
+    w.structure_tools()->isolate(bone, p);
+    ASSERT_TRUE(QTest::qWaitFor([&] { return w.scene().surfaces().size() == before + 1 && !w.busy(); }, 600000))
+        << w.statusBar()->currentMessage().toStdString();
+    const core::SurfaceId made = w.scene().surfaces().back();
+    EXPECT_EQ(w.scene().info(made).name, plan.info.name);
+    EXPECT_NE(plan.info.name.find("within box"), std::string::npos) << plan.info.name;
+    EXPECT_EQ(w.scene().mesh(made).triangles.size(), plan.mesh.triangles.size());
+    const auto measured = core::measure_surfaces(w.scene(), {made}).front().measures;
+    EXPECT_NEAR(measured.volume_ml, plan.measures.volume_ml, 1e-9 * std::abs(plan.measures.volume_ml));
+    EXPECT_TRUE(measured.closed) << "the box's caps close the cut";
+    ASSERT_TRUE(w.scene().info(made).post.keep_within.has_value());
+    EXPECT_EQ(*w.scene().info(made).post.keep_within, box);
+    for (const auto& q : w.scene().mesh(made).positions)
+        for (int a = 0; a < 3; ++a) {
+            EXPECT_GE(double(q[a]), box.lo[a] - 1e-3);
+            EXPECT_LE(double(q[a]), box.hi[a] + 1e-3);
+        }
+    // Without the crop box, the whole component again (a new surface: another part).
+    look.clip.box.reset();
+    w.workspace().set_look(look);
+    w.structure_tools()->isolate(bone, p);
+    ASSERT_TRUE(QTest::qWaitFor([&] { return w.scene().surfaces().size() == before + 2 && !w.busy(); }, 600000));
+    EXPECT_FALSE(w.scene().info(w.scene().surfaces().back()).post.keep_within.has_value());
+    EXPECT_GT(w.scene().mesh(w.scene().surfaces().back()).triangles.size(), plan.mesh.triangles.size());
+}
