@@ -20,6 +20,8 @@ PACKAGES=(
   qt6-base-dev libqt6opengl6-dev
   # clusters and levels of detail of massive meshes (the simplifier)
   libmeshoptimizer-dev
+  # convex hulls (the largest diameter of a structure)
+  libqhull-dev
   # ray-traced ambient occlusion (and the tests' ground truth)
   libembree-dev
   # overlay text: FreeType rasterises DejaVu Sans, which fontconfig finds

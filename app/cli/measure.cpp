@@ -110,6 +110,10 @@ void print_structures(const nlohmann::json& j) {
             std::cout << ", " << volume_text(c) << std::setprecision(3);
         if (!c["volume_uncertainty_ml"].is_null()) std::cout << " +- " << c["volume_uncertainty_ml"].get<double>();
         std::cout << (c["closed"].get<bool>() ? ", closed" : ", open");
+        std::cout << ", largest diameter " << std::setprecision(1) << c["largest_diameter_mm"].get<double>() << " mm";
+        if (!c["centroid_lps"].is_null())
+            std::cout << ", centroid LPS (" << c["centroid_lps"][0].get<double>() << ", "
+                      << c["centroid_lps"][1].get<double>() << ", " << c["centroid_lps"][2].get<double>() << ")";
         if (c.contains("within")) {
             std::cout << ", within the box";
             for (const auto& f : c["within"]["faces_cut"])

@@ -9,6 +9,7 @@
 #include "renderer/core/surface_name.hpp"
 #include "renderer/surface/analysis.hpp"
 #include "renderer/surface/box_clip.hpp"
+#include "renderer/surface/shape.hpp"
 #include "renderer/surface/postprocess.hpp"
 
 namespace iso::core {
@@ -172,6 +173,11 @@ nlohmann::json component_json(const Scene& scene, const IsolatedComponent& c) {
     j["of_components"] = c.components;
     const auto& post = scene.info(c.surface).post;
     j["at"] = post.keep_at ? vec(*post.keep_at) : nlohmann::json(nullptr);
+    // Where it is and how large across (surface/shape.hpp).
+    const ShapeMeasures shape = measure_shape(scene.mesh(c.surface), c.measured.measures.closed);
+    j["centroid_lps"] = shape.solid ? vec(shape.centroid) : nlohmann::json(nullptr);
+    j["largest_diameter_mm"] = shape.feret_mm;
+    j["largest_diameter_points_lps"] = {vec(shape.feret_a), vec(shape.feret_b)};
     if (post.keep_within) {
         const LpsBox& b = *post.keep_within;
         const auto caps = cap_areas(scene.mesh(c.surface), b);

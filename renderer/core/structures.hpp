@@ -106,8 +106,9 @@ std::vector<LineCrossing> solid_crossings(const Scene& scene, const glm::dvec3& 
 
 // JSON of a gap (surfaces, distance_mm, points LPS, triangles, touching) and
 // of an isolated component (the measure JSON of its surface, plus its parent
-// and index, and for a part within a box how it was cut: the box, and the
-// cap's area on each face it cuts).
+// and index, its centroid and largest diameter (surface/shape.hpp), and for
+// a part within a box how it was cut: the box, and the cap's area on each
+// face it cuts).
 nlohmann::json gap_json(const SurfaceGap& g);
 nlohmann::json component_json(const Scene& scene, const IsolatedComponent& c);
 

@@ -18,6 +18,7 @@
 #include "renderer/surface/analysis.hpp"
 #include "renderer/surface/box_clip.hpp"
 #include "renderer/surface/postprocess.hpp"
+#include "renderer/surface/shape.hpp"
 #include "io/volume_io.hpp"
 #include "tests/support/measure_phantoms.hpp"
 #include "tests/support/test_util.hpp"
@@ -101,6 +102,20 @@ TEST(Structures, APartWithinABoxIsCutCappedAndMeasuredExactly) {
     const double disc = 3.14159265358979323846 * kTube * kTube;
     EXPECT_NEAR(j["within"]["cap_area_mm2"].get<double>(), disc, 0.03 * disc);
     EXPECT_NEAR(j["volume_ml"].get<double>(), m.volume_ml, 1e-12);
+    // Its largest diameter: from the tube's cut rim to the far side of the
+    // ball, |rim - centre| + R; its centroid on the tube's axis, at the
+    // first moment of ball and half tube over their volume.
+    EXPECT_NEAR(j["largest_diameter_mm"].get<double>(), std::hypot(cut, kTube) + kRBig, 0.15);
+    {
+        const double pi = 3.14159265358979323846, h0 = std::sqrt(kRBig * kRBig - kTube * kTube);
+        const auto cap_moment = [&](double x) { return pi * (kRBig * kRBig * x * x / 2 - x * x * x * x / 4); };
+        const double moment = pi * kTube * kTube * (cut * cut - h0 * h0) / 2 - (cap_moment(kRBig) - cap_moment(h0));
+        const auto& g = j["centroid_lps"];
+        ASSERT_FALSE(g.is_null());
+        EXPECT_NEAR(g[0].get<double>(), moment / ball_and_tube_to(cut), 0.05);
+        EXPECT_NEAR(g[1].get<double>(), 0.0, 0.05);
+        EXPECT_NEAR(g[2].get<double>(), 0.0, 0.05);
+    }
     // The whole shape on the same grid, for comparison: the cut is as exact as the rest.
     const double pi = 3.14159265358979323846;
     const auto cap = [&](double r) {
@@ -160,6 +175,18 @@ TEST(Structures, ASlabOfABallIsClosedAndComesBackFromASession) {
     parts += measure_surface(clip_to_box(ball, LpsBox{{-20, -20, -20}, {20, 20, -3}})).volume_ml;
     parts += measure_surface(clip_to_box(ball, LpsBox{{-20, -20, 4}, {20, 20, 20}})).volume_ml;
     EXPECT_NEAR(parts, measure_surface(ball).volume_ml, 1e-6 * measure_surface(ball).volume_ml);
+    // The largest diameter is the largest distance between any two vertices (brute force).
+    {
+        const Mesh& part = scene.mesh(c.surface);
+        double best = 0;
+        for (std::size_t a = 0; a < part.positions.size(); ++a)
+            for (std::size_t b = a + 1; b < part.positions.size(); ++b)
+                best = std::max(best, glm::distance(glm::dvec3(part.positions[a]), glm::dvec3(part.positions[b])));
+        const ShapeMeasures shape = measure_shape(part, true);
+        EXPECT_DOUBLE_EQ(shape.feret_mm, best);
+        EXPECT_LE(shape.hull_vertices, part.positions.size()); // a convex slab: most of them
+        EXPECT_TRUE(shape.solid);
+    }
     const auto caps = cap_areas(scene.mesh(c.surface), slab);
     EXPECT_NEAR(caps[4], pi * (kRBig * kRBig - 9.0), 0.02 * pi * kRBig * kRBig);  // inferior, z = -3
     EXPECT_NEAR(caps[5], pi * (kRBig * kRBig - 16.0), 0.02 * pi * kRBig * kRBig); // superior, z = 4
