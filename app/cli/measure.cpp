@@ -24,6 +24,7 @@ struct MeasureArgs {
     std::vector<double> isos;
     std::vector<std::string> distance, angle, values;
     std::vector<std::string> component_at, surface_distance, within;
+    std::vector<std::string> grow_from, grow_range, grow_within;
     bool json = false;
 };
 
@@ -63,6 +64,43 @@ std::optional<iso::LpsBox> within_box(const MeasureArgs& a, std::size_t i) {
     return iso::parse_box("--within", t.substr(4));
 }
 
+// The i-th of options given once for all or once each (`what` names the option).
+const std::string& one_or_each(const std::vector<std::string>& v, std::size_t i, std::size_t n, const char* what) {
+    if (v.size() != 1 && v.size() != n)
+        throw iso::Error(what, "give one (for every --grow-from) or one per --grow-from, not " +
+                                   std::to_string(v.size()) + " for " + std::to_string(n));
+    return v[v.size() == 1 ? 0 : i];
+}
+
+// The regions grown from --grow-from seeds (core::grow_structure).
+void grow_structures(iso::core::Scene& scene, const MeasureArgs& a, nlohmann::json& j) {
+    j["grown"] = nlohmann::json::array();
+    if (a.grow_from.empty()) {
+        if (!a.grow_range.empty() || !a.grow_within.empty()) throw iso::Error("--grow-range", "needs --grow-from");
+        return;
+    }
+    if (a.grow_range.empty()) throw iso::Error("--grow-from", "needs --grow-range LO,HI (the values grown through)");
+    for (std::size_t i = 0; i < a.grow_from.size(); ++i) {
+        iso::GrowOptions o;
+        const std::string& range = one_or_each(a.grow_range, i, a.grow_from.size(), "--grow-range");
+        char tail = 0;
+        if (std::sscanf(range.c_str(), "%lf,%lf%c", &o.lo, &o.hi, &tail) != 2)
+            throw iso::Error("--grow-range", "expected LO,HI, got '" + range + "'");
+        if (!a.grow_within.empty()) {
+            const std::string& w = one_or_each(a.grow_within, i, a.grow_from.size(), "--grow-within");
+            if (w != "none") {
+                if (w.rfind("box=", 0) != 0)
+                    throw iso::Error("--grow-within",
+                                     "expected box=x0,y0,z0,x1,y1,z1 (LPS mm) or none, got '" + w + "'");
+                o.within = iso::parse_box("--grow-within", w.substr(4));
+            }
+        }
+        const glm::dvec3 seed = iso::core::parse_point("--grow-from", a.grow_from[i]);
+        const auto g = iso::core::grow_structure(scene, seed, o);
+        j["grown"].push_back(iso::core::grown_json(scene, g));
+    }
+}
+
 // The structures asked for: isolated components (or their parts within
 // boxes) and distances between surfaces (core/structures.hpp). The parts
 // come first: a distance can name one ("iso 300 component 1 within box").
@@ -75,6 +113,7 @@ nlohmann::json measure_structures(iso::core::Scene& scene, const MeasureArgs& a,
             iso::core::isolate_component(scene, iso::core::surface_at(scene, p).surface, p, within_box(a, i));
         j["components"].push_back(iso::core::component_json(scene, c));
     }
+    grow_structures(scene, a, j);
     std::vector<iso::core::SurfaceGap> gaps;
     for (std::size_t i = 0; i + 1 < a.surface_distance.size(); i += 2) {
         const SurfaceChoice x = choose_surface(scene, a.surface_distance[i]);
@@ -126,6 +165,19 @@ void print_structures(const nlohmann::json& j) {
                       << b[2].get<double>() << ")";
         std::cout << "\n";
     }
+    for (const auto& g : j["grown"]) {
+        std::cout << g["surface"].get<std::string>() << " (grown from (" << std::setprecision(1)
+                  << g["seed_lps"][0].get<double>() << ", " << g["seed_lps"][1].get<double>() << ", "
+                  << g["seed_lps"][2].get<double>() << ") through " << g["range"][0].get<double>() << " to "
+                  << g["range"][1].get<double>() << "): " << g["voxels"].get<std::size_t>() << " voxels, volume "
+                  << std::setprecision(3) << g["volume_ml"].get<double>() << " mL +- "
+                  << g["partial_volume_ml"].get<double>() << " (partial volume), surface " << std::setprecision(1)
+                  << g["surface_area_mm2"].get<double>() << " mm2 enclosing " << std::setprecision(3)
+                  << g["surface_volume_ml"].get<double>() << " mL, largest diameter " << std::setprecision(1)
+                  << g["largest_diameter_mm"].get<double>() << " mm"
+                  << (g["reached_box"].get<bool>() ? ", stopped at the box" : "")
+                  << (g["reached_volume_border"].get<bool>() ? ", reached the volume's edge" : "") << "\n";
+    }
     for (const auto& g : j["surface_distances"]) {
         const auto& p = g["points"];
         std::cout << "distance " << g["surfaces"][0].get<std::string>() << " to " << g["surfaces"][1].get<std::string>()
@@ -154,13 +206,16 @@ int run_measure(const MeasureArgs& a) {
         iso::check_writable_destination(a.out);
     }
     iso::core::Scene scene;
-    open_input(scene, a.in, a.series, a.isos, {}, "measure");
+    // Values at points, distances, angles and grown regions need no isosurface.
+    const bool without_surfaces = !a.grow_from.empty() || !a.values.empty() || !a.distance.empty() || !a.angle.empty();
+    open_input(scene, a.in, a.series, a.isos, {}, "measure", without_surfaces);
     const auto surfaces = iso::core::measure_surfaces(scene);
     auto j = iso::core::measure_json(scene, surfaces, points);
     iso::MarkupsFile markups = iso::core::point_markups(scene, points);
     const auto structures = measure_structures(scene, a, markups);
     j["components"] = structures["components"];
     j["surface_distances"] = structures["surface_distances"];
+    j["grown"] = structures["grown"];
     if (!a.out.empty()) iso::save_markups(markups, a.out);
     if (a.json) {
         std::cout << j.dump(2) << "\n";
@@ -231,6 +286,18 @@ RunFn add_measure(CLI::App& cmd, char*) {
     c->add_option("--within", a.within,
                   "Of --component-at, only the part inside an LPS box, cut at its faces and capped: "
                   "box=x0,y0,z0,x1,y1,z1 (mm), or none; one for every --component-at, or one each")
+        ->expected(1)
+        ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll);
+    c->add_option("--grow-from", a.grow_from,
+                  "Grow a region from the seed X,Y,Z (LPS mm) through the voxels joined to it whose values are in "
+                  "--grow-range, and measure it (named \"grown N\"; repeatable)")
+        ->expected(1)
+        ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll);
+    c->add_option("--grow-range", a.grow_range, "The values a region grows through: LO,HI (one for all, or one each)")
+        ->expected(1)
+        ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll);
+    c->add_option("--grow-within", a.grow_within,
+                  "Limit a grown region to an LPS box: box=x0,y0,z0,x1,y1,z1 or none (one for all, or one each)")
         ->expected(1)
         ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll);
     c->add_option("--surface-distance", a.surface_distance,

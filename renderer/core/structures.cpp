@@ -9,6 +9,7 @@
 #include "renderer/core/surface_name.hpp"
 #include "renderer/surface/analysis.hpp"
 #include "renderer/surface/box_clip.hpp"
+#include "renderer/surface/extract.hpp"
 #include "renderer/surface/shape.hpp"
 #include "renderer/surface/postprocess.hpp"
 
@@ -104,6 +105,53 @@ IsolatedComponent add_component(Scene& scene, ComponentPlan plan) {
 IsolatedComponent isolate_component(Scene& scene, SurfaceId surface, const glm::dvec3& at,
                                     const std::optional<LpsBox>& within) {
     return add_component(scene, plan_component(scene, surface, at, within));
+}
+
+GrownStructure grow_structure(Scene& scene, const glm::dvec3& seed, const GrowOptions& options,
+                              const ProgressFn& progress) {
+    if (!scene.has_volume()) throw Error("grow from a seed", "the input is a mesh: there is no volume to grow in");
+    GrownStructure g;
+    g.seed = seed;
+    g.options = options;
+    g.region = grow_region(scene.volume(), seed, options, progress);
+    const double one = 1.0;
+    std::vector<LabelSurface> surfaces = extract_labels(g.region.mask, std::span<const double>(&one, 1));
+    g.region.mask = Volume{};
+    if (surfaces.empty() || surfaces.front().mesh.empty())
+        throw Error("grow from a seed", "the grown region has no surface");
+    std::size_t grown = 0;
+    for (const SurfaceId id : scene.surfaces()) grown += scene.info(id).name.rfind("grown ", 0) == 0;
+    SurfaceInfo info;
+    info.kind = SurfaceInfo::Kind::Mesh;
+    info.name = "grown " + std::to_string(grown + 1);
+    info.color = linear_from_hex(hex_from_linear(component_color(grown + 3)));
+    g.measures = measure_surface(surfaces.front().mesh);
+    g.surface = scene.add_mesh(std::move(surfaces.front().mesh), info);
+    return g;
+}
+
+nlohmann::json grown_json(const Scene& scene, const GrownStructure& g) {
+    const SurfaceMeasures& m = g.measures;
+    const ShapeMeasures shape = measure_shape(scene.mesh(g.surface), m.closed);
+    nlohmann::json j{{"surface", scene.info(g.surface).name},
+                     {"seed_lps", vec(g.seed)},
+                     {"seed_voxel", {g.region.seed[0], g.region.seed[1], g.region.seed[2]}},
+                     {"range", {g.options.lo, g.options.hi}},
+                     {"voxels", g.region.voxels},
+                     {"boundary_voxels", g.region.boundary_voxels},
+                     {"volume_ml", g.region.volume_ml},
+                     {"partial_volume_ml", g.region.partial_volume_ml},
+                     {"reached_box", g.region.reached_box},
+                     {"reached_volume_border", g.region.reached_border},
+                     {"surface_area_mm2", m.area_mm2},
+                     {"surface_volume_ml", std::abs(m.volume_ml)},
+                     {"closed", m.closed},
+                     {"centroid_lps", shape.solid ? vec(shape.centroid) : nlohmann::json(nullptr)},
+                     {"largest_diameter_mm", shape.feret_mm},
+                     {"largest_diameter_points_lps", {vec(shape.feret_a), vec(shape.feret_b)}}};
+    j["within"] = g.options.within ? nlohmann::json{vec(g.options.within->lo), vec(g.options.within->hi)}
+                                   : nlohmann::json(nullptr);
+    return j;
 }
 
 SurfaceGap surface_gap(const Scene& scene, SurfaceId a, SurfaceId b, const std::optional<glm::dvec3>& at_a,

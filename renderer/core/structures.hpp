@@ -16,6 +16,7 @@
 #include "renderer/core/measure.hpp"
 #include "renderer/core/scene.hpp"
 #include "renderer/surface/closest.hpp"
+#include "renderer/surface/grow.hpp"
 
 namespace iso::core {
 
@@ -72,6 +73,25 @@ struct ComponentPlan {
 ComponentPlan plan_component(const Scene& scene, SurfaceId surface, const glm::dvec3& at,
                              const std::optional<LpsBox>& within = {});
 IsolatedComponent add_component(Scene& scene, ComponentPlan plan);
+
+// A region grown from a seed in the volume (surface/grow.hpp: the voxels
+// joined to it within a value range, limited to a box), made a surface of
+// its own: the boundary of its voxels (extract_labels: vertices at edge
+// midpoints, closed), named "grown <n>", in a colour of its own. Measured
+// twice: by its voxels (the count's volume, with the partial-volume
+// uncertainty of its boundary voxels) and by its surface (area, enclosed
+// volume, centroid, largest diameter). Throws iso::Error (no volume, and
+// grow_region's errors).
+struct GrownStructure {
+    SurfaceId surface = 0;
+    GrownRegion region; // its mask is dropped (empty) once the surface is made
+    glm::dvec3 seed{0.0};
+    GrowOptions options;
+    SurfaceMeasures measures;
+};
+GrownStructure grow_structure(Scene& scene, const glm::dvec3& seed, const GrowOptions& options,
+                              const ProgressFn& progress = {});
+nlohmann::json grown_json(const Scene& scene, const GrownStructure& g);
 
 // The shortest distance between two surfaces, or between the components of
 // them nearest to two points (`at_a`, `at_b`; none: the whole surface).

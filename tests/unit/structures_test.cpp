@@ -234,6 +234,98 @@ TEST(Structures, TheCliMeasuresAPartWithinABox) {
     }
 }
 
+// Grown from a seed: a bright ball (1000 HU) touching a dimmer vessel
+// (600 HU) along x. At iso 500 the two are one component; grown through
+// 800 and up from the ball's centre, the region is the ball alone, its
+// voxel volume within the stated partial-volume uncertainty of 4/3 pi r^3,
+// and its surface closed; with a box the region stops at the box.
+TEST(Structures, AGrownRegionSeparatesABallFromTheVesselItTouches) {
+    core::Scene scene;
+    const auto dims = dims_for(16, 2, 0.7);
+    Volume v = sample_field(dims, oblique_affine(dims, 0.7, kBig), [](const glm::dvec3& p) {
+        const double ball = ct_edge(kRBig - glm::length(p - kBig), 0.6) / 1000.0;
+        const double vessel = ct_edge(3.0 - std::hypot(p.y, p.z), 0.6) / 1000.0 * (p.x > 0 ? 1.0 : 0.0);
+        return std::max(1000.0 * ball, 600.0 * vessel);
+    });
+    scene.set_volume(std::move(v), "ball and vessel");
+    const SurfaceId iso = scene.add_isosurfaces({300.0}).front();
+    ASSERT_EQ(core::measure_surfaces(scene, {iso}).front().measures.components.size(), 1u) << "touching at 300";
+    GrowOptions o;
+    o.lo = 800;
+    o.hi = 5000;
+    const auto g = core::grow_structure(scene, kBig, o);
+    const double pi = 3.14159265358979323846, ball_ml = 4.0 / 3.0 * pi * std::pow(kRBig, 3) / 1000.0;
+    std::printf("grown ball: %.4f mL +- %.4f (%zu voxels, %zu on the boundary), analytic %.4f; surface %.4f mL\n",
+                g.region.volume_ml, g.region.partial_volume_ml, g.region.voxels, g.region.boundary_voxels, ball_ml,
+                g.measures.volume_ml);
+    // The 800 level of the ball's edge lies inside its 500 boundary.
+    const double r800 = kRBig - 0.505; // ct_edge = 800 where erf(d / (sqrt(2) 0.6)) = 0.6: d = 0.505 mm
+    const double grown_ml = 4.0 / 3.0 * pi * std::pow(r800, 3) / 1000.0;
+    EXPECT_NEAR(g.region.volume_ml, grown_ml, g.region.partial_volume_ml);
+    EXPECT_LT(g.region.volume_ml, ball_ml) << "the vessel is left out";
+    EXPECT_FALSE(g.region.reached_border);
+    EXPECT_FALSE(g.region.reached_box);
+    EXPECT_TRUE(g.measures.closed);
+    EXPECT_NEAR(g.measures.volume_ml, g.region.volume_ml, g.region.partial_volume_ml);
+    EXPECT_EQ(scene.info(g.surface).name, "grown 1");
+    const auto j = core::grown_json(scene, g);
+    EXPECT_EQ(j["voxels"].get<std::size_t>(), g.region.voxels);
+    EXPECT_NEAR(j["largest_diameter_mm"].get<double>(), 2 * r800, 1.5);
+    // Through 500 and up, the vessel is grown into too: far larger.
+    o.lo = 500;
+    const auto both = core::grow_structure(scene, kBig, o);
+    EXPECT_GT(both.region.volume_ml, g.region.volume_ml + 0.1); // + the vessel out to the edge (about 0.15 mL)
+    EXPECT_TRUE(both.region.reached_border) << "the vessel runs to the volume's edge";
+    // Within a box that cuts the ball at x = 2: stopped there.
+    o.lo = 800;
+    o.within = LpsBox{{-20, -20, -20}, {2, 20, 20}};
+    const auto cut = core::grow_structure(scene, kBig, o);
+    EXPECT_TRUE(cut.region.reached_box);
+    EXPECT_LT(cut.region.volume_ml, 0.75 * g.region.volume_ml);
+    EXPECT_GT(cut.region.volume_ml, 0.5 * g.region.volume_ml);
+    EXPECT_EQ(scene.info(cut.surface).name, "grown 3");
+    // Refused: a seed outside the volume, outside the range, outside the box; an empty range.
+    const auto refused = [&](const glm::dvec3& seed, GrowOptions opt, const char* why) {
+        try {
+            core::grow_structure(scene, seed, opt);
+            ADD_FAILURE() << "accepted: " << why;
+        } catch (const Error& e) {
+            EXPECT_NE(std::string(e.what()).find(why), std::string::npos) << e.what();
+        }
+    };
+    GrowOptions plain;
+    plain.lo = 800;
+    plain.hi = 5000;
+    refused(kBig + glm::dvec3(500, 0, 0), plain, "outside the volume");
+    refused(kBig + glm::dvec3(0, 0, 15), plain, "is outside the range 800 to 5000");
+    refused(kBig, GrowOptions{800, 5000, LpsBox{{5, 5, 5}, {9, 9, 9}}}, "outside the box");
+    refused(kBig, GrowOptions{900, 800, std::nullopt}, "is empty");
+}
+
+TEST(Structures, TheCliGrowsARegionFromASeed) {
+    core::Scene scene;
+    two_balls(scene);
+    TempDir dir;
+    const std::string volume = dir / "balls.nrrd";
+    save_volume(scene.volume(), volume, false);
+    const auto r = run_command(cli() + " measure " + volume + " --grow-from 0,0,0 --grow-range 500,5000 --json", false);
+    ASSERT_EQ(r.exit_code, 0) << r.out;
+    const auto j = nlohmann::json::parse(r.out);
+    ASSERT_EQ(j["grown"].size(), 1u);
+    const auto& g = j["grown"][0];
+    const double pi = 3.14159265358979323846, ball_ml = 4.0 / 3.0 * pi * std::pow(kRBig, 3) / 1000.0;
+    EXPECT_NEAR(g["volume_ml"].get<double>(), ball_ml, g["partial_volume_ml"].get<double>());
+    EXPECT_TRUE(g["closed"].get<bool>());
+    EXPECT_EQ(g["surface"], "grown 1");
+    const auto bad = run_command(cli() + " measure " + volume + " --grow-from 0,0,0", true);
+    EXPECT_EQ(bad.exit_code, 1);
+    EXPECT_NE(bad.out.find("--grow-range"), std::string::npos) << bad.out;
+    // A value at a point needs no isosurface either.
+    const auto value = run_command(cli() + " measure " + volume + " --value 0,0,0", false);
+    EXPECT_EQ(value.exit_code, 0) << value.out;
+    EXPECT_NE(value.out.find("value 1000"), std::string::npos) << value.out;
+}
+
 TEST(Structures, AnIsolatedComponentIsTheComponentMeasureLists) {
     core::Scene scene;
     two_balls(scene);
