@@ -20,7 +20,7 @@ namespace iso::cli {
 namespace {
 
 struct MeasureArgs {
-    std::string in, series, out;
+    std::string in, series, out, label_map;
     std::vector<double> isos;
     std::vector<std::string> distance, angle, values;
     std::vector<std::string> component_at, surface_distance, within;
@@ -73,7 +73,8 @@ const std::string& one_or_each(const std::vector<std::string>& v, std::size_t i,
 }
 
 // The regions grown from --grow-from seeds (core::grow_structure).
-void grow_structures(iso::core::Scene& scene, const MeasureArgs& a, nlohmann::json& j) {
+void grow_structures(iso::core::Scene& scene, const MeasureArgs& a, nlohmann::json& j,
+                     std::vector<iso::core::SurfaceId>& made) {
     j["grown"] = nlohmann::json::array();
     if (a.grow_from.empty()) {
         if (!a.grow_range.empty() || !a.grow_within.empty()) throw iso::Error("--grow-range", "needs --grow-from");
@@ -98,6 +99,7 @@ void grow_structures(iso::core::Scene& scene, const MeasureArgs& a, nlohmann::js
         const glm::dvec3 seed = iso::core::parse_point("--grow-from", a.grow_from[i]);
         const auto g = iso::core::grow_structure(scene, seed, o);
         j["grown"].push_back(iso::core::grown_json(scene, g));
+        made.push_back(g.surface);
     }
 }
 
@@ -107,13 +109,23 @@ void grow_structures(iso::core::Scene& scene, const MeasureArgs& a, nlohmann::js
 nlohmann::json measure_structures(iso::core::Scene& scene, const MeasureArgs& a, iso::MarkupsFile& markups) {
     nlohmann::json j{{"components", nlohmann::json::array()}, {"surface_distances", nlohmann::json::array()}};
     if (!a.within.empty() && a.component_at.empty()) throw iso::Error("--within", "needs --component-at");
+    std::vector<iso::core::SurfaceId> made; // the structures, in order: their labels in --label-map
     for (std::size_t i = 0; i < a.component_at.size(); ++i) {
         const glm::dvec3 p = iso::core::parse_point("--component-at", a.component_at[i]);
         const auto c =
             iso::core::isolate_component(scene, iso::core::surface_at(scene, p).surface, p, within_box(a, i));
         j["components"].push_back(iso::core::component_json(scene, c));
+        made.push_back(c.surface);
     }
-    grow_structures(scene, a, j);
+    grow_structures(scene, a, j, made);
+    if (!a.label_map.empty()) {
+        if (made.empty()) throw iso::Error("--label-map", "needs structures: --component-at or --grow-from");
+        const auto map = iso::core::structures_label_map(scene, made);
+        const std::string table = iso::core::save_label_map(map, a.label_map);
+        j["label_map"] = {{"file", a.label_map}, {"color_table", table}, {"labels", nlohmann::json::array()}};
+        for (const auto& e : map.entries)
+            j["label_map"]["labels"].push_back({{"label", e.label}, {"name", e.name}, {"voxels", e.voxels}});
+    }
     std::vector<iso::core::SurfaceGap> gaps;
     for (std::size_t i = 0; i + 1 < a.surface_distance.size(); i += 2) {
         const SurfaceChoice x = choose_surface(scene, a.surface_distance[i]);
@@ -205,6 +217,14 @@ int run_measure(const MeasureArgs& a) {
             throw iso::Error("--output", "markups are written as .mrk.json, got '" + a.out + "'");
         iso::check_writable_destination(a.out);
     }
+    // Checked before any work: a wrong name fails at once, not after the structures.
+    if (!a.label_map.empty()) {
+        const bool nii = a.label_map.ends_with(".nii") || a.label_map.ends_with(".nii.gz");
+        if (!nii)
+            throw iso::Error("--label-map",
+                             "a label map is written as NIfTI (.nii or .nii.gz), got '" + a.label_map + "'");
+        iso::check_writable_destination(a.label_map);
+    }
     iso::core::Scene scene;
     // Values at points, distances, angles and grown regions need no isosurface.
     const bool without_surfaces = !a.grow_from.empty() || !a.values.empty() || !a.distance.empty() || !a.angle.empty();
@@ -216,6 +236,7 @@ int run_measure(const MeasureArgs& a) {
     j["components"] = structures["components"];
     j["surface_distances"] = structures["surface_distances"];
     j["grown"] = structures["grown"];
+    if (structures.contains("label_map")) j["label_map"] = structures["label_map"];
     if (!a.out.empty()) iso::save_markups(markups, a.out);
     if (a.json) {
         std::cout << j.dump(2) << "\n";
@@ -300,6 +321,10 @@ RunFn add_measure(CLI::App& cmd, char*) {
                   "Limit a grown region to an LPS box: box=x0,y0,z0,x1,y1,z1 or none (one for all, or one each)")
         ->expected(1)
         ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll);
+    c->add_option(
+        "--label-map", a.label_map,
+        "Write the structures (--component-at, --grow-from) as a label map on the volume's grid, 1, 2, ... in "
+        "order (NIfTI .nii/.nii.gz, LPS; 3D Slicer loads it as a segmentation), with its colour table (.ctbl)");
     c->add_option("--surface-distance", a.surface_distance,
                   "Shortest distance between two surfaces: --surface-distance A B, each a surface's name (\"iso 500\") "
                   "or a point X,Y,Z meaning the component nearest to it (repeatable)")

@@ -2,7 +2,10 @@
 
 #include <cmath>
 #include <algorithm>
+#include <fstream>
 #include <limits>
+
+#include <glm/gtc/matrix_transform.hpp>
 
 #include "io/color.hpp"
 #include "io/error.hpp"
@@ -10,6 +13,9 @@
 #include "renderer/surface/analysis.hpp"
 #include "renderer/surface/box_clip.hpp"
 #include "renderer/surface/extract.hpp"
+#include "renderer/surface/voxelize.hpp"
+#include "io/atomic_file.hpp"
+#include "io/volume_io.hpp"
 #include "renderer/surface/shape.hpp"
 #include "renderer/surface/postprocess.hpp"
 
@@ -114,9 +120,24 @@ GrownStructure grow_structure(Scene& scene, const glm::dvec3& seed, const GrowOp
     g.seed = seed;
     g.options = options;
     g.region = grow_region(scene.volume(), seed, options, progress);
-    const double one = 1.0;
-    std::vector<LabelSurface> surfaces = extract_labels(g.region.mask, std::span<const double>(&one, 1));
+    // Padded by a voxel of background all round, so that a region reaching
+    // the volume's edge is closed there too (half a voxel beyond its last
+    // centres, as its voxels count whole).
+    const Volume& mask = g.region.mask;
+    const std::array<std::int64_t, 3> d = mask.dims;
+    Volume padded = Volume::dense({d[0] + 2, d[1] + 2, d[2] + 2}, VoxelType::U8,
+                                  mask.index_to_lps * glm::translate(glm::dmat4(1.0), glm::dvec3(-1.0)));
+    {
+        const auto from = mask.as<std::uint8_t>();
+        auto to = padded.as<std::uint8_t>();
+        for (std::int64_t k = 0; k < d[2]; ++k)
+            for (std::int64_t j = 0; j < d[1]; ++j)
+                for (std::int64_t i = 0; i < d[0]; ++i)
+                    to[padded.linear_index(i + 1, j + 1, k + 1)] = from[mask.linear_index(i, j, k)];
+    }
     g.region.mask = Volume{};
+    const double one = 1.0;
+    std::vector<LabelSurface> surfaces = extract_labels(padded, std::span<const double>(&one, 1));
     if (surfaces.empty() || surfaces.front().mesh.empty())
         throw Error("grow from a seed", "the grown region has no surface");
     std::size_t grown = 0;
@@ -152,6 +173,48 @@ nlohmann::json grown_json(const Scene& scene, const GrownStructure& g) {
     j["within"] = g.options.within ? nlohmann::json{vec(g.options.within->lo), vec(g.options.within->hi)}
                                    : nlohmann::json(nullptr);
     return j;
+}
+
+LabelMap structures_label_map(const Scene& scene, const std::vector<SurfaceId>& surfaces) {
+    if (!scene.has_volume()) throw Error("label map", "the input is a mesh: there is no voxel grid to label");
+    if (surfaces.size() > 65535) throw Error("label map", "more than 65535 structures");
+    const Volume& v = scene.volume();
+    LabelMap out;
+    out.labels = Volume::dense(v.dims, VoxelType::U16, v.index_to_lps);
+    out.labels.meta.source = v.meta.source;
+    auto labels = out.labels.as<std::uint16_t>();
+    for (std::size_t k = 0; k < surfaces.size(); ++k) {
+        const SurfaceId id = surfaces[k];
+        const Mesh& m = surface_mesh(scene, id, "label map");
+        LabelMapEntry e{id, std::uint16_t(k + 1), scene.info(id).name, scene.info(id).color, 0};
+        e.voxels = voxelize(m, v.index_to_lps, v.dims, labels, e.label);
+        out.entries.push_back(e);
+    }
+    return out;
+}
+
+std::string save_label_map(const LabelMap& m, const std::string& path) {
+    const auto ends = [&](const char* s) {
+        const std::string e(s);
+        return path.size() >= e.size() && path.compare(path.size() - e.size(), e.size(), e) == 0;
+    };
+    if (!ends(".nii") && !ends(".nii.gz")) throw Error(path, "a label map is written as NIfTI: .nii or .nii.gz");
+    const std::string table = path.substr(0, path.size() - (ends(".nii") ? 4 : 7)) + ".ctbl";
+    save_volume(m.labels, path);
+    write_atomically(table, [&](const std::string& tmp) {
+        std::ofstream f(tmp);
+        f << "# Color table file " << table << "\n# " << m.entries.size() + 1 << " values\n0 Background 0 0 0 0\n";
+        for (const auto& e : m.entries) {
+            std::string name = e.name;
+            std::replace(name.begin(), name.end(), ' ', '_');
+            const std::string hex = hex_from_linear(e.color); // #rrggbb, sRGB
+            f << e.label << " " << name << " " << std::stoi(hex.substr(1, 2), nullptr, 16) << " "
+              << std::stoi(hex.substr(3, 2), nullptr, 16) << " " << std::stoi(hex.substr(5, 2), nullptr, 16)
+              << " 255\n";
+        }
+        if (!f.flush()) throw Error(table, "cannot write");
+    });
+    return table;
 }
 
 SurfaceGap surface_gap(const Scene& scene, SurfaceId a, SurfaceId b, const std::optional<glm::dvec3>& at_a,

@@ -93,6 +93,30 @@ GrownStructure grow_structure(Scene& scene, const glm::dvec3& seed, const GrowOp
                               const ProgressFn& progress = {});
 nlohmann::json grown_json(const Scene& scene, const GrownStructure& g);
 
+// Structures as a label map on the volume's grid (3D Slicer loads it as a
+// segmentation: Add Data, a NIfTI as "Segmentation", with the colour table
+// beside it): label k+1 for surfaces[k], set in the voxels whose centres
+// the surface encloses (surface/voxelize.hpp); where two overlap, the later
+// one's label. uint16, the volume's index -> LPS affine. Throws iso::Error
+// without a volume, or for more than 65535 surfaces.
+struct LabelMapEntry {
+    SurfaceId surface = 0;
+    std::uint16_t label = 0;
+    std::string name;
+    glm::vec3 color{0.0f}; // linear RGB
+    std::size_t voxels = 0;
+};
+struct LabelMap {
+    Volume labels;
+    std::vector<LabelMapEntry> entries;
+};
+LabelMap structures_label_map(const Scene& scene, const std::vector<SurfaceId>& surfaces);
+// Writes the label map (.nii or .nii.gz; never half-written) and, beside it,
+// its colour table (the same name with .ctbl: Slicer's colour table file,
+// "label name R G B A", names with spaces as underscores). Returns the
+// table's path. Throws iso::Error naming the file.
+std::string save_label_map(const LabelMap& m, const std::string& path);
+
 // The shortest distance between two surfaces, or between the components of
 // them nearest to two points (`at_a`, `at_b`; none: the whole surface).
 struct SurfaceGap {

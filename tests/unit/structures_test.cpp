@@ -7,6 +7,7 @@
 #include "renderer/core/structures.hpp"
 
 #include <cmath>
+#include <filesystem>
 
 #include <glm/glm.hpp>
 #include <gtest/gtest.h>
@@ -320,10 +321,65 @@ TEST(Structures, TheCliGrowsARegionFromASeed) {
     const auto bad = run_command(cli() + " measure " + volume + " --grow-from 0,0,0", true);
     EXPECT_EQ(bad.exit_code, 1);
     EXPECT_NE(bad.out.find("--grow-range"), std::string::npos) << bad.out;
+    // The structures as a label map, and a name that is no NIfTI refused before any work.
+    const std::string labels = dir / "grown.nii.gz";
+    const auto written = run_command(cli() + " measure " + volume +
+                                         " --grow-from 0,0,0 --grow-range 500,5000 --label-map " + labels + " --json",
+                                     false);
+    ASSERT_EQ(written.exit_code, 0) << written.out;
+    EXPECT_EQ(nlohmann::json::parse(written.out)["label_map"]["labels"][0]["voxels"], g["voxels"]);
+    EXPECT_TRUE(std::filesystem::exists(labels));
+    EXPECT_TRUE(std::filesystem::exists(dir / "grown.ctbl"));
+    const auto png = run_command(
+        cli() + " measure " + volume + " --grow-from 0,0,0 --grow-range 500,5000 --label-map " + (dir / "a.png"), true);
+    EXPECT_EQ(png.exit_code, 1);
+    EXPECT_NE(png.out.find("--label-map"), std::string::npos) << png.out;
     // A value at a point needs no isosurface either.
     const auto value = run_command(cli() + " measure " + volume + " --value 0,0,0", false);
     EXPECT_EQ(value.exit_code, 0) << value.out;
     EXPECT_NE(value.out.find("value 1000"), std::string::npos) << value.out;
+}
+
+// The label map: a grown region's surface voxelized gives back exactly its
+// voxels; a ball's isosurface the voxels whose centres it encloses (their
+// volume that of the surface within half a voxel of its area); read back
+// from the NIfTI on the volume's grid, with the colour table beside it.
+TEST(Structures, TheLabelMapHoldsEachStructuresVoxels) {
+    core::Scene scene;
+    two_balls(scene);
+    const SurfaceId both = scene.add_isosurfaces({kBallIso}).front();
+    const auto small = core::isolate_component(scene, both, kSmall + glm::dvec3(0, 0, kRSmall));
+    GrowOptions o;
+    o.lo = 500;
+    o.hi = 5000;
+    const auto grown = core::grow_structure(scene, kBig, o);
+    const auto map = core::structures_label_map(scene, {small.surface, grown.surface});
+    ASSERT_EQ(map.entries.size(), 2u);
+    EXPECT_EQ(map.entries[1].voxels, grown.region.voxels) << "the grown voxels, exactly";
+    const double voxel_ml = grown.region.voxel_mm3 / 1000.0;
+    const auto& sm = small.measured.measures;
+    const double half_voxel_shell_ml = 0.5 * sm.area_mm2 * std::cbrt(grown.region.voxel_mm3) / 1000.0;
+    EXPECT_NEAR(double(map.entries[0].voxels) * voxel_ml, sm.volume_ml, half_voxel_shell_ml);
+    // Each voxel's label: none inside both, so the counts are the map's.
+    std::size_t count[3] = {0, 0, 0};
+    for (const auto l : map.labels.as<std::uint16_t>()) ++count[std::min<std::uint16_t>(l, 2)];
+    EXPECT_EQ(count[1], map.entries[0].voxels);
+    EXPECT_EQ(count[2], map.entries[1].voxels);
+    TempDir dir;
+    const std::string path = dir / "structures.nii.gz";
+    const std::string table = core::save_label_map(map, path);
+    EXPECT_EQ(table, dir / "structures.ctbl");
+    const Volume back = load_volume(path);
+    EXPECT_EQ(back.dims, scene.volume().dims);
+    EXPECT_EQ(back.type, VoxelType::U16);
+    for (int c = 0; c < 4; ++c)
+        for (int r = 0; r < 3; ++r) EXPECT_NEAR(back.index_to_lps[c][r], scene.volume().index_to_lps[c][r], 1e-4);
+    EXPECT_TRUE(std::equal(back.as<std::uint16_t>().begin(), back.as<std::uint16_t>().end(),
+                           map.labels.as<std::uint16_t>().begin()));
+    const std::string ctbl = read_file(table);
+    EXPECT_NE(ctbl.find("1 iso_500_component_2 "), std::string::npos) << ctbl;
+    EXPECT_NE(ctbl.find("2 grown_1 "), std::string::npos) << ctbl;
+    EXPECT_THROW(core::save_label_map(map, dir / "structures.png"), Error);
 }
 
 TEST(Structures, AnIsolatedComponentIsTheComponentMeasureLists) {
