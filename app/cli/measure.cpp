@@ -275,6 +275,12 @@ int run_measure(const MeasureArgs& a) {
             }
         }
         print_structures(structures);
+        if (structures.contains("label_map")) {
+            const auto& m = structures["label_map"];
+            const std::size_t n = m["labels"].size();
+            std::cout << "label map: " << m["file"].get<std::string>() << " (" << n << (n == 1 ? " label" : " labels")
+                      << "), colour table " << m["color_table"].get<std::string>() << "\n";
+        }
     }
     if (!a.out.empty()) std::cerr << "markups -> " << a.out << "\n";
     return 0;
