@@ -70,6 +70,15 @@ double ball_and_tube_to(double cut) {
            pi * cap * cap * (3 * kRBig - cap) / 3;
 }
 
+// The phantom `make` builds, written to `dir / name` (for the CLI).
+std::string phantom_file(const TempDir& dir, void (*make)(core::Scene&), const std::string& name) {
+    core::Scene scene;
+    make(scene);
+    const std::string path = dir / name;
+    save_volume(scene.volume(), path, false);
+    return path;
+}
+
 } // namespace
 
 // The bar of "structures that touch": the big ball of a dumbbell within a
@@ -209,11 +218,8 @@ TEST(Structures, ASlabOfABallIsClosedAndComesBackFromASession) {
 }
 
 TEST(Structures, TheCliMeasuresAPartWithinABox) {
-    core::Scene scene;
-    dumbbell(scene);
     TempDir dir;
-    const std::string volume = dir / "dumbbell.nrrd";
-    save_volume(scene.volume(), volume, false);
+    const std::string volume = phantom_file(dir, dumbbell, "dumbbell.nrrd");
     const auto r = run_command(cli() + " measure " + volume +
                                    " --iso 500 --component-at 0,0,9 --within box=-12,-12,-12,15,12,12 --json",
                                false);
@@ -304,11 +310,8 @@ TEST(Structures, AGrownRegionSeparatesABallFromTheVesselItTouches) {
 }
 
 TEST(Structures, TheCliGrowsARegionFromASeed) {
-    core::Scene scene;
-    two_balls(scene);
     TempDir dir;
-    const std::string volume = dir / "balls.nrrd";
-    save_volume(scene.volume(), volume, false);
+    const std::string volume = phantom_file(dir, two_balls, "balls.nrrd");
     const auto r = run_command(cli() + " measure " + volume + " --grow-from 0,0,0 --grow-range 500,5000 --json", false);
     ASSERT_EQ(r.exit_code, 0) << r.out;
     const auto j = nlohmann::json::parse(r.out);
