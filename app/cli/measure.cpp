@@ -49,27 +49,28 @@ SurfaceChoice choose_surface(const iso::core::Scene& scene, const std::string& t
                      "no surface is named '" + text + "' (the scene has: " + names + "), and it is not a point x,y,z");
 }
 
-// The box of the i-th --component-at: "box=x0,y0,z0,x1,y1,z1", or "none";
-// one --within applies to every --component-at, else one each.
-std::optional<iso::LpsBox> within_box(const MeasureArgs& a, std::size_t i) {
-    if (a.within.empty()) return std::nullopt;
-    if (a.within.size() != 1 && a.within.size() != a.component_at.size())
-        throw iso::Error("--within", "give one (for every --component-at) or one per --component-at, not " +
-                                         std::to_string(a.within.size()) + " for " +
-                                         std::to_string(a.component_at.size()));
-    const std::string& t = a.within[a.within.size() == 1 ? 0 : i];
-    if (t == "none") return std::nullopt;
-    if (t.rfind("box=", 0) != 0)
-        throw iso::Error("--within", "expected box=x0,y0,z0,x1,y1,z1 (LPS mm) or none, got '" + t + "'");
-    return iso::parse_box("--within", t.substr(4));
-}
-
-// The i-th of options given once for all or once each (`what` names the option).
-const std::string& one_or_each(const std::vector<std::string>& v, std::size_t i, std::size_t n, const char* what) {
+// The i-th of option `what`'s values, given once for all `n` values of
+// option `per` or once each.
+const std::string& one_or_each(const std::vector<std::string>& v, std::size_t i, std::size_t n, const char* what,
+                               const char* per) {
     if (v.size() != 1 && v.size() != n)
-        throw iso::Error(what, "give one (for every --grow-from) or one per --grow-from, not " +
+        throw iso::Error(what, std::string("give one (for every ") + per + ") or one per " + per + ", not " +
                                    std::to_string(v.size()) + " for " + std::to_string(n));
     return v[v.size() == 1 ? 0 : i];
+}
+
+// A box option's value: "box=x0,y0,z0,x1,y1,z1" (LPS mm) or "none".
+std::optional<iso::LpsBox> box_option(const char* what, const std::string& t) {
+    if (t == "none") return std::nullopt;
+    if (t.rfind("box=", 0) != 0)
+        throw iso::Error(what, "expected box=x0,y0,z0,x1,y1,z1 (LPS mm) or none, got '" + t + "'");
+    return iso::parse_box(what, t.substr(4));
+}
+
+// The box of the i-th --component-at (none without --within).
+std::optional<iso::LpsBox> within_box(const MeasureArgs& a, std::size_t i) {
+    if (a.within.empty()) return std::nullopt;
+    return box_option("--within", one_or_each(a.within, i, a.component_at.size(), "--within", "--component-at"));
 }
 
 // The regions grown from --grow-from seeds (core::grow_structure).
@@ -83,19 +84,13 @@ void grow_structures(iso::core::Scene& scene, const MeasureArgs& a, nlohmann::js
     if (a.grow_range.empty()) throw iso::Error("--grow-from", "needs --grow-range LO,HI (the values grown through)");
     for (std::size_t i = 0; i < a.grow_from.size(); ++i) {
         iso::GrowOptions o;
-        const std::string& range = one_or_each(a.grow_range, i, a.grow_from.size(), "--grow-range");
+        const std::string& range = one_or_each(a.grow_range, i, a.grow_from.size(), "--grow-range", "--grow-from");
         char tail = 0;
         if (std::sscanf(range.c_str(), "%lf,%lf%c", &o.lo, &o.hi, &tail) != 2)
             throw iso::Error("--grow-range", "expected LO,HI, got '" + range + "'");
-        if (!a.grow_within.empty()) {
-            const std::string& w = one_or_each(a.grow_within, i, a.grow_from.size(), "--grow-within");
-            if (w != "none") {
-                if (w.rfind("box=", 0) != 0)
-                    throw iso::Error("--grow-within",
-                                     "expected box=x0,y0,z0,x1,y1,z1 (LPS mm) or none, got '" + w + "'");
-                o.within = iso::parse_box("--grow-within", w.substr(4));
-            }
-        }
+        if (!a.grow_within.empty())
+            o.within = box_option("--grow-within",
+                                  one_or_each(a.grow_within, i, a.grow_from.size(), "--grow-within", "--grow-from"));
         const glm::dvec3 seed = iso::core::parse_point("--grow-from", a.grow_from[i]);
         const auto g = iso::core::grow_structure(scene, seed, o);
         j["grown"].push_back(iso::core::grown_json(scene, g));
@@ -219,10 +214,7 @@ int run_measure(const MeasureArgs& a) {
     }
     // Checked before any work: a wrong name fails at once, not after the structures.
     if (!a.label_map.empty()) {
-        const bool nii = a.label_map.ends_with(".nii") || a.label_map.ends_with(".nii.gz");
-        if (!nii)
-            throw iso::Error("--label-map",
-                             "a label map is written as NIfTI (.nii or .nii.gz), got '" + a.label_map + "'");
+        iso::core::label_map_table(a.label_map, "--label-map");
         iso::check_writable_destination(a.label_map);
     }
     iso::core::Scene scene;

@@ -25,6 +25,14 @@ namespace {
 
 nlohmann::json vec(const glm::dvec3& v) { return nlohmann::json::array({v.x, v.y, v.z}); }
 
+// Where a structure is and how large across (surface/shape.hpp), into its JSON.
+void add_shape(nlohmann::json& j, const Mesh& m, bool closed) {
+    const ShapeMeasures shape = measure_shape(m, closed);
+    j["centroid_lps"] = shape.solid ? vec(shape.centroid) : nlohmann::json(nullptr);
+    j["largest_diameter_mm"] = shape.feret_mm;
+    j["largest_diameter_points_lps"] = {vec(shape.feret_a), vec(shape.feret_b)};
+}
+
 bool finite(const glm::dvec3& p) { return std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z); }
 
 const Mesh& surface_mesh(const Scene& scene, SurfaceId id, const char* what) {
@@ -153,7 +161,6 @@ GrownStructure grow_structure(Scene& scene, const glm::dvec3& seed, const GrowOp
 
 nlohmann::json grown_json(const Scene& scene, const GrownStructure& g) {
     const SurfaceMeasures& m = g.measures;
-    const ShapeMeasures shape = measure_shape(scene.mesh(g.surface), m.closed);
     nlohmann::json j{{"surface", scene.info(g.surface).name},
                      {"seed_lps", vec(g.seed)},
                      {"seed_voxel", {g.region.seed[0], g.region.seed[1], g.region.seed[2]}},
@@ -166,10 +173,8 @@ nlohmann::json grown_json(const Scene& scene, const GrownStructure& g) {
                      {"reached_volume_border", g.region.reached_border},
                      {"surface_area_mm2", m.area_mm2},
                      {"surface_volume_ml", std::abs(m.volume_ml)},
-                     {"closed", m.closed},
-                     {"centroid_lps", shape.solid ? vec(shape.centroid) : nlohmann::json(nullptr)},
-                     {"largest_diameter_mm", shape.feret_mm},
-                     {"largest_diameter_points_lps", {vec(shape.feret_a), vec(shape.feret_b)}}};
+                     {"closed", m.closed}};
+    add_shape(j, scene.mesh(g.surface), m.closed);
     j["within"] = g.options.within ? nlohmann::json{vec(g.options.within->lo), vec(g.options.within->hi)}
                                    : nlohmann::json(nullptr);
     return j;
@@ -193,13 +198,14 @@ LabelMap structures_label_map(const Scene& scene, const std::vector<SurfaceId>& 
     return out;
 }
 
+std::string label_map_table(const std::string& path, const std::string& what) {
+    for (const std::string ext : {".nii", ".nii.gz"})
+        if (path.ends_with(ext)) return path.substr(0, path.size() - ext.size()) + ".ctbl";
+    throw Error(what, "a label map is written as NIfTI (.nii or .nii.gz), got '" + path + "'");
+}
+
 std::string save_label_map(const LabelMap& m, const std::string& path) {
-    const auto ends = [&](const char* s) {
-        const std::string e(s);
-        return path.size() >= e.size() && path.compare(path.size() - e.size(), e.size(), e) == 0;
-    };
-    if (!ends(".nii") && !ends(".nii.gz")) throw Error(path, "a label map is written as NIfTI: .nii or .nii.gz");
-    const std::string table = path.substr(0, path.size() - (ends(".nii") ? 4 : 7)) + ".ctbl";
+    const std::string table = label_map_table(path, path);
     save_volume(m.labels, path);
     write_atomically(table, [&](const std::string& tmp) {
         std::ofstream f(tmp);
@@ -285,10 +291,7 @@ nlohmann::json component_json(const Scene& scene, const IsolatedComponent& c) {
     const auto& post = scene.info(c.surface).post;
     j["at"] = post.keep_at ? vec(*post.keep_at) : nlohmann::json(nullptr);
     // Where it is and how large across (surface/shape.hpp).
-    const ShapeMeasures shape = measure_shape(scene.mesh(c.surface), c.measured.measures.closed);
-    j["centroid_lps"] = shape.solid ? vec(shape.centroid) : nlohmann::json(nullptr);
-    j["largest_diameter_mm"] = shape.feret_mm;
-    j["largest_diameter_points_lps"] = {vec(shape.feret_a), vec(shape.feret_b)};
+    add_shape(j, scene.mesh(c.surface), c.measured.measures.closed);
     if (post.keep_within) {
         const LpsBox& b = *post.keep_within;
         const auto caps = cap_areas(scene.mesh(c.surface), b);

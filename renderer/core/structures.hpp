@@ -116,6 +116,9 @@ LabelMap structures_label_map(const Scene& scene, const std::vector<SurfaceId>& 
 // "label name R G B A", names with spaces as underscores). Returns the
 // table's path. Throws iso::Error naming the file.
 std::string save_label_map(const LabelMap& m, const std::string& path);
+// The colour table's path for a label map at `path`; throws iso::Error(what,
+// ...) when `path` is not .nii or .nii.gz (the CLI asks before any work).
+std::string label_map_table(const std::string& path, const std::string& what);
 
 // The shortest distance between two surfaces, or between the components of
 // them nearest to two points (`at_a`, `at_b`; none: the whole surface).

@@ -28,12 +28,6 @@ void check(const LpsBox& b, const std::string& what) {
     }
 }
 
-bool inside(const LpsBox& b, const glm::vec3& p) {
-    for (int i = 0; i < 3; ++i)
-        if (double(p[i]) < b.lo[i] || double(p[i]) > b.hi[i]) return false;
-    return true;
-}
-
 } // namespace
 
 LpsBox parse_box(const std::string& what, const std::string& text) {
@@ -68,7 +62,7 @@ Mesh clip_to_box(const Mesh& m, const LpsBox& box) {
     bool all_in = true, any_in = false;
     glm::dvec3 lo(1e300), hi(-1e300);
     for (const auto& p : m.positions) {
-        const bool in = inside(box, p);
+        const bool in = box.contains(glm::dvec3(p));
         all_in = all_in && in;
         any_in = any_in || in;
         lo = glm::min(lo, glm::dvec3(p));

@@ -20,6 +20,10 @@ namespace iso {
 
 struct LpsBox {
     glm::dvec3 lo{0.0}, hi{0.0}; // LPS mm, lo < hi on every axis
+    // The point lies in the box, its faces included.
+    bool contains(const glm::dvec3& p) const {
+        return p.x >= lo.x && p.x <= hi.x && p.y >= lo.y && p.y <= hi.y && p.z >= lo.z && p.z <= hi.z;
+    }
     bool operator==(const LpsBox&) const = default;
 };
 
