@@ -98,6 +98,10 @@ void add_frame_options(CLI::App* c, FrameArgs& a, bool input_required) {
     c->add_option("--volume-step", req.look.volume.step,
                   "Volume rendering: sample step in voxels of the smallest spacing (default 0.5)")
         ->check(CLI::Range(0.01, 8.0));
+    c->add_option("--volume-integration", a.volume_integration,
+                  "Volume rendering between samples: preintegrated (default: each segment integrated for values "
+                  "varying linearly along it, accurate at large steps) or sampled (each sample held over its step)")
+        ->check(CLI::IsMember({"preintegrated", "sampled"}));
     c->add_flag("--no-empty-skipping", a.no_empty_skipping,
                 "Volume rendering: march every chunk, also those the transfer function leaves empty (checks)");
     c->add_option("--clip", a.clip,
@@ -130,6 +134,7 @@ iso::core::RenderRequest frame_request(const FrameArgs& a) {
     req.look.flat_shading = a.look.shading == "flat";
     apply_volume_options(a.volume, a.volume_mode, req.look.volume);
     req.look.volume.skip_empty = !a.no_empty_skipping;
+    req.look.volume.integration = iso::volume_integration_from_name(a.volume_integration);
     for (const auto& c : a.clip) req.look.clip.add(c);
     req.look.lod.enabled = a.lod != "off";
     req.look.lod.culling = a.culling != "off";

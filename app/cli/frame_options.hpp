@@ -31,7 +31,7 @@ struct FrameArgs {
     Look look; // surface colours and opacities, background, shading
     bool no_aa = false;
     // Volume rendering: a preset or value:opacity:#rrggbb,...; its mode; clips.
-    std::string volume, volume_mode = "composite";
+    std::string volume, volume_mode = "composite", volume_integration = "preintegrated";
     std::vector<std::string> clip;
     bool no_empty_skipping = false;
     std::string lod = "auto", culling = "on"; // levels of detail (docs/lod.md)

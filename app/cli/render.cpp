@@ -93,6 +93,8 @@ iso::core::RenderRequest session_render_request(const RenderArgs& a, iso::core::
         req.look.volume = cli.look.volume;
     else if (a.mode_given)
         req.look.volume.mode = cli.look.volume.mode;
+    // Sessions keep the volume's look, not how it is marched.
+    req.look.volume.integration = cli.look.volume.integration;
     if (!f.clip.empty()) req.look.clip = cli.look.clip;
     return req;
 }

@@ -130,11 +130,14 @@ void add_shading(Text& t, const FrameRecord& f) {
     if (look.volume.enabled) {
         const VolumeLook& v = look.volume;
         t["isoscope:volume_transfer_function"] = v.tf.text();
-        t["isoscope:volume"] = std::string("ray cast, ") + volume_mode_name(v.mode) +
-                               "; opacity per mm, colours sRGB interpolated in linear light; step " +
-                               number_text(f.result.volume.step_mm) + " mm (" + number_text(v.step) + " voxel); " +
-                               (v.shading && !look.flat_shading ? "gradient shading" : "flat (unshaded)") +
-                               (v.skip_empty ? "; empty chunks skipped" : "");
+        t["isoscope:volume"] =
+            std::string("ray cast, ") + volume_mode_name(v.mode) +
+            "; opacity per mm, colours sRGB interpolated in linear light; step " +
+            number_text(f.result.volume.step_mm) + " mm (" + number_text(v.step) + " voxel), " +
+            (v.mode == VolumeMode::Composite ? std::string(volume_integration_name(v.integration)) + " segments; "
+                                             : std::string()) +
+            (v.shading && !look.flat_shading ? "gradient shading" : "flat (unshaded)") +
+            (v.skip_empty ? "; empty chunks skipped" : "");
     }
     if (look.clip.active()) t["isoscope:clip"] = look.clip.text() + " (LPS mm)";
     if (req.aov != Aov::None && req.aov != Aov::Ao)

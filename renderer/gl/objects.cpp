@@ -34,7 +34,7 @@ Texture Texture::create(GLenum target, GLenum internal_format, int width, int he
     glCreateTextures(target, 1, &id);
     Texture t;
     static_cast<Object<TextureTraits>&>(t) = Object<TextureTraits>(id);
-    if (target == GL_TEXTURE_2D)
+    if (target == GL_TEXTURE_2D || target == GL_TEXTURE_1D_ARRAY)
         glTextureStorage2D(id, levels, internal_format, width, height);
     else
         glTextureStorage3D(id, 1, internal_format, width, height, depth);
@@ -49,6 +49,13 @@ Texture Texture::create(GLenum target, GLenum internal_format, int width, int he
     t.h_ = height;
     t.d_ = depth;
     t.format_ = internal_format;
+    return t;
+}
+
+Texture Texture::create_1d_array(GLenum internal_format, int width, int layers) {
+    Texture t = create(GL_TEXTURE_1D_ARRAY, internal_format, width, layers, 1);
+    t.h_ = 1;
+    t.d_ = layers;
     return t;
 }
 

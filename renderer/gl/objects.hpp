@@ -94,6 +94,8 @@ public:
     static Texture create_2d_levels(GLenum internal_format, int width, int height, int levels);
     // 2D array texture (layers >= 1), one level, nearest filtering.
     static Texture create_2d_array(GLenum internal_format, int width, int height, int layers);
+    // 1D array texture (layers >= 1), one level, nearest filtering.
+    static Texture create_1d_array(GLenum internal_format, int width, int layers);
     // 3D texture, one level, nearest filtering.
     static Texture create_3d(GLenum internal_format, int width, int height, int depth);
     // 2D multisample texture (fixed sample locations): `samples` per pixel.

@@ -5,7 +5,8 @@
 // index's substitute, Inf clamped), and the occupancy of its chunks under
 // the frame's transfer function, from the per-chunk min/max index the
 // extractor builds (made here when none is handed over), remade only when
-// the transfer function or mode changes. Needs the GL context current.
+// the transfer function or mode changes; the transfer function's tables
+// (preintegration.hpp), remade when it changes. Needs the GL context current.
 #pragma once
 
 #include <memory>
@@ -31,7 +32,8 @@ private:
     void upload();
     std::shared_ptr<const Volume> volume_;
     std::shared_ptr<const ChunkIndex> index_;
-    gl::Texture texture_, occupancy_;
+    void make_tables(const TransferFunction& tf);
+    gl::Texture texture_, occupancy_, tables_;
     VolumeLook occupancy_for_;
     bool occupancy_valid_ = false;
     passes::VolumeInput input_;

@@ -24,6 +24,7 @@
 #include "renderer/frame/annotations.hpp"
 #include "renderer/frame/camera.hpp"
 #include "renderer/frame/frame.hpp"
+#include "renderer/volume/preintegration.hpp"
 
 namespace iso::gl {
 class Program;
@@ -98,6 +99,10 @@ struct VolumeInput {
     double min_spacing = 1;
     std::uint64_t texture_bytes = 0;
     bool uploaded = false; // the texture was made this frame
+    // The transfer function's tables (1D array texture, RGBA32F, linear:
+    // layer 0 classification, layer 1 integrals) and what they were made from.
+    std::uint32_t tf_tables = 0;
+    std::shared_ptr<const TransferTables> tables;
 };
 
 struct FrameContext {
@@ -299,6 +304,10 @@ void report_volume(GlResources& gl, const graph::Resources& r, const FrameContex
 // The frame's clip in the surfaces' programs (shaders/render/clip.glsl):
 // the define to build them with, and the uniforms to set on the bound one.
 std::string clip_define(const FrameContext& ctx);
+// The volume march's variant (volume_march.glsl): gradient shading and
+// pre-integration are compiled in or out, not branched on (llvmpipe runs
+// both sides of a branch, so a path a frame does not take would still cost).
+std::string volume_variant(const FrameContext& ctx);
 void set_clip(const FrameContext& ctx, iso::gl::Program& prog);
 // The sample step of this frame in mm (the still or the moving step).
 double volume_step_mm(const FrameContext& ctx);

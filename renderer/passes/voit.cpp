@@ -142,7 +142,9 @@ struct Lists {
 
 std::string merge_define(const FrameContext& ctx) { return ctx.oit_merge ? "#define OIT_MERGE 1\n" : ""; }
 // The resolve marches the volume between the fragments (volume_march.glsl).
-std::string volume_define(const FrameContext& ctx) { return ctx.volume ? "#define VOLUME 1\n" : ""; }
+std::string volume_define(const FrameContext& ctx) {
+    return ctx.volume ? "#define VOLUME 1\n" + volume_variant(ctx) : "";
+}
 constexpr std::size_t kCountersBytes = 3 * 4; // OitCounters in oit_common.glsl
 constexpr std::size_t kTailBytes = 12 * 4;    // OitTail in oit_common.glsl
 

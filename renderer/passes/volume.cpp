@@ -19,7 +19,6 @@ namespace iso::passes {
 namespace {
 
 constexpr std::size_t kClipSlots = 16;       // clip_planes[16] in volume_march.glsl (and clip.glsl)
-constexpr std::size_t kTfBins = 256;         // tf_bins in volume_march.glsl: 64 uvec4
 constexpr std::size_t kCounterBytes = 4 * 4; // VolumeCounters
 
 // The frame's clip as the shaders take it: half-spaces (normal, offset), at most kClipSlots.
@@ -30,52 +29,27 @@ std::vector<glm::vec4> clip_planes(const FrameContext& ctx) {
     return planes;
 }
 
-// The values the transfer function's points span, in kTfBins bins: the
-// first bin's start and the bins' width.
-std::pair<double, double> tf_bin_span(const TransferFunction& tf) {
-    const auto& pts = tf.points();
-    if (pts.empty()) return {0.0, 0.0};
-    return {pts.front().value, (pts.back().value - pts.front().value) / double(kTfBins)};
-}
-
-// What takes a value to its bin in the shader: (value - y) * x.
-glm::vec2 tf_bin_map(const TransferFunction& tf) {
-    const auto [lo, width] = tf_bin_span(tf);
-    return {width > 0 ? float(1.0 / width) : 0.0f, float(lo)};
-}
-
-// Per bin, a point at or below every value of the bin and of the one
-// before (a value's bin is computed in float: it may land one bin high):
-// the shader's search for the value's segment starts there and moves
-// forward, ending where a search from the first point ends.
-std::vector<std::uint32_t> tf_bins(const TransferFunction& tf) {
-    const auto& pts = tf.points();
-    const auto [lo, width] = tf_bin_span(tf);
-    std::vector<std::uint32_t> bins(kTfBins, 0);
-    for (std::size_t b = 0; b < kTfBins; ++b)
-        for (std::size_t i = 0; i < pts.size(); ++i)
-            if (pts[i].value <= lo + (double(b) - 1.0) * width) bins[b] = std::uint32_t(i);
-    return bins;
-}
-
-// The tables buffer: clip half-spaces, the bins, then the transfer function's points.
+// The tables buffer: the clip's half-spaces.
 std::vector<glm::vec4> volume_tables(const FrameContext& ctx) {
-    std::vector<glm::vec4> t(kClipSlots + kTfBins / 4, glm::vec4(0.0f));
+    std::vector<glm::vec4> t(kClipSlots, glm::vec4(0.0f));
     const auto planes = clip_planes(ctx);
     std::copy(planes.begin(), planes.end(), t.begin());
-    const TransferFunction& tf = ctx.opt.look.volume.tf;
-    const auto bins = tf_bins(tf);
-    std::memcpy(&t[kClipSlots], bins.data(), kTfBins * sizeof(std::uint32_t));
-    for (std::size_t i = 0; i < tf.points().size(); ++i) {
-        t.push_back(glm::vec4(float(tf.points()[i].value), float(tf.points()[i].opacity), 0.0f, 0.0f));
-        t.push_back(glm::vec4(glm::vec3(tf.linear_color(i)), 0.0f));
-    }
     return t;
 }
 
-std::size_t tables_bytes(const FrameContext& ctx) {
-    return (kClipSlots + kTfBins / 4 + 2 * std::max<std::size_t>(ctx.opt.look.volume.tf.points().size(), 1)) *
-           sizeof(glm::vec4);
+std::size_t tables_bytes() { return kClipSlots * sizeof(glm::vec4); }
+
+// The transfer function's tables as the march reads them (volume_march.glsl).
+void set_tables(VolumeParams& p, const TransferTables& t) {
+    const double w = t.width();
+    p.tf_lut =
+        glm::vec4(float(t.lo()), w > 0 ? float(1.0 / w) : 0.0f, 1.0f / float(t.classification().size()), float(t.hi()));
+    p.tf_low_end = glm::vec4(t.low_end());
+    p.tf_high_end = glm::vec4(t.high_end());
+    p.tf_top = t.integrals().back();
+    p.tf_clear = glm::vec2(float(std::max(t.clear_below(), -3.0e38)), float(std::min(t.clear_above(), 3.0e38)));
+    // One point only: every segment takes the classification (no integrals' difference).
+    p.tf_width = w > 0 ? float(w) : 3.0e38f;
 }
 
 VolumeParams volume_params(const FrameContext& ctx) {
@@ -93,7 +67,7 @@ VolumeParams volume_params(const FrameContext& ctx) {
     p.texel = glm::vec4(1.0f / glm::vec3(v.dims), 0.0f);
     p.vol_near_far = {float(ctx.camera.near_plane), float(ctx.camera.far_plane)};
     p.value_map = v.value_map;
-    p.tf_bin_map = tf_bin_map(look.tf);
+    set_tables(p, *v.tables);
     p.vol_image_size = {ctx.width, ctx.height};
     p.step_mm = float(volume_step_mm(ctx));
     p.vol_epsilon = ctx.opt.look.oit_epsilon;
@@ -108,14 +82,20 @@ VolumeParams volume_params(const FrameContext& ctx) {
     const double spread = ctx.aa && ctx.aa_frame > 0 ? sequences::radical_inverse2(std::uint32_t(ctx.aa_frame)) : 0.0;
     p.sample_offset = float(std::fmod(0.5 + spread, 1.0));
     p.mode = look.mode == VolumeMode::Mip ? 1u : look.mode == VolumeMode::Minip ? 2u : 0u;
-    p.tf_count = std::uint32_t(pts.size());
     p.clip_count = std::uint32_t(clip_planes(ctx).size());
-    p.shading = look.shading && !ctx.opt.look.flat_shading ? 1u : 0u;
     p.skip_empty = look.skip_empty ? 1u : 0u;
     return p;
 }
 
 } // namespace
+
+std::string volume_variant(const FrameContext& ctx) {
+    const VolumeLook& look = ctx.opt.look.volume;
+    std::string d;
+    if (look.shading && !ctx.opt.look.flat_shading) d += "#define VOLUME_SHADING 1\n";
+    if (look.integration == VolumeIntegration::Preintegrated) d += "#define VOLUME_PREINTEGRATED 1\n";
+    return d;
+}
 
 std::string clip_define(const FrameContext& ctx) { return ctx.opt.look.clip.active() ? "#define CLIP 1\n" : ""; }
 
@@ -134,7 +114,7 @@ double volume_step_mm(const FrameContext& ctx) {
 VolumeBindings declare_volume(graph::FrameGraph::Builder& b, const FrameContext& ctx, const GBuffer& gb) {
     VolumeBindings v;
     v.depth = b.read(gb.depth);
-    v.tables = b.write(b.create("volume_tables", graph::BufferDesc{tables_bytes(ctx)}));
+    v.tables = b.write(b.create("volume_tables", graph::BufferDesc{tables_bytes()}));
     v.counters = b.write(b.create("volume_counters", graph::BufferDesc{kCounterBytes}));
     v.params = params_buffer<VolumeParams>(b, "volume_params");
     return v;
@@ -151,6 +131,7 @@ void bind_volume(GlResources& gl, const graph::Resources& r, const FrameContext&
     glBindTextureUnit(4, ctx.volume->texture);
     glBindTextureUnit(5, ctx.volume->occupancy);
     glBindTextureUnit(6, gl.texture(r, v.depth));
+    glBindTextureUnit(7, ctx.volume->tf_tables);
 }
 
 void report_volume(GlResources& gl, const graph::Resources& r, const FrameContext& ctx, const VolumeBindings& v) {
@@ -168,7 +149,7 @@ void report_volume(GlResources& gl, const graph::Resources& r, const FrameContex
     s.terminated = c[3];
     s.texture_bytes = in.texture_bytes;
     s.uploaded = in.uploaded;
-    for (int unit = 4; unit <= 6; ++unit) glBindTextureUnit(GLuint(unit), 0);
+    for (int unit = 4; unit <= 7; ++unit) glBindTextureUnit(GLuint(unit), 0);
 }
 
 graph::TextureHandle volume(graph::FrameGraph& fg, const FrameContext& ctx, const GBuffer& gb,
@@ -186,7 +167,7 @@ graph::TextureHandle volume(graph::FrameGraph& fg, const FrameContext& ctx, cons
             },
             [&ctx](const Data& d, const graph::Resources& r) {
                 GlResources& gl = *ctx.gl;
-                gl.program({"render/volume.comp"}).use();
+                gl.program({"render/volume.comp"}, volume_variant(ctx)).use();
                 bind_volume(gl, r, ctx, d.vol);
                 glBindImageTexture(1, gl.texture(r, d.color), 0, GL_FALSE, 0, GL_READ_WRITE, GL_RGBA8);
                 glDispatchCompute(GLuint((ctx.width + 7) / 8), GLuint((ctx.height + 7) / 8), 1);

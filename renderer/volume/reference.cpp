@@ -138,12 +138,49 @@ void composite_piece(const VolumeSampler& s, const VolumeLook& look, const glm::
     }
 }
 
+// The pre-integrated march over [a, b] (preintegration.hpp), as the GPU
+// marches it in its first frame: points a, a + k h (0 < k < n) and b, every
+// segment between two of them integrated for a value linear along it.
+void preintegrated_piece(const VolumeSampler& s, const TransferTables& tables, const glm::dvec3& origin,
+                         const glm::dvec3& dir, double a, double b, double step, double epsilon, Accumulator& acc,
+                         RayResult& out) {
+    if (!(b > a)) return;
+    const auto n = std::int64_t(std::ceil((b - a) / step));
+    const double h = (b - a) / double(n);
+    double vf = s.at_index(s.to_index(origin + a * dir));
+    ++out.samples;
+    for (std::int64_t k = 1; k <= n && acc.transmittance >= epsilon; ++k) {
+        const double t = k < n ? a + double(k) * h : b;
+        const double vb = s.at_index(s.to_index(origin + t * dir));
+        ++out.samples;
+        const SegmentLight seg = tables.segment(vf, vb, h);
+        acc.color += acc.transmittance * seg.color;
+        acc.transmittance *= seg.transmittance;
+        const double before = acc.volume_transmittance;
+        acc.volume_transmittance *= seg.transmittance;
+        if (!out.t_half && acc.volume_transmittance <= 0.5) {
+            // Within the segment as if its extinction were uniform.
+            const double keep = seg.transmittance;
+            const double x = keep > 0.0 ? h * std::log(0.5 / before) / std::log(keep) : 0.0;
+            out.t_half = t - h + std::clamp(x, 0.0, h);
+            out.value_half = vf + (vb - vf) * std::clamp(x / h, 0.0, 1.0);
+        }
+        vf = vb;
+    }
+}
+
 } // namespace
 
 RayResult march_ray(const VolumeSampler& s, const VolumeLook& look, const Clip& clip, const glm::dvec3& origin,
                     const glm::dvec3& dir, double t_near, double t_far, std::span<const RayLayer> layers,
-                    double step_mm, double epsilon) {
+                    double step_mm, double epsilon, const TransferTables* tables) {
     RayResult out;
+    auto piece = [&](double a, double b, Accumulator& acc) {
+        if (tables)
+            preintegrated_piece(s, *tables, origin, dir, a, b, step_mm, epsilon, acc, out);
+        else
+            composite_piece(s, look, origin, dir, a, b, step_mm, epsilon, acc, out);
+    };
     std::vector<RayLayer> sorted(layers.begin(), layers.end());
     std::stable_sort(sorted.begin(), sorted.end(), [](const RayLayer& a, const RayLayer& b) { return a.t < b.t; });
     // An opaque layer ends the ray.
@@ -195,14 +232,13 @@ RayResult march_ray(const VolumeSampler& s, const VolumeLook& look, const Clip& 
     for (const auto& l : sorted) {
         if (l.t > end || acc.transmittance < epsilon) break;
         if (span && l.t > t) {
-            composite_piece(s, look, origin, dir, t, std::min(l.t, span->second), step_mm, epsilon, acc, out);
+            piece(t, std::min(l.t, span->second), acc);
             t = std::max(t, l.t);
         }
         acc.layer(l);
         if (l.alpha >= 1.0) break;
     }
-    if (span && acc.transmittance >= epsilon)
-        composite_piece(s, look, origin, dir, t, span->second, step_mm, epsilon, acc, out);
+    if (span && acc.transmittance >= epsilon) piece(t, span->second, acc);
     out.color = acc.color;
     out.transmittance = acc.transmittance;
     return out;

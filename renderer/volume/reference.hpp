@@ -24,6 +24,7 @@
 #include <glm/vec3.hpp>
 
 #include "io/volume.hpp"
+#include "renderer/volume/preintegration.hpp"
 #include "renderer/volume/transfer_function.hpp"
 
 namespace iso {
@@ -80,9 +81,13 @@ std::optional<std::pair<double, double>> ray_interval(const VolumeSampler& s, co
                                                       double t_far);
 
 // Marches one ray; `layers` in any order; `step_mm` the sample step;
-// stops once the transmittance is below `epsilon` (0: never).
+// stops once the transmittance is below `epsilon` (0: never). The stated
+// model's sampling (the reference) unless `tables` are given: then the
+// composite march is pre-integrated (preintegration.hpp) with those
+// tables, as the GPU's first frame marches it (look.integration is not
+// read: the reference stays the reference whatever the look).
 RayResult march_ray(const VolumeSampler& s, const VolumeLook& look, const Clip& clip, const glm::dvec3& origin,
                     const glm::dvec3& dir, double t_near, double t_far, std::span<const RayLayer> layers,
-                    double step_mm, double epsilon = 0);
+                    double step_mm, double epsilon = 0, const TransferTables* tables = nullptr);
 
 } // namespace iso

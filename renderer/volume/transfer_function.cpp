@@ -157,6 +157,16 @@ VolumeMode volume_mode_from_name(const std::string& name) {
     throw Error("volume mode", "must be composite, mip or minip, got '" + name + "'");
 }
 
+const char* volume_integration_name(VolumeIntegration i) {
+    return i == VolumeIntegration::Sampled ? "sampled" : "preintegrated";
+}
+
+VolumeIntegration volume_integration_from_name(const std::string& name) {
+    if (name == "preintegrated") return VolumeIntegration::Preintegrated;
+    if (name == "sampled") return VolumeIntegration::Sampled;
+    throw Error("volume integration", "must be preintegrated or sampled, got '" + name + "'");
+}
+
 bool Clip::keeps(const glm::dvec3& p) const {
     for (const auto& h : half_spaces())
         if (glm::dot(h.normal, p) < h.offset) return false;
@@ -225,7 +235,10 @@ std::vector<unsigned char> occupied_chunks(const VolumeLook& v, std::span<const 
                                            std::span<const double> maxs) {
     std::vector<unsigned char> out(mins.size(), 1);
     if (v.mode != VolumeMode::Composite) return out;
-    for (std::size_t i = 0; i < mins.size(); ++i) out[i] = v.tf.max_opacity(mins[i], maxs[i]) > 0.0 ? 1 : 0;
+    const auto& pts = v.tf.points();
+    const double texel = pts.empty() ? 0.0 : (pts.back().value - pts.front().value) / double(kTransferTableTexels - 1);
+    for (std::size_t i = 0; i < mins.size(); ++i)
+        out[i] = v.tf.max_opacity(mins[i] - texel, maxs[i] + texel) > 0.0 ? 1 : 0;
     return out;
 }
 

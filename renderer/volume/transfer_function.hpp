@@ -67,6 +67,14 @@ enum class VolumeMode { Composite, Mip, Minip };
 const char* volume_mode_name(VolumeMode m);                // "composite", "mip", "minip"
 VolumeMode volume_mode_from_name(const std::string& name); // throws iso::Error
 
+// How the composite march integrates between samples (docs/volume.md):
+// pre-integrated segments (preintegration.hpp; the default), or each
+// sample's classification held over its step (the stated model's sampling,
+// which the CPU reference marches at a fine step).
+enum class VolumeIntegration { Preintegrated, Sampled };
+const char* volume_integration_name(VolumeIntegration i);                // "preintegrated", "sampled"
+VolumeIntegration volume_integration_from_name(const std::string& name); // throws iso::Error
+
 // A half-space kept by clipping: points p with dot(normal, p) >= offset (LPS mm).
 struct ClipPlane {
     glm::dvec3 normal{0.0, 0.0, 1.0};
@@ -100,6 +108,7 @@ struct VolumeLook {
     // while the camera moves (RenderOptions::moving).
     double step = 0.5;
     double moving_step = 2.0;
+    VolumeIntegration integration = VolumeIntegration::Preintegrated;
     // Gradient shading (central differences); FrameLook::flat_shading turns it off.
     bool shading = true;
     // Skip chunks whose value range the transfer function maps to zero
@@ -110,10 +119,15 @@ struct VolumeLook {
 // Throws iso::Error naming the setting.
 void validate(const VolumeLook& v);
 
+// Texels of the transfer function's tables (preintegration.hpp) over its points' values.
+constexpr int kTransferTableTexels = 4096;
+
 // Per chunk of a range index (one min and max per chunk): 1 where the
 // transfer function gives some sample in the chunk a non-zero opacity (or,
 // for MIP/MinIP, always: every sample counts), 0 where marching it adds
-// nothing.
+// nothing. The range is widened by one texel of the tables each way: the
+// march reads them interpolated between texels, so a chunk is empty only
+// where every texel it can read is.
 std::vector<unsigned char> occupied_chunks(const VolumeLook& v, std::span<const double> mins,
                                            std::span<const double> maxs);
 

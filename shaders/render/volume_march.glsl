@@ -22,12 +22,13 @@
 layout(binding = 4) uniform sampler3D volume_tex;     // the values (normalized integer or float)
 layout(binding = 5) uniform usampler3D occupancy_tex; // per chunk: 1 marched, 0 empty
 layout(binding = 6) uniform sampler2D opaque_depth;   // the G-buffer's reversed-Z depth
-// clip[0..clip_count): half-spaces (normal, offset): kept where dot(n, p) >= offset;
-// tf_bins: per bin of values (tf_bin_map; 256 bins, 4 to a uvec4) a point at
-// or below every value of the bin and the one before: where the search for a
-// value's segment starts, a step or two before its end.
-// tf[2i] = (value, opacity per mm, 0, 0), tf[2i + 1] = (linear RGB, 0).
-layout(std430, binding = 11) readonly buffer VolumeTables { vec4 clip_planes[16]; uvec4 tf_bins[64]; vec4 tf[]; };
+// clip[0..clip_count): half-spaces (normal, offset): kept where dot(n, p) >= offset.
+layout(std430, binding = 11) readonly buffer VolumeTables { vec4 clip_planes[16]; };
+// The transfer function's tables (renderer/volume/preintegration.hpp),
+// texel i at value tf_lut.x + i / tf_lut.y, linearly interpolated: layer 0
+// the classification (linear RGB, opacity per mm), layer 1 the integrals
+// (E = integral of tau c dv, P = integral of tau dv, from the first point).
+layout(binding = 7) uniform sampler1DArray tf_tables;
 // Rays met, samples taken, samples skipped (empty chunks), rays ended early.
 layout(std430, binding = 12) buffer VolumeCounters { uint vol_rays; uint vol_samples; uint vol_skipped; uint vol_terminated; };
 
@@ -45,20 +46,20 @@ float vol_extreme_t = 0.0;
 vec4 vol_extreme_c = vec4(0.0);
 bool vol_extreme_pending = false;
 
+// The classification at v: one fetch (constant beyond the points: the texture clamps).
 vec4 tf_at(float v) {
-    uint n = tf_count;
-    if (!(v > tf[0].x)) return vec4(tf[1].rgb, tf[0].y);
-    if (v >= tf[2u * (n - 1u)].x) return vec4(tf[2u * (n - 1u) + 1u].rgb, tf[2u * (n - 1u)].y);
-    uint bin = uint(clamp((v - tf_bin_map.y) * tf_bin_map.x, 0.0, 255.0));
-    uint i = tf_bins[bin >> 2u][bin & 3u];
-    for (uint k = 0u; k < n; ++k) {   // to the last point at or below v
-        if (i + 1u >= n || tf[2u * (i + 1u)].x > v) break;
-        ++i;
-    }
-    vec4 a = tf[2u * i], b = tf[2u * i + 2u];
-    float t = (v - a.x) / (b.x - a.x);
-    return vec4(mix(tf[2u * i + 1u].rgb, tf[2u * i + 3u].rgb, t), mix(a.y, b.y, t));
+    return texture(tf_tables, vec2(((v - tf_lut.x) * tf_lut.y + 0.5) * tf_lut.z, 0.0));
 }
+
+// (E, P) at v; beyond the points extended by their constant (tau c, tau).
+vec4 tf_integral(float v) {
+    if (v <= tf_lut.x) return tf_low_end * (v - tf_lut.x);
+    if (v >= tf_lut.w) return tf_top + tf_high_end * (v - tf_lut.w);
+    return texture(tf_tables, vec2(((v - tf_lut.x) * tf_lut.y + 0.5) * tf_lut.z, 1.0));
+}
+
+// tau = -ln(1 - a) per mm, capped (kMaxExtinction).
+float vol_extinction(float a) { return a >= 1.0 ? 20.72 : min(-log(1.0 - a), 20.72); }
 
 float vol_value(vec3 idx) {
     return texture(volume_tex, (idx + 0.5) * texel.xyz).r * value_map.x + value_map.y;
@@ -124,7 +125,9 @@ bool volume_begin(ivec2 p) {
 // Linear colour of a sample with opacity: the transfer function's, shaded
 // by the gradient's direction where the gradient is strong enough.
 vec3 vol_shaded(vec3 idx, vec3 color) {
-    if (!shading) return color;
+#ifndef VOLUME_SHADING
+    return color;
+#else
     vec3 g;
     for (int k = 0; k < 3; ++k) {
         vec3 e = vec3(0.0);
@@ -137,6 +140,7 @@ vec3 vol_shaded(vec3 idx, vec3 color) {
     n /= len;
     if (n.z < 0.0) n = -n;   // towards the viewer: the side the ray sees
     return mix(color, shade(n, color, false, 1.0), clamp(len / gradient_ref, 0.0, 1.0));
+#endif
 }
 
 // The chunk a sample lies in, and the ray's t where it leaves that chunk.
@@ -153,20 +157,10 @@ float vol_chunk_exit(vec3 idx, out bool empty) {
     return t_exit;
 }
 
-// Composites the volume over [vol_at, min(t, end)].
-void volume_until(float t) {
-    float b = min(t, vol_t1);
-    if (mode != 0u) {
-        if (vol_extreme_pending && vol_extreme_t <= b) {
-            acc += transmittance * vol_extreme_c.a * vol_extreme_c.rgb;
-            transmittance *= 1.0 - vol_extreme_c.a;
-            vol_extreme_pending = false;
-        }
-        return;
-    }
-    float a = vol_at;
-    if (!(b > a) || transmittance < vol_epsilon) return;
-    vol_at = b;
+#ifndef VOLUME_PREINTEGRATED
+// The sampled march over [a, b]: n equal steps, each sample's
+// classification held over its step (the stated model's sampling).
+void volume_sampled(float a, float b) {
     float n = ceil((b - a) / step_mm), h = (b - a) / n;
     for (float k = 0.0; k < n; k += 1.0) {
         if (transmittance < vol_epsilon) break;
@@ -186,12 +180,116 @@ void volume_until(float t) {
             }
         }
         ++vol_samples_n;
-        vec4 c = tf_at(vol_value(idx));
+        float v = vol_value(idx);
+        if (v <= tf_clear.x || v >= tf_clear.y) continue;   // opacity 0: no lookup
+        vec4 c = tf_at(v);
         if (c.a <= 0.0) continue;
         float keep = exp2(h * log2(1.0 - c.a));   // (1 - a)^h
         acc += transmittance * (1.0 - keep) * vol_shaded(idx, c.rgb);
         transmittance *= keep;
     }
+}
+
+#else
+// Half of a pre-integrated segment, hh mm, value linear from va to vb
+// (integrals Ia, Ib): its tau-weighted colour and transmittance. Within a
+// texel's width of a constant value, the classification c at the
+// segment's mean value (the integrals' difference would cancel).
+// TransferTables::segment, on the CPU.
+vec4 preint_half(float va, float vb, vec4 Ia, vec4 Ib, vec4 c, float hh) {
+    float dv = vb - va;
+    vec4 d = Ib - Ia;
+    bool flat_ = !(abs(dv) >= tf_width);
+    float tau = flat_ ? vol_extinction(c.a) : d.w / dv;
+    vec3 color = flat_ ? c.rgb : d.w != 0.0 ? d.rgb / d.w : vec3(0.0);
+    return vec4(color, exp(-hh * tau));
+}
+
+// One segment of len mm from value vf to vb, split at the mean value.
+void preint_segment(float vf, float vb, vec4 If, vec4 Ib, float len, vec3 idx_mid) {
+    float vm = 0.5 * (vf + vb);
+    vec4 Im = tf_integral(vm), c = tf_at(vm);
+    vec4 h1 = preint_half(vf, vm, If, Im, c, 0.5 * len), h2 = preint_half(vm, vb, Im, Ib, c, 0.5 * len);
+    float keep = h1.a * h2.a;
+    vec3 emit = (1.0 - h1.a) * h1.rgb + h1.a * (1.0 - h2.a) * h2.rgb;
+#ifdef VOLUME_SHADING
+    if (keep < 1.0) emit = (1.0 - keep) * vol_shaded(idx_mid, emit / (1.0 - keep));
+#endif
+    acc += transmittance * emit;
+    transmittance *= keep;
+}
+
+// The pre-integrated march over [a, b] (preintegration.hpp): the points
+// a, a + (k + o) h (k < n; o = 0 in the first frame, spread in accumulated
+// ones) and b, one fetch each, every segment between two points integrated
+// for a value linear along it. A point in an empty chunk closes its
+// segment; the march then jumps to the chunk's last point: the segments
+// in between join values the tables map to nothing (the occupancy is
+// widened by a texel), so they would add exactly nothing.
+void volume_preintegrated(float a, float b) {
+    float n = ceil((b - a) / step_mm), h = (b - a) / n, o = fract(sample_offset + 0.5);
+    float t_front = a, vf = vol_value(vol_o_idx + a * vol_d_idx);
+    vec4 If = tf_integral(vf);
+    ++vol_samples_n;
+    for (float k = o > 0.0 ? 0.0 : 1.0; k <= n; k += 1.0) {
+        if (transmittance < vol_epsilon) break;
+        float tb = k < n ? a + (k + o) * h : b;
+        vec3 idx = vol_o_idx + tb * vol_d_idx;
+        float vb = vol_value(idx);
+        ++vol_samples_n;
+        // Both ends where the opacity is 0 on one side: the linear values
+        // between them too; the segment adds nothing.
+        vec4 Ib = tf_integral(vb);
+        if (!(max(vf, vb) <= tf_clear.x || min(vf, vb) >= tf_clear.y))
+            preint_segment(vf, vb, If, Ib, tb - t_front, vol_o_idx + 0.5 * (t_front + tb) * vol_d_idx);
+        If = Ib;
+        t_front = tb;
+        vf = vb;
+        if (skip_empty && !(tb < vol_chunk_end) && k < n) {
+            bool empty;
+            float t_exit = vol_chunk_exit(idx, empty);
+            vol_chunk_end = empty ? -3.0e38 : t_exit;
+            if (empty) {
+                if (t_exit >= b) {   // the rest of the piece lies in the empty chunk
+                    vol_skipped_n += uint(n - k);
+                    break;
+                }
+                // The last point still inside the chunk (a hair early).
+                float last = floor((t_exit - a) / h - o - 1e-3);
+                if (last > k) {
+                    vol_skipped_n += uint(last - k - 1.0);
+                    k = last;
+                    t_front = a + (k + o) * h;
+                    vf = vol_value(vol_o_idx + t_front * vol_d_idx);
+                    If = tf_integral(vf);
+                    ++vol_samples_n;
+                }
+            }
+        }
+    }
+}
+
+#endif
+
+// Composites the volume over [vol_at, min(t, end)].
+void volume_until(float t) {
+    float b = min(t, vol_t1);
+    if (mode != 0u) {
+        if (vol_extreme_pending && vol_extreme_t <= b) {
+            acc += transmittance * vol_extreme_c.a * vol_extreme_c.rgb;
+            transmittance *= 1.0 - vol_extreme_c.a;
+            vol_extreme_pending = false;
+        }
+        return;
+    }
+    float a = vol_at;
+    if (!(b > a) || transmittance < vol_epsilon) return;
+    vol_at = b;
+#ifdef VOLUME_PREINTEGRATED
+    volume_preintegrated(a, b);
+#else
+    volume_sampled(a, b);
+#endif
 }
 
 // The statistics of this pixel's ray.

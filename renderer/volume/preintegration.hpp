@@ -1,0 +1,92 @@
+// The transfer function as tables (docs/volume.md, "Pre-integration"): what
+// the GPU march reads per sample instead of searching the points, and the
+// pre-integrated classification of a ray segment (Engel, Kraus and Ertl
+// 2001) in the integral-function form of Lum, Wilson and Ma (2004).
+//
+// The stated model (transfer_function.hpp) gives, per value v, a colour
+// c(v) (linear light) and an opacity a(v) per mm, i.e. an extinction
+// tau(v) = -ln(1 - a(v)) per mm. A ray segment of h mm whose value varies
+// linearly from vf (front) to vb (back) then has the optical depth
+//     h * (P(vb) - P(vf)) / (vb - vf),   P(v) = integral of tau dv,
+// exact for any h and any pair of values; and it emits, front to back,
+//     integral over s of tau c exp(-optical depth up to s) ds.
+// The colour is taken as tau-weighted mean colour (E(vb) - E(vf)) /
+// (P(vb) - P(vf)), E(v) = integral of tau c dv, per half of the segment
+// (split at the mean value), the front half in front of the back one: exact
+// where the colour is constant over the segment's values, a second-order
+// error (in the half's optical depth times its change of colour) where it
+// varies. Measured on a smoothed angiogram phantom (256^2, flat): at step 2
+// the image error of the two halves 0.0054 against 0.0056 for the exact
+// integral of linear values, one whole segment 0.0090.
+//
+// Why tables of P and E and not Engel's 2D table of (vf, vb): these hold
+// for every segment length (the drag frames' step and the still frames'
+// use one table, and the pieces a ray is cut into by surfaces and clips
+// are any length), values beyond the points extend them exactly (the
+// transfer function is constant there), and they are 1D: 4096 texels
+// rebuilt in well under a millisecond when the transfer function changes.
+//
+// Both tables have kTableTexels texels, texel i at value lo + i * width
+// (lo, hi: the first and last points), read with linear interpolation.
+#pragma once
+
+#include <vector>
+
+#include <glm/vec3.hpp>
+#include <glm/vec4.hpp>
+
+#include "renderer/volume/transfer_function.hpp"
+
+namespace iso {
+
+// An opacity per mm of 1 is an infinite extinction: capped here (a
+// millimetre at the cap transmits e^-20.7, 1e-9).
+constexpr double kMaxExtinction = 20.72;
+double extinction(double opacity_per_mm);
+
+struct SegmentLight {
+    glm::dvec3 color{0.0}; // linear RGB, premultiplied: what the segment emits towards its front
+    double transmittance = 1;
+};
+
+class TransferTables {
+public:
+    static constexpr int kTexels = kTransferTableTexels;
+    explicit TransferTables(const TransferFunction& tf);
+
+    const TransferFunction& function() const { return tf_; }
+    double lo() const { return lo_; }
+    double width() const { return width_; } // value between texels (0: one point only)
+    double hi() const { return hi_; }
+    // Per texel: linear RGB and opacity per mm (the sampled march's table).
+    const std::vector<glm::vec4>& classification() const { return classify_; }
+    // Per texel: E (RGB) and P, from the first point (the pre-integrated march's table).
+    const std::vector<glm::vec4>& integrals() const { return integral_f_; }
+    // Beyond the points: (tau c, tau) at the first and the last point.
+    glm::dvec4 low_end() const { return lo_end_; }
+    glm::dvec4 high_end() const { return hi_end_; }
+    // Values at or below clear_below() (at or above clear_above()) are
+    // classified with opacity 0 by the tables, texel interpolation
+    // included: a sample or segment there adds nothing, so the march skips
+    // the lookup. -inf / +inf where there is no such range.
+    double clear_below() const { return clear_below_; }
+    double clear_above() const { return clear_above_; }
+
+    // The classification at v as the GPU reads it (interpolated between texels).
+    glm::dvec4 classify(double v) const;
+    // (E, P) at v, interpolated, extended linearly beyond the points.
+    glm::dvec4 integral(double v) const;
+    // A segment of h mm, value linear from vf to vb (the model above).
+    SegmentLight segment(double vf, double vb, double h) const;
+
+private:
+    TransferFunction tf_;
+    double lo_ = 0, hi_ = 0, width_ = 0;
+    int last_ = 0; // the last texel (0 when the function has one value)
+    std::vector<glm::vec4> classify_, integral_f_;
+    std::vector<glm::dvec4> integral_; // in double, for the CPU march
+    glm::dvec4 lo_end_{0.0}, hi_end_{0.0};
+    double clear_below_ = 0, clear_above_ = 0;
+};
+
+} // namespace iso
