@@ -16,24 +16,7 @@ void GpuVolume::set(std::shared_ptr<const Volume> v, std::shared_ptr<const Chunk
     texture_ = gl::Texture{};
     occupancy_ = gl::Texture{};
     occupancy_valid_ = false;
-    tables_ = gl::Texture{};
     input_.tables.reset();
-}
-
-// The classification and integral tables as a two-layer 1D array texture,
-// interpolated linearly (the march reads between texels).
-void GpuVolume::make_tables(const TransferFunction& tf) {
-    auto t = std::make_shared<const TransferTables>(tf);
-    const int n = int(t->classification().size());
-    if (!tables_.id() || tables_.width() != n) {
-        tables_ = gl::Texture::create_1d_array(GL_RGBA32F, n, 2);
-        glTextureParameteri(tables_.id(), GL_TEXTURE_MIN_FILTER, GL_LINEAR);
-        glTextureParameteri(tables_.id(), GL_TEXTURE_MAG_FILTER, GL_LINEAR);
-    }
-    glTextureSubImage2D(tables_.id(), 0, 0, 0, n, 1, GL_RGBA, GL_FLOAT, t->classification().data());
-    glTextureSubImage2D(tables_.id(), 0, 0, 1, n, 1, GL_RGBA, GL_FLOAT, t->integrals().data());
-    input_.tf_tables = tables_.id();
-    input_.tables = std::move(t);
 }
 
 namespace {
@@ -133,7 +116,9 @@ const passes::VolumeInput& GpuVolume::prepare(const VolumeLook& look) {
     if (!volume_) throw Error("volume rendering", "there is no volume to render (the input is a mesh)");
     input_.uploaded = false;
     if (!texture_.id()) upload();
-    if (!input_.tables || !(input_.tables->function() == look.tf)) make_tables(look.tf);
+    // The transfer function's tables: made again only when it changes.
+    if (!input_.tables || !(input_.tables->function() == look.tf))
+        input_.tables = std::make_shared<const TransferTables>(look.tf);
     if (!occupancy_valid_ || !(occupancy_for_.tf == look.tf) || occupancy_for_.mode != look.mode) {
         const auto occupied = occupied_chunks(look, index_->mins(), index_->maxs());
         input_.empty_chunks = std::size_t(std::count(occupied.begin(), occupied.end(), 0));

@@ -32,8 +32,7 @@ private:
     void upload();
     std::shared_ptr<const Volume> volume_;
     std::shared_ptr<const ChunkIndex> index_;
-    void make_tables(const TransferFunction& tf);
-    gl::Texture texture_, occupancy_, tables_;
+    gl::Texture texture_, occupancy_;
     VolumeLook occupancy_for_;
     bool occupancy_valid_ = false;
     passes::VolumeInput input_;

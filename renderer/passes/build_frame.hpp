@@ -99,9 +99,8 @@ struct VolumeInput {
     double min_spacing = 1;
     std::uint64_t texture_bytes = 0;
     bool uploaded = false; // the texture was made this frame
-    // The transfer function's tables (1D array texture, RGBA32F, linear:
-    // layer 0 classification, layer 1 integrals) and what they were made from.
-    std::uint32_t tf_tables = 0;
+    // The transfer function's tables (made when it changes; the pass
+    // uploads them with the frame's other tables).
     std::shared_ptr<const TransferTables> tables;
 };
 

@@ -29,21 +29,24 @@ std::vector<glm::vec4> clip_planes(const FrameContext& ctx) {
     return planes;
 }
 
-// The tables buffer: the clip's half-spaces.
+// The tables buffer: the clip's half-spaces, the transfer function's tables.
 std::vector<glm::vec4> volume_tables(const FrameContext& ctx) {
     std::vector<glm::vec4> t(kClipSlots, glm::vec4(0.0f));
     const auto planes = clip_planes(ctx);
     std::copy(planes.begin(), planes.end(), t.begin());
+    const auto& tb = *ctx.volume->tables;
+    t.insert(t.end(), tb.classification().begin(), tb.classification().end());
+    t.insert(t.end(), tb.integrals().begin(), tb.integrals().end());
     return t;
 }
 
-std::size_t tables_bytes() { return kClipSlots * sizeof(glm::vec4); }
+std::size_t tables_bytes() { return (kClipSlots + 2 * TransferTables::kTexels) * sizeof(glm::vec4); }
 
 // The transfer function's tables as the march reads them (volume_march.glsl).
 void set_tables(VolumeParams& p, const TransferTables& t) {
     const double w = t.width();
     p.tf_lut =
-        glm::vec4(float(t.lo()), w > 0 ? float(1.0 / w) : 0.0f, 1.0f / float(t.classification().size()), float(t.hi()));
+        glm::vec4(float(t.lo()), w > 0 ? float(1.0 / w) : 0.0f, float(TransferTables::kTexels - 1), float(t.hi()));
     p.tf_low_end = glm::vec4(t.low_end());
     p.tf_high_end = glm::vec4(t.high_end());
     p.tf_top = t.integrals().back();
@@ -131,7 +134,6 @@ void bind_volume(GlResources& gl, const graph::Resources& r, const FrameContext&
     glBindTextureUnit(4, ctx.volume->texture);
     glBindTextureUnit(5, ctx.volume->occupancy);
     glBindTextureUnit(6, gl.texture(r, v.depth));
-    glBindTextureUnit(7, ctx.volume->tf_tables);
 }
 
 void report_volume(GlResources& gl, const graph::Resources& r, const FrameContext& ctx, const VolumeBindings& v) {
@@ -149,7 +151,7 @@ void report_volume(GlResources& gl, const graph::Resources& r, const FrameContex
     s.terminated = c[3];
     s.texture_bytes = in.texture_bytes;
     s.uploaded = in.uploaded;
-    for (int unit = 4; unit <= 7; ++unit) glBindTextureUnit(GLuint(unit), 0);
+    for (int unit = 4; unit <= 6; ++unit) glBindTextureUnit(GLuint(unit), 0);
 }
 
 graph::TextureHandle volume(graph::FrameGraph& fg, const FrameContext& ctx, const GBuffer& gb,

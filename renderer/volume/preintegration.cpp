@@ -70,14 +70,16 @@ TransferTables::TransferTables(const TransferFunction& tf) : tf_(tf) {
     const double hi = hi_ = tf.points().back().value;
     last_ = hi > lo_ ? kTexels - 1 : 0;
     width_ = last_ ? (hi - lo_) / double(last_) : 0.0;
-    classify_.resize(std::size_t(last_) + 1);
-    integral_.resize(classify_.size());
-    integral_f_.resize(classify_.size());
+    // kTexels always (one point: all alike), as the shader indexes them.
+    classify_.resize(kTexels);
+    integral_.resize(kTexels);
+    integral_f_.resize(kTexels);
     glm::dvec4 sum(0.0);
-    for (int i = 0; i <= last_; ++i) {
-        const double v = lo_ + double(i) * width_;
-        if (i > 0) sum += span_integral(tf, lo_ + double(i - 1) * width_, i == last_ ? hi : v);
-        classify_[std::size_t(i)] = glm::vec4(tf.at(i == last_ ? hi : v));
+    for (int i = 0; i < kTexels; ++i) {
+        const int j = std::min(i, last_);
+        const double v = lo_ + double(j) * width_;
+        if (j > 0 && j == i) sum += span_integral(tf, lo_ + double(j - 1) * width_, j == last_ ? hi : v);
+        classify_[std::size_t(i)] = glm::vec4(tf.at(j == last_ ? hi : v));
         integral_[std::size_t(i)] = sum;
         integral_f_[std::size_t(i)] = glm::vec4(sum);
     }

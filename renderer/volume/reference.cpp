@@ -100,6 +100,57 @@ std::optional<std::pair<double, double>> ray_interval(const VolumeSampler& s, co
     return std::pair{t0, t1};
 }
 
+VolumeLighting volume_lighting(const VolumeSampler& s, const TransferFunction& tf, const glm::dmat3& world_to_view) {
+    VolumeLighting l;
+    l.gradient_to_view = world_to_view * glm::transpose(glm::dmat3(glm::inverse(s.volume().index_to_lps)));
+    // As the GPU pass: full shading from a twentieth of the transfer
+    // function's value span per voxel (volume.cpp, gradient_ref).
+    const auto& pts = tf.points();
+    const double span = pts.empty() ? 1.0 : std::max(pts.back().value - pts.front().value, 1e-6);
+    l.gradient_ref = 0.05 * span / s.min_spacing();
+    return l;
+}
+
+namespace {
+
+// shading.glsl's shade() without AO, in double.
+glm::dvec3 shade_view(const glm::dvec3& n, const glm::dvec3& albedo) {
+    const glm::dvec3 v(0.0, 0.0, 1.0), key = glm::normalize(glm::dvec3(-0.45, 0.6, 0.65));
+    glm::dvec3 color = albedo * (0.12 * (0.6 + 0.4 * n.y));
+    for (int i = 0; i < 2; ++i) {
+        const glm::dvec3 l = i == 0 ? key : v;
+        const double intensity = i == 0 ? 0.75 : 0.35, ndl = std::max(glm::dot(n, l), 0.0);
+        const glm::dvec3 h = glm::normalize(l + v);
+        const double spec =
+            ndl > 0.0 ? std::pow(std::max(glm::dot(n, h), 0.0), 48.0) * (48.0 + 8.0) / (8.0 * 3.14159265) : 0.0;
+        color += intensity * (albedo * ndl + 0.04 * spec * ndl);
+    }
+    glm::dvec3 out;
+    for (int k = 0; k < 3; ++k) { // ACES fitted
+        const double x = color[k];
+        out[k] = std::clamp((x * (2.51 * x + 0.03)) / (x * (2.43 * x + 0.59) + 0.14), 0.0, 1.0);
+    }
+    return out;
+}
+
+} // namespace
+
+glm::dvec3 shade_volume_sample(const VolumeSampler& s, const VolumeLighting& l, const glm::dvec3& ijk,
+                               const glm::dvec3& color) {
+    glm::dvec3 g;
+    for (int k = 0; k < 3; ++k) {
+        glm::dvec3 e(0.0);
+        e[k] = 1.0;
+        g[k] = 0.5 * (s.at_index(glm::min(ijk + e, s.dims_max())) - s.at_index(glm::max(ijk - e, glm::dvec3(0.0))));
+    }
+    glm::dvec3 n = l.gradient_to_view * g;
+    const double len = glm::length(n);
+    if (!(len > 0.0)) return color;
+    n /= len;
+    if (n.z < 0.0) n = -n;
+    return glm::mix(color, shade_view(n, color), std::clamp(len / l.gradient_ref, 0.0, 1.0));
+}
+
 namespace {
 
 struct Accumulator {
@@ -113,19 +164,22 @@ struct Accumulator {
 };
 
 // Emission-absorption over [a, b]: n equal steps sampled at their midpoints.
-void composite_piece(const VolumeSampler& s, const VolumeLook& look, const glm::dvec3& origin, const glm::dvec3& dir,
-                     double a, double b, double step, double epsilon, Accumulator& acc, RayResult& out) {
+void composite_piece(const VolumeSampler& s, const VolumeLook& look, const VolumeLighting* lighting,
+                     const glm::dvec3& origin, const glm::dvec3& dir, double a, double b, double step, double epsilon,
+                     Accumulator& acc, RayResult& out) {
     if (!(b > a)) return;
     const auto n = std::int64_t(std::ceil((b - a) / step));
     const double h = (b - a) / double(n);
     for (std::int64_t k = 0; k < n && acc.transmittance >= epsilon; ++k) {
         const double t = a + (double(k) + 0.5) * h;
-        const double v = s.at_index(s.to_index(origin + t * dir));
+        const glm::dvec3 ijk = s.to_index(origin + t * dir);
+        const double v = s.at_index(ijk);
         const glm::dvec4 c = look.tf.at(v);
         ++out.samples;
         if (c.a <= 0.0) continue;
         const double keep = std::pow(1.0 - c.a, h), alpha = 1.0 - keep;
-        acc.color += acc.transmittance * alpha * glm::dvec3(c);
+        const glm::dvec3 color = lighting ? shade_volume_sample(s, *lighting, ijk, glm::dvec3(c)) : glm::dvec3(c);
+        acc.color += acc.transmittance * alpha * color;
         acc.transmittance *= keep;
         const double before = acc.volume_transmittance;
         acc.volume_transmittance *= keep;
@@ -141,9 +195,9 @@ void composite_piece(const VolumeSampler& s, const VolumeLook& look, const glm::
 // The pre-integrated march over [a, b] (preintegration.hpp), as the GPU
 // marches it in its first frame: points a, a + k h (0 < k < n) and b, every
 // segment between two of them integrated for a value linear along it.
-void preintegrated_piece(const VolumeSampler& s, const TransferTables& tables, const glm::dvec3& origin,
-                         const glm::dvec3& dir, double a, double b, double step, double epsilon, Accumulator& acc,
-                         RayResult& out) {
+void preintegrated_piece(const VolumeSampler& s, const TransferTables& tables, const VolumeLighting* lighting,
+                         const glm::dvec3& origin, const glm::dvec3& dir, double a, double b, double step,
+                         double epsilon, Accumulator& acc, RayResult& out) {
     if (!(b > a)) return;
     const auto n = std::int64_t(std::ceil((b - a) / step));
     const double h = (b - a) / double(n);
@@ -153,7 +207,12 @@ void preintegrated_piece(const VolumeSampler& s, const TransferTables& tables, c
         const double t = k < n ? a + double(k) * h : b;
         const double vb = s.at_index(s.to_index(origin + t * dir));
         ++out.samples;
-        const SegmentLight seg = tables.segment(vf, vb, h);
+        SegmentLight seg = tables.segment(vf, vb, h);
+        if (lighting && seg.transmittance < 1.0) { // shaded at the segment's middle, as a colour
+            const glm::dvec3 mid = s.to_index(origin + (t - 0.5 * h) * dir);
+            const double alpha = 1.0 - seg.transmittance;
+            seg.color = alpha * shade_volume_sample(s, *lighting, mid, seg.color / alpha);
+        }
         acc.color += acc.transmittance * seg.color;
         acc.transmittance *= seg.transmittance;
         const double before = acc.volume_transmittance;
@@ -173,13 +232,13 @@ void preintegrated_piece(const VolumeSampler& s, const TransferTables& tables, c
 
 RayResult march_ray(const VolumeSampler& s, const VolumeLook& look, const Clip& clip, const glm::dvec3& origin,
                     const glm::dvec3& dir, double t_near, double t_far, std::span<const RayLayer> layers,
-                    double step_mm, double epsilon, const TransferTables* tables) {
+                    double step_mm, double epsilon, const TransferTables* tables, const VolumeLighting* lighting) {
     RayResult out;
     auto piece = [&](double a, double b, Accumulator& acc) {
         if (tables)
-            preintegrated_piece(s, *tables, origin, dir, a, b, step_mm, epsilon, acc, out);
+            preintegrated_piece(s, *tables, lighting, origin, dir, a, b, step_mm, epsilon, acc, out);
         else
-            composite_piece(s, look, origin, dir, a, b, step_mm, epsilon, acc, out);
+            composite_piece(s, look, lighting, origin, dir, a, b, step_mm, epsilon, acc, out);
     };
     std::vector<RayLayer> sorted(layers.begin(), layers.end());
     std::stable_sort(sorted.begin(), sorted.end(), [](const RayLayer& a, const RayLayer& b) { return a.t < b.t; });

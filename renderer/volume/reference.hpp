@@ -12,14 +12,15 @@
 // whole interval at n + 1 points, ends included (an axis-aligned ray through
 // voxel centres, stepped one voxel, meets every voxel of its column), and
 // put the extreme value's colour, with its opacity as a plain alpha, at its
-// place among the surfaces. Colour is the transfer function's (flat: the
-// reference has no gradient shading).
+// place among the surfaces. Colour is the transfer function's, or shaded by
+// the gradient as the GPU shades it (VolumeLighting).
 #pragma once
 
 #include <optional>
 #include <span>
 #include <vector>
 
+#include <glm/mat3x3.hpp>
 #include <glm/mat4x4.hpp>
 #include <glm/vec3.hpp>
 
@@ -75,6 +76,21 @@ struct RayResult {
     std::size_t samples = 0;
 };
 
+// Gradient shading as the GPU march does it (volume_march.glsl,
+// vol_shaded; shading.glsl, shade): the gradient by central differences of
+// one voxel in index space (clamped to the box), turned into view space,
+// the surfaces' key light and headlight (no AO) and tone mapping, faded in
+// with the gradient's magnitude up to `gradient_ref` (value per mm).
+struct VolumeLighting {
+    glm::dmat3 gradient_to_view{1.0}; // index-space gradient -> view space
+    double gradient_ref = 1;
+};
+// The lighting of a frame whose world -> view rotation is `world_to_view`.
+VolumeLighting volume_lighting(const VolumeSampler& s, const TransferFunction& tf, const glm::dmat3& world_to_view);
+// A colour (linear) shaded at continuous index `ijk`.
+glm::dvec3 shade_volume_sample(const VolumeSampler& s, const VolumeLighting& l, const glm::dvec3& ijk,
+                               const glm::dvec3& color);
+
 // The interval [t0, t1] of the ray kept by the box, the clip and near/far; none when empty.
 std::optional<std::pair<double, double>> ray_interval(const VolumeSampler& s, const Clip& clip,
                                                       const glm::dvec3& origin, const glm::dvec3& dir, double t_near,
@@ -85,9 +101,12 @@ std::optional<std::pair<double, double>> ray_interval(const VolumeSampler& s, co
 // model's sampling (the reference) unless `tables` are given: then the
 // composite march is pre-integrated (preintegration.hpp) with those
 // tables, as the GPU's first frame marches it (look.integration is not
-// read: the reference stays the reference whatever the look).
+// read: the reference stays the reference whatever the look). With
+// `lighting`, each sample (pre-integrated: each segment, at its middle) is
+// shaded as the GPU shades it; without, flat (look.shading is not read).
 RayResult march_ray(const VolumeSampler& s, const VolumeLook& look, const Clip& clip, const glm::dvec3& origin,
                     const glm::dvec3& dir, double t_near, double t_far, std::span<const RayLayer> layers,
-                    double step_mm, double epsilon = 0, const TransferTables* tables = nullptr);
+                    double step_mm, double epsilon = 0, const TransferTables* tables = nullptr,
+                    const VolumeLighting* lighting = nullptr);
 
 } // namespace iso

@@ -23,12 +23,13 @@ layout(binding = 4) uniform sampler3D volume_tex;     // the values (normalized 
 layout(binding = 5) uniform usampler3D occupancy_tex; // per chunk: 1 marched, 0 empty
 layout(binding = 6) uniform sampler2D opaque_depth;   // the G-buffer's reversed-Z depth
 // clip[0..clip_count): half-spaces (normal, offset): kept where dot(n, p) >= offset.
-layout(std430, binding = 11) readonly buffer VolumeTables { vec4 clip_planes[16]; };
-// The transfer function's tables (renderer/volume/preintegration.hpp),
-// texel i at value tf_lut.x + i / tf_lut.y, linearly interpolated: layer 0
-// the classification (linear RGB, opacity per mm), layer 1 the integrals
-// (E = integral of tau c dv, P = integral of tau dv, from the first point).
-layout(binding = 7) uniform sampler1DArray tf_tables;
+// tf_table: the transfer function's tables (renderer/volume/preintegration.hpp),
+// texel i at value tf_lut.x + i / tf_lut.y, read interpolated between texels:
+// [0, n) the classification (linear RGB, opacity per mm), [n, 2n) the
+// integrals (n = tf_lut.z + 1 texels; E = integral of tau c dv, P = integral
+// of tau dv, from the first point). A buffer, not a texture: llvmpipe reads
+// it in less time (measured: 8 % of a pre-integrated frame).
+layout(std430, binding = 11) readonly buffer VolumeTables { vec4 clip_planes[16]; vec4 tf_table[]; };
 // Rays met, samples taken, samples skipped (empty chunks), rays ended early.
 layout(std430, binding = 12) buffer VolumeCounters { uint vol_rays; uint vol_samples; uint vol_skipped; uint vol_terminated; };
 
@@ -46,16 +47,20 @@ float vol_extreme_t = 0.0;
 vec4 vol_extreme_c = vec4(0.0);
 bool vol_extreme_pending = false;
 
-// The classification at v: one fetch (constant beyond the points: the texture clamps).
+// The classification at v: one lookup (constant beyond the points).
 vec4 tf_at(float v) {
-    return texture(tf_tables, vec2(((v - tf_lut.x) * tf_lut.y + 0.5) * tf_lut.z, 0.0));
+    float x = clamp((v - tf_lut.x) * tf_lut.y, 0.0, tf_lut.z);
+    int i = min(int(x), int(tf_lut.z) - 1);
+    return mix(tf_table[i], tf_table[i + 1], x - float(i));
 }
 
 // (E, P) at v; beyond the points extended by their constant (tau c, tau).
 vec4 tf_integral(float v) {
     if (v <= tf_lut.x) return tf_low_end * (v - tf_lut.x);
     if (v >= tf_lut.w) return tf_top + tf_high_end * (v - tf_lut.w);
-    return texture(tf_tables, vec2(((v - tf_lut.x) * tf_lut.y + 0.5) * tf_lut.z, 1.0));
+    float x = clamp((v - tf_lut.x) * tf_lut.y, 0.0, tf_lut.z);
+    int i = min(int(x), int(tf_lut.z) - 1), j = i + int(tf_lut.z) + 1;
+    return mix(tf_table[j], tf_table[j + 1], x - float(i));
 }
 
 // tau = -ln(1 - a) per mm, capped (kMaxExtinction).
@@ -224,8 +229,8 @@ void preint_segment(float vf, float vb, vec4 If, vec4 Ib, float len, vec3 idx_mi
 // ones) and b, one fetch each, every segment between two points integrated
 // for a value linear along it. A point in an empty chunk closes its
 // segment; the march then jumps to the chunk's last point: the segments
-// in between join values the tables map to nothing (the occupancy is
-// widened by a texel), so they would add exactly nothing.
+// in between, and the one jumped over, join values the tables map to
+// nothing (the occupancy is widened by a texel), so they add exactly nothing.
 void volume_preintegrated(float a, float b) {
     float n = ceil((b - a) / step_mm), h = (b - a) / n, o = fract(sample_offset + 0.5);
     float t_front = a, vf = vol_value(vol_o_idx + a * vol_d_idx);
@@ -254,15 +259,14 @@ void volume_preintegrated(float a, float b) {
                     vol_skipped_n += uint(n - k);
                     break;
                 }
-                // The last point still inside the chunk (a hair early).
+                // On to the last point still inside the chunk (a hair
+                // early): the segment from here to there joins two values
+                // of the chunk and adds exactly nothing. (Nothing is
+                // fetched here: llvmpipe would run it for every point.)
                 float last = floor((t_exit - a) / h - o - 1e-3);
-                if (last > k) {
+                if (last > k + 1.0) {
                     vol_skipped_n += uint(last - k - 1.0);
-                    k = last;
-                    t_front = a + (k + o) * h;
-                    vf = vol_value(vol_o_idx + t_front * vol_d_idx);
-                    If = tf_integral(vf);
-                    ++vol_samples_n;
+                    k = last - 1.0;
                 }
             }
         }

@@ -9,7 +9,7 @@ ISO_MEMBER(vec4, forward)                 // unit view axis, LPS
 ISO_MEMBER(vec4, dims_max)                // n - 1 per axis; w: chunk size (cells)
 ISO_MEMBER(vec4, chunk_counts)            // chunks per axis
 ISO_MEMBER(vec4, texel)                   // 1 / n per axis: index -> texture coordinate
-ISO_MEMBER(vec4, tf_lut)                  // the tables: first point's value, texels per value, 1 / texels, last point's value
+ISO_MEMBER(vec4, tf_lut)                  // the tables: first point's value, texels per value, the last texel, last point's value
 ISO_MEMBER(vec4, tf_low_end)              // (tau c, tau) below the first point
 ISO_MEMBER(vec4, tf_high_end)             // and above the last
 ISO_MEMBER(vec4, tf_top)                  // (E, P) at the last point

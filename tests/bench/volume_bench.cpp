@@ -1,22 +1,25 @@
 // Volume rendering benchmark (docs/volume_bench.md): our GPU ray casting
-// (composite) against the CPU reference march of the stated model
-// (renderer/volume/reference.hpp, double precision, a fine step) and VTK
+// (composite; pre-integrated and sampled, flat and lit) against the CPU
+// reference march of the stated model (renderer/volume/reference.hpp,
+// double precision, a fine step; lit: the GPU's gradient and lights) and VTK
 // 9.1's vtkGPUVolumeRayCastMapper (volume_peer under xvfb-run) on the same
 // volume, transfer function, camera and image size, in the same run.
 //
-// Per case: the reference (flat, step --ref-step voxels, TBB over rows) and
-// its time; ours, flat, at each step (voxels of the smallest spacing) with
-// and without empty-space skipping, frames alternated A/B, each timed as a
+// Per case: the references (flat and lit, step --ref-step voxels, TBB over
+// rows) and their times; ours at each step (voxels of the smallest
+// spacing): pre-integrated with and without empty-space skipping, sampled,
+// and both lit, frames alternated across them, each timed as a
 // frame drawn into an offscreen framebuffer and finished (glFinish), warm-up
 // frames dropped, the median of --reps; the samples taken and skipped; the
 // image with skipping against the one without (max difference, which should
 // be 0); the error of every image against the reference (RMSE, p99 and max
-// over all pixels, sRGB units 0..1); ours lit at the default step; 36 frames
+// over all pixels and over the volume's pixels, sRGB units 0..1); 36 frames
 // of a rotation at the moving step; VTK at the same steps (in mm) and its
-// rotation. Prints a table per case and writes volume_bench.csv and a
+// rotation. Prints a table per case, the fastest frame of each at equal
+// error (volume-pixel RMSE <= 0.003), and writes volume_bench.csv and a
 // time-vs-error plot.
 //
-//   volume_bench [--out DIR] [--size N] [--reps N] [--cases headsq,cta,ct512] [--steps 0.25,0.5,1,2]
+//   volume_bench [--out DIR] [--size N] [--reps N] [--cases headsq,cta,ct512] [--steps 0.25,0.5,1,2,4]
 //                [--ref-step 0.05] [--rotate 36] [--budget SECONDS] [--zoom 1.4]
 //                [--no-ref-check] [--quick] [--no-vtk] [--peer PATH]
 // --budget caps the timed frames of one setting (default 15 s; never fewer
@@ -54,7 +57,7 @@ struct Args {
     std::string out = "bench-results", peer = ISOSCOPE_VOLUME_PEER;
     int size = 384, reps = 10, rotate = 36;
     std::vector<std::string> cases{"headsq", "cta", "ct512"};
-    std::vector<double> steps{0.25, 0.5, 1.0, 2.0};
+    std::vector<double> steps{0.25, 0.5, 1.0, 2.0, 4.0};
     double ref_step = 0.05;
     double zoom = 1.4;    // the camera moved closer than the fitted view by this factor
     double budget_s = 15; // per setting's timed frames, at most (at least 3 frames)
@@ -115,8 +118,9 @@ glm::dvec3 stored_background(const glm::vec3& linear) {
 // The stated model marched per pixel centre (Camera::pixel_ray), flat, from
 // the near plane to the far plane, over the background; RGBA8 sRGB.
 Image reference_image(const Volume& v, const VolumeLook& look, const Camera& cam, int W, int H, double step_voxels,
-                      const glm::vec3& background, double& ms) {
+                      const glm::vec3& background, double& ms, bool lit = false) {
     const VolumeSampler sampler(v);
+    const VolumeLighting lighting = volume_lighting(sampler, look.tf, glm::dmat3(cam.view()));
     const double step_mm = step_voxels * sampler.min_spacing();
     const glm::dvec3 bg = stored_background(background);
     Image img;
@@ -129,8 +133,9 @@ Image reference_image(const Volume& v, const VolumeLook& look, const Camera& cam
         for (int x = 0; x < W; ++x) {
             const Ray ray = cam.pixel_ray(x + 0.5, y + 0.5, W, H);
             const double cosine = glm::dot(ray.dir, cam.forward());
-            const RayResult r = march_ray(sampler, look, Clip{}, ray.origin, ray.dir, cam.near_plane / cosine,
-                                          cam.far_plane / cosine, {}, step_mm, 1e-5);
+            const RayResult r =
+                march_ray(sampler, look, Clip{}, ray.origin, ray.dir, cam.near_plane / cosine, cam.far_plane / cosine,
+                          {}, step_mm, 1e-5, nullptr, lit ? &lighting : nullptr);
             const glm::dvec3 c = r.color + r.transmittance * bg;
             auto* px = &img.bytes[(std::size_t(y) * std::size_t(W) + std::size_t(x)) * 4];
             for (int i = 0; i < 3; ++i)
@@ -245,59 +250,69 @@ Row timed_row(const std::string& config, const std::vector<double>& ms, const Re
     return row;
 }
 
-// Ours at each step, with and without empty-space skipping (frames
-// alternated A/B; as many pairs as --reps and --budget allow), flat, with
-// errors against `ref`; then lit at the default step, and a frame without
-// the volume. One warm-up pair first (shaders, the texture upload).
-std::vector<Row> run_ours(Ours& ours, const Case& c, const Args& a, const Image& ref, const std::string& out_prefix) {
+// One configuration of ours at a step.
+struct Config {
+    std::string name;
+    VolumeIntegration integration;
+    bool skip, lit;
+};
+
+// Ours at each step: pre-integrated with and without empty-space skipping
+// and sampled, flat, then both lit; frames of a step alternated across the
+// configurations (as many rounds as --reps and --budget allow); errors of
+// flat images against the flat reference, of lit ones against the lit
+// reference; the skipping image against the one without. One warm-up round
+// first (shaders, the texture upload); then a frame without the volume.
+std::vector<Row> run_ours(Ours& ours, const Case& c, const Args& a, const Image& ref, const Image& lit_ref,
+                          const std::string& out_prefix) {
+    const std::vector<Config> configs{
+        {"flat, preintegrated", VolumeIntegration::Preintegrated, true, false},
+        {"flat, preintegrated, no skipping", VolumeIntegration::Preintegrated, false, false},
+        {"flat, sampled", VolumeIntegration::Sampled, true, false},
+        {"lit, preintegrated", VolumeIntegration::Preintegrated, true, true},
+        {"lit, sampled", VolumeIntegration::Sampled, true, true}};
     std::vector<Row> rows;
-    VolumeLook vl;
-    vl.enabled = true;
-    vl.tf = c.tf;
-    RenderResult r[2];
-    for (int s = 0; s < 2; ++s) {
-        vl.skip_empty = s == 0;
-        vl.step = a.steps.back();
-        ours.timed(ours.cam, ours.options(vl, true));
-    }
-    for (double step : a.steps) {
+    auto options = [&](const Config& k, double step) {
+        VolumeLook vl;
+        vl.enabled = true;
+        vl.tf = c.tf;
         vl.step = step;
-        RenderOptions o[2];
-        for (int s = 0; s < 2; ++s) {
-            vl.skip_empty = s == 0;
-            o[s] = ours.options(vl, true);
-        }
-        std::vector<double> ms[2];
+        vl.skip_empty = k.skip;
+        vl.integration = k.integration;
+        return ours.options(vl, !k.lit);
+    };
+    std::vector<RenderResult> r(configs.size());
+    for (std::size_t k = 0; k < configs.size(); ++k) ours.timed(ours.cam, options(configs[k], a.steps.back()));
+    for (double step : a.steps) {
+        std::vector<std::vector<double>> ms(configs.size());
         for (int f = 0, n = 1; f < n; ++f) {
-            for (int s = 0; s < 2; ++s) ms[s].push_back(ours.timed(ours.cam, o[s], &r[s]));
-            if (f == 0) n = reps_within(a, ms[0][0] + ms[1][0]);
+            double round = 0;
+            for (std::size_t k = 0; k < configs.size(); ++k) {
+                ms[k].push_back(ours.timed(ours.cam, options(configs[k], step), &r[k]));
+                round += ms[k].back();
+            }
+            if (f == 0) n = reps_within(a, round);
         }
         const int diff = max_channel_diff(r[0].image, r[1].image);
-        for (int s = 0; s < 2; ++s) {
-            Row row = timed_row(s == 0 ? "flat, skipping" : "flat, no skipping", ms[s], r[s], step);
-            add_error(row, r[s].image, ref);
-            if (s == 0)
+        for (std::size_t k = 0; k < configs.size(); ++k) {
+            Row row = timed_row(configs[k].name, ms[k], r[k], step);
+            add_error(row, r[k].image, configs[k].lit ? lit_ref : ref);
+            if (k == 0)
                 row.note += "; vs no skipping: max diff " + std::to_string(diff) + "/255; " +
                             std::to_string(r[0].volume.empty_chunks) + " of " + std::to_string(r[0].volume.chunks) +
                             " chunks empty";
             rows.push_back(row);
         }
-        char name[64];
-        std::snprintf(name, sizeof name, "_ours_step%g.png", step);
-        save_image(r[0].image, out_prefix + name);
+        for (std::size_t k : {std::size_t(0), std::size_t(2), std::size_t(3)}) {
+            char name[96];
+            std::snprintf(name, sizeof name, "_ours_%s_%s_step%g.png", configs[k].lit ? "lit" : "flat",
+                          volume_integration_name(configs[k].integration), step);
+            save_image(r[k].image, out_prefix + name);
+        }
     }
-    // Lit, default step, skipping (no error: the reference is flat).
-    vl = VolumeLook{};
-    vl.enabled = true;
-    vl.tf = c.tf;
-    const RenderOptions lit = ours.options(vl, false);
-    auto ms = frames(ours, a, lit, r[0]);
-    save_image(r[0].image, out_prefix + "_ours_lit.png");
-    rows.push_back(timed_row("lit, skipping", ms, r[0], vl.step));
-    rows.back().note += "; gradient shading: not the reference's model";
-    RenderOptions none = lit;
+    RenderOptions none = options(configs[0], 0.5);
     none.look.volume.enabled = false;
-    ms = frames(ours, a, none, r[1]);
+    const auto ms = frames(ours, a, none, r[1]);
     rows.push_back(timed_row("no volume (the frame's other passes)", ms, r[1], 0));
     return rows;
 }
@@ -407,6 +422,36 @@ std::vector<Row> run_vtk(const Args& a, const Case& c, const Volume& v, const Ca
     return rows;
 }
 
+// At equal error: per renderer and configuration, the fastest frame whose
+// volume-pixel RMSE is at most kEqualError, and ours against VTK's.
+constexpr double kEqualError = 0.003;
+void print_equal_error(const std::vector<Row>& rows) {
+    auto fastest = [&](const std::string& renderer, const std::string& config) -> const Row* {
+        const Row* best = nullptr;
+        for (const auto& r : rows)
+            if (r.renderer == renderer && r.config == config && r.fg_rmse >= 0 && r.fg_rmse <= kEqualError &&
+                (!best || r.ms < best->ms))
+                best = &r;
+        return best;
+    };
+    std::printf("\nAt equal error (volume-pixel RMSE <= %.3f), the fastest frame:\n\n", kEqualError);
+    const Row* vtk = fastest("VTK 9.1 GPU mapper", "flat");
+    for (const char* config : {"flat, preintegrated", "flat, sampled", "lit, preintegrated", "lit, sampled"}) {
+        const Row* r = fastest("isoscope GPU", config);
+        if (!r) {
+            std::printf("- isoscope %s: no step reaches it\n", config);
+            continue;
+        }
+        std::printf("- isoscope %s: %.1f ms at step %g (RMSE %.4f)", config, r->ms, r->step_vox, r->fg_rmse);
+        if (vtk && std::string(config).rfind("flat", 0) == 0) std::printf(", %.2fx VTK's time", r->ms / vtk->ms);
+        std::printf("\n");
+    }
+    if (vtk)
+        std::printf("- VTK flat: %.1f ms at step %g (RMSE %.4f)\n", vtk->ms, vtk->step_vox, vtk->fg_rmse);
+    else
+        std::printf("- VTK flat: no step reaches it (or VTK did not run)\n");
+}
+
 void print_rows(const std::string& title, const std::vector<Row>& rows) {
     std::printf("\n### %s\n\n", title.c_str());
     std::printf("| renderer | config | step vox | step mm | ms median | ms lo-hi | RMSE | volume px RMSE | p99 | max | "
@@ -492,11 +537,18 @@ std::vector<Row> run_case(const Args& a, const std::string& name, std::string& d
     const Image ref = reference_image(v, look.volume, cam, S, S, a.ref_step, look.background, ref_ms);
     const std::string prefix = a.out + "/volume_" + name;
     save_image(ref, prefix + "_reference.png");
+    std::fprintf(stderr, "[volume_bench] %s: lit reference (step %g voxel)\n", name.c_str(), a.ref_step);
+    double lit_ms = 0;
+    const Image lit_ref = reference_image(v, look.volume, cam, S, S, a.ref_step, look.background, lit_ms, true);
+    save_image(lit_ref, prefix + "_reference_lit.png");
     Row ref_row{"CPU reference (march_ray)", "flat, double", a.ref_step,
                 a.ref_step * std::min({v.spacing().x, v.spacing().y, v.spacing().z})};
     ref_row.ms = ref_ms;
     ref_row.note = "2 threads (TBB); one frame";
-    std::vector<Row> rows{ref_row};
+    Row lit_row = ref_row;
+    lit_row.config = "lit (the GPU's gradient and lights), double";
+    lit_row.ms = lit_ms;
+    std::vector<Row> rows{ref_row, lit_row};
     if (a.ref_check) {
         double ms = 0;
         const Image coarse = reference_image(v, look.volume, cam, S, S, 2 * a.ref_step, look.background, ms);
@@ -509,7 +561,7 @@ std::vector<Row> run_case(const Args& a, const std::string& name, std::string& d
     }
     std::fprintf(stderr, "[volume_bench] %s: isoscope\n", name.c_str());
     Ours ours{scene, cam, S, S};
-    for (auto& r : run_ours(ours, c, a, ref, prefix)) rows.push_back(r);
+    for (auto& r : run_ours(ours, c, a, ref, lit_ref, prefix)) rows.push_back(r);
     const double min_spacing = VolumeSampler(v).min_spacing();
     rows.push_back(run_rotation(ours, c.tf, min_spacing, a.rotate, false));
     scene.release_gpu();
@@ -526,6 +578,7 @@ std::vector<Row> run_case(const Args& a, const std::string& name, std::string& d
     char title[512];
     std::snprintf(title, sizeof title, "%s: %dx%d, VTK's GL renderer: %s", description.c_str(), S, S, renderer.c_str());
     print_rows(title, rows);
+    print_equal_error(rows);
     return rows;
 }
 
@@ -534,10 +587,13 @@ void write_plot(const Args& a, const std::vector<std::pair<std::string, std::vec
     std::ofstream gp(gp_file);
     gp << "set terminal pngcairo size " << 480 * int(all.size()) << ",440\nset output '" << a.out
        << "/volume_bench.png'\nset multiplot layout 1," << all.size()
-       << "\nset logscale xy\nset xlabel 'ms per frame (llvmpipe, 2 cores)'\nset ylabel 'RMSE vs reference (sRGB)'\n"
+       << "\nset logscale xy\nset xlabel 'ms per frame (llvmpipe, 2 cores)'\nset ylabel 'volume-pixel RMSE vs "
+          "reference (sRGB)'\n"
        << "set key bottom left\nset grid\n";
-    const std::vector<std::pair<std::string, std::string>> series{
-        {"isoscope GPU", "flat, skipping"}, {"isoscope GPU", "flat, no skipping"}, {"VTK 9.1 GPU mapper", "flat"}};
+    const std::vector<std::pair<std::string, std::string>> series{{"isoscope GPU", "flat, preintegrated"},
+                                                                  {"isoscope GPU", "flat, sampled"},
+                                                                  {"isoscope GPU", "lit, preintegrated"},
+                                                                  {"VTK 9.1 GPU mapper", "flat"}};
     for (const auto& [name, rows] : all) {
         gp << "set title '" << name << " (labels: step in voxels)'\nplot";
         for (std::size_t i = 0; i < series.size(); ++i)
@@ -547,8 +603,8 @@ void write_plot(const Args& a, const std::vector<std::pair<std::string, std::vec
         for (const auto& s : series)
             for (int pass = 0; pass < 2; ++pass) {
                 for (const auto& r : rows)
-                    if (r.renderer == s.first && r.config == s.second && r.rmse >= 0)
-                        gp << r.ms << " " << std::max(r.rmse, 1e-4) << " " << r.step_vox << "\n";
+                    if (r.renderer == s.first && r.config == s.second && r.fg_rmse >= 0)
+                        gp << r.ms << " " << std::max(r.fg_rmse, 1e-4) << " " << r.step_vox << "\n";
                 gp << "e\n";
             }
     }
@@ -565,7 +621,7 @@ int main(int argc, char** argv) {
     try {
         if (!parse(argc, argv, a)) {
             std::cerr << "usage: volume_bench [--out DIR] [--size N] [--reps N] [--cases headsq,cta,ct512] "
-                         "[--steps 0.25,0.5,1,2] [--ref-step 0.05] [--rotate 36] [--budget S] [--zoom F] "
+                         "[--steps 0.25,0.5,1,2,4] [--ref-step 0.05] [--rotate 36] [--budget S] [--zoom F] "
                          "[--no-ref-check] [--quick] [--no-vtk] "
                          "[--peer PATH]\n";
             return 2;

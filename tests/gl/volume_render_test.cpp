@@ -64,14 +64,15 @@ RenderOptions flat_options(int size, const std::string& tf, double step = 0.5) {
 }
 
 // The reference's pixel: its colour over the background, sRGB-encoded, 0..1.
-// With `tables`, the CPU's pre-integrated march (as the GPU's first frame).
+// With `tables`, the CPU's pre-integrated march (as the GPU's first
+// frame); with `lighting`, shaded as the GPU shades.
 glm::dvec3 reference_pixel(const VolumeSampler& s, const Camera& cam, const RenderOptions& o, int x, int y,
                            double step_mm, const std::vector<RayLayer>& layers = {},
-                           const TransferTables* tables = nullptr) {
+                           const TransferTables* tables = nullptr, const VolumeLighting* lighting = nullptr) {
     const Ray r = cam.pixel_ray(x + 0.5, y + 0.5, o.width, o.height);
     const double cosine = glm::dot(r.dir, cam.forward());
     const RayResult m = march_ray(s, o.look.volume, o.look.clip, r.origin, r.dir, cam.near_plane / cosine,
-                                  cam.far_plane / cosine, layers, step_mm, 0.0, tables);
+                                  cam.far_plane / cosine, layers, step_mm, 0.0, tables, lighting);
     const glm::dvec3 c = m.color + m.transmittance * glm::dvec3(kBackground);
     return {srgb_from_linear(c.r), srgb_from_linear(c.g), srgb_from_linear(c.b)};
 }
@@ -165,6 +166,41 @@ TEST_F(VolumeRender, ABallInAnObliqueAnisotropicVolumeMatchesTheReference) {
         EXPECT_LE(fine.max, 0.05);
         std::printf("ball, %s: same march rmse %.5f max %.5f; fine step rmse %.5f max %.5f\n",
                     volume_integration_name(integration), same.rmse, same.max, fine.rmse, fine.max);
+    }
+}
+
+TEST_F(VolumeRender, LitVolumesMatchTheLitReference) {
+    // The oblique ball, gradient shading on: the GPU's gradient and lights
+    // against the CPU's (reference.hpp, VolumeLighting), both marches.
+    glm::dmat4 m = glm::rotate(glm::dmat4(1.0), 0.6, glm::normalize(glm::dvec3(1, 2, 3)));
+    m = glm::translate(glm::dmat4(1.0), glm::dvec3(-30, 12, 40)) * m * glm::scale(glm::dmat4(1.0), {0.8, 1.0, 1.3});
+    const auto v = make_volume({41, 33, 25}, m, [&](double i, double j, double k) {
+        const double r =
+            std::sqrt(std::pow((i - 20) * 0.8, 2) + std::pow((j - 16) * 1.0, 2) + std::pow((k - 12) * 1.3, 2));
+        return 1000.0 * std::exp(-r * r / 120.0);
+    });
+    Renderer ren;
+    ren.set_volume(v);
+    const glm::dvec3 centre = v->index_to_world({20, 16, 12});
+    const Camera cam = looking(centre + glm::dvec3(70, -90, 40), centre, {0, 0, 1}, 1, 1000);
+    RenderOptions o = flat_options(64, "100:0:#2040ff,400:0.08:#ff8000,800:0.3:#ffffff");
+    o.look.flat_shading = false;
+    const VolumeSampler s(*v);
+    const VolumeLighting light = volume_lighting(s, o.look.volume.tf, glm::dmat3(cam.view()));
+    const TransferTables tables(o.look.volume.tf);
+    const double step = 0.5 * 0.8;
+    for (auto integration : {VolumeIntegration::Sampled, VolumeIntegration::Preintegrated}) {
+        o.look.volume.integration = integration;
+        const RenderResult r = ren.render(cam, o);
+        const TransferTables* t = integration == VolumeIntegration::Preintegrated ? &tables : nullptr;
+        const PixelError same =
+            compare(r.image, [&](int x, int y) { return reference_pixel(s, cam, o, x, y, step, {}, t, &light); });
+        const PixelError flat = compare(r.image, [&](int x, int y) { return reference_pixel(s, cam, o, x, y, step); });
+        std::printf("lit ball, %s: vs lit reference rmse %.5f max %.5f; vs flat reference rmse %.4f\n",
+                    volume_integration_name(integration), same.rmse, same.max, flat.rmse);
+        EXPECT_LE(same.rmse, 0.003);
+        EXPECT_LE(same.max, 0.03);
+        EXPECT_GE(flat.rmse, 5 * same.rmse); // the shading is there, and it is the reference's
     }
 }
 
