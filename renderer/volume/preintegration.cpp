@@ -109,7 +109,11 @@ glm::dvec4 TransferTables::integral(double v) const {
     return glm::mix(integral_[std::size_t(i)], integral_[std::size_t(i) + 1], x - i);
 }
 
-SegmentLight TransferTables::segment(double vf, double vb, double h) const {
+double TransferTables::middle(double vp, double v0, double v1, double vn) {
+    return std::clamp((9.0 * (v0 + v1) - vp - vn) / 16.0, std::min(v0, v1), std::max(v0, v1));
+}
+
+SegmentLight TransferTables::segment(double vf, double vm, double vb, double h) const {
     // One half: its optical depth and tau-weighted mean colour; within a
     // texel's width of a constant value, the classification at its mean
     // (the integrals' difference would cancel).
@@ -127,7 +131,6 @@ SegmentLight TransferTables::segment(double vf, double vb, double h) const {
         }
         return std::pair{std::exp(-depth), color};
     };
-    const double vm = 0.5 * (vf + vb);
     const auto [k1, c1] = half(vf, vm);
     const auto [k2, c2] = half(vm, vb);
     return {(1.0 - k1) * c1 + k1 * (1.0 - k2) * c2, k1 * k2};

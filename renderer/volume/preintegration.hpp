@@ -11,13 +11,20 @@
 // exact for any h and any pair of values; and it emits, front to back,
 //     integral over s of tau c exp(-optical depth up to s) ds.
 // The colour is taken as tau-weighted mean colour (E(vb) - E(vf)) /
-// (P(vb) - P(vf)), E(v) = integral of tau c dv, per half of the segment
-// (split at the mean value), the front half in front of the back one: exact
-// where the colour is constant over the segment's values, a second-order
-// error (in the half's optical depth times its change of colour) where it
-// varies. Measured on a smoothed angiogram phantom (256^2, flat): at step 2
-// the image error of the two halves 0.0054 against 0.0056 for the exact
-// integral of linear values, one whole segment 0.0090.
+// (P(vb) - P(vf)), E(v) = integral of tau c dv, per half of the segment,
+// the front half in front of the back one: exact where the colour is
+// constant over the segment's values, a second-order error (in the half's
+// optical depth times its change of colour) where it varies. The march
+// splits each segment at a middle value from the cubic through its ends and
+// their neighbours (Catmull-Rom, no extra fetch), kept between its ends.
+// Measured on the angiogram phantom smoothed as a CT kernel would (Gaussian
+// sigma 2.5 voxels; 256^2, flat, RMSE against a 0.05-voxel march), step 2
+// and 4 voxels: sampled 0.0263 / 0.0505; one segment, linear 0.0090 /
+// 0.0245; halves at the mean value 0.0054 / 0.0169 (the exact integral of
+// linear values: 0.0056 / 0.0179); halves at the cubic's middle 0.0037 /
+// 0.0128. Unsmoothed (sharp 1-voxel walls, vessels of 1-6 voxels) every
+// variant stays near the sampled error: there the values between samples
+// are not near linear at all.
 //
 // Why tables of P and E and not Engel's 2D table of (vf, vb): these hold
 // for every segment length (the drag frames' step and the still frames'
@@ -77,7 +84,14 @@ public:
     // (E, P) at v, interpolated, extended linearly beyond the points.
     glm::dvec4 integral(double v) const;
     // A segment of h mm, value linear from vf to vb (the model above).
-    SegmentLight segment(double vf, double vb, double h) const;
+    SegmentLight segment(double vf, double vb, double h) const { return segment(vf, 0.5 * (vf + vb), vb, h); }
+    // A segment of h mm whose value runs linearly from vf to vm over its
+    // first half and from vm to vb over its second.
+    SegmentLight segment(double vf, double vm, double vb, double h) const;
+    // The middle value the march takes for the segment from v0 to v1 with
+    // neighbours vp (before) and vn (after), equally spaced: the cubic
+    // through the four (Catmull-Rom), kept between v0 and v1.
+    static double middle(double vp, double v0, double v1, double vn);
 
 private:
     TransferFunction tf_;

@@ -193,21 +193,25 @@ void composite_piece(const VolumeSampler& s, const VolumeLook& look, const Volum
 }
 
 // The pre-integrated march over [a, b] (preintegration.hpp), as the GPU
-// marches it in its first frame: points a, a + k h (0 < k < n) and b, every
-// segment between two of them integrated for a value linear along it.
+// marches it in its first frame: points a + k h (k = 0..n, b the last),
+// every segment between two of them integrated in two halves, the middle
+// value from the cubic through its ends and their neighbours (the points
+// one step beyond a and b included).
 void preintegrated_piece(const VolumeSampler& s, const TransferTables& tables, const VolumeLighting* lighting,
                          const glm::dvec3& origin, const glm::dvec3& dir, double a, double b, double step,
                          double epsilon, Accumulator& acc, RayResult& out) {
     if (!(b > a)) return;
     const auto n = std::int64_t(std::ceil((b - a) / step));
     const double h = (b - a) / double(n);
-    double vf = s.at_index(s.to_index(origin + a * dir));
-    ++out.samples;
+    auto value = [&](std::int64_t k) {
+        ++out.samples;
+        return s.at_index(s.to_index(origin + (k == n ? b : a + double(k) * h) * dir));
+    };
+    double vp = value(-1), vf = value(0), vb = value(1);
     for (std::int64_t k = 1; k <= n && acc.transmittance >= epsilon; ++k) {
         const double t = k < n ? a + double(k) * h : b;
-        const double vb = s.at_index(s.to_index(origin + t * dir));
-        ++out.samples;
-        SegmentLight seg = tables.segment(vf, vb, h);
+        const double vn = value(k + 1);
+        SegmentLight seg = tables.segment(vf, TransferTables::middle(vp, vf, vb, vn), vb, h);
         if (lighting && seg.transmittance < 1.0) { // shaded at the segment's middle, as a colour
             const glm::dvec3 mid = s.to_index(origin + (t - 0.5 * h) * dir);
             const double alpha = 1.0 - seg.transmittance;
@@ -224,7 +228,9 @@ void preintegrated_piece(const VolumeSampler& s, const TransferTables& tables, c
             out.t_half = t - h + std::clamp(x, 0.0, h);
             out.value_half = vf + (vb - vf) * std::clamp(x / h, 0.0, 1.0);
         }
+        vp = vf;
         vf = vb;
+        vb = vn;
     }
 }
 

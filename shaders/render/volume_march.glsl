@@ -210,9 +210,9 @@ vec4 preint_half(float va, float vb, vec4 Ia, vec4 Ib, vec4 c, float hh) {
     return vec4(color, exp(-hh * tau));
 }
 
-// One segment of len mm from value vf to vb, split at the mean value.
-void preint_segment(float vf, float vb, vec4 If, vec4 Ib, float len, vec3 idx_mid) {
-    float vm = 0.5 * (vf + vb);
+// One segment of len mm from value vf through vm (its middle) to vb,
+// linear in each half.
+void preint_segment(float vf, float vm, float vb, vec4 If, vec4 Ib, float len, vec3 idx_mid) {
     vec4 Im = tf_integral(vm), c = tf_at(vm);
     vec4 h1 = preint_half(vf, vm, If, Im, c, 0.5 * len), h2 = preint_half(vm, vb, Im, Ib, c, 0.5 * len);
     float keep = h1.a * h2.a;
@@ -224,51 +224,69 @@ void preint_segment(float vf, float vb, vec4 If, vec4 Ib, float len, vec3 idx_mi
     transmittance *= keep;
 }
 
-// The pre-integrated march over [a, b] (preintegration.hpp): the points
-// a, a + (k + o) h (k < n; o = 0 in the first frame, spread in accumulated
-// ones) and b, one fetch each, every segment between two points integrated
-// for a value linear along it. A point in an empty chunk closes its
-// segment; the march then jumps to the chunk's last point: the segments
-// in between, and the one jumped over, join values the tables map to
-// nothing (the occupancy is widened by a texel), so they add exactly nothing.
+// Point k of the pre-integrated march over [a, b] (n steps of h; s the
+// frame's shift, 0 in the first frame; b is point K): a, the interior
+// points a + (k - s) h, b, and one point beyond each end (read only for
+// the shape of the values, as the texture clamps).
+float preint_point(float k, float a, float b, float h, float s, float K) {
+    if (k <= 0.0) return a + k * h;
+    if (k >= K) return b + (k - K) * h;
+    return a + (k - s) * h;
+}
+
+// The pre-integrated march over [a, b] (preintegration.hpp), one fetch per
+// point: every segment between two points integrated for values linear in
+// each half, the middle value from the cubic through the segment's ends
+// and their neighbours (Catmull-Rom), kept between the ends. Each fetch is
+// a point ahead of the segment it completes.
+//
+// Skipping: a point in an empty chunk (F) is fetched; once the one after it
+// is, the march jumps ahead to the chunk's last point but one. Segments
+// with both ends in the chunk add exactly nothing (their values, middle
+// included, stay within the chunk's range, which the tables map to nothing:
+// the occupancy is widened by a texel), so the ones jumped over, and the
+// two composited from the jump's stale values, would have added nothing,
+// and every other segment sees its true neighbours: the image is the same.
 void volume_preintegrated(float a, float b) {
     float n = ceil((b - a) / step_mm), h = (b - a) / n, o = fract(sample_offset + 0.5);
-    float t_front = a, vf = vol_value(vol_o_idx + a * vol_d_idx);
-    vec4 If = tf_integral(vf);
-    ++vol_samples_n;
-    for (float k = o > 0.0 ? 0.0 : 1.0; k <= n; k += 1.0) {
+    float s = o > 0.0 ? 1.0 - o : 0.0, K = o > 0.0 ? n + 1.0 : n;
+    // Points k - 3 .. k - 1 of the loop's k: vp, v0 (at t0), v1 (at t1).
+    float t0 = a, t1 = preint_point(1.0, a, b, h, s, K);
+    float vp = vol_value(vol_o_idx + (a - h) * vol_d_idx), v0 = vol_value(vol_o_idx + a * vol_d_idx);
+    float v1 = vol_value(vol_o_idx + t1 * vol_d_idx);
+    vec4 I0 = tf_integral(v0), I1 = tf_integral(v1);
+    vol_samples_n += 3u;
+    float jump_when = -1.0, jump_to = 0.0;
+    for (float k = 2.0; k <= K + 1.0; k += 1.0) {
         if (transmittance < vol_epsilon) break;
-        float tb = k < n ? a + (k + o) * h : b;
-        vec3 idx = vol_o_idx + tb * vol_d_idx;
-        float vb = vol_value(idx);
+        float t2 = preint_point(k, a, b, h, s, K);
+        vec3 idx = vol_o_idx + t2 * vol_d_idx;
+        float v2 = vol_value(idx);
         ++vol_samples_n;
-        // Both ends where the opacity is 0 on one side: the linear values
-        // between them too; the segment adds nothing.
-        vec4 Ib = tf_integral(vb);
-        if (!(max(vf, vb) <= tf_clear.x || min(vf, vb) >= tf_clear.y))
-            preint_segment(vf, vb, If, Ib, tb - t_front, vol_o_idx + 0.5 * (t_front + tb) * vol_d_idx);
-        If = Ib;
-        t_front = tb;
-        vf = vb;
-        if (skip_empty && !(tb < vol_chunk_end) && k < n) {
+        float vm = clamp((9.0 * (v0 + v1) - vp - v2) / 16.0, min(v0, v1), max(v0, v1));
+        // Both ends where the opacity is 0 on one side: the segment adds nothing.
+        if (!(max(v0, v1) <= tf_clear.x || min(v0, v1) >= tf_clear.y))
+            preint_segment(v0, vm, v1, I0, I1, t1 - t0, vol_o_idx + 0.5 * (t0 + t1) * vol_d_idx);
+        vp = v0;
+        v0 = v1;
+        v1 = v2;
+        t0 = t1;
+        t1 = t2;
+        I0 = I1;
+        I1 = tf_integral(v2);
+        if (skip_empty && !(t2 < vol_chunk_end) && k < K && jump_when < k) {
             bool empty;
             float t_exit = vol_chunk_exit(idx, empty);
             vol_chunk_end = empty ? -3.0e38 : t_exit;
             if (empty) {
-                if (t_exit >= b) {   // the rest of the piece lies in the empty chunk
-                    vol_skipped_n += uint(n - k);
-                    break;
-                }
-                // On to the last point still inside the chunk (a hair
-                // early): the segment from here to there joins two values
-                // of the chunk and adds exactly nothing. (Nothing is
-                // fetched here: llvmpipe would run it for every point.)
-                float last = floor((t_exit - a) / h - o - 1e-3);
-                if (last > k + 1.0) {
-                    vol_skipped_n += uint(last - k - 1.0);
-                    k = last - 1.0;
-                }
+                // The chunk's last point (a hair early) and when to jump.
+                jump_to = min(floor((t_exit - a) / h + s - 1e-3), K);
+                jump_when = k + 1.0;
             }
+        }
+        if (k == jump_when && jump_to - 1.0 > k + 1.0) {
+            vol_skipped_n += uint(jump_to - 2.0 - k);
+            k = jump_to - 2.0;
         }
     }
 }

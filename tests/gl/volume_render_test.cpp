@@ -230,10 +230,11 @@ TEST_F(VolumeRender, PreintegrationKeepsAThinShellAtLargeSteps) {
         }
         std::printf("thin shell, step %g: sampled rmse %.4f, pre-integrated %.4f\n", step,
                     err[int(VolumeIntegration::Sampled)], err[int(VolumeIntegration::Preintegrated)]);
-        // Measured: sampled 0.050 / 0.064, pre-integrated 0.0031 / 0.0103
-        // (the values along a ray through a cone-shaped ball are not linear).
-        EXPECT_LE(err[int(VolumeIntegration::Preintegrated)], step < 3 ? 0.005 : 0.015) << step;
-        EXPECT_LE(err[int(VolumeIntegration::Preintegrated)], 0.25 * err[int(VolumeIntegration::Sampled)]) << step;
+        // Measured: sampled 0.050 / 0.064, pre-integrated 0.0024 / 0.0036
+        // (0.0031 / 0.0103 with each segment linear: the values along a ray
+        // through a cone-shaped ball are not, the cubic's middle follows them).
+        EXPECT_LE(err[int(VolumeIntegration::Preintegrated)], step < 3 ? 0.004 : 0.006) << step;
+        EXPECT_LE(err[int(VolumeIntegration::Preintegrated)], 0.1 * err[int(VolumeIntegration::Sampled)]) << step;
     }
 }
 
