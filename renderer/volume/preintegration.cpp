@@ -113,23 +113,23 @@ double TransferTables::middle(double vp, double v0, double v1, double vn) {
     return std::clamp((9.0 * (v0 + v1) - vp - vn) / 16.0, std::min(v0, v1), std::max(v0, v1));
 }
 
+glm::dvec4 TransferTables::slope(double v) const {
+    if (v <= lo_ || !last_) return lo_end_;
+    if (v >= hi_) return hi_end_;
+    const int i = std::min(int((v - lo_) / width_), last_ - 1);
+    return (integral_[std::size_t(i) + 1] - integral_[std::size_t(i)]) / width_;
+}
+
 SegmentLight TransferTables::segment(double vf, double vm, double vb, double h) const {
     // One half: its optical depth and tau-weighted mean colour; within a
-    // texel's width of a constant value, the classification at its mean
-    // (the integrals' difference would cancel).
+    // texel's width of a constant value, from the integrals' slope at the
+    // segment's middle value (their difference would cancel).
+    const glm::dvec4 at_middle = slope(vm);
     auto half = [&](double a, double b) {
-        double depth = 0;
-        glm::dvec3 color(0.0);
-        if (!(std::abs(b - a) >= width_) || last_ == 0) {
-            const glm::dvec4 c = classify(0.5 * (a + b));
-            depth = 0.5 * h * extinction(c.a);
-            color = glm::dvec3(c);
-        } else {
-            const glm::dvec4 d = integral(b) - integral(a);
-            depth = 0.5 * h * d.w / (b - a);
-            if (d.w != 0.0) color = glm::dvec3(d) / d.w;
-        }
-        return std::pair{std::exp(-depth), color};
+        const glm::dvec4 d =
+            !(std::abs(b - a) >= width_) || last_ == 0 ? at_middle : (integral(b) - integral(a)) / (b - a);
+        const glm::dvec3 color = d.w > 0.0 ? glm::dvec3(d) / d.w : glm::dvec3(0.0);
+        return std::pair{std::exp(-0.5 * h * d.w), color};
     };
     const auto [k1, c1] = half(vf, vm);
     const auto [k2, c2] = half(vm, vb);

@@ -83,6 +83,9 @@ public:
     glm::dvec4 classify(double v) const;
     // (E, P) at v, interpolated, extended linearly beyond the points.
     glm::dvec4 integral(double v) const;
+    // Their slope at v: (tau c, tau) averaged over the interval between the
+    // two texels v lies between (beyond the points: the ends' own).
+    glm::dvec4 slope(double v) const;
     // A segment of h mm, value linear from vf to vb (the model above).
     SegmentLight segment(double vf, double vb, double h) const { return segment(vf, 0.5 * (vf + vb), vb, h); }
     // A segment of h mm whose value runs linearly from vf to vm over its

@@ -37,9 +37,9 @@ vec3 vol_origin;      // eye, LPS
 vec3 vol_dir;         // unit, LPS
 vec3 vol_o_idx;       // eye in index space
 vec3 vol_d_idx;       // direction in index space (per mm)
+vec3 vol_inv_d;       // 1 / vol_d_idx (3e38 where 0)
+vec3 vol_ahead;       // per axis 1 where the ray runs towards higher indices, else 0
 float vol_t0 = 0.0, vol_t1 = -1.0; // the kept interval
-// The occupied chunk the last sample lay in ends here: until then no lookup.
-float vol_chunk_end = -3.0e38;
 float vol_at = 0.0;   // composited up to here
 uint vol_samples_n = 0u, vol_skipped_n = 0u;
 // MIP / MinIP: the extreme sample and whether it was composited yet.
@@ -63,6 +63,18 @@ vec4 tf_integral(float v) {
     return mix(tf_table[j], tf_table[j + 1], x - float(i));
 }
 
+// (E, P) at v, and their slope there, (tau c, tau) averaged over the
+// texel's interval (from the same two texels: no further lookup).
+vec4 tf_integral(float v, out vec4 slope) {
+    float x = clamp((v - tf_lut.x) * tf_lut.y, 0.0, tf_lut.z);
+    int i = min(int(x), int(tf_lut.z) - 1), j = i + int(tf_lut.z) + 1;
+    vec4 a = tf_table[j], b = tf_table[j + 1];
+    slope = v <= tf_lut.x ? tf_low_end : v >= tf_lut.w ? tf_high_end : (b - a) * tf_lut.y;
+    if (v <= tf_lut.x) return tf_low_end * (v - tf_lut.x);
+    if (v >= tf_lut.w) return tf_top + tf_high_end * (v - tf_lut.w);
+    return mix(a, b, x - float(i));
+}
+
 // tau = -ln(1 - a) per mm, capped (kMaxExtinction).
 float vol_extinction(float a) { return a >= 1.0 ? 20.72 : min(-log(1.0 - a), 20.72); }
 
@@ -84,6 +96,8 @@ bool volume_begin(ivec2 p) {
     vol_dir = normalize(b.xyz / b.w - a.xyz / a.w);
     vol_o_idx = (lps_to_index * vec4(vol_origin, 1.0)).xyz;
     vol_d_idx = (lps_to_index * vec4(vol_dir, 0.0)).xyz;
+    vol_ahead = vec3(greaterThanEqual(vol_d_idx, vec3(0.0)));
+    for (int k = 0; k < 3; ++k) vol_inv_d[k] = vol_d_idx[k] == 0.0 ? 3.0e38 : 1.0 / vol_d_idx[k];
     float cosine = dot(vol_dir, forward.xyz);
     float t0 = vol_near_far.x / cosine, t1 = vol_t_of_depth(texelFetch(opaque_depth, p, 0).r);
     for (int k = 0; k < 3; ++k) {
@@ -149,72 +163,74 @@ vec3 vol_shaded(vec3 idx, vec3 color) {
 }
 
 // The chunk a sample lies in, and the ray's t where it leaves that chunk.
+// Branch-free (llvmpipe runs this for every sample): the faces ahead on
+// each axis, an axis the ray runs parallel to never the nearest.
 float vol_chunk_exit(vec3 idx, out bool empty) {
     float S = dims_max.w;
     vec3 c = clamp(floor(idx / S), vec3(0.0), chunk_counts.xyz - 1.0);
     empty = texelFetch(occupancy_tex, ivec3(c), 0).r == 0u;
-    float t_exit = 3.0e38;
-    for (int k = 0; k < 3; ++k) {
-        if (vol_d_idx[k] == 0.0) continue;
-        float face = vol_d_idx[k] > 0.0 ? (c[k] + 1.0) * S : c[k] * S;
-        t_exit = min(t_exit, (face - vol_o_idx[k]) / vol_d_idx[k]);
-    }
-    return t_exit;
+    vec3 t = ((c + vol_ahead) * S - vol_o_idx) * vol_inv_d;
+    return min(min(t.x, t.y), t.z);
 }
 
 #ifndef VOLUME_PREINTEGRATED
 // The sampled march over [a, b]: n equal steps, each sample's
-// classification held over its step (the stated model's sampling).
+// classification held over its step (the stated model's sampling). One
+// round per chunk the ray meets: its occupancy looked up once, then its
+// samples (an inner loop with no lookup: llvmpipe would run a lookup's
+// code for every sample, taken or not); an empty chunk's samples are
+// skipped: they would have added exactly nothing.
 void volume_sampled(float a, float b) {
-    float n = ceil((b - a) / step_mm), h = (b - a) / n;
-    for (float k = 0.0; k < n; k += 1.0) {
+    float n = ceil((b - a) / step_mm), h = (b - a) / n, k = 0.0;
+    for (float round = 0.0; k < n && round < n; round += 1.0) {
         if (transmittance < vol_epsilon) break;
-        float ts = a + (k + sample_offset) * h;
-        vec3 idx = vol_o_idx + ts * vol_d_idx;
-        if (skip_empty && !(ts < vol_chunk_end)) {
+        float end = n;
+        if (skip_empty) {
             bool empty;
-            float t_exit = vol_chunk_exit(idx, empty);
-            vol_chunk_end = empty ? -3.0e38 : t_exit;   // an occupied chunk's samples need no lookup
+            float t_exit = vol_chunk_exit(vol_o_idx + (a + (k + sample_offset) * h) * vol_d_idx, empty);
+            // The first sample at or beyond the chunk's exit (a hair early:
+            // a sample found still inside is looked up again next round).
+            end = min(n, max(k + 1.0, ceil((t_exit - a) / h - sample_offset - 1e-3)));
             if (empty) {
-                // The first sample at or beyond the chunk's exit (a hair early:
-                // a sample found still inside is skipped again next time round).
-                float next = max(k + 1.0, ceil((t_exit - a) / h - sample_offset - 1e-3));
-                vol_skipped_n += uint(min(next, n) - k);
-                k = next - 1.0;
+                vol_skipped_n += uint(end - k);
+                k = end;
                 continue;
             }
         }
-        ++vol_samples_n;
-        float v = vol_value(idx);
-        if (v <= tf_clear.x || v >= tf_clear.y) continue;   // opacity 0: no lookup
-        vec4 c = tf_at(v);
-        if (c.a <= 0.0) continue;
-        float keep = exp2(h * log2(1.0 - c.a));   // (1 - a)^h
-        acc += transmittance * (1.0 - keep) * vol_shaded(idx, c.rgb);
-        transmittance *= keep;
+        for (; k < end; k += 1.0) {
+            if (transmittance < vol_epsilon) break;
+            vec3 idx = vol_o_idx + (a + (k + sample_offset) * h) * vol_d_idx;
+            ++vol_samples_n;
+            float v = vol_value(idx);
+            if (v <= tf_clear.x || v >= tf_clear.y) continue;   // opacity 0: no lookup
+            vec4 c = tf_at(v);
+            if (c.a <= 0.0) continue;
+            float keep = exp2(h * log2(1.0 - c.a));   // (1 - a)^h
+            acc += transmittance * (1.0 - keep) * vol_shaded(idx, c.rgb);
+            transmittance *= keep;
+        }
     }
 }
 
 #else
 // Half of a pre-integrated segment, hh mm, value linear from va to vb
 // (integrals Ia, Ib): its tau-weighted colour and transmittance. Within a
-// texel's width of a constant value, the classification c at the
-// segment's mean value (the integrals' difference would cancel).
-// TransferTables::segment, on the CPU.
-vec4 preint_half(float va, float vb, vec4 Ia, vec4 Ib, vec4 c, float hh) {
+// texel's width of a constant value, the integrals' slope at the segment's
+// middle value (their difference would cancel). TransferTables::segment,
+// on the CPU.
+vec4 preint_half(float va, float vb, vec4 Ia, vec4 Ib, vec4 slope, float hh) {
     float dv = vb - va;
-    vec4 d = Ib - Ia;
     bool flat_ = !(abs(dv) >= tf_width);
-    float tau = flat_ ? vol_extinction(c.a) : d.w / dv;
-    vec3 color = flat_ ? c.rgb : d.w != 0.0 ? d.rgb / d.w : vec3(0.0);
-    return vec4(color, exp(-hh * tau));
+    vec4 d = flat_ ? slope : (Ib - Ia) * (1.0 / dv);   // (tau c, tau), averaged
+    return vec4(d.w > 0.0 ? d.rgb * (1.0 / d.w) : vec3(0.0), exp(-hh * d.w));
 }
 
 // One segment of len mm from value vf through vm (its middle) to vb,
 // linear in each half.
 void preint_segment(float vf, float vm, float vb, vec4 If, vec4 Ib, float len, vec3 idx_mid) {
-    vec4 Im = tf_integral(vm), c = tf_at(vm);
-    vec4 h1 = preint_half(vf, vm, If, Im, c, 0.5 * len), h2 = preint_half(vm, vb, Im, Ib, c, 0.5 * len);
+    vec4 slope;
+    vec4 Im = tf_integral(vm, slope);
+    vec4 h1 = preint_half(vf, vm, If, Im, slope, 0.5 * len), h2 = preint_half(vm, vb, Im, Ib, slope, 0.5 * len);
     float keep = h1.a * h2.a;
     vec3 emit = (1.0 - h1.a) * h1.rgb + h1.a * (1.0 - h2.a) * h2.rgb;
 #ifdef VOLUME_SHADING
@@ -256,37 +272,43 @@ void volume_preintegrated(float a, float b) {
     float v1 = vol_value(vol_o_idx + t1 * vol_d_idx);
     vec4 I0 = tf_integral(v0), I1 = tf_integral(v1);
     vol_samples_n += 3u;
-    float jump_when = -1.0, jump_to = 0.0;
-    for (float k = 2.0; k <= K + 1.0; k += 1.0) {
+    float k = 2.0;
+    // One round per chunk the points meet (as the sampled march): a lookup,
+    // then the points in the chunk without one.
+    for (float round = 0.0; k <= K + 1.0 && round <= K + 1.0; round += 1.0) {
         if (transmittance < vol_epsilon) break;
-        float t2 = preint_point(k, a, b, h, s, K);
-        vec3 idx = vol_o_idx + t2 * vol_d_idx;
-        float v2 = vol_value(idx);
-        ++vol_samples_n;
-        float vm = clamp((9.0 * (v0 + v1) - vp - v2) / 16.0, min(v0, v1), max(v0, v1));
-        // Both ends where the opacity is 0 on one side: the segment adds nothing.
-        if (!(max(v0, v1) <= tf_clear.x || min(v0, v1) >= tf_clear.y))
-            preint_segment(v0, vm, v1, I0, I1, t1 - t0, vol_o_idx + 0.5 * (t0 + t1) * vol_d_idx);
-        vp = v0;
-        v0 = v1;
-        v1 = v2;
-        t0 = t1;
-        t1 = t2;
-        I0 = I1;
-        I1 = tf_integral(v2);
-        if (skip_empty && !(t2 < vol_chunk_end) && k < K && jump_when < k) {
+        float end = K + 2.0, jump_to = -1.0;
+        if (skip_empty && k < K) {
             bool empty;
-            float t_exit = vol_chunk_exit(idx, empty);
-            vol_chunk_end = empty ? -3.0e38 : t_exit;
-            if (empty) {
-                // The chunk's last point (a hair early) and when to jump.
-                jump_to = min(floor((t_exit - a) / h + s - 1e-3), K);
-                jump_when = k + 1.0;
+            float t_exit = vol_chunk_exit(vol_o_idx + preint_point(k, a, b, h, s, K) * vol_d_idx, empty);
+            // The chunk's last point (a hair early).
+            float last = max(k, min(floor((t_exit - a) / h + s - 1e-3), K));
+            end = last + 1.0;
+            if (empty && last - 1.0 > k + 2.0) {
+                end = k + 2.0;   // this point and the next, then on to the last but one
+                jump_to = last - 1.0;
             }
         }
-        if (k == jump_when && jump_to - 1.0 > k + 1.0) {
-            vol_skipped_n += uint(jump_to - 2.0 - k);
-            k = jump_to - 2.0;
+        for (; k < end; k += 1.0) {
+            if (transmittance < vol_epsilon) break;
+            float t2 = preint_point(k, a, b, h, s, K);
+            float v2 = vol_value(vol_o_idx + t2 * vol_d_idx);
+            ++vol_samples_n;
+            float vm = clamp((9.0 * (v0 + v1) - vp - v2) / 16.0, min(v0, v1), max(v0, v1));
+            // Both ends where the opacity is 0 on one side: the segment adds nothing.
+            if (!(max(v0, v1) <= tf_clear.x || min(v0, v1) >= tf_clear.y))
+                preint_segment(v0, vm, v1, I0, I1, t1 - t0, vol_o_idx + 0.5 * (t0 + t1) * vol_d_idx);
+            vp = v0;
+            v0 = v1;
+            v1 = v2;
+            t0 = t1;
+            t1 = t2;
+            I0 = I1;
+            I1 = tf_integral(v2);
+        }
+        if (jump_to > k) {
+            vol_skipped_n += uint(jump_to - k);
+            k = jump_to;
         }
     }
 }
