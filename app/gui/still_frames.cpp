@@ -56,6 +56,7 @@ bool StillFrames::wait_for_work(std::unique_lock<std::mutex>& lock) {
     for (;;) {
         wake_.wait(lock, [this] { return stop_ || (pending_ && pending_->id != done_); });
         if (stop_) return false;
+        if (pending_->interactive) return true; // the frame a drag waits for
         const std::int64_t hold = hold_until_ns_.load(std::memory_order_relaxed) - now_ns();
         if (hold <= 0) return true;
         if (!counted) ++held_;

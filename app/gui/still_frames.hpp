@@ -1,10 +1,11 @@
-// The 3D view's still frames (AO accumulation, anti-aliasing, DSRAA) drawn
-// on a thread of their own (docs/gui.md, "Still frames off the GUI
-// thread"): its own headless GL context and renderer draw a snapshot of the
-// scene (core::SceneSnapshot: the meshes shared, not copied), read the
-// image back and hand it to the GUI thread, which only blits it. The thread
-// runs below the GUI thread's priority (so do the software rasterizer's
-// threads it starts) and starts no frame while the user's input is recent.
+// The 3D view's frames (AO accumulation, anti-aliasing, DSRAA, and the
+// frames of a drag) drawn on a thread of their own (docs/gui.md, "Frames
+// off the GUI thread"): its own headless GL context and renderer draw a
+// snapshot of the scene (core::SceneSnapshot: the meshes shared, not
+// copied), read the image back and hand it to the GUI thread, which only
+// blits it. The thread runs below the GUI thread's priority (so do the
+// software rasterizer's threads it starts) and starts no still frame while
+// the user's input is recent (a drag's own frames excepted).
 #pragma once
 
 #include <atomic>
@@ -36,6 +37,9 @@ struct StillRequest {
     std::shared_ptr<const Image> ao_image;
     int ao_frames = 0; // cone AO frames to accumulate (0: the AO is done in one frame)
     int aa_frames = 1; // frames the anti-aliasing averages
+    // A frame the user is waiting for while the camera moves (a drag's):
+    // never held back by input (hold_for), drawn once.
+    bool interactive = false;
 };
 
 // One frame, as the GUI thread receives it.

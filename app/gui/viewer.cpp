@@ -226,14 +226,21 @@ RenderOptions plain(RenderOptions opt) {
 }
 } // namespace
 
+// With the frame thread, still frames and a drag's frames are drawn there
+// (a drag's frames, 150-400 ms on a 32 M-triangle surface or a volume on
+// llvmpipe, held the GUI thread and every input behind them); the GUI
+// thread shows the frame asked for once it arrives, the newest one
+// meanwhile, and draws a plain frame itself only before the thread's
+// first. A look that needs no still frames (no AO, no average) is drawn
+// here, once, when the view stops moving: that frame is final.
 void Viewer::draw() {
     frame_camera();
     follow_raytraced();
     const RenderOptions opt = frame_options();
     annotations_->legend.clear();
     if (options_.legend) annotations_->legend = core::legend_entries(scene_, opt.look);
-    if (!dragging_ && needs_still_frames(opt) && use_still_thread()) {
-        if (show_still(opt)) return;
+    if ((dragging_ || needs_still_frames(opt)) && use_still_thread()) {
+        if (show_still(opt) || show_latest()) return;
         draw_here(plain(opt), true);
         return;
     }
@@ -276,43 +283,69 @@ bool Viewer::show_still(const RenderOptions& opt) {
         r.opt = opt;
         r.annotations = std::make_shared<const Annotations>(*annotations_);
         if (opt.ao_image) r.ao_image = raytraced_;
-        r.ao_frames = opt.look.ao == AoMethod::Cone && options_.look.ao == AoMethod::Cone ? options_.look.ao_frames : 0;
+        const bool stills = needs_still_frames(opt);
+        r.ao_frames =
+            stills && opt.look.ao == AoMethod::Cone && options_.look.ao == AoMethod::Cone ? options_.look.ao_frames : 0;
         r.aa_frames = opt.accumulate ? options_.look.aa.view_frames : 1;
+        r.interactive = dragging_;
         stills_->request(std::move(r));
         still_key_ = key;
         still_look_ = opt.look;
         still_.reset();
     }
     if (!still_ || !still_->image) return false;
-    presenter_->present(*still_->image, defaultFramebufferObject());
+    show_frame(*still_, opt);
     shown_key_ = std::move(key);
     shown_look_ = opt.look;
-    labels_ = still_->labels;
-    volume_stats_ = still_->volume;
-    raytraced_drawn_ = opt.ao_image != nullptr;
-    ao_frames_ = still_->ao_frames;
-    aa_frames_ = still_->aa_frames;
-    complete_ = still_->last;
-    ++frames_;
+    complete_ = still_->last && !dragging_;
     return true;
+}
+
+// The newest frame the thread drew, while the one asked for is on its way.
+bool Viewer::show_latest() {
+    if (!latest_ || !latest_->image) return false;
+    show_frame(*latest_, frame_options());
+    shown_key_.clear(); // not the view as it is: a plain frame here would not be skipped
+    complete_ = false;
+    return true;
+}
+
+void Viewer::show_frame(const StillFrame& f, const RenderOptions& opt) {
+    presenter_->present(*f.image, defaultFramebufferObject());
+    latest_shown_ = std::max(latest_shown_, f.request);
+    labels_ = f.labels;
+    volume_stats_ = f.volume;
+    raytraced_drawn_ = opt.ao_image != nullptr;
+    ao_frames_ = f.ao_frames;
+    aa_frames_ = f.aa_frames;
+    ++frames_;
 }
 
 // On the GUI thread, for each frame the thread drew: kept and shown if it
 // is for the view as it is; an error makes the view draw its still frames
 // itself from now on (and report the error if it has it too).
 void Viewer::take_still(const StillFrame& f) {
-    if (f.request != still_id_) return; // stale: the view changed since
     if (!f.error.empty()) {
+        if (f.request != still_id_) return; // stale: the view changed since
         std::cerr << "isoscope view: still frames drawn on the GUI thread: " << f.error << "\n";
         stills_failed_ = true;
         still_key_.clear();
         update();
         return;
     }
-    still_ = std::make_shared<const StillFrame>(f);
+    auto frame = std::make_shared<const StillFrame>(f);
     ++thread_frames_;
     last_thread_ms_ = f.ms;
-    update();
+    // A frame for an older view is kept as the newest and shown if nothing
+    // newer is: a drag's frames arrive after its camera moved on.
+    const bool newer = !latest_ || f.request >= latest_->request;
+    if (newer) latest_ = frame;
+    if (f.request == still_id_) {
+        still_ = std::move(frame);
+        update();
+    } else if (newer && f.request > latest_shown_) {
+        update();
+    }
 }
 
 // A frame drawn here, on the GUI thread: a drag's, a final one, the plain

@@ -55,11 +55,11 @@ struct ViewerOptions {
     // AO in the frames drawn while a mouse drag moves the camera (off: those
     // frames go without it and the still frames after the release bring it back).
     bool ao_while_dragging = false;
-    // Still frames (AO, anti-aliasing) drawn on a thread of their own
-    // (StillFrames) while the GUI thread shows a plain frame (no AO, one
-    // sample) and blits each one that arrives; off: drawn on the GUI thread
-    // between events (the way to compare, and the fallback when that thread
-    // has no GL context).
+    // Frames drawn on a thread of their own (StillFrames): the still frames
+    // (AO, anti-aliasing) and a drag's frames; the GUI thread blits the
+    // newest one that arrived (a plain frame of its own only before the
+    // first); off: drawn on the GUI thread between events (the way to
+    // compare, and the fallback when that thread has no GL context).
     bool still_thread = true;
     // The legend in the overlay: the visible surfaces' names, colours,
     // opacities and iso values (core/legend.hpp), as exports draw it.
@@ -178,6 +178,8 @@ protected:
     void frame_camera();
     void draw_here(const RenderOptions& opt, bool stand_in);
     bool show_still(const RenderOptions& opt);
+    bool show_latest();
+    void show_frame(const StillFrame& f, const RenderOptions& opt);
     std::vector<double> frame_key(const RenderOptions& opt) const;
     void camera_moved();
     RenderOptions frame_options() const;
@@ -237,6 +239,12 @@ private:
     std::vector<double> still_key_, shown_key_;
     FrameLook still_look_, shown_look_;
     std::shared_ptr<const StillFrame> still_;
+    // The newest frame the thread drew, whatever it was asked for: shown
+    // while the frame asked for is on its way (a drag's camera has moved on,
+    // a still frame for a new look is being drawn), instead of a frame drawn
+    // here on the GUI thread.
+    std::shared_ptr<const StillFrame> latest_;
+    std::uint64_t latest_shown_ = 0; // the request of the newest frame on screen
     std::uint64_t annotations_version_ = 0;
     int thread_frames_ = 0;
     double last_thread_ms_ = 0;

@@ -423,31 +423,59 @@ std::vector<Row> run_vtk(const Args& a, const Case& c, const Volume& v, const Ca
 }
 
 // At equal error: per renderer and configuration, the fastest frame whose
-// volume-pixel RMSE is at most kEqualError, and ours against VTK's.
+// volume-pixel RMSE is at most kEqualError, and the time the error reaches
+// it (between the two steps around it: step and time interpolated
+// log-log); ours against VTK's.
 constexpr double kEqualError = 0.003;
+struct EqualError {
+    const Row* fastest = nullptr; // the fastest measured frame within the error
+    double ms = -1, step = -1;    // interpolated where the error crosses kEqualError
+};
+
+EqualError equal_error(const std::vector<Row>& rows, const std::string& renderer, const std::string& config) {
+    std::vector<const Row*> s;
+    for (const auto& r : rows)
+        if (r.renderer == renderer && r.config == config && r.fg_rmse > 0) s.push_back(&r);
+    std::sort(s.begin(), s.end(), [](const Row* a, const Row* b) { return a->step_vox < b->step_vox; });
+    EqualError e;
+    for (const Row* r : s)
+        if (r->fg_rmse <= kEqualError && (!e.fastest || r->ms < e.fastest->ms)) e.fastest = r;
+    for (std::size_t i = 0; i + 1 < s.size(); ++i) {
+        const Row &a = *s[i], &b = *s[i + 1];
+        if (a.fg_rmse <= kEqualError && b.fg_rmse > kEqualError) {
+            const double f = std::log(kEqualError / a.fg_rmse) / std::log(b.fg_rmse / a.fg_rmse);
+            e.step = std::exp(std::log(a.step_vox) + f * std::log(b.step_vox / a.step_vox));
+            e.ms = std::exp(std::log(a.ms) + f * std::log(b.ms / a.ms));
+        }
+    }
+    if (e.ms < 0 && e.fastest) { // within it at every step measured: the coarsest
+        e.step = e.fastest->step_vox;
+        e.ms = e.fastest->ms;
+    }
+    return e;
+}
+
 void print_equal_error(const std::vector<Row>& rows) {
-    auto fastest = [&](const std::string& renderer, const std::string& config) -> const Row* {
-        const Row* best = nullptr;
-        for (const auto& r : rows)
-            if (r.renderer == renderer && r.config == config && r.fg_rmse >= 0 && r.fg_rmse <= kEqualError &&
-                (!best || r.ms < best->ms))
-                best = &r;
-        return best;
-    };
-    std::printf("\nAt equal error (volume-pixel RMSE <= %.3f), the fastest frame:\n\n", kEqualError);
-    const Row* vtk = fastest("VTK 9.1 GPU mapper", "flat");
+    std::printf("\nAt equal error (volume-pixel RMSE <= %.3f): the fastest frame measured within it, and the time "
+                "where the error crosses it (step and time interpolated log-log between the steps around it):\n\n",
+                kEqualError);
+    const EqualError vtk = equal_error(rows, "VTK 9.1 GPU mapper", "flat");
     for (const char* config : {"flat, preintegrated", "flat, sampled", "lit, preintegrated", "lit, sampled"}) {
-        const Row* r = fastest("isoscope GPU", config);
-        if (!r) {
+        const EqualError e = equal_error(rows, "isoscope GPU", config);
+        if (!e.fastest) {
             std::printf("- isoscope %s: no step reaches it\n", config);
             continue;
         }
-        std::printf("- isoscope %s: %.1f ms at step %g (RMSE %.4f)", config, r->ms, r->step_vox, r->fg_rmse);
-        if (vtk && std::string(config).rfind("flat", 0) == 0) std::printf(", %.2fx VTK's time", r->ms / vtk->ms);
+        std::printf("- isoscope %s: %.1f ms at step %g (RMSE %.4f); crossing at step %.2f, %.1f ms", config,
+                    e.fastest->ms, e.fastest->step_vox, e.fastest->fg_rmse, e.step, e.ms);
+        if (vtk.fastest && std::string(config).rfind("flat", 0) == 0)
+            std::printf("; %.2fx VTK's time (measured), %.2fx (crossing)", e.fastest->ms / vtk.fastest->ms,
+                        e.ms / vtk.ms);
         std::printf("\n");
     }
-    if (vtk)
-        std::printf("- VTK flat: %.1f ms at step %g (RMSE %.4f)\n", vtk->ms, vtk->step_vox, vtk->fg_rmse);
+    if (vtk.fastest)
+        std::printf("- VTK flat: %.1f ms at step %g (RMSE %.4f); crossing at step %.2f, %.1f ms\n", vtk.fastest->ms,
+                    vtk.fastest->step_vox, vtk.fastest->fg_rmse, vtk.step, vtk.ms);
     else
         std::printf("- VTK flat: no step reaches it (or VTK did not run)\n");
 }

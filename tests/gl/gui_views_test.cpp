@@ -493,7 +493,13 @@ TEST(GuiViews, ThreeDViewMouseAndToolBar) {
     ASSERT_EQ(viewer->options().look.ao, AoMethod::Off);
 
     // ---- transparency off: the translucent skin is drawn as if opaque
-    // (the frames compared pixel for pixel; AO is off, so each frame is final)
+    // (the converged frames compared pixel for pixel: the view shows its
+    // last picture until the frame thread's new one arrives, so a grab
+    // right after a change may still show the one before)
+    const auto settled = [&] {
+        EXPECT_TRUE(wait_until([&] { return viewer->converged() || !viewer->error().empty(); }, 120000));
+        return viewer->grabFramebuffer();
+    };
     bar->reset_action()->trigger();
     const auto id = w.scene().surfaces().front();
     {
@@ -502,10 +508,10 @@ TEST(GuiViews, ThreeDViewMouseAndToolBar) {
         w.workspace().set_surface_info(id, info);
     }
     ASSERT_TRUE(bar->transparency_action()->isChecked());
-    const QImage translucent = viewer->grabFramebuffer();
+    const QImage translucent = settled();
     bar->transparency_action()->trigger();
     EXPECT_FALSE(viewer->options().look.transparency);
-    const QImage forced = viewer->grabFramebuffer();
+    const QImage forced = settled();
     EXPECT_EQ(w.scene().info(id).opacity, 0.3f) << "the toggle must not edit the surface";
     bar->transparency_action()->trigger();
     {
@@ -513,7 +519,7 @@ TEST(GuiViews, ThreeDViewMouseAndToolBar) {
         info.opacity = 1.0f;
         w.workspace().set_surface_info(id, info);
     }
-    const QImage opaque = viewer->grabFramebuffer();
+    const QImage opaque = settled();
     ASSERT_EQ(forced.size(), opaque.size());
     long differ_opaque = 0, differ_translucent = 0;
     for (int y = 0; y < forced.height(); ++y)
