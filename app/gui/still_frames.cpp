@@ -112,6 +112,7 @@ void StillFrames::run() {
 StillFrame StillFrames::draw(core::SnapshotRenderer& renderer, const StillRequest& r, int& frames_left) {
     StillFrame f;
     f.request = r.id;
+    f.interactive = r.interactive;
     const auto t0 = std::chrono::steady_clock::now();
     try {
         RenderOptions opt = r.opt;

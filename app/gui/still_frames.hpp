@@ -47,7 +47,8 @@ struct StillFrame {
     std::uint64_t request = 0;
     std::shared_ptr<const Image> image; // 8-bit RGBA, rows top-down
     int ao_frames = 0, aa_frames = 0;
-    bool last = false; // the request's frames are all drawn: the picture stopped changing
+    bool last = false;        // the request's frames are all drawn: the picture stopped changing
+    bool interactive = false; // drawn for a drag (StillRequest::interactive)
     std::vector<LabelBox> labels;
     // The volume's ray casting in this frame.
     VolumeStats volume;

@@ -288,6 +288,11 @@ bool Viewer::show_still(const RenderOptions& opt) {
             stills && opt.look.ao == AoMethod::Cone && options_.look.ao == AoMethod::Cone ? options_.look.ao_frames : 0;
         r.aa_frames = opt.accumulate ? options_.look.aa.view_frames : 1;
         r.interactive = dragging_;
+        if (dragging_ && drag_scale_ < 1.0) {
+            r.opt.width = std::max(1, int(std::lround(opt.width * drag_scale_)));
+            r.opt.height = std::max(1, int(std::lround(opt.height * drag_scale_)));
+            r.opt.scale = float(opt.scale * drag_scale_); // the overlay's text keeps its size on screen
+        }
         stills_->request(std::move(r));
         still_key_ = key;
         still_look_ = opt.look;
@@ -311,9 +316,9 @@ bool Viewer::show_latest() {
 }
 
 void Viewer::show_frame(const StillFrame& f, const RenderOptions& opt) {
-    presenter_->present(*f.image, defaultFramebufferObject());
+    presenter_->present(*f.image, defaultFramebufferObject(), opt.width, opt.height);
     latest_shown_ = std::max(latest_shown_, f.request);
-    labels_ = f.labels;
+    if (f.image->width == opt.width) labels_ = f.labels; // a reduced drag frame's are in its own pixels
     volume_stats_ = f.volume;
     raytraced_drawn_ = opt.ao_image != nullptr;
     ao_frames_ = f.ao_frames;
@@ -336,6 +341,14 @@ void Viewer::take_still(const StillFrame& f) {
     auto frame = std::make_shared<const StillFrame>(f);
     ++thread_frames_;
     last_thread_ms_ = f.ms;
+    // Drag frames slower than 70 ms (under 14 a second) go to half the
+    // size, a quarter of the pixels; back to the full size when a half-size
+    // one takes under 15 ms (the full one would take about 60).
+    if (f.interactive && f.image) {
+        const bool reduced = f.image->width < image_size().width();
+        if (!reduced && f.ms > 70.0) drag_scale_ = 0.5;
+        if (reduced && f.ms < 15.0) drag_scale_ = 1.0;
+    }
     // A frame for an older view is kept as the newest and shown if nothing
     // newer is: a drag's frames arrive after its camera moved on.
     const bool newer = !latest_ || f.request >= latest_->request;

@@ -245,6 +245,10 @@ private:
     // here on the GUI thread.
     std::shared_ptr<const StillFrame> latest_;
     std::uint64_t latest_shown_ = 0; // the request of the newest frame on screen
+    // A drag's frames on the frame thread are drawn at this fraction of the
+    // view's size (and stretched) when they are slow: 1 or 0.5, from the
+    // last drag frame's time (VTK's interactive image sample distance).
+    double drag_scale_ = 1.0;
     std::uint64_t annotations_version_ = 0;
     int thread_frames_ = 0;
     double last_thread_ms_ = 0;

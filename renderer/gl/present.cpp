@@ -20,6 +20,10 @@ ImagePresenter::~ImagePresenter() {
 }
 
 void ImagePresenter::present(const Image& img, unsigned framebuffer) {
+    present(img, framebuffer, img.width, img.height);
+}
+
+void ImagePresenter::present(const Image& img, unsigned framebuffer, int width, int height) {
     if (img.is_float || img.channels != 4 || img.width < 1 || img.height < 1 ||
         img.bytes.size() != std::size_t(img.width) * std::size_t(img.height) * 4)
         throw Error("present image", "not an 8-bit RGBA image of its stated size");
@@ -35,8 +39,9 @@ void ImagePresenter::present(const Image& img, unsigned framebuffer) {
     glTextureSubImage2D(im.texture.id(), 0, 0, 0, img.width, img.height, GL_RGBA, GL_UNSIGNED_BYTE, img.bytes.data());
     glDisable(GL_SCISSOR_TEST);
     // The image's first row is the top: blit it to the destination's top row.
-    glBlitNamedFramebuffer(im.source.id(), GLuint(framebuffer), 0, 0, img.width, img.height, 0, img.height, img.width,
-                           0, GL_COLOR_BUFFER_BIT, GL_NEAREST);
+    const bool same = width == img.width && height == img.height;
+    glBlitNamedFramebuffer(im.source.id(), GLuint(framebuffer), 0, 0, img.width, img.height, 0, height, width, 0,
+                           GL_COLOR_BUFFER_BIT, same ? GL_NEAREST : GL_LINEAR);
 }
 
 void ImagePresenter::release() {

@@ -19,6 +19,9 @@ public:
     // `framebuffer` at its lower-left corner, byte for byte (no colour
     // conversion). Throws iso::Error for another kind of image.
     void present(const Image& img, unsigned framebuffer);
+    // The same, stretched over width x height pixels of the framebuffer
+    // (linear filtering): a frame drawn at a reduced size while the camera moves.
+    void present(const Image& img, unsigned framebuffer, int width, int height);
     // Frees the texture and framebuffer, with the context they were made in current.
     void release();
 
