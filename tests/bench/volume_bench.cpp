@@ -613,11 +613,11 @@ std::vector<Row> run_case(const Args& a, const std::string& name, std::string& d
 void write_plot(const Args& a, const std::vector<std::pair<std::string, std::vector<Row>>>& all) {
     const std::string gp_file = a.out + "/volume_bench.gp";
     std::ofstream gp(gp_file);
-    gp << "set terminal pngcairo size " << 480 * int(all.size()) << ",440\nset output '" << a.out
+    gp << "set terminal pngcairo size " << 480 * int(all.size()) << ",560\nset output '" << a.out
        << "/volume_bench.png'\nset multiplot layout 1," << all.size()
        << "\nset logscale xy\nset xlabel 'ms per frame (llvmpipe, 2 cores)'\nset ylabel 'volume-pixel RMSE vs "
           "reference (sRGB)'\n"
-       << "set key bottom left\nset grid\n";
+       << "set key below font ',9'\nset grid\n";
     const std::vector<std::pair<std::string, std::string>> series{{"isoscope GPU", "flat, preintegrated"},
                                                                   {"isoscope GPU", "flat, sampled"},
                                                                   {"isoscope GPU", "lit, preintegrated"},
