@@ -109,8 +109,14 @@ glm::dvec4 TransferTables::integral(double v) const {
     return glm::mix(integral_[std::size_t(i)], integral_[std::size_t(i) + 1], x - i);
 }
 
-double TransferTables::middle(double vp, double v0, double v1, double vn) {
-    return std::clamp((9.0 * (v0 + v1) - vp - vn) / 16.0, std::min(v0, v1), std::max(v0, v1));
+std::array<double, 3> TransferTables::inner_values(double vp, double v0, double v1, double vn) {
+    const double lo = std::min(v0, v1), hi = std::max(v0, v1);
+    auto at = [&](double t) { // Catmull-Rom between v0 (t = 0) and v1 (t = 1)
+        const double c = (-vp + 3.0 * v0 - 3.0 * v1 + vn) * t * t * t + (2.0 * vp - 5.0 * v0 + 4.0 * v1 - vn) * t * t +
+                         (v1 - vp) * t + 2.0 * v0;
+        return std::clamp(0.5 * c, lo, hi);
+    };
+    return {at(0.25), at(0.5), at(0.75)};
 }
 
 glm::dvec4 TransferTables::slope(double v) const {
@@ -120,20 +126,23 @@ glm::dvec4 TransferTables::slope(double v) const {
     return (integral_[std::size_t(i) + 1] - integral_[std::size_t(i)]) / width_;
 }
 
-SegmentLight TransferTables::segment(double vf, double vm, double vb, double h) const {
-    // One half: its optical depth and tau-weighted mean colour; within a
-    // texel's width of a constant value, from the integrals' slope at the
-    // segment's middle value (their difference would cancel).
-    const glm::dvec4 at_middle = slope(vm);
-    auto half = [&](double a, double b) {
-        const glm::dvec4 d =
-            !(std::abs(b - a) >= width_) || last_ == 0 ? at_middle : (integral(b) - integral(a)) / (b - a);
+SegmentLight TransferTables::segment(std::span<const double> v, double h) const {
+    const std::size_t pieces = v.size() - 1;
+    const double len = h / double(pieces);
+    SegmentLight out;
+    for (std::size_t k = 0; k < pieces; ++k) {
+        // The piece's optical depth and tau-weighted mean colour; within a
+        // texel's width of a constant value, from the integrals' slope
+        // (their difference would cancel).
+        const double a = v[k], b = v[k + 1];
+        const glm::dvec4 d = !(std::abs(b - a) >= width_) || last_ == 0 ? slope(v[std::min(k + 1, pieces - 1)])
+                                                                        : (integral(b) - integral(a)) / (b - a);
         const glm::dvec3 color = d.w > 0.0 ? glm::dvec3(d) / d.w : glm::dvec3(0.0);
-        return std::pair{std::exp(-0.5 * h * d.w), color};
-    };
-    const auto [k1, c1] = half(vf, vm);
-    const auto [k2, c2] = half(vm, vb);
-    return {(1.0 - k1) * c1 + k1 * (1.0 - k2) * c2, k1 * k2};
+        const double keep = std::exp(-len * d.w);
+        out.color += out.transmittance * (1.0 - keep) * color;
+        out.transmittance *= keep;
+    }
+    return out;
 }
 
 } // namespace iso

@@ -194,9 +194,9 @@ void composite_piece(const VolumeSampler& s, const VolumeLook& look, const Volum
 
 // The pre-integrated march over [a, b] (preintegration.hpp), as the GPU
 // marches it in its first frame: points a + k h (k = 0..n, b the last),
-// every segment between two of them integrated in two halves, the middle
-// value from the cubic through its ends and their neighbours (the points
-// one step beyond a and b included).
+// every segment between two of them integrated in quarters, the values
+// inside it from the cubic through its ends and their neighbours (the
+// points one step beyond a and b included).
 void preintegrated_piece(const VolumeSampler& s, const TransferTables& tables, const VolumeLighting* lighting,
                          const glm::dvec3& origin, const glm::dvec3& dir, double a, double b, double step,
                          double epsilon, Accumulator& acc, RayResult& out) {
@@ -211,7 +211,9 @@ void preintegrated_piece(const VolumeSampler& s, const TransferTables& tables, c
     for (std::int64_t k = 1; k <= n && acc.transmittance >= epsilon; ++k) {
         const double t = k < n ? a + double(k) * h : b;
         const double vn = value(k + 1);
-        SegmentLight seg = tables.segment(vf, TransferTables::middle(vp, vf, vb, vn), vb, h);
+        const auto q = TransferTables::inner_values(vp, vf, vb, vn);
+        const double values[] = {vf, q[0], q[1], q[2], vb};
+        SegmentLight seg = tables.segment(values, h);
         if (lighting && seg.transmittance < 1.0) { // shaded at the segment's middle, as a colour
             const glm::dvec3 mid = s.to_index(origin + (t - 0.5 * h) * dir);
             const double alpha = 1.0 - seg.transmittance;

@@ -213,26 +213,36 @@ void volume_sampled(float a, float b) {
 }
 
 #else
-// Half of a pre-integrated segment, hh mm, value linear from va to vb
+// A piece of a pre-integrated segment, hh mm, value linear from va to vb
 // (integrals Ia, Ib): its tau-weighted colour and transmittance. Within a
-// texel's width of a constant value, the integrals' slope at the segment's
-// middle value (their difference would cancel). TransferTables::segment,
-// on the CPU.
-vec4 preint_half(float va, float vb, vec4 Ia, vec4 Ib, vec4 slope, float hh) {
+// texel's width of a constant value, the integrals' slope given (at the
+// piece's back value; the last piece's at its front) instead: their
+// difference would cancel. TransferTables::segment, on the CPU.
+vec4 preint_piece(float va, float vb, vec4 Ia, vec4 Ib, vec4 slope, float hh) {
     float dv = vb - va;
     bool flat_ = !(abs(dv) >= tf_width);
     vec4 d = flat_ ? slope : (Ib - Ia) * (1.0 / dv);   // (tau c, tau), averaged
     return vec4(d.w > 0.0 ? d.rgb * (1.0 / d.w) : vec3(0.0), exp(-hh * d.w));
 }
 
-// One segment of len mm from value vf through vm (its middle) to vb,
-// linear in each half.
-void preint_segment(float vf, float vm, float vb, vec4 If, vec4 Ib, float len, vec3 idx_mid) {
-    vec4 slope;
-    vec4 Im = tf_integral(vm, slope);
-    vec4 h1 = preint_half(vf, vm, If, Im, slope, 0.5 * len), h2 = preint_half(vm, vb, Im, Ib, slope, 0.5 * len);
-    float keep = h1.a * h2.a;
-    vec3 emit = (1.0 - h1.a) * h1.rgb + h1.a * (1.0 - h2.a) * h2.rgb;
+// One segment of len mm from value v0 to v1 (integrals I0, I1), vp and v2
+// the points' values before and after it: the values inside it from the
+// cubic through the four (Catmull-Rom) at 1/4, 1/2, 3/4, kept between v0
+// and v1, linear between them (TransferTables::inner_values and segment).
+void preint_segment(float vp, float v0, float v1, float v2, vec4 I0, vec4 I1, float len, vec3 idx_mid) {
+    float lo = min(v0, v1), hi = max(v0, v1);
+    vec3 t = vec3(0.25, 0.5, 0.75), t2 = t * t;
+    vec3 q = 0.5 * ((-vp + 3.0 * v0 - 3.0 * v1 + v2) * t2 * t + (2.0 * vp - 5.0 * v0 + 4.0 * v1 - v2) * t2 +
+                    (v1 - vp) * t + 2.0 * v0);
+    q = clamp(q, lo, hi);
+    vec4 s1, s2, s3;
+    vec4 J1 = tf_integral(q.x, s1), J2 = tf_integral(q.y, s2), J3 = tf_integral(q.z, s3);
+    float l = 0.25 * len;
+    vec4 p1 = preint_piece(v0, q.x, I0, J1, s1, l), p2 = preint_piece(q.x, q.y, J1, J2, s2, l);
+    vec4 p3 = preint_piece(q.y, q.z, J2, J3, s3, l), p4 = preint_piece(q.z, v1, J3, I1, s3, l);
+    vec3 emit = (1.0 - p1.a) * p1.rgb +
+                p1.a * ((1.0 - p2.a) * p2.rgb + p2.a * ((1.0 - p3.a) * p3.rgb + p3.a * (1.0 - p4.a) * p4.rgb));
+    float keep = p1.a * p2.a * p3.a * p4.a;
 #ifdef VOLUME_SHADING
     if (keep < 1.0) emit = (1.0 - keep) * vol_shaded(idx_mid, emit / (1.0 - keep));
 #endif
@@ -251,14 +261,14 @@ float preint_point(float k, float a, float b, float h, float s, float K) {
 }
 
 // The pre-integrated march over [a, b] (preintegration.hpp), one fetch per
-// point: every segment between two points integrated for values linear in
-// each half, the middle value from the cubic through the segment's ends
-// and their neighbours (Catmull-Rom), kept between the ends. Each fetch is
-// a point ahead of the segment it completes.
+// point: every segment between two points integrated in quarters, its
+// inner values from the cubic through the segment's ends and their
+// neighbours (Catmull-Rom), kept between the ends. Each fetch is a point
+// ahead of the segment it completes.
 //
 // Skipping: a point in an empty chunk (F) is fetched; once the one after it
 // is, the march jumps ahead to the chunk's last point but one. Segments
-// with both ends in the chunk add exactly nothing (their values, middle
+// with both ends in the chunk add exactly nothing (their values, inner ones
 // included, stay within the chunk's range, which the tables map to nothing:
 // the occupancy is widened by a texel), so the ones jumped over, and the
 // two composited from the jump's stale values, would have added nothing,
@@ -294,10 +304,9 @@ void volume_preintegrated(float a, float b) {
             float t2 = preint_point(k, a, b, h, s, K);
             float v2 = vol_value(vol_o_idx + t2 * vol_d_idx);
             ++vol_samples_n;
-            float vm = clamp((9.0 * (v0 + v1) - vp - v2) / 16.0, min(v0, v1), max(v0, v1));
             // Both ends where the opacity is 0 on one side: the segment adds nothing.
             if (!(max(v0, v1) <= tf_clear.x || min(v0, v1) >= tf_clear.y))
-                preint_segment(v0, vm, v1, I0, I1, t1 - t0, vol_o_idx + 0.5 * (t0 + t1) * vol_d_idx);
+                preint_segment(vp, v0, v1, v2, I0, I1, t1 - t0, vol_o_idx + 0.5 * (t0 + t1) * vol_d_idx);
             vp = v0;
             v0 = v1;
             v1 = v2;
