@@ -7,7 +7,9 @@
 // cases: ambient occlusion on/off x skin translucent (opacity 0.3) or opaque,
 // at the view's size in the window. Each rotation frame is the first frame
 // of a new camera (AO accumulation restarts on every change: the look's ao_frames is
-// 1 here so no extra still frame slips between two steps). The cases take
+// 1 here so no extra still frame slips between two steps). The frames are
+// drawn on the GUI thread (ViewerOptions::still_thread off): what a frame
+// costs; gui_latency_bench measures the frame thread's drag. The cases take
 // turns in three blocks each, so a shared machine's changing load reaches
 // them alike.
 //
@@ -154,6 +156,10 @@ int main(int argc, char** argv) {
             o.look.ao = c.ao ? AoMethod::Cone : AoMethod::Off;
             o.look.ao_frames = 1; // every rotation frame is a first frame; no extra still frames in between
             o.look.transparency = true;
+            // Frames drawn here, on the GUI thread: with the frame thread the
+            // view would blit its last picture at once and the frame would
+            // arrive later (gui_latency_bench measures that way).
+            o.still_thread = false;
             v->set_options(o);
             {
                 core::SurfaceInfo info = w.scene().info(ids[0]);
