@@ -173,6 +173,21 @@ float vol_chunk_exit(vec3 idx, out bool empty) {
     return min(min(t.x, t.y), t.z);
 }
 
+// Where a run of empty chunks the ray is in (its chunk's exit t_exit) ends:
+// the chunks after it are looked up while they are empty, up to b. A value
+// at a chunk's face belongs to both chunks' ranges (they share the face's
+// voxels), so the run's ranges join into one interval the tables map to
+// nothing, and a segment between two of its points adds nothing either.
+float vol_empty_run_exit(float t_exit, float b) {
+    for (int i = 0; i < 64 && t_exit < b; ++i) {
+        bool empty;
+        float next = vol_chunk_exit(vol_o_idx + (t_exit + 0.01 * step_mm) * vol_d_idx, empty);
+        if (!empty || !(next > t_exit)) break;
+        t_exit = next;
+    }
+    return t_exit;
+}
+
 #ifndef VOLUME_PREINTEGRATED
 // The sampled march over [a, b]: n equal steps, each sample's
 // classification held over its step (the stated model's sampling). One
@@ -188,6 +203,7 @@ void volume_sampled(float a, float b) {
         if (skip_empty) {
             bool empty;
             float t_exit = vol_chunk_exit(vol_o_idx + (a + (k + sample_offset) * h) * vol_d_idx, empty);
+            if (empty) t_exit = vol_empty_run_exit(t_exit, b);
             // The first sample at or beyond the chunk's exit (a hair early:
             // a sample found still inside is looked up again next round).
             end = min(n, max(k + 1.0, ceil((t_exit - a) / h - sample_offset - 1e-3)));
@@ -291,6 +307,7 @@ void volume_preintegrated(float a, float b) {
         if (skip_empty && k < K) {
             bool empty;
             float t_exit = vol_chunk_exit(vol_o_idx + preint_point(k, a, b, h, s, K) * vol_d_idx, empty);
+            if (empty) t_exit = vol_empty_run_exit(t_exit, b);
             // The chunk's last point (a hair early).
             float last = max(k, min(floor((t_exit - a) / h + s - 1e-3), K));
             end = last + 1.0;
