@@ -278,6 +278,11 @@ int run_measure(const MeasureArgs& a) {
     return 0;
 }
 
+// An option given any number of times, `values` values each time, all kept.
+template <class T> void repeatable(CLI::App* c, const std::string& name, T& into, const std::string& help, int values) {
+    c->add_option(name, into, help)->expected(values)->multi_option_policy(CLI::MultiOptionPolicy::TakeAll);
+}
+
 } // namespace
 
 RunFn add_measure(CLI::App& cmd, char*) {
@@ -288,46 +293,33 @@ RunFn add_measure(CLI::App& cmd, char*) {
         ->required();
     c->add_option("--iso", a.isos, "Iso value (repeatable) for volume inputs")->allow_extra_args(false);
     c->add_option("--series", a.series, "DICOM series to load: index or SeriesInstanceUID");
-    c->add_option("--distance", a.distance, "Distance between two points: --distance X,Y,Z X,Y,Z (LPS mm; repeatable)")
-        ->expected(2)
-        ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll);
-    c->add_option("--angle", a.angle, "Angle at the middle of three points: --angle P1 P2 P3 (repeatable)")
-        ->expected(3)
-        ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll);
+    repeatable(c, "--distance", a.distance, "Distance between two points: --distance X,Y,Z X,Y,Z (LPS mm; repeatable)",
+               2);
+    repeatable(c, "--angle", a.angle, "Angle at the middle of three points: --angle P1 P2 P3 (repeatable)", 3);
     // --hu is the option's earlier name: scripts that use it keep working.
-    c->add_option("--value,--hu", a.values, "The volume's value (HU for CT) at a point X,Y,Z (repeatable)")
-        ->expected(1)
-        ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll);
-    c->add_option("--component-at", a.component_at,
-                  "Isolate and measure the connected component of the surface nearest to X,Y,Z (LPS mm; repeatable)")
-        ->expected(1)
-        ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll);
-    c->add_option("--within", a.within,
-                  "Of --component-at, only the part inside an LPS box, cut at its faces and capped: "
-                  "box=x0,y0,z0,x1,y1,z1 (mm), or none; one for every --component-at, or one each")
-        ->expected(1)
-        ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll);
-    c->add_option("--grow-from", a.grow_from,
-                  "Grow a region from the seed X,Y,Z (LPS mm) through the voxels joined to it whose values are in "
-                  "--grow-range, and measure it (named \"grown N\"; repeatable)")
-        ->expected(1)
-        ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll);
-    c->add_option("--grow-range", a.grow_range, "The values a region grows through: LO,HI (one for all, or one each)")
-        ->expected(1)
-        ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll);
-    c->add_option("--grow-within", a.grow_within,
-                  "Limit a grown region to an LPS box: box=x0,y0,z0,x1,y1,z1 or none (one for all, or one each)")
-        ->expected(1)
-        ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll);
+    repeatable(c, "--value,--hu", a.values, "The volume's value (HU for CT) at a point X,Y,Z (repeatable)", 1);
+    repeatable(c, "--component-at", a.component_at,
+               "Isolate and measure the connected component of the surface nearest to X,Y,Z (LPS mm; repeatable)", 1);
+    repeatable(c, "--within", a.within,
+               "Of --component-at, only the part inside an LPS box, cut at its faces and capped: "
+               "box=x0,y0,z0,x1,y1,z1 (mm), or none; one for every --component-at, or one each",
+               1);
+    repeatable(c, "--grow-from", a.grow_from,
+               "Grow a region from the seed X,Y,Z (LPS mm) through the voxels joined to it whose values are in "
+               "--grow-range, and measure it (named \"grown N\"; repeatable)",
+               1);
+    repeatable(c, "--grow-range", a.grow_range, "The values a region grows through: LO,HI (one for all, or one each)",
+               1);
+    repeatable(c, "--grow-within", a.grow_within,
+               "Limit a grown region to an LPS box: box=x0,y0,z0,x1,y1,z1 or none (one for all, or one each)", 1);
     c->add_option(
         "--label-map", a.label_map,
         "Write the structures (--component-at, --grow-from) as a label map on the volume's grid, 1, 2, ... in "
         "order (NIfTI .nii/.nii.gz, LPS; 3D Slicer loads it as a segmentation), with its colour table (.ctbl)");
-    c->add_option("--surface-distance", a.surface_distance,
-                  "Shortest distance between two surfaces: --surface-distance A B, each a surface's name (\"iso 500\") "
-                  "or a point X,Y,Z meaning the component nearest to it (repeatable)")
-        ->expected(2)
-        ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll);
+    repeatable(c, "--surface-distance", a.surface_distance,
+               "Shortest distance between two surfaces: --surface-distance A B, each a surface's name (\"iso 500\") "
+               "or a point X,Y,Z meaning the component nearest to it (repeatable)",
+               2);
     c->add_flag("--json", a.json, "Print JSON");
     c->add_option("-o,--output", a.out, "Write the points, distances and angles as 3D Slicer markups (.mrk.json, LPS)");
     return [args] { return run_measure(*args); };
