@@ -4,7 +4,6 @@
 // when it marches the volume between its fragments.
 #include <algorithm>
 #include <cmath>
-#include <cstring>
 #include <vector>
 
 #include <glm/glm.hpp>
@@ -51,7 +50,7 @@ void set_tables(VolumeParams& p, const TransferTables& t) {
     p.tf_high_end = glm::vec4(t.high_end());
     p.tf_top = t.integrals().back();
     p.tf_clear = glm::vec2(float(std::max(t.clear_below(), -3.0e38)), float(std::min(t.clear_above(), 3.0e38)));
-    // One point only: every segment takes the classification (no integrals' difference).
+    // One point only: every piece takes the integrals' slope (no difference of them).
     p.tf_width = w > 0 ? float(w) : 3.0e38f;
 }
 
@@ -74,11 +73,7 @@ VolumeParams volume_params(const FrameContext& ctx) {
     p.vol_image_size = {ctx.width, ctx.height};
     p.step_mm = float(volume_step_mm(ctx));
     p.vol_epsilon = ctx.opt.look.oit_epsilon;
-    // Shading fades in over gradients up to a twentieth of the transfer
-    // function's value span per voxel: homogeneous regions keep their colour.
-    const auto& pts = look.tf.points();
-    const double span = pts.empty() ? 1.0 : std::max(pts.back().value - pts.front().value, 1e-6);
-    p.gradient_ref = float(0.05 * span / v.min_spacing);
+    p.gradient_ref = float(gradient_reference(look.tf, v.min_spacing));
     // The first frame (and every frame not accumulated) samples midpoints,
     // the stated model; the later frames of an average spread the samples
     // over their steps (0.5, 0, 0.75, 0.25, ...: van der Corput, shifted).

@@ -69,7 +69,7 @@ TransferTables::TransferTables(const TransferFunction& tf) : tf_(tf) {
     lo_ = tf.points().front().value;
     const double hi = hi_ = tf.points().back().value;
     last_ = hi > lo_ ? kTexels - 1 : 0;
-    width_ = last_ ? (hi - lo_) / double(last_) : 0.0;
+    width_ = transfer_table_texel(tf);
     // kTexels always (one point: all alike), as the shader indexes them.
     classify_.resize(kTexels);
     integral_.resize(kTexels);

@@ -103,11 +103,7 @@ std::optional<std::pair<double, double>> ray_interval(const VolumeSampler& s, co
 VolumeLighting volume_lighting(const VolumeSampler& s, const TransferFunction& tf, const glm::dmat3& world_to_view) {
     VolumeLighting l;
     l.gradient_to_view = world_to_view * glm::transpose(glm::dmat3(glm::inverse(s.volume().index_to_lps)));
-    // As the GPU pass: full shading from a twentieth of the transfer
-    // function's value span per voxel (volume.cpp, gradient_ref).
-    const auto& pts = tf.points();
-    const double span = pts.empty() ? 1.0 : std::max(pts.back().value - pts.front().value, 1e-6);
-    l.gradient_ref = 0.05 * span / s.min_spacing();
+    l.gradient_ref = gradient_reference(tf, s.min_spacing());
     return l;
 }
 
@@ -161,6 +157,16 @@ struct Accumulator {
         color += transmittance * l.alpha * l.color;
         transmittance *= 1.0 - l.alpha;
     }
+    // A step of h mm of the volume transmitting `keep`, uniform within it
+    // (T(x) = before * keep^(x / h)): when the volume's own transmittance is
+    // at or below 0.5 after it, where in the step (0..h mm) it got there.
+    std::optional<double> volume_step(double keep, double h) {
+        const double before = volume_transmittance;
+        volume_transmittance *= keep;
+        if (!(volume_transmittance <= 0.5)) return std::nullopt;
+        const double x = keep > 0.0 ? h * std::log(0.5 / before) / std::log(keep) : 0.0;
+        return std::clamp(x, 0.0, h);
+    }
 };
 
 // Emission-absorption over [a, b]: n equal steps sampled at their midpoints.
@@ -181,12 +187,9 @@ void composite_piece(const VolumeSampler& s, const VolumeLook& look, const Volum
         const glm::dvec3 color = lighting ? shade_volume_sample(s, *lighting, ijk, glm::dvec3(c)) : glm::dvec3(c);
         acc.color += acc.transmittance * alpha * color;
         acc.transmittance *= keep;
-        const double before = acc.volume_transmittance;
-        acc.volume_transmittance *= keep;
-        if (!out.t_half && acc.volume_transmittance <= 0.5) {
-            // Within the step the opacity is constant: T(x) = before * keep^(x / h).
-            const double x = keep > 0.0 ? h * std::log(0.5 / before) / std::log(keep) : 0.0;
-            out.t_half = t - 0.5 * h + std::clamp(x, 0.0, h);
+        // Within the step the opacity is constant.
+        if (const auto x = acc.volume_step(keep, h); x && !out.t_half) {
+            out.t_half = t - 0.5 * h + *x;
             out.value_half = v;
         }
     }
@@ -221,14 +224,10 @@ void preintegrated_piece(const VolumeSampler& s, const TransferTables& tables, c
         }
         acc.color += acc.transmittance * seg.color;
         acc.transmittance *= seg.transmittance;
-        const double before = acc.volume_transmittance;
-        acc.volume_transmittance *= seg.transmittance;
-        if (!out.t_half && acc.volume_transmittance <= 0.5) {
-            // Within the segment as if its extinction were uniform.
-            const double keep = seg.transmittance;
-            const double x = keep > 0.0 ? h * std::log(0.5 / before) / std::log(keep) : 0.0;
-            out.t_half = t - h + std::clamp(x, 0.0, h);
-            out.value_half = vf + (vb - vf) * std::clamp(x / h, 0.0, 1.0);
+        // Within the segment as if its extinction were uniform.
+        if (const auto x = acc.volume_step(seg.transmittance, h); x && !out.t_half) {
+            out.t_half = t - h + *x;
+            out.value_half = vf + (vb - vf) * (*x / h);
         }
         vp = vf;
         vf = vb;

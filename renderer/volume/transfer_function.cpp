@@ -231,12 +231,22 @@ void validate(const VolumeLook& v) {
         throw Error("volume step while moving", "expected 0.01..16 voxels, got " + short_number(v.moving_step));
 }
 
+double transfer_table_texel(const TransferFunction& tf) {
+    const auto& pts = tf.points();
+    return pts.empty() ? 0.0 : (pts.back().value - pts.front().value) / double(kTransferTableTexels - 1);
+}
+
+double gradient_reference(const TransferFunction& tf, double min_spacing) {
+    const auto& pts = tf.points();
+    const double span = pts.empty() ? 1.0 : std::max(pts.back().value - pts.front().value, 1e-6);
+    return 0.05 * span / min_spacing;
+}
+
 std::vector<unsigned char> occupied_chunks(const VolumeLook& v, std::span<const double> mins,
                                            std::span<const double> maxs) {
     std::vector<unsigned char> out(mins.size(), 1);
     if (v.mode != VolumeMode::Composite) return out;
-    const auto& pts = v.tf.points();
-    const double texel = pts.empty() ? 0.0 : (pts.back().value - pts.front().value) / double(kTransferTableTexels - 1);
+    const double texel = transfer_table_texel(v.tf);
     for (std::size_t i = 0; i < mins.size(); ++i)
         out[i] = v.tf.max_opacity(mins[i] - texel, maxs[i] + texel) > 0.0 ? 1 : 0;
     return out;

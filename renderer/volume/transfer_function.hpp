@@ -121,6 +121,13 @@ void validate(const VolumeLook& v);
 
 // Texels of the transfer function's tables (preintegration.hpp) over its points' values.
 constexpr int kTransferTableTexels = 4096;
+// The value between two of those texels (0: the function has one value).
+double transfer_table_texel(const TransferFunction& tf);
+// The gradient magnitude (value per mm) at which gradient shading is full:
+// a twentieth of the transfer function's value span per voxel of
+// `min_spacing` mm, so homogeneous regions keep their colour (the GPU march
+// and the CPU reference alike).
+double gradient_reference(const TransferFunction& tf, double min_spacing);
 
 // Per chunk of a range index (one min and max per chunk): 1 where the
 // transfer function gives some sample in the chunk a non-zero opacity (or,

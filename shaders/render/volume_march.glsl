@@ -55,6 +55,8 @@ vec4 tf_at(float v) {
 }
 
 // (E, P) at v; beyond the points extended by their constant (tau c, tau).
+// (Not the form below with its slope unused: llvmpipe computes the slope
+// anyway, 20 % of a pre-integrated frame.)
 vec4 tf_integral(float v) {
     if (v <= tf_lut.x) return tf_low_end * (v - tf_lut.x);
     if (v >= tf_lut.w) return tf_top + tf_high_end * (v - tf_lut.w);
@@ -74,9 +76,6 @@ vec4 tf_integral(float v, out vec4 slope) {
     if (v >= tf_lut.w) return tf_top + tf_high_end * (v - tf_lut.w);
     return mix(a, b, x - float(i));
 }
-
-// tau = -ln(1 - a) per mm, capped (kMaxExtinction).
-float vol_extinction(float a) { return a >= 1.0 ? 20.72 : min(-log(1.0 - a), 20.72); }
 
 float vol_value(vec3 idx) {
     return texture(volume_tex, (idx + 0.5) * texel.xyz).r * value_map.x + value_map.y;
