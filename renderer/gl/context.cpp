@@ -3,6 +3,8 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <map>
+#include <mutex>
 #include <vector>
 
 #include <epoxy/egl.h>
@@ -75,19 +77,46 @@ std::vector<std::pair<EGLDisplay, const char*>> candidate_displays() {
     return out;
 }
 
+// An EGL display is one per process (eglGetPlatformDisplayEXT returns the
+// same handle to every caller), and eglTerminate on it ends every context
+// made on it, another thread's included: the frame thread's context died
+// when a one-off render on a worker ended. The contexts made here count
+// their display's users and the last one terminates it.
+std::mutex& display_mutex() {
+    static std::mutex m;
+    return m;
+}
+std::map<EGLDisplay, int>& display_users() {
+    static std::map<EGLDisplay, int> users;
+    return users;
+}
+bool initialize_display(EGLDisplay d, EGLint& major, EGLint& minor) {
+    std::lock_guard lock(display_mutex());
+    if (!eglInitialize(d, &major, &minor)) return false;
+    ++display_users()[d];
+    return true;
+}
+void release_display(EGLDisplay d) {
+    std::lock_guard lock(display_mutex());
+    auto& users = display_users();
+    if (--users[d] > 0) return;
+    users.erase(d);
+    eglTerminate(d);
+}
+
 } // namespace
 
 HeadlessContext::HeadlessContext(bool debug) : impl_(std::make_unique<Impl>()) {
     std::string tried;
     for (auto [display, platform] : candidate_displays()) {
         EGLint major = 0, minor = 0;
-        if (!eglInitialize(display, &major, &minor)) {
+        if (!initialize_display(display, major, minor)) {
             tried += std::string(platform) + ": eglInitialize failed (" + egl_error_name(eglGetError()) + "); ";
             continue;
         }
         if (!eglBindAPI(EGL_OPENGL_API)) {
             tried += std::string(platform) + ": no desktop OpenGL; ";
-            eglTerminate(display);
+            release_display(display);
             continue;
         }
         const EGLint attribs[] = {EGL_CONTEXT_MAJOR_VERSION,
@@ -102,13 +131,13 @@ HeadlessContext::HeadlessContext(bool debug) : impl_(std::make_unique<Impl>()) {
         EGLContext ctx = eglCreateContext(display, EGL_NO_CONFIG_KHR, EGL_NO_CONTEXT, attribs);
         if (ctx == EGL_NO_CONTEXT) {
             tried += std::string(platform) + ": no GL 4.5 core context (" + egl_error_name(eglGetError()) + "); ";
-            eglTerminate(display);
+            release_display(display);
             continue;
         }
         if (!eglMakeCurrent(display, EGL_NO_SURFACE, EGL_NO_SURFACE, ctx)) {
             tried += std::string(platform) + ": eglMakeCurrent failed; ";
             eglDestroyContext(display, ctx);
-            eglTerminate(display);
+            release_display(display);
             continue;
         }
         impl_->display = display;
@@ -131,7 +160,7 @@ HeadlessContext::~HeadlessContext() {
     if (impl_ && impl_->display != EGL_NO_DISPLAY) {
         eglMakeCurrent(impl_->display, EGL_NO_SURFACE, EGL_NO_SURFACE, EGL_NO_CONTEXT);
         if (impl_->context != EGL_NO_CONTEXT) eglDestroyContext(impl_->display, impl_->context);
-        eglTerminate(impl_->display);
+        release_display(impl_->display);
     }
 }
 
