@@ -103,6 +103,43 @@ ComponentPlan plan_component(const Scene& scene, SurfaceId surface, const glm::d
     return plan;
 }
 
+ComponentPlan plan_scissors(const Scene& scene, SurfaceId surface, const ScissorsRequest& r) {
+    const Mesh& parent = surface_mesh(scene, surface, "scissors");
+    if (r.width <= 0 || r.height <= 0) throw Error("scissors", "the view has no size");
+    const double aspect = double(r.width) / double(r.height);
+    const glm::dmat4 clip = r.camera.projection(aspect) * r.camera.view();
+    // The view's maps, as the overlay projects and the pick casts rays (image pixels from the top-left).
+    OutlineSweep sweep;
+    sweep.project = [clip, &r](const glm::dvec3& p) -> std::optional<glm::dvec2> {
+        const glm::dvec4 c = clip * glm::dvec4(p, 1.0);
+        if (!(c.w > 0)) return std::nullopt;
+        return glm::dvec2((c.x / c.w + 1) * 0.5 * r.width, (1 - c.y / c.w) * 0.5 * r.height);
+    };
+    sweep.ray = [&r](const glm::dvec2& q) {
+        const Ray ray = r.camera.pixel_ray(q.x, q.y, r.width, r.height);
+        return std::make_pair(ray.origin, glm::normalize(ray.dir));
+    };
+    const SurfaceInfo& info = scene.info(surface);
+    ComponentPlan plan;
+    plan.from = surface;
+    plan.mesh = scissors_cut(parent, r.outline, sweep, r.keep_inside).part;
+    if (plan.mesh.empty())
+        throw Error("scissors",
+                    "nothing of " + info.name + " is " + (r.keep_inside ? "inside" : "outside") + " the outline");
+    std::size_t cuts = 0, made = 0;
+    for (const SurfaceId id : scene.surfaces()) {
+        cuts += scene.info(id).name.find(" scissors ") != std::string::npos;
+        made += scene.info(id).post.keep_at.has_value() || scene.info(id).kind == SurfaceInfo::Kind::Mesh;
+    }
+    plan.info.kind = SurfaceInfo::Kind::Mesh;
+    plan.info.name = info.name + " scissors " + std::to_string(cuts + 1);
+    plan.info.color = linear_from_hex(hex_from_linear(component_color(made + 5)));
+    plan.info.opacity = 1.0f;
+    plan.info.visible = plan.info.pickable = true;
+    plan.measures = measure_surface_mesh(scene, plan.info, plan.mesh);
+    return plan;
+}
+
 IsolatedComponent add_component(Scene& scene, ComponentPlan plan) {
     IsolatedComponent out;
     out.from = plan.from;
@@ -121,10 +158,11 @@ IsolatedComponent isolate_component(Scene& scene, SurfaceId surface, const glm::
     return add_component(scene, plan_component(scene, surface, at, within));
 }
 
-GrownStructure grow_structure(Scene& scene, const glm::dvec3& seed, const GrowOptions& options,
-                              const ProgressFn& progress) {
+GrownPlan plan_grown(const Scene& scene, const glm::dvec3& seed, const GrowOptions& options,
+                     const ProgressFn& progress) {
     if (!scene.has_volume()) throw Error("grow from a seed", "the input is a mesh: there is no volume to grow in");
-    GrownStructure g;
+    GrownPlan plan;
+    GrownStructure& g = plan.grown;
     g.seed = seed;
     g.options = options;
     g.region = grow_region(scene.volume(), seed, options, progress);
@@ -148,15 +186,26 @@ GrownStructure grow_structure(Scene& scene, const glm::dvec3& seed, const GrowOp
     std::vector<LabelSurface> surfaces = extract_labels(padded, std::span<const double>(&one, 1));
     if (surfaces.empty() || surfaces.front().mesh.empty())
         throw Error("grow from a seed", "the grown region has no surface");
+    g.measures = measure_surface(surfaces.front().mesh);
+    plan.mesh = std::move(surfaces.front().mesh);
+    return plan;
+}
+
+SurfaceInfo grown_info(const Scene& scene) {
     std::size_t grown = 0;
     for (const SurfaceId id : scene.surfaces()) grown += scene.info(id).name.rfind("grown ", 0) == 0;
     SurfaceInfo info;
     info.kind = SurfaceInfo::Kind::Mesh;
     info.name = "grown " + std::to_string(grown + 1);
     info.color = linear_from_hex(hex_from_linear(component_color(grown + 3)));
-    g.measures = measure_surface(surfaces.front().mesh);
-    g.surface = scene.add_mesh(std::move(surfaces.front().mesh), info);
-    return g;
+    return info;
+}
+
+GrownStructure grow_structure(Scene& scene, const glm::dvec3& seed, const GrowOptions& options,
+                              const ProgressFn& progress) {
+    GrownPlan plan = plan_grown(scene, seed, options, progress);
+    plan.grown.surface = scene.add_mesh(std::move(plan.mesh), grown_info(scene));
+    return std::move(plan.grown);
 }
 
 nlohmann::json grown_json(const Scene& scene, const GrownStructure& g) {

@@ -9,6 +9,7 @@
 #include <optional>
 #include <string>
 
+#include <glm/vec2.hpp>
 #include <glm/vec3.hpp>
 #include <nlohmann/json.hpp>
 
@@ -17,6 +18,7 @@
 #include "renderer/core/scene.hpp"
 #include "renderer/surface/closest.hpp"
 #include "renderer/surface/grow.hpp"
+#include "renderer/surface/scissors.hpp"
 
 namespace iso::core {
 
@@ -74,6 +76,22 @@ ComponentPlan plan_component(const Scene& scene, SurfaceId surface, const glm::d
                              const std::optional<LpsBox>& within = {});
 IsolatedComponent add_component(Scene& scene, ComponentPlan plan);
 
+// Scissors (surface/scissors.hpp: 3D Slicer's Scissors, exact): the part of
+// `surface` inside (or outside) an outline drawn on a view of `camera` at
+// width x height (image pixels from the top-left, closed), swept along the
+// view's rays, cut at the swept walls and capped. A surface of its own,
+// "<parent> scissors <n>" (a mesh: its measurement has no discretization
+// uncertainty), in a colour of its own; its parent is left as it is (the
+// desktop app hides it). Throws iso::Error: an unknown or empty surface, a
+// bad outline (surface/scissors.hpp), nothing of the surface kept.
+struct ScissorsRequest {
+    std::vector<glm::dvec2> outline;
+    Camera camera;
+    int width = 0, height = 0;
+    bool keep_inside = true;
+};
+ComponentPlan plan_scissors(const Scene& scene, SurfaceId surface, const ScissorsRequest& r);
+
 // A region grown from a seed in the volume (surface/grow.hpp: the voxels
 // joined to it within a value range, limited to a box), made a surface of
 // its own: the boundary of its voxels (extract_labels: vertices at edge
@@ -91,6 +109,17 @@ struct GrownStructure {
 };
 GrownStructure grow_structure(Scene& scene, const glm::dvec3& seed, const GrowOptions& options,
                               const ProgressFn& progress = {});
+// grow_structure in two steps, for a caller that works off its GUI thread:
+// plan_grown only reads the scene's volume and does the work (the region,
+// its surface, the measures); grown_info names the surface as the scene
+// stands when it is added ("grown <n>", its colour).
+struct GrownPlan {
+    GrownStructure grown; // surface 0 until added
+    Mesh mesh;
+};
+GrownPlan plan_grown(const Scene& scene, const glm::dvec3& seed, const GrowOptions& options,
+                     const ProgressFn& progress = {});
+SurfaceInfo grown_info(const Scene& scene);
 nlohmann::json grown_json(const Scene& scene, const GrownStructure& g);
 
 // Structures as a label map on the volume's grid (3D Slicer loads it as a

@@ -72,17 +72,28 @@ Mesh clip_to_box(const Mesh& m, const LpsBox& box) {
     // No corner inside can still cut (a box inside a large solid); no overlap of the bounds cannot.
     for (int i = 0; i < 3; ++i)
         if (hi[i] < box.lo[i] || lo[i] > box.hi[i]) return Mesh{};
-    vtkNew<vtkPlaneCollection> planes;
+    std::vector<HalfSpace> region;
     for (int face = 0; face < 6; ++face) {
         const int axis = face / 2;
         const bool upper = face % 2 == 1;
-        double origin[3] = {box.lo.x, box.lo.y, box.lo.z}, normal[3] = {0, 0, 0};
-        if (upper) origin[axis] = box.hi[axis];
-        // vtkClipClosedSurface keeps what the planes' normals point to: inwards.
-        normal[axis] = upper ? -1.0 : 1.0;
+        HalfSpace h;
+        h.origin = box.lo;
+        if (upper) h.origin[axis] = box.hi[axis];
+        h.normal = glm::dvec3(0.0);
+        h.normal[axis] = upper ? -1.0 : 1.0; // inwards
+        region.push_back(h);
+    }
+    return clip_closed(m, region);
+}
+
+Mesh clip_closed(const Mesh& m, const std::vector<HalfSpace>& region) {
+    if (m.empty()) return m;
+    vtkNew<vtkPlaneCollection> planes;
+    for (const HalfSpace& h : region) {
+        // vtkClipClosedSurface keeps what the planes' normals point to.
         vtkNew<vtkPlane> p;
-        p->SetOrigin(origin);
-        p->SetNormal(normal);
+        p->SetOrigin(h.origin.x, h.origin.y, h.origin.z);
+        p->SetNormal(h.normal.x, h.normal.y, h.normal.z);
         planes->AddItem(p);
     }
     vtkNew<vtkClipClosedSurface> clip;
@@ -103,7 +114,7 @@ Mesh clip_to_box(const Mesh& m, const LpsBox& box) {
     n->AutoOrientNormalsOff();
     n->ComputeCellNormalsOff();
     n->Update();
-    return from_polydata(n->GetOutput(), "clip to a box");
+    return from_polydata(n->GetOutput(), "clip a closed surface");
 }
 
 std::array<double, 6> cap_areas(const Mesh& m, const LpsBox& box) {

@@ -11,6 +11,7 @@
 
 #include <array>
 #include <string>
+#include <vector>
 
 #include <glm/vec3.hpp>
 
@@ -30,6 +31,16 @@ struct LpsBox {
 // Parses "x0,y0,z0,x1,y1,z1" (LPS mm; either corner first on each axis).
 // Throws iso::Error(what, ...) for a malformed, non-finite or flat box.
 LpsBox parse_box(const std::string& what, const std::string& text);
+
+// A half-space: the points p with dot(p - origin, normal) >= 0.
+struct HalfSpace {
+    glm::dvec3 origin{0.0}, normal{0.0, 0.0, 1.0};
+};
+
+// The part of closed surface `m` within every half-space (a convex region),
+// capped on each plane by the polygons the surface traces there
+// (vtkClipClosedSurface); normals recomputed, one vertex per point.
+Mesh clip_closed(const Mesh& m, const std::vector<HalfSpace>& region);
 
 // The part of closed surface `m` within `box`, capped: a closed surface
 // again (an open surface is cut, but its cuts are left open). A surface
