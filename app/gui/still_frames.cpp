@@ -43,6 +43,25 @@ void StillFrames::request(StillRequest r) {
     wake_.notify_all();
 }
 
+void StillFrames::pick(PickJob job, std::function<void(PickFrame)> done) {
+    std::function<void(PickFrame)> replaced;
+    {
+        std::lock_guard lock(mutex_);
+        if (job.replaceable && !picks_.empty() && picks_.back().job.replaceable) {
+            replaced = std::move(picks_.back().done);
+            picks_.back() = Pick{std::move(job), std::move(done)};
+        } else {
+            picks_.push_back(Pick{std::move(job), std::move(done)});
+        }
+    }
+    wake_.notify_all();
+    if (replaced) {
+        PickFrame f;
+        f.replaced = true;
+        replaced(std::move(f));
+    }
+}
+
 void StillFrames::hold_for(int ms) {
     const std::int64_t until = now_ns() + std::int64_t(ms) * 1000000;
     std::int64_t seen = hold_until_ns_.load(std::memory_order_relaxed);
@@ -54,8 +73,9 @@ void StillFrames::hold_for(int ms) {
 bool StillFrames::wait_for_work(std::unique_lock<std::mutex>& lock) {
     bool counted = false;
     for (;;) {
-        wake_.wait(lock, [this] { return stop_ || (pending_ && pending_->id != done_); });
+        wake_.wait(lock, [this] { return stop_ || !picks_.empty() || (pending_ && pending_->id != done_); });
         if (stop_) return false;
+        if (!picks_.empty()) return true;       // a pick is never held back
         if (pending_->interactive) return true; // the frame a drag waits for
         const std::int64_t hold = hold_until_ns_.load(std::memory_order_relaxed) - now_ns();
         if (hold <= 0) return true;
@@ -87,6 +107,10 @@ void StillFrames::run() {
     int frames_left = 0;
     std::unique_lock lock(mutex_);
     while (wait_for_work(lock)) {
+        if (!picks_.empty()) {
+            draw_picks(context ? &renderer : nullptr, failed, lock);
+            continue;
+        }
         StillRequest r = *pending_; // shares the meshes, annotations and AO image
         lock.unlock();
         StillFrame f;
@@ -105,8 +129,40 @@ void StillFrames::run() {
         post(std::move(f));
         lock.lock();
     }
+    // Picks still waiting get their answer: nobody is left to draw them.
+    for (Pick& p : picks_) {
+        PickFrame f;
+        f.error = "the 3D view is closing";
+        p.done(std::move(f));
+    }
+    picks_.clear();
     lock.unlock();
     if (context) renderer.release(); // the context is still current on this thread
+}
+
+// Draws the waiting picks' frames, first come first drawn (the lock is
+// held on entry and exit, released while drawing).
+void StillFrames::draw_picks(core::SnapshotRenderer* renderer, const std::string& failed,
+                             std::unique_lock<std::mutex>& lock) {
+    while (!picks_.empty()) {
+        Pick p = std::move(picks_.front());
+        picks_.pop_front();
+        lock.unlock();
+        PickFrame f;
+        const auto t0 = std::chrono::steady_clock::now();
+        if (!renderer) {
+            f.error = failed;
+        } else {
+            try {
+                f.list = std::move(renderer->render(p.job.scene, p.job.camera, p.job.opt).pick);
+            } catch (const std::exception& e) {
+                f.error = e.what();
+            }
+        }
+        f.ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+        p.done(std::move(f));
+        lock.lock();
+    }
 }
 
 StillFrame StillFrames::draw(core::SnapshotRenderer& renderer, const StillRequest& r, int& frames_left) {
@@ -126,6 +182,8 @@ StillFrame StillFrames::draw(core::SnapshotRenderer& renderer, const StillReques
         f.aa_frames = res.aa_frames;
         f.labels = std::move(res.labels);
         f.volume = res.volume;
+        f.gl_renderer = res.gl_renderer;
+        f.gl_objects = renderer.renderer().gl_objects_created();
         // Done when the AO and the average have their frames (a restart
         // inside the renderer, such as a grown translucency pool, is counted in them).
         --frames_left;

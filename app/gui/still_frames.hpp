@@ -11,6 +11,7 @@
 #include <atomic>
 #include <condition_variable>
 #include <cstdint>
+#include <deque>
 #include <functional>
 #include <memory>
 #include <mutex>
@@ -52,8 +53,31 @@ struct StillFrame {
     std::vector<LabelBox> labels;
     // The volume's ray casting in this frame.
     VolumeStats volume;
-    double ms = 0;     // render and read-back time of this frame
-    std::string error; // the thread could not draw (no context, a rendering error): no image
+    double ms = 0;              // render and read-back time of this frame
+    std::string error;          // the thread could not draw (no context, a rendering error): no image
+    std::string gl_renderer;    // the thread's GL renderer and version
+    std::size_t gl_objects = 0; // GL objects its renderer has made so far
+};
+
+// A pick asked of the thread: one frame of the view with the pick riding on
+// it (RenderOptions::pick set, no image), drawn for its lists. The thread
+// keeps the scene on its GPU, so the GUI thread's context holds none of it.
+struct PickJob {
+    core::SceneSnapshot scene;
+    Camera camera;
+    RenderOptions opt;
+    // A hover's pick: a newer replaceable job replaces it while it waits
+    // (only the pointer's latest position is worth a frame).
+    bool replaceable = false;
+};
+
+// What the thread returns: the frame's lists (resolved against the scene by
+// the caller, core::resolve_pick) or why there are none.
+struct PickFrame {
+    PickList list;
+    double ms = 0; // the frame's render time
+    std::string error;
+    bool replaced = false; // a newer replaceable job took its place: not drawn
 };
 
 class StillFrames {
@@ -68,6 +92,11 @@ public:
     // Replaces what was asked before (a frame being drawn for it finishes,
     // and arrives with the older id).
     void request(StillRequest r);
+    // Draws `job`'s pick frame before any waiting still frame (input never
+    // holds it back) and hands the result to `done` on the frame thread
+    // (the caller posts it on, or wakes a waiting thread). Every job gets
+    // its `done` once: drawn, replaced, or with an error.
+    void pick(PickJob job, std::function<void(PickFrame)> done);
     // Input: no frame starts within `ms` of now (called on every input event: cheap).
     void hold_for(int ms);
     // The input that held the frames back is over (the view's own drag ended).
@@ -82,6 +111,11 @@ private:
     void run();
     bool wait_for_work(std::unique_lock<std::mutex>& lock);
     StillFrame draw(core::SnapshotRenderer& renderer, const StillRequest& r, int& frames_left);
+    struct Pick {
+        PickJob job;
+        std::function<void(PickFrame)> done;
+    };
+    void draw_picks(core::SnapshotRenderer* renderer, const std::string& failed, std::unique_lock<std::mutex>& lock);
     void post(StillFrame f);
 
     QObject* receiver_; // outlives this object: its owner waits for the thread first
@@ -89,6 +123,7 @@ private:
     std::mutex mutex_;
     std::condition_variable wake_;
     std::optional<StillRequest> pending_; // guarded by mutex_
+    std::deque<Pick> picks_;              // guarded by mutex_, first come first drawn
     std::uint64_t done_ = 0;              // the last request drawn to the end
     bool stop_ = false;
     std::atomic<std::int64_t> hold_until_ns_{0}; // steady clock

@@ -5,11 +5,16 @@
 #include <QKeyEvent>
 #include <QOpenGLContext>
 #include <QOpenGLFunctions>
+#include <QPainter>
+#include <QPen>
+#include <QPolygonF>
 #include <QMouseEvent>
 #include <QTimer>
 #include <QWheelEvent>
 
+#include <chrono>
 #include <cmath>
+#include <future>
 #include <cstdlib>
 #include <iostream>
 
@@ -34,8 +39,7 @@ Viewer::Viewer(core::Workspace& workspace, PatientView view, ViewerOptions optio
     // frames draw every triangle meanwhile (docs/lod.md).
     scene_.set_background_lod(true);
     setMouseTracking(true); // hover readout
-    // The framebuffer keeps its picture between paints: a plain frame
-    // already on screen is not drawn again (draw_here), and a grab reads it.
+    // The framebuffer keeps its picture between paints: a grab reads it.
     setUpdateBehavior(QOpenGLWidget::PartialUpdate);
     still_timer_ = new QTimer(this);
     still_timer_->setSingleShot(true);
@@ -81,6 +85,7 @@ void Viewer::paintGL() {
     }
     try {
         draw();
+        paint_sketch();
     } catch (const std::exception& e) {
         // Nothing escapes into Qt's event loop: report, show the background, stop drawing.
         error_ = e.what();
@@ -208,43 +213,30 @@ bool needs_still_frames(const RenderOptions& opt) {
     return traced_ao || opt.look.aa.samples > 1 || opt.accumulate;
 }
 
-// The plain frame shown until the still-frame thread's first one arrives:
-// what a drag draws (no AO but ray-traced AO already traced, one sample,
-// the moving camera's coarser levels of detail and volume step). It holds
-// the GUI thread, so it costs what a drag frame costs: on a 32 M-triangle
-// surface at the error bound of still frames it took most of a second on
-// llvmpipe, and every release and wheel notch waited for it.
-RenderOptions plain(RenderOptions opt) {
-    opt.moving = true;
-    if (!(opt.look.ao == AoMethod::Raytraced && opt.ao_image)) {
-        opt.look.ao = AoMethod::Off;
-        opt.ao_image = nullptr;
-    }
-    opt.look.aa.samples = 1;
-    opt.accumulate = false;
-    return opt;
-}
 } // namespace
 
-// With the frame thread, still frames and a drag's frames are drawn there
-// (a drag's frames, 150-400 ms on a 32 M-triangle surface or a volume on
-// llvmpipe, held the GUI thread and every input behind them); the GUI
-// thread shows the frame asked for once it arrives, the newest one
-// meanwhile, and draws a plain frame itself only before the thread's
-// first. A look that needs no still frames (no AO, no average) is drawn
-// here, once, when the view stops moving: that frame is final.
+// With the frame thread, every frame is drawn there: still frames, a
+// drag's frames (150-400 ms on a 32 M-triangle surface or a volume on
+// llvmpipe, which held the GUI thread and every input behind them) and the
+// one final frame of a look that needs no still frames; so are picks
+// (pick_at). The GUI thread shows the frame asked for once it arrives, the
+// newest one meanwhile, and holds no GPU copy of the scene. Without the
+// thread, every frame is drawn here.
 void Viewer::draw() {
     frame_camera();
     follow_raytraced();
     const RenderOptions opt = frame_options();
     annotations_->legend.clear();
     if (options_.legend) annotations_->legend = core::legend_entries(scene_, opt.look);
-    if ((dragging_ || needs_still_frames(opt)) && use_still_thread()) {
+    if (use_still_thread()) {
         if (show_still(opt) || show_latest()) return;
-        draw_here(plain(opt), true);
+        // Nothing from the thread yet: the background until its first frame
+        // (a frame drawn here would upload the scene to this context too: a
+        // second GPU copy of every mesh, 1.2 GB for 32 M triangles).
+        clear_to_background();
         return;
     }
-    draw_here(opt, false);
+    draw_here(opt);
 }
 
 // What a frame shows apart from its jitter and its look (compared on its
@@ -300,8 +292,6 @@ bool Viewer::show_still(const RenderOptions& opt) {
     }
     if (!still_ || !still_->image) return false;
     show_frame(*still_, opt);
-    shown_key_ = std::move(key);
-    shown_look_ = opt.look;
     complete_ = still_->last && !dragging_;
     return true;
 }
@@ -310,7 +300,6 @@ bool Viewer::show_still(const RenderOptions& opt) {
 bool Viewer::show_latest() {
     if (!latest_ || !latest_->image) return false;
     show_frame(*latest_, frame_options());
-    shown_key_.clear(); // not the view as it is: a plain frame here would not be skipped
     complete_ = false;
     return true;
 }
@@ -341,6 +330,9 @@ void Viewer::take_still(const StillFrame& f) {
     auto frame = std::make_shared<const StillFrame>(f);
     ++thread_frames_;
     last_thread_ms_ = f.ms;
+    if (gl_renderer_.empty()) gl_renderer_ = f.gl_renderer;
+    if (thread_frames_ == 1) thread_objects_first_ = f.gl_objects;
+    objects_since_first_frame_ = f.gl_objects - std::min(f.gl_objects, thread_objects_first_);
     // Drag frames slower than 70 ms (under 14 a second) go to half the
     // size, a quarter of the pixels; back to the full size when a half-size
     // one takes under 15 ms (the full one would take about 60).
@@ -361,15 +353,9 @@ void Viewer::take_still(const StillFrame& f) {
     }
 }
 
-// A frame drawn here, on the GUI thread: a drag's, a final one, the plain
-// frame standing in for the thread's (`stand_in`), or every still frame
-// without the thread. A plain frame already on screen is not drawn again.
-void Viewer::draw_here(const RenderOptions& opt, bool stand_in) {
-    std::vector<double> key = frame_key(opt);
-    if (stand_in && key == shown_key_ && opt.look == shown_look_) return;
+// A frame drawn here, on the GUI thread (the view without the frame thread).
+void Viewer::draw_here(const RenderOptions& opt) {
     auto r = scene_.render(camera_, opt);
-    shown_key_ = std::move(key);
-    shown_look_ = opt.look;
     raytraced_drawn_ = opt.ao_image != nullptr;
     labels_ = std::move(r.labels);
     volume_stats_ = r.volume;
@@ -391,8 +377,8 @@ void Viewer::draw_here(const RenderOptions& opt, bool stand_in) {
     // accumulation (the renderer sees the change).
     const bool ao_more = accumulates && ao_frames_ < options_.look.ao_frames;
     const bool aa_more = opt.accumulate && aa_frames_ < options_.look.aa.view_frames;
-    complete_ = !stand_in && !dragging_ && !ao_more && !aa_more;
-    if (!stand_in && (ao_more || aa_more)) still_timer_->start(0);
+    complete_ = !dragging_ && !ao_more && !aa_more;
+    if (ao_more || aa_more) still_timer_->start(0);
 }
 
 // Input anywhere in the application (this view's own included) holds the
@@ -449,28 +435,110 @@ QSize Viewer::image_size() const {
     return {std::max(1, int(width() * dpr)), std::max(1, int(height() * dpr))};
 }
 
-core::PickResult Viewer::pick_at(QPointF image_pixel) {
+core::PickRequest Viewer::pick_request(QPointF image_pixel, PickRegion rect) const {
     if (!error_.empty()) throw Error("3D view pick", "the view cannot draw: " + error_);
-    if (!isValid() || frames_ == 0) throw Error("3D view pick", "the view has not drawn a frame yet");
+    if (frames_ == 0) throw Error("3D view pick", "the view has not drawn a frame yet");
     core::PickRequest p;
     p.x = int(std::floor(image_pixel.x()));
     p.y = int(std::floor(image_pixel.y()));
-    // The view's frame (camera, size, surfaces) without what the lists do
-    // not depend on: no AO, no overlay, and read back rather than presented,
-    // so the picture on screen and its AO accumulation stay as they are.
+    p.rect = rect;
+    return p;
+}
+
+// The view's frame (camera, size, surfaces) without what the lists do not
+// depend on: no AO, no overlay, and read back rather than presented, so the
+// picture on screen and its AO accumulation stay as they are.
+RenderOptions Viewer::pick_options(const core::PickRequest& p) {
     RenderOptions opt = frame_options();
     opt.look.ao = AoMethod::Off;
+    opt.ao_image = nullptr;
     opt.accumulate = false;
     opt.annotations = nullptr;
     opt.present = false;
     opt.target_framebuffer = 0;
-    makeCurrent();
-    struct Done {
-        Viewer& v;
-        ~Done() { v.doneCurrent(); }
-    } done{*this};
+    opt.pick = core::pick_region(p);
+    opt.image = false; // the lists are the output
     camera_.fit_planes(scene_.bounds(options_.look));
-    return core::pick_in_frame(scene_, camera_, opt, p);
+    return opt;
+}
+
+// The lists of a pick frame the thread drew from `scene`, resolved against
+// the scene as it is now: they name triangles of the snapshot's meshes, so
+// a mesh replaced meanwhile makes the pick stale (an error, not a wrong point).
+core::PickResult Viewer::resolve(const core::SceneSnapshot& scene, const Camera& camera, const RenderOptions& opt,
+                                 const PickList& list, double ms, const core::PickRequest& p) const {
+    const core::SceneSnapshot now = scene_.snapshot();
+    bool same = now.surfaces.size() == scene.surfaces.size();
+    for (std::size_t i = 0; same && i < now.surfaces.size(); ++i) same = now.surfaces[i].mesh == scene.surfaces[i].mesh;
+    if (!same) throw Error("3D view pick", "the surfaces changed while the pick was drawn: pick again");
+    core::PickResult r = core::resolve_pick(scene_, camera, opt.width, opt.height, list, p, &opt.look);
+    r.frame_ms = ms;
+    return r;
+}
+
+core::PickResult Viewer::pick_at(QPointF image_pixel, PickRegion rect) {
+    const core::PickRequest p = pick_request(image_pixel, rect);
+    const auto t0 = std::chrono::steady_clock::now();
+    if (!use_still_thread()) {
+        if (!isValid()) throw Error("3D view pick", "the view has no GL context yet");
+        RenderOptions opt = pick_options(p);
+        opt.pick.reset(); // pick_in_frame sets it and renders
+        opt.image = true;
+        makeCurrent();
+        struct Done {
+            Viewer& v;
+            ~Done() { v.doneCurrent(); }
+        } done{*this};
+        return core::pick_in_frame(scene_, camera_, opt, p);
+    }
+    PickJob job{scene_.snapshot(), camera_, pick_options(p), false};
+    auto answer = std::make_shared<std::promise<PickFrame>>();
+    std::future<PickFrame> frame = answer->get_future();
+    const core::SceneSnapshot scene = job.scene;
+    const Camera camera = job.camera;
+    const RenderOptions opt = job.opt;
+    stills_->pick(std::move(job), [answer](PickFrame f) { answer->set_value(std::move(f)); });
+    const PickFrame f = frame.get(); // the thread never waits for this one: no deadlock
+    if (!f.error.empty()) throw Error("3D view pick", f.error);
+    return resolve(scene, camera, opt, f.list,
+                   std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count(), p);
+}
+
+void Viewer::pick_later(QPointF image_pixel, PickDone done, bool hover) {
+    core::PickRequest p;
+    try {
+        p = pick_request(image_pixel);
+        if (!use_still_thread()) {
+            const core::PickResult r = pick_at(image_pixel);
+            done(&r, {});
+            return;
+        }
+    } catch (const std::exception& e) {
+        done(nullptr, e.what());
+        return;
+    }
+    PickJob job{scene_.snapshot(), camera_, pick_options(p), hover};
+    const auto t0 = std::chrono::steady_clock::now();
+    // Back on the GUI thread through this widget's event queue (dropped
+    // with the widget): resolved there, against the scene as it is then.
+    auto answer = [this, p, t0, scene = job.scene, camera = job.camera, opt = job.opt,
+                   done = std::move(done)](const PickFrame& f) {
+        --picks_waiting_;
+        if (f.replaced) return done(nullptr, {});
+        try {
+            if (!f.error.empty()) throw Error("3D view pick", f.error);
+            const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+            const core::PickResult r = resolve(scene, camera, opt, f.list, ms, p);
+            done(&r, {});
+        } catch (const std::exception& e) {
+            done(nullptr, e.what());
+        }
+    };
+    ++picks_waiting_;
+    stills_->pick(std::move(job), [this, answer = std::move(answer)](PickFrame f) {
+        QMetaObject::invokeMethod(
+            this, [answer, f = std::move(f)] { answer(f); }, Qt::QueuedConnection);
+    });
 }
 
 void Viewer::set_markups(std::vector<Markup> markups) {
@@ -486,6 +554,24 @@ void Viewer::set_guides(std::vector<Annotations::Line> lines, std::vector<glm::d
     annotations_->points = std::move(points);
     ++annotations_version_; // the still frames' picture changed
     update();
+}
+
+void Viewer::set_sketch(std::vector<QPointF> image_pixels) {
+    sketch_ = std::move(image_pixels);
+    update();
+}
+
+// The outline over the picture, closed back to its start (a dashed segment): in widget pixels.
+void Viewer::paint_sketch() {
+    if (sketch_.size() < 2) return;
+    QPainter p(this);
+    p.setRenderHint(QPainter::Antialiasing);
+    QPolygonF line;
+    for (const QPointF& q : sketch_) line << q / devicePixelRatioF();
+    p.setPen(QPen(QColor(255, 220, 60), 2.0));
+    p.drawPolyline(line);
+    p.setPen(QPen(QColor(255, 220, 60), 1.5, Qt::DashLine));
+    p.drawLine(line.back(), line.front());
 }
 
 void Viewer::set_labels(std::vector<std::pair<glm::dvec3, std::string>> labels) {

@@ -27,6 +27,7 @@ struct RenderOptions;
 namespace core {
 class Scene;
 class Workspace;
+struct PickRequest;
 struct PickResult;
 struct SceneSnapshot;
 } // namespace core
@@ -109,8 +110,8 @@ public:
     // ViewerOptions::still_thread off), and the last one's render time.
     int thread_frames() const { return thread_frames_; }
     double last_thread_frame_ms() const { return last_thread_ms_; }
-    // GL objects the renderer made after the first frame (0 in a steady
-    // view: resources live across frames).
+    // GL objects the renderer drawing the view (the frame thread's, with it)
+    // made after its first frame (0 in a steady view: resources live across frames).
     std::size_t gl_objects_since_first_frame() const { return objects_since_first_frame_; }
     // The volume's ray casting in the frame on screen (VolumeStats::drawn:
     // the volume was drawn).
@@ -154,7 +155,23 @@ public:
     // AO and overlay and not presented: the picture and its AO
     // accumulation stay. Throws iso::Error: a pixel outside the image, a
     // view that has not drawn yet or failed to.
-    core::PickResult pick_at(QPointF image_pixel);
+    // With the frame thread (ViewerOptions::still_thread), the pick's frame
+    // is drawn there, on its GPU copy of the scene (this view's context
+    // holds none), and this thread waits for it and resolves its lists.
+    // With `rect` (image pixels, not empty), every triangle visible in it is
+    // listed too (PickResult::triangles).
+    core::PickResult pick_at(QPointF image_pixel, PickRegion rect = {0, 0, 0, 0});
+    // The same pick, answered later: `done` runs on the GUI thread with the
+    // result, or with null and why there is none. The GUI thread does not
+    // wait for the pick's frame (a hover's or a click's: on a 32 M-triangle
+    // surface it would hold the input). A `hover` pick waiting to be drawn
+    // is replaced by a newer one (`done` is then called with null and an
+    // empty reason). Without the frame thread it is drawn here, and `done`
+    // runs before this returns.
+    using PickDone = std::function<void(const core::PickResult*, const std::string& error)>;
+    void pick_later(QPointF image_pixel, PickDone done, bool hover = false);
+    // pick_later picks not answered yet.
+    int picks_waiting() const { return picks_waiting_; }
     // Markups (LPS mm) drawn over the view by the renderer's overlay, as
     // `isoscope render --markups` draws them.
     void set_markups(std::vector<Markup> markups);
@@ -162,6 +179,10 @@ public:
     // the overlay: the slice planes' outlines and the crosshair (View >
     // Slice planes in 3D). Empty: none.
     void set_guides(std::vector<Annotations::Line> lines, std::vector<glm::dvec3> points);
+    // An outline being drawn on the view (image pixels; the Scissors
+    // tool's), painted over the picture at once (not part of any frame or
+    // export). Empty: none.
+    void set_sketch(std::vector<QPointF> image_pixels);
     // Text drawn by the overlay next to LPS points (the markups' names).
     void set_labels(std::vector<std::pair<glm::dvec3, std::string>> labels);
     // The overlay's labels as the last frame placed them (boxes in image
@@ -176,7 +197,7 @@ protected:
     void paintGL() override;
     void draw();
     void frame_camera();
-    void draw_here(const RenderOptions& opt, bool stand_in);
+    void draw_here(const RenderOptions& opt);
     bool show_still(const RenderOptions& opt);
     bool show_latest();
     void show_frame(const StillFrame& f, const RenderOptions& opt);
@@ -236,8 +257,8 @@ private:
     std::unique_ptr<gl::ImagePresenter> presenter_;
     bool stills_failed_ = false;
     std::uint64_t still_id_ = 0;
-    std::vector<double> still_key_, shown_key_;
-    FrameLook still_look_, shown_look_;
+    std::vector<double> still_key_;
+    FrameLook still_look_;
     std::shared_ptr<const StillFrame> still_;
     // The newest frame the thread drew, whatever it was asked for: shown
     // while the frame asked for is on its way (a drag's camera has moved on,
@@ -250,10 +271,19 @@ private:
     // last drag frame's time (VTK's interactive image sample distance).
     double drag_scale_ = 1.0;
     std::uint64_t annotations_version_ = 0;
+    std::vector<QPointF> sketch_;
+    void paint_sketch();
+    std::size_t thread_objects_first_ = 0; // the frame thread's GL objects after its first frame
     int thread_frames_ = 0;
     double last_thread_ms_ = 0;
+    int picks_waiting_ = 0;
     bool use_still_thread();
     void take_still(const StillFrame& f);
+    // The frame a pick rides on: the view's, without AO and overlay, not presented.
+    RenderOptions pick_options(const core::PickRequest& p);
+    core::PickRequest pick_request(QPointF image_pixel, PickRegion rect = {0, 0, 0, 0}) const;
+    core::PickResult resolve(const core::SceneSnapshot& scene, const Camera& camera, const RenderOptions& opt,
+                             const PickList& list, double ms, const core::PickRequest& p) const;
 };
 
 } // namespace iso::gui

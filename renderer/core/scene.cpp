@@ -400,6 +400,8 @@ RenderResult Scene::render(const Camera& camera, const RenderOptions& opt) {
 
 void Scene::release_gpu() { impl_->gpu.release(); }
 
+bool Scene::has_gpu_data() const { return impl_->gpu.started(); }
+
 void Scene::set_background_lod(bool on) { impl_->gpu.set_background_lod(on); }
 
 bool Scene::lod_ready(SurfaceId id) const {

@@ -80,8 +80,9 @@ public:
     SnapshotRenderer();
     ~SnapshotRenderer();
     RenderResult render(const SceneSnapshot& s, const Camera& camera, const RenderOptions& opt);
-    Renderer& renderer(); // made on first use in the current context
-    void release();       // with the context current, before it goes
+    Renderer& renderer();                                 // made on first use in the current context
+    void release();                                       // with the context current, before it goes
+    bool started() const { return renderer_ != nullptr; } // GPU resources made and not released
     // Levels of detail a frame asks for and lacks are built in the
     // background (interactive views: the frames meanwhile draw every
     // triangle) instead of inside the frame (the CLI, exports).
@@ -189,6 +190,9 @@ public:
     // release_gpu() with it current before the context goes.
     RenderResult render(const Camera& camera, const RenderOptions& opt);
     void release_gpu();
+    // Whether render() made GPU resources (its renderer, the meshes'
+    // copies) that release_gpu() has not freed yet.
+    bool has_gpu_data() const;
     // Interactive views: levels of detail are built in the background, not
     // inside a frame (SnapshotRenderer::set_background_lod).
     void set_background_lod(bool on);

@@ -5,6 +5,7 @@
 
 #include <QApplication>
 #include <QEventLoop>
+#include <QMouseEvent>
 #include <QSurfaceFormat>
 #include <QTimer>
 
@@ -80,6 +81,35 @@ inline std::string open_mesh(gui::MainWindow& w, const std::string& path) {
     w.open_path(QString::fromStdString(path));
     if (!wait_until([&] { return !w.busy(); }, 300000) || w.scene().surfaces().empty()) return "cannot open " + path;
     return {};
+}
+
+// Runs the event loop for `ms`.
+inline void wait_ms(int ms) {
+    const double until = now_ms() + ms;
+    wait_until([&] { return now_ms() >= until; }, ms + 1000);
+}
+
+// The 10 ms probe: how late each tick came (the GUI thread was busy meanwhile).
+struct Probe {
+    QTimer timer;
+    double last = 0;
+    std::vector<double> late;
+    Probe() {
+        timer.setTimerType(Qt::PreciseTimer);
+        timer.setInterval(10);
+        QObject::connect(&timer, &QTimer::timeout, [this] {
+            const double t = now_ms();
+            if (last > 0) late.push_back(std::max(0.0, t - last - 10.0));
+            last = t;
+        });
+        timer.start();
+    }
+    double max() const { return late.empty() ? 0.0 : *std::max_element(late.begin(), late.end()); }
+};
+
+// A mouse event posted to `to` (as the window system delivers them: queued).
+inline void post_mouse(QWidget* to, QEvent::Type type, QPointF at, Qt::MouseButton b, Qt::MouseButtons held) {
+    QCoreApplication::postEvent(to, new QMouseEvent(type, at, to->mapToGlobal(at), b, held, Qt::NoModifier));
 }
 
 // Writes `text` to `path` atomically; throws iso::Error.

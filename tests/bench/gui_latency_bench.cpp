@@ -57,15 +57,13 @@
 
 using namespace iso;
 using bench::now_ms;
+using bench::post_mouse;
+using bench::Probe;
 using bench::quantile;
+using bench::wait_ms;
 using bench::wait_until;
 
 namespace {
-
-void wait_ms(int ms) {
-    const double until = now_ms() + ms;
-    wait_until([&] { return now_ms() >= until; }, ms + 1000);
-}
 
 int fail(const std::string& why) {
     std::fprintf(stderr, "gui_latency_bench: %s\n", why.c_str());
@@ -79,27 +77,6 @@ struct Way {
     std::vector<double> drag_fps, drag_stall; // frames drawn per second of a drag; the GUI thread's lateness then
     int inputs_during_accumulation = 0, inputs = 0;
 };
-
-// The 10 ms probe: how late each tick came (the GUI thread was busy meanwhile).
-struct Probe {
-    QTimer timer;
-    double last = 0;
-    std::vector<double> late;
-    Probe() {
-        timer.setTimerType(Qt::PreciseTimer);
-        timer.setInterval(10);
-        QObject::connect(&timer, &QTimer::timeout, [this] {
-            const double t = now_ms();
-            if (last > 0) late.push_back(std::max(0.0, t - last - 10.0));
-            last = t;
-        });
-        timer.start();
-    }
-};
-
-void post_mouse(QWidget* to, QEvent::Type type, QPointF at, Qt::MouseButton b, Qt::MouseButtons held) {
-    QCoreApplication::postEvent(to, new QMouseEvent(type, at, to->mapToGlobal(at), b, held, Qt::NoModifier));
-}
 
 // A left drag of the 3D view as a hand makes it: press, 60 moves of 3
 // pixels 16 ms apart (a 60 Hz pointer; the moves do not wait for frames), release. Returns

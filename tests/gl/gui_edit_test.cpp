@@ -93,8 +93,8 @@ TEST_F(GuiEdit, CheekRulerOnTheFrontSkinDragUndoRedo) {
 
     const int surface_steps = w.undo_stack()->count(); // adding the surfaces and their opacity are steps too
     w.measure_tools()->ruler_action()->trigger();
-    QTest::mouseClick(viewer, Qt::LeftButton, {}, *cheek[0]);
-    QTest::mouseClick(viewer, Qt::LeftButton, {}, *cheek[1]);
+    ASSERT_NO_FATAL_FAILURE(click_3d(viewer, *cheek[0]));
+    ASSERT_NO_FATAL_FAILURE(click_3d(viewer, *cheek[1]));
     ASSERT_EQ(w.workspace().markups().size(), 1u) << w.statusBar()->currentMessage().toStdString();
     w.measure_tools()->set_tool(gui::MeasureTools::Tool::None);
     const Markup ruler = w.workspace().markups()[0];
@@ -145,7 +145,12 @@ TEST_F(GuiEdit, CheekRulerOnTheFrontSkinDragUndoRedo) {
     // release pixel
     const auto from = viewer->image_pixel(ruler.points[0].position);
     ASSERT_TRUE(from);
-    const QPoint press = from->toPoint(), release = press + QPoint(-4, 30);
+    // Down the cheek: 30 pixels, or less where the face ends sooner (the
+    // view's size follows the window's tool bars).
+    const QPoint press = from->toPoint();
+    QPoint release = press + QPoint(-4, 30);
+    for (int down = 30; down >= 10 && oracle.pick(release).layers.empty(); down -= 4)
+        release = press + QPoint(-4, down);
     const Camera camera = viewer->camera();
     const QString clicked = w.measure_tools()->click_readout();
     drag_widget(viewer, press, release);
@@ -231,7 +236,7 @@ TEST_F(GuiEdit, PointListInThePanelAndTheFile) {
 
     w.measure_tools()->point_action()->trigger();
     ASSERT_EQ(w.measure_tools()->tool(), gui::MeasureTools::Tool::Point);
-    QTest::mouseClick(viewer, Qt::LeftButton, {}, face);
+    ASSERT_NO_FATAL_FAILURE(click_3d(viewer, face));
     // Placing a point moves the crosshair there: each plane through it.
     for (auto o : {core::SliceOrientation::Axial, core::SliceOrientation::Coronal, core::SliceOrientation::Sagittal}) {
         const core::SliceGrid& g = w.slice_view(o)->grid();

@@ -118,8 +118,8 @@ TEST_F(GuiMeasure, RulerInThe3DViewIsOnThePickedPoints) {
 
     auto* tools = w.measure_tools();
     tools->ruler_action()->trigger();
-    QTest::mouseClick(viewer, Qt::LeftButton, {}, c0);
-    QTest::mouseClick(viewer, Qt::LeftButton, {}, c1);
+    ASSERT_NO_FATAL_FAILURE(click_3d(viewer, c0));
+    ASSERT_NO_FATAL_FAILURE(click_3d(viewer, c1));
     ASSERT_EQ(w.workspace().markups().size(), 3u) << w.statusBar()->currentMessage().toStdString();
     const Markup& m = w.workspace().markups()[2];
     ASSERT_EQ(m.points.size(), 2u);

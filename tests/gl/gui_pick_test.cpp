@@ -29,7 +29,7 @@ TEST_F(GuiPick, ClickShowsTheCliPickAndMovesTheCrosshair) {
     gui::Viewer* viewer = w.viewer();
     const QSize size = viewer->image_size();
     const QPoint at = face_pixel(size);
-    QTest::mouseClick(viewer, Qt::LeftButton, {}, at);
+    ASSERT_NO_FATAL_FAILURE(click_3d(viewer, at));
     const std::string msg = w.statusBar()->currentMessage().toStdString();
     std::printf("3D click at %d,%d: %s\n", at.x(), at.y(), msg.c_str());
     const auto shown = parse_readout(msg);
@@ -58,7 +58,7 @@ TEST_F(GuiPick, ClickShowsTheCliPickAndMovesTheCrosshair) {
     EXPECT_EQ(tools->click_readout().toStdString(), "Click: " + msg) << "hovering overwrote the click's readout";
 
     // A background pixel says so.
-    QTest::mouseClick(viewer, Qt::LeftButton, {}, QPoint(3, 3));
+    ASSERT_NO_FATAL_FAILURE(click_3d(viewer, QPoint(3, 3)));
     EXPECT_EQ(w.statusBar()->currentMessage(), "background");
     EXPECT_EQ(tools->click_readout(), "Click: background");
 }
@@ -125,7 +125,7 @@ TEST_F(GuiPick, ClickAfterRotatingIsCorePickWithTheViewsCamera) {
     const int drawn = viewer->frames();
     ASSERT_TRUE(wait_until([&] { return viewer->frames() > drawn; }, 30000));
     const QPoint px(size.width() / 2 - 14, int(size.height() * 0.47));
-    QTest::mouseClick(viewer, Qt::LeftButton, {}, px);
+    ASSERT_NO_FATAL_FAILURE(click_3d(viewer, px));
     const std::string turned_msg = w.statusBar()->currentMessage().toStdString();
     std::printf("3D click after rotating, at %d,%d: %s\n", px.x(), px.y(), turned_msg.c_str());
     const auto got = parse_readout(turned_msg);
@@ -293,4 +293,26 @@ TEST_F(GuiPick, StillFramesComeFromTheirThreadAndMatchTheGuiThreads) {
     // Upside down or shifted pictures differ by far more; so does a picture without AO.
     o.still_thread = true;
     viewer->set_options(o);
+}
+
+// Frames and picks are drawn on the frame thread, which keeps the scene on
+// its own GPU context: the GUI thread's context never gets a copy of the
+// meshes (on a 32 M-triangle surface a second copy is over a gigabyte), and
+// a click's pick is answered without the GUI thread waiting for its frame.
+TEST_F(GuiPick, TheGuiContextHoldsNoCopyOfTheScene) {
+    gui::MainWindow& w = window();
+    gui::Viewer* viewer = w.viewer();
+    ASSERT_TRUE(viewer->options().still_thread);
+    ASSERT_TRUE(wait_until([&] { return viewer->converged() || !viewer->error().empty(); }, 180000));
+    const QPoint at = face_pixel(viewer->image_size());
+    ASSERT_NO_FATAL_FAILURE(click_3d(viewer, at));
+    auto* tools = w.measure_tools();
+    const int before = tools->hover_picks();
+    hover(viewer, at + QPoint(9, 4));
+    ASSERT_TRUE(wait_until([&] { return tools->hover_picks() > before; }, 30000)) << "no hover pick";
+    const core::PickResult r = viewer->pick_at(QPointF(at) + QPointF(0.5, 0.5));
+    ASSERT_TRUE(r.visible);
+    EXPECT_EQ(tools->click_readout(), "Click: " + tools->readout(r)) << "the click's answer is the pick's";
+    EXPECT_GT(viewer->thread_frames(), 0);
+    EXPECT_FALSE(w.scene().has_gpu_data()) << "the GUI thread's context uploaded the scene";
 }

@@ -29,6 +29,7 @@
 #include "app/gui/main_window.hpp"
 #include "app/gui/surfaces_panel.hpp"
 #include "app/gui/unsaved_work.hpp"
+#include "app/gui/viewer.hpp"
 #include "tests/support/test_util.hpp"
 
 namespace iso::test {
@@ -41,6 +42,14 @@ inline bool wait_until(const std::function<bool()>& ready, int timeout_ms) {
         QTest::qWait(20);
     }
     return true;
+}
+
+// A left click in the 3D view, and its pick answered: the view picks on
+// its frame thread (Viewer::pick_later), and the click's readout, point or
+// crosshair follow when the answer arrives.
+inline void click_3d(gui::Viewer* v, QPoint at) {
+    QTest::mouseClick(v, Qt::LeftButton, {}, at);
+    ASSERT_TRUE(wait_until([&] { return v->picks_waiting() == 0; }, 60000)) << "the click's pick was not answered";
 }
 
 // Adds the isosurface at `iso` as the user does: the Surfaces panel's iso

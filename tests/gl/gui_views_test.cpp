@@ -425,7 +425,7 @@ TEST(GuiViews, ThreeDViewMouseAndToolBar) {
     viewer->on_hover = [&](gui::Viewer&, QPointF) { ++hovers; };
     // Whole pixels: the 3D view reads integer mouse positions.
     const QPointF mid(viewer->width() / 2, viewer->height() / 2);
-    QTest::mouseClick(viewer, Qt::LeftButton, {}, mid.toPoint());
+    ASSERT_NO_FATAL_FAILURE(test::click_3d(viewer, mid.toPoint()));
     EXPECT_EQ(clicks, 1);
     QTest::mouseMove(viewer, (mid + QPointF(5, 5)).toPoint());
     EXPECT_GE(hovers, 1);

@@ -377,7 +377,7 @@ TEST_F(GuiVolume, ClickOnTheVolumeIsTheCorePick) {
     const Bounds vb = w.scene().volume_bounds();
     const Box box = projected(*v, {vb.min, vb.max}, 0);
     const QPoint at((box.x0 + box.x1) / 2, (box.y0 + box.y1) / 2);
-    QTest::mouseClick(v, Qt::LeftButton, {}, at);
+    ASSERT_NO_FATAL_FAILURE(click_3d(v, at));
     const std::string msg = w.statusBar()->currentMessage().toStdString();
     std::printf("click at %d,%d: %s\n", at.x(), at.y(), msg.c_str());
     EXPECT_NE(msg.find("volume"), std::string::npos) << msg;

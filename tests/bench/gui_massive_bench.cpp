@@ -1,0 +1,302 @@
+// The desktop app on a massive volume (issue 39, item 4): what a user waits
+// for, and how long the GUI thread is ever away from its event loop, from
+// opening a 1024^3 micro-CT to measuring on its 30 M-triangle surface, on
+// this machine's GL (llvmpipe here). As the user does it, in one window:
+//
+//   1. open the volume (File > Open's path);
+//   2. add its isosurface in the Surfaces panel, press the progress
+//      dialog's Cancel after 1.5 s (the time until the work stopped), then
+//      add it again and let it finish;
+//   3. wait for the 3D view's converged picture (the levels of detail are
+//      built in the background meanwhile);
+//   4. rotate: a left drag as a 60 Hz pointer makes it (60 moves 16 ms
+//      apart, not waiting for frames): frames per second;
+//   5. hover: 2 s of pointer moves over the surface: hover picks answered,
+//      and the time from each question to its answer;
+//   6. measure: the Ruler, two clicks on the surface: the time from each
+//      click to its readout, and the ruler's length against the distance
+//      between the two points the core API picks at those pixels;
+// then the peak memory (VmHWM), and whether the GUI thread's GL context
+// holds a copy of the scene (it should not: frames and picks are drawn on
+// the frame thread's).
+//
+// Throughout, a 10 ms timer measures how late the GUI thread came back to
+// its loop: "input <= 150 ms" is the largest lateness in each phase.
+//
+//   xvfb-run -a -s '-screen 0 1600x1200x24' build/tests/bench/gui_massive_bench VOLUME [--iso 300.5]
+//       [--csv docs/gui_massive.csv]
+//
+// VOLUME: the 1024^3 phantom (`scale_bench --sizes 1024 --generate-only`),
+// or any volume. Prints a markdown table; writes the CSV (one row per phase).
+#include <QApplication>
+#include <QMouseEvent>
+#include <QProgressDialog>
+#include <QPushButton>
+#include <QStatusBar>
+#include <QTimer>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "app/gui/main_window.hpp"
+#include "app/gui/measure_tools.hpp"
+#include "app/gui/surfaces_panel.hpp"
+#include "app/gui/viewer.hpp"
+#include "gui_bench_util.hpp"
+#include "renderer/core/pick.hpp"
+#include "renderer/core/scene.hpp"
+#include "renderer/core/workspace.hpp"
+
+using namespace iso;
+using bench::now_ms;
+using bench::post_mouse;
+using bench::Probe;
+using bench::quantile;
+using bench::wait_ms;
+using bench::wait_until;
+
+namespace {
+
+int fail(const std::string& why) {
+    std::fprintf(stderr, "gui_massive_bench: %s\n", why.c_str());
+    return 1;
+}
+
+struct Phase {
+    std::string name;
+    double seconds = 0;                // the phase's own time (what the user waited for)
+    double away_p99 = 0, away_max = 0; // the GUI thread's lateness meanwhile, ms
+    std::string result;                // what came out
+};
+
+// Runs `step` with a probe; the phase's time is what `step` returns (s).
+template <class F> Phase phase(const std::string& name, F&& step) {
+    Probe probe;
+    Phase p;
+    p.name = name;
+    p.seconds = step(p.result);
+    p.away_p99 = quantile(probe.late, 0.99);
+    p.away_max = probe.max();
+    std::printf("  %s: %.2f s, GUI thread away at most %.0f ms; %s\n", name.c_str(), p.seconds, p.away_max,
+                p.result.c_str());
+    std::fflush(stdout);
+    return p;
+}
+
+// kB of a /proc/self/status field ("VmHWM", "VmRSS").
+double status_mib(const char* field) {
+    std::ifstream f("/proc/self/status");
+    std::string line;
+    const std::string key = std::string(field) + ":";
+    while (std::getline(f, line))
+        if (line.rfind(key, 0) == 0) return std::atof(line.c_str() + key.size()) / 1024.0;
+    return 0;
+}
+
+// Two pixels of the view that show the surface, 40 pixels apart near the
+// middle: the view's own picks (the frame thread draws them).
+std::vector<QPointF> surface_pixels(gui::Viewer& v) {
+    std::vector<QPointF> out;
+    const QSize s = v.image_size();
+    for (int j = 0; j < 9 && out.size() < 2; ++j)
+        for (int i = 0; i < 9 && out.size() < 2; ++i) {
+            const QPointF px(s.width() * (0.3 + 0.05 * i) + 0.5, s.height() * (0.3 + 0.05 * j) + 0.5);
+            if (!out.empty() && std::hypot(px.x() - out[0].x(), px.y() - out[0].y()) < 40) continue;
+            try {
+                const core::PickResult r = v.pick_at(px);
+                if (r.visible && !r.layers[*r.visible].volume) out.push_back(px);
+            } catch (const std::exception&) {}
+        }
+    return out;
+}
+
+} // namespace
+
+int main(int argc, char** argv) {
+    std::string input, csv = std::string(ISOSCOPE_SOURCE_DIR) + "/docs/gui_massive.csv";
+    double iso = 300.5;
+    for (int i = 1; i < argc; ++i) {
+        const std::string a = argv[i];
+        if (a == "--iso" && i + 1 < argc)
+            iso = std::atof(argv[++i]);
+        else if (a == "--csv" && i + 1 < argc)
+            csv = argv[++i];
+        else if (a[0] != '-' && input.empty())
+            input = a;
+        else {
+            std::printf("usage: gui_massive_bench VOLUME [--iso V] [--csv FILE]  (under xvfb-run)\n");
+            return a == "--help" ? 0 : 2;
+        }
+    }
+    if (input.empty()) return fail("no volume given");
+    bench::set_gl_format();
+    int qargc = 1;
+    char* qargv[] = {argv[0], nullptr};
+    QApplication app(qargc, qargv);
+    QApplication::setOrganizationName("isoscope-bench");
+    QApplication::setApplicationName("gui_massive_bench");
+    gui::MainWindow w;
+    w.show();
+    if (!wait_until([&] { return w.isVisible(); }, 10000)) return fail("the window did not show");
+    std::printf("gui_massive_bench: %s, iso %g\n", input.c_str(), iso);
+    std::vector<Phase> phases;
+    bool ok = true;
+
+    phases.push_back(phase("open the volume", [&](std::string& res) {
+        const double t0 = now_ms();
+        w.open_path(QString::fromStdString(input));
+        ok = wait_until([&] { return !w.busy(); }, 600000) && w.scene().has_volume();
+        const auto& d = ok ? w.scene().volume().dims : std::array<std::int64_t, 3>{0, 0, 0};
+        res = std::to_string(d[0]) + "x" + std::to_string(d[1]) + "x" + std::to_string(d[2]);
+        return (now_ms() - t0) / 1000;
+    }));
+    if (!ok) return fail("cannot open " + input);
+
+    phases.push_back(phase("extract, cancelled after 1.5 s", [&](std::string& res) {
+        w.surfaces_panel()->add_surface(iso);
+        wait_ms(1500);
+        auto* dialog = w.findChild<QProgressDialog*>();
+        if (!dialog || !w.busy()) {
+            res = "no progress dialog to cancel";
+            return 0.0;
+        }
+        const double t0 = now_ms();
+        QMetaObject::invokeMethod(
+            dialog, [dialog] { dialog->cancel(); }, Qt::QueuedConnection);
+        ok = wait_until([&] { return !w.busy(); }, 120000);
+        res = std::to_string(w.scene().surfaces().size()) + " surfaces after the cancel";
+        return (now_ms() - t0) / 1000; // the cancel's answer
+    }));
+
+    phases.push_back(phase("extract", [&](std::string& res) {
+        const double t0 = now_ms();
+        w.surfaces_panel()->add_surface(iso);
+        ok = ok && wait_until([&] { return !w.busy(); }, 600000) && !w.scene().surfaces().empty();
+        if (ok) res = std::to_string(w.scene().mesh(w.scene().surfaces().back()).triangles.size()) + " triangles";
+        return (now_ms() - t0) / 1000;
+    }));
+    if (!ok) return fail("the extraction did not finish");
+    gui::Viewer* v = w.viewer();
+
+    phases.push_back(phase("first picture, then converged", [&](std::string& res) {
+        const double t0 = now_ms();
+        ok = wait_until([&] { return v->frames() > 0 || !v->error().empty(); }, 600000);
+        const double first = now_ms() - t0;
+        ok = ok && wait_until([&] { return v->converged() || !v->error().empty(); }, 1200000) && v->error().empty();
+        char b[160];
+        std::snprintf(b, sizeof b, "first frame after %.1f s, %d frames from the frame thread", first / 1000,
+                      v->thread_frames());
+        res = b;
+        return (now_ms() - t0) / 1000;
+    }));
+    if (!ok) return fail("no converged picture: " + v->error());
+
+    phases.push_back(phase("rotate (60 Hz drag, 1 s)", [&](std::string& res) {
+        const QPointF mid(v->width() / 2.0, v->height() / 2.0);
+        const int before = v->thread_frames();
+        const double t0 = now_ms();
+        post_mouse(v, QEvent::MouseButtonPress, mid, Qt::LeftButton, Qt::LeftButton);
+        for (int k = 1; k <= 60; ++k) {
+            wait_ms(16);
+            post_mouse(v, QEvent::MouseMove, mid + QPointF(3 * (k % 40), 0), Qt::NoButton, Qt::LeftButton);
+        }
+        wait_ms(16);
+        const double s = (now_ms() - t0) / 1000;
+        post_mouse(v, QEvent::MouseButtonRelease, mid + QPointF(80, 0), Qt::LeftButton, Qt::NoButton);
+        char b[160];
+        std::snprintf(b, sizeof b, "%.1f frames/s, the last in %.0f ms", (v->thread_frames() - before) / s,
+                      v->last_thread_frame_ms());
+        res = b;
+        ok = wait_until([&] { return v->converged(); }, 1200000);
+        return s;
+    }));
+
+    const std::vector<QPointF> on_surface = surface_pixels(*v);
+    if (on_surface.size() < 2) return fail("fewer than two view pixels show the surface");
+    auto* tools = w.measure_tools();
+
+    phases.push_back(phase("hover (60 Hz, 2 s)", [&](std::string& res) {
+        const int before = tools->hover_picks();
+        const double t0 = now_ms();
+        const QPointF a = on_surface[0] / v->devicePixelRatioF(), b = on_surface[1] / v->devicePixelRatioF();
+        for (int k = 0; k < 120; ++k) {
+            post_mouse(v, QEvent::MouseMove, a + (b - a) * (k % 30) / 30.0, Qt::NoButton, Qt::NoButton);
+            wait_ms(16);
+        }
+        ok = wait_until([&] { return v->picks_waiting() == 0; }, 60000);
+        char s[160];
+        std::snprintf(s, sizeof s, "%d hover picks answered, interval now %d ms", tools->hover_picks() - before,
+                      tools->hover_interval_ms());
+        res = s;
+        return (now_ms() - t0) / 1000;
+    }));
+
+    phases.push_back(phase("measure: Ruler, two clicks", [&](std::string& res) {
+        tools->set_tool(gui::MeasureTools::Tool::Ruler);
+        const std::size_t markups = w.workspace().markups().size();
+        std::vector<double> answered;
+        for (int k = 0; k < 2; ++k) {
+            const QPointF at = on_surface[k] / v->devicePixelRatioF();
+            const double t0 = now_ms();
+            post_mouse(v, QEvent::MouseButtonPress, at, Qt::LeftButton, Qt::LeftButton);
+            post_mouse(v, QEvent::MouseButtonRelease, at, Qt::LeftButton, Qt::NoButton);
+            // The first click leaves a point waiting, the second makes the ruler.
+            ok = ok &&
+                 wait_until(
+                     [&] {
+                         return v->picks_waiting() == 0 &&
+                                (k == 0 ? tools->pending().size() == 1 : w.workspace().markups().size() == markups + 1);
+                     },
+                     60000);
+            answered.push_back(now_ms() - t0);
+        }
+        ok = ok && w.workspace().markups().size() == markups + 1;
+        double length = NAN, expected = NAN;
+        if (ok) {
+            const auto& pts = w.workspace().markups().back().points;
+            length = glm::distance(pts[0].position, pts[1].position);
+            const core::PickResult p0 = v->pick_at(on_surface[0]), p1 = v->pick_at(on_surface[1]);
+            expected = glm::distance(p0.layers[*p0.visible].lps, p1.layers[*p1.visible].lps);
+        }
+        char s[200];
+        std::snprintf(s, sizeof s, "clicks answered in %.0f / %.0f ms; ruler %.4f mm, the core's picks %.4f mm",
+                      answered[0], answered.size() > 1 ? answered[1] : 0.0, length, expected);
+        res = s;
+        return *std::max_element(answered.begin(), answered.end()) / 1000;
+    }));
+    if (!ok) return fail("the ruler was not placed");
+
+    const double hwm = status_mib("VmHWM"), rss = status_mib("VmRSS");
+    const std::size_t tris = w.scene().mesh(w.scene().surfaces().back()).triangles.size();
+    const std::size_t verts = w.scene().mesh(w.scene().surfaces().back()).positions.size();
+    std::printf("\npeak memory (VmHWM) %.0f MiB, now %.0f MiB; the surface: %zu triangles, %zu vertices; the GUI "
+                "thread's context holds %s\n\n",
+                hwm, rss, tris, verts, w.scene().has_gpu_data() ? "a copy of the scene" : "no copy of the scene");
+
+    std::printf("| phase | seconds | GUI thread away, p99 / max ms | result |\n|---|---:|---:|---|\n");
+    std::string out = "phase,seconds,away_p99_ms,away_max_ms,result\n";
+    for (const Phase& p : phases) {
+        std::printf("| %s | %.2f | %.0f / %.0f | %s |\n", p.name.c_str(), p.seconds, p.away_p99, p.away_max,
+                    p.result.c_str());
+        char line[512];
+        std::snprintf(line, sizeof line, "%s,%.3f,%.1f,%.1f,\"%s\"\n", p.name.c_str(), p.seconds, p.away_p99,
+                      p.away_max, p.result.c_str());
+        out += line;
+    }
+    char mem[200];
+    std::snprintf(mem, sizeof mem, "peak memory,%.0f,0,0,\"VmHWM MiB; GUI context scene copy: %s\"\n", hwm,
+                  w.scene().has_gpu_data() ? "yes" : "no");
+    out += mem;
+    try {
+        bench::write_text(csv, out);
+    } catch (const std::exception& e) {
+        return fail(e.what());
+    }
+    std::printf("\nwrote %s\n", csv.c_str());
+    return 0;
+}
