@@ -64,7 +64,7 @@ public:
 
     // The interaction tool that takes clicks in the views: one at a time
     // across the window (the Measure and Structures tool bars follow it).
-    enum class Tool { None, Ruler, Angle, Point, Isolate, Distance };
+    enum class Tool { None, Ruler, Angle, Point, Isolate, Distance, Grow, Scissors };
     Tool tool() const { return tool_; }
     void set_tool(Tool t);
     std::vector<std::function<void(Tool)>> tool_changed;

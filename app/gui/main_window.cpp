@@ -75,6 +75,12 @@ MainWindow::MainWindow(QWidget* parent) : QMainWindow(parent) {
         crop_->attach(v);
     });
     measure_->other_tool_click = [this](Viewer& v, QPointF p) { structures_->viewer_click(v, p); };
+    measure_->other_slice_click = [this](const glm::dvec3& lps) { return structures_->slice_click(lps); };
+    measure_->other_tool_press = [this](Viewer& v, QPointF p) { return structures_->outline_press(v, p); };
+    measure_->other_tool_move = [this](QPointF p) { structures_->outline_move(p); };
+    measure_->other_tool_release = [this](Viewer& v, QPointF p, bool dragged) {
+        structures_->outline_release(v, p, dragged);
+    };
     crop_ = new CropBoxTool(*context_);
     for (SliceView* v : context_->slices) {
         measure_->attach(*v); // a markup point first, then the crop box's sides

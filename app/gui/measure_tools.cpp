@@ -186,6 +186,9 @@ void MeasureTools::attach(SliceView& view) {
     // A click places a point with a tool on; without, it moves the crosshair there and says what is there.
     view.on_click = [this](SliceView& v, QPointF p) {
         if (!context_.workspace.scene().has_volume() || slice_click(v, p)) return;
+        if (context_.tool() == AppContext::Tool::Grow && other_slice_click && v.has_image() &&
+            other_slice_click(core::pixel_to_lps(v.grid(), {p.x(), p.y()})))
+            return; // the Structures tools' Grow seeds there
         context_.status(slice_readout(context_.workspace.scene().volume(), v.grid(), p));
         context_.workspace.set_crosshair(core::pixel_to_lps(v.grid(), {p.x(), p.y()}));
     };
@@ -223,40 +226,71 @@ QString MeasureTools::readout(const core::PickResult& r) const {
     return s + ", surface " + QString::fromStdString(l.name);
 }
 
-std::optional<glm::dvec3> MeasureTools::pick_and_show(Viewer& v, QPointF pixel, bool hover) {
-    core::PickResult r;
-    try {
-        r = v.pick_at(pixel);
-    } catch (const std::exception& e) {
+// The readout of a pick (or why there is none); the visible layer's point.
+std::optional<glm::dvec3> MeasureTools::show_pick(const core::PickResult* r, const std::string& error, bool hover) {
+    if (!r) {
         // A pointer at the very edge, a view that cannot draw: say so, nothing else.
-        if (!hover) context_.status(QString("3D pick: ") + e.what());
+        if (!hover && !error.empty()) context_.status(QString("3D pick: ") + QString::fromStdString(error));
         return std::nullopt;
     }
-    last_pick_ms_ = r.frame_ms;
-    context_.status(readout(r));
-    if (!hover) click_field_->setText("Click: " + readout(r));
-    if (!r.visible) return std::nullopt;
-    return r.layers[*r.visible].lps;
+    last_pick_ms_ = r->frame_ms;
+    context_.status(readout(*r));
+    if (!hover) click_field_->setText("Click: " + readout(*r));
+    if (!r->visible) return std::nullopt;
+    return r->layers[*r->visible].lps;
+}
+
+std::optional<glm::dvec3> MeasureTools::pick_and_show(Viewer& v, QPointF pixel, bool hover) {
+    try {
+        const core::PickResult r = v.pick_at(pixel);
+        return show_pick(&r, {}, hover);
+    } catch (const std::exception& e) {
+        return show_pick(nullptr, e.what(), hover);
+    }
+}
+
+// The same, answered later (Viewer::pick_later: the GUI thread does not
+// wait for the pick's frame); `then` gets the point, or none. A hover's
+// answer that arrives after a later click's question is dropped: the
+// click's readout is the newer one.
+void MeasureTools::pick_and_show_later(Viewer& v, QPointF pixel, bool hover,
+                                       std::function<void(std::optional<glm::dvec3>)> then) {
+    const std::uint64_t asked = ++picks_asked_;
+    if (!hover) last_click_asked_ = asked;
+    QPointer<MeasureTools> self(this);
+    v.pick_later(
+        pixel,
+        [self, asked, hover, then = std::move(then)](const core::PickResult* r, const std::string& error) {
+            if (!self || (hover && asked < self->last_click_asked_)) return;
+            const auto lps = self->show_pick(r, error, hover);
+            if (then && (r || !error.empty())) then(lps); // a replaced hover pick has neither
+        },
+        hover);
 }
 
 void MeasureTools::viewer_click(Viewer& v, QPointF pixel) {
     if (context_.busy()) return; // a worker is changing the scene
     hover_timer_->stop();        // the click's readout is the newer one
     hover_at_.reset();
-    if (context_.tool() == AppContext::Tool::Isolate || context_.tool() == AppContext::Tool::Distance) {
+    if (context_.tool() == AppContext::Tool::Isolate || context_.tool() == AppContext::Tool::Distance ||
+        context_.tool() == AppContext::Tool::Grow) {
         if (other_tool_click) other_tool_click(v, pixel); // the Structures tools
         return;
     }
-    const auto lps = pick_and_show(v, pixel, false);
-    if (tool_ == Tool::None) {
-        if (lps) context_.workspace.set_crosshair(*lps);
-        return;
-    }
-    if (!lps) {
-        context_.status(context_.status_text() + ": " + tool_name(tool_) + " needs a point on a visible surface");
-        return;
-    }
-    add_point(*lps);
+    // The answer is acted on with the tool that was on at the click, if it still is.
+    const Tool tool = tool_;
+    pick_and_show_later(v, pixel, false, [this, tool](std::optional<glm::dvec3> lps) {
+        if (tool != tool_ || context_.busy()) return;
+        if (tool_ == Tool::None) {
+            if (lps) context_.workspace.set_crosshair(*lps);
+            return;
+        }
+        if (!lps) {
+            context_.status(context_.status_text() + ": " + tool_name(tool_) + " needs a point on a visible surface");
+            return;
+        }
+        add_point(*lps);
+    });
 }
 
 void MeasureTools::viewer_hover(Viewer&, QPointF pixel) {
@@ -270,9 +304,12 @@ void MeasureTools::hover_pick() {
     if (!hover_at_ || !viewer_ || context_.busy() || viewer_ != context_.viewer() || !viewer_->isVisible()) return;
     const QPointF at = *hover_at_;
     hover_at_.reset();
-    ++hover_picks_;
-    pick_and_show(*viewer_, at, true);
-    since_hover_.restart(); // the interval counts from the pick's end: the view keeps the time between
+    // The interval counts from the pick's answer: the view keeps the time between.
+    since_hover_.restart();
+    pick_and_show_later(*viewer_, at, true, [this](std::optional<glm::dvec3>) {
+        ++hover_picks_;
+        since_hover_.restart();
+    });
 }
 
 // ---- slice views --------------------------------------------------------------------

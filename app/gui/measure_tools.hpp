@@ -10,8 +10,10 @@
 // core::pixel_to_lps / core::lps_to_pixel, values the core's.
 #pragma once
 
+#include <cstdint>
 #include <functional>
 #include <optional>
+#include <string>
 #include <vector>
 
 #include <QElapsedTimer>
@@ -68,6 +70,13 @@ public:
     void attach(SliceView& view);
     // A 3D view click while a Structures tool is on (the window wires it to StructureTools).
     std::function<void(Viewer&, QPointF)> other_tool_click;
+    // A press in the 3D view while the Scissors tool is on (true: taken),
+    // the drag's moves and its release: the outline being drawn.
+    std::function<bool(Viewer&, QPointF)> other_tool_press;
+    std::function<void(QPointF)> other_tool_move;
+    std::function<void(Viewer&, QPointF, bool dragged)> other_tool_release;
+    // A slice view click (LPS mm) while the Grow tool is on: true when taken.
+    std::function<bool(const glm::dvec3&)> other_slice_click;
     // A left click on a slice view: true when the active tool took it as a
     // point (then the window does nothing else with it).
     bool slice_click(SliceView& view, QPointF pixel);
@@ -99,7 +108,7 @@ public:
     // in a permanent field of the status bar (hover readouts are the status
     // bar's passing messages and leave it alone); empty before a click.
     QString click_readout() const;
-    // Hover picks made so far (throttled: one per interval, the latest position wins).
+    // Hover picks answered so far (throttled: one per interval, the latest position wins).
     int hover_picks() const { return hover_picks_; }
     // The hover interval: at least 80 ms, and at least twice the last pick's time.
     int hover_interval_ms() const;
@@ -110,6 +119,8 @@ private:
     void hover_pick();
     // Picks the visible layer at the pixel and shows the readout; none: background or failure.
     std::optional<glm::dvec3> pick_and_show(Viewer& v, QPointF pixel, bool hover);
+    void pick_and_show_later(Viewer& v, QPointF pixel, bool hover, std::function<void(std::optional<glm::dvec3>)> then);
+    std::optional<glm::dvec3> show_pick(const core::PickResult* r, const std::string& error, bool hover);
     // `on`: the slice view it was placed on (its slice stays), none: the 3D view.
     void add_point(const glm::dvec3& lps, const SliceView* on = nullptr);
     void add_list_point(const glm::dvec3& lps);
@@ -153,7 +164,10 @@ private:
     QElapsedTimer since_hover_;
     double last_pick_ms_ = 0;
     int hover_picks_ = 0;
+    std::uint64_t picks_asked_ = 0, last_click_asked_ = 0;
+    std::uint64_t grabs_ = 0; // grabs so far: a drag's pick answers only its own grab
     std::optional<Grab> grab_;
+    bool outlining_ = false;         // the press went to the Scissors' outline
     std::optional<QPointF> grab_at_; // the 3D view's latest drag position, not picked yet
     QTimer* grab_timer_ = nullptr;
 };

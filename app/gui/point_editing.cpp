@@ -57,6 +57,7 @@ QString point_name(const Markup& m, std::size_t point) {
 
 bool MeasureTools::grab(const std::optional<Hit>& hit) {
     if (!hit) return false;
+    ++grabs_;
     grab_ = Grab{hit->markup, hit->point, context_.workspace.markups_state()};
     context_.status("Moving " + point_name(context_.workspace.markups()[hit->markup], hit->point) +
                     ": release to place it (Edit > Undo puts it back)");
@@ -103,6 +104,11 @@ void MeasureTools::commit_grab() {
 // ---- the 3D view -------------------------------------------------------------------
 
 bool MeasureTools::viewer_press(Viewer& v, QPointF pixel) {
+    // The Structures tools' Scissors draws an outline with the press's drag.
+    if (context_.tool() == AppContext::Tool::Scissors) {
+        outlining_ = other_tool_press && other_tool_press(v, pixel);
+        return outlining_;
+    }
     if (tool_ != Tool::None || context_.busy()) return false;
     const double radius = kGrabRadiusPx * v.devicePixelRatioF();
     const auto hit = nearest_point(context_.workspace.markups(), pixel, radius,
@@ -111,6 +117,10 @@ bool MeasureTools::viewer_press(Viewer& v, QPointF pixel) {
 }
 
 void MeasureTools::viewer_grab_move(QPointF pixel) {
+    if (outlining_) {
+        if (other_tool_move) other_tool_move(pixel);
+        return;
+    }
     grab_at_ = pixel;
     // A pick is a frame: at most one per pass of the event loop, for the
     // latest position (the moves queued meanwhile only replace it).
@@ -121,13 +131,25 @@ void MeasureTools::viewer_grab_pick() {
     if (!grab_ || !grab_at_ || !viewer_ || context_.busy()) return;
     const QPointF at = *grab_at_;
     grab_at_.reset();
-    if (const auto lps = pick_and_show(*viewer_, at, true))
-        move_grabbed(*lps);
-    else
-        context_.status("Background: the point stays where it was");
+    // Answered later (the GUI thread does not wait for the pick's frame),
+    // and only while the same grab goes on: the release places the point
+    // where the pointer was let go.
+    const std::uint64_t grab = grabs_;
+    pick_and_show_later(*viewer_, at, true, [this, grab](std::optional<glm::dvec3> lps) {
+        if (!grab_ || grab != grabs_) return;
+        if (lps)
+            move_grabbed(*lps);
+        else
+            context_.status("Background: the point stays where it was");
+    });
 }
 
 void MeasureTools::viewer_grab_release(Viewer& v, QPointF pixel, bool dragged) {
+    if (outlining_) {
+        outlining_ = false;
+        if (other_tool_release) other_tool_release(v, pixel, dragged);
+        return;
+    }
     grab_timer_->stop();
     grab_at_.reset();
     if (!grab_) return;

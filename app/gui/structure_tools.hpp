@@ -5,10 +5,15 @@
 // shown, not added twice) and the Distance tool (click two separate
 // structures, two surfaces or two components of one: the exact shortest
 // distance between them, drawn as a ruler between the two closest points,
-// one undo step; two clicks on one connected structure are refused). The
-// workspace's isolated components are listed with their area, volume (mL,
-// with the uncertainty), closed or open and bounds in the Measurements
-// dock. Presentation only: the work is the core's (core::plan_component,
+// one undo step; two clicks on one connected structure are refused) and
+// the Grow tool (click a point in the 3D view or a slice view: the voxels
+// joined to it whose values lie within the tool bar's range, within the
+// crop box when it is on, become a closed surface of their own, "grown
+// <n>": 3D Slicer's Grow from seeds / threshold flood fill, one undo step).
+// The workspace's isolated components and grown regions are listed with
+// their area, volume (mL, with the uncertainty; a grown region's by its
+// voxels), closed or open, largest diameter, centroid and bounds in the
+// Measurements dock. Presentation only: the work is the core's (core::plan_component,
 // core::Workspace::isolate, core::surface_gap), off the GUI thread.
 #pragma once
 
@@ -21,15 +26,21 @@
 
 #include <QObject>
 #include <QPointF>
+#include <QPointer>
 #include <QString>
 
 #include <glm/vec3.hpp>
 
 class QAction;
+class QDoubleSpinBox;
 class QTableWidget;
 
 #include "io/mesh.hpp"
+#include "io/volume.hpp"
 #include "renderer/core/measure.hpp"
+#include "renderer/core/structures.hpp"
+#include "renderer/surface/grow.hpp"
+#include "renderer/surface/shape.hpp"
 
 namespace iso::gui {
 
@@ -39,8 +50,8 @@ class Viewer;
 
 class StructureTools : public QObject {
 public:
-    enum class Tool { None, Isolate, Distance };
-    enum Column { Name = 0, Area = 1, Volume = 2, Closed = 3, Bounds = 4 };
+    enum class Tool { None, Isolate, Distance, Grow, Scissors };
+    enum Column { Name = 0, Area = 1, Volume = 2, Closed = 3, Diameter = 4, Centroid = 5, Bounds = 6, Columns = 7 };
 
     // Adds the Structures tool bar (Isolate, Distance: checkable, at most
     // one on, and off when another tool is taken) and the table of
@@ -52,12 +63,36 @@ public:
     void set_tool(Tool t);
     QAction* isolate_action() const { return isolate_; }
     QAction* distance_action() const { return distance_; }
+    QAction* grow_action() const { return grow_; }
+    QAction* scissors_action() const { return scissors_; }
+    // Scissors keeps the outside of the outline (the tool bar's "Keep outside"); else the inside.
+    QAction* keep_outside_action() const { return keep_outside_; }
+    // The Grow tool's range (the tool bar's two numbers, volume units).
+    void set_grow_range(double lo, double hi);
+    std::pair<double, double> grow_range() const;
     QTableWidget* table() const { return table_; }
 
     // A click of the 3D view: true when the active tool took it.
     bool viewer_click(Viewer& v, QPointF pixel);
+    // Scissors: a press in the 3D view starts an outline (true: taken), the
+    // drag draws it, the release closes it and cuts the surface most of
+    // whose visible pixels it encloses (core::plan_scissors off the GUI
+    // thread; the part a surface of its own, its parent hidden, one undo step).
+    bool outline_press(Viewer& v, QPointF pixel);
+    void outline_move(QPointF pixel);
+    void outline_release(Viewer& v, QPointF pixel, bool dragged);
+    // Scissors' work on surface `id` (what a release does).
+    void cut(std::uint32_t id, core::ScissorsRequest r);
+    int cuts() const { return cuts_; } // finished so far, refused or failed ones too
+    // A click of a slice view at `lps`: true when the active tool took it
+    // (Grow seeds there).
+    bool slice_click(const glm::dvec3& lps);
     // Isolate's work for surface `id` at `at` (what a click does).
     void isolate(std::uint32_t id, const glm::dvec3& at);
+    // Grow's work: the region joined to `seed` within the range (and the
+    // crop box when it is on) made a surface of its own, one undo step.
+    void grow(const glm::dvec3& seed);
+    int grown() const { return grown_; } // grows finished so far, refused or failed ones too
     // Distances and isolations finished so far, refused or failed ones too (tests wait on them).
     int distances() const { return distances_; }
     int isolations() const { return isolations_; }
@@ -70,6 +105,13 @@ private:
     int observer_ = 0;
     QAction* isolate_ = nullptr;
     QAction* distance_ = nullptr;
+    QAction* grow_ = nullptr;
+    QAction* scissors_ = nullptr;
+    QAction* keep_outside_ = nullptr;
+    std::vector<QPointF> outline_; // image pixels, while a drag draws it
+    QPointer<Viewer> outlined_;
+    QDoubleSpinBox* grow_lo_ = nullptr;
+    QDoubleSpinBox* grow_hi_ = nullptr;
     QTableWidget* table_ = nullptr;
     ColumnFit* fit_ = nullptr;
     Tool tool_ = Tool::None;
@@ -78,9 +120,21 @@ private:
         glm::dvec3 at{0.0};
     };
     std::optional<First> first_; // the Distance tool's first click
-    int distances_ = 0, isolations_ = 0;
-    // Each isolated surface's measurement, with the mesh it was made of.
-    std::map<std::uint32_t, std::pair<std::shared_ptr<const Mesh>, core::SurfaceMeasurement>> measured_;
+    int distances_ = 0, isolations_ = 0, grown_ = 0, cuts_ = 0;
+    // Surfaces Scissors made, with their mesh (listed while it is theirs).
+    std::map<std::uint32_t, std::shared_ptr<const Mesh>> scissored_;
+    void update_grow_range();
+    // Each listed surface's measurement and shape, with the mesh it was made of.
+    struct Measured {
+        std::shared_ptr<const Mesh> mesh;
+        core::SurfaceMeasurement m;
+        ShapeMeasures shape;
+    };
+    std::map<std::uint32_t, Measured> measured_;
+    // Grown regions: their voxel measurement (the count, with the
+    // partial-volume uncertainty), by surface, with the mesh they made.
+    std::map<std::uint32_t, std::pair<std::shared_ptr<const Mesh>, GrownRegion>> grown_regions_;
+    const iso::Volume* grow_range_for_ = nullptr; // the volume the range was set for
     bool measuring_ = false;
 };
 

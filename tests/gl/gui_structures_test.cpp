@@ -19,7 +19,9 @@
 #include "renderer/core/measure.hpp"
 #include "renderer/core/pick.hpp"
 #include "renderer/core/structures.hpp"
+#include "renderer/core/slices.hpp"
 #include "renderer/surface/analysis.hpp"
+#include "renderer/surface/shape.hpp"
 
 using namespace iso;
 using namespace iso::test;
@@ -187,4 +189,156 @@ TEST_F(GuiStructures, IsolateWithTheCropBoxOnKeepsThePartWithinIt) {
     ASSERT_TRUE(QTest::qWaitFor([&] { return w.scene().surfaces().size() == before + 2 && !w.busy(); }, 600000));
     EXPECT_FALSE(w.scene().info(w.scene().surfaces().back()).post.keep_within.has_value());
     EXPECT_GT(w.scene().mesh(w.scene().surfaces().back()).triangles.size(), plan.mesh.triangles.size());
+}
+
+// Grow (3D Slicer's Grow from seeds, a threshold flood fill): a click on
+// the bone in the axial view with the range 1150 to the volume's largest
+// value makes "grown 1", the region core::plan_grown grows from that point
+// on a scene of the test's own, listed in the Measurements dock by its
+// voxels (with the partial-volume uncertainty), diameter and centroid; one
+// undo step. A click in the 3D view on the same bone seeds inside it (the
+// pick lies on the isosurface) and grows the same region.
+TEST_F(GuiStructures, GrowFromAClickIsTheCoresRegionListedByItsVoxels) {
+    gui::MainWindow& w = window();
+    gui::StructureTools* tools = w.structure_tools();
+    tools->grow_action()->trigger();
+    ASSERT_EQ(tools->tool(), gui::StructureTools::Tool::Grow);
+    const double hi = w.scene().value_range().max;
+    tools->set_grow_range(1150, hi);
+    // An axial pixel on bone, well inside it (its 3x3 neighbours too).
+    gui::SliceView* axial = w.slice_view(core::SliceOrientation::Axial);
+    const Volume& v = w.scene().volume();
+    const auto value = [&](QPoint p) {
+        const auto s = core::sample_at_pixel(v, axial->grid(), {double(p.x()), double(p.y())});
+        return s ? s->voxel_value : -1e9;
+    };
+    std::optional<QPoint> seed_px;
+    for (int y = 10; y < axial->height() - 10 && !seed_px; y += 3)
+        for (int x = 10; x < axial->width() - 10 && !seed_px; x += 3) {
+            bool all = true;
+            for (int d = -2; d <= 2 && all; d += 2)
+                for (int e = -2; e <= 2 && all; e += 2) all = value(QPoint(x + d, y + e)) >= 1300;
+            if (all) seed_px = QPoint(x, y);
+        }
+    ASSERT_TRUE(seed_px) << "no bone in the axial view";
+    const glm::dvec3 seed = core::pixel_to_lps(axial->grid(), {double(seed_px->x()), double(seed_px->y())});
+    const std::size_t before = w.scene().surfaces().size();
+    QTest::mouseClick(axial, Qt::LeftButton, {}, *seed_px);
+    ASSERT_TRUE(QTest::qWaitFor([&] { return tools->grown() == 1 && !w.busy(); }, 600000))
+        << w.statusBar()->currentMessage().toStdString();
+    ASSERT_EQ(w.scene().surfaces().size(), before + 1) << w.statusBar()->currentMessage().toStdString();
+    const core::SurfaceId made = w.scene().surfaces().back();
+    EXPECT_EQ(w.scene().info(made).name, "grown 1");
+
+    // The core's answer on a scene of the test's own.
+    core::Scene own;
+    own.open(headsq());
+    GrowOptions o;
+    o.lo = 1150;
+    o.hi = hi;
+    const core::GrownPlan expected = core::plan_grown(own, seed, o);
+    EXPECT_EQ(w.scene().mesh(made).triangles.size(), expected.mesh.triangles.size());
+    const GrownRegion& r = expected.grown.region;
+    std::printf("grown from (%.1f, %.1f, %.1f): %zu voxels, %.3f +- %.3f mL\n", seed.x, seed.y, seed.z, r.voxels,
+                r.volume_ml, r.partial_volume_ml);
+    QTableWidget* table = tools->table();
+    ASSERT_TRUE(QTest::qWaitFor([&] { return table->rowCount() == 1 && !w.busy(); }, 600000));
+    EXPECT_EQ(table->item(0, gui::StructureTools::Name)->text(), "grown 1");
+    const QString vol = table->item(0, gui::StructureTools::Volume)->text();
+    EXPECT_TRUE(vol.contains(QString::number(r.volume_ml, 'f', 3))) << vol.toStdString();
+    EXPECT_TRUE(vol.contains(QString::number(r.partial_volume_ml, 'f', 3))) << vol.toStdString();
+    EXPECT_TRUE(vol.contains(QString("%1 voxels").arg(r.voxels))) << vol.toStdString();
+    const ShapeMeasures shape = measure_shape(expected.mesh, true);
+    EXPECT_EQ(table->item(0, gui::StructureTools::Diameter)->text(), QString::number(shape.feret_mm, 'f', 2) + " mm");
+    EXPECT_TRUE(
+        table->item(0, gui::StructureTools::Centroid)->text().contains(QString::number(shape.centroid.x, 'f', 1)));
+
+    // One undo step.
+    EXPECT_EQ(w.undo_stack()->undoText(), "Grow grown 1");
+    w.undo_stack()->undo();
+    EXPECT_FALSE(w.scene().has_surface(made));
+    ASSERT_TRUE(QTest::qWaitFor([&] { return table->rowCount() == 0; }, 10000));
+
+    // The 3D view: a click on the bone grows from inside it, the same region.
+    gui::Viewer* viewer = w.viewer();
+    HeadOracle oracle(viewer->image_size(), viewer->camera());
+    ASSERT_TRUE(oracle.error().empty()) << oracle.error();
+    const auto bone = find_pixel(oracle, viewer->image_size(), "iso 1150", 0.45);
+    ASSERT_TRUE(bone);
+    QTest::mouseClick(viewer, Qt::LeftButton, {}, bone->first);
+    ASSERT_TRUE(QTest::qWaitFor([&] { return tools->grown() == 2 && !w.busy(); }, 600000));
+    ASSERT_EQ(w.scene().surfaces().size(), before + 1) << w.statusBar()->currentMessage().toStdString();
+    std::printf("3D click: %s\n", w.statusBar()->currentMessage().toStdString().c_str());
+    EXPECT_TRUE(w.statusBar()->currentMessage().contains("grown 1:")) << w.statusBar()->currentMessage().toStdString();
+}
+
+// Scissors: an outline dragged over the left half of the 3D view cuts the
+// surface it encloses most of: the part is core::plan_scissors' for the same
+// outline, camera and view size on a scene of the test's own (the same
+// triangles and volume), closed, listed in the Measurements dock, its parent
+// hidden; one undo step brings the parent back.
+TEST_F(GuiStructures, ScissorsCutTheSurfaceAsTheCoreDoes) {
+    gui::MainWindow& w = window();
+    gui::Viewer* viewer = w.viewer();
+    gui::StructureTools* tools = w.structure_tools();
+    tools->scissors_action()->trigger();
+    ASSERT_EQ(tools->tool(), gui::StructureTools::Tool::Scissors);
+    ASSERT_TRUE(QTest::qWaitFor([&] { return viewer->frames() > 0; }, 60000));
+    const QSize size = viewer->size();
+    // A pentagon over the left half, its corners joined by 10-pixel steps.
+    const std::vector<QPoint> corners{{size.width() / 10, size.height() / 10},
+                                      {size.width() / 2, size.height() / 8},
+                                      {size.width() / 2 - 20, size.height() / 2},
+                                      {size.width() / 2, size.height() * 7 / 8},
+                                      {size.width() / 10, size.height() * 9 / 10}};
+    std::vector<QPoint> path;
+    for (std::size_t i = 0; i < corners.size(); ++i) {
+        const QPoint a = corners[i], b = corners[(i + 1) % corners.size()];
+        const int steps = std::max(1, int(std::hypot(b.x() - a.x(), b.y() - a.y()) / 10));
+        for (int k = 0; k < steps; ++k) path.push_back(a + (b - a) * k / steps);
+    }
+    const auto send = [&](QEvent::Type type, QPoint at, Qt::MouseButtons held) {
+        const Qt::MouseButton button = type == QEvent::MouseMove ? Qt::NoButton : Qt::LeftButton;
+        QMouseEvent e(type, QPointF(at), viewer->mapToGlobal(QPointF(at)), button, held, Qt::NoModifier);
+        QCoreApplication::sendEvent(viewer, &e);
+    };
+    const Camera camera = viewer->camera();
+    const std::size_t before = w.scene().surfaces().size();
+    send(QEvent::MouseButtonPress, path.front(), Qt::LeftButton);
+    for (std::size_t k = 1; k < path.size(); ++k) send(QEvent::MouseMove, path[k], Qt::LeftButton);
+    send(QEvent::MouseButtonRelease, path.back(), Qt::NoButton);
+    ASSERT_TRUE(QTest::qWaitFor([&] { return tools->cuts() == 1 && !w.busy(); }, 600000))
+        << w.statusBar()->currentMessage().toStdString();
+    ASSERT_EQ(w.scene().surfaces().size(), before + 1) << w.statusBar()->currentMessage().toStdString();
+    EXPECT_EQ(viewer->camera(), camera) << "the outline's drag turned the view";
+    const core::SurfaceId made = w.scene().surfaces().back();
+    const std::string name = w.scene().info(made).name;
+    std::printf("scissors: %s; %s\n", name.c_str(), w.statusBar()->currentMessage().toStdString().c_str());
+    const core::SurfaceId parent = name.rfind("iso 500", 0) == 0 ? 1 : 2;
+    EXPECT_EQ(name, (parent == 1 ? "iso 500" : "iso 1150") + std::string(" scissors 1"));
+    EXPECT_FALSE(w.scene().info(parent).visible) << "the parent is hidden";
+
+    // The core on a scene of the test's own, with the same outline (image pixels).
+    core::Scene own;
+    own.open(headsq());
+    own.add_isosurfaces({500, 1150});
+    core::ScissorsRequest r;
+    const double dpr = viewer->devicePixelRatioF();
+    for (const QPoint& p : path) r.outline.push_back({p.x() * dpr, p.y() * dpr});
+    r.camera = camera;
+    r.width = viewer->image_size().width();
+    r.height = viewer->image_size().height();
+    const core::ComponentPlan expected = core::plan_scissors(own, parent, r);
+    EXPECT_EQ(w.scene().mesh(made).triangles.size(), expected.mesh.triangles.size());
+    const auto got = core::measure_surfaces(w.scene(), {made}).front().measures;
+    EXPECT_NEAR(got.volume_ml, expected.measures.volume_ml, 1e-9 + 1e-9 * std::abs(expected.measures.volume_ml));
+    EXPECT_EQ(got.closed, expected.measures.closed);
+    QTableWidget* table = tools->table();
+    ASSERT_TRUE(QTest::qWaitFor([&] { return table->rowCount() == 1 && !w.busy(); }, 600000));
+    EXPECT_EQ(table->item(0, gui::StructureTools::Name)->text().toStdString(), name);
+
+    EXPECT_EQ(w.undo_stack()->undoText().toStdString(), "Scissors " + name);
+    w.undo_stack()->undo();
+    EXPECT_FALSE(w.scene().has_surface(made));
+    EXPECT_TRUE(w.scene().info(parent).visible);
 }
