@@ -20,6 +20,7 @@
 #include "app/gui/app_context.hpp"
 #include "app/gui/column_fit.hpp"
 #include "app/gui/files.hpp"
+#include "app/gui/jobs.hpp"
 #include "app/gui/measure_tools.hpp"
 #include "io/error.hpp"
 #include "io/markups.hpp"
@@ -27,6 +28,7 @@
 #include "renderer/core/scene.hpp"
 #include "renderer/core/structures.hpp"
 #include "renderer/core/value_unit.hpp"
+#include "renderer/surface/closest.hpp"
 
 namespace iso::gui {
 
@@ -34,6 +36,31 @@ namespace {
 
 // A point within this of a surface lies on it (a pick's point is on it up to rounding).
 constexpr double kOnSurfaceMm = 0.5;
+
+// The name of the surface a point lies on (within kOnSurfaceMm), "off
+// surface", or "-" without a visible surface.
+QString surface_text_of(const std::vector<core::SurfaceTree>& trees, const glm::dvec3& p) {
+    try {
+        const core::SurfacePoint s = core::surface_at(trees, p);
+        for (const auto& t : trees)
+            if (t.id == s.surface && s.distance_mm <= kOnSurfaceMm) return QString::fromStdString(t.name);
+        return "off surface";
+    } catch (const Error&) {
+        return "-"; // no visible surface
+    }
+}
+
+// "passes through iso 1150 at 22.3 mm, ..." for a ruler from a to b; empty when it passes through nothing.
+QString crossings_text_of(const std::vector<core::SurfaceTree>& trees, const glm::dvec3& a, const glm::dvec3& b) {
+    QStringList parts;
+    try {
+        for (const core::LineCrossing& c : core::solid_crossings(trees, a, b))
+            parts << QString("%1 at %2 mm").arg(QString::fromStdString(c.name)).arg(c.along_mm, 0, 'f', 1);
+    } catch (const Error&) {
+        // Not finite points (a damaged file): nothing to say about them.
+    }
+    return parts.isEmpty() ? QString() : "passes through " + parts.join(", ");
+}
 
 QString kind_text(MarkupType t) {
     switch (t) {
@@ -296,8 +323,81 @@ void MeasurementsPanel::check_cache() {
     }
     if (key == cache_key_) return;
     cache_key_ = key;
+    surface_waiting_.clear();
+    crossings_waiting_.clear();
     surface_cache_.clear();
     crossings_cache_.clear();
+}
+
+struct MeasurementsPanel::Trees {
+    std::map<const Mesh*, std::pair<std::shared_ptr<const Mesh>, std::shared_ptr<TriangleBvh>>> by_mesh;
+};
+
+bool MeasurementsPanel::answers_later() const {
+    const core::Scene& scene = context_.workspace.scene();
+    std::size_t triangles = 0;
+    for (const auto id : scene.surfaces())
+        if (scene.info(id).visible) triangles += scene.mesh(id).triangles.size();
+    return triangles > kInlineTriangles;
+}
+
+// The waiting points and lines, answered on a worker from the surfaces as
+// they are now (their meshes are shared and never change in place); the
+// answers are kept if the surfaces are still those when they arrive.
+void MeasurementsPanel::look_up_later() {
+    if (looking_up_ || (surface_waiting_.empty() && crossings_waiting_.empty())) return;
+    looking_up_ = true;
+    const core::Scene& scene = context_.workspace.scene();
+    struct Surface {
+        core::SurfaceId id;
+        std::string name;
+        std::shared_ptr<const Mesh> mesh;
+        double opacity;
+        bool pickable;
+    };
+    std::vector<Surface> surfaces;
+    for (const auto id : scene.surfaces()) {
+        const auto& info = scene.info(id);
+        if (info.visible && !scene.mesh(id).empty())
+            surfaces.push_back({id, info.name, scene.shared_mesh(id), double(info.opacity), info.pickable});
+    }
+    if (!trees_) trees_ = std::make_shared<Trees>();
+    auto points = std::make_shared<std::vector<std::pair<std::array<double, 3>, QString>>>();
+    auto lines = std::make_shared<std::vector<std::pair<std::array<double, 6>, QString>>>();
+    for (const auto& k : surface_waiting_) points->push_back({k, {}});
+    for (const auto& k : crossings_waiting_) lines->push_back({k, {}});
+    const std::string key = cache_key_;
+    context_.jobs.run(
+        "Finding the surfaces the measurements lie on",
+        [trees = trees_, surfaces, points, lines](const ProgressFn&) {
+            std::map<const Mesh*, std::pair<std::shared_ptr<const Mesh>, std::shared_ptr<TriangleBvh>>> kept;
+            std::vector<core::SurfaceTree> list;
+            for (const Surface& s : surfaces) {
+                auto it = trees->by_mesh.find(s.mesh.get());
+                auto tree = it != trees->by_mesh.end() ? it->second.second : std::make_shared<TriangleBvh>(*s.mesh);
+                kept[s.mesh.get()] = {s.mesh, tree};
+                list.push_back({s.id, s.name, tree.get(), s.opacity, s.pickable});
+            }
+            trees->by_mesh = std::move(kept); // the trees of meshes gone go
+            for (auto& [k, text] : *points) text = surface_text_of(list, {k[0], k[1], k[2]});
+            for (auto& [k, text] : *lines) text = crossings_text_of(list, {k[0], k[1], k[2]}, {k[3], k[4], k[5]});
+        },
+        [this, key, points, lines](std::exception_ptr) {
+            looking_up_ = false;
+            check_cache();
+            if (key == cache_key_) {
+                for (const auto& [k, text] : *points) {
+                    surface_cache_[k] = text;
+                    surface_waiting_.erase(k);
+                }
+                for (const auto& [k, text] : *lines) {
+                    crossings_cache_[k] = text;
+                    crossings_waiting_.erase(k);
+                }
+            }
+            refresh_soon();
+        },
+        Jobs::Options{false, true});
 }
 
 QString MeasurementsPanel::surface_text(const glm::dvec3& p) {
@@ -305,15 +405,13 @@ QString MeasurementsPanel::surface_text(const glm::dvec3& p) {
     if (const auto it = surface_cache_.find(key); it != surface_cache_.end()) return it->second;
     // While a point is dragged, only the points already known (each query builds a search tree).
     if (context_.editing_markup()) return "...";
-    QString text;
-    try {
-        const core::SurfacePoint s = core::surface_at(context_.workspace.scene(), p);
-        text = s.distance_mm <= kOnSurfaceMm ? QString::fromStdString(context_.workspace.scene().info(s.surface).name)
-                                             : QString("off surface");
-    } catch (const Error&) {
-        text = "-"; // no visible surface
+    if (answers_later()) {
+        surface_waiting_.insert(key);
+        QTimer::singleShot(0, this, [this] { look_up_later(); });
+        return "...";
     }
-    return surface_cache_[key] = text;
+    std::vector<std::unique_ptr<TriangleBvh>> keep;
+    return surface_cache_[key] = surface_text_of(core::surface_trees(context_.workspace.scene(), keep), p);
 }
 
 QString MeasurementsPanel::crossings_text(const Markup& m) {
@@ -324,15 +422,13 @@ QString MeasurementsPanel::crossings_text(const Markup& m) {
     const std::array<double, 6> key{a.x, a.y, a.z, b.x, b.y, b.z};
     if (const auto it = crossings_cache_.find(key); it != crossings_cache_.end()) return it->second;
     if (context_.editing_markup()) return "...";
-    QStringList parts;
-    try {
-        for (const core::LineCrossing& c : core::solid_crossings(context_.workspace.scene(), a, b))
-            parts << QString("%1 at %2 mm").arg(QString::fromStdString(c.name)).arg(c.along_mm, 0, 'f', 1);
-    } catch (const Error&) {
-        // Not finite points (a damaged file): nothing to say about them.
+    if (answers_later()) {
+        crossings_waiting_.insert(key);
+        QTimer::singleShot(0, this, [this] { look_up_later(); });
+        return "...";
     }
-    const QString text = parts.isEmpty() ? QString() : "passes through " + parts.join(", ");
-    return crossings_cache_[key] = text;
+    std::vector<std::unique_ptr<TriangleBvh>> keep;
+    return crossings_cache_[key] = crossings_text_of(core::surface_trees(context_.workspace.scene(), keep), a, b);
 }
 
 bool MeasurementsPanel::save(const QString& path) {

@@ -16,6 +16,8 @@
 #include <array>
 #include <cstddef>
 #include <map>
+#include <memory>
+#include <set>
 #include <optional>
 #include <string>
 #include <vector>
@@ -85,6 +87,18 @@ private:
     QString surface_text(const glm::dvec3& p);
     QString crossings_text(const Markup& m);
     void check_cache();
+    // Above kInlineTriangles in the visible surfaces the answers are worked
+    // out off the GUI thread (a quiet job that keeps the search trees while
+    // the meshes stay: at 32 M triangles a tree takes minutes to build), the
+    // table showing "..." until they arrive.
+    static constexpr std::size_t kInlineTriangles = 2'000'000;
+    bool answers_later() const;
+    void look_up_later();
+    std::set<std::array<double, 3>> surface_waiting_;
+    std::set<std::array<double, 6>> crossings_waiting_;
+    bool looking_up_ = false;
+    struct Trees; // the search trees a lookup builds, kept for the next
+    std::shared_ptr<Trees> trees_;
 
     AppContext& context_;
     int observer_ = 0;

@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <fstream>
 #include <limits>
+#include <memory>
 
 #include <glm/gtc/matrix_transform.hpp>
 
@@ -52,18 +53,34 @@ glm::vec3 component_color(std::size_t n) {
 
 } // namespace
 
-SurfacePoint surface_at(const Scene& scene, const glm::dvec3& lps) {
+std::vector<SurfaceTree> surface_trees(const Scene& scene, std::vector<std::unique_ptr<TriangleBvh>>& keep) {
+    std::vector<SurfaceTree> out;
+    for (const SurfaceId id : scene.surfaces()) {
+        const SurfaceInfo& info = scene.info(id);
+        if (!info.visible || scene.mesh(id).empty()) continue;
+        keep.push_back(std::make_unique<TriangleBvh>(scene.mesh(id)));
+        out.push_back({id, info.name, keep.back().get(), double(info.opacity), info.pickable});
+    }
+    return out;
+}
+
+SurfacePoint surface_at(const std::vector<SurfaceTree>& trees, const glm::dvec3& lps) {
     if (!finite(lps)) throw Error("surface at a point", "the point is not finite");
     SurfacePoint best;
     best.distance_mm = std::numeric_limits<double>::infinity();
-    for (const SurfaceId id : scene.surfaces()) {
-        const SurfaceInfo& info = scene.info(id);
-        if (!info.visible || !info.pickable || scene.mesh(id).empty()) continue;
-        const NearestPoint n = nearest_point(TriangleBvh(scene.mesh(id)), lps);
-        if (n.distance_mm < best.distance_mm) best = {id, n.triangle, n.point, n.distance_mm};
+    for (const SurfaceTree& t : trees) {
+        if (!t.pickable) continue;
+        const NearestPoint n = nearest_point(*t.bvh, lps);
+        if (n.distance_mm < best.distance_mm) best = {t.id, n.triangle, n.point, n.distance_mm};
     }
     if (!best.surface) throw Error("surface at a point", "the scene has no visible surface");
     return best;
+}
+
+SurfacePoint surface_at(const Scene& scene, const glm::dvec3& lps) {
+    if (!finite(lps)) throw Error("surface at a point", "the point is not finite");
+    std::vector<std::unique_ptr<TriangleBvh>> keep;
+    return surface_at(surface_trees(scene, keep), lps);
 }
 
 ComponentPlan plan_component(const Scene& scene, SurfaceId surface, const glm::dvec3& at,
@@ -300,26 +317,32 @@ SurfaceGap surface_gap(const Scene& scene, SurfaceId a, SurfaceId b, const std::
     return g;
 }
 
-std::vector<LineCrossing> solid_crossings(const Scene& scene, const glm::dvec3& a, const glm::dvec3& b,
-                                          double threshold, double end_tolerance_mm) {
+std::vector<LineCrossing> solid_crossings(const std::vector<SurfaceTree>& trees, const glm::dvec3& a,
+                                          const glm::dvec3& b, double threshold, double end_tolerance_mm) {
     if (!finite(a) || !finite(b)) throw Error("line crossings", "a point is not finite");
     const double length = glm::length(b - a);
     std::vector<LineCrossing> out;
-    for (const SurfaceId id : scene.surfaces()) {
-        const SurfaceInfo& info = scene.info(id);
-        if (!info.visible || double(info.opacity) < threshold || scene.mesh(id).empty()) continue;
+    for (const SurfaceTree& t : trees) {
+        if (t.opacity < threshold) continue;
         double last = -1e300;
-        for (const SegmentCrossing& c : segment_crossings(TriangleBvh(scene.mesh(id)), a, b)) {
+        for (const SegmentCrossing& c : segment_crossings(*t.bvh, a, b)) {
             const double along = c.t * length;
             if (along < end_tolerance_mm || along > length - end_tolerance_mm) continue;
             if (along - last < 1e-6) continue; // the same crossing through a shared edge
             last = along;
-            out.push_back({id, info.name, a + c.t * (b - a), along});
+            out.push_back({t.id, t.name, a + c.t * (b - a), along});
         }
     }
     std::sort(out.begin(), out.end(),
               [](const LineCrossing& x, const LineCrossing& y) { return x.along_mm < y.along_mm; });
     return out;
+}
+
+std::vector<LineCrossing> solid_crossings(const Scene& scene, const glm::dvec3& a, const glm::dvec3& b,
+                                          double threshold, double end_tolerance_mm) {
+    if (!finite(a) || !finite(b)) throw Error("line crossings", "a point is not finite");
+    std::vector<std::unique_ptr<TriangleBvh>> keep;
+    return solid_crossings(surface_trees(scene, keep), a, b, threshold, end_tolerance_mm);
 }
 
 nlohmann::json gap_json(const SurfaceGap& g) {

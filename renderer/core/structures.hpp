@@ -6,6 +6,7 @@
 // each one's triangles: renderer/surface/closest.hpp).
 #pragma once
 
+#include <memory>
 #include <optional>
 #include <string>
 
@@ -33,6 +34,19 @@ struct SurfacePoint {
     double distance_mm = 0;
 };
 SurfacePoint surface_at(const Scene& scene, const glm::dvec3& lps);
+// The visible surfaces with a search tree each, for a caller that keeps the
+// trees across queries (building one per query costs seconds at 30 M
+// triangles: the desktop app's Measurements panel keeps them, off its GUI
+// thread). surface_trees builds them for `scene` into `keep`.
+struct SurfaceTree {
+    SurfaceId id = 0;
+    std::string name;
+    const TriangleBvh* bvh = nullptr;
+    double opacity = 1;
+    bool pickable = true;
+};
+std::vector<SurfaceTree> surface_trees(const Scene& scene, std::vector<std::unique_ptr<TriangleBvh>>& keep);
+SurfacePoint surface_at(const std::vector<SurfaceTree>& trees, const glm::dvec3& lps);
 
 struct IsolatedComponent {
     SurfaceId surface = 0;       // the new surface
@@ -179,6 +193,8 @@ struct LineCrossing {
 };
 std::vector<LineCrossing> solid_crossings(const Scene& scene, const glm::dvec3& a, const glm::dvec3& b,
                                           double threshold = 0.5, double end_tolerance_mm = 0.5);
+std::vector<LineCrossing> solid_crossings(const std::vector<SurfaceTree>& trees, const glm::dvec3& a,
+                                          const glm::dvec3& b, double threshold = 0.5, double end_tolerance_mm = 0.5);
 
 // JSON of a gap (surfaces, distance_mm, points LPS, triangles, touching) and
 // of an isolated component (the measure JSON of its surface, plus its parent
