@@ -135,7 +135,8 @@ void SliceView::refresh() {
         for (auto id : scene.surfaces()) {
             const auto& info = scene.info(id);
             if (!info.visible) continue;
-            outlines_.push_back({core::mesh_outline(scene.mesh(id), grid_), to_qcolor(info.color)});
+            outlines_.push_back(
+                {core::mesh_outline(scene.mesh(id), grid_, *scene.outline_index(id)), to_qcolor(info.color)});
         }
     } catch (const std::exception& e) {
         // Nothing escapes into Qt's event loop.
@@ -305,7 +306,7 @@ void SliceView::mouseMoveEvent(QMouseEvent* e) {
         return;
     }
     if (e->buttons() & Qt::LeftButton) {
-        if (!range_) range_ = workspace_->scene().volume().value_range();
+        if (!range_) range_ = workspace_->scene().value_range(); // the scene's, worked out once
         const QPointF total = e->position() - drag_.press;
         workspace_->set_window(core::drag_window(window_at_press_, {total.x(), -total.y()}, *range_));
     } else if (e->buttons() & Qt::MiddleButton) {

@@ -1,4 +1,5 @@
 #include "renderer/core/scene.hpp"
+#include "renderer/core/slices.hpp"
 
 #include <algorithm>
 #include <chrono>
@@ -18,11 +19,12 @@ namespace iso::core {
 struct Scene::Impl {
     struct Entry {
         SurfaceInfo info;
-        std::shared_ptr<const Mesh> mesh; // shared with snapshots: replaced, never changed in place
-        std::shared_ptr<SurfaceLod> lod;  // the mesh's levels of detail (built when a frame first asks)
+        std::shared_ptr<const Mesh> mesh;            // shared with snapshots: replaced, never changed in place
+        std::shared_ptr<SurfaceLod> lod;             // the mesh's levels of detail (built when a frame first asks)
         Bounds bounds;
         std::uint64_t version = 0; // a new one with each mesh (and removal)
         bool removed = false;      // the id stays taken: ids equal the renderer's object ids
+        std::shared_ptr<const OutlineIndex> outline = {}; // its blocks' bounds for slice outlines (made on first use)
     };
     std::vector<Entry> surfaces;
     std::uint64_t versions = 0;
@@ -30,6 +32,7 @@ struct Scene::Impl {
     // A new mesh for `e` (null: removed) and its bounds.
     void set_mesh(Entry& e, std::shared_ptr<const Mesh> m) {
         e.bounds = Bounds{};
+        e.outline.reset();
         if (m)
             for (const auto& p : m->positions) e.bounds.add(glm::dvec3(p));
         e.lod = m ? std::make_shared<SurfaceLod>(m) : nullptr;
@@ -324,6 +327,12 @@ std::vector<SurfaceId> Scene::surfaces() const {
 SurfaceInfo& Scene::info(SurfaceId id) { return impl_->at(id, "Scene::info").info; }
 const SurfaceInfo& Scene::info(SurfaceId id) const { return impl_->at(id, "Scene::info").info; }
 const Mesh& Scene::mesh(SurfaceId id) const { return *impl_->at(id, "Scene::mesh").mesh; }
+
+std::shared_ptr<const OutlineIndex> Scene::outline_index(SurfaceId id) const {
+    auto& e = impl_->at(id, "Scene::outline_index");
+    if (!e.outline) e.outline = std::make_shared<const OutlineIndex>(iso::core::outline_index(*e.mesh));
+    return e.outline;
+}
 
 Bounds Scene::bounds() const {
     Bounds b;

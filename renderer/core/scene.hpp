@@ -30,6 +30,8 @@
 
 namespace iso::core {
 
+struct OutlineIndex;
+
 // A surface of the scene: 1-based, the value the id AOV and picking report.
 using SurfaceId = std::uint32_t;
 
@@ -172,6 +174,9 @@ public:
     SurfaceInfo& info(SurfaceId id);         // edit freely; the next render shows it
     const SurfaceInfo& info(SurfaceId id) const;
     const Mesh& mesh(SurfaceId id) const;
+    // The mesh's outline index (slices.hpp), made on first use (the GUI
+    // thread: slice views outline every visible surface on each slice step).
+    std::shared_ptr<const OutlineIndex> outline_index(SurfaceId id) const;
     Bounds bounds() const; // of the visible surfaces
     // The volume's index box [0, n-1] in LPS mm (empty without a volume).
     Bounds volume_bounds() const;

@@ -7,6 +7,7 @@
 // its clamped outer half voxel and its NaN rule, and VTK's image data has no
 // sheared (gantry-tilt) geometry.
 #include "renderer/core/slices.hpp"
+#include "renderer/core/scene.hpp"
 
 #include <algorithm>
 #include <atomic>
@@ -434,6 +435,12 @@ WindowLevel default_window(const Volume& v) {
     return default_window(v.meta.modality, v.value_range());
 }
 
+WindowLevel default_window(const Scene& s) {
+    const Volume& v = s.volume();
+    if (v.meta.modality == "CT") return default_window("CT", ValueRange{});
+    return default_window(v.meta.modality, s.value_range());
+}
+
 WindowLevel drag_window(const WindowLevel& start, const glm::dvec2& drag, const ValueRange& range) {
     // vtkSliceViewInteractorStyle (3D Slicer): gain = (range high - low) / 500 per pixel.
     const double span = range.max - range.min;
@@ -471,55 +478,59 @@ std::vector<std::uint8_t> apply_window(const SliceImage& img, const WindowLevel&
 
 // ---- Surface outlines ------------------------------------------------------------------
 
-std::vector<SliceSegment> mesh_outline(const Mesh& m, const SliceGrid& g) {
-    const std::size_t nv = m.positions.size(), nt = m.triangles.size();
-    if (nt == 0) return {};
-    // Signed distances once per vertex; a triangle then only compares signs.
-    std::vector<double> d(nv);
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nv, 1 << 14), [&](const tbb::blocked_range<std::size_t>& r) {
-        for (std::size_t i = r.begin(); i < r.end(); ++i)
-            d[i] = glm::dot(glm::dvec3(m.positions[i]), g.normal) - g.offset_mm;
-    });
+namespace {
+
+// The segment of triangle t on the plane (distances d of its vertices), in
+// the grid's pixels; false when the plane misses it.
+bool triangle_segment(const Mesh& m, const std::array<std::uint32_t, 3>& tri, const double dd[3], const SliceGrid& g,
+                      SliceSegment& s) {
+    // Vertices on the plane (d == 0) and NaN count as above.
+    const bool below[3] = {dd[0] < 0, dd[1] < 0, dd[2] < 0};
+    const int nb = int(below[0]) + int(below[1]) + int(below[2]);
+    if (nb == 0 || nb == 3) return false;
+    // Walking the triangle's edges in winding order, one goes down through
+    // the plane (above -> below) and one up: the segment runs from the down
+    // crossing to the up crossing, so a neighbour (which walks the shared
+    // edge the other way) starts where this ends.
+    glm::dvec3 down{0.0}, up{0.0};
+    for (int k = 0; k < 3; ++k) {
+        const int k1 = (k + 1) % 3;
+        if (below[k] == below[k1]) continue;
+        const int lo = below[k] ? k : k1, hi = below[k] ? k1 : k;
+        const glm::dvec3 p =
+            crossing(m.positions[tri[std::size_t(lo)]], dd[lo], m.positions[tri[std::size_t(hi)]], dd[hi]);
+        (below[k] ? up : down) = p;
+    }
     const double s2 = g.pixel_mm * g.pixel_mm;
-    auto to_pixel = [&](const glm::dvec3& p) {
+    const auto to_pixel = [&](const glm::dvec3& p) {
         const glm::dvec3 rel = p - g.corner;
         return glm::vec2(float(glm::dot(rel, g.dx) / s2), float(glm::dot(rel, g.dy) / s2));
     };
-    constexpr std::size_t kBlock = 1 << 15;
-    const std::size_t blocks = (nt + kBlock - 1) / kBlock;
+    s = SliceSegment{to_pixel(down), to_pixel(up)};
+    return !(s.a == s.b || !std::isfinite(s.a.x) || !std::isfinite(s.a.y) || !std::isfinite(s.b.x) ||
+             !std::isfinite(s.b.y));
+}
+
+// The outline from the blocks `take` keeps, kOutlineBlock triangles each.
+template <class Take> std::vector<SliceSegment> outline_blocks(const Mesh& m, const SliceGrid& g, Take take) {
+    const std::size_t nv = m.positions.size(), nt = m.triangles.size();
+    const std::size_t blocks = (nt + kOutlineBlock - 1) / kOutlineBlock;
     std::vector<std::vector<SliceSegment>> parts(blocks);
     std::atomic<std::size_t> bad{std::numeric_limits<std::size_t>::max()};
     tbb::parallel_for(std::size_t(0), blocks, [&](std::size_t b) {
-        auto& part = parts[b];
-        const std::size_t end = std::min(nt, (b + 1) * kBlock);
-        for (std::size_t t = b * kBlock; t < end; ++t) {
+        if (!take(b)) return;
+        const std::size_t end = std::min(nt, (b + 1) * kOutlineBlock);
+        for (std::size_t t = b * kOutlineBlock; t < end; ++t) {
             const auto& tri = m.triangles[t];
             if (tri[0] >= nv || tri[1] >= nv || tri[2] >= nv) {
                 atomic_min(bad, t);
                 continue;
             }
-            const double dd[3] = {d[tri[0]], d[tri[1]], d[tri[2]]};
-            // Vertices on the plane (d == 0) and NaN count as above.
-            const bool below[3] = {dd[0] < 0, dd[1] < 0, dd[2] < 0};
-            const int nb = int(below[0]) + int(below[1]) + int(below[2]);
-            if (nb == 0 || nb == 3) continue;
-            // Walking the triangle's edges in winding order, one goes down
-            // through the plane (above -> below) and one up: the segment runs
-            // from the down crossing to the up crossing, so a neighbour
-            // (which walks the shared edge the other way) starts where this ends.
-            glm::dvec3 down{0.0}, up{0.0};
-            for (int k = 0; k < 3; ++k) {
-                const int k1 = (k + 1) % 3;
-                if (below[k] == below[k1]) continue;
-                const std::uint32_t lo = below[k] ? tri[k] : tri[k1], hi = below[k] ? tri[k1] : tri[k];
-                const glm::dvec3 p = crossing(m.positions[lo], d[lo], m.positions[hi], d[hi]);
-                (below[k] ? up : down) = p;
-            }
-            const SliceSegment s{to_pixel(down), to_pixel(up)};
-            if (s.a == s.b || !std::isfinite(s.a.x) || !std::isfinite(s.a.y) || !std::isfinite(s.b.x) ||
-                !std::isfinite(s.b.y))
-                continue;
-            part.push_back(s);
+            const double dd[3] = {glm::dot(glm::dvec3(m.positions[tri[0]]), g.normal) - g.offset_mm,
+                                  glm::dot(glm::dvec3(m.positions[tri[1]]), g.normal) - g.offset_mm,
+                                  glm::dot(glm::dvec3(m.positions[tri[2]]), g.normal) - g.offset_mm};
+            SliceSegment s;
+            if (triangle_segment(m, tri, dd, g, s)) parts[b].push_back(s);
         }
     });
     if (const std::size_t t = bad.load(); t != std::numeric_limits<std::size_t>::max())
@@ -531,6 +542,43 @@ std::vector<SliceSegment> mesh_outline(const Mesh& m, const SliceGrid& g) {
     out.reserve(total);
     for (const auto& p : parts) out.insert(out.end(), p.begin(), p.end());
     return out;
+}
+
+} // namespace
+
+std::vector<SliceSegment> mesh_outline(const Mesh& m, const SliceGrid& g) {
+    return outline_blocks(m, g, [](std::size_t) { return true; });
+}
+
+OutlineIndex outline_index(const Mesh& m) {
+    const std::size_t nv = m.positions.size(), nt = m.triangles.size();
+    const std::size_t blocks = (nt + kOutlineBlock - 1) / kOutlineBlock;
+    OutlineIndex index;
+    index.lo.assign(blocks, glm::vec3(std::numeric_limits<float>::max()));
+    index.hi.assign(blocks, glm::vec3(std::numeric_limits<float>::lowest()));
+    tbb::parallel_for(std::size_t(0), blocks, [&](std::size_t b) {
+        const std::size_t end = std::min(nt, (b + 1) * kOutlineBlock);
+        for (std::size_t t = b * kOutlineBlock; t < end; ++t)
+            for (const std::uint32_t v : m.triangles[t])
+                if (v < nv) {
+                    index.lo[b] = glm::min(index.lo[b], m.positions[v]);
+                    index.hi[b] = glm::max(index.hi[b], m.positions[v]);
+                }
+    });
+    return index;
+}
+
+std::vector<SliceSegment> mesh_outline(const Mesh& m, const SliceGrid& g, const OutlineIndex& index) {
+    if (index.lo.size() != (m.triangles.size() + kOutlineBlock - 1) / kOutlineBlock) return mesh_outline(m, g);
+    const glm::dvec3 n = g.normal, an = glm::abs(n);
+    return outline_blocks(m, g, [&](std::size_t b) {
+        // The box's distances to the plane span centre +- half extent along |n|.
+        const glm::dvec3 lo(index.lo[b]), hi(index.hi[b]);
+        const double centre = glm::dot(0.5 * (lo + hi), n) - g.offset_mm, half = glm::dot(0.5 * (hi - lo), an);
+        // A margin for rounding: a triangle touching the box's face still counts.
+        const double margin = 1e-6 * (1.0 + std::abs(centre) + half);
+        return !(centre - half > margin || centre + half < -margin);
+    });
 }
 
 // ---- The planes in the 3D view ------------------------------------------------------

@@ -32,6 +32,8 @@
 
 namespace iso::core {
 
+class Scene;
+
 // ---- Planes ------------------------------------------------------------------
 
 enum class SliceOrientation : std::uint8_t { Axial, Coronal, Sagittal };
@@ -261,6 +263,9 @@ std::optional<WindowLevel> ct_window_preset(std::string_view name);
 // The window a view opens with: soft tissue for CT (meta.modality "CT");
 // otherwise the value range's (min..max; a width of 1 when the range is flat).
 WindowLevel default_window(const Volume& v);
+// The same for the scene's volume, from its value range worked out once
+// (Scene::value_range: a non-CT volume's scan is half a second at 2 GiB).
+WindowLevel default_window(const Scene& s);
 WindowLevel default_window(std::string_view modality, const ValueRange& range);
 
 // Slicer's window/level drag (vtkSliceViewInteractorStyle, left button):
@@ -305,5 +310,18 @@ struct SliceSegment {
 // Parallel over triangles through TBB, in triangle order. Throws
 // iso::Error("slice outline", ...) for a triangle naming a missing vertex.
 std::vector<SliceSegment> mesh_outline(const Mesh& m, const SliceGrid& g);
+// What lets an outline skip most of a large mesh: the bounds (LPS mm) of
+// each block of kOutlineBlock consecutive triangles (an extraction's
+// triangles come chunk by chunk, so a block is small in space). A plane
+// that misses a block's box misses its triangles. Throws iso::Error as
+// mesh_outline for a triangle naming a missing vertex.
+constexpr std::size_t kOutlineBlock = 4096;
+struct OutlineIndex {
+    std::vector<glm::vec3> lo, hi; // per block
+};
+OutlineIndex outline_index(const Mesh& m);
+// The same segments as mesh_outline(m, g), from the blocks the plane meets
+// (a 32 M-triangle surface: milliseconds instead of a third of a second).
+std::vector<SliceSegment> mesh_outline(const Mesh& m, const SliceGrid& g, const OutlineIndex& index);
 
 } // namespace iso::core

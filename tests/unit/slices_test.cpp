@@ -829,6 +829,43 @@ TEST(SliceOutline, ASpheresOutlineThroughItsCentreIsOneClosedLoopAtItsRadius) {
     EXPECT_EQ(mesh_outline(sphere, slice_grid(p, 64, 64)).size(), 72u);
 }
 
+// The outline index skips the blocks of triangles a plane misses and gives
+// the same segments, in the same order, as the whole mesh: spheres far
+// apart (each its own blocks) cut by planes through one, both, none, on a
+// block's face and along every axis, oblique too.
+TEST(SliceOutline, TheIndexGivesTheSameSegmentsAsTheWholeMesh) {
+    Mesh m;
+    for (int k = 0; k < 6; ++k) {
+        const Mesh s = uv_sphere(glm::dvec3(60.0 * k, 7.0 * k, -3.0 * k), 12.0 + k, 60, 90);
+        const auto base = std::uint32_t(m.positions.size());
+        m.positions.insert(m.positions.end(), s.positions.begin(), s.positions.end());
+        for (auto t : s.triangles) m.triangles.push_back({t[0] + base, t[1] + base, t[2] + base});
+    }
+    ASSERT_GT(m.triangles.size(), 4 * kOutlineBlock);
+    const OutlineIndex index = outline_index(m);
+    ASSERT_EQ(index.lo.size(), (m.triangles.size() + kOutlineBlock - 1) / kOutlineBlock);
+    std::size_t compared = 0;
+    for (const glm::dvec3 n : {glm::dvec3(0, 0, 1), glm::dvec3(1, 0, 0), glm::dvec3(0, 1, 0),
+                               glm::normalize(glm::dvec3(1, 0.3, 0.2))})
+        for (const double offset : {-100.0, 0.0, 12.0, 60.0, 125.5, 301.0, double(index.hi[0].x)}) {
+            SlicePlane p;
+            p.normal = n;
+            p.right = glm::normalize(glm::cross(std::abs(n.z) < 0.9 ? glm::dvec3(0, 0, 1) : glm::dvec3(1, 0, 0), n));
+            p.up = glm::cross(n, p.right);
+            p.origin = p.center = n * offset;
+            p.pixel_mm = 0.5;
+            const SliceGrid g = slice_grid(p, 512, 512);
+            const auto all = mesh_outline(m, g), fast = mesh_outline(m, g, index);
+            ASSERT_EQ(all.size(), fast.size()) << "offset " << offset;
+            for (std::size_t i = 0; i < all.size(); ++i) {
+                EXPECT_EQ(all[i].a, fast[i].a);
+                EXPECT_EQ(all[i].b, fast[i].b);
+            }
+            compared += all.size();
+        }
+    EXPECT_GT(compared, 1000u);
+}
+
 TEST(SliceOutline, FacesInThePlaneAndDegenerateTriangles) {
     const Mesh cube = box({0, 0, 0}, {2, 2, 2});
     SlicePlane p;
