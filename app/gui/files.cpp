@@ -129,6 +129,9 @@ void Files::load(const QString& path, const QString& series) {
             opt.progress = progress;
             opt.series = chosen;
             s->open(p, opt);
+            // Its value range here, not on the GUI thread at its first use
+            // (a 2 GiB volume's scan held the window for half a second).
+            if (s->has_volume()) s->value_range();
             *result = std::move(s);
         },
         [this, result, path, series](std::exception_ptr e) {

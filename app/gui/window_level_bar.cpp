@@ -31,7 +31,7 @@ int window_preset_index(const QComboBox* combo, const core::WindowLevel& w, cons
         return std::abs(o.center - w.center) < 0.05 && std::abs(o.width - w.width) < 0.05;
     };
     if (!scene.has_volume()) return 0;
-    if (same(core::default_window(scene.volume()))) return 0;
+    if (same(core::default_window(scene))) return 0;
     if (!core::value_unit(scene).empty()) {
         const auto presets = core::ct_window_presets();
         for (std::size_t i = 0; i < presets.size(); ++i)
@@ -74,7 +74,7 @@ WindowLevelBar::WindowLevelBar(AppContext& context, QWidget* parent)
         if (showing_ || index < 0 || index == preset_->count() - 1) return;
         const core::Scene& scene = context_.workspace.scene();
         if (index == 0) {
-            if (scene.has_volume()) context_.workspace.set_window(core::default_window(scene.volume()));
+            if (scene.has_volume()) context_.workspace.set_window(core::default_window(scene));
             return;
         }
         context_.workspace.set_window(core::ct_window_presets()[std::size_t(index - 1)].window);

@@ -112,7 +112,7 @@ void Workspace::reset(std::unique_ptr<Scene> scene, std::string input, std::stri
     live_.look.volume.tf = initial_transfer_function(*scene_);
     if (scene_->has_volume()) {
         live_.planes = default_planes(scene_->volume());
-        live_.window = default_window(scene_->volume());
+        live_.window = default_window(*scene_);
     }
     saved_ = capture(kEditedParts);
     force_modified_ = false;
