@@ -159,7 +159,11 @@ StructureTools::StructureTools(AppContext& context) : QObject(&context.window), 
     table_ = new QTableWidget(0, Columns);
     table_->setObjectName("structures_table");
     table_->setHorizontalHeaderLabels(
-        {"Structure", "Area", "Volume", "Closed", "Largest diameter", "Centroid (LPS mm)", "Bounds (LPS mm)"});
+        {"Structure", "Area", "Volume", "Closed", "Diameter", "Centroid", "Bounds (LPS mm)"});
+    // Short headers in a narrow dock; what they mean in their tooltips.
+    table_->horizontalHeaderItem(Diameter)->setToolTip("The largest diameter (3D Feret): the longest segment between "
+                                                       "two points of the structure");
+    table_->horizontalHeaderItem(Centroid)->setToolTip("The centroid of the enclosed solid, LPS mm");
     // Within the dock's width: the widest columns give way, elided (whole in the tooltips).
     fit_ = new ColumnFit(table_);
     table_->verticalHeader()->hide();
@@ -450,8 +454,10 @@ void StructureTools::cut(std::uint32_t id, core::ScissorsRequest req) {
             if (!made) return;
             scissored_[made] = w.scene().shared_mesh(made);
             const SurfaceMeasures& m = plan->measures;
-            context_.status(part + ": " + number(m.volume_ml, 3) + " mL, " + (m.closed ? "closed" : "open") +
-                            " (Edit > Undo takes it back)");
+            // An open part's volume is a lower bound, as the table says it.
+            const QString at_least = m.volume_kind == VolumeKind::LowerBound ? QString::fromUtf8("\u2265 ") : QString();
+            context_.status(part + ": " + at_least + number(std::abs(m.volume_ml), 3) + " mL, " +
+                            (m.closed ? "closed" : "open") + " (Edit > Undo takes it back)");
             update_table();
         });
 }
