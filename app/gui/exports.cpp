@@ -3,6 +3,7 @@
 #include <QAction>
 #include <QCoreApplication>
 #include <QDir>
+#include <QFileDialog>
 #include <QFileInfo>
 #include <QMainWindow>
 #include <QMenu>
@@ -21,6 +22,7 @@
 #include "renderer/core/api.hpp"
 #include "renderer/core/scene.hpp"
 #include "renderer/core/session.hpp"
+#include "renderer/core/structures.hpp"
 
 namespace iso::gui {
 
@@ -58,6 +60,10 @@ void Files::add_export_actions(QMenu* file) {
     file->addAction("&Export image...", this, [this] { export_image_dialog(); });
     file->addAction("Export to &DICOM...", this, [this] { export_dicom_dialog(); });
     file->addAction("Save s&urfaces...", this, [this] { save_surfaces_dialog(); });
+    QAction* labels = file->addAction("Export &label map...", this, [this] { export_label_map_dialog(); });
+    labels->setObjectName("export_label_map");
+    labels->setToolTip("The visible surfaces as a label map on the volume's grid (NIfTI, LPS) with a colour table: "
+                       "3D Slicer loads it as a segmentation");
 }
 
 void Files::export_image_dialog() {
@@ -106,6 +112,52 @@ void Files::save_surfaces_dialog() {
     d->setAttribute(Qt::WA_DeleteOnClose);
     connect(d, &QDialog::accepted, this, [this, d] { save_surface(d->surface(), d->path()); });
     d->open();
+}
+
+void Files::export_label_map_dialog() {
+    const core::Workspace& w = context_.workspace;
+    if (!w.scene().has_volume() || w.scene().surfaces().empty()) {
+        context_.status("A label map needs a volume and a surface: open a volume and add a surface first");
+        return;
+    }
+    auto* d = new QFileDialog(
+        &context_.window, "Export label map",
+        QDir(start_folder("labels")).filePath(data_name(QString::fromStdString(w.input())) + "-labels.nii.gz"),
+        "NIfTI label map (*.nii.gz *.nii)");
+    d->setAcceptMode(QFileDialog::AcceptSave);
+    d->setOption(QFileDialog::DontUseNativeDialog);
+    d->setAttribute(Qt::WA_DeleteOnClose);
+    connect(d, &QFileDialog::fileSelected, this, [this](const QString& path) { export_label_map(path); });
+    d->open();
+}
+
+void Files::export_label_map(const QString& path) {
+    if (context_.busy(true)) return;
+    const core::Scene* scene = &context_.workspace.scene();
+    std::vector<core::SurfaceId> ids;
+    for (const auto id : scene->surfaces())
+        if (scene->info(id).visible) ids.push_back(id);
+    const std::string p = path.toStdString();
+    auto table = std::make_shared<std::string>();
+    auto count = std::make_shared<std::size_t>(0);
+    context_.jobs.run(
+        "Exporting the label map " + path, false,
+        [scene, ids, p, table, count](const ProgressFn&) {
+            core::label_map_table(p, "label map"); // refused before any work when not .nii or .nii.gz
+            const core::LabelMap m = core::structures_label_map(*scene, ids);
+            *count = m.entries.size();
+            *table = core::save_label_map(m, p);
+        },
+        [this, path, table, count](std::exception_ptr e) {
+            if (e) {
+                context_.error("Cannot export the label map", "Cannot export " + path, e);
+                return;
+            }
+            remember_folder("labels", path);
+            context_.status(QString("Exported %1 structures as labels 1-%1 to %2 (colour table %3)")
+                                .arg(*count)
+                                .arg(path, QString::fromStdString(*table)));
+        });
 }
 
 void Files::export_image(const QString& path, const core::RenderRequest& frame, const core::SessionParts& take) {

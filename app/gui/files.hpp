@@ -56,6 +56,10 @@ public:
     void export_dicom(const QString& folder, const core::RenderRequest& frame, const core::SessionParts& take);
     // File > Save surfaces: one surface in LPS mm (.stl, .ply, .obj, .vtp).
     void save_surface(std::uint32_t id, const QString& path);
+    // File > Export label map: the visible surfaces as labels 1..N on the
+    // volume's grid (core::structures_label_map; .nii or .nii.gz, LPS, with
+    // Slicer's colour table beside it), in the background.
+    void export_label_map(const QString& path);
 
     // Runs `proceed` at once when nothing is unsaved; else asks first (a
     // window-modal box named "unsaved": Save, Discard, Cancel): Save saves
@@ -91,6 +95,7 @@ private:
     void export_image_dialog();
     void export_dicom_dialog();
     void save_surfaces_dialog();
+    void export_label_map_dialog();
 
     AppContext& context_;
     QMenu* recent_menu_ = nullptr;

@@ -6,6 +6,8 @@
 // under xvfb-run; it skips without a display). Expected values come from
 // the core on a scene of the test's own (core::pick with every layer,
 // core::measure_surfaces, core::surface_gap), not from the window.
+#include <filesystem>
+
 #include <QAction>
 #include <QScrollBar>
 #include <QStatusBar>
@@ -13,12 +15,14 @@
 #include <QTest>
 #include <QUndoStack>
 
+#include "app/gui/files.hpp"
 #include "app/gui/measurements_panel.hpp"
 #include "app/gui/structure_tools.hpp"
 #include "gui_measure_util.hpp"
 #include "renderer/core/measure.hpp"
 #include "renderer/core/pick.hpp"
 #include "renderer/core/structures.hpp"
+#include "io/volume_io.hpp"
 #include "renderer/core/slices.hpp"
 #include "renderer/surface/analysis.hpp"
 #include "renderer/surface/shape.hpp"
@@ -252,6 +256,24 @@ TEST_F(GuiStructures, GrowFromAClickIsTheCoresRegionListedByItsVoxels) {
     EXPECT_EQ(table->item(0, gui::StructureTools::Diameter)->text(), QString::number(shape.feret_mm, 'f', 2) + " mm");
     EXPECT_TRUE(
         table->item(0, gui::StructureTools::Centroid)->text().contains(QString::number(shape.centroid.x, 'f', 1)));
+
+    // File > Export label map: the visible surfaces as labels 1..3 (skin,
+    // bone, then the grown region, whose label wins where they overlap): the
+    // grown region's label holds exactly its voxels, read back from the file.
+    const std::string labels = dir() / "labels.nii.gz";
+    w.files()->export_label_map(QString::fromStdString(labels));
+    ASSERT_TRUE(QTest::qWaitFor([&] { return !w.busy(); }, 600000));
+    ASSERT_TRUE(std::filesystem::exists(labels)) << w.statusBar()->currentMessage().toStdString();
+    EXPECT_TRUE(std::filesystem::exists(std::string(dir() / "labels.ctbl")));
+    const Volume back = load_volume(labels);
+    ASSERT_EQ(back.dims, v.dims);
+    std::size_t grown_voxels = 0;
+    for (std::int64_t k = 0; k < back.dims[2]; ++k)
+        for (std::int64_t j = 0; j < back.dims[1]; ++j)
+            for (std::int64_t i = 0; i < back.dims[0]; ++i) grown_voxels += back.value(i, j, k) == 3.0;
+    EXPECT_EQ(grown_voxels, r.voxels);
+    EXPECT_TRUE(w.statusBar()->currentMessage().contains("Exported 3 structures"))
+        << w.statusBar()->currentMessage().toStdString();
 
     // One undo step.
     EXPECT_EQ(w.undo_stack()->undoText(), "Grow grown 1");
