@@ -1,7 +1,6 @@
 #include "app/gui/structure_tools.hpp"
 
 #include <algorithm>
-#include <array>
 #include <cmath>
 #include <map>
 #include <memory>
@@ -27,9 +26,6 @@
 #include "renderer/core/pick.hpp"
 #include "renderer/core/structures.hpp"
 #include "renderer/core/workspace.hpp"
-
-#include <glm/gtc/matrix_inverse.hpp>
-#include <glm/mat3x3.hpp>
 
 namespace iso::gui {
 
@@ -80,31 +76,6 @@ void add_row(QTableWidget* t, const core::SurfaceMeasurement& m, const ShapeMeas
     cell(StructureTools::Diameter, number(shape.feret_mm, 2) + " mm");
     cell(StructureTools::Centroid, shape.solid ? point_text(shape.centroid) : QString("(open surface)"));
     cell(StructureTools::Bounds, point_text(s.bounds_min) + QString::fromUtf8(" \u2013 ") + point_text(s.bounds_max));
-}
-
-// A seed for a click on a surface: the click's point lies on the
-// isosurface, between voxels in and out of the range; the first point a
-// little further along the view ray (into what was clicked) whose nearest
-// voxel is within the range. None: no such voxel within three voxels.
-std::optional<glm::dvec3> seed_near(const iso::Volume& v, const glm::dvec3& at, const glm::dvec3& forward, double lo,
-                                    double hi) {
-    const glm::dmat3 m(v.index_to_lps);
-    const double step = std::min({glm::length(m[0]), glm::length(m[1]), glm::length(m[2])}) * 0.5;
-    const glm::dmat4 to_index = glm::inverse(v.index_to_lps);
-    for (int k = 0; k <= 6; ++k) {
-        const glm::dvec3 p = at + forward * (step * k);
-        const glm::dvec3 ijk = glm::dvec3(to_index * glm::dvec4(p, 1.0));
-        std::array<std::int64_t, 3> i{};
-        bool inside = true;
-        for (int a = 0; a < 3; ++a) {
-            i[std::size_t(a)] = std::int64_t(std::llround(ijk[a]));
-            inside = inside && i[std::size_t(a)] >= 0 && i[std::size_t(a)] < v.dims[std::size_t(a)];
-        }
-        if (!inside) continue;
-        const double value = v.value(i[0], i[1], i[2]);
-        if (value >= lo && value <= hi) return p;
-    }
-    return std::nullopt;
 }
 
 } // namespace
@@ -266,14 +237,14 @@ bool StructureTools::viewer_click(Viewer& v, QPointF pixel) {
     }
     if (tool_ == Tool::Grow) {
         // A surface or the ray-cast volume: the seed is what was clicked, a
-        // little inside it (seed_near) when the point lies on an isosurface.
+        // little inside it (seed_within) when the point lies on an isosurface.
         if (!r.visible || !context_.workspace.scene().has_volume()) {
             context_.status("Grow: no structure there: click a surface or the volume");
             return true;
         }
         const auto [lo, hi] = grow_range();
         const auto seed =
-            seed_near(context_.workspace.scene().volume(), r.layers[*r.visible].lps, v.camera().forward(), lo, hi);
+            seed_within(context_.workspace.scene().volume(), r.layers[*r.visible].lps, v.camera().forward(), lo, hi);
         grow(seed ? *seed : r.layers[*r.visible].lps); // without one, grow says why (the value there)
         return true;
     }

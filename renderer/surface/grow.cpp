@@ -1,5 +1,6 @@
 #include "renderer/surface/grow.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <span>
 #include <string>
@@ -69,20 +70,43 @@ template <class T> void flood(const Volume& v, const GrowOptions& o, GrownRegion
     r.voxels = queue.size();
 }
 
+// The voxel nearest an LPS point (rounded index): kNearestOk, or why there
+// is none, axis by axis (a coordinate not finite, or outside the volume).
+enum { kNearestOk, kNearestNotFinite, kNearestOutside };
+int nearest_voxel(const Volume& v, const glm::dvec3& lps, std::array<std::int64_t, 3>& s) {
+    const glm::dvec3 ijk = glm::dvec3(glm::inverse(v.index_to_lps) * glm::dvec4(lps, 1.0));
+    for (int a = 0; a < 3; ++a) {
+        if (!std::isfinite(ijk[a])) return kNearestNotFinite;
+        s[std::size_t(a)] = std::int64_t(std::llround(ijk[a]));
+        if (s[std::size_t(a)] < 0 || s[std::size_t(a)] >= v.dims[std::size_t(a)]) return kNearestOutside;
+    }
+    return kNearestOk;
+}
+
 } // namespace
+
+std::optional<glm::dvec3> seed_within(const Volume& v, const glm::dvec3& at, const glm::dvec3& forward, double lo,
+                                      double hi) {
+    const glm::dmat3 m(v.index_to_lps);
+    const double step = std::min({glm::length(m[0]), glm::length(m[1]), glm::length(m[2])}) * 0.5;
+    for (int k = 0; k <= 6; ++k) {
+        const glm::dvec3 p = at + forward * (step * k);
+        std::array<std::int64_t, 3> i{};
+        if (nearest_voxel(v, p, i) != kNearestOk) continue;
+        const double value = v.value(i[0], i[1], i[2]);
+        if (value >= lo && value <= hi) return p;
+    }
+    return std::nullopt;
+}
 
 GrownRegion grow_region(const Volume& v, const glm::dvec3& seed_lps, const GrowOptions& o, const ProgressFn& progress) {
     if (v.is_sparse()) throw Error("grow from a seed", "the volume is sparse (OpenVDB): not supported");
     if (!std::isfinite(o.lo) || !std::isfinite(o.hi) || o.lo > o.hi)
         throw Error("grow from a seed", "the range " + number(o.lo) + " to " + number(o.hi) + " is empty");
-    const glm::dvec3 ijk = glm::dvec3(glm::inverse(v.index_to_lps) * glm::dvec4(seed_lps, 1.0));
     std::array<std::int64_t, 3> s{};
-    for (int a = 0; a < 3; ++a) {
-        if (!std::isfinite(ijk[a])) throw Error("grow from a seed", "the seed is not finite");
-        s[std::size_t(a)] = std::int64_t(std::llround(ijk[a]));
-        if (s[std::size_t(a)] < 0 || s[std::size_t(a)] >= v.dims[std::size_t(a)])
-            throw Error("grow from a seed", "the seed lies outside the volume");
-    }
+    const int nearest = nearest_voxel(v, seed_lps, s);
+    if (nearest == kNearestNotFinite) throw Error("grow from a seed", "the seed is not finite");
+    if (nearest == kNearestOutside) throw Error("grow from a seed", "the seed lies outside the volume");
     const int seed_kind =
         dispatch_voxel_type(v.type, [&](auto tag) { return classify(v, v.as<decltype(tag)>(), o, s[0], s[1], s[2]); });
     if (seed_kind == 2) throw Error("grow from a seed", "the seed lies outside the box");

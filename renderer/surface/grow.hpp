@@ -47,4 +47,13 @@ struct GrownRegion {
 GrownRegion grow_region(const Volume& v, const glm::dvec3& seed_lps, const GrowOptions& o,
                         const ProgressFn& progress = {});
 
+// A seed for a point on a structure's isosurface (a click lands there,
+// between voxels in and out of the range, so the voxel nearest it may be
+// out): the first point from `at` along `forward` (into what was clicked),
+// half the smallest voxel spacing at a time up to three voxels, whose
+// nearest voxel (grow_region's seed voxel) is within [lo, hi]. None when
+// there is no such point.
+std::optional<glm::dvec3> seed_within(const Volume& v, const glm::dvec3& at, const glm::dvec3& forward, double lo,
+                                      double hi);
+
 } // namespace iso

@@ -18,6 +18,7 @@
 #include "renderer/core/session.hpp"
 #include "renderer/surface/analysis.hpp"
 #include "renderer/surface/box_clip.hpp"
+#include "renderer/surface/grow.hpp"
 #include "renderer/surface/postprocess.hpp"
 #include "renderer/surface/scissors.hpp"
 #include "renderer/surface/shape.hpp"
@@ -666,4 +667,23 @@ TEST(Scissors, TheCoreCutsASurfaceAsTheCameraSeesIt) {
         sum += half.measures.volume_ml;
     }
     EXPECT_NEAR(sum, w.volume_ml, 1e-6 * w.volume_ml);
+}
+
+// A click on a ball's isosurface seeds inside it: along the view ray into
+// the ball, a point whose nearest voxel is within the range (grow_region
+// grows from it); looking out of the ball, none within three voxels.
+TEST(Structures, ASeedOnTheSurfaceIsFoundJustInside) {
+    core::Scene scene;
+    two_balls(scene);
+    const Volume& v = scene.volume();
+    const double hi = scene.value_range().max;
+    const glm::dvec3 on = kBig + glm::dvec3(kRBig, 0, 0);
+    const auto seed = seed_within(v, on, {-1, 0, 0}, kBallIso, hi);
+    ASSERT_TRUE(seed.has_value());
+    EXPECT_LT(glm::length(*seed - on), 3.0);
+    GrowOptions o;
+    o.lo = kBallIso;
+    o.hi = hi;
+    EXPECT_GT(grow_region(v, *seed, o).voxels, 0u);
+    EXPECT_FALSE(seed_within(v, on + glm::dvec3(1.5, 0, 0), {1, 0, 0}, kBallIso, hi).has_value());
 }
