@@ -481,9 +481,7 @@ core::PickResult Viewer::pick_at(QPointF image_pixel, PickRegion rect) {
     const auto t0 = std::chrono::steady_clock::now();
     if (!use_still_thread()) {
         if (!isValid()) throw Error("3D view pick", "the view has no GL context yet");
-        RenderOptions opt = pick_options(p);
-        opt.pick.reset(); // pick_in_frame sets it and renders
-        opt.image = true;
+        const RenderOptions opt = pick_options(p); // pick_in_frame sets the pick region and image again
         makeCurrent();
         struct Done {
             Viewer& v;
