@@ -12,6 +12,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdio>
 #include <fstream>
 #include <functional>
 #include <string>
@@ -119,6 +120,23 @@ inline void write_text(const std::string& path, const std::string& text) {
         f << text;
         if (!f.flush()) throw Error(path, "cannot write");
     });
+}
+
+// A benchmark's failure: "PROGRAM: why" on stderr; the exit status, 1.
+inline int fail(const char* program, const std::string& why) {
+    std::fprintf(stderr, "%s: %s\n", program, why.c_str());
+    return 1;
+}
+
+// Writes the CSV and says where; the exit status (fail's when it cannot).
+inline int write_csv(const char* program, const std::string& path, const std::string& text) {
+    try {
+        write_text(path, text);
+    } catch (const std::exception& e) {
+        return fail(program, e.what());
+    }
+    std::printf("\nwrote %s\n", path.c_str());
+    return 0;
 }
 
 } // namespace iso::bench

@@ -76,10 +76,7 @@ double median(std::vector<double> v) {
     return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
 }
 
-int fail(const std::string& why) {
-    std::fprintf(stderr, "gui_frame_bench: %s\n", why.c_str());
-    return 1;
-}
+int fail(const std::string& why) { return bench::fail("gui_frame_bench", why); }
 
 } // namespace
 
@@ -199,11 +196,5 @@ int main(int argc, char** argv) {
                       r.max, renderer.c_str());
         out += line;
     }
-    try {
-        bench::write_text(csv, out);
-    } catch (const std::exception& e) {
-        return fail(e.what());
-    }
-    std::printf("\nwrote %s\n", csv.c_str());
-    return 0;
+    return bench::write_csv("gui_frame_bench", csv, out);
 }

@@ -65,10 +65,7 @@ using bench::wait_until;
 
 namespace {
 
-int fail(const std::string& why) {
-    std::fprintf(stderr, "gui_latency_bench: %s\n", why.c_str());
-    return 1;
-}
+int fail(const std::string& why) { return bench::fail("gui_latency_bench", why); }
 
 struct Way {
     const char* name;

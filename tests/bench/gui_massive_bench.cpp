@@ -62,10 +62,7 @@ using bench::wait_until;
 
 namespace {
 
-int fail(const std::string& why) {
-    std::fprintf(stderr, "gui_massive_bench: %s\n", why.c_str());
-    return 1;
-}
+int fail(const std::string& why) { return bench::fail("gui_massive_bench", why); }
 
 struct Phase {
     std::string name;
@@ -298,11 +295,5 @@ int main(int argc, char** argv) {
     std::snprintf(mem, sizeof mem, "peak memory,%.0f,0,0,\"VmHWM MiB; GUI context scene copy: %s\"\n", hwm,
                   w.scene().has_gpu_data() ? "yes" : "no");
     out += mem;
-    try {
-        bench::write_text(csv, out);
-    } catch (const std::exception& e) {
-        return fail(e.what());
-    }
-    std::printf("\nwrote %s\n", csv.c_str());
-    return 0;
+    return bench::write_csv("gui_massive_bench", csv, out);
 }
