@@ -14,10 +14,15 @@ SurfaceMeasures measure_surface_mesh(const Scene& scene, const SurfaceInfo& info
     // label surfaces and meshes are measured as they are.
     if (info.kind == SurfaceInfo::Kind::Iso && scene.has_volume()) {
         MeasureOptions opt;
-        opt.components_only = info.post.keep_largest || info.post.keep_at || info.post.keep_within;
-        // A part cut by a box is compared with the coarse isosurfaces cut by the same box.
-        if (const auto box = info.post.keep_within)
-            opt.coarse_post = [b = *box](const Mesh& m) { return clip_to_box(m, b); };
+        opt.components_only = info.post.keep_largest || kept_at(info.post) || info.post.keep_within;
+        // A part cut by a box or an outline is compared with the coarse
+        // isosurfaces cut the same way (the pieces kept are matched by components).
+        std::vector<PartStep> cuts = info.post.steps;
+        for (PartStep& c : cuts) c.keep_at.reset();
+        if (info.post.keep_within || !cuts.empty())
+            opt.coarse_post = [box = info.post.keep_within, cuts](const Mesh& m) {
+                return apply_steps(box ? clip_to_box(m, *box) : m, cuts);
+            };
         return measure_isosurface(scene.volume(), info.value, mesh, opt);
     }
     return measure_surface(mesh);

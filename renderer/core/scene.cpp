@@ -19,25 +19,49 @@ namespace iso::core {
 struct Scene::Impl {
     struct Entry {
         SurfaceInfo info;
-        std::shared_ptr<const Mesh> mesh;            // shared with snapshots: replaced, never changed in place
-        std::shared_ptr<SurfaceLod> lod;             // the mesh's levels of detail (built when a frame first asks)
+        std::shared_ptr<const Mesh> mesh; // shared with snapshots: replaced, never changed in place
+        std::shared_ptr<SurfaceLod> lod;  // the mesh's levels of detail (built when a frame first asks)
         Bounds bounds;
-        std::uint64_t version = 0; // a new one with each mesh (and removal)
-        bool removed = false;      // the id stays taken: ids equal the renderer's object ids
+        std::uint64_t version = 0;                        // a new one with each mesh (and removal)
+        bool removed = false;                             // the id stays taken: ids equal the renderer's object ids
         std::shared_ptr<const OutlineIndex> outline = {}; // its blocks' bounds for slice outlines (made on first use)
     };
     std::vector<Entry> surfaces;
     std::uint64_t versions = 0;
     SnapshotRenderer gpu;
-    // A new mesh for `e` (null: removed) and its bounds.
-    void set_mesh(Entry& e, std::shared_ptr<const Mesh> m) {
-        e.bounds = Bounds{};
-        e.outline.reset();
-        if (m)
-            for (const auto& p : m->positions) e.bounds.add(glm::dvec3(p));
-        e.lod = m ? std::make_shared<SurfaceLod>(m) : nullptr;
-        e.mesh = std::move(m);
+    // Meshes the surfaces had (an undo step may bring one back) with what
+    // was worked out for them: taken again, not worked out again.
+    struct Known {
+        std::weak_ptr<const Mesh> mesh;
+        Bounds bounds;
+        std::shared_ptr<const OutlineIndex> outline;
+    };
+    std::vector<Known> known;
+    // A new mesh for `e` (null: removed), with its bounds and outline index when known.
+    void set_mesh(Entry& e, PreparedMesh m) {
+        std::erase_if(known, [](const Known& k) { return k.mesh.expired(); });
+        if (e.mesh) known.push_back({e.mesh, e.bounds, e.outline});
+        if (m.mesh && !m.bounds)
+            for (const Known& k : known)
+                if (k.mesh.lock() == m.mesh) {
+                    m.bounds = k.bounds;
+                    if (!m.outline) m.outline = k.outline;
+                }
+        if (m.mesh && !m.bounds) {
+            Bounds b;
+            for (const auto& p : m.mesh->positions) b.add(glm::dvec3(p));
+            m.bounds = b;
+        }
+        e.bounds = m.mesh ? *m.bounds : Bounds{};
+        e.outline = m.mesh ? std::move(m.outline) : nullptr;
+        e.lod = m.mesh ? std::make_shared<SurfaceLod>(m.mesh) : nullptr;
+        e.mesh = std::move(m.mesh);
         e.version = ++versions;
+    }
+    void set_mesh(Entry& e, std::shared_ptr<const Mesh> m) {
+        PreparedMesh p;
+        p.mesh = std::move(m);
+        set_mesh(e, std::move(p));
     }
     std::shared_ptr<const Volume> volume; // shared with snapshots: replaced, never changed in place
     std::uint64_t volume_version = 0;
@@ -70,6 +94,17 @@ struct Scene::Impl {
         return x;
     }
 };
+
+PreparedMesh::PreparedMesh(Mesh m) : mesh(std::make_shared<const Mesh>(std::move(m))) {}
+
+PreparedMesh prepare_mesh(Mesh m) {
+    PreparedMesh p(std::move(m));
+    Bounds b;
+    for (const auto& v : p.mesh->positions) b.add(glm::dvec3(v));
+    p.bounds = b;
+    p.outline = std::make_shared<const OutlineIndex>(outline_index(*p.mesh));
+    return p;
+}
 
 Scene::Scene() : impl_(std::make_unique<Impl>()) {}
 Scene::~Scene() = default;
@@ -214,7 +249,8 @@ ValueRange Scene::value_range() const {
     return r;
 }
 
-SurfaceId Scene::add_isosurface(Mesh m, double iso, const PostProcessOptions& post, std::optional<glm::vec3> color) {
+SurfaceId Scene::add_isosurface(PreparedMesh m, double iso, const PostProcessOptions& post,
+                                std::optional<glm::vec3> color) {
     SurfaceInfo info;
     info.name = surface_name(false, iso);
     info.kind = SurfaceInfo::Kind::Iso;
@@ -227,19 +263,19 @@ SurfaceId Scene::add_isosurface(Mesh m, double iso, const PostProcessOptions& po
     return add_mesh(std::move(m), info);
 }
 
-void Scene::replace_surface(SurfaceId id, Mesh m, double value, const PostProcessOptions& post) {
+void Scene::replace_surface(SurfaceId id, PreparedMesh m, double value, const PostProcessOptions& post) {
     auto& e = impl_->at(id, "Scene::replace_surface");
     if (e.info.kind == SurfaceInfo::Kind::Iso && e.info.name == surface_name(false, e.info.value))
         e.info.name = surface_name(false, value);
     e.info.value = value;
     e.info.post = post;
-    impl_->set_mesh(e, std::make_shared<const Mesh>(std::move(m)));
+    impl_->set_mesh(e, std::move(m));
 }
 
 void Scene::remove_surface(SurfaceId id) {
     auto& e = impl_->at(id, "Scene::remove_surface");
     e.removed = true;
-    impl_->set_mesh(e, nullptr);
+    impl_->set_mesh(e, std::shared_ptr<const Mesh>());
 }
 
 void Scene::restore_surface(SurfaceId id, Mesh m, SurfaceInfo info) {
@@ -308,11 +344,12 @@ std::vector<SurfaceId> Scene::add_extracted(std::vector<Mesh> meshes, SurfaceInf
     return ids;
 }
 
-SurfaceId Scene::add_mesh(Mesh m, SurfaceInfo info) {
+SurfaceId Scene::add_mesh(PreparedMesh m, SurfaceInfo info) {
     if (!(info.opacity >= 0.0f && info.opacity <= 1.0f))
         throw Error("Scene::add_mesh", "opacity of '" + info.name + "' must be between 0 and 1");
+    if (!m.mesh) throw Error("Scene::add_mesh", "'" + info.name + "' has no mesh");
     impl_->surfaces.push_back({std::move(info), nullptr, nullptr, Bounds{}, 0, false});
-    impl_->set_mesh(impl_->surfaces.back(), std::make_shared<const Mesh>(std::move(m)));
+    impl_->set_mesh(impl_->surfaces.back(), std::move(m));
     return SurfaceId(impl_->surfaces.size());
 }
 

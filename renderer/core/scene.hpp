@@ -24,6 +24,7 @@
 #include "io/volume.hpp"
 #include "io/volume_io.hpp"
 #include "renderer/surface/extract.hpp"
+#include "renderer/surface/grow.hpp"
 #include "renderer/surface/postprocess.hpp"
 #include "renderer/gpu/renderer.hpp"
 #include "renderer/frame/camera.hpp"
@@ -45,11 +46,28 @@ struct SurfaceInfo {
     float opacity = 1.0f;  // 0..1
     bool visible = true, pickable = true;
     // How an Iso or Label surface was made from the volume (smoothing,
-    // decimation, keep-largest): a session restores the surface by
-    // extracting `value` again with these.
+    // decimation, keep-largest, the part kept): a session restores the
+    // surface by extracting `value` again with these.
     PostProcessOptions post;
+    // A grown region (kind Mesh): its seed and range. A session grows it
+    // again (then applies `post`: the cuts made on it).
+    std::optional<GrownFrom> grown;
     bool operator==(const SurfaceInfo&) const = default;
 };
+
+// A mesh with what the scene keeps beside it: its bounds and its slice
+// outlines' block index (slices.hpp). prepare_mesh works both out, on a
+// worker: at 32 M triangles they take a third of a second, which adding the
+// mesh on the GUI thread then does not. A plain Mesh converts to one whose
+// bounds the scene works out when it takes it, and its index at first use.
+struct PreparedMesh {
+    PreparedMesh() = default;
+    PreparedMesh(Mesh m); // NOLINT: implicit, so that every Mesh taker takes one
+    std::shared_ptr<const Mesh> mesh;
+    std::optional<Bounds> bounds;
+    std::shared_ptr<const OutlineIndex> outline;
+};
+PreparedMesh prepare_mesh(Mesh m);
 
 // What a frame draws, taken at one moment: each surface slot's mesh
 // (shared and never changed in place: a replaced mesh is a new one), a
@@ -127,7 +145,7 @@ public:
     std::vector<SurfaceId> add_label_surfaces(const std::vector<double>& labels, const ExtractOptions& extract = {},
                                               const PostProcessOptions& post = {}, ProgressFn progress = {},
                                               ExtractSeconds* seconds = nullptr);
-    SurfaceId add_mesh(Mesh m, SurfaceInfo info);
+    SurfaceId add_mesh(PreparedMesh m, SurfaceInfo info);
 
     // ---- surfaces made off the GUI thread ----------------------------------
     // The isosurface of the volume at `iso`, post-processed, as a mesh; the
@@ -146,13 +164,13 @@ public:
     // `post` recorded, the volume as its source. Colour: the given one, else
     // the next along the skin-to-bone palette for the n surfaces already
     // there (surface_color(n, max(n + 1, 2)): skin, bone, then other hues).
-    SurfaceId add_isosurface(Mesh m, double iso, const PostProcessOptions& post = {},
+    SurfaceId add_isosurface(PreparedMesh m, double iso, const PostProcessOptions& post = {},
                              std::optional<glm::vec3> color = std::nullopt);
     // Replaces a surface's mesh (a moved iso slider, other post-processing);
     // colour, opacity and visibility stay. An Iso surface whose name was the
     // automatic "iso <old>" is renamed "iso <value>". The renderer uploads
     // the new mesh on the next render, into the same object id.
-    void replace_surface(SurfaceId id, Mesh m, double value, const PostProcessOptions& post);
+    void replace_surface(SurfaceId id, PreparedMesh m, double value, const PostProcessOptions& post);
     // Removes a surface: its id is never reused (the others keep theirs),
     // surfaces() no longer lists it, info() and mesh() throw for it, and the
     // renderer drops its GPU copy on the next render.
@@ -174,8 +192,8 @@ public:
     SurfaceInfo& info(SurfaceId id);         // edit freely; the next render shows it
     const SurfaceInfo& info(SurfaceId id) const;
     const Mesh& mesh(SurfaceId id) const;
-    // The mesh's outline index (slices.hpp), made on first use (the GUI
-    // thread: slice views outline every visible surface on each slice step).
+    // The mesh's outline index (slices.hpp): prepare_mesh's, else made on
+    // first use (slice views outline every visible surface on each slice step).
     std::shared_ptr<const OutlineIndex> outline_index(SurfaceId id) const;
     Bounds bounds() const; // of the visible surfaces
     // The volume's index box [0, n-1] in LPS mm (empty without a volume).

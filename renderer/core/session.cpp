@@ -11,6 +11,7 @@
 #include "io/error.hpp"
 #include "io/read_file.hpp"
 #include "io/image.hpp"
+#include "renderer/core/structures.hpp"
 
 namespace iso::core {
 namespace fs = std::filesystem;
@@ -44,6 +45,27 @@ const char* kind_name(SurfaceInfo::Kind k) {
 }
 
 ordered_json vec_json(const glm::dvec3& v) { return ordered_json::array({v.x, v.y, v.z}); }
+
+ordered_json box_json(const LpsBox& b) { return {{"lo", vec_json(b.lo)}, {"hi", vec_json(b.hi)}}; }
+
+// A cut as Reader::step reads it; numbers written to round-trip exactly,
+// so that the part made again is the same.
+ordered_json step_json(const PartStep& st) {
+    ordered_json o = ordered_json::object();
+    if (st.within) o["within"] = box_json(*st.within);
+    if (st.keep_at) o["keep_at"] = vec_json(*st.keep_at);
+    if (const auto& v = st.outline) {
+        ordered_json pts = ordered_json::array(), m = ordered_json::array();
+        for (const auto& q : v->outline) pts.push_back({q.x, q.y});
+        for (int k = 0; k < 16; ++k) m.push_back(v->view_projection[k / 4][k % 4]);
+        o["scissors"] = {{"outline_pixels", pts},
+                         {"view_projection", m},
+                         {"eye", vec_json(v->eye)},
+                         {"image_size", {v->width, v->height}},
+                         {"keep", v->keep_inside ? "inside" : "outside"}};
+    }
+    return o;
+}
 
 // Reads one session; every failure names the file and the field.
 class Reader {
@@ -225,16 +247,74 @@ private:
         s.post.keep_largest = boolean(item, "keep_largest", where + ".keep_largest", false);
         if (item.contains("keep_at") && !item["keep_at"].is_null())
             s.post.keep_at = vec3(item["keep_at"], where + ".keep_at");
-        if (item.contains("keep_within") && !item["keep_within"].is_null()) {
-            const json& b = item["keep_within"];
-            if (!b.is_object()) fail(where + ".keep_within", "must be an object {\"lo\": [x,y,z], \"hi\": [x,y,z]}");
-            LpsBox box{vec3(b.value("lo", json()), where + ".keep_within.lo"),
-                       vec3(b.value("hi", json()), where + ".keep_within.hi")};
-            for (int i = 0; i < 3; ++i)
-                if (!(box.lo[i] < box.hi[i])) fail(where + ".keep_within", "lo must be below hi on every axis");
-            s.post.keep_within = box;
+        if (item.contains("keep_within") && !item["keep_within"].is_null())
+            s.post.keep_within = box(item["keep_within"], where + ".keep_within");
+        if (const json* steps = member(item, "steps"); steps && !steps->is_null()) {
+            if (!steps->is_array()) fail(where + ".steps", "must be an array");
+            for (std::size_t i = 0; i < steps->size(); ++i)
+                s.post.steps.push_back(step((*steps)[i], where + ".steps[" + std::to_string(i) + "]"));
         }
+        if (const json* g = member(item, "grown"); g && !g->is_null()) s.grown = grown(*g, where + ".grown");
         return s;
+    }
+
+    LpsBox box(const json& b, const std::string& where) const {
+        if (!b.is_object()) fail(where, "must be an object {\"lo\": [x,y,z], \"hi\": [x,y,z]}");
+        LpsBox box{vec3(b.value("lo", json()), where + ".lo"), vec3(b.value("hi", json()), where + ".hi")};
+        for (int i = 0; i < 3; ++i)
+            if (!(box.lo[i] < box.hi[i])) fail(where, "lo must be below hi on every axis");
+        return box;
+    }
+
+    // A cut made on the surface (PartStep): {"within": box, "keep_at": [x,y,z], "scissors": {...}}.
+    PartStep step(const json& o, const std::string& where) const {
+        if (!o.is_object()) fail(where, "must be an object");
+        PartStep st;
+        if (const json* b = member(o, "within"); b && !b->is_null()) st.within = box(*b, where + ".within");
+        if (const json* a = member(o, "keep_at"); a && !a->is_null()) st.keep_at = vec3(*a, where + ".keep_at");
+        if (const json* c = member(o, "scissors"); c && !c->is_null()) st.outline = scissors(*c, where + ".scissors");
+        if (!st.within && !st.keep_at && !st.outline) fail(where, "has none of within, keep_at and scissors");
+        return st;
+    }
+
+    ViewOutline scissors(const json& c, const std::string& where) const {
+        if (!c.is_object()) fail(where, "must be an object");
+        ViewOutline v;
+        const json& pts = require(c, "outline_pixels", where + ".outline_pixels");
+        if (!pts.is_array() || pts.size() < 3) fail(where + ".outline_pixels", "must be an array of 3 or more [x, y]");
+        for (const json& q : pts) {
+            if (!q.is_array() || q.size() != 2) fail(where + ".outline_pixels", "each point must be [x, y]");
+            v.outline.push_back({number(q[0], where + ".outline_pixels"), number(q[1], where + ".outline_pixels")});
+        }
+        const json& m = require(c, "view_projection", where + ".view_projection");
+        if (!m.is_array() || m.size() != 16) fail(where + ".view_projection", "must be 16 numbers (column-major)");
+        for (int k = 0; k < 16; ++k)
+            v.view_projection[k / 4][k % 4] = number(m[std::size_t(k)], where + ".view_projection");
+        v.eye = vec3(require(c, "eye", where + ".eye"), where + ".eye");
+        const json& size = require(c, "image_size", where + ".image_size");
+        if (!size.is_array() || size.size() != 2 || !size[0].is_number_integer() || !size[1].is_number_integer() ||
+            size[0].get<long long>() < 1 || size[1].get<long long>() < 1 || size[0].get<long long>() > 1 << 16 ||
+            size[1].get<long long>() > 1 << 16)
+            fail(where + ".image_size", "must be [width, height], whole numbers from 1 to 65536");
+        v.width = int(size[0].get<long long>());
+        v.height = int(size[1].get<long long>());
+        const std::string keep = string(c, "keep", where + ".keep", true);
+        if (keep != "inside" && keep != "outside") fail(where + ".keep", "must be \"inside\" or \"outside\"");
+        v.keep_inside = keep == "inside";
+        return v;
+    }
+
+    GrownFrom grown(const json& g, const std::string& where) const {
+        if (!g.is_object()) fail(where, "must be an object");
+        GrownFrom out;
+        out.seed = vec3(require(g, "seed", where + ".seed"), where + ".seed");
+        const json& r = require(g, "range", where + ".range");
+        if (!r.is_array() || r.size() != 2) fail(where + ".range", "must be [lo, hi]");
+        out.options.lo = number(r[0], where + ".range");
+        out.options.hi = number(r[1], where + ".range");
+        if (!(out.options.lo <= out.options.hi)) fail(where + ".range", "lo must not be above hi");
+        if (const json* b = member(g, "within"); b && !b->is_null()) out.options.within = box(*b, where + ".within");
+        return out;
     }
 
     SliceViewsState slice_views(const json& sv) const {
@@ -358,6 +438,7 @@ Session capture_session(const Scene& scene, const std::string& input, const std:
         ss.opacity = info.opacity;
         ss.visible = info.visible;
         ss.post = info.post;
+        ss.grown = info.grown;
         s.surfaces.push_back(std::move(ss));
     }
     s.camera = camera;
@@ -400,8 +481,15 @@ ordered_json session_json(const Session& s, const std::string& session_path) {
             o["keep_largest"] = ss.post.keep_largest;
         }
         if (ss.post.keep_at) o["keep_at"] = vec_json(*ss.post.keep_at);
-        if (ss.post.keep_within)
-            o["keep_within"] = {{"lo", vec_json(ss.post.keep_within->lo)}, {"hi", vec_json(ss.post.keep_within->hi)}};
+        if (ss.post.keep_within) o["keep_within"] = box_json(*ss.post.keep_within);
+        if (!ss.post.steps.empty()) {
+            o["steps"] = ordered_json::array();
+            for (const PartStep& st : ss.post.steps) o["steps"].push_back(step_json(st));
+        }
+        if (const auto& g = ss.grown)
+            o["grown"] = {{"seed", vec_json(g->seed)},
+                          {"range", {g->options.lo, g->options.hi}},
+                          {"within", g->options.within ? box_json(*g->options.within) : ordered_json(nullptr)}};
         j["surfaces"].push_back(o);
     }
     if (s.camera)
@@ -499,6 +587,29 @@ bool same_state(const Session& a, const Session& b) {
     return ja == jb;
 }
 
+namespace {
+
+// What a mesh surface keeps of its parent (a mesh has no smoothing of its own).
+PostProcessOptions part_only(const PostProcessOptions& post) {
+    PostProcessOptions part;
+    part.keep_at = post.keep_at;
+    part.keep_within = post.keep_within;
+    part.steps = post.steps;
+    return part;
+}
+
+// A grown region grown again from its seed, then cut as it was.
+SurfaceId add_grown(Scene& scene, const SessionSurface& ss, const std::string& input, const std::string& where,
+                    const ProgressFn& progress) {
+    if (!scene.has_volume()) throw Error(input, where + ": a grown region, but the input is not a volume");
+    GrownPlan g = plan_grown(scene, ss.grown->seed, ss.grown->options, progress);
+    SurfaceInfo info = grown_info(scene, g.grown);
+    info.post = part_only(ss.post);
+    return scene.add_mesh(needs_postprocess(info.post) ? postprocess(g.mesh, info.post) : std::move(g.mesh), info);
+}
+
+} // namespace
+
 OpenedSession open_session(const Session& s, const ProgressFn& progress) {
     OpenedSession o;
     o.session = s;
@@ -523,14 +634,13 @@ OpenedSession open_session(const Session& s, const ProgressFn& progress) {
             "surface " + std::to_string(i + 1) + (ss.name.empty() ? std::string() : " ('" + ss.name + "')");
         const ProgressFn p = part(0.3 + 0.7 * double(i) / double(n), 0.3 + 0.7 * double(i + 1) / double(n));
         std::vector<SurfaceId> ids;
-        if (ss.kind == SurfaceInfo::Kind::Mesh && (ss.post.keep_at || ss.post.keep_within) && !meshes.empty()) {
-            // A component (or a part within a box) isolated from the mesh input: made again from it.
+        if (ss.grown) {
+            ids = {add_grown(scene, ss, s.input, where, p)};
+        } else if (ss.kind == SurfaceInfo::Kind::Mesh && keeps_a_part(ss.post) && !meshes.empty()) {
+            // A part (a component, within a box, cut) of the mesh input: made again from it.
             SurfaceInfo info = scene.info(meshes.front());
             info.post = ss.post;
-            PostProcessOptions part;
-            part.keep_at = ss.post.keep_at;
-            part.keep_within = ss.post.keep_within;
-            ids = {scene.add_mesh(postprocess(scene.mesh(meshes.front()), part), info)};
+            ids = {scene.add_mesh(postprocess(scene.mesh(meshes.front()), part_only(ss.post)), info)};
         } else if (ss.kind == SurfaceInfo::Kind::Mesh) {
             if (next_mesh >= meshes.size())
                 throw Error(s.input, where + ": a mesh surface, but the input is not a mesh file");

@@ -40,8 +40,11 @@ struct SessionSurface {
     std::string color = "#e6e6e6"; // sRGB, as colour pickers give it
     float opacity = 1.0f;
     bool visible = true;
-    // What the surface was extracted with (iso and label surfaces).
+    // What the surface was extracted with (iso and label surfaces), and the
+    // part kept of it (an isolated component, a part within a box, the cuts).
     PostProcessOptions post;
+    // A grown region: grown again from its seed, then `post` applied.
+    std::optional<GrownFrom> grown;
 };
 
 // The desktop app's arrangement of its views (View > Layout), named as 3D

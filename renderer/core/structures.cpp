@@ -98,8 +98,13 @@ ComponentPlan plan_component(const Scene& scene, SurfaceId surface, const glm::d
     plan.mesh = component_mesh(parent, near.triangle_component, near.component);
     // Recorded with the surface's post-processing, so that a session (or a
     // moved iso value) makes the same component again from the volume.
+    // A part cut by steps already (Scissors): this isolation is one more step after them.
     plan.info = info;
-    plan.info.post.keep_at = near.nearest.point;
+    const bool after_steps = !info.post.steps.empty();
+    if (after_steps)
+        plan.info.post.steps.push_back(PartStep{within, near.nearest.point, std::nullopt});
+    else
+        plan.info.post.keep_at = near.nearest.point;
     plan.info.name = info.name + " component " + std::to_string(plan.component + 1);
     if (within) {
         plan.mesh = clip_to_box(plan.mesh, *within);
@@ -107,11 +112,11 @@ ComponentPlan plan_component(const Scene& scene, SurfaceId surface, const glm::d
         if (!plan.mesh.empty()) plan.mesh = component_at(plan.mesh, at);
         if (plan.mesh.empty())
             throw Error("isolate within a box", plan.info.name + " of " + info.name + " has no part within the box");
-        plan.info.post.keep_within = within;
+        if (!after_steps) plan.info.post.keep_within = within;
         plan.info.name += " within box";
     }
     std::size_t isolated = 0;
-    for (const SurfaceId id : scene.surfaces()) isolated += scene.info(id).post.keep_at.has_value();
+    for (const SurfaceId id : scene.surfaces()) isolated += kept_at(scene.info(id).post).has_value();
     // As a session stores it (8-bit sRGB), so that the colour on screen is the one saved.
     plan.info.color = linear_from_hex(hex_from_linear(component_color(isolated)));
     plan.info.opacity = 1.0f;
@@ -125,30 +130,24 @@ ComponentPlan plan_scissors(const Scene& scene, SurfaceId surface, const Scissor
     if (r.width <= 0 || r.height <= 0) throw Error("scissors", "the view has no size");
     const double aspect = double(r.width) / double(r.height);
     const glm::dmat4 clip = r.camera.projection(aspect) * r.camera.view();
-    // The view's maps, as the overlay projects and the pick casts rays (image pixels from the top-left).
-    OutlineSweep sweep;
-    sweep.project = [clip, &r](const glm::dvec3& p) -> std::optional<glm::dvec2> {
-        const glm::dvec4 c = clip * glm::dvec4(p, 1.0);
-        if (!(c.w > 0)) return std::nullopt;
-        return glm::dvec2((c.x / c.w + 1) * 0.5 * r.width, (1 - c.y / c.w) * 0.5 * r.height);
-    };
-    sweep.ray = [&r](const glm::dvec2& q) {
-        const Ray ray = r.camera.pixel_ray(q.x, q.y, r.width, r.height);
-        return std::make_pair(ray.origin, glm::normalize(ray.dir));
-    };
+    // The view as the overlay projects and the pick casts rays (image pixels from the top-left).
+    const ViewOutline view{r.outline, clip, r.camera.eye, r.width, r.height, r.keep_inside};
     const SurfaceInfo& info = scene.info(surface);
     ComponentPlan plan;
     plan.from = surface;
-    plan.mesh = scissors_cut(parent, r.outline, sweep, r.keep_inside).part;
+    plan.mesh = scissors_cut(parent, view).part;
     if (plan.mesh.empty())
         throw Error("scissors",
                     "nothing of " + info.name + " is " + (r.keep_inside ? "inside" : "outside") + " the outline");
     std::size_t cuts = 0, made = 0;
     for (const SurfaceId id : scene.surfaces()) {
         cuts += scene.info(id).name.find(" scissors ") != std::string::npos;
-        made += scene.info(id).post.keep_at.has_value() || scene.info(id).kind == SurfaceInfo::Kind::Mesh;
+        made += kept_at(scene.info(id).post).has_value() || scene.info(id).kind == SurfaceInfo::Kind::Mesh;
     }
-    plan.info.kind = SurfaceInfo::Kind::Mesh;
+    // The parent's making with this cut after it: a session, or a moved
+    // iso value, makes the same part again.
+    plan.info = info;
+    plan.info.post.steps.push_back(PartStep{std::nullopt, std::nullopt, view});
     plan.info.name = info.name + " scissors " + std::to_string(cuts + 1);
     plan.info.color = linear_from_hex(hex_from_linear(component_color(made + 5)));
     plan.info.opacity = 1.0f;
@@ -208,20 +207,21 @@ GrownPlan plan_grown(const Scene& scene, const glm::dvec3& seed, const GrowOptio
     return plan;
 }
 
-SurfaceInfo grown_info(const Scene& scene) {
+SurfaceInfo grown_info(const Scene& scene, const GrownStructure& g) {
     std::size_t grown = 0;
     for (const SurfaceId id : scene.surfaces()) grown += scene.info(id).name.rfind("grown ", 0) == 0;
     SurfaceInfo info;
     info.kind = SurfaceInfo::Kind::Mesh;
     info.name = "grown " + std::to_string(grown + 1);
     info.color = linear_from_hex(hex_from_linear(component_color(grown + 3)));
+    info.grown = GrownFrom{g.seed, g.options};
     return info;
 }
 
 GrownStructure grow_structure(Scene& scene, const glm::dvec3& seed, const GrowOptions& options,
                               const ProgressFn& progress) {
     GrownPlan plan = plan_grown(scene, seed, options, progress);
-    plan.grown.surface = scene.add_mesh(std::move(plan.mesh), grown_info(scene));
+    plan.grown.surface = scene.add_mesh(std::move(plan.mesh), grown_info(scene, plan.grown));
     return std::move(plan.grown);
 }
 
@@ -361,7 +361,8 @@ nlohmann::json component_json(const Scene& scene, const IsolatedComponent& c) {
     j["component"] = c.component + 1;
     j["of_components"] = c.components;
     const auto& post = scene.info(c.surface).post;
-    j["at"] = post.keep_at ? vec(*post.keep_at) : nlohmann::json(nullptr);
+    const auto at = kept_at(post);
+    j["at"] = at ? vec(*at) : nlohmann::json(nullptr);
     // Where it is and how large across (surface/shape.hpp).
     add_shape(j, scene.mesh(c.surface), c.measured.measures.closed);
     if (post.keep_within) {

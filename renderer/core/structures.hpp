@@ -126,14 +126,15 @@ GrownStructure grow_structure(Scene& scene, const glm::dvec3& seed, const GrowOp
 // grow_structure in two steps, for a caller that works off its GUI thread:
 // plan_grown only reads the scene's volume and does the work (the region,
 // its surface, the measures); grown_info names the surface as the scene
-// stands when it is added ("grown <n>", its colour).
+// stands when it is added ("grown <n>", its colour) and records how it was
+// grown (SurfaceInfo::grown: a session grows it again).
 struct GrownPlan {
     GrownStructure grown; // surface 0 until added
     Mesh mesh;
 };
 GrownPlan plan_grown(const Scene& scene, const glm::dvec3& seed, const GrowOptions& options,
                      const ProgressFn& progress = {});
-SurfaceInfo grown_info(const Scene& scene);
+SurfaceInfo grown_info(const Scene& scene, const GrownStructure& g);
 nlohmann::json grown_json(const Scene& scene, const GrownStructure& g);
 
 // Structures as a label map on the volume's grid (3D Slicer loads it as a

@@ -264,14 +264,14 @@ void Workspace::select(std::optional<std::size_t> index) {
 
 // ---- surfaces -----------------------------------------------------------------------
 
-SurfaceId Workspace::add_isosurface(Mesh m, double iso, const PostProcessOptions& post,
+SurfaceId Workspace::add_isosurface(PreparedMesh m, double iso, const PostProcessOptions& post,
                                     std::optional<glm::vec3> color) {
     const SurfaceId id = scene_->add_isosurface(std::move(m), iso, post, color);
     notify(Parts(Part::Surfaces));
     return id;
 }
 
-SurfaceId Workspace::add_mesh(Mesh m, SurfaceInfo info) {
+SurfaceId Workspace::add_mesh(PreparedMesh m, SurfaceInfo info) {
     const SurfaceId id = scene_->add_mesh(std::move(m), std::move(info));
     notify(Parts(Part::Surfaces));
     return id;
@@ -292,7 +292,7 @@ void Workspace::set_surface_info(SurfaceId id, const SurfaceInfo& info) {
     notify(Parts(Part::Surfaces));
 }
 
-void Workspace::replace_surface(SurfaceId id, Mesh m, double value, const PostProcessOptions& post) {
+void Workspace::replace_surface(SurfaceId id, PreparedMesh m, double value, const PostProcessOptions& post) {
     scene_->replace_surface(id, std::move(m), value, post);
     notify(Parts(Part::Surfaces));
 }
@@ -304,13 +304,14 @@ void Workspace::remove_surface(SurfaceId id) {
 
 std::optional<SurfaceId> Workspace::existing_component(const ComponentPlan& plan) const {
     // A single isolated component isolated again (within the same box, or none) is itself.
-    if (scene_->has_surface(plan.from) && plan.components == 1 && scene_->info(plan.from).post.keep_at &&
-        scene_->info(plan.from).post.keep_within == plan.info.post.keep_within)
+    if (scene_->has_surface(plan.from) && plan.components == 1 && kept_at(scene_->info(plan.from).post) &&
+        scene_->info(plan.from).post.keep_within == plan.info.post.keep_within &&
+        (plan.info.post.steps.empty() || !plan.info.post.steps.back().within))
         return plan.from;
     for (const SurfaceId id : scene_->surfaces()) {
         if (id == plan.from) continue;
         const SurfaceInfo& info = scene_->info(id);
-        if (!info.post.keep_at || info.kind != plan.info.kind || info.value != plan.info.value) continue;
+        if (!kept_at(info.post) || info.kind != plan.info.kind || info.value != plan.info.value) continue;
         const Mesh& m = scene_->mesh(id);
         if (m.positions == plan.mesh.positions && m.triangles == plan.mesh.triangles) return id;
     }

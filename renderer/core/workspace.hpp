@@ -179,13 +179,13 @@ public:
     void select(std::optional<std::size_t> index);
 
     // Surfaces: what Scene does, notified.
-    SurfaceId add_isosurface(Mesh m, double iso, const PostProcessOptions& post = {},
+    SurfaceId add_isosurface(PreparedMesh m, double iso, const PostProcessOptions& post = {},
                              std::optional<glm::vec3> color = std::nullopt);
-    SurfaceId add_mesh(Mesh m, SurfaceInfo info);
+    SurfaceId add_mesh(PreparedMesh m, SurfaceInfo info);
     // Colour, opacity, visibility, name, pickable (kind, value, source and
     // post-processing are the mesh's: replace_surface).
     void set_surface_info(SurfaceId id, const SurfaceInfo& info);
-    void replace_surface(SurfaceId id, Mesh m, double value, const PostProcessOptions& post);
+    void replace_surface(SurfaceId id, PreparedMesh m, double value, const PostProcessOptions& post);
     void remove_surface(SurfaceId id);
     // A planned component (plan_component, done off the GUI thread) as a
     // surface of its own, its parent hidden (3D Slicer's "keep selected

@@ -22,6 +22,14 @@ namespace iso {
 struct GrowOptions {
     double lo = 0, hi = 0;        // the values grown through, inclusive
     std::optional<LpsBox> within; // voxel centres outside are never grown into
+    bool operator==(const GrowOptions&) const = default;
+};
+
+// How a grown region was made (kept with its surface: a session grows it again).
+struct GrownFrom {
+    glm::dvec3 seed{0.0}; // LPS mm
+    GrowOptions options;
+    bool operator==(const GrownFrom&) const = default;
 };
 
 struct GrownRegion {

@@ -23,7 +23,31 @@
 namespace iso {
 
 bool needs_postprocess(const PostProcessOptions& o) {
-    return o.smooth > 0.0 || o.decimate > 0.0 || o.keep_largest || o.keep_at.has_value() || o.keep_within.has_value();
+    return o.smooth > 0.0 || o.decimate > 0.0 || o.keep_largest || o.keep_at.has_value() || o.keep_within.has_value() ||
+           !o.steps.empty();
+}
+
+bool keeps_a_part(const PostProcessOptions& o) {
+    return o.keep_largest || o.keep_at.has_value() || o.keep_within.has_value() || !o.steps.empty();
+}
+
+std::optional<glm::dvec3> kept_at(const PostProcessOptions& o) {
+    for (auto s = o.steps.rbegin(); s != o.steps.rend(); ++s)
+        if (s->keep_at) return s->keep_at;
+    return o.keep_at;
+}
+
+Mesh apply_steps(const Mesh& m, const std::vector<PartStep>& steps) {
+    for (const PartStep& s : steps)
+        if (s.keep_at && !(std::isfinite(s.keep_at->x) && std::isfinite(s.keep_at->y) && std::isfinite(s.keep_at->z)))
+            throw Error("component point", "the point is not finite");
+    Mesh out = m;
+    for (const PartStep& s : steps) {
+        if (s.within && !out.empty()) out = clip_to_box(out, *s.within);
+        if (s.keep_at && !out.empty()) out = component_at(out, *s.keep_at);
+        if (s.outline) out = scissors_cut(out, *s.outline).part; // checks the outline, empty or not
+    }
+    return out;
 }
 
 Mesh component_at(const Mesh& m, const glm::dvec3& at) {
@@ -32,7 +56,10 @@ Mesh component_at(const Mesh& m, const glm::dvec3& at) {
     return component_mesh(m, c.triangle_component, c.component);
 }
 
-Mesh postprocess(const Mesh& in, const PostProcessOptions& o, const ProgressFn& progress) {
+namespace {
+
+// Everything but the steps.
+Mesh postprocess_body(const Mesh& in, const PostProcessOptions& o, const ProgressFn& progress) {
     if (!(o.smooth >= 0.0 && o.smooth <= 1.0)) throw Error("smoothing factor", "must be between 0 and 1");
     if (!(o.decimate >= 0.0 && o.decimate < 1.0)) throw Error("decimation fraction", "must be at least 0 and below 1");
     if (o.keep_at && !(std::isfinite(o.keep_at->x) && std::isfinite(o.keep_at->y) && std::isfinite(o.keep_at->z)))
@@ -118,6 +145,22 @@ Mesh postprocess(const Mesh& in, const PostProcessOptions& o, const ProgressFn& 
     n->ComputeCellNormalsOff();
     n->Update();
     Mesh out = from_polydata(n->GetOutput(), "postprocess");
+    report(progress, 1.0, "done", "postprocess");
+    return out;
+}
+
+} // namespace
+
+Mesh postprocess(const Mesh& in, const PostProcessOptions& o, const ProgressFn& progress) {
+    if (o.steps.empty()) return postprocess_body(in, o, progress);
+    PostProcessOptions rest = o;
+    rest.steps.clear();
+    const ProgressFn first =
+        progress ? ProgressFn([&progress](double f, std::string_view stage) { return progress(0.8 * f, stage); })
+                 : ProgressFn();
+    const Mesh body = postprocess_body(in, rest, first);
+    report(progress, 0.8, "cutting the part", "postprocess");
+    Mesh out = apply_steps(body, o.steps);
     report(progress, 1.0, "done", "postprocess");
     return out;
 }

@@ -6,6 +6,7 @@
 #include <string>
 
 #include <glm/geometric.hpp>
+#include <glm/matrix.hpp>
 #include <vtkCellArray.h>
 #include <vtkCleanPolyData.h>
 #include <vtkNew.h>
@@ -337,6 +338,33 @@ ScissorsCut scissors_cut(const Mesh& m, const std::vector<glm::dvec2>& outline, 
     out.part = from_polydata(n->GetOutput(), "scissors");
     close_t_junctions(out.part, tol);
     return out;
+}
+
+OutlineSweep outline_sweep(const ViewOutline& v) {
+    if (v.width <= 0 || v.height <= 0) throw Error("scissors", "the view has no size");
+    if (!(std::abs(glm::determinant(v.view_projection)) > 0)) throw Error("scissors", "the view's matrix is singular");
+    const glm::dmat4 clip = v.view_projection, inv = glm::inverse(clip);
+    const double w = v.width, h = v.height;
+    OutlineSweep sweep;
+    sweep.project = [clip, w, h](const glm::dvec3& p) -> std::optional<glm::dvec2> {
+        const glm::dvec4 c = clip * glm::dvec4(p, 1.0);
+        if (!(c.w > 0)) return std::nullopt;
+        return glm::dvec2((c.x / c.w + 1) * 0.5 * w, (1 - c.y / c.w) * 0.5 * h);
+    };
+    sweep.ray = [inv, eye = v.eye, w, h](const glm::dvec2& q) {
+        const double nx = q.x / w * 2.0 - 1.0, ny = 1.0 - q.y / h * 2.0;
+        const auto unproject = [&](double z) {
+            const glm::dvec4 p = inv * glm::dvec4(nx, ny, z, 1.0);
+            return glm::dvec3(p) / p.w;
+        };
+        // Reversed Z: depth 1 at the near plane, 0.5 on the way to the far one.
+        return std::make_pair(eye, glm::normalize(unproject(0.5) - unproject(1.0)));
+    };
+    return sweep;
+}
+
+ScissorsCut scissors_cut(const Mesh& m, const ViewOutline& v) {
+    return scissors_cut(m, v.outline, outline_sweep(v), v.keep_inside);
 }
 
 } // namespace iso

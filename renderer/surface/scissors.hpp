@@ -26,6 +26,7 @@
 #include <utility>
 #include <vector>
 
+#include <glm/mat4x4.hpp>
 #include <glm/vec2.hpp>
 #include <glm/vec3.hpp>
 
@@ -55,6 +56,26 @@ struct ScissorsCut {
 // outside) a surface reaching behind the eye.
 ScissorsCut scissors_cut(const Mesh& m, const std::vector<glm::dvec2>& outline, const OutlineSweep& sweep,
                          bool keep_inside);
+
+// An outline drawn on a perspective view, kept with the part it cut so that
+// a session or a moved iso value makes the part again: the outline (image
+// pixels from the top-left, closed), the view (its projection x view
+// matrix, reversed Z as Camera makes it; the eye; the image size) and the
+// side kept.
+struct ViewOutline {
+    std::vector<glm::dvec2> outline;
+    glm::dmat4 view_projection{1.0};
+    glm::dvec3 eye{0.0};
+    int width = 0, height = 0;
+    bool keep_inside = true;
+    bool operator==(const ViewOutline&) const = default;
+};
+// The view's sweep: where a point projects, and the ray from the eye
+// through an image point, as Camera::pixel_ray casts it (the same numbers).
+OutlineSweep outline_sweep(const ViewOutline& v);
+// scissors_cut along that sweep. Throws iso::Error as it does, and for a
+// view without size or with a singular matrix.
+ScissorsCut scissors_cut(const Mesh& m, const ViewOutline& v);
 
 // ---- the outline's geometry (tested on its own) ----------------------------------
 

@@ -16,6 +16,7 @@
 #include "io/error.hpp"
 #include "io/markups.hpp"
 #include "renderer/core/session.hpp"
+#include "renderer/core/slices.hpp"
 #include "renderer/surface/analysis.hpp"
 #include "renderer/surface/box_clip.hpp"
 #include "renderer/surface/grow.hpp"
@@ -686,4 +687,99 @@ TEST(Structures, ASeedOnTheSurfaceIsFoundJustInside) {
     o.hi = hi;
     EXPECT_GT(grow_region(v, *seed, o).voxels, 0u);
     EXPECT_FALSE(seed_within(v, on + glm::dvec3(1.5, 0, 0), {1, 0, 0}, kBallIso, hi).has_value());
+}
+
+// Every part a user makes is kept with how it was made (PostProcessOptions
+// steps, SurfaceInfo::grown), so a session makes the same parts again: a
+// scissors cut of the isosurface, the big ball isolated from that cut (a
+// step after the cut), a region grown from a seed and a scissors cut of
+// that region. Each comes back with the same triangles and volume; the cut
+// follows a moved iso value (made again from the new surface).
+TEST(Structures, CutsAndGrownRegionsComeBackFromASessionAndFollowTheIsoValue) {
+    TempDir dir;
+    const std::string volume = phantom_file(dir, dumbbell, "dumbbell.nrrd"), path = dir / "s.json";
+    core::Scene scene;
+    scene.open(volume);
+    const SurfaceId all = scene.add_isosurfaces({kBallIso}).front();
+    core::ScissorsRequest r;
+    r.width = 320;
+    r.height = 240;
+    r.camera = scene.camera(PatientView::Anterior, double(r.width) / r.height);
+    r.outline = {{-5, -5}, {170.3, -5}, {150.1, 245}, {-5, 245}}; // a slanted cut through the tube
+    const auto cut = core::add_component(scene, core::plan_scissors(scene, all, r));
+    ASSERT_EQ(scene.info(cut.surface).post.steps.size(), 1u);
+    EXPECT_EQ(scene.info(cut.surface).kind, SurfaceInfo::Kind::Iso); // it has the parent's iso value
+    const auto ball = core::isolate_component(scene, cut.surface, kBig);
+    ASSERT_EQ(scene.info(ball.surface).post.steps.size(), 2u); // the isolation is a step after the cut
+    EXPECT_FALSE(scene.info(ball.surface).post.keep_at.has_value());
+    GrowOptions o;
+    o.lo = kBallIso;
+    o.hi = scene.value_range().max;
+    const auto grown = core::grow_structure(scene, kBig, o);
+    ASSERT_TRUE(scene.info(grown.surface).grown.has_value());
+    EXPECT_EQ(scene.info(grown.surface).grown->seed, kBig);
+    r.keep_inside = false;
+    const auto grown_cut = core::add_component(scene, core::plan_scissors(scene, grown.surface, r));
+    EXPECT_TRUE(scene.info(grown_cut.surface).grown.has_value());
+
+    core::save_session(core::capture_session(scene, volume, "", std::nullopt, std::nullopt, FrameLook{}, {}), path);
+    const auto again = core::open_session(path);
+    const auto ids = scene.surfaces();
+    ASSERT_EQ(again.surfaces.size(), ids.size());
+    for (std::size_t i = 0; i < ids.size(); ++i) {
+        SCOPED_TRACE(scene.info(ids[i]).name);
+        const SurfaceInfo& was = scene.info(ids[i]);
+        const SurfaceInfo& is = again.scene->info(again.surfaces[i]);
+        EXPECT_EQ(is.name, was.name);
+        EXPECT_EQ(is.post, was.post);
+        EXPECT_EQ(is.grown, was.grown);
+        const Mesh& a = scene.mesh(ids[i]);
+        const Mesh& b = again.scene->mesh(again.surfaces[i]);
+        EXPECT_EQ(b.triangles.size(), a.triangles.size());
+        const double va = measure_surface(a).volume_ml;
+        EXPECT_NEAR(measure_surface(b).volume_ml, va, 1e-9 * std::abs(va));
+        EXPECT_TRUE(measure_surface(b).closed);
+    }
+    // A moved iso value: the same cut of the new surface, part of it and closed.
+    const double iso2 = kBallIso + 0.25 * (scene.value_range().max - kBallIso);
+    const Mesh whole2 = scene.extract_isosurface(iso2);
+    const Mesh cut2 = scene.extract_isosurface(iso2, {}, scene.info(cut.surface).post);
+    const SurfaceMeasures w2 = measure_surface(whole2), c2 = measure_surface(cut2);
+    EXPECT_TRUE(c2.closed);
+    EXPECT_GT(c2.volume_ml, 0.3 * w2.volume_ml);
+    EXPECT_LT(c2.volume_ml, 0.95 * w2.volume_ml);
+    EXPECT_NE(c2.volume_ml, measure_surface(scene.mesh(cut.surface)).volume_ml);
+    // A session whose cut is damaged says where.
+    nlohmann::json j = nlohmann::json::parse(read_file(path));
+    j["surfaces"][1]["steps"][0]["scissors"]["keep"] = "both";
+    write_file(path, j.dump());
+    try {
+        core::load_session(path);
+        FAIL() << "a bad keep was read";
+    } catch (const Error& e) {
+        EXPECT_NE(std::string(e.what()).find("surfaces[1].steps[0].scissors.keep"), std::string::npos) << e.what();
+    }
+}
+
+// What the scene keeps beside a mesh, worked out on a worker
+// (prepare_mesh), is what it works out itself; an undone removal takes back
+// the index it had, not a new one.
+TEST(Structures, APreparedMeshHasTheScenesBoundsAndOutlineIndex) {
+    core::Scene scene;
+    two_balls(scene);
+    Mesh m = scene.extract_isosurface(kBallIso);
+    const core::PreparedMesh p = core::prepare_mesh(m);
+    const SurfaceId plain = scene.add_mesh(std::move(m), SurfaceInfo{});
+    const SurfaceId prepared = scene.add_mesh(p, SurfaceInfo{});
+    EXPECT_EQ(scene.outline_index(prepared), p.outline);
+    const auto ip = scene.outline_index(plain);
+    EXPECT_EQ(ip->lo, p.outline->lo);
+    EXPECT_EQ(ip->hi, p.outline->hi);
+    EXPECT_EQ(p.bounds->min, scene.bounds().min);
+    EXPECT_EQ(p.bounds->max, scene.bounds().max);
+    const auto mesh = scene.shared_mesh(prepared);
+    const SurfaceInfo info = scene.info(prepared);
+    scene.remove_surface(prepared);
+    scene.set_surface(prepared, mesh, info);
+    EXPECT_EQ(scene.outline_index(prepared), p.outline);
 }
