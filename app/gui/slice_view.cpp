@@ -1,11 +1,15 @@
 #include "app/gui/slice_view.hpp"
 
+#include <QApplication>
 #include <QFont>
 #include <QKeyEvent>
+#include <QPointer>
+#include <QThreadPool>
 #include <QMouseEvent>
 #include <QPainter>
 #include <QWheelEvent>
 
+#include <algorithm>
 #include <cmath>
 #include <utility>
 #include <iostream>
@@ -111,6 +115,9 @@ std::size_t SliceView::outline_segments() const {
 void SliceView::refresh() {
     image_ = QImage();
     outlines_.clear();
+    outline_image_ = QImage();
+    ++outline_generation_; // outlines asked for before are for another slice
+    pending_outlines_.reset();
     const core::SlicePlane* plane = this->plane();
     if (!plane || width() < 1 || height() < 1) {
         update();
@@ -132,12 +139,7 @@ void SliceView::refresh() {
         core::reslice(scene.volume(), grid_, core::Interp::Linear, values_);
         grey_ = core::apply_window(values_, window_, core::PixelFormat::Grey8);
         image_ = QImage(grey_.data(), values_.width, values_.height, values_.width, QImage::Format_Grayscale8).copy();
-        for (auto id : scene.surfaces()) {
-            const auto& info = scene.info(id);
-            if (!info.visible) continue;
-            outlines_.push_back(
-                {core::mesh_outline(scene.mesh(id), grid_, *scene.outline_index(id)), to_qcolor(info.color)});
-        }
+        request_outlines();
     } catch (const std::exception& e) {
         // Nothing escapes into Qt's event loop.
         std::cerr << "isoscope gui: " << core::slice_orientation_name(orientation_) << " view: " << e.what() << "\n";
@@ -146,6 +148,100 @@ void SliceView::refresh() {
     update_probe(); // the slice under the pointer moved
     update();
     if (on_refresh) on_refresh(*this);
+}
+
+// What an outline job reads: shared, never changed in place.
+struct SliceView::OutlineJob {
+    struct Surface {
+        std::shared_ptr<const Mesh> mesh;
+        std::shared_ptr<const core::OutlineIndex> index;
+        QColor color;
+    };
+    core::SliceGrid grid;
+    std::vector<Surface> surfaces;
+    std::uint64_t generation = 0;
+    std::vector<Outline> run() const {
+        std::vector<Outline> out;
+        for (const auto& s : surfaces) out.push_back({core::mesh_outline(*s.mesh, grid, *s.index), s.color});
+        return out;
+    }
+};
+
+namespace {
+// The outlines as the view paints them (antialiased, 1.5 px).
+void paint_outlines(QPainter& p, const std::vector<SliceView::Outline>& outlines) {
+    p.setRenderHint(QPainter::Antialiasing);
+    std::vector<QLineF> lines;
+    for (const auto& o : outlines) {
+        p.setPen(QPen(o.color, 1.5));
+        lines.clear();
+        lines.reserve(o.segments.size());
+        for (const auto& s : o.segments) lines.emplace_back(s.a.x, s.a.y, s.b.x, s.b.y);
+        p.drawLines(lines.data(), int(lines.size()));
+    }
+}
+
+// Painted once into an image of the view's size (a slice through a
+// 30 M-triangle surface has 10^5 segments: 90 ms of antialiased strokes,
+// which the pool thread pays instead of every paint of the GUI thread).
+QImage outline_image(const std::vector<SliceView::Outline>& outlines, int width, int height) {
+    QImage image(std::max(1, width), std::max(1, height), QImage::Format_ARGB32_Premultiplied);
+    image.fill(Qt::transparent);
+    QPainter p(&image);
+    paint_outlines(p, outlines);
+    return image;
+}
+} // namespace
+
+void SliceView::request_outlines() {
+    const core::Scene& scene = workspace_->scene();
+    auto job = std::make_shared<OutlineJob>();
+    job->grid = grid_;
+    job->generation = ++outline_generation_;
+    std::size_t triangles = 0;
+    for (auto id : scene.surfaces()) {
+        const auto& info = scene.info(id);
+        if (!info.visible) continue;
+        job->surfaces.push_back({scene.shared_mesh(id), scene.outline_index(id), to_qcolor(info.color)});
+        triangles += scene.mesh(id).triangles.size();
+    }
+    pending_outlines_.reset();
+    if (triangles <= kInlineTriangles) {
+        outlines_ = job->run();
+        return;
+    }
+    pending_outlines_ = std::move(job);
+    start_outlines();
+}
+
+void SliceView::start_outlines() {
+    if (outlining_ || !pending_outlines_) return;
+    outlining_ = true;
+    std::shared_ptr<const OutlineJob> job = std::move(pending_outlines_);
+    QThreadPool::globalInstance()->start([job, self = QPointer<SliceView>(this)] {
+        auto out = std::make_shared<std::vector<Outline>>();
+        auto image = std::make_shared<QImage>();
+        try {
+            *out = job->run();
+            *image = outline_image(*out, job->grid.width, job->grid.height);
+        } catch (const std::exception& e) {
+            std::cerr << "isoscope gui: slice outlines: " << e.what() << "\n";
+        }
+        // Back on the GUI thread (the application outlives the view; the view may not).
+        QMetaObject::invokeMethod(
+            qApp,
+            [self, job, out, image] {
+                if (!self) return;
+                self->outlining_ = false;
+                if (job->generation == self->outline_generation_) {
+                    self->outlines_ = std::move(*out);
+                    self->outline_image_ = std::move(*image);
+                    self->update();
+                }
+                self->start_outlines();
+            },
+            Qt::QueuedConnection);
+    });
 }
 
 void SliceView::fit() {
@@ -182,11 +278,11 @@ void SliceView::paintEvent(QPaintEvent*) {
     p.fillRect(rect(), Qt::black);
     if (image_.isNull()) return;
     p.drawImage(0, 0, image_);
-    p.setRenderHint(QPainter::Antialiasing);
-    for (const auto& o : outlines_) {
-        p.setPen(QPen(o.color, 1.5));
-        for (const auto& s : o.segments) p.drawLine(QPointF(s.a.x, s.a.y), QPointF(s.b.x, s.b.y));
-    }
+    if (!outline_image_.isNull())
+        p.drawImage(0, 0, outline_image_);
+    else
+        paint_outlines(p, outlines_);
+    p.setRenderHint(QPainter::Antialiasing);        // the crosshair, the text and the overlays too
     const core::SlicePlane& plane = *this->plane(); // an image: a plane
     const auto c = core::lps_to_pixel(grid_, plane.origin).pixel;
     p.setPen(QPen(QColor(255, 200, 0, 160), 1.0, Qt::DashLine));

@@ -10,7 +10,10 @@
 #pragma once
 
 #include <array>
+#include <cstddef>
+#include <cstdint>
 #include <functional>
+#include <memory>
 #include <optional>
 #include <vector>
 
@@ -42,8 +45,14 @@ public:
     // this view's plane of its planes, and its window/level (null: nothing).
     // The view follows the workspace's changes from then on.
     void set_workspace(core::Workspace* workspace);
-    // Recomputes the image and outlines from the plane (the workspace's changes call it).
+    // Recomputes the image and outlines from the plane (the workspace's
+    // changes call it). Above kInlineTriangles in the visible surfaces the
+    // outlines are worked out on a pool thread and painted when they come
+    // (outlines_waiting()): the GUI thread never scans a 30 M-triangle
+    // surface per slice step.
     void refresh();
+    static constexpr std::size_t kInlineTriangles = 2'000'000;
+    bool outlines_waiting() const { return outlining_ || pending_outlines_; }
     // Keeps the plane's framing (centre and pixel size) as it is, through
     // resizes too, as after a pan or zoom (a session restored it); until
     // then, and again with new data, a resize fits the plane's field of
@@ -97,6 +106,12 @@ public:
     // After each refresh (the plane may have moved: a slider follows).
     std::function<void(SliceView&)> on_refresh;
 
+    // A surface's outline on the slice, in its colour.
+    struct Outline {
+        std::vector<core::SliceSegment> segments;
+        QColor color;
+    };
+
 protected:
     void paintEvent(QPaintEvent*) override;
     void resizeEvent(QResizeEvent*) override;
@@ -109,10 +124,14 @@ protected:
     void leaveEvent(QEvent* e) override;
 
 private:
-    struct Outline {
-        std::vector<core::SliceSegment> segments;
-        QColor color;
-    };
+    struct OutlineJob;
+    // The visible surfaces' outlines on the current grid: now, or (large
+    // surfaces) on a pool thread, one at a time, the newest request next.
+    void request_outlines();
+    void start_outlines();
+    std::shared_ptr<OutlineJob> pending_outlines_;
+    bool outlining_ = false;
+    std::uint64_t outline_generation_ = 0;
     // The plane changed by the view's own gesture: into the workspace.
     void set_plane(const core::SlicePlane& p);
     void set_window(const core::WindowLevel& w);
@@ -128,7 +147,8 @@ private:
     std::vector<std::uint8_t> grey_;
     QImage image_;
     std::vector<Outline> outlines_;
-    double wheel_ = 0; // accumulated angle delta (touchpads send fractions of a notch)
+    QImage outline_image_; // outlines_ painted by the pool thread (large surfaces), else null
+    double wheel_ = 0;     // accumulated angle delta (touchpads send fractions of a notch)
     // A drag (3D Slicer's slice view): left window/level, middle pan, right
     // zoom (core::pan_pixels, core::zoom_about on the plane's framing).
     PointerDrag drag_;

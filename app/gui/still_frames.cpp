@@ -3,6 +3,7 @@
 #include <QMetaObject>
 #include <QObject>
 
+#include <algorithm>
 #include <chrono>
 #ifdef __linux__
 #include <sys/resource.h>
@@ -18,6 +19,28 @@ namespace {
 std::int64_t now_ns() {
     return std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::steady_clock::now().time_since_epoch())
         .count();
+}
+
+// A surface this large is not drawn whole while its levels of detail are
+// being built: its frames wait for them (on llvmpipe, 32 M triangles take
+// 20-30 s to draw whole the first time, their levels 9 s to build, and a
+// frame of the levels a second). Picks are drawn meanwhile (they use every
+// triangle anyway). A build that has not given levels after kLevelsWaitNs
+// (it failed: out of memory) is no longer waited for.
+constexpr std::size_t kWaitForLevels = 4'000'000;
+constexpr std::int64_t kLevelsWaitNs = 120'000'000'000;
+
+// Whether a visible surface of `r` is waiting for its levels (their build started here if not yet).
+bool levels_on_their_way(const StillRequest& r) {
+    if (!r.opt.look.lod.enabled) return false;
+    bool waiting = false;
+    const std::size_t large = std::max(kWaitForLevels, r.opt.look.lod.min_triangles);
+    for (const auto& s : r.scene.surfaces)
+        if (s.lod && s.mesh && s.object.visible && s.mesh->triangles.size() >= large && !s.lod->get()) {
+            s.lod->build_in_background();
+            waiting = true;
+        }
+    return waiting;
 }
 } // namespace
 
@@ -103,7 +126,8 @@ void StillFrames::run() {
     } catch (const std::exception& e) {
         failed = std::string("the still-frame thread has no GL context: ") + e.what();
     }
-    std::uint64_t drawing = 0; // the request the frames are accumulating for
+    std::uint64_t drawing = 0;      // the request the frames are accumulating for
+    std::int64_t waiting_since = 0; // since when frames wait for levels of detail (0: they do not)
     int frames_left = 0;
     std::unique_lock lock(mutex_);
     while (wait_for_work(lock)) {
@@ -112,6 +136,15 @@ void StillFrames::run() {
             continue;
         }
         StillRequest r = *pending_; // shares the meshes, annotations and AO image
+        if (failed.empty() && levels_on_their_way(r)) {
+            if (waiting_since == 0) waiting_since = now_ns();
+            if (now_ns() - waiting_since < kLevelsWaitNs) {
+                wake_.wait_for(lock, std::chrono::milliseconds(100)); // picks, a stop or new requests come first
+                continue;
+            }
+        } else {
+            waiting_since = 0;
+        }
         lock.unlock();
         StillFrame f;
         if (!failed.empty()) {

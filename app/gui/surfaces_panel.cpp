@@ -53,7 +53,7 @@ struct SurfacesPanel::Worker {
     int drag = 0;          // the slider drag it was asked in (0: none): its edit merges with the drag's others
     const char* what = ""; // "Change iso value of"
     std::atomic<bool> cancel{false};
-    Mesh mesh;
+    core::PreparedMesh mesh; // with its bounds and outline index, worked out here too
     std::exception_ptr error;
 };
 
@@ -322,13 +322,16 @@ void SurfacesPanel::add_surface(double iso, const PostProcessOptions& post) {
         context_.error("Cannot add the surface", QString("Cannot add the isosurface at %1").arg(iso), why);
         return;
     }
-    // The worker only reads the volume; the mesh joins the scene on the GUI thread.
-    auto mesh = std::make_shared<Mesh>();
+    // The worker only reads the volume, and works out what the scene keeps
+    // beside the mesh (bounds, outline index); the mesh joins the scene on the GUI thread.
+    auto mesh = std::make_shared<core::PreparedMesh>();
     const core::Scene* s = &ws.scene();
     const unsigned generation = generation_;
     context_.jobs.run(
         QString("Extracting the isosurface at %1").arg(iso), false,
-        [s, iso, post, mesh](const ProgressFn& progress) { *mesh = s->extract_isosurface(iso, {}, post, progress); },
+        [s, iso, post, mesh](const ProgressFn& progress) {
+            *mesh = core::prepare_mesh(s->extract_isosurface(iso, {}, post, progress));
+        },
         [this, s, iso, post, mesh, generation](std::exception_ptr e) {
             if (e) {
                 context_.error("Surface extraction failed", QString("Cannot extract the isosurface at %1").arg(iso), e);
@@ -336,7 +339,7 @@ void SurfacesPanel::add_surface(double iso, const PostProcessOptions& post) {
             }
             core::Workspace& ws = context_.workspace;
             if (s != &ws.scene() || generation != generation_) return; // another scene meanwhile
-            const std::size_t triangles = mesh->triangles.size();
+            const std::size_t triangles = mesh->mesh->triangles.size();
             context_.edit(QString("Add iso %1").arg(iso), core::Parts(core::Part::Surfaces),
                           [&] { ws.add_isosurface(std::move(*mesh), iso, post); });
             context_.status(QString("Added the isosurface at %1: %2 triangles").arg(iso).arg(triangles));
@@ -629,8 +632,8 @@ void SurfacesPanel::start(Row& r) {
     // the views keep drawing the scene meanwhile.
     w->thread = QThread::create([raw, s] {
         try {
-            raw->mesh = s->extract_isosurface(raw->iso, {}, raw->post,
-                                              [raw](double, std::string_view) { return !raw->cancel.load(); });
+            raw->mesh = core::prepare_mesh(s->extract_isosurface(
+                raw->iso, {}, raw->post, [raw](double, std::string_view) { return !raw->cancel.load(); }));
         } catch (...) {
             raw->error = std::current_exception();
         }

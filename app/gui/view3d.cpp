@@ -2,6 +2,8 @@
 
 #include <QLabel>
 
+#include <utility>
+
 #include "app/gui/app_context.hpp"
 #include "app/gui/crop_box.hpp"
 #include "app/gui/viewer.hpp"
@@ -22,6 +24,7 @@ View3D::View3D(AppContext& context, QWidget* parent) : QStackedWidget(parent), c
     addWidget(hint_);
     setMinimumSize(320, 240);
     observer_ = context_.workspace.observe([this](core::Parts p) { watched(p); });
+    make_spare();
     show_or_hint();
 }
 
@@ -31,15 +34,35 @@ View3D::~View3D() {
 }
 
 void View3D::drop_viewer() {
-    if (!viewer_) return;
-    removeWidget(viewer_);
-    delete viewer_; // releases its GL objects through the scene it drew
-    viewer_ = nullptr;
+    for (Viewer** v : {&viewer_, &spare_}) {
+        if (!*v) continue;
+        removeWidget(*v);
+        delete *v; // releases its GL objects through the scene it drew
+        *v = nullptr;
+    }
+}
+
+// A viewer of the workspace's scene made before anything is drawn (at
+// start, and when new data comes) and kept behind the hint: the first
+// OpenGL widget of a window switches the window to OpenGL composition
+// (150-180 ms on llvmpipe, loading the GL libraries), which the user would
+// otherwise feel when the first surface appears (a 32 M-triangle surface's
+// extraction ended in a 300 ms stall, gui_massive_bench).
+void View3D::make_spare() {
+    if (spare_ || viewer_) return;
+    ViewerOptions o;
+    o.look = context_.workspace.look();
+    spare_ = new Viewer(context_.workspace, PatientView::Anterior, o);
+    spare_->setObjectName("viewer");
+    addWidget(spare_);
 }
 
 void View3D::watched(core::Parts parts) {
     // The viewer's GL objects belong to the old scene, alive until the observers heard.
-    if (core::has(parts, core::Part::Data)) drop_viewer();
+    if (core::has(parts, core::Part::Data)) {
+        drop_viewer();
+        make_spare();
+    }
     if (parts & (core::Part::Data | core::Part::Surfaces | core::Part::Look)) show_or_hint();
     if (!viewer_) return;
     if (parts & (core::Part::Look | core::Part::Data)) apply_look();
@@ -71,18 +94,14 @@ void View3D::show_or_hint() {
         return;
     }
     if (!viewer_) {
-        ViewerOptions o;
-        o.look = w.look();
-        o.look.volume.enabled = volume_shown;
-        viewer_ = new Viewer(context_.workspace, PatientView::Anterior, o);
-        viewer_->setObjectName("viewer");
+        make_spare();
+        viewer_ = std::exchange(spare_, nullptr); // its look: apply_look below
         if (w.camera()) viewer_->set_camera(*w.camera());
         viewer_->on_options_changed = [this](Viewer& v) { // the O key: AO on or off
             FrameLook look = context_.workspace.look();
             look.ao = v.options().look.ao;
             context_.workspace.set_look(look);
         };
-        addWidget(viewer_);
         for (const auto& f : viewer_made) f(*viewer_);
         update_guides();
     }

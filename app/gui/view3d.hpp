@@ -39,9 +39,11 @@ private:
     void apply_look();
     void update_guides();
     void drop_viewer();
+    void make_spare();
     AppContext& context_;
     QLabel* hint_ = nullptr;
     Viewer* viewer_ = nullptr;
+    Viewer* spare_ = nullptr; // made ahead, behind the hint: the next viewer_
     int observer_ = 0;
 };
 

@@ -24,7 +24,9 @@
 // its loop: "input <= 150 ms" is the largest lateness in each phase.
 //
 //   xvfb-run -a -s '-screen 0 1600x1200x24' build/tests/bench/gui_massive_bench VOLUME [--iso 300.5]
-//       [--csv docs/gui_massive.csv]
+//       [--csv docs/gui_massive.csv] [--phases N]
+//
+// --phases N: stop after the first N phases (to profile one; no CSV written).
 //
 // VOLUME: the 1024^3 phantom (`scale_bench --sizes 1024 --generate-only`),
 // or any volume. Prints a markdown table; writes the CSV (one row per phase).
@@ -117,16 +119,19 @@ std::vector<QPointF> surface_pixels(gui::Viewer& v) {
 int main(int argc, char** argv) {
     std::string input, csv = std::string(ISOSCOPE_SOURCE_DIR) + "/docs/gui_massive.csv";
     double iso = 300.5;
+    std::size_t stop_after = 99;
     for (int i = 1; i < argc; ++i) {
         const std::string a = argv[i];
         if (a == "--iso" && i + 1 < argc)
             iso = std::atof(argv[++i]);
+        else if (a == "--phases" && i + 1 < argc)
+            stop_after = std::size_t(std::atoi(argv[++i]));
         else if (a == "--csv" && i + 1 < argc)
             csv = argv[++i];
         else if (a[0] != '-' && input.empty())
             input = a;
         else {
-            std::printf("usage: gui_massive_bench VOLUME [--iso V] [--csv FILE]  (under xvfb-run)\n");
+            std::printf("usage: gui_massive_bench VOLUME [--iso V] [--csv FILE] [--phases N]  (under xvfb-run)\n");
             return a == "--help" ? 0 : 2;
         }
     }
@@ -184,6 +189,10 @@ int main(int argc, char** argv) {
         return (now_ms() - t0) / 1000;
     }));
     if (!ok) return fail("the extraction did not finish");
+    if (phases.size() >= stop_after) {
+        wait_ms(2000); // apart from the teardown, for a profile
+        return 0;
+    }
     gui::Viewer* v = w.viewer();
 
     phases.push_back(phase("first picture, then converged", [&](std::string& res) {
