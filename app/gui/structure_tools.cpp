@@ -13,6 +13,7 @@
 #include <QLineF>
 #include <QPolygonF>
 #include <QRectF>
+#include <QSignalBlocker>
 #include <QHeaderView>
 #include <QMainWindow>
 #include <QTableWidget>
@@ -22,6 +23,7 @@
 #include "app/gui/app_context.hpp"
 #include "app/gui/column_fit.hpp"
 #include "app/gui/jobs.hpp"
+#include "app/gui/slice_view.hpp"
 #include "app/gui/viewer.hpp"
 #include "renderer/core/pick.hpp"
 #include "renderer/core/structures.hpp"
@@ -45,10 +47,11 @@ QString point_text(const glm::dvec3& p) {
     return "(" + number(p.x, 1) + ", " + number(p.y, 1) + ", " + number(p.z, 1) + ")";
 }
 
-// A row of the table: a structure's measurement and shape; a grown
-// region's volume is its voxels' (`region`), with the partial-volume uncertainty.
-void add_row(QTableWidget* t, const core::SurfaceMeasurement& m, const ShapeMeasures& shape,
-             const GrownRegion* region) {
+// A row of the table: a structure's visibility (the box), colour and name,
+// its measurement and shape; a grown region's volume is its voxels'
+// (`region`), with the partial-volume uncertainty.
+void add_row(QTableWidget* t, const core::SurfaceInfo& info, const core::SurfaceMeasurement& m,
+             const ShapeMeasures& shape, const GrownRegion* region) {
     const SurfaceMeasures& s = m.measures;
     const int row = t->rowCount();
     t->insertRow(row);
@@ -59,6 +62,12 @@ void add_row(QTableWidget* t, const core::SurfaceMeasurement& m, const ShapeMeas
         t->setItem(row, col, item);
     };
     cell(StructureTools::Name, QString::fromStdString(m.name));
+    QTableWidgetItem* name = t->item(row, StructureTools::Name);
+    name->setFlags(name->flags() | Qt::ItemIsUserCheckable);
+    name->setCheckState(info.visible ? Qt::Checked : Qt::Unchecked);
+    name->setData(Qt::DecorationRole, to_qcolor(info.color));
+    name->setData(Qt::UserRole, m.surface);
+    name->setToolTip(name->text() + ": tick to show, untick to hide (3D view and slice outlines)");
     cell(StructureTools::Area, with_uncertainty(s.area_mm2, s.area_uncertainty_mm2, 1, QString::fromUtf8("mm\u00b2")));
     // Never a negative volume: the wall of a cavity says what it encloses (encloses_cavity).
     const QString at_least = s.volume_kind == VolumeKind::LowerBound ? QString::fromUtf8("\u2265 ") : QString();
@@ -140,6 +149,17 @@ StructureTools::StructureTools(AppContext& context) : QObject(&context.window), 
     table_->verticalHeader()->hide();
     table_->setSelectionBehavior(QAbstractItemView::SelectRows);
     table_->setMinimumHeight(5 * table_->fontMetrics().height()); // a few rows visible, not one
+    // The Structure cell's box shows or hides it (3D Slicer's segment list's eye), one undo step.
+    QObject::connect(table_, &QTableWidget::itemChanged, this, [this](QTableWidgetItem* item) {
+        core::Workspace& w = context_.workspace;
+        const core::SurfaceId id = item->data(Qt::UserRole).toUInt();
+        if (item->column() != Name || !w.scene().has_surface(id)) return;
+        core::SurfaceInfo info = w.scene().info(id);
+        info.visible = item->checkState() == Qt::Checked;
+        if (info.visible == w.scene().info(id).visible) return;
+        context_.edit(QString(info.visible ? "Show " : "Hide ") + QString::fromStdString(info.name),
+                      core::Parts(core::Part::Surfaces), [&] { w.set_surface_info(id, info); });
+    });
     // One tool at a time across the window: another one taken turns these off.
     context.tool_changed.push_back([this](AppContext::Tool t) {
         if (t != AppContext::Tool::Isolate && t != AppContext::Tool::Distance && t != AppContext::Tool::Grow &&
@@ -423,7 +443,6 @@ void StructureTools::cut(std::uint32_t id, core::ScissorsRequest req) {
                 w.set_surface_info(id, parent);
             });
             if (!made) return;
-            scissored_[made] = w.scene().shared_mesh(made);
             const SurfaceMeasures& m = plan->measures;
             // An open part's volume is a lower bound, as the table says it.
             const QString at_least = m.volume_kind == VolumeKind::LowerBound ? QString::fromUtf8("\u2265 ") : QString();
@@ -458,7 +477,7 @@ void StructureTools::grow(const glm::dvec3& seed) {
             }
             // Another volume meanwhile: the region is of what was.
             if (scene != &w.scene() || !w.scene().has_volume() || &w.scene().volume() != volume) return;
-            const core::SurfaceInfo info = core::grown_info(w.scene());
+            const core::SurfaceInfo info = core::grown_info(w.scene(), plan->grown);
             core::SurfaceId id = 0;
             context_.edit("Grow " + QString::fromStdString(info.name), core::Parts(core::Part::Surfaces),
                           [&] { id = w.add_mesh(std::move(plan->mesh), info); });
@@ -475,24 +494,32 @@ void StructureTools::grow(const glm::dvec3& seed) {
         });
 }
 
-// The rows: the workspace's isolated components (surfaces made by Isolate,
-// or a session's) and grown regions, each measured once per mesh (off the
-// GUI thread).
+// The rows: the workspace's parts (isolated components, parts cut by a box
+// or the scissors, grown regions: made here or by a session), each measured
+// once per mesh off the GUI thread; a grown region as it was grown by its
+// voxels (its region grown again when it came from a session).
 void StructureTools::update_table() {
     const core::Scene& scene = context_.workspace.scene();
     std::vector<core::SurfaceId> ids, unmeasured;
+    const auto whole_region = [&](core::SurfaceId id) {
+        const auto& info = scene.info(id);
+        return info.grown && !keeps_a_part(info.post);
+    };
     const auto grown = [&](core::SurfaceId id) -> const GrownRegion* {
         const auto it = grown_regions_.find(id);
-        return it != grown_regions_.end() && it->second.first == scene.shared_mesh(id) ? &it->second.second : nullptr;
+        return whole_region(id) && it != grown_regions_.end() && it->second.first == scene.shared_mesh(id)
+                   ? &it->second.second
+                   : nullptr;
     };
     for (const auto id : scene.surfaces()) {
-        const auto cut = scissored_.find(id);
-        const bool scissored = cut != scissored_.end() && cut->second == scene.shared_mesh(id);
-        if (!scene.info(id).post.keep_at && !grown(id) && !scissored) continue;
+        const auto& info = scene.info(id);
+        if (!kept_at(info.post) && !info.post.keep_within && info.post.steps.empty() && !info.grown) continue;
         ids.push_back(id);
         const auto it = measured_.find(id);
-        if (it == measured_.end() || it->second.mesh != scene.shared_mesh(id)) unmeasured.push_back(id);
+        if (it == measured_.end() || it->second.mesh != scene.shared_mesh(id) || (whole_region(id) && !grown(id)))
+            unmeasured.push_back(id);
     }
+    const QSignalBlocker filling(table_); // rows made are no edits
     table_->setRowCount(0);
     struct Refit {
         ColumnFit* f;
@@ -502,25 +529,43 @@ void StructureTools::update_table() {
         if (const auto it = measured_.find(id); it != measured_.end() && it->second.mesh == scene.shared_mesh(id)) {
             core::SurfaceMeasurement m = it->second.m;
             m.name = scene.info(id).name;
-            add_row(table_, m, it->second.shape, grown(id));
+            m.surface = id;
+            add_row(table_, scene.info(id), m, it->second.shape, grown(id));
         }
     if (unmeasured.empty() || measuring_ || context_.busy()) return;
     measuring_ = true;
     auto out = std::make_shared<std::vector<Measured>>();
-    std::vector<std::shared_ptr<const Mesh>> meshes;
-    for (const auto id : unmeasured) meshes.push_back(scene.shared_mesh(id));
+    struct Job {
+        std::shared_ptr<const Mesh> mesh;
+        std::optional<GrownFrom> regrow; // a whole grown region not measured by its voxels yet
+    };
+    std::vector<Job> jobs;
+    for (const auto id : unmeasured)
+        jobs.push_back({scene.shared_mesh(id), whole_region(id) && !grown(id) ? scene.info(id).grown : std::nullopt});
     const core::Scene* s = &scene;
     context_.jobs.run(
         "Measuring the structures", false,
-        [s, unmeasured, out, meshes](const ProgressFn&) {
+        [s, unmeasured, out, jobs](const ProgressFn&) {
             const auto measured = core::measure_surfaces(*s, unmeasured);
-            for (std::size_t i = 0; i < measured.size(); ++i)
-                out->push_back({meshes[i], measured[i], measure_shape(*meshes[i], measured[i].measures.closed)});
+            for (std::size_t i = 0; i < measured.size(); ++i) {
+                Measured m{jobs[i].mesh, measured[i], measure_shape(*jobs[i].mesh, measured[i].measures.closed), {}};
+                if (const auto& g = jobs[i].regrow) {
+                    m.region = grow_region(s->volume(), g->seed, g->options);
+                    m.region->mask = iso::Volume{}; // the count is what is kept, not the voxels
+                }
+                out->push_back(std::move(m));
+            }
         },
         [this, s, out, unmeasured](std::exception_ptr e) {
             measuring_ = false;
             if (e || s != &context_.workspace.scene()) return;
-            for (std::size_t i = 0; i < out->size(); ++i) measured_[unmeasured[i]] = (*out)[i];
+            for (std::size_t i = 0; i < out->size(); ++i) {
+                Measured& m = (*out)[i];
+                if (m.region)
+                    grown_regions_.insert_or_assign(unmeasured[i], std::make_pair(m.mesh, std::move(*m.region)));
+                m.region.reset();
+                measured_[unmeasured[i]] = std::move(m);
+            }
             update_table();
         });
 }

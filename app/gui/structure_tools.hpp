@@ -10,10 +10,12 @@
 // joined to it whose values lie within the tool bar's range, within the
 // crop box when it is on, become a closed surface of their own, "grown
 // <n>": 3D Slicer's Grow from seeds / threshold flood fill, one undo step).
-// The workspace's isolated components and grown regions are listed with
-// their area, volume (mL, with the uncertainty; a grown region's by its
-// voxels), closed or open, largest diameter, centroid and bounds in the
-// Measurements dock. Presentation only: the work is the core's (core::plan_component,
+// The workspace's parts (isolated components, parts cut by a box or the
+// Scissors, grown regions; made here or by a session, which keeps how each
+// was made) are listed in the Measurements dock as 3D Slicer lists
+// segments: a box that shows or hides each (one undo step), its colour and
+// name, then its area, volume (mL, with the uncertainty; a grown region's
+// by its voxels), closed or open, largest diameter, centroid and bounds. Presentation only: the work is the core's (core::plan_component,
 // core::Workspace::isolate, core::surface_gap), off the GUI thread.
 #pragma once
 
@@ -121,18 +123,18 @@ private:
     };
     std::optional<First> first_; // the Distance tool's first click
     int distances_ = 0, isolations_ = 0, grown_ = 0, cuts_ = 0;
-    // Surfaces Scissors made, with their mesh (listed while it is theirs).
-    std::map<std::uint32_t, std::shared_ptr<const Mesh>> scissored_;
     void update_grow_range();
     // Each listed surface's measurement and shape, with the mesh it was made of.
     struct Measured {
         std::shared_ptr<const Mesh> mesh;
         core::SurfaceMeasurement m;
         ShapeMeasures shape;
+        std::optional<GrownRegion> region; // a grown region grown again (a session's), on its way to grown_regions_
     };
     std::map<std::uint32_t, Measured> measured_;
-    // Grown regions: their voxel measurement (the count, with the
-    // partial-volume uncertainty), by surface, with the mesh they made.
+    // Grown regions (SurfaceInfo::grown, not cut since): their voxel
+    // measurement (the count, with the partial-volume uncertainty), by
+    // surface, with the mesh they made.
     std::map<std::uint32_t, std::pair<std::shared_ptr<const Mesh>, GrownRegion>> grown_regions_;
     const iso::Volume* grow_range_for_ = nullptr; // the volume the range was set for
     bool measuring_ = false;

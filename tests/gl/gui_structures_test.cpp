@@ -9,6 +9,7 @@
 #include <filesystem>
 
 #include <QAction>
+#include <QColor>
 #include <QScrollBar>
 #include <QStatusBar>
 #include <QTableWidget>
@@ -17,6 +18,7 @@
 
 #include "app/gui/files.hpp"
 #include "app/gui/measurements_panel.hpp"
+#include "app/gui/slice_view.hpp"
 #include "app/gui/structure_tools.hpp"
 #include "gui_measure_util.hpp"
 #include "renderer/core/measure.hpp"
@@ -358,6 +360,46 @@ TEST_F(GuiStructures, ScissorsCutTheSurfaceAsTheCoreDoes) {
     QTableWidget* table = tools->table();
     ASSERT_TRUE(QTest::qWaitFor([&] { return table->rowCount() == 1 && !w.busy(); }, 600000));
     EXPECT_EQ(table->item(0, gui::StructureTools::Name)->text().toStdString(), name);
+
+    // The list as Slicer's segment list: its colour, and a box that hides and shows it (one undo step each).
+    QTableWidgetItem* row = table->item(0, gui::StructureTools::Name);
+    EXPECT_EQ(row->checkState(), Qt::Checked);
+    EXPECT_EQ(row->data(Qt::DecorationRole).value<QColor>(), gui::to_qcolor(w.scene().info(made).color));
+    row->setCheckState(Qt::Unchecked);
+    EXPECT_FALSE(w.scene().info(made).visible);
+    EXPECT_EQ(w.undo_stack()->undoText().toStdString(), "Hide " + name);
+    w.undo_stack()->undo();
+    EXPECT_TRUE(w.scene().info(made).visible);
+    // The list follows (rebuilt when the event loop runs next).
+    EXPECT_TRUE(QTest::qWaitFor(
+        [&] {
+            return table->rowCount() == 1 && table->item(0, gui::StructureTools::Name)->checkState() == Qt::Checked;
+        },
+        10000));
+
+    // Kept in the session with its outline: a window opened from it cuts the same part again.
+    const std::string session = dir() / "cut.isoscope.json";
+    w.files()->save_session(QString::fromStdString(session));
+    ASSERT_TRUE(QTest::qWaitFor([&] { return !w.busy(); }, 60000));
+    {
+        gui::MainWindow w2;
+        w2.resize(900, 700);
+        w2.show();
+        ASSERT_TRUE(QTest::qWaitForWindowExposed(&w2));
+        w2.open_session(QString::fromStdString(session));
+        ASSERT_TRUE(QTest::qWaitFor([&] { return !w2.busy(); }, 600000));
+        ASSERT_EQ(w2.scene().surfaces().size(), w.scene().surfaces().size())
+            << w2.statusBar()->currentMessage().toStdString();
+        const core::SurfaceId again = w2.scene().surfaces().back();
+        EXPECT_EQ(w2.scene().info(again).name, name);
+        EXPECT_EQ(w2.scene().info(again).post, w.scene().info(made).post);
+        EXPECT_EQ(w2.scene().mesh(again).triangles.size(), expected.mesh.triangles.size());
+        EXPECT_NEAR(measure_surface(w2.scene().mesh(again)).volume_ml, measure_surface(expected.mesh).volume_ml,
+                    1e-9 * std::abs(measure_surface(expected.mesh).volume_ml));
+        QTableWidget* table2 = w2.structure_tools()->table();
+        ASSERT_TRUE(QTest::qWaitFor([&] { return table2->rowCount() == 1 && !w2.busy(); }, 600000));
+        EXPECT_EQ(table2->item(0, gui::StructureTools::Name)->text().toStdString(), name);
+    }
 
     EXPECT_EQ(w.undo_stack()->undoText().toStdString(), "Scissors " + name);
     w.undo_stack()->undo();
