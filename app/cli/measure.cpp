@@ -12,6 +12,7 @@
 #include "io/markups.hpp"
 #include "io/mesh.hpp"
 #include "renderer/core/measure.hpp"
+#include "renderer/core/session.hpp"
 #include "renderer/core/structures.hpp"
 #include "renderer/core/value_unit.hpp"
 
@@ -20,7 +21,7 @@ namespace iso::cli {
 namespace {
 
 struct MeasureArgs {
-    std::string in, series, out, label_map;
+    std::string in, series, out, label_map, session;
     std::vector<double> isos;
     std::vector<std::string> distance, angle, values;
     std::vector<std::string> component_at, surface_distance, within;
@@ -196,6 +197,47 @@ void print_structures(const nlohmann::json& j) {
     }
 }
 
+// The input's scene: a session's (--session: its surfaces and the parts
+// made in it, made again), or INPUT with the --iso surfaces.
+std::unique_ptr<iso::core::Scene> open_scene(const MeasureArgs& a) {
+    if (!a.session.empty()) {
+        if (!a.in.empty())
+            throw iso::Error("--session", "the session names its input: give INPUT or --session, not both");
+        if (!a.isos.empty())
+            throw iso::Error("--session", "the session names its surfaces: --iso is not taken with it");
+        return std::move(iso::core::open_session(a.session, progress_bar()).scene);
+    }
+    if (a.in.empty()) throw iso::Error("isoscope measure", "give INPUT (a volume, DICOM folder or mesh) or --session");
+    auto scene = std::make_unique<iso::core::Scene>();
+    // Values at points, distances, angles and grown regions need no isosurface.
+    const bool without_surfaces = !a.grow_from.empty() || !a.values.empty() || !a.distance.empty() || !a.angle.empty();
+    open_input(*scene, a.in, a.series, a.isos, {}, "measure", without_surfaces);
+    return scene;
+}
+
+// Each surface that is a part (a session's: isolated, cut, grown) gets its
+// making and shape as "part" (core::part_json).
+void add_parts(const iso::core::Scene& scene, const std::vector<iso::core::SurfaceMeasurement>& surfaces,
+               nlohmann::json& j) {
+    for (std::size_t i = 0; i < surfaces.size(); ++i)
+        if (auto part = iso::core::part_json(scene, surfaces[i].surface, surfaces[i].measures.closed); !part.is_null())
+            j["surfaces"][i]["part"] = std::move(part);
+}
+
+void print_part(const nlohmann::json& p) {
+    std::cout << "  part:";
+    for (const auto& step : p["made"]) std::cout << " " << step.begin().key();
+    if (p.contains("grown_from"))
+        std::cout << " grown from (" << std::setprecision(1) << p["grown_from"][0].get<double>() << ", "
+                  << p["grown_from"][1].get<double>() << ", " << p["grown_from"][2].get<double>() << ") through "
+                  << p["grown_range"][0].get<double>() << " to " << p["grown_range"][1].get<double>();
+    std::cout << "; largest diameter " << std::setprecision(1) << p["largest_diameter_mm"].get<double>() << " mm";
+    if (!p["centroid_lps"].is_null())
+        std::cout << ", centroid LPS (" << p["centroid_lps"][0].get<double>() << ", "
+                  << p["centroid_lps"][1].get<double>() << ", " << p["centroid_lps"][2].get<double>() << ")";
+    std::cout << "\n";
+}
+
 int run_measure(const MeasureArgs& a) {
     iso::core::PointMeasurements points;
     for (std::size_t i = 0; i + 1 < a.distance.size(); i += 2)
@@ -217,12 +259,11 @@ int run_measure(const MeasureArgs& a) {
         iso::core::label_map_table(a.label_map, "--label-map");
         iso::check_writable_destination(a.label_map);
     }
-    iso::core::Scene scene;
-    // Values at points, distances, angles and grown regions need no isosurface.
-    const bool without_surfaces = !a.grow_from.empty() || !a.values.empty() || !a.distance.empty() || !a.angle.empty();
-    open_input(scene, a.in, a.series, a.isos, {}, "measure", without_surfaces);
+    std::unique_ptr<iso::core::Scene> owned = open_scene(a);
+    iso::core::Scene& scene = *owned;
     const auto surfaces = iso::core::measure_surfaces(scene);
     auto j = iso::core::measure_json(scene, surfaces, points);
+    add_parts(scene, surfaces, j);
     iso::MarkupsFile markups = iso::core::point_markups(scene, points);
     const auto structures = measure_structures(scene, a, markups);
     j["components"] = structures["components"];
@@ -252,6 +293,7 @@ int run_measure(const MeasureArgs& a) {
                 std::cout << ", open (boundary " << std::setprecision(1) << s["boundary"]["length_mm"].get<double>()
                           << " mm)";
             std::cout << ", " << s["components"].size() << " component(s)\n";
+            if (s.contains("part")) print_part(s["part"]);
             for (const auto& w : s["warnings"]) std::cout << "  note: " << w.get<std::string>() << "\n";
         }
         for (const auto& d : j["distances"])
@@ -289,8 +331,11 @@ RunFn add_measure(CLI::App& cmd, char*) {
     const auto args = std::make_shared<MeasureArgs>();
     MeasureArgs& a = *args;
     CLI::App* c = &cmd;
-    c->add_option("input", a.in, "Volume file, DICOM folder, or mesh (" + iso::mesh_extensions_text() + ")")
-        ->required();
+    c->add_option("input", a.in, "Volume file, DICOM folder, or mesh (" + iso::mesh_extensions_text() + ")");
+    c->add_option("--session", a.session,
+                  "Measure a session's surfaces instead (a desktop app's .json): its isosurfaces and the parts made in "
+                  "it (isolated, cut by a box or the scissors, grown), each part with how it was made, its largest "
+                  "diameter and centroid");
     c->add_option("--iso", a.isos, "Iso value (repeatable) for volume inputs")->allow_extra_args(false);
     c->add_option("--series", a.series, "DICOM series to load: index or SeriesInstanceUID");
     repeatable(c, "--distance", a.distance, "Distance between two points: --distance X,Y,Z X,Y,Z (LPS mm; repeatable)",

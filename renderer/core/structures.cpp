@@ -396,4 +396,30 @@ Markup gap_markup(const SurfaceGap& g) {
     return m;
 }
 
+nlohmann::json part_json(const Scene& scene, SurfaceId id, bool closed) {
+    const SurfaceInfo& info = scene.info(id);
+    const PostProcessOptions& post = info.post;
+    if (!post.keep_at && !post.keep_within && post.steps.empty() && !info.grown) return nullptr;
+    nlohmann::json made = nlohmann::json::array();
+    const auto box = [](const LpsBox& b) { return nlohmann::json{vec(b.lo), vec(b.hi)}; };
+    if (post.keep_at) made.push_back({{"component_at", vec(*post.keep_at)}});
+    if (post.keep_within) made.push_back({{"within_box", box(*post.keep_within)}});
+    for (const PartStep& st : post.steps) {
+        if (st.within) made.push_back({{"within_box", box(*st.within)}});
+        if (st.keep_at) made.push_back({{"component_at", vec(*st.keep_at)}});
+        if (st.outline)
+            made.push_back({{st.outline->keep_inside ? "scissors_inside" : "scissors_outside",
+                             {{"corners", st.outline->outline.size()},
+                              {"image_size", {st.outline->width, st.outline->height}},
+                              {"eye_lps", vec(st.outline->eye)}}}});
+    }
+    nlohmann::json j{{"surface", info.name}, {"made", made}};
+    if (info.grown) {
+        j["grown_from"] = vec(info.grown->seed);
+        j["grown_range"] = {info.grown->options.lo, info.grown->options.hi};
+    }
+    add_shape(j, scene.mesh(id), closed);
+    return j;
+}
+
 } // namespace iso::core

@@ -205,6 +205,15 @@ std::vector<LineCrossing> solid_crossings(const std::vector<SurfaceTree>& trees,
 nlohmann::json gap_json(const SurfaceGap& g);
 nlohmann::json component_json(const Scene& scene, const IsolatedComponent& c);
 
+// A part's making and shape, for `measure --session` (the parts a session
+// holds: made in the desktop app, or by the CLI): how it was made
+// ("made": the steps in order, each "component at", "within box",
+// "scissors inside" or "scissors outside"; "grown_from" and "grown_range"
+// for a grown region), its largest diameter and centroid. Null for a
+// surface that is no part (a whole isosurface, label or mesh). `closed`:
+// the surface is (its measurement says so): its centroid is a solid's.
+nlohmann::json part_json(const Scene& scene, SurfaceId id, bool closed);
+
 // The gap as a 3D Slicer line markup between the two closest points, named
 // "<a> to <b>", its length the distance.
 Markup gap_markup(const SurfaceGap& g);

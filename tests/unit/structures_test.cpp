@@ -749,6 +749,40 @@ TEST(Structures, CutsAndGrownRegionsComeBackFromASessionAndFollowTheIsoValue) {
     EXPECT_GT(c2.volume_ml, 0.3 * w2.volume_ml);
     EXPECT_LT(c2.volume_ml, 0.95 * w2.volume_ml);
     EXPECT_NE(c2.volume_ml, measure_surface(scene.mesh(cut.surface)).volume_ml);
+    // `isoscope measure --session`: the same surfaces and volumes, each part with its making and shape.
+    {
+        const auto r = run_command(cli() + " measure --session " + path + " --json 2>/dev/null");
+        ASSERT_EQ(r.exit_code, 0) << r.out;
+        const auto mj = nlohmann::json::parse(r.out);
+        ASSERT_EQ(mj["surfaces"].size(), ids.size());
+        for (std::size_t i = 0; i < ids.size(); ++i) {
+            const auto& s = mj["surfaces"][i];
+            SCOPED_TRACE(s["surface"].get<std::string>());
+            EXPECT_EQ(s["surface"], scene.info(ids[i]).name);
+            const double v = measure_surface(scene.mesh(ids[i])).volume_ml;
+            EXPECT_NEAR(s["volume_ml"].get<double>(), v, 1e-9 * std::abs(v));
+            EXPECT_EQ(s.contains("part"), i > 0); // the whole isosurface is no part
+        }
+        const auto& ball_part = mj["surfaces"][2]["part"];
+        ASSERT_EQ(ball_part["made"].size(), 2u);
+        EXPECT_TRUE(ball_part["made"][0].contains("scissors_inside"));
+        EXPECT_TRUE(ball_part["made"][1].contains("component_at"));
+        EXPECT_NEAR(ball_part["largest_diameter_mm"].get<double>(),
+                    measure_shape(scene.mesh(ball.surface), true).feret_mm, 1e-9);
+        EXPECT_EQ(mj["surfaces"][3]["part"]["grown_range"][0].get<double>(), o.lo);
+        // Two of the session's parts by name: their exact distance.
+        const auto gap =
+            run_command(cli() + " measure --session " + path + " --surface-distance '" + scene.info(ball.surface).name +
+                        "' '" + scene.info(grown_cut.surface).name + "' --json 2>/dev/null");
+        ASSERT_EQ(gap.exit_code, 0) << gap.out;
+        const auto gj = nlohmann::json::parse(gap.out)["surface_distances"];
+        ASSERT_EQ(gj.size(), 1u);
+        EXPECT_NEAR(gj[0]["distance_mm"].get<double>(),
+                    core::surface_gap(scene, ball.surface, grown_cut.surface).distance.pair.distance_mm, 1e-9);
+        const auto both = run_command(cli() + " measure " + volume + " --session " + path + " 2>&1");
+        EXPECT_NE(both.exit_code, 0);
+        EXPECT_NE(both.out.find("not both"), std::string::npos) << both.out;
+    }
     // A session whose cut is damaged says where.
     nlohmann::json j = nlohmann::json::parse(read_file(path));
     j["surfaces"][1]["steps"][0]["scissors"]["keep"] = "both";
