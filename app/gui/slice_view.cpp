@@ -4,6 +4,7 @@
 #include <QFont>
 #include <QKeyEvent>
 #include <QPointer>
+#include <QThread>
 #include <QThreadPool>
 #include <QMouseEvent>
 #include <QPainter>
@@ -214,11 +215,27 @@ void SliceView::request_outlines() {
     start_outlines();
 }
 
+namespace {
+// The outline jobs' own threads (two, below the GUI thread's priority), not
+// Qt's global pool: the raster engine draws large images with the global
+// pool's threads and waits for them, so a paint waited behind outline jobs.
+QThreadPool* outline_pool() {
+    static QPointer<QThreadPool> pool;
+    if (!pool) {
+        pool = new QThreadPool(qApp); // waited for when the application goes
+        pool->setObjectName("slice_outlines");
+        pool->setMaxThreadCount(2);
+        pool->setThreadPriority(QThread::LowPriority);
+    }
+    return pool;
+}
+} // namespace
+
 void SliceView::start_outlines() {
     if (outlining_ || !pending_outlines_) return;
     outlining_ = true;
     std::shared_ptr<const OutlineJob> job = std::move(pending_outlines_);
-    QThreadPool::globalInstance()->start([job, self = QPointer<SliceView>(this)] {
+    outline_pool()->start([job, self = QPointer<SliceView>(this)] {
         auto out = std::make_shared<std::vector<Outline>>();
         auto image = std::make_shared<QImage>();
         try {
