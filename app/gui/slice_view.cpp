@@ -64,7 +64,10 @@ void SliceView::set_workspace(core::Workspace* workspace) {
                 user_framed_ = true; // framed elsewhere (a session, an undo): resizes keep it
             }
             if (p & (core::Part::Data | core::Part::Window)) set_window(workspace_->window());
-            if (p & (core::Part::Data | core::Part::Slices | core::Part::Surfaces)) refresh();
+            if (p & (core::Part::Data | core::Part::Slices))
+                refresh();
+            else if (core::has(p, core::Part::Surfaces))
+                refresh_outlines(); // the same slice: its image stays
         });
         window_ = workspace_->window();
     }
@@ -111,6 +114,23 @@ std::size_t SliceView::outline_segments() const {
     std::size_t n = 0;
     for (const auto& o : outlines_) n += o.segments.size();
     return n;
+}
+
+void SliceView::refresh_outlines() {
+    if (image_.isNull() || !plane()) {
+        refresh();
+        return;
+    }
+    outlines_.clear();
+    outline_image_ = QImage();
+    ++outline_generation_;
+    pending_outlines_.reset();
+    try {
+        request_outlines();
+    } catch (const std::exception& e) {
+        std::cerr << "isoscope gui: " << core::slice_orientation_name(orientation_) << " view: " << e.what() << "\n";
+    }
+    update();
 }
 
 void SliceView::refresh() {
@@ -207,7 +227,7 @@ void SliceView::request_outlines() {
         triangles += scene.mesh(id).triangles.size();
     }
     pending_outlines_.reset();
-    if (triangles <= kInlineTriangles) {
+    if (triangles <= inline_triangles_) {
         outlines_ = job->run();
         return;
     }

@@ -52,6 +52,10 @@ public:
     // surface per slice step.
     void refresh();
     static constexpr std::size_t kInlineTriangles = 2'000'000;
+    void set_inline_triangles(std::size_t n) { inline_triangles_ = n; } // tests: 0 sends every outline to the pool
+    // The outlines alone, on the slice shown (the surfaces changed, not the
+    // plane, the volume or the window: the image stays).
+    void refresh_outlines();
     bool outlines_waiting() const { return outlining_ || pending_outlines_; }
     // Keeps the plane's framing (centre and pixel size) as it is, through
     // resizes too, as after a pan or zoom (a session restored it); until
@@ -131,6 +135,7 @@ private:
     void start_outlines();
     std::shared_ptr<OutlineJob> pending_outlines_;
     bool outlining_ = false;
+    std::size_t inline_triangles_ = kInlineTriangles;
     std::uint64_t outline_generation_ = 0;
     // The plane changed by the view's own gesture: into the workspace.
     void set_plane(const core::SlicePlane& p);

@@ -138,6 +138,29 @@ TEST(MainWindow, OpenSlicesClickSurfaceAndBrokenFile) {
     w.workspace().set_window(core::default_window(v));
     for (auto o : {core::SliceOrientation::Axial, core::SliceOrientation::Coronal, core::SliceOrientation::Sagittal})
         EXPECT_GT(w.slice_view(o)->outline_segments(), 50u) << core::slice_orientation_name(o) << ": no skin outline";
+    // ---- the same outlines worked out and painted on the pool thread (a massive surface's way)
+    for (auto o : {core::SliceOrientation::Axial, core::SliceOrientation::Coronal, core::SliceOrientation::Sagittal}) {
+        gui::SliceView* sv = w.slice_view(o);
+        const std::size_t segments = sv->outline_segments();
+        const QImage here = sv->grab().toImage().convertToFormat(QImage::Format_RGB32);
+        sv->set_inline_triangles(0);
+        sv->refresh();
+        EXPECT_TRUE(sv->outlines_waiting());
+        ASSERT_TRUE(wait_until([&] { return !sv->outlines_waiting(); }, 30000));
+        EXPECT_EQ(sv->outline_segments(), segments) << core::slice_orientation_name(o);
+        const QImage pooled = sv->grab().toImage().convertToFormat(QImage::Format_RGB32);
+        ASSERT_EQ(pooled.size(), here.size());
+        // Painted into an image and blended, or painted on the view: antialiased edges may differ by rounding.
+        std::size_t differ = 0;
+        for (int y = 0; y < here.height(); ++y)
+            for (int x = 0; x < here.width(); ++x) {
+                const QRgb a = here.pixel(x, y), b = pooled.pixel(x, y);
+                differ += std::abs(qRed(a) - qRed(b)) > 8 || std::abs(qGreen(a) - qGreen(b)) > 8 ||
+                          std::abs(qBlue(a) - qBlue(b)) > 8;
+            }
+        EXPECT_LT(differ, std::size_t(here.width()) * here.height() / 1000) << core::slice_orientation_name(o);
+        sv->set_inline_triangles(gui::SliceView::kInlineTriangles);
+    }
     ASSERT_NE(w.viewer(), nullptr);
     ASSERT_TRUE(wait_until([&] { return w.viewer()->frames() > 0 || !w.viewer()->error().empty(); }, 60000));
     EXPECT_TRUE(w.viewer()->error().empty()) << w.viewer()->error();
