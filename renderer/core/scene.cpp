@@ -265,8 +265,13 @@ SurfaceId Scene::add_isosurface(PreparedMesh m, double iso, const PostProcessOpt
 
 void Scene::replace_surface(SurfaceId id, PreparedMesh m, double value, const PostProcessOptions& post) {
     auto& e = impl_->at(id, "Scene::replace_surface");
-    if (e.info.kind == SurfaceInfo::Kind::Iso && e.info.name == surface_name(false, e.info.value))
+    // The automatic "iso <old>" follows the value, and so does a part's
+    // "iso <old> scissors 1" (its rest is the part's own).
+    const std::string was = surface_name(false, e.info.value);
+    if (e.info.kind == SurfaceInfo::Kind::Iso && e.info.name == was)
         e.info.name = surface_name(false, value);
+    else if (e.info.kind == SurfaceInfo::Kind::Iso && keeps_a_part(e.info.post) && e.info.name.rfind(was + " ", 0) == 0)
+        e.info.name = surface_name(false, value) + e.info.name.substr(was.size());
     e.info.value = value;
     e.info.post = post;
     impl_->set_mesh(e, std::move(m));

@@ -16,6 +16,7 @@
 #include "io/error.hpp"
 #include "io/markups.hpp"
 #include "renderer/core/session.hpp"
+#include "renderer/core/surface_name.hpp"
 #include "renderer/core/slices.hpp"
 #include "renderer/surface/analysis.hpp"
 #include "renderer/surface/box_clip.hpp"
@@ -789,6 +790,11 @@ TEST(Structures, CutsAndGrownRegionsComeBackFromASessionAndFollowTheIsoValue) {
     write_file(path, j.dump());
     const std::string why = error_of([&] { core::load_session(path); });
     EXPECT_NE(why.find("surfaces[1].steps[0].scissors.keep"), std::string::npos) << why;
+    // As the desktop app's slider does it: the part's name follows the value, its own rest stays.
+    const std::string rest = scene.info(cut.surface).name.substr(core::surface_name(false, kBallIso).size());
+    scene.replace_surface(cut.surface, cut2, iso2, scene.info(cut.surface).post);
+    EXPECT_EQ(scene.info(cut.surface).name, core::surface_name(false, iso2) + rest);
+    EXPECT_EQ(rest, " scissors 1");
 }
 
 // What the scene keeps beside a mesh, worked out on a worker
