@@ -116,15 +116,19 @@ std::size_t SliceView::outline_segments() const {
     return n;
 }
 
+void SliceView::drop_outlines() {
+    outlines_.clear();
+    outline_image_ = QImage();
+    ++outline_generation_; // outlines asked for before are for another slice or other surfaces
+    pending_outlines_.reset();
+}
+
 void SliceView::refresh_outlines() {
     if (image_.isNull() || !plane()) {
         refresh();
         return;
     }
-    outlines_.clear();
-    outline_image_ = QImage();
-    ++outline_generation_;
-    pending_outlines_.reset();
+    drop_outlines();
     try {
         request_outlines();
     } catch (const std::exception& e) {
@@ -135,10 +139,7 @@ void SliceView::refresh_outlines() {
 
 void SliceView::refresh() {
     image_ = QImage();
-    outlines_.clear();
-    outline_image_ = QImage();
-    ++outline_generation_; // outlines asked for before are for another slice
-    pending_outlines_.reset();
+    drop_outlines();
     const core::SlicePlane* plane = this->plane();
     if (!plane || width() < 1 || height() < 1) {
         update();

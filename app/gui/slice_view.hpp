@@ -132,6 +132,7 @@ private:
     // The visible surfaces' outlines on the current grid: now, or (large
     // surfaces) on a pool thread, one at a time, the newest request next.
     void request_outlines();
+    void drop_outlines(); // the outlines shown and asked for go
     void start_outlines();
     std::shared_ptr<OutlineJob> pending_outlines_;
     bool outlining_ = false;

@@ -512,8 +512,7 @@ void StructureTools::update_table() {
                    : nullptr;
     };
     for (const auto id : scene.surfaces()) {
-        const auto& info = scene.info(id);
-        if (!kept_at(info.post) && !info.post.keep_within && info.post.steps.empty() && !info.grown) continue;
+        if (!core::is_part(scene.info(id))) continue;
         ids.push_back(id);
         const auto it = measured_.find(id);
         if (it == measured_.end() || it->second.mesh != scene.shared_mesh(id) || (whole_region(id) && !grown(id)))

@@ -396,10 +396,14 @@ Markup gap_markup(const SurfaceGap& g) {
     return m;
 }
 
+bool is_part(const SurfaceInfo& info) {
+    return info.post.keep_at || info.post.keep_within || !info.post.steps.empty() || info.grown;
+}
+
 nlohmann::json part_json(const Scene& scene, SurfaceId id, bool closed) {
     const SurfaceInfo& info = scene.info(id);
     const PostProcessOptions& post = info.post;
-    if (!post.keep_at && !post.keep_within && post.steps.empty() && !info.grown) return nullptr;
+    if (!is_part(info)) return nullptr;
     nlohmann::json made = nlohmann::json::array();
     const auto box = [](const LpsBox& b) { return nlohmann::json{vec(b.lo), vec(b.hi)}; };
     if (post.keep_at) made.push_back({{"component_at", vec(*post.keep_at)}});

@@ -213,6 +213,9 @@ nlohmann::json component_json(const Scene& scene, const IsolatedComponent& c);
 // surface that is no part (a whole isosurface, label or mesh). `closed`:
 // the surface is (its measurement says so): its centroid is a solid's.
 nlohmann::json part_json(const Scene& scene, SurfaceId id, bool closed);
+// The surface is a part: a component kept at a point, a part within a box,
+// cut by steps, or a grown region (what the structures table lists).
+bool is_part(const SurfaceInfo& info);
 
 // The gap as a 3D Slicer line markup between the two closest points, named
 // "<a> to <b>", its length the distance.
