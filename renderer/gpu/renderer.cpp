@@ -135,6 +135,10 @@ void lod_stats(const passes::FrameContext& ctx, LodStats& s) {
             s.triangles_drawn += std::uint64_t(d->count) / 3;
             continue;
         }
+        if (d->lod->proxy_triangles > 0 && !ctx.pick) { // a moving frame's stand-in (lod_draw.hpp)
+            s.triangles_drawn += d->lod->proxy_triangles;
+            continue;
+        }
         std::uint32_t w[passes::kCountWords] = {};
         d->lod->counts.read(0, sizeof w, w);
         const std::uint32_t* c = w + passes::kStatsWord; // lod_cull.comp's C_SELECTED ...

@@ -275,6 +275,7 @@ ClusterLod build_cluster_lod(const Mesh& m, const BuildOptions& o, const Progres
         out.cells.push_back(cells[c].cell);
         out.clusters.insert(out.clusters.end(), per_cell[c].begin(), per_cell[c].end());
     }
+    build_proxies(m, out, o.proxy_triangles);
     out.build_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     return out;
 }

@@ -77,6 +77,25 @@ struct BuildOptions {
     // a step keeps more than `min_reduction` of its input (the locked border
     // is then most of the cell) or at kMaxLevels.
     double level_ratio = 0.25, min_reduction = 0.8;
+    // The stand-ins' grids, sized for about these many triangles each
+    // (ClusterLod::proxies); one is built when under an eighth of the mesh's.
+    std::vector<std::size_t> proxy_triangles{std::size_t(1) << 19, std::size_t(1) << 17, std::size_t(1) << 15};
+};
+
+// A stand-in for the whole surface while the camera moves (a drag's
+// frames), as ParaView draws a vtkQuadricClustering of its surfaces while
+// interacting: the vertices clustered on one grid (moving_proxy.cpp), its
+// triangles a range of ClusterLod::indices (the mesh's own vertices, drawn
+// with one glDrawElements, no culling). `error` (mm) is the simplifier's
+// error of the cells' levels it starts from (each cell's coarsest within
+// half the grid's cell) plus the grid cell's diagonal (a vertex moves to
+// another of its cell). Parts thinner than a
+// grid cell may close up or vanish: it is for motion, never for a still
+// frame, a pick or a measurement.
+struct Proxy {
+    std::uint32_t first_index = 0, index_count = 0;
+    float error = 0.0f; // mm
+    float cell = 0.0f;  // the grid's cell size, mm
 };
 
 struct ClusterLod {
@@ -90,6 +109,9 @@ struct ClusterLod {
     // its coarsest in the levels after it): what a frame draws at one level.
     std::array<std::size_t, kMaxLevels> level_triangles{};
     int max_levels = 1;
+    // Stand-ins while moving, finest first (after every level in `indices`;
+    // BuildOptions::proxy_triangles).
+    std::vector<Proxy> proxies;
     double build_seconds = 0;
     std::size_t memory_bytes() const;
 };
@@ -98,6 +120,19 @@ struct ClusterLod {
 // not copied). Runs on every core (TBB); `progress` gets the cells done.
 // A mesh of fewer than two cells' triangles gets one cell.
 ClusterLod build_cluster_lod(const Mesh& m, const BuildOptions& o = {}, const ProgressFn& progress = {});
+
+// Vertex clustering (moving_proxy.cpp): `tris` with every vertex replaced
+// by the one nearest the centre of its cell of a grid of `cell` mm from
+// `origin` (ties by the lower id), the triangles that collapse dropped and
+// repeats kept once (a triangle and its reverse are two: thin walls keep
+// both sides). Deterministic, parallel.
+std::vector<std::array<std::uint32_t, 3>> cluster_vertices(const std::vector<std::array<std::uint32_t, 3>>& tris,
+                                                           const std::vector<glm::vec3>& positions,
+                                                           const glm::vec3& origin, float cell);
+
+// The stand-ins of `lod` (its cells and levels built from `m`), appended to
+// lod.indices and listed in lod.proxies.
+void build_proxies(const Mesh& m, ClusterLod& lod, const std::vector<std::size_t>& targets);
 
 // The level of `cell` drawn for a view: the coarsest whose error, projected
 // at the cell's nearest point to `eye`, is at most `max_error_px` pixels;

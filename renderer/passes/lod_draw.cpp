@@ -41,6 +41,10 @@ struct CullCall {
     glm::vec2 batch{0.0f, std::numeric_limits<float>::infinity()};
 };
 
+float pixels_per_mm_at_1mm(const FrameContext& ctx) {
+    return float(double(ctx.height) / (2.0 * std::tan(glm::radians(ctx.camera.fov_y_degrees) / 2.0)));
+}
+
 // Runs lod_cull.comp over one surface's clusters.
 void cull(const FrameContext& ctx, GlResources& gl, const GpuLod& lod, const CullCall& c, const CullState* pyramid) {
     const GLuint zero = 0;
@@ -48,7 +52,7 @@ void cull(const FrameContext& ctx, GlResources& gl, const GpuLod& lod, const Cul
     auto& prog = gl.program({"render/lod_cull.comp"});
     prog.use();
     const GLuint p = prog.id();
-    const float px_per_mm = float(double(ctx.height) / (2.0 * std::tan(glm::radians(ctx.camera.fov_y_degrees) / 2.0)));
+    const float px_per_mm = pixels_per_mm_at_1mm(ctx);
     glProgramUniformMatrix4fv(p, prog.uniform("view_projection"), 1, GL_FALSE, &ctx.raster_view_projection[0][0]);
     const glm::vec3 eye(ctx.camera.eye);
     glProgramUniform3fv(p, prog.uniform("eye"), 1, &eye.x);
@@ -138,6 +142,20 @@ float lod_error(const FrameContext& ctx) {
     return float(ctx.opt.moving ? std::max(l.error_px, l.moving_error_px) : l.error_px);
 }
 
+// A moving frame's stand-in for `item` (lod_draw.hpp), or null: the
+// coarsest whose error projects within the frame's bound at the nearest
+// point of the surface's bounds (lod::select_level's rule for a cell).
+const lod::Proxy* proxy_for(const FrameContext& ctx, const DrawItem& item) {
+    if (!ctx.opt.moving || ctx.pick || !item.lod || !ctx.opt.look.lod.enabled) return nullptr;
+    const glm::dvec3 e = ctx.camera.eye;
+    const double d = std::max(glm::length(e - glm::clamp(e, item.bounds.min, item.bounds.max)), ctx.camera.near_plane);
+    const double limit = double(lod_error(ctx)) * d / double(pixels_per_mm_at_1mm(ctx)); // mm
+    const auto& p = item.lod->proxies;
+    for (auto it = p.rbegin(); it != p.rend(); ++it)
+        if (double(it->error) <= limit) return &*it;
+    return nullptr;
+}
+
 bool backface_ok(const FrameContext& ctx, const DrawItem& item) {
     // A closed surface seen from outside its bounds, uncut: what faces away is hidden behind what faces the eye.
     const glm::dvec3 e = ctx.camera.eye;
@@ -220,6 +238,10 @@ void draw_visible(const FrameContext& ctx, GlResources& gl, const std::vector<Dr
     if (lod.empty()) return;
     build_pyramid(ctx, gl, pyramid, depth, samples);
     for (const DrawItem* it : lod) {
+        // The cells' visible levels are this frame's from here on (lod_cull.comp's State).
+        const GLuint zero = 0;
+        glClearNamedBufferSubData(it->lod->state.id(), GL_R32UI, GLintptr(it->lod->cluster_count) * 4,
+                                  GLsizeiptr(it->lod->cpu_cells.size()) * 4, GL_RED_INTEGER, GL_UNSIGNED_INT, &zero);
         CullCall c;
         c.mode = kModeFinal;
         c.slot = kSlots - 1;
@@ -241,18 +263,34 @@ GpuLod upload_lod(const lod::ClusterLod& c, std::uint32_t vao, gl::Buffer& indic
     g.clusters = gl::Buffer(c.clusters.size() * sizeof(lod::Cluster), c.clusters.data(), 0);
     g.order = gl::Buffer(std::max<std::size_t>(c.triangle_order.size(), 1) * 4, c.triangle_order.data(), 0);
     g.cluster_count = std::uint32_t(c.clusters.size());
-    g.state = gl::Buffer(std::max<std::size_t>(g.cluster_count, 1) * 4, nullptr, 0);
+    g.state = gl::Buffer((std::size_t(g.cluster_count) + c.cells.size() + 1) * 4, nullptr, 0); // lod_cull.comp's State
     g.state.clear_u32(0);
     g.commands = gl::Buffer(std::max<std::size_t>(g.cluster_count, 1) * kSlots * kCommandBytes, nullptr, 0);
     g.counts = gl::Buffer(kCountWords * 4, nullptr, 0);
     g.counts.clear_u32(0);
     g.cpu_cells = c.cells;
     g.full_triangles = c.level0_indices / 3;
+    g.proxies = c.proxies;
     return g;
 }
 
-void draw_surfaces(const FrameContext& ctx, GlResources& gl, const std::vector<DrawItem>& items, DrawSet set,
+void draw_surfaces(const FrameContext& ctx, GlResources& gl, const std::vector<DrawItem>& all, DrawSet set,
                    const std::function<void(const DrawItem&)>& bind, std::uint32_t depth, int samples) {
+    // Stand-ins first (a moving frame), then the rest as they would be drawn.
+    std::vector<DrawItem> items;
+    for (const auto& it : all) {
+        const lod::Proxy* p = set == DrawSet::Complete ? nullptr : proxy_for(ctx, it);
+        if (it.lod && set != DrawSet::Complete) it.lod->proxy_triangles = p ? p->index_count / 3 : 0;
+        if (!p) {
+            items.push_back(it);
+            continue;
+        }
+        if (ctx.result) ctx.result->lod.used = true;
+        bind(it);
+        glBindVertexArray(it.vao);
+        glDrawElements(GL_TRIANGLES, GLsizei(p->index_count), GL_UNSIGNED_INT,
+                       reinterpret_cast<const void*>(std::uintptr_t(p->first_index) * 4));
+    }
     const bool any_lod = std::any_of(items.begin(), items.end(), [](const DrawItem& d) { return d.lod != nullptr; });
     const bool culled = ctx.opt.look.lod.enabled && ctx.opt.look.lod.culling;
     if (any_lod && ctx.result) ctx.result->lod.used = true;

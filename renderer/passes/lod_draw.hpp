@@ -38,6 +38,8 @@ struct GpuLod {
     std::uint32_t cluster_count = 0;
     std::vector<lod::Cell> cpu_cells; // the batches of a frame without history
     std::size_t full_triangles = 0;
+    std::vector<lod::Proxy> proxies; // stand-ins while moving, finest first
+    std::size_t proxy_triangles = 0; // drawn by a stand-in in the last frame that drew this surface (0: none)
     // Culled frames drawn so far: the state's visibility is the last one's when > 0.
     int frames = 0;
 };
@@ -60,7 +62,9 @@ enum class DrawSet {
 
 // Draws `items`: `bind(item)` sets the item's uniforms and binds the
 // program (again after a compute step), then the item is drawn whole or by
-// its culled clusters. `depth` (and `samples`) is the depth texture being
+// its culled clusters, or, in a moving frame (RenderOptions::moving), by
+// its coarsest stand-in (lod::Proxy) whose error projects within the
+// moving bound at the surface's nearest point. `depth` (and `samples`) is the depth texture being
 // drawn into, for the pyramid (DrawSet::Visible). A pick frame (ctx.pick)
 // draws level 0 only, culled to the pick region: picks stay on the full
 // geometry. Statistics go to ctx.result->lod.

@@ -12,13 +12,18 @@
 //     a pick without, triangle for triangle, bit for bit;
 //   - coarser levels are drawn where the view allows (a small image), and
 //     then the image stays close to the full one;
-//   - a moving camera draws to the coarser bound of moving frames.
+//   - a moving camera draws to the coarser bound of moving frames, and a
+//     massive surface's stand-in where its error projects within it.
 #include <cmath>
 #include <cstdio>
+
+#include <glm/glm.hpp>
 
 #include "gl_test.hpp"
 #include "renderer/core/api.hpp"
 #include "renderer/core/pick.hpp"
+#include "renderer/lod/cluster_lod.hpp"
+#include "tests/support/meshes.hpp"
 #include "tests/support/image_compare.hpp"
 #include "tests/support/test_util.hpp"
 
@@ -196,4 +201,43 @@ TEST_F(Lod, AMovingCameraDrawsToTheMovingBound) {
     EXPECT_EQ(scene.render(cam, coarse_still).lod.triangles_drawn, moving.lod.triangles_drawn);
     moving_opt.look.lod.moving_error_px = 0.25; // finer than error_px: error_px holds
     EXPECT_EQ(scene.render(cam, moving_opt).lod.triangles_drawn, still.lod.triangles_drawn);
+}
+
+// A moving frame draws a massive surface's stand-in (lod::Proxy: vertex
+// clustering, for a drag's frames) where the stand-in's error, projected
+// at the surface's nearest point, is within the moving bound, and its
+// levels where it is not; the stand-in looks like the surface.
+TEST_F(Lod, AMovingFrameDrawsTheStandInWhoseErrorProjectsWithinTheBound) {
+    Mesh ball = test::sphere_mesh({0.0, 0.0, 0.0}, 60.0, 0.5);
+    ASSERT_GE(ball.triangles.size(), 8u * 32768u) << "large enough for the coarsest stand-in";
+    const auto levels = lod::build_cluster_lod(ball); // what the scene builds: the same options
+    ASSERT_FALSE(levels.proxies.empty());
+    const lod::Proxy coarsest = levels.proxies.back();
+    core::Scene scene;
+    core::SurfaceInfo info;
+    info.name = "ball";
+    scene.add_mesh(std::move(ball), info);
+    RenderOptions opt;
+    opt.width = opt.height = 160;
+    opt.look.aa.samples = 1;
+    const Camera cam = scene.camera(PatientView::Anterior, 1.0);
+    // The stand-in's error in pixels at the ball's nearest point (its bounds' face).
+    const double d = glm::length(glm::dvec3(cam.eye)) - 60.0;
+    const double px = double(coarsest.error) * 160.0 / (2.0 * std::tan(glm::radians(cam.fov_y_degrees) / 2.0)) / d;
+    std::printf("the coarsest stand-in: %u triangles, %.3f mm = %.2f px here\n", coarsest.index_count / 3,
+                double(coarsest.error), px);
+    ASSERT_LT(px, 60.0);
+    const auto still = scene.render(cam, opt);
+    auto moving = opt;
+    moving.moving = true;
+    moving.look.lod.moving_error_px = px * 1.02;
+    const auto stand_in = scene.render(cam, moving);
+    EXPECT_EQ(stand_in.lod.triangles_drawn, coarsest.index_count / 3);
+    moving.look.lod.moving_error_px = px * 0.98; // just short: a finer stand-in, or the levels
+    EXPECT_NE(scene.render(cam, moving).lod.triangles_drawn, coarsest.index_count / 3);
+    const auto c = test::compare_images(stand_in.image, still.image, 24);
+    std::printf("stand-in against the still frame: %.4f of the pixels off by more than 24, mean %.3f\n",
+                c.off_fraction(), c.mean);
+    EXPECT_LT(c.off_fraction(), 0.03);
+    EXPECT_LT(c.mean, 2.0);
 }

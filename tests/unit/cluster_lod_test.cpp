@@ -4,8 +4,12 @@
 // bounds hold their triangles and their cones their normals; errors grow
 // with the level; and, the point of locked borders, any choice of level per
 // cell gives a closed surface (every edge twice, in opposite directions):
-// no cracks, whatever the view picks.
+// no cracks, whatever the view picks. The stand-ins while moving (vertex
+// clustering, lod::Proxy) keep the nearest vertex of each grid cell and
+// stay within their stated error.
 #include <algorithm>
+#include <cmath>
+#include <cstdio>
 #include <map>
 #include <random>
 #include <set>
@@ -14,6 +18,7 @@
 #include <gtest/gtest.h>
 
 #include "renderer/lod/cluster_lod.hpp"
+#include "renderer/surface/closest.hpp"
 #include "tests/support/meshes.hpp"
 
 using namespace iso;
@@ -159,4 +164,92 @@ TEST(ClusterLod, TinyAndEmptyMeshes) {
     ASSERT_EQ(l.cells.size(), 1u);
     EXPECT_EQ(l.level0_indices, 36u);
     EXPECT_EQ(l.cells[0].levels, 1u); // too few triangles to simplify
+}
+
+namespace {
+
+double signed_volume(const std::vector<std::array<std::uint32_t, 3>>& tris, const std::vector<glm::vec3>& p) {
+    double v = 0;
+    for (const auto& t : tris) v += double(glm::dot(p[t[0]], glm::cross(p[t[1]], p[t[2]]))) / 6.0;
+    return v;
+}
+
+} // namespace
+
+// Vertex clustering (the stand-ins' step): each vertex goes to the one of
+// its grid cell nearest the cell's centre (checked against a brute-force
+// search of every cell), nothing collapsed or repeated is left, the same
+// input gives the same output, and the enclosed volume moves by less than
+// the area times the cell's diagonal.
+TEST(ClusterLod, VertexClusteringKeepsTheNearestVertexOfEachCell) {
+    const Mesh& m = sphere();
+    const glm::vec3 origin(-40.0f, -45.0f, -40.0f);
+    const float cell = 2.0f;
+    const auto out = lod::cluster_vertices(m.triangles, m.positions, origin, cell);
+    ASSERT_GT(out.size(), 1000u);
+    EXPECT_LT(out.size(), m.triangles.size() / 4);
+    EXPECT_EQ(out, lod::cluster_vertices(m.triangles, m.positions, origin, cell));
+    // The brute-force representative of every cell.
+    std::map<std::array<int, 3>, std::pair<float, std::uint32_t>> best;
+    for (std::uint32_t v = 0; v < m.positions.size(); ++v) {
+        const glm::vec3 q = glm::floor((m.positions[v] - origin) / cell);
+        const glm::vec3 d = m.positions[v] - (origin + (q + 0.5f) * cell);
+        const std::pair<float, std::uint32_t> k{glm::dot(d, d), v};
+        auto [it, fresh] = best.try_emplace({int(q.x), int(q.y), int(q.z)}, k);
+        if (!fresh && k < it->second) it->second = k;
+    }
+    std::set<std::uint32_t> reps;
+    for (const auto& [c, k] : best) reps.insert(k.second);
+    std::set<std::array<std::uint32_t, 3>> seen;
+    for (const auto& t : out) {
+        for (const auto v : t) EXPECT_TRUE(reps.count(v)) << "vertex " << v << " is not its cell's nearest";
+        EXPECT_TRUE(t[0] != t[1] && t[1] != t[2] && t[0] != t[2]);
+        EXPECT_TRUE(seen.insert(t).second) << "a triangle is repeated";
+    }
+    const double v0 = signed_volume(m.triangles, m.positions), v1 = signed_volume(out, m.positions);
+    const double area = 4.0 * M_PI * 30.0 * 30.0;
+    EXPECT_LT(std::abs(v1 - v0), area * std::sqrt(3.0) * cell);
+    EXPECT_LT(std::abs(v1 - v0) / v0, 0.02) << v0 << " -> " << v1;
+}
+
+// The stand-ins: coarser step by step, after every level in the indices,
+// and every vertex of the surface within a stand-in's error of one of its
+// vertices; none for a surface under eight times a grid's triangles.
+TEST(ClusterLod, StandInsAreCoarserStepByStepAndWithinTheirError) {
+    const Mesh& m = sphere();
+    auto o = small_cells();
+    o.proxy_triangles = {8192, 2048, 512};
+    const auto l = lod::build_cluster_lod(m, o);
+    ASSERT_EQ(l.proxies.size(), 3u);
+    std::size_t end_of_levels = 0;
+    for (const auto& c : l.clusters)
+        end_of_levels = std::max<std::size_t>(end_of_levels, c.first_index + c.index_count);
+    std::size_t next = end_of_levels;
+    for (std::size_t k = 0; k < l.proxies.size(); ++k) {
+        const auto& p = l.proxies[k];
+        EXPECT_EQ(p.first_index, next);
+        next = p.first_index + p.index_count;
+        ASSERT_LE(next, l.indices.size());
+        EXPECT_GT(p.error, p.cell * std::sqrt(3.0f) - 1e-4f);
+        if (k > 0) {
+            EXPECT_LT(p.index_count, l.proxies[k - 1].index_count);
+            EXPECT_GT(p.error, l.proxies[k - 1].error);
+            EXPECT_FLOAT_EQ(p.cell, 2.0f * l.proxies[k - 1].cell);
+        }
+        // Every vertex of the sphere is within the error of the stand-in's surface.
+        Mesh standin;
+        standin.positions = m.positions;
+        for (std::size_t i = p.first_index; i < next; i += 3)
+            standin.triangles.push_back({l.indices[i], l.indices[i + 1], l.indices[i + 2]});
+        const TriangleBvh bvh(standin);
+        double worst = 0.0;
+        for (std::size_t v = 0; v < m.positions.size(); v += 5)
+            worst = std::max(worst, nearest_point(bvh, glm::dvec3(m.positions[v])).distance_mm);
+        EXPECT_LE(worst, double(p.error)) << "stand-in " << k << ": " << p.index_count / 3 << " triangles";
+        std::printf("stand-in %zu: %u triangles, error %.3f mm, farthest vertex of the sphere %.3f mm\n", k,
+                    p.index_count / 3, double(p.error), worst);
+    }
+    EXPECT_EQ(next, l.indices.size());
+    o.proxy_triangles = {m.triangles.size() / 8 + 1}; // more than an eighth of the sphere's triangles
+    EXPECT_TRUE(lod::build_cluster_lod(m, o).proxies.empty());
 }
