@@ -60,7 +60,13 @@ struct Command {
 
 layout(std430, binding = 20) readonly buffer Cells { Cell cells[]; };
 layout(std430, binding = 21) readonly buffer Clusters { Cluster clusters[]; };
-layout(std430, binding = 22) buffer State { uint state[]; }; // bit 0: visible last frame; bit 1: drawn this frame
+// Per cluster: bit 0 visible last frame, bit 1 drawn this frame; then per
+// cell (from word cluster_count on): 1 + the level it was visible at in the
+// last frame (0: none of it), so that where a cell's level changed since
+// (a drag's coarser bound, a zoom) the first phase draws the new level's
+// clusters over the old level's visible ones (seen_at_another_level)
+// instead of testing everything against a pyramid of almost nothing.
+layout(std430, binding = 22) buffer State { uint state[]; };
 layout(std430, binding = 23) writeonly buffer Commands { Command commands[]; };
 // [0..11]: draws per slot; then the statistics (lod_draw.cpp, LodCounter).
 layout(std430, binding = 24) buffer Counts { uint counts[]; };
@@ -166,6 +172,23 @@ void emit(uint k, Cluster c) {
     }
 }
 
+// A cluster of a cell that the last frame saw at another level (a drag's
+// coarser bound, a zoom) counts as visible last frame if a cluster of that
+// level its bounds overlap was: the cell's clusters are in order of level
+// (a cell has a few dozen).
+bool seen_at_another_level(Cluster c) {
+    uint seen = state[cluster_count + c.cell];
+    if (seen == 0u || seen == c.level + 1u) return false;
+    for (uint j = cells[c.cell].first_cluster; j < cluster_count; ++j) {
+        Cluster o = clusters[j];
+        if (o.cell != c.cell || o.level + 1u > seen) break;
+        if (o.level + 1u == seen && (state[j] & 1u) != 0u && all(lessThanEqual(o.lo, c.hi)) &&
+            all(lessThanEqual(c.lo, o.hi)))
+            return true;
+    }
+    return false;
+}
+
 void main() {
     uint k = gl_GlobalInvocationID.x;
     if (k >= cluster_count) return;
@@ -201,7 +224,7 @@ void main() {
     float dist = length(eye - clamp(eye, c.lo, c.hi));
     bool in_batch = dist >= batch.x && dist < batch.y;
     if (mode == MODE_FIRST) {
-        bool first = history ? (st & 1u) != 0u : in_batch;
+        bool first = history ? (st & 1u) != 0u || seen_at_another_level(c) : in_batch;
         if (first) emit(k, c);
         state[k] = (st & 1u) | (first ? 2u : 0u);
         return;
@@ -217,5 +240,6 @@ void main() {
     // MODE_FINAL: visible next frame if drawn and not hidden by the whole frame's depth.
     bool hidden = in_front && occluded(rect, nearest);
     state[k] = drawn && !hidden ? 1u : 0u;
+    if (drawn && !hidden) state[cluster_count + c.cell] = c.level + 1u; // one level a cell: every writer writes the same
     if (!drawn && count_tests) atomicAdd(counts[C_OCCLUDED], 1u);
 }
