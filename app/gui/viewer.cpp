@@ -280,11 +280,13 @@ bool Viewer::show_still(const RenderOptions& opt) {
             stills && opt.look.ao == AoMethod::Cone && options_.look.ao == AoMethod::Cone ? options_.look.ao_frames : 0;
         r.aa_frames = opt.accumulate ? options_.look.aa.view_frames : 1;
         r.interactive = dragging_;
-        if (dragging_ && drag_scale_ < 1.0) {
-            r.opt.width = std::max(1, int(std::lround(opt.width * drag_scale_)));
-            r.opt.height = std::max(1, int(std::lround(opt.height * drag_scale_)));
-            r.opt.scale = float(opt.scale * drag_scale_); // the overlay's text keeps its size on screen
+        const double scale = drag_pacing_.scale();
+        if (dragging_ && scale < 1.0) {
+            r.opt.width = std::max(1, int(std::lround(opt.width * scale)));
+            r.opt.height = std::max(1, int(std::lround(opt.height * scale)));
+            r.opt.scale = float(opt.scale * scale); // the overlay's text keeps its size on screen
         }
+        if (dragging_) r.opt.look.lod.moving_error_px *= drag_pacing_.coarsen();
         stills_->request(std::move(r));
         still_key_ = key;
         still_look_ = opt.look;
@@ -333,14 +335,8 @@ void Viewer::take_still(const StillFrame& f) {
     if (gl_renderer_.empty()) gl_renderer_ = f.gl_renderer;
     if (thread_frames_ == 1) thread_objects_first_ = f.gl_objects;
     objects_since_first_frame_ = f.gl_objects - std::min(f.gl_objects, thread_objects_first_);
-    // Drag frames slower than 70 ms (under 14 a second) go to half the
-    // size, a quarter of the pixels; back to the full size when a half-size
-    // one takes under 15 ms (the full one would take about 60).
-    if (f.interactive && f.image) {
-        const bool reduced = f.image->width < image_size().width();
-        if (!reduced && f.ms > 70.0) drag_scale_ = 0.5;
-        if (reduced && f.ms < 15.0) drag_scale_ = 1.0;
-    }
+    // A drag frame's time paces the next ones (their size and detail).
+    if (f.interactive && f.image) drag_pacing_.frame(f.request, f.ms, f.image->width < image_size().width(), still_id_);
     // A frame for an older view is kept as the newest and shown if nothing
     // newer is: a drag's frames arrive after its camera moved on.
     const bool newer = !latest_ || f.request >= latest_->request;
@@ -621,6 +617,7 @@ void Viewer::mouseMoveEvent(QMouseEvent* e) {
         if (on_grab_move) on_grab_move(*this, to_image(e->position()));
         return;
     }
+    if (!dragging_) drag_pacing_.start(last_thread_ms_, still_id_);
     dragging_ = true;
     const QPointF d = drag_.step(e->position());
     // 3D Slicer's mouse: left rotates, middle pans, right drags zoom (up: closer).

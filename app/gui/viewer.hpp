@@ -17,6 +17,7 @@
 
 #include "io/markups.hpp"
 #include "app/gui/pointer_drag.hpp"
+#include "renderer/core/drag_pacing.hpp"
 #include "renderer/ao/progressive.hpp"
 #include "renderer/frame/annotations.hpp"
 #include "renderer/frame/camera.hpp"
@@ -266,10 +267,9 @@ private:
     // here on the GUI thread.
     std::shared_ptr<const StillFrame> latest_;
     std::uint64_t latest_shown_ = 0; // the request of the newest frame on screen
-    // A drag's frames on the frame thread are drawn at this fraction of the
-    // view's size (and stretched) when they are slow: 1 or 0.5, from the
-    // last drag frame's time (VTK's interactive image sample distance).
-    double drag_scale_ = 1.0;
+    // A drag's frames on the frame thread: their size and level of detail,
+    // from the frames' own times (core::DragPacing).
+    core::DragPacing drag_pacing_;
     std::uint64_t annotations_version_ = 0;
     std::vector<QPointF> sketch_;
     void paint_sketch();
