@@ -12,13 +12,15 @@
 //     differs.
 // VTK's answer beside it (lod_peer under xvfb-run): vtkPolyDataMapper with
 // every triangle, and vtkQuadricClustering as ParaView's LOD, against VTK's
-// own full image. Scenes: the bundled CT (headsq) resampled 3x per axis,
+// own full image. Moving frames (a drag's, RenderOptions::moving) at
+// several moving bounds: the stand-ins (lod::Proxy) where they qualify.
+// Scenes: the bundled CT (headsq) resampled 3x per axis,
 // skin and bone; and any mesh given with --mesh (the 1024^3 phantom's
 // surface: `isoscope mesh ct1024x1024x1024.nii --iso 300.5 -o ct1024.ply`,
 // the volume from `scale_bench --sizes 1024 --generate-only`).
 //
 //   lod_bench [--mesh NAME=PATH ...] [--no-ct] [--size 1920x1080] [--errors 0.5,1,2,4]
-//             [--frames 4] [--out DIR] [--no-peer] [--divisions 128,256]
+//             [--moving-errors 2,4,8] [--frames 4] [--out DIR] [--no-peer] [--divisions 128,256]
 // Writes DIR/lod_bench.csv and DIR/lod_bench.png (gnuplot: G-buffer time
 // against image RMSE).
 #include <algorithm>
@@ -49,6 +51,7 @@ struct Args {
     bool ct = true, peer = true;
     int width = 1920, height = 1080, frames = 4;
     std::vector<double> errors{0.5, 1.0, 2.0, 4.0};
+    std::vector<double> moving_errors{2.0, 4.0, 8.0};
     std::string out = "bench-results/lod", divisions = "128,256";
 };
 
@@ -198,6 +201,23 @@ void bench_scene(const Args& a, const std::string& name, core::Scene& scene, con
             rows.push_back(r);
             print(rows.back());
         }
+    // A drag's frames (RenderOptions::moving): a stand-in where its error
+    // projects within the moving bound, else the levels to that bound (the
+    // "lod N px + culling" rows above are what a moving frame drew before
+    // the stand-ins).
+    for (const double e : a.moving_errors) {
+        ro.look.lod.enabled = true;
+        ro.look.lod.culling = true;
+        ro.look.lod.error_px = 0.5;
+        ro.look.lod.moving_error_px = e;
+        ro.moving = true;
+        char cfg[64];
+        std::snprintf(cfg, sizeof cfg, "moving %.2g px", e);
+        Row r{name, cfg, run(scene, cam, ro, a.frames), {}};
+        r.e = compare(r.f, ref);
+        rows.push_back(r);
+        print(rows.back());
+    }
     if (a.peer && !mesh_path.empty()) run_peer(a, name, mesh_path, cam, rows);
 }
 
@@ -247,6 +267,9 @@ Args parse(int argc, char** argv) {
         } else if (s == "--errors") {
             a.errors.clear();
             for (const auto& e : bench::split_list(value())) a.errors.push_back(std::stod(e));
+        } else if (s == "--moving-errors") {
+            a.moving_errors.clear();
+            for (const auto& e : bench::split_list(value())) a.moving_errors.push_back(std::stod(e));
         } else if (s == "--frames") {
             a.frames = std::max(2, std::stoi(value()));
         } else if (s == "--out") {
