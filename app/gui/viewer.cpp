@@ -617,7 +617,7 @@ void Viewer::mouseMoveEvent(QMouseEvent* e) {
         if (on_grab_move) on_grab_move(*this, to_image(e->position()));
         return;
     }
-    if (!dragging_) drag_pacing_.start(last_thread_ms_, still_id_);
+    if (!dragging_ && has_massive_surface()) drag_pacing_.start(last_thread_ms_, still_id_);
     dragging_ = true;
     const QPointF d = drag_.step(e->position());
     // 3D Slicer's mouse: left rotates, middle pans, right drags zoom (up: closer).
@@ -629,6 +629,17 @@ void Viewer::mouseMoveEvent(QMouseEvent* e) {
         camera_.zoom(core::drag_zoom_factor(-double(d.y()), height()));
     update();
     camera_moved();
+}
+
+// A visible surface drawn by clusters and stand-ins (LodSettings::
+// min_triangles): where a drag starts paced from slow still frames. Slow
+// still frames of a small scene (ray-traced AO, a volume) say nothing of
+// its drag frames, which stay at full size and detail.
+bool Viewer::has_massive_surface() const {
+    const auto snapshot = scene_.snapshot();
+    for (const auto& s : snapshot.surfaces)
+        if (s.mesh && s.object.visible && s.mesh->triangles.size() >= options_.look.lod.min_triangles) return true;
+    return false;
 }
 
 void Viewer::wheelEvent(QWheelEvent* e) {

@@ -279,6 +279,7 @@ private:
     int picks_waiting_ = 0;
     bool use_still_thread();
     void take_still(const StillFrame& f);
+    bool has_massive_surface() const;
     // The frame a pick rides on: the view's, without AO and overlay, not presented.
     RenderOptions pick_options(const core::PickRequest& p);
     core::PickRequest pick_request(QPointF image_pixel, PickRegion rect = {0, 0, 0, 0}) const;

@@ -30,10 +30,12 @@ public:
     // full size. Frames asked for before the last change are ignored (they
     // arrive after it); `newest` is the newest request asked for so far.
     void frame(std::uint64_t request, double ms, bool reduced, std::uint64_t newest);
-    // A drag starts, the view's still frames taking `still_ms` each: over
-    // 400 ms, it starts as if a drag frame had taken as long (the first
-    // drag frames over a 32 M-triangle surface took 1.3-2.1 s each at full
-    // size and detail).
+    // A drag over a massive surface starts, the view's still frames taking
+    // `still_ms` each: over 400 ms, it starts as if a drag frame had taken
+    // as long (the first drag frames over a 32 M-triangle surface took
+    // 1.3-2.1 s each at full size and detail). The caller asks only where
+    // the still frames' time speaks for the drag's (not for ray-traced AO
+    // or a volume over a small scene).
     void start(double still_ms, std::uint64_t newest);
 
 private:
