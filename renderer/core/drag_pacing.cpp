@@ -28,8 +28,8 @@ void DragPacing::slow(double ms, bool reduced, std::uint64_t newest) {
         scale_ = 0.5;
         slower /= 3.0;
     }
-    if (slower > 1.5 && coarsen_ < 8.0)
-        coarsen_ = std::min(8.0, coarsen_ * std::exp2(std::max(1.0, std::round(0.5 * std::log2(slower)))));
+    if (slower > 1.5 && coarsen_ < kMaxCoarsen)
+        coarsen_ = std::min(kMaxCoarsen, coarsen_ * std::exp2(std::max(1.0, std::round(0.5 * std::log2(slower)))));
     changed_at_ = newest;
 }
 

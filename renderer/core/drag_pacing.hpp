@@ -12,11 +12,16 @@ class DragPacing {
 public:
     // The aim: a drag frame in at most this long (14 frames a second).
     static constexpr double kAimMs = 70.0;
+    // The coarsest drag frames: 4 times LodSettings::moving_error_px. At 8
+    // the 1024^3 phantom's half-size drag frames drew its coarsest stand-in
+    // (38 647 triangles, a 2.8 mm grid), whose thin outer wall closed into
+    // holes the user saw through; at 4 the 147 026-triangle one (1.4 mm).
+    static constexpr double kMaxCoarsen = 4.0;
 
     // The next drag frames' size, as a fraction of the view's (1 or 0.5),
     // and their level-of-detail bound, times LodSettings::moving_error_px
-    // (1, 2, 4 or 8: at 8 a massive surface is drawn by its coarsest
-    // stand-ins, lod::Proxy).
+    // (1, 2 or 4: where massive surfaces are drawn by their stand-ins,
+    // lod::Proxy).
     double scale() const { return scale_; }
     double coarsen() const { return coarsen_; }
 
@@ -25,7 +30,7 @@ public:
     // as three times as fast (the 1024^3 phantom's stand-in: 257 -> 78 ms).
     // Still over 1.5 times too slow: the bound times the power of two
     // nearest the square root of what is left, at least 2 (the triangles
-    // drawn go about with the bound's inverse square), up to 8. Faster than
+    // drawn go about with the bound's inverse square), up to kMaxCoarsen. Faster than
     // 15 ms at half size: the bound comes back a step at a time, then the
     // full size. Frames asked for before the last change are ignored (they
     // arrive after it); `newest` is the newest request asked for so far.

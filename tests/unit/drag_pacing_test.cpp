@@ -20,14 +20,14 @@ TEST(DragPacing, SlowFramesGoToHalfSizeThenToCoarserDetail) {
     EXPECT_EQ(p.coarsen(), 1.0);
     p.frame(4, 900.0, false, 6); // asked for before the change: ignored
     EXPECT_EQ(p.coarsen(), 1.0);
-    p.frame(6, 560.0, true, 9); // 8x at half size: sqrt 2.8 -> x4
-    EXPECT_EQ(p.coarsen(), 4.0);
+    p.frame(6, 300.0, true, 9); // 4.3x at half size: 2^round(log2(4.3) / 2) = 2
+    EXPECT_EQ(p.coarsen(), 2.0);
     p.frame(10, 100.0, true, 12); // 1.4x: under 1.5, kept
-    EXPECT_EQ(p.coarsen(), 4.0);
-    p.frame(13, 2000.0, true, 14); // up to 8 at most
-    EXPECT_EQ(p.coarsen(), 8.0);
+    EXPECT_EQ(p.coarsen(), 2.0);
+    p.frame(13, 2000.0, true, 14); // up to kMaxCoarsen at most
+    EXPECT_EQ(p.coarsen(), DragPacing::kMaxCoarsen);
     p.frame(15, 5000.0, true, 16);
-    EXPECT_EQ(p.coarsen(), 8.0);
+    EXPECT_EQ(p.coarsen(), DragPacing::kMaxCoarsen);
     EXPECT_EQ(p.scale(), 0.5);
 }
 
