@@ -11,6 +11,7 @@
 #include <unistd.h>
 #endif
 
+#include "renderer/core/drag_pacing.hpp"
 #include "renderer/gl/context.hpp"
 
 namespace iso::gui {
@@ -128,7 +129,7 @@ void StillFrames::run() {
     }
     std::uint64_t drawing = 0;      // the request the frames are accumulating for
     bool after_drag = false;        // the last frame drawn was a drag's
-    bool slow_stills = false;       // the last still frame took over kSlowStillMs
+    bool slow_stills = false;       // the last still frame took over core::DragPacing::kSlowStillMs
     std::int64_t waiting_since = 0; // since when frames wait for levels of detail (0: they do not)
     int frames_left = 0;
     std::unique_lock lock(mutex_);
@@ -161,7 +162,7 @@ void StillFrames::run() {
             drawing = r.id;
             f = draw(renderer, r, frames_left);
             after_drag = r.interactive;
-            if (!r.interactive) slow_stills = f.ms > kSlowStillMs;
+            if (!r.interactive) slow_stills = f.ms > core::DragPacing::kSlowStillMs;
         }
         lock.lock();
         if (f.last && pending_ && pending_->id == r.id) done_ = r.id;

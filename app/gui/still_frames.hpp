@@ -112,8 +112,6 @@ private:
     bool wait_for_work(std::unique_lock<std::mutex>& lock);
     StillFrame draw(core::SnapshotRenderer& renderer, const StillRequest& r, int& frames_left);
     StillFrame draw_plain(core::SnapshotRenderer& renderer, const StillRequest& r);
-    // Still frames slower than this get a plain frame of the view first after a drag (draw_plain).
-    static constexpr double kSlowStillMs = 400.0;
     struct Pick {
         PickJob job;
         std::function<void(PickFrame)> done;

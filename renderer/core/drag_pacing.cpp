@@ -19,7 +19,7 @@ void DragPacing::frame(std::uint64_t request, double ms, bool reduced, std::uint
 }
 
 void DragPacing::start(double still_ms, std::uint64_t newest) {
-    if (scale_ == 1.0 && coarsen_ == 1.0 && still_ms > 400.0) slow(still_ms, false, newest);
+    if (scale_ == 1.0 && coarsen_ == 1.0 && still_ms > kSlowStillMs) slow(still_ms, false, newest);
 }
 
 void DragPacing::slow(double ms, bool reduced, std::uint64_t newest) {

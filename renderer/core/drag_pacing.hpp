@@ -17,6 +17,10 @@ public:
     // (38 647 triangles, a 2.8 mm grid), whose thin outer wall closed into
     // holes the user saw through; at 4 the 147 026-triangle one (1.4 mm).
     static constexpr double kMaxCoarsen = 4.0;
+    // Still frames slower than this speak for a massive scene: a drag
+    // starts paced (start), and the frame thread draws a plain frame of the
+    // view first after a drag (app/gui/still_frames.cpp).
+    static constexpr double kSlowStillMs = 400.0;
 
     // The next drag frames' size, as a fraction of the view's (1 or 0.5),
     // and their level-of-detail bound, times LodSettings::moving_error_px
@@ -36,7 +40,7 @@ public:
     // arrive after it); `newest` is the newest request asked for so far.
     void frame(std::uint64_t request, double ms, bool reduced, std::uint64_t newest);
     // A drag over a massive surface starts, the view's still frames taking
-    // `still_ms` each: over 400 ms, it starts as if a drag frame had taken
+    // `still_ms` each: over kSlowStillMs, it starts as if a drag frame had taken
     // as long (the first drag frames over a 32 M-triangle surface took
     // 1.3-2.1 s each at full size and detail). The caller asks only where
     // the still frames' time speaks for the drag's (not for ray-traced AO

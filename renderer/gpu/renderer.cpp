@@ -135,8 +135,8 @@ void lod_stats(const passes::FrameContext& ctx, LodStats& s) {
             s.triangles_drawn += std::uint64_t(d->count) / 3;
             continue;
         }
-        if (d->lod->proxy_triangles > 0 && !ctx.pick) { // a moving frame's stand-in (lod_draw.hpp)
-            s.triangles_drawn += d->lod->proxy_triangles;
+        if (const lod::Proxy* p = passes::moving_proxy(ctx, *d)) { // drawn instead of its clusters
+            s.triangles_drawn += p->index_count / 3;
             continue;
         }
         std::uint32_t w[passes::kCountWords] = {};

@@ -280,11 +280,15 @@ ClusterLod build_cluster_lod(const Mesh& m, const BuildOptions& o, const Progres
     return out;
 }
 
+float error_limit_mm(const glm::vec3& eye, const glm::vec3& lo, const glm::vec3& hi, float pixels_per_mm_at_1mm,
+                     float max_error_px, float near_plane) {
+    const float d = std::max(glm::length(eye - glm::clamp(eye, lo, hi)), near_plane);
+    return max_error_px * d / pixels_per_mm_at_1mm;
+}
+
 std::uint32_t select_level(const Cell& cell, const glm::vec3& eye, float pixels_per_mm_at_1mm, float max_error_px,
                            float near_plane) {
-    const glm::vec3 nearest = glm::clamp(eye, cell.lo, cell.hi);
-    const float d = std::max(glm::length(eye - nearest), near_plane);
-    const float limit = max_error_px * d / pixels_per_mm_at_1mm; // mm
+    const float limit = error_limit_mm(eye, cell.lo, cell.hi, pixels_per_mm_at_1mm, max_error_px, near_plane);
     for (std::uint32_t l = cell.levels; l-- > 1;)
         if (cell.error[l] <= limit) return l;
     return 0;

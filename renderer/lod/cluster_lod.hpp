@@ -134,6 +134,13 @@ std::vector<std::array<std::uint32_t, 3>> cluster_vertices(const std::vector<std
 // lod.indices and listed in lod.proxies.
 void build_proxies(const Mesh& m, ClusterLod& lod, const std::vector<std::size_t>& targets);
 
+// The largest error (mm) drawn within `max_error_px` pixels at the
+// nearest point of the box [lo, hi] to `eye` (at least `near_plane` away):
+// the rule select_level, lod_cull.comp's select_level and a moving frame's
+// stand-in (lod_draw.cpp) follow.
+float error_limit_mm(const glm::vec3& eye, const glm::vec3& lo, const glm::vec3& hi, float pixels_per_mm_at_1mm,
+                     float max_error_px, float near_plane);
+
 // The level of `cell` drawn for a view: the coarsest whose error, projected
 // at the cell's nearest point to `eye`, is at most `max_error_px` pixels;
 // `pixels_per_mm_at_1mm` is the image height over 2 tan(fov_y / 2) (a

@@ -100,10 +100,14 @@ void draw_slot(const DrawItem& item, const GpuLod& lod, std::uint32_t slot) {
     glBindBuffer(GL_DRAW_INDIRECT_BUFFER, 0);
 }
 
-void draw_whole(const DrawItem& item) {
+// `count` indices of the item's element buffer from `first` on.
+void draw_range(const DrawItem& item, std::uint32_t first, std::uint32_t count) {
     glBindVertexArray(item.vao);
-    glDrawElements(GL_TRIANGLES, item.count, GL_UNSIGNED_INT, nullptr);
+    glDrawElements(GL_TRIANGLES, GLsizei(count), GL_UNSIGNED_INT,
+                   reinterpret_cast<const void*>(std::uintptr_t(first) * 4));
 }
+
+void draw_whole(const DrawItem& item) { draw_range(item, 0, std::uint32_t(item.count)); }
 
 // The pyramid of the depth drawn so far (depth_pyramid.comp).
 void build_pyramid(const FrameContext& ctx, GlResources& gl, CullState& s, GLuint depth, int samples) {
@@ -140,20 +144,6 @@ float lod_error(const FrameContext& ctx) {
     const LodSettings& l = ctx.opt.look.lod;
     if (!l.enabled) return 0.0f;
     return float(ctx.opt.moving ? std::max(l.error_px, l.moving_error_px) : l.error_px);
-}
-
-// A moving frame's stand-in for `item` (lod_draw.hpp), or null: the
-// coarsest whose error projects within the frame's bound at the nearest
-// point of the surface's bounds (lod::select_level's rule for a cell).
-const lod::Proxy* proxy_for(const FrameContext& ctx, const DrawItem& item) {
-    if (!ctx.opt.moving || ctx.pick || !item.lod || !ctx.opt.look.lod.enabled) return nullptr;
-    const glm::dvec3 e = ctx.camera.eye;
-    const double d = std::max(glm::length(e - glm::clamp(e, item.bounds.min, item.bounds.max)), ctx.camera.near_plane);
-    const double limit = double(lod_error(ctx)) * d / double(pixels_per_mm_at_1mm(ctx)); // mm
-    const auto& p = item.lod->proxies;
-    for (auto it = p.rbegin(); it != p.rend(); ++it)
-        if (double(it->error) <= limit) return &*it;
-    return nullptr;
 }
 
 bool backface_ok(const FrameContext& ctx, const DrawItem& item) {
@@ -255,6 +245,17 @@ void draw_visible(const FrameContext& ctx, GlResources& gl, const std::vector<Dr
 
 } // namespace
 
+const lod::Proxy* moving_proxy(const FrameContext& ctx, const DrawItem& item) {
+    if (!ctx.opt.moving || ctx.pick || !item.lod || !ctx.opt.look.lod.enabled) return nullptr;
+    const float limit =
+        lod::error_limit_mm(glm::vec3(ctx.camera.eye), glm::vec3(item.bounds.min), glm::vec3(item.bounds.max),
+                            pixels_per_mm_at_1mm(ctx), lod_error(ctx), float(ctx.camera.near_plane));
+    const auto& p = item.lod->proxies;
+    for (auto it = p.rbegin(); it != p.rend(); ++it)
+        if (it->error <= limit) return &*it;
+    return nullptr;
+}
+
 GpuLod upload_lod(const lod::ClusterLod& c, std::uint32_t vao, gl::Buffer& indices) {
     GpuLod g;
     indices = gl::Buffer(c.indices.size() * 4, c.indices.data(), 0);
@@ -279,17 +280,14 @@ void draw_surfaces(const FrameContext& ctx, GlResources& gl, const std::vector<D
     // Stand-ins first (a moving frame), then the rest as they would be drawn.
     std::vector<DrawItem> items;
     for (const auto& it : all) {
-        const lod::Proxy* p = set == DrawSet::Complete ? nullptr : proxy_for(ctx, it);
-        if (it.lod && set != DrawSet::Complete) it.lod->proxy_triangles = p ? p->index_count / 3 : 0;
+        const lod::Proxy* p = set == DrawSet::Complete ? nullptr : moving_proxy(ctx, it);
         if (!p) {
             items.push_back(it);
             continue;
         }
         if (ctx.result) ctx.result->lod.used = true;
         bind(it);
-        glBindVertexArray(it.vao);
-        glDrawElements(GL_TRIANGLES, GLsizei(p->index_count), GL_UNSIGNED_INT,
-                       reinterpret_cast<const void*>(std::uintptr_t(p->first_index) * 4));
+        draw_range(it, p->first_index, p->index_count);
     }
     const bool any_lod = std::any_of(items.begin(), items.end(), [](const DrawItem& d) { return d.lod != nullptr; });
     const bool culled = ctx.opt.look.lod.enabled && ctx.opt.look.lod.culling;

@@ -39,7 +39,6 @@ struct GpuLod {
     std::vector<lod::Cell> cpu_cells; // the batches of a frame without history
     std::size_t full_triangles = 0;
     std::vector<lod::Proxy> proxies; // stand-ins while moving, finest first
-    std::size_t proxy_triangles = 0; // drawn by a stand-in in the last frame that drew this surface (0: none)
     // Culled frames drawn so far: the state's visibility is the last one's when > 0.
     int frames = 0;
 };
@@ -70,6 +69,12 @@ enum class DrawSet {
 // geometry. Statistics go to ctx.result->lod.
 void draw_surfaces(const FrameContext& ctx, GlResources& gl, const std::vector<DrawItem>& items, DrawSet set,
                    const std::function<void(const DrawItem&)>& bind, std::uint32_t depth = 0, int samples = 1);
+
+// The stand-in a moving frame draws for `item` instead of its clusters
+// (draw_surfaces; not for DrawSet::Complete), or null: the coarsest whose
+// error projects within the moving bound at the nearest point of the
+// surface's bounds (lod::error_limit_mm).
+const lod::Proxy* moving_proxy(const FrameContext& ctx, const DrawItem& item);
 
 // The shaders' define and binding for the triangle a pick names: level 0's
 // order maps a drawn triangle back to the mesh's (shaders/render/lod_pick.glsl).
