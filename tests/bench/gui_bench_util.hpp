@@ -95,12 +95,13 @@ struct Probe {
     QTimer timer;
     double last = 0;
     std::vector<double> late;
-    Probe() {
+    // From the start: an event handled before the first tick is counted too.
+    Probe() : last(now_ms()) {
         timer.setTimerType(Qt::PreciseTimer);
         timer.setInterval(10);
         QObject::connect(&timer, &QTimer::timeout, [this] {
             const double t = now_ms();
-            if (last > 0) late.push_back(std::max(0.0, t - last - 10.0));
+            late.push_back(std::max(0.0, t - last - 10.0));
             last = t;
         });
         timer.start();

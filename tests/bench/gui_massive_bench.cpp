@@ -26,14 +26,17 @@
 // its loop: "input <= 150 ms" is the largest lateness in each phase.
 //
 //   xvfb-run -a -s '-screen 0 1600x1200x24' build/tests/bench/gui_massive_bench VOLUME [--iso 300.5]
-//       [--csv docs/gui_massive.csv] [--phases N]
+//       [--csv docs/gui_massive.csv] [--phases N] [--trace-events MS]
 //
 // --phases N: stop after the first N phases (to profile one; no CSV written).
+// --trace-events MS: print each event the GUI thread took MS ms or more to
+// handle (the receiver's class and name, the event's type): what a stall was.
 //
 // VOLUME: the 1024^3 phantom (`scale_bench --sizes 1024 --generate-only`),
 // or any volume. Prints a markdown table; writes the CSV (one row per phase).
 #include <QApplication>
 #include <QMouseEvent>
+#include <QThread>
 #include <QProgressDialog>
 #include <QPushButton>
 #include <QStatusBar>
@@ -89,6 +92,31 @@ template <class F> Phase phase(const std::string& name, F&& step) {
     return p;
 }
 
+// The application, timing every event the GUI thread handles (outermost
+// only: an event handled inside another's handler is part of it).
+class TracingApp : public QApplication {
+public:
+    using QApplication::QApplication;
+    double threshold_ms = 0; // 0: no tracing
+    bool notify(QObject* receiver, QEvent* e) override {
+        if (threshold_ms <= 0 || depth_ > 0 || QThread::currentThread() != thread())
+            return QApplication::notify(receiver, e);
+        // Read before: the handler may delete either.
+        const std::string what = std::string(receiver->metaObject()->className()) + " '" +
+                                  receiver->objectName().toStdString() + "' event " + std::to_string(int(e->type()));
+        ++depth_;
+        const double t0 = now_ms();
+        const bool handled = QApplication::notify(receiver, e);
+        const double ms = now_ms() - t0;
+        --depth_;
+        if (ms >= threshold_ms) std::printf("    [%.0f ms] %s\n", ms, what.c_str());
+        return handled;
+    }
+
+private:
+    int depth_ = 0;
+};
+
 // kB of a /proc/self/status field ("VmHWM", "VmRSS").
 double status_mib(const char* field) {
     std::ifstream f("/proc/self/status");
@@ -122,18 +150,22 @@ int main(int argc, char** argv) {
     std::string input, csv = std::string(ISOSCOPE_SOURCE_DIR) + "/docs/gui_massive.csv";
     double iso = 300.5;
     std::size_t stop_after = 99;
+    double trace_ms = 0;
     for (int i = 1; i < argc; ++i) {
         const std::string a = argv[i];
         if (a == "--iso" && i + 1 < argc)
             iso = std::atof(argv[++i]);
         else if (a == "--phases" && i + 1 < argc)
             stop_after = std::size_t(std::atoi(argv[++i]));
+        else if (a == "--trace-events" && i + 1 < argc)
+            trace_ms = std::atof(argv[++i]);
         else if (a == "--csv" && i + 1 < argc)
             csv = argv[++i];
         else if (a[0] != '-' && input.empty())
             input = a;
         else {
-            std::printf("usage: gui_massive_bench VOLUME [--iso V] [--csv FILE] [--phases N]  (under xvfb-run)\n");
+            std::printf("usage: gui_massive_bench VOLUME [--iso V] [--csv FILE] [--phases N] [--trace-events MS]  (under "
+                        "xvfb-run)\n");
             return a == "--help" ? 0 : 2;
         }
     }
@@ -141,7 +173,8 @@ int main(int argc, char** argv) {
     bench::set_gl_format();
     int qargc = 1;
     char* qargv[] = {argv[0], nullptr};
-    QApplication app(qargc, qargv);
+    TracingApp app(qargc, qargv);
+    app.threshold_ms = trace_ms;
     QApplication::setOrganizationName("isoscope-bench");
     QApplication::setApplicationName("gui_massive_bench");
     gui::MainWindow w;
