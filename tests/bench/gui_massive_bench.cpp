@@ -3,6 +3,7 @@
 // opening a 1024^3 micro-CT to measuring on its 30 M-triangle surface, on
 // this machine's GL (llvmpipe here). As the user does it, in one window:
 //
+//   0. show the window and let it paint (1 s);
 //   1. open the volume (File > Open's path);
 //   2. add its isosurface in the Surfaces panel, press the progress
 //      dialog's Cancel after 1.5 s (the time until the work stopped), then
@@ -37,6 +38,7 @@
 #include <QApplication>
 #include <QMouseEvent>
 #include <QThread>
+#include <QWindow>
 #include <QProgressDialog>
 #include <QPushButton>
 #include <QStatusBar>
@@ -178,11 +180,24 @@ int main(int argc, char** argv) {
     QApplication::setOrganizationName("isoscope-bench");
     QApplication::setApplicationName("gui_massive_bench");
     gui::MainWindow w;
-    w.show();
-    if (!wait_until([&] { return w.isVisible(); }, 10000)) return fail("the window did not show");
     std::printf("gui_massive_bench: %s, iso %g\n", input.c_str(), iso);
     std::vector<Phase> phases;
     bool ok = true;
+
+    // The window's first paints are a phase of their own: a user opens a
+    // file once the window is there, while they happened during the opening
+    // (the window composed through OpenGL: the GL libraries and llvmpipe's
+    // shaders paged in and compiled, waiting on the disk behind the volume's
+    // read, 250 ms blocked in one run's perf).
+    phases.push_back(phase("show the window (1 s)", [&](std::string& res) {
+        const double t0 = now_ms();
+        w.show();
+        ok = wait_until([&] { return w.isVisible() && w.windowHandle() && w.windowHandle()->isExposed(); }, 10000);
+        wait_ms(1000);
+        res = std::to_string(w.width()) + "x" + std::to_string(w.height());
+        return (now_ms() - t0) / 1000;
+    }));
+    if (!ok) return fail("the window did not show");
 
     phases.push_back(phase("open the volume", [&](std::string& res) {
         const double t0 = now_ms();
