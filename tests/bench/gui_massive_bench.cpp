@@ -105,7 +105,7 @@ public:
             return QApplication::notify(receiver, e);
         // Read before: the handler may delete either.
         const std::string what = std::string(receiver->metaObject()->className()) + " '" +
-                                  receiver->objectName().toStdString() + "' event " + std::to_string(int(e->type()));
+                                 receiver->objectName().toStdString() + "' event " + std::to_string(int(e->type()));
         ++depth_;
         const double t0 = now_ms();
         const bool handled = QApplication::notify(receiver, e);
@@ -166,8 +166,9 @@ int main(int argc, char** argv) {
         else if (a[0] != '-' && input.empty())
             input = a;
         else {
-            std::printf("usage: gui_massive_bench VOLUME [--iso V] [--csv FILE] [--phases N] [--trace-events MS]  (under "
-                        "xvfb-run)\n");
+            std::printf(
+                "usage: gui_massive_bench VOLUME [--iso V] [--csv FILE] [--phases N] [--trace-events MS]  (under "
+                "xvfb-run)\n");
             return a == "--help" ? 0 : 2;
         }
     }
