@@ -9,6 +9,8 @@
 // Which presets fit is the core's rule (core/presets.hpp).
 #pragma once
 
+#include <cstdint>
+
 #include <array>
 #include <functional>
 #include <utility>
@@ -71,8 +73,9 @@ private:
     int observer_ = 0;
     std::pair<glm::dvec3, glm::dvec3> box_{glm::dvec3(0.0), glm::dvec3(0.0)}; // the box while cropping is off
     bool ct_ = false;
-    bool showing_ = false;    // the widgets are being set from the workspace: no edits
-    bool showing_tf_ = false; // the editor's own change: it shows it already
+    std::uint64_t histogram_generation_ = 0; // the latest histogram asked for (make_histogram)
+    bool showing_ = false;                   // the widgets are being set from the workspace: no edits
+    bool showing_tf_ = false;                // the editor's own change: it shows it already
     std::pair<glm::dvec3, glm::dvec3> volume_box_{glm::dvec3(0.0), glm::dvec3(0.0)};
     QCheckBox* show_ = nullptr;
     QComboBox* preset_ = nullptr;
