@@ -9,9 +9,8 @@
 // Which presets fit is the core's rule (core/presets.hpp).
 #pragma once
 
-#include <cstdint>
-
 #include <array>
+#include <cstdint>
 #include <functional>
 #include <utility>
 
