@@ -54,6 +54,8 @@ public:
     QTableWidget* table() const { return table_; }
     // The row of a markup (point -1) or of one of a point list's points; -1: none.
     int row_of(std::size_t markup, int point = -1) const;
+    // Surface and crossing answers the table still waits for (shown as "...").
+    bool looking_up() const { return looking_up_ || !surface_waiting_.empty() || !crossings_waiting_.empty(); }
 
     // The file dialogs of File > Save markups... / Load markups....
     void save_dialog();
@@ -89,7 +91,7 @@ private:
     void check_cache();
     // Above kInlineTriangles in the visible surfaces the answers are worked
     // out off the GUI thread (a quiet job that keeps the search trees while
-    // the meshes stay: at 32 M triangles a tree takes minutes to build), the
+    // the meshes stay: at 32 M triangles a tree takes seconds to build), the
     // table showing "..." until they arrive.
     static constexpr std::size_t kInlineTriangles = 2'000'000;
     bool answers_later() const;

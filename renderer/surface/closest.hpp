@@ -56,7 +56,7 @@ public:
     TriangleCorners corners(std::uint32_t triangle) const;
 
     struct Node {
-        glm::dvec3 lo, hi;
+        glm::vec3 lo, hi; // float, as the corners are: exact (40 bytes a node, 16.8 M nodes at 32.5 M triangles)
         std::uint32_t first = 0, count = 0; // a leaf: tris_[first, first + count)
         std::uint32_t left = 0, right = 0;  // an inner node (count 0): children
     };
@@ -64,9 +64,9 @@ public:
     const std::vector<std::uint32_t>& triangles() const { return tris_; } // in leaf order
 
 private:
+    struct Prim;
     void build();
-    std::uint32_t build_node(std::uint32_t first, std::uint32_t count, std::vector<glm::dvec3>& centroid,
-                             std::vector<std::array<glm::dvec3, 2>>& box);
+    std::uint32_t build_node(std::uint32_t first, std::uint32_t count, std::vector<Prim>& prims);
     const Mesh& mesh_;
     std::vector<std::uint32_t> tris_;
     std::vector<Node> nodes_;

@@ -19,6 +19,9 @@
 //   6. measure: the Ruler, two clicks on the surface: the time from each
 //      click to its readout, and the ruler's length against the distance
 //      between the two points the core API picks at those pixels;
+//   7. the Measurements table's answers for the ruler (the surface under
+//      each point, the surfaces its line passes through), worked out off
+//      the GUI thread: the time until they show;
 // then the peak memory (VmHWM), and whether the GUI thread's GL context
 // holds a copy of the scene (it should not: frames and picks are drawn on
 // the frame thread's).
@@ -37,6 +40,7 @@
 // or any volume. Prints a markdown table; writes the CSV (one row per phase).
 #include <QApplication>
 #include <QMouseEvent>
+#include <QTableWidget>
 #include <QThread>
 #include <QWindow>
 #include <QProgressDialog>
@@ -54,6 +58,7 @@
 
 #include "app/gui/main_window.hpp"
 #include "app/gui/measure_tools.hpp"
+#include "app/gui/measurements_panel.hpp"
 #include "app/gui/surfaces_panel.hpp"
 #include "app/gui/viewer.hpp"
 #include "gui_bench_util.hpp"
@@ -335,6 +340,30 @@ int main(int argc, char** argv) {
         return *std::max_element(answered.begin(), answered.end()) / 1000;
     }));
     if (!ok) return fail("the ruler was not placed");
+
+    // The Measurements table's answers for the ruler (the surface each point
+    // lies on, the surfaces its line passes through): worked out off the GUI
+    // thread on a search tree of every triangle, "..." until then.
+    auto* table = w.measurements_panel();
+    phases.push_back(phase("the ruler's surfaces in the table", [&](std::string& res) {
+        const double t0 = now_ms();
+        const auto row_text = [&] {
+            const int row = table->row_of(w.workspace().markups().size() - 1);
+            QString cells;
+            for (int c = 0; row >= 0 && c < table->table()->columnCount(); ++c)
+                if (const auto* item = table->table()->item(row, c); item && !item->text().isEmpty())
+                    cells += (cells.isEmpty() ? "" : "; ") + item->text();
+            return cells;
+        };
+        ok = wait_until([&] { return !table->looking_up() && !row_text().contains("..."); }, 1200000);
+        const double s = (now_ms() - t0) / 1000;
+        const QString cells = row_text();
+        char b[64];
+        std::snprintf(b, sizeof b, "shown after %.1f s: ", s);
+        res = b + cells.toStdString();
+        return s;
+    }));
+    if (!ok) return fail("the table's answers did not arrive");
 
     const double hwm = status_mib("VmHWM"), rss = status_mib("VmRSS");
     const std::size_t tris = w.scene().mesh(w.scene().surfaces().back()).triangles.size();
