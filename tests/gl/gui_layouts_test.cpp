@@ -235,6 +235,14 @@ TEST_F(GuiLayouts, SessionRestoresTheLayoutSliceViewsAndCrosshair) {
 TEST_F(GuiLayouts, SlicePlanesAreDrawnInTheirColoursIn3d) {
     gui::MainWindow& w = window();
     gui::Viewer* viewer = w.viewer();
+    // The outlines are the overlay's, drawn in every frame: one frame a view
+    // (no AO, no anti-aliasing still frames to wait for; under the
+    // sanitizers the 4 x 32 still frames took 108 s).
+    FrameLook look = w.workspace().look();
+    look.ao = AoMethod::Off;
+    look.aa.samples = 1;
+    look.aa.view_frames = 1;
+    w.workspace().set_look(look);
     // Surfaces in a neutral blue, so no surface pixel passes for a plane's colour.
     for (auto id : w.scene().surfaces()) {
         core::SurfaceInfo info = w.scene().info(id);
