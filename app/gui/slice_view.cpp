@@ -158,7 +158,8 @@ void SliceView::refresh() {
             }
         }
         grid_ = core::slice_grid(*plane, width(), height());
-        core::reslice(scene.volume(), grid_, core::Interp::Linear, values_);
+        core::reslice_here(scene.volume(), grid_, core::Interp::Linear,
+                           values_); // the GUI thread never waits on a worker
         grey_ = core::apply_window(values_, window_, core::PixelFormat::Grey8);
         image_ = QImage(grey_.data(), values_.width, values_.height, values_.width, QImage::Format_Grayscale8).copy();
         request_outlines();

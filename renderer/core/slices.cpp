@@ -22,6 +22,7 @@
 #include <glm/matrix.hpp>
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
 
 #include "io/error.hpp"
 #include "renderer/frame/annotations.hpp"
@@ -390,6 +391,11 @@ void reslice(const Volume& v, const SliceGrid& g, Interp interp, SliceImage& out
             reslice_dense_rows<T>(v, s, width, r.begin(), r.end(), interp, dst);
         });
     });
+}
+
+void reslice_here(const Volume& v, const SliceGrid& g, Interp interp, SliceImage& out) {
+    thread_local tbb::task_arena alone(1);
+    alone.execute([&] { reslice(v, g, interp, out); });
 }
 
 SliceImage reslice(const Volume& v, const SlicePlane& p, int width, int height, Interp interp) {

@@ -234,6 +234,12 @@ struct SliceImage {
 // per row come from the inverse affine once; rows in parallel through TBB);
 // sparse ones go through Volume::value. `out` is resized and reused.
 void reslice(const Volume& v, const SliceGrid& g, Interp interp, SliceImage& out);
+// The same on the calling thread alone (an arena of one: TBB's loop runs
+// inline), for a thread that must not wait: a parallel loop started from
+// the GUI thread waits for every piece a worker took, and beside busy
+// processes that held the desktop app's GUI thread 340 ms as a volume
+// arrived (gui_massive_bench). A view's slice is a few milliseconds of work.
+void reslice_here(const Volume& v, const SliceGrid& g, Interp interp, SliceImage& out);
 SliceImage reslice(const Volume& v, const SlicePlane& p, int width, int height, Interp interp = Interp::Linear);
 
 // ---- Window / level ------------------------------------------------------------------

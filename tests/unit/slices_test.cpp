@@ -610,6 +610,29 @@ TEST(SliceReslice, PixelsEqualSampleVolumeAtTheirCentresLinearAndNearest) {
     }
 }
 
+// reslice_here (the GUI thread's: no worker) gives reslice's pixels, bit for
+// bit (NaN where it has NaN), on a grid large enough to split into tasks.
+TEST(SliceReslice, OnTheCallingThreadAloneItIsTheSameSlice) {
+    const Volume v = oblique_linear({23, 19, 17});
+    for (auto p : default_planes(v)) {
+        p.pixel_mm = 0.11;
+        const SliceGrid g = slice_grid(p, 301, 257);
+        SliceImage everywhere, here;
+        reslice(v, g, Interp::Linear, everywhere);
+        reslice_here(v, g, Interp::Linear, here);
+        ASSERT_EQ(here.width, everywhere.width);
+        ASSERT_EQ(here.height, everywhere.height);
+        ASSERT_EQ(here.values.size(), everywhere.values.size());
+        std::size_t nan = 0;
+        for (std::size_t i = 0; i < here.values.size(); ++i) {
+            const float a = everywhere.values[i], b = here.values[i];
+            nan += std::isnan(a);
+            EXPECT_TRUE(std::isnan(a) ? std::isnan(b) : a == b) << i;
+        }
+        EXPECT_LT(nan, here.values.size()); // the slice crosses the volume
+    }
+}
+
 TEST(SliceReslice, ShearedGridsAndEveryVoxelType) {
     // A gantry-tilted grid: the slice step has a y component (shear), spacing anisotropic.
     glm::dmat4 a(1.0);
@@ -845,8 +868,8 @@ TEST(SliceOutline, TheIndexGivesTheSameSegmentsAsTheWholeMesh) {
     const OutlineIndex index = outline_index(m);
     ASSERT_EQ(index.lo.size(), (m.triangles.size() + kOutlineBlock - 1) / kOutlineBlock);
     std::size_t compared = 0;
-    for (const glm::dvec3 n : {glm::dvec3(0, 0, 1), glm::dvec3(1, 0, 0), glm::dvec3(0, 1, 0),
-                               glm::normalize(glm::dvec3(1, 0.3, 0.2))})
+    for (const glm::dvec3 n :
+         {glm::dvec3(0, 0, 1), glm::dvec3(1, 0, 0), glm::dvec3(0, 1, 0), glm::normalize(glm::dvec3(1, 0.3, 0.2))})
         for (const double offset : {-100.0, 0.0, 12.0, 60.0, 125.5, 301.0, double(index.hi[0].x)}) {
             SlicePlane p;
             p.normal = n;
