@@ -500,7 +500,7 @@ TEST(GuiViews, ThreeDViewMouseAndToolBar) {
     // right after a change may still show the one before)
     const auto settled = [&] {
         EXPECT_TRUE(wait_until([&] { return viewer->converged() || !viewer->error().empty(); }, 120000));
-        return viewer->grab().toImage();
+        return viewer->grabFramebuffer();
     };
     bar->reset_action()->trigger();
     const auto id = w.scene().surfaces().front();
