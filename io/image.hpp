@@ -1,5 +1,6 @@
-// CPU images and their export (PNG, TIFF, EXR through OpenImageIO) with
-// metadata embedded in the file.
+// CPU images and their export (PNG, TIFF, EXR through OpenImageIO, loaded
+// on the first read or write: io/image_module.hpp) with metadata embedded in
+// the file.
 #pragma once
 
 #include <cstdint>
@@ -30,6 +31,10 @@ void save_image(const Image& img, const std::string& path, const ImageMetadata& 
 // Reads any image OpenImageIO reads, with its metadata as text (tests,
 // golden images). Throws iso::Error.
 Image load_image(const std::string& path, ImageMetadata* meta = nullptr);
+
+// OpenImageIO's version (10000 * major + 100 * minor + patch), loading the
+// image module if it is not yet; -1 when it cannot be loaded.
+int image_library_version();
 
 // SHA-256 of a file or of every file under a folder (sorted by path), hex.
 std::string sha256_of_path(const std::string& path);

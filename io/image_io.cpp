@@ -3,13 +3,16 @@
 #include <algorithm>
 #include <filesystem>
 #include <fstream>
-#include <sstream>
+#include <mutex>
+#include <vector>
 
-#include <OpenImageIO/imageio.h>
+#include <dlfcn.h>
+
 #include <openssl/evp.h>
 
 #include "io/atomic_file.hpp"
 #include "io/error.hpp"
+#include "io/image_module.hpp"
 
 namespace iso {
 namespace fs = std::filesystem;
@@ -20,6 +23,60 @@ std::string lower_ext(const std::string& path) {
     std::transform(e.begin(), e.end(), e.begin(), [](unsigned char c) { return char(std::tolower(c)); });
     return e;
 }
+
+// Where the module may be, in this order: beside the object this code is in
+// (libisoscope_io.so in the shared sanitizer build) or the program, and in
+// the install layout relative to either (/usr/bin/isoscope ->
+// /usr/lib/isoscope/); then the build tree's output (ISOSCOPE_IMAGE_MODULE:
+// test programs and benchmarks run from folders of their own).
+std::vector<fs::path> module_candidates() {
+    std::vector<fs::path> dirs;
+    std::error_code ec;
+    Dl_info info{};
+    // For the program itself dladdr names argv[0], which may be relative to
+    // a folder the process has left: only a library's absolute path is used.
+    if (dladdr(reinterpret_cast<void*>(&save_image), &info) && info.dli_fname && info.dli_fname[0] == '/')
+        if (const fs::path self = fs::canonical(info.dli_fname, ec); !ec) dirs.push_back(self.parent_path());
+    if (const fs::path exe = fs::canonical("/proc/self/exe", ec); !ec) dirs.push_back(exe.parent_path());
+    std::vector<fs::path> paths;
+    for (const fs::path& dir : dirs) {
+        paths.push_back(dir / image_module::kFileName);
+        paths.push_back(dir.parent_path() / "lib" / "isoscope" / image_module::kFileName);
+    }
+#ifdef ISOSCOPE_IMAGE_MODULE
+    paths.emplace_back(ISOSCOPE_IMAGE_MODULE);
+#endif
+    return paths;
+}
+
+// Loads the module once (a failed load is tried again on the next call);
+// throws iso::Error naming `path`, the image being read or written.
+const image_module::Functions& module_for(const std::string& path) {
+    static std::mutex mutex;
+    static const image_module::Functions* loaded = nullptr;
+    std::lock_guard lock(mutex);
+    if (loaded) return *loaded;
+    std::string tried;
+    for (const fs::path& candidate : module_candidates()) {
+        std::error_code ec;
+        if (!fs::exists(candidate, ec)) {
+            tried += (tried.empty() ? "" : ", ") + candidate.string();
+            continue;
+        }
+        // Never closed: the module stays for the process's life.
+        void* handle = dlopen(candidate.c_str(), RTLD_NOW | RTLD_LOCAL);
+        if (!handle) throw Error(path, std::string("cannot load the image module: ") + dlerror());
+        using Entry = const image_module::Functions* (*)();
+        auto entry = reinterpret_cast<Entry>(dlsym(handle, image_module::kEntry));
+        const image_module::Functions* f = entry ? entry() : nullptr;
+        if (!f || f->abi != image_module::kAbi)
+            throw Error(path, "the image module " + candidate.string() + " is from another build of isoscope");
+        loaded = f;
+        return *loaded;
+    }
+    throw Error(path, std::string("cannot read or write images: the image module (") + image_module::kFileName +
+                          ", OpenImageIO) is not installed (looked in " + tried + ")");
+}
 } // namespace
 
 void save_image(const Image& img, const std::string& path, const ImageMetadata& meta) {
@@ -28,79 +85,28 @@ void save_image(const Image& img, const std::string& path, const ImageMetadata& 
         throw Error(path, "unsupported image format (write .png, .tif or .exr)");
     if (img.is_float && ext == ".png") throw Error(path, "float images (AOVs) need .exr or .tif");
     if (img.width <= 0 || img.height <= 0) throw Error(path, "empty image");
+    const image_module::Functions& oiio = module_for(path);
     check_writable_destination(path);
     write_atomically(path, [&](const std::string& tmp) {
-        auto out = OIIO::ImageOutput::create(tmp);
-        if (!out) throw Error(path, "OpenImageIO cannot write this format: " + OIIO::geterror());
-        OIIO::ImageSpec spec(img.width, img.height, img.channels,
-                             img.is_float ? OIIO::TypeDesc::FLOAT : OIIO::TypeDesc::UINT8);
-        if (img.channels == 4) spec.alpha_channel = 3;
-        if (img.is_float) {
-            if (img.channels == 1) spec.channelnames = {"Z"};
-            if (img.channels == 3) spec.channelnames = {"X", "Y", "Z"};
-        }
-        spec.attribute("Software", "isoscope");
-        // TIFF has no free-form tags: everything goes into ImageDescription,
-        // one "key: value" line each (load_image splits it again).
-        const bool tiff = ext == ".tif" || ext == ".tiff";
-        std::string description;
-        for (const auto& [k, v] : meta.text) {
-            if (tiff)
-                description += k + ": " + v + "\n";
-            else
-                spec.attribute(k, v);
-        }
-        for (const auto& [k, v] : meta.float_arrays) {
-            if (ext == ".exr") {
-                spec.attribute(k, OIIO::TypeDesc(OIIO::TypeDesc::FLOAT, int(v.size())), v.data());
-            } else {
-                // PNG and TIFF keep text only: the array as space-separated numbers.
-                std::ostringstream os;
-                os.precision(9);
-                for (std::size_t i = 0; i < v.size(); ++i) os << (i ? " " : "") << v[i];
-                if (tiff)
-                    description += k + ": " + os.str() + "\n";
-                else
-                    spec.attribute(k, os.str());
-            }
-        }
-        if (tiff && !description.empty()) spec.attribute("ImageDescription", description);
-        if (!out->open(tmp, spec)) throw Error(path, "cannot open for writing: " + out->geterror());
-        const bool ok = img.is_float ? out->write_image(OIIO::TypeDesc::FLOAT, img.floats.data())
-                                     : out->write_image(OIIO::TypeDesc::UINT8, img.bytes.data());
-        if (!ok || !out->close()) throw Error(path, "writing failed: " + out->geterror());
+        std::string error;
+        if (!oiio.save(img, tmp, ext, meta, error)) throw Error(path, error);
     });
 }
 
 Image load_image(const std::string& path, ImageMetadata* meta) {
-    auto in = OIIO::ImageInput::open(path);
-    if (!in) throw Error(path, "cannot read image: " + OIIO::geterror());
-    const OIIO::ImageSpec& spec = in->spec();
+    const image_module::Functions& oiio = module_for(path);
     Image img;
-    img.width = spec.width;
-    img.height = spec.height;
-    img.channels = spec.nchannels;
-    img.is_float = spec.format.basetype == OIIO::TypeDesc::FLOAT || spec.format.basetype == OIIO::TypeDesc::HALF;
-    bool ok;
-    if (img.is_float) {
-        img.floats.resize(std::size_t(img.width) * img.height * img.channels);
-        ok = in->read_image(0, 0, 0, img.channels, OIIO::TypeDesc::FLOAT, img.floats.data());
-    } else {
-        img.bytes.resize(std::size_t(img.width) * img.height * img.channels);
-        ok = in->read_image(0, 0, 0, img.channels, OIIO::TypeDesc::UINT8, img.bytes.data());
-    }
-    if (!ok) throw Error(path, "cannot read pixels: " + in->geterror());
-    if (meta) {
-        for (const auto& p : spec.extra_attribs) meta->text[p.name().string()] = p.get_string(1 << 20);
-        // Our TIFF metadata: "key: value" lines in ImageDescription.
-        std::istringstream lines(spec.get_string_attribute("ImageDescription"));
-        std::string line;
-        while (std::getline(lines, line))
-            if (const auto c = line.find(": "); line.rfind("isoscope:", 0) == 0 && c != std::string::npos)
-                meta->text[line.substr(0, c)] = line.substr(c + 2);
-    }
-    in->close();
+    std::string error;
+    if (!oiio.load(path, img, meta, error)) throw Error(path, error);
     return img;
+}
+
+int image_library_version() {
+    try {
+        return module_for("OpenImageIO").version();
+    } catch (const Error&) {
+        return -1;
+    }
 }
 
 namespace {

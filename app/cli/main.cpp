@@ -3,6 +3,7 @@
 // Parses arguments, calls the core API, prints; no algorithms live here.
 #include <cstdlib>
 #include <iostream>
+#include <functional>
 #include <string>
 #include <unistd.h>
 #include <vector>
@@ -44,11 +45,16 @@ int main(int argc, char** argv) {
     // No arguments: the desktop app where there is a display, the help otherwise.
     if (argc == 1 && (std::getenv("DISPLAY") || std::getenv("WAYLAND_DISPLAY"))) return iso::cli::run_gui("", argv[0]);
     CLI::App app{"isoscope: inspect CT volumes, reconstruct and render isosurfaces"};
-    // isoscope's version, then the libraries' it is built with (a bug report's first lines).
-    std::string versions;
-    for (const auto& [name, v] : iso::core::component_versions())
-        versions += (versions.empty() ? "" : "\n") + name + " " + v;
-    app.set_version_flag("--version", versions);
+    // isoscope's version, then the libraries' it is built with (a bug report's
+    // first lines). Asked for only on --version: OpenImageIO's loads the
+    // image module (io/image_module.hpp), which every other command would
+    // otherwise pay for at start.
+    app.set_version_flag("--version", std::function<std::string()>([] {
+                             std::string versions;
+                             for (const auto& [name, v] : iso::core::component_versions())
+                                 versions += (versions.empty() ? "" : "\n") + name + " " + v;
+                             return versions;
+                         }));
     app.require_subcommand(1);
     std::vector<std::pair<CLI::App*, iso::cli::RunFn>> commands;
     for (const auto& c : kCommands) {

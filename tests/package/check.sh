@@ -27,7 +27,7 @@ dpkg-deb -f "$deb" Depends | sed "s/^/package: depends on /"
 
 root="$tmp/root"
 dpkg-deb -x "$deb" "$root"
-for f in usr/bin/isoscope usr/share/applications/isoscope.desktop usr/share/mime/packages/isoscope.xml \
+for f in usr/bin/isoscope usr/lib/isoscope/libisoscope_image.so usr/share/applications/isoscope.desktop usr/share/mime/packages/isoscope.xml \
          usr/share/icons/hicolor/48x48/apps/isoscope.png usr/share/icons/hicolor/256x256/apps/isoscope.png \
          usr/share/man/man1/isoscope.1.gz usr/share/doc/isoscope/copyright usr/share/doc/isoscope/changelog.gz; do
   [[ -s $root/$f ]] || fail "/$f is missing"

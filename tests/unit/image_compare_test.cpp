@@ -1,11 +1,13 @@
 // The golden-image helper (image_compare.hpp): its three thresholds at and
 // just past their limits, shape mismatches, the files it writes on failure
-// and ISOSCOPE_UPDATE_GOLDEN=1.
+// and ISOSCOPE_UPDATE_GOLDEN=1; and the image module loaded on first use.
 #include "tests/support/image_compare.hpp"
 
 #include <cstdlib>
 #include <filesystem>
+#include <fstream>
 #include <optional>
+#include <string>
 
 #include "tests/support/test_util.hpp"
 
@@ -127,4 +129,50 @@ TEST(ImageCompare, UpdateGoldenRewritesTheGolden) {
     EXPECT_EQ(load_image(golden).bytes, a.bytes);
     UpdateGolden off(std::nullopt);
     EXPECT_TRUE(test::matches_golden(a, golden, kTol, dir / "failures"));
+}
+
+namespace {
+// Whether a shared object whose path contains `name` is mapped into this process.
+bool mapped(const std::string& name) {
+    std::ifstream maps("/proc/self/maps");
+    std::string line;
+    while (std::getline(maps, line))
+        if (line.find(name) != std::string::npos) return true;
+    return false;
+}
+// Taken while the program starts (every library it links is loaded by then,
+// whatever test runs first).
+const bool kOiioAtStart = mapped("libOpenImageIO");
+} // namespace
+
+// OpenImageIO (about 260 shared libraries) is not loaded when a program
+// starts, neither here nor in the CLI, only with the image module on the
+// first image read or write (io/image_module.hpp).
+TEST(ImageModule, OpenImageIOLoadsOnTheFirstImageNotAtStart) {
+    EXPECT_FALSE(kOiioAtStart);
+    const auto ldd = test::run_command("ldd " ISOSCOPE_CLI);
+    ASSERT_EQ(ldd.exit_code, 0) << ldd.out;
+    EXPECT_EQ(ldd.out.find("libOpenImageIO"), std::string::npos) << ldd.out;
+    EXPECT_NE(ldd.out.find("libvtkCommonCore"), std::string::npos) << ldd.out; // ldd listed the closure
+
+    test::TempDir dir;
+    ImageMetadata meta;
+    meta.text["isoscope:input"] = "headsq.nhdr";
+    meta.float_arrays["isoscope:view"] = {1.5f, -2.25f};
+    save_image(grey(6, 4, 77), dir / "a.png", meta);
+    EXPECT_TRUE(mapped("libOpenImageIO"));
+    EXPECT_TRUE(mapped("libisoscope_image.so"));
+    ImageMetadata back;
+    const Image img = load_image(dir / "a.png", &back);
+    EXPECT_EQ(img.bytes, grey(6, 4, 77).bytes);
+    EXPECT_EQ(back.text["isoscope:input"], "headsq.nhdr");
+    EXPECT_EQ(back.text["isoscope:view"], "1.5 -2.25");
+    EXPECT_GE(image_library_version(), 20000); // 2.x
+    // What the module reports still names the file.
+    try {
+        load_image(dir / "missing.png");
+        ADD_FAILURE() << "no error";
+    } catch (const Error& e) {
+        EXPECT_NE(std::string(e.what()).find("missing.png"), std::string::npos) << e.what();
+    }
 }
