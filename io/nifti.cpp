@@ -31,7 +31,7 @@ struct NimDeleter {
 };
 using NimPtr = std::unique_ptr<nifti_image, NimDeleter>;
 
-VoxelType voxel_type(const std::string& path, int dt) {
+VoxelType nifti_voxel_type(const std::string& path, int dt) {
     switch (dt) {
     case DT_INT8: return VoxelType::I8;
     case DT_UINT8: return VoxelType::U8;
@@ -116,7 +116,7 @@ VolumeHeader header_of(const std::string& path, const nifti_image* nim) {
     VolumeHeader h;
     h.path = path;
     h.format = VolumeFormat::Nifti;
-    h.stored = voxel_type(path, nim->datatype);
+    h.stored = nifti_voxel_type(path, nim->datatype);
     h.dims = {nim->nx, nim->ny, std::max(nim->nz, 1)};
     checked_byte_size(path, h.dims, h.stored);
 

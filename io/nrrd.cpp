@@ -40,7 +40,7 @@ std::string teem_error() {
     return s;
 }
 
-VoxelType voxel_type(const std::string& path, int t) {
+VoxelType nrrd_voxel_type(const std::string& path, int t) {
     switch (t) {
     case nrrdTypeChar: return VoxelType::I8;
     case nrrdTypeUChar: return VoxelType::U8;
@@ -164,7 +164,7 @@ VolumeHeader read_nrrd_header(const std::string& path) {
     VolumeHeader h;
     h.path = path;
     h.format = VolumeFormat::Nrrd;
-    h.stored = h.type = voxel_type(path, header->type);
+    h.stored = h.type = nrrd_voxel_type(path, header->type);
     h.dims = {1, 1, 1};
     for (unsigned a = 0; a < dim; ++a) h.dims[a] = std::int64_t(header->axis[a].size);
     checked_byte_size(path, h.dims, h.stored);

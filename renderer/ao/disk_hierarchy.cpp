@@ -14,6 +14,7 @@
 #include <limits>
 #include <numeric>
 #include <string>
+#include <numbers>
 
 #include <glm/geometric.hpp>
 #include <tbb/parallel_for.h>
@@ -23,8 +24,6 @@
 namespace iso {
 
 namespace {
-
-constexpr double kPi = 3.14159265358979323846;
 
 // ---------------------------------------------------------------- build
 
@@ -180,7 +179,7 @@ std::vector<double> fill_leaves(const VertexDisks& d, const std::vector<std::int
         if (v < 0) continue;
         const auto vu = static_cast<std::size_t>(v);
         DiskNode& node = h.nodes[iu];
-        double reach = std::sqrt(d.area[vu] / kPi);
+        double reach = std::sqrt(d.area[vu] / std::numbers::pi);
         const std::int32_t first = owned[iu], end = owned[iu + 1];
         for (std::int32_t t = first; t < end; ++t)
             for (int k = 0; k < 3; ++k)

@@ -24,7 +24,7 @@ namespace iso {
 
 namespace {
 
-constexpr std::uint32_t kNone = 0xFFFFFFFFu;
+constexpr std::uint32_t kNoSlot = 0xFFFFFFFFu;
 
 // Large output arrays are backed by transparent huge pages where the kernel
 // offers them on request ("madvise" mode): one fault per 2 MiB instead of one
@@ -220,8 +220,8 @@ void run_chunk(const Block<T>& b, const ChunkGeom& g, const Frame& f, const Cls&
                 b.data + (g.p0[0] - b.lo[0]) + b.n[0] * ((g.p0[1] + y - b.lo[1]) + b.n[1] * (g.p0[2] + z - b.lo[2]));
             for (std::int64_t x = 0; x < nx; ++x) in[x] = cls.inside(double(row[x])) ? 1 : 0;
         }
-    // Slots stay kNone between chunks: only the ones written are reset.
-    if (s.slots.size() < npts * 3) s.slots.assign(npts * 3, kNone);
+    // Slots stay kNoSlot between chunks: only the ones written are reset.
+    if (s.slots.size() < npts * 3) s.slots.assign(npts * 3, kNoSlot);
     s.touched.clear();
     s.cols.resize(std::size_t(nx));
 
@@ -232,7 +232,7 @@ void run_chunk(const Block<T>& b, const ChunkGeom& g, const Frame& f, const Cls&
     auto make_vertex = [&](std::int64_t lx, std::int64_t ly, std::int64_t lz, int axis) -> std::uint32_t {
         const std::size_t sp = lin(lx, ly, lz);
         std::uint32_t& slot = s.slots[sp * 3 + std::size_t(axis)];
-        if (slot != kNone) return slot;
+        if (slot != kNoSlot) return slot;
         s.touched.push_back(std::uint32_t(sp * 3 + std::size_t(axis)));
         const std::int64_t gx = g.p0[0] + lx, gy = g.p0[1] + ly, gz = g.p0[2] + lz;
         const double s0 = double(b.at(gx, gy, gz));
@@ -294,7 +294,7 @@ void run_chunk(const Block<T>& b, const ChunkGeom& g, const Frame& f, const Cls&
                 }
             }
         }
-    for (auto t : s.touched) s.slots[t] = kNone;
+    for (auto t : s.touched) s.slots[t] = kNoSlot;
     result.positions.assign(out.positions.begin(), out.positions.end());
     result.normals.assign(out.normals.begin(), out.normals.end());
     result.triangles.assign(out.triangles.begin(), out.triangles.end());
@@ -828,7 +828,7 @@ Mesh weld(const ChunkedSurface& s, int threads, WeldMap* map) {
     // 2. Global numbering: every vertex but the border duplicates.
     constexpr std::uint32_t kAlias = 0xFFFFFFFEu;
     std::vector<std::vector<std::uint32_t>> remap(n);
-    for (std::size_t id = 0; id < n; ++id) remap[id].assign(s.chunks[id].positions.size(), kNone);
+    for (std::size_t id = 0; id < n; ++id) remap[id].assign(s.chunks[id].positions.size(), kNoSlot);
     for (std::size_t i = 1; i < border.size(); ++i)
         if (border[i].key == border[i - 1].key) remap[border[i].chunk][border[i].local] = kAlias;
     std::vector<std::size_t> vbase(n + 1, 0), tbase(n + 1, 0);
@@ -838,7 +838,7 @@ Mesh weld(const ChunkedSurface& s, int threads, WeldMap* map) {
         vbase[id + 1] = vbase[id] + kept;
         tbase[id + 1] = tbase[id] + s.chunks[id].triangles.size();
     }
-    if (vbase[n] >= kNone) throw Error("weld", "the surface has more than 4 billion vertices");
+    if (vbase[n] >= kNoSlot) throw Error("weld", "the surface has more than 4 billion vertices");
     const bool normals = [&] {
         for (const auto& c : s.chunks)
             if (!c.positions.empty()) return !c.normals.empty();
