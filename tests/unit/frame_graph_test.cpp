@@ -37,7 +37,6 @@ struct RecordingBackend : Backend {
 };
 
 const TextureDesc kColor{64, 32, Format::RGBA16F};
-const TextureDesc kDepth{64, 32, Format::Depth32F};
 
 } // namespace
 

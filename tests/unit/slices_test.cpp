@@ -376,7 +376,7 @@ TEST(SlicePlanes, PanMovesTheContentWithThePointer) {
         const glm::dvec2 delta(17.25, -9.5); // right and up
         pan_pixels(p, delta);
         const SliceGrid after = slice_grid(p, 300, 200);
-        for (const glm::dvec2 q : {glm::dvec2(0.5, 0.5), glm::dvec2(150, 100), glm::dvec2(299.5, 12.25)}) {
+        for (const glm::dvec2& q : {glm::dvec2(0.5, 0.5), glm::dvec2(150, 100), glm::dvec2(299.5, 12.25)}) {
             // What was under q is now under q + delta.
             EXPECT_NEAR(glm::length(pixel_to_lps(after, q + delta) - pixel_to_lps(before, q)), 0.0, 1e-9)
                 << slice_orientation_name(p.orientation);
@@ -868,7 +868,7 @@ TEST(SliceOutline, TheIndexGivesTheSameSegmentsAsTheWholeMesh) {
     const OutlineIndex index = outline_index(m);
     ASSERT_EQ(index.lo.size(), (m.triangles.size() + kOutlineBlock - 1) / kOutlineBlock);
     std::size_t compared = 0;
-    for (const glm::dvec3 n :
+    for (const glm::dvec3& n :
          {glm::dvec3(0, 0, 1), glm::dvec3(1, 0, 0), glm::dvec3(0, 1, 0), glm::normalize(glm::dvec3(1, 0.3, 0.2))})
         for (const double offset : {-100.0, 0.0, 12.0, 60.0, 125.5, 301.0, double(index.hi[0].x)}) {
             SlicePlane p;
