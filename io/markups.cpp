@@ -30,6 +30,7 @@
 
 #include "io/atomic_file.hpp"
 #include "io/error.hpp"
+#include "io/finite.hpp"
 #include "io/read_file.hpp"
 
 namespace iso {
@@ -70,8 +71,6 @@ const char* status_name(PositionStatus s) {
 
 // The number of control points a type must have, or 0 when any number will do.
 std::size_t required_points(MarkupType t) { return t == MarkupType::Line ? 2 : t == MarkupType::Angle ? 3 : 0; }
-
-bool finite(const glm::dvec3& v) { return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z); }
 
 // Text from the file, made safe to print in a message.
 std::string printable(const std::string& s, std::size_t max = 60) {

@@ -25,6 +25,7 @@
 #include <tbb/task_arena.h>
 
 #include "io/error.hpp"
+#include "io/finite.hpp"
 #include "renderer/frame/annotations.hpp"
 #include "renderer/surface/atomic.hpp"
 
@@ -54,8 +55,6 @@ Axes orientation_axes(SliceOrientation o) {
     }
     return {{1, 0, 0}, {0, -1, 0}, {0, 0, 1}};
 }
-
-bool finite(const glm::dvec3& p) { return std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z); }
 
 double lerp(double a, double b, double t) { return t == 0.0 ? a : t == 1.0 ? b : a + (b - a) * t; }
 

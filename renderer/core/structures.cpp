@@ -10,6 +10,7 @@
 
 #include "io/color.hpp"
 #include "io/error.hpp"
+#include "io/finite.hpp"
 #include "renderer/core/surface_name.hpp"
 #include "renderer/surface/analysis.hpp"
 #include "renderer/surface/box_clip.hpp"
@@ -33,8 +34,6 @@ void add_shape(nlohmann::json& j, const Mesh& m, bool closed) {
     j["largest_diameter_mm"] = shape.feret_mm;
     j["largest_diameter_points_lps"] = {vec(shape.feret_a), vec(shape.feret_b)};
 }
-
-bool finite_point(const glm::dvec3& p) { return std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z); }
 
 const Mesh& surface_mesh(const Scene& scene, SurfaceId id, const char* what) {
     if (!scene.has_surface(id)) throw Error(what, "there is no surface " + std::to_string(id));
@@ -65,7 +64,7 @@ std::vector<SurfaceTree> surface_trees(const Scene& scene, std::vector<std::uniq
 }
 
 SurfacePoint surface_at(const std::vector<SurfaceTree>& trees, const glm::dvec3& lps) {
-    if (!finite_point(lps)) throw Error("surface at a point", "the point is not finite");
+    if (!finite(lps)) throw Error("surface at a point", "the point is not finite");
     SurfacePoint best;
     best.distance_mm = std::numeric_limits<double>::infinity();
     for (const SurfaceTree& t : trees) {
@@ -78,14 +77,14 @@ SurfacePoint surface_at(const std::vector<SurfaceTree>& trees, const glm::dvec3&
 }
 
 SurfacePoint surface_at(const Scene& scene, const glm::dvec3& lps) {
-    if (!finite_point(lps)) throw Error("surface at a point", "the point is not finite");
+    if (!finite(lps)) throw Error("surface at a point", "the point is not finite");
     std::vector<std::unique_ptr<TriangleBvh>> keep;
     return surface_at(surface_trees(scene, keep), lps);
 }
 
 ComponentPlan plan_component(const Scene& scene, SurfaceId surface, const glm::dvec3& at,
                              const std::optional<LpsBox>& within) {
-    if (!finite_point(at)) throw Error("isolate", "the point is not finite");
+    if (!finite(at)) throw Error("isolate", "the point is not finite");
     const Mesh& parent = surface_mesh(scene, surface, "isolate");
     const SurfaceInfo& info = scene.info(surface);
     const NearestComponent near = nearest_component(parent, at);
@@ -302,7 +301,7 @@ SurfaceGap surface_gap(const Scene& scene, SurfaceId a, SurfaceId b, const std::
     const auto part = [](const Mesh& m, const std::optional<glm::dvec3>& at, std::string& name,
                          std::optional<std::size_t>& component) {
         if (!at) return TriangleBvh(m);
-        if (!finite_point(*at)) throw Error("surface distance", "a component's point is not finite");
+        if (!finite(*at)) throw Error("surface distance", "a component's point is not finite");
         const NearestComponent near = nearest_component(m, *at);
         std::vector<std::uint32_t> tris;
         for (std::uint32_t t = 0; t < near.triangle_component.size(); ++t)
@@ -319,7 +318,7 @@ SurfaceGap surface_gap(const Scene& scene, SurfaceId a, SurfaceId b, const std::
 
 std::vector<LineCrossing> solid_crossings(const std::vector<SurfaceTree>& trees, const glm::dvec3& a,
                                           const glm::dvec3& b, double threshold, double end_tolerance_mm) {
-    if (!finite_point(a) || !finite_point(b)) throw Error("line crossings", "a point is not finite");
+    if (!finite(a) || !finite(b)) throw Error("line crossings", "a point is not finite");
     const double length = glm::length(b - a);
     std::vector<LineCrossing> out;
     for (const SurfaceTree& t : trees) {
@@ -340,7 +339,7 @@ std::vector<LineCrossing> solid_crossings(const std::vector<SurfaceTree>& trees,
 
 std::vector<LineCrossing> solid_crossings(const Scene& scene, const glm::dvec3& a, const glm::dvec3& b,
                                           double threshold, double end_tolerance_mm) {
-    if (!finite_point(a) || !finite_point(b)) throw Error("line crossings", "a point is not finite");
+    if (!finite(a) || !finite(b)) throw Error("line crossings", "a point is not finite");
     std::vector<std::unique_ptr<TriangleBvh>> keep;
     return solid_crossings(surface_trees(scene, keep), a, b, threshold, end_tolerance_mm);
 }

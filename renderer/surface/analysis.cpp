@@ -5,6 +5,7 @@
 // open surface its volume is meaningless; vtkMultiObjectMassProperties flags
 // open objects but neither caps them nor reports their boundaries; neither
 // welds STL triangle soups, runs in parallel or estimates an uncertainty.
+#include "io/finite.hpp"
 #include "io/markups.hpp"
 #include "renderer/surface/arena.hpp"
 #include "renderer/surface/analysis.hpp"
@@ -41,8 +42,6 @@ namespace {
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 constexpr std::uint32_t kNone = ~std::uint32_t(0);
 constexpr const char* kWhere = "surface measure";
-
-bool finite(const glm::dvec3& p) { return std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z); }
 
 // a + (b - a) t that ignores b at t == 0 (and a at t == 1), so a NaN sample
 // with no weight does not spread.
