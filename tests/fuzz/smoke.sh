@@ -74,7 +74,6 @@ run_target() {
     rm -f "$artifacts/crash-$target-"*
   else
     { echo "fuzz_$target: FAILED"; tail -n 40 "$work/$target.log"; } >"$work/$target.verdict"
-    return 1
   fi
 }
 # The targets are independent (each has its own input folder, corpus, log and
@@ -88,8 +87,8 @@ for target in "${targets[@]}"; do
   run_target "$target" &
 done
 wait
-# A target passed when its verdict says so (an exit status may already have
-# been taken by `wait -n` above).
+# A target passed when its verdict says so (its job's exit status may have
+# been taken by `wait -n` above, so the verdict file is the record).
 failed=()
 for target in "${targets[@]}"; do
   if [[ -f $work/$target.verdict ]]; then cat "$work/$target.verdict"; else echo "fuzz_$target: FAILED (no verdict)"; fi
