@@ -1,6 +1,7 @@
 #include "renderer/surface/scissors.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <map>
 #include <string>
@@ -126,6 +127,28 @@ std::optional<std::array<HalfSpace, 3>> sweep_triangle(const std::array<glm::dve
     return out;
 }
 
+// The edges used by one triangle only, in (lower vertex, higher vertex)
+// order, each with that triangle. A sorted array of every edge's use, not a
+// map of edges to their triangles: a map allocated a node and a vector per
+// edge, and under the sanitizers the scissors' GUI test spent most of its
+// cut there.
+std::vector<std::pair<std::array<std::uint32_t, 2>, std::size_t>> edges_used_once(const Mesh& m) {
+    std::vector<std::pair<std::array<std::uint32_t, 2>, std::size_t>> uses;
+    uses.reserve(3 * m.triangles.size());
+    for (std::size_t t = 0; t < m.triangles.size(); ++t)
+        for (int e = 0; e < 3; ++e) {
+            const std::uint32_t a = m.triangles[t][std::size_t(e)], b = m.triangles[t][std::size_t((e + 1) % 3)];
+            uses.push_back({{std::min(a, b), std::max(a, b)}, t});
+        }
+    std::sort(uses.begin(), uses.end());
+    std::vector<std::pair<std::array<std::uint32_t, 2>, std::size_t>> once;
+    for (std::size_t i = 0, j = 0; i < uses.size(); i = j) {
+        for (j = i + 1; j < uses.size() && uses[j].first == uses[i].first;) ++j;
+        if (j == i + 1) once.push_back(uses[i]);
+    }
+    return once;
+}
+
 // Where caps of two triangles' walls meet along a corner's ray (at a
 // reflex corner of the outline), each cap was cut by its own triangle's
 // planes: the same segment of the ray, split at different points. Each
@@ -133,47 +156,41 @@ std::optional<std::array<HalfSpace, 3>> sweep_triangle(const std::array<glm::dve
 // every edge along the seam is shared (T-junctions closed).
 void close_t_junctions(Mesh& m, double tol) {
     for (int round = 0; round < 64; ++round) {
-        std::map<std::pair<std::uint32_t, std::uint32_t>, std::vector<std::size_t>> owners;
-        for (std::size_t t = 0; t < m.triangles.size(); ++t)
-            for (int e = 0; e < 3; ++e) {
-                const std::uint32_t a = m.triangles[t][std::size_t(e)], b = m.triangles[t][std::size_t((e + 1) % 3)];
-                owners[{std::min(a, b), std::max(a, b)}].push_back(t);
-            }
+        const auto once = edges_used_once(m);
         std::vector<std::uint32_t> loose; // vertices on an edge used once
-        for (const auto& [e, ts] : owners)
-            if (ts.size() == 1) {
-                loose.push_back(e.first);
-                loose.push_back(e.second);
-            }
+        for (const auto& [e, t] : once) {
+            loose.push_back(e[0]);
+            loose.push_back(e[1]);
+        }
         std::sort(loose.begin(), loose.end());
         loose.erase(std::unique(loose.begin(), loose.end()), loose.end());
         std::vector<bool> split(m.triangles.size(), false);
         std::vector<std::array<std::uint32_t, 3>> added;
-        for (const auto& [e, ts] : owners) {
-            if (ts.size() != 1 || split[ts[0]]) continue;
-            const glm::dvec3 a(m.positions[e.first]), b(m.positions[e.second]);
+        for (const auto& [e, t] : once) {
+            if (split[t]) continue;
+            const glm::dvec3 a(m.positions[e[0]]), b(m.positions[e[1]]);
             const glm::dvec3 ab = b - a;
             const double len2 = glm::dot(ab, ab);
             std::uint32_t best = 0;
             double best_t = 2;
             for (const std::uint32_t v : loose) {
-                if (v == e.first || v == e.second || !(len2 > 0)) continue;
+                if (v == e[0] || v == e[1] || !(len2 > 0)) continue;
                 const glm::dvec3 p(m.positions[v]);
-                const double t = glm::dot(p - a, ab) / len2;
-                if (t <= 0 || t >= 1 || glm::length(p - (a + t * ab)) > tol) continue;
-                if (t < best_t) {
-                    best_t = t;
+                const double s = glm::dot(p - a, ab) / len2;
+                if (s <= 0 || s >= 1 || glm::length(p - (a + s * ab)) > tol) continue;
+                if (s < best_t) {
+                    best_t = s;
                     best = v;
                 }
             }
             if (best_t > 1) continue;
             // The triangle (x, y, z) with edge (x, y) on this edge: (x, v, z) and (v, y, z).
-            auto tri = m.triangles[ts[0]];
-            while (!((tri[0] == e.first && tri[1] == e.second) || (tri[0] == e.second && tri[1] == e.first)))
+            auto tri = m.triangles[t];
+            while (!((tri[0] == e[0] && tri[1] == e[1]) || (tri[0] == e[1] && tri[1] == e[0])))
                 tri = {tri[1], tri[2], tri[0]};
-            m.triangles[ts[0]] = {tri[0], best, tri[2]};
+            m.triangles[t] = {tri[0], best, tri[2]};
             added.push_back({best, tri[1], tri[2]});
-            split[ts[0]] = true;
+            split[t] = true;
         }
         if (added.empty()) return;
         m.triangles.insert(m.triangles.end(), added.begin(), added.end());
