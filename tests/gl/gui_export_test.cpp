@@ -84,6 +84,7 @@ TEST(GuiExport, ExportSaveOpenSessionAndSurfaces) {
 
     gui::MainWindow w;
     w.resize(1400, 1000);
+    test::fewer_still_frames(w); // gui_test_util.hpp
     w.show();
     ASSERT_TRUE(QTest::qWaitForWindowExposed(&w));
 
@@ -342,6 +343,7 @@ TEST(GuiExport, ExportToDicomJoinsTheStudyInOneSeriesPerSession) {
     const auto app = test::make_app("gui_export_test", dir / "config");
     gui::MainWindow w;
     w.resize(1200, 900);
+    test::fewer_still_frames(w); // gui_test_util.hpp
     w.show();
     ASSERT_TRUE(QTest::qWaitForWindowExposed(&w));
     w.open_path(QString::fromStdString(test::data("dicom-mr-forearm")));

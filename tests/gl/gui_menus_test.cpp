@@ -192,6 +192,7 @@ TEST(GuiMenusDefault, ToolsShowDeleteAllFollowsTheMeasurementsTitleNamesTheSessi
     TempDir dir;
     const auto app = make_app("gui_menus_default", dir / "config");
     gui::MainWindow w;
+    fewer_still_frames(w); // gui_test_util.hpp
     w.show();
     ASSERT_TRUE(QTest::qWaitForWindowExposed(&w));
     ASSERT_EQ(w.size(), QSize(1280, 900));

@@ -122,6 +122,7 @@ TEST(GuiPanels, SurfaceListScrollsAndTheWindowKeepsItsSize) {
     gui::MainWindow w;
     const QRect screen = QApplication::primaryScreen()->availableGeometry();
     w.resize(std::min(1280, screen.width()), std::min(900, screen.height()));
+    test::fewer_still_frames(w); // gui_test_util.hpp
     w.show();
     ASSERT_TRUE(QTest::qWaitForWindowExposed(&w));
     open_and_wait(w, ball);
@@ -184,6 +185,7 @@ TEST(GuiPanels, IsoValueStaysWithinTheVolumesValues) {
 
     gui::MainWindow w;
     w.resize(1280, 900);
+    test::fewer_still_frames(w); // gui_test_util.hpp
     w.show();
     ASSERT_TRUE(QTest::qWaitForWindowExposed(&w));
     auto* iso = w.surfaces_panel()->findChild<QDoubleSpinBox*>("add_iso_value");
@@ -254,6 +256,7 @@ TEST(GuiPanels, FirstNonEmptySurfaceFramesThe3DView) {
 
     gui::MainWindow w;
     w.resize(1280, 900);
+    test::fewer_still_frames(w); // gui_test_util.hpp
     w.show();
     ASSERT_TRUE(QTest::qWaitForWindowExposed(&w));
     open_and_wait(w, ball);
@@ -332,6 +335,7 @@ TEST(GuiPanels, SeriesChooserPreselectsTheSeriesFor3D) {
 
     gui::MainWindow w;
     w.resize(1200, 900);
+    test::fewer_still_frames(w); // gui_test_util.hpp
     w.show();
     ASSERT_TRUE(QTest::qWaitForWindowExposed(&w));
     w.open_path(QString::fromStdString(t.folder));
@@ -369,6 +373,7 @@ TEST(GuiPanels, OneDicomFileOpensItsSeries) {
 
     gui::MainWindow w;
     w.resize(1200, 900);
+    test::fewer_still_frames(w); // gui_test_util.hpp
     w.show();
     ASSERT_TRUE(QTest::qWaitForWindowExposed(&w));
     open_and_wait(w, file);
@@ -415,6 +420,7 @@ TEST(GuiPanels, HintAndPresetsFollowTheData) {
     const std::string ball = ball_volume(dir.path());
     gui::MainWindow w;
     w.resize(1280, 900);
+    test::fewer_still_frames(w); // gui_test_util.hpp
     w.show();
     ASSERT_TRUE(QTest::qWaitForWindowExposed(&w));
     auto* hint = w.findChild<QLabel*>("view3d_hint");
@@ -484,6 +490,7 @@ TEST(GuiPanels, IsoSliderStepsAndOpacityNumber) {
 
     gui::MainWindow w;
     w.resize(1280, 900);
+    test::fewer_still_frames(w); // gui_test_util.hpp
     w.show();
     ASSERT_TRUE(QTest::qWaitForWindowExposed(&w));
     open_and_wait(w, headsq);
@@ -574,6 +581,7 @@ TEST(GuiPanels, SaveDialogsStartInTheLastFolderUsedElseTheDocumentsFolder) {
     // ---- the dialogs start there
     gui::MainWindow w;
     w.resize(1280, 900);
+    test::fewer_still_frames(w); // gui_test_util.hpp
     w.show();
     ASSERT_TRUE(QTest::qWaitForWindowExposed(&w));
     open_and_wait(w, headsq.toStdString());

@@ -100,6 +100,7 @@ TEST(GuiSurfaces, AddOpacitySliderLargestRemoveAndCancel) {
 
     gui::MainWindow w;
     w.resize(1500, 1000);
+    test::fewer_still_frames(w); // gui_test_util.hpp
     w.show();
     ASSERT_TRUE(QTest::qWaitForWindowExposed(&w));
     auto* panel = w.surfaces_panel();
@@ -263,6 +264,7 @@ TEST(GuiSurfaces, PickedColourIsStoredAndSavedAsPicked) {
     const auto app = test::make_app("gui_surfaces_test", dir / "config");
     gui::MainWindow w;
     w.resize(1200, 900);
+    test::fewer_still_frames(w); // gui_test_util.hpp
     w.show();
     ASSERT_TRUE(QTest::qWaitForWindowExposed(&w));
     w.open_path(QString::fromStdString(test::data("headsq.nhdr")));
@@ -310,6 +312,7 @@ TEST(GuiSurfaces, AHalfwayIsoValueOnIntegerVoxelsIsShownAsItIs) {
     const auto app = test::make_app("gui_surfaces_test", dir / "config");
     gui::MainWindow w;
     w.resize(1500, 1000);
+    test::fewer_still_frames(w); // gui_test_util.hpp
     w.show();
     ASSERT_TRUE(QTest::qWaitForWindowExposed(&w));
     w.open_path(QString::fromStdString(test::data("headsq.nhdr")));

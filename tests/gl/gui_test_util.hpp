@@ -125,6 +125,21 @@ inline std::unique_ptr<QApplication> make_app(const std::string& name, const std
     return app;
 }
 
+// Fewer still frames in the 3D view than the app's 16 (cone AO and
+// anti-aliasing accumulate over them; ViewerOptions::interactive_look).
+// On llvmpipe a still frame of the head with a translucent skin takes about
+// 0.8 s (1 s under the sanitizers; its translucent AO alone 0.55 s,
+// `isoscope render --stats`), and the tests that wait for a converged view
+// waited for 16 of them each time: what they check (threads, picks,
+// pictures against the core's of the same look) holds at any count.
+// Through the workspace's look, as a user's change of the look goes.
+inline void fewer_still_frames(gui::MainWindow& w, int frames = 4) {
+    FrameLook look = w.workspace().look();
+    look.ao_frames = frames;
+    look.aa.view_frames = frames;
+    w.workspace().set_look(look);
+}
+
 // The test's output folder for screenshots: build/test_output/<name>.
 inline std::filesystem::path output_dir(const std::string& name) {
     const auto out = std::filesystem::path(ISOSCOPE_BINARY_DIR) / "test_output" / name;

@@ -51,6 +51,7 @@ void open_headsq(gui::MainWindow& w) {
 // The window on screen with headsq open.
 void show_with_headsq(gui::MainWindow& w) {
     w.resize(1400, 1000);
+    test::fewer_still_frames(w); // gui_test_util.hpp
     w.show();
     ASSERT_TRUE(QTest::qWaitForWindowExposed(&w));
     open_headsq(w);
@@ -306,6 +307,7 @@ TEST(GuiUndo, AskBeforeQuittingOrOpening) {
     // Nothing changed: quitting asks nothing.
     EXPECT_TRUE(w.close());
     EXPECT_FALSE(w.isVisible());
+    test::fewer_still_frames(w); // gui_test_util.hpp
     w.show();
     ASSERT_TRUE(QTest::qWaitForWindowExposed(&w));
 
@@ -362,6 +364,7 @@ TEST(GuiUndo, AskBeforeQuittingOrOpening) {
     const core::Session quit_saved = core::read_session(session);
     ASSERT_EQ(quit_saved.surfaces.size(), 1u);
     EXPECT_FALSE(quit_saved.surfaces[0].visible);
+    test::fewer_still_frames(w); // gui_test_util.hpp
     w.show();
     child<QCheckBox>(w.surfaces_panel()->row(w.scene().surfaces()[0]), "visible")->setChecked(true);
     w.close();
@@ -381,6 +384,7 @@ TEST(GuiUndoChild, EditAndWaitForTheKill) {
     const auto app = test::make_app("gui_undo_test", dir / "config");
     gui::MainWindow w;
     w.unsaved_work()->set_autosave_interval(200);
+    test::fewer_still_frames(w); // gui_test_util.hpp
     w.show();
     ASSERT_TRUE(QTest::qWaitForWindowExposed(&w));
     open_headsq(w);
@@ -439,6 +443,7 @@ TEST(GuiUndo, AutosaveKillAndRestore) {
     const auto app = test::make_app("gui_undo_test", dir / "config");
     ASSERT_EQ(gui::UnsavedWork::recovery_path().toStdString(), recovery.string());
     gui::MainWindow w;
+    test::fewer_still_frames(w); // gui_test_util.hpp
     w.show();
     ASSERT_TRUE(QTest::qWaitForWindowExposed(&w));
     bool otherwise = false;

@@ -185,6 +185,7 @@ TEST(GuiViews, TwoSeriesFolderShowsTheChooser) {
 
     gui::MainWindow w;
     w.resize(1200, 900);
+    test::fewer_still_frames(w); // gui_test_util.hpp
     w.show();
     ASSERT_TRUE(QTest::qWaitForWindowExposed(&w));
 
@@ -283,6 +284,7 @@ TEST(GuiViews, ObliqueVolumeSliceClicksPanZoomAndWindow) {
 
     gui::MainWindow w;
     w.resize(1200, 900);
+    test::fewer_still_frames(w); // gui_test_util.hpp
     w.show();
     ASSERT_TRUE(QTest::qWaitForWindowExposed(&w));
     w.open_path(QString::fromStdString(file));
@@ -364,6 +366,7 @@ TEST(GuiViews, ThreeDViewMouseAndToolBar) {
 
     gui::MainWindow w;
     w.resize(1200, 900);
+    test::fewer_still_frames(w); // gui_test_util.hpp
     w.show();
     ASSERT_TRUE(QTest::qWaitForWindowExposed(&w));
     w.open_path(QString::fromStdString(file));

@@ -52,6 +52,7 @@ TEST(MainWindow, OpenSlicesClickSurfaceAndBrokenFile) {
 
     gui::MainWindow w;
     w.resize(1400, 1000);
+    test::fewer_still_frames(w); // gui_test_util.hpp
     w.show();
     ASSERT_TRUE(QTest::qWaitForWindowExposed(&w));
 
