@@ -34,8 +34,6 @@ using test::voxel_at;
 
 namespace {
 
-Mesh box(glm::vec3 lo, glm::vec3 hi) { return test::flat_box_mesh(lo, hi); }
-
 RenderOptions ao_options(int size, double radius) {
     RenderOptions o;
     o.width = o.height = size;
@@ -55,8 +53,8 @@ using SliceMap = test::GlTest;
 TEST_F(SliceMap, TwoBoxesGiveExactBitPatterns) {
     // Seen from the front (camera on -y looking +y): box A spans depths 480..500, box B 490..520.
     Renderer ren;
-    ren.add(box({-20, -20, -20}, {0, 0, 20}), {});
-    ren.add(box({0, -10, -20}, {20, 20, 20}), {});
+    ren.add(test::flat_box_mesh({-20, -20, -20}, {0, 0, 20}), {});
+    ren.add(test::flat_box_mesh({0, -10, -20}, {20, 20, 20}), {});
     const Camera cam = looking({0, -500, 0}, {0, 0, 0}, {0, 0, 1});
     auto o = ao_options(128, 100);
     const auto r = ren.render(cam, o, {.read_slicemap = true});
@@ -153,8 +151,8 @@ TEST_F(ConeAo, SphereOcclusionByAHalfSpaceIsItsVolumeFraction) {
     // 1 - the fraction of the sphere of radius R/2 above it that lies in the wall.
     const double R = 10;
     Renderer ren;
-    ren.add(box({-100, -100, -10}, {0, 100, 0}), {});
-    ren.add(box({0, -100, -10}, {100, 100, 40}), {});
+    ren.add(test::flat_box_mesh({-100, -100, -10}, {0, 100, 0}), {});
+    ren.add(test::flat_box_mesh({0, -100, -10}, {100, 100, 40}), {});
     const Camera cam = looking({0, 0, 300}, {0, 0, 0}, {0, 1, 0}, 10, 1000);
     auto o = ao_options(256, R);
     o.look.cone.resolution = 1.0; // the cone pass itself, no upsampling
@@ -284,8 +282,8 @@ TEST_F(ConeAo, CoarseConePassIsUpsampledAlongSurfacesNotAcrossEdges) {
     //    the slab's darkness onto the top across the silhouette, and must keep
     //    most of the slab's dark ring.
     Renderer ren;
-    ren.add(box({-100, -100, -10}, {100, 100, 0}), {});
-    const auto block = ren.add(box({-20, -20, 0}, {20, 20, 40}), {});
+    ren.add(test::flat_box_mesh({-100, -100, -10}, {100, 100, 0}), {});
+    const auto block = ren.add(test::flat_box_mesh({-20, -20, 0}, {20, 20, 40}), {});
     const Camera cam = looking({0, 0, 300}, {0, 0, 0}, {0, 1, 0});
     RenderOptions o = ao_options(128, 10.0);
     o.look.cone.temporal = false;
@@ -332,8 +330,8 @@ TEST_F(ConeAo, GuardBandKeepsOccludersJustOffScreen) {
     const int S = 128;
     const Camera cam = looking({0, 0, 200}, {0, 0, 0}, {0, 1, 0});
     const double x_edge = 200.0 / (cam.projection(1.0))[0][0]; // floor x at NDC x = 1 (the floor's depth is 200)
-    std::vector<Mesh> meshes{box({-400, -400, -10}, {400, 400, 0}),
-                             box({float(x_edge + 3), -400, 0}, {float(x_edge + 40), 400, 40})};
+    std::vector<Mesh> meshes{test::flat_box_mesh({-400, -400, -10}, {400, 400, 0}),
+                             test::flat_box_mesh({float(x_edge + 3), -400, 0}, {float(x_edge + 40), 400, 40})};
     Renderer ren;
     for (const auto& m : meshes) ren.add(m, {});
     AoReference reference({&meshes[0], &meshes[1]});
@@ -387,13 +385,13 @@ TEST_F(ConeAo, GuardBandKeepsOccludersJustOffScreen) {
     EXPECT_NEAR(with, in_view, 0.03) << "guard band " << guard_used << ": the strip as if the wall were in view";
     // A scene wholly in view needs no guard band.
     Renderer small;
-    small.add(box({-20, -20, -20}, {20, 20, 20}), {});
+    small.add(test::flat_box_mesh({-20, -20, -20}, {20, 20, 20}), {});
     EXPECT_EQ(small.render(looking({0, -300, 0}, {0, 0, 0}, {0, 0, 1}), ao_options(64, R)).ao_guard, 0.0);
 }
 
 TEST_F(ConeAo, PassesAreCulledWhenOffAndTheSlicemapIsReusedWhenStill) {
     Renderer ren;
-    ren.add(box({-20, -20, -20}, {20, 20, 20}), {});
+    ren.add(test::flat_box_mesh({-20, -20, -20}, {20, 20, 20}), {});
     const Camera cam = looking({30, -300, 40}, {0, 0, 0}, {0, 0, 1});
     RenderOptions o;
     o.width = o.height = 64;
@@ -436,14 +434,14 @@ TEST_F(ConeAo, PassesAreCulledWhenOffAndTheSlicemapIsReusedWhenStill) {
     EXPECT_TRUE(d.voxelized) << "the camera moved";
     EXPECT_EQ(d.ao_frames, 1);
     ren.object(1).visible = false;
-    ren.add(box({-5, -5, 25}, {5, 5, 35}), {});
+    ren.add(test::flat_box_mesh({-5, -5, 25}, {5, 5, 35}), {});
     EXPECT_TRUE(ren.render(moved, o).voxelized) << "the scene changed";
 }
 
 TEST_F(ConeAo, StillFramesConvergeInsteadOfFlickering) {
     Renderer ren;
-    ren.add(box({-100, -100, -10}, {100, 100, 0}), {});
-    ren.add(box({-10, -10, 0}, {10, 10, 15}), {});
+    ren.add(test::flat_box_mesh({-100, -100, -10}, {100, 100, 0}), {});
+    ren.add(test::flat_box_mesh({-10, -10, 0}, {10, 10, 15}), {});
     const Camera cam = looking({40, -120, 160}, {0, 0, 0}, {0, 0, 1});
     auto o = ao_options(128, 10);
     o.look.cone.samples = 4;
@@ -477,7 +475,7 @@ TEST_F(ConeAo, StillFramesConvergeInsteadOfFlickering) {
 
 TEST_F(ConeAoStress, GrazingViewOfAnOpenPlaneStaysUnoccluded) {
     Renderer ren;
-    ren.add(box({-400, -400, -10}, {400, 400, 0}), {});
+    ren.add(test::flat_box_mesh({-400, -400, -10}, {400, 400, 0}), {});
     // 85 degrees from the normal.
     const double a = glm::radians(85.0);
     const Camera cam = looking({0, -300 * std::sin(a), 300 * std::cos(a)}, {0, 0, 0}, {0, 0, 1});
@@ -498,21 +496,22 @@ TEST_F(ConeAoStress, GrazingViewOfAnOpenPlaneStaysUnoccluded) {
 TEST_F(ConeAoStress, ThinSheetAndDeepCavityAgainstTheReference) {
     // Floor, a 0.3 mm sheet standing on it (thinner than a voxel), and a 10 x 10 x 40 mm well built
     // from boxes that share faces.
-    std::vector<Mesh> meshes = {box({-100, -100, -10}, {100, 100, 0}), box({-40, -30, 0}, {-39.7f, 30, 25}),
-                                box({20, -5, -50}, {25, 5, 0}),        box({35, -5, -50}, {40, 5, 0}),
-                                box({20, -10, -50}, {40, -5, 0}),      box({20, 5, -50}, {40, 10, 0}),
-                                box({20, -10, -60}, {40, 10, -50})};
+    std::vector<Mesh> meshes = {
+        test::flat_box_mesh({-100, -100, -10}, {100, 100, 0}), test::flat_box_mesh({-40, -30, 0}, {-39.7f, 30, 25}),
+        test::flat_box_mesh({20, -5, -50}, {25, 5, 0}),        test::flat_box_mesh({35, -5, -50}, {40, 5, 0}),
+        test::flat_box_mesh({20, -10, -50}, {40, -5, 0}),      test::flat_box_mesh({20, 5, -50}, {40, 10, 0}),
+        test::flat_box_mesh({20, -10, -60}, {40, 10, -50})};
     // The floor has a hole where the well is: cut it into pieces around x 20..40, y -10..10.
-    meshes[0] = box({-100, -100, -10}, {20, 100, 0});
-    meshes.push_back(box({40, -100, -10}, {100, 100, 0}));
-    meshes.push_back(box({20, -100, -10}, {40, -10, 0}));
-    meshes.push_back(box({20, 10, -10}, {40, 100, 0}));
+    meshes[0] = test::flat_box_mesh({-100, -100, -10}, {20, 100, 0});
+    meshes.push_back(test::flat_box_mesh({40, -100, -10}, {100, 100, 0}));
+    meshes.push_back(test::flat_box_mesh({20, -100, -10}, {40, -10, 0}));
+    meshes.push_back(test::flat_box_mesh({20, 10, -10}, {40, 100, 0}));
     // The well's walls overlap the floor pieces between z -10 and 0: shorten them to below the floor.
-    meshes[2] = box({25, -5, -50}, {35, -5, -50}); // (degenerate: no volume, draws nothing)
-    meshes[2] = box({20, -5, -50}, {25, 5, -10});
-    meshes[3] = box({35, -5, -50}, {40, 5, -10});
-    meshes[4] = box({20, -10, -50}, {40, -5, -10});
-    meshes[5] = box({20, 5, -50}, {40, 10, -10});
+    meshes[2] = test::flat_box_mesh({25, -5, -50}, {35, -5, -50}); // (degenerate: no volume, draws nothing)
+    meshes[2] = test::flat_box_mesh({20, -5, -50}, {25, 5, -10});
+    meshes[3] = test::flat_box_mesh({35, -5, -50}, {40, 5, -10});
+    meshes[4] = test::flat_box_mesh({20, -10, -50}, {40, -5, -10});
+    meshes[5] = test::flat_box_mesh({20, 5, -50}, {40, 10, -10});
     Renderer ren;
     std::vector<const Mesh*> ptrs;
     for (const auto& m : meshes) {
@@ -577,7 +576,7 @@ TEST_F(ConeAoStress, NearPlaneEmptySceneAndSingleTriangle) {
         // The near plane cuts through the object: nothing is clipped from the slicemap (depth clamp), values stay finite.
         Renderer ren;
         ren.add(sphere_mesh({0, 0, 0}, 40, 2.0), {});
-        ren.add(box({-100, 30, -100}, {100, 40, 100}), {});
+        ren.add(test::flat_box_mesh({-100, 30, -100}, {100, 40, 100}), {});
         const Camera cam = looking({0, -45, 0}, {0, 0, 0}, {0, 0, 1}, 10, 500);
         const auto img = ren.render(cam, ao_options(96, 20)).image;
         std::size_t finite = 0;

@@ -29,8 +29,6 @@ using test::voxel_at;
 
 namespace {
 
-Mesh box(glm::vec3 lo, glm::vec3 hi) { return test::flat_box_mesh(lo, hi); }
-
 RenderOptions ao_options(int size, double radius, bool surface) {
     RenderOptions o;
     o.width = o.height = size;
@@ -62,9 +60,9 @@ TEST_F(ConeAoThin, SheetThinnerThanAVoxelSetsExactlyItsVoxel) {
     // floor at z = -70..-60 (the far bound): 256 voxels over 230..320, 0.35 mm each.
     const float t = 0.02f;
     Renderer ren;
-    ren.add(box({-40, -30, -t}, {0, 30, 0}), {});         // the sheet
-    ren.add(box({20, -5, 0}, {30, 5, 20}), {});           // nearest depth 230
-    ren.add(box({-100, -100, -70}, {100, 100, -60}), {}); // floor: far bound
+    ren.add(test::flat_box_mesh({-40, -30, -t}, {0, 30, 0}), {});         // the sheet
+    ren.add(test::flat_box_mesh({20, -5, 0}, {30, 5, 20}), {});           // nearest depth 230
+    ren.add(test::flat_box_mesh({-100, -100, -70}, {100, 100, -60}), {}); // floor: far bound
     const Camera cam = test::looking({0, 0, 250}, {0, 0, 0}, {0, 1, 0});
     for (const bool surface : {false, true}) {
         const auto r = ren.render(cam, ao_options(128, 30, surface), {.read_slicemap = true});
@@ -107,8 +105,8 @@ TEST_F(ConeAoThin, SurfaceVoxelsStayInsideThickSolids) {
     // face's voxel on the wrong side would add a voxel in front of the block
     // (self-occlusion) or behind it in every column.
     Renderer ren;
-    ren.add(box({-40, -30, 0}, {0, 30, 20}), {});
-    ren.add(box({-100, -100, -70}, {100, 100, -60}), {});
+    ren.add(test::flat_box_mesh({-40, -30, 0}, {0, 30, 20}), {});
+    ren.add(test::flat_box_mesh({-100, -100, -70}, {100, 100, -60}), {});
     const Camera cam = test::looking({0, 0, 250}, {0, 0, 0}, {0, 1, 0});
     const auto off = ren.render(cam, ao_options(128, 30, false), {.read_slicemap = true}).slicemap;
     const auto on = ren.render(cam, ao_options(128, 30, true), {.read_slicemap = true}).slicemap;
@@ -134,8 +132,8 @@ TEST_F(ConeAoThin, SurfaceVoxelsKeepTheSlicemapReuse) {
     // changed: with surface voxels on, a still camera reuses it; turning them
     // on or off rebuilds it (they are in its key).
     Renderer ren;
-    ren.add(box({-20, -20, 0}, {20, 20, 10}), {});
-    ren.add(box({-100, -100, -10}, {100, 100, 0}), {});
+    ren.add(test::flat_box_mesh({-20, -20, 0}, {20, 20, 10}), {});
+    ren.add(test::flat_box_mesh({-100, -100, -10}, {100, 100, 0}), {});
     const Camera cam = test::looking({0, 0, 250}, {0, 0, 0}, {0, 1, 0});
     auto o = ao_options(64, 10, true);
     EXPECT_TRUE(ren.render(cam, o).voxelized);
@@ -154,14 +152,14 @@ TEST_F(ConeAoThin, TiltedSheetThinnerThanAVoxelKeepsItsVoxelsInEveryColumn) {
     // surface pass sets, in every column it covers, voxels only within the
     // sheet's depths there (+- half a texel's slope and one voxel).
     const float t = 0.05f;
-    Mesh sheet = box({-20, -20, -t}, {20, 20, 0});
+    Mesh sheet = test::flat_box_mesh({-20, -20, -t}, {20, 20, 0});
     const glm::mat3 tilt = glm::mat3(glm::rotate(glm::mat4(1.0f), glm::radians(60.0f), glm::vec3(0, 1, 0)));
     for (auto& p : sheet.positions) p = tilt * p;
     for (auto& n : sheet.normals) n = tilt * n;
     Renderer ren;
     ren.add(sheet, {});
-    ren.add(box({40, -5, -50}, {50, 5, 30}), {});         // nearest visible depth 220
-    ren.add(box({-100, -100, -70}, {100, 100, -60}), {}); // floor: far bound
+    ren.add(test::flat_box_mesh({40, -5, -50}, {50, 5, 30}), {});         // nearest visible depth 220
+    ren.add(test::flat_box_mesh({-100, -100, -70}, {100, 100, -60}), {}); // floor: far bound
     const Camera cam = test::looking({0, 0, 250}, {0, 0, 0}, {0, 1, 0});
     const glm::dvec3 n = glm::dvec3(tilt * glm::vec3(0, 0, 1));
     for (const bool surface : {false, true}) {

@@ -38,7 +38,7 @@ vtkSmartPointer<vtkDICOMMetaData> header(const std::string& file) {
     return md;
 }
 
-std::string text(vtkDICOMMetaData* md, vtkDICOMTag tag) {
+std::string tag_text(vtkDICOMMetaData* md, vtkDICOMTag tag) {
     std::string s = md->Get(tag).AsUTF8String();
     while (!s.empty() && (s.back() == ' ' || s.back() == '\0')) s.pop_back();
     return s;
@@ -110,34 +110,35 @@ TEST(DicomExport, AFigureOfTheBundledMrJoinsItsStudyInOneSeries) {
     for (int i = 0; i < 2; ++i) {
         SCOPED_TRACE(files[std::size_t(i)]);
         vtkDICOMMetaData* m = md[std::size_t(i)];
-        EXPECT_EQ(text(m, DC::SOPClassUID), kSecondaryCapture);
-        EXPECT_EQ(text(m, DC::StudyInstanceUID), text(source, DC::StudyInstanceUID));
+        EXPECT_EQ(tag_text(m, DC::SOPClassUID), kSecondaryCapture);
+        EXPECT_EQ(tag_text(m, DC::StudyInstanceUID), tag_text(source, DC::StudyInstanceUID));
         for (auto tag : {DC::PatientName, DC::PatientID, DC::PatientSex, DC::StudyDate, DC::StudyDescription})
-            EXPECT_EQ(text(m, tag), text(source, tag)) << vtkDICOMTag(tag);
-        EXPECT_NE(text(m, DC::SeriesInstanceUID), text(source, DC::SeriesInstanceUID));
-        EXPECT_EQ(text(m, DC::SeriesInstanceUID), text(md[0], DC::SeriesInstanceUID));
-        EXPECT_EQ(text(m, DC::SeriesDescription), "isoscope 3D");
+            EXPECT_EQ(tag_text(m, tag), tag_text(source, tag)) << vtkDICOMTag(tag);
+        EXPECT_NE(tag_text(m, DC::SeriesInstanceUID), tag_text(source, DC::SeriesInstanceUID));
+        EXPECT_EQ(tag_text(m, DC::SeriesInstanceUID), tag_text(md[0], DC::SeriesInstanceUID));
+        EXPECT_EQ(tag_text(m, DC::SeriesDescription), "isoscope 3D");
         EXPECT_EQ(m->Get(DC::InstanceNumber).AsInt(), i + 1);
-        EXPECT_EQ(text(m, DC::BurnedInAnnotation), "YES");
-        EXPECT_EQ(text(m, DC::PhotometricInterpretation), "RGB");
+        EXPECT_EQ(tag_text(m, DC::BurnedInAnnotation), "YES");
+        EXPECT_EQ(tag_text(m, DC::PhotometricInterpretation), "RGB");
         EXPECT_EQ(m->Get(DC::SamplesPerPixel).AsInt(), 3);
         EXPECT_EQ(m->Get(DC::BitsAllocated).AsInt(), 8);
         EXPECT_EQ(m->Get(DC::Rows).AsInt(), 120);
         EXPECT_EQ(m->Get(DC::Columns).AsInt(), 160);
-        EXPECT_EQ(text(m, DC::ConversionType), "WSD");
+        EXPECT_EQ(tag_text(m, DC::ConversionType), "WSD");
         // The provenance the PNG carries.
-        const std::string comments = text(m, DC::ImageComments);
+        const std::string comments = tag_text(m, DC::ImageComments);
         EXPECT_NE(comments.find("isoscope:input: " + fs::absolute(src).lexically_normal().string()), std::string::npos)
             << comments;
         EXPECT_NE(comments.find(std::string("isoscope:iso: ") + (i == 0 ? "200" : "300")), std::string::npos)
             << comments;
         EXPECT_NE(comments.find("isoscope:commit: "), std::string::npos) << comments;
-        EXPECT_NE(text(m, DC::DerivationDescription).find(text(source, DC::SeriesInstanceUID)), std::string::npos);
+        EXPECT_NE(tag_text(m, DC::DerivationDescription).find(tag_text(source, DC::SeriesInstanceUID)),
+                  std::string::npos);
     }
-    EXPECT_NE(text(md[0], DC::SOPInstanceUID), text(md[1], DC::SOPInstanceUID));
+    EXPECT_NE(tag_text(md[0], DC::SOPInstanceUID), tag_text(md[1], DC::SOPInstanceUID));
     expect_same_pixels(files[0], dir / "a.png");
     expect_same_pixels(files[1], dir / "b.png");
-    expect_tools_read(files[1], text(source, DC::StudyInstanceUID));
+    expect_tools_read(files[1], tag_text(source, DC::StudyInstanceUID));
 }
 
 TEST(DicomExport, AFigureOfAnotherFormatStartsANewStudyThatSaysSo) {
@@ -150,12 +151,12 @@ TEST(DicomExport, AFigureOfAnotherFormatStartsANewStudyThatSaysSo) {
     const auto files = dcm_files(pacs);
     ASSERT_EQ(files.size(), 2u);
     const auto a = header(files[0]), b = header(files[1]);
-    EXPECT_NE(text(a, DC::StudyDescription).find("headsq.nhdr (not from a DICOM study)"), std::string::npos);
-    EXPECT_EQ(text(a, DC::StudyInstanceUID), text(b, DC::StudyInstanceUID));
-    EXPECT_EQ(text(a, DC::SeriesInstanceUID), text(b, DC::SeriesInstanceUID));
+    EXPECT_NE(tag_text(a, DC::StudyDescription).find("headsq.nhdr (not from a DICOM study)"), std::string::npos);
+    EXPECT_EQ(tag_text(a, DC::StudyInstanceUID), tag_text(b, DC::StudyInstanceUID));
+    EXPECT_EQ(tag_text(a, DC::SeriesInstanceUID), tag_text(b, DC::SeriesInstanceUID));
     EXPECT_EQ(b->Get(DC::InstanceNumber).AsInt(), 2);
-    EXPECT_EQ(text(a, DC::SOPClassUID), kSecondaryCapture);
-    expect_tools_read(files[0], text(a, DC::StudyInstanceUID));
+    EXPECT_EQ(tag_text(a, DC::SOPClassUID), kSecondaryCapture);
+    expect_tools_read(files[0], tag_text(a, DC::StudyInstanceUID));
 }
 
 TEST(DicomExport, ErrorsNameTheFlagAndNothingIsOverwritten) {

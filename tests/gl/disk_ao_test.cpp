@@ -303,8 +303,6 @@ TEST_F(DiskAo, GlslKernelsMatchTheCppFloatTemplates) {
 
 namespace {
 
-Mesh box(glm::vec3 lo, glm::vec3 hi) { return test::flat_box_mesh(lo, hi); }
-
 RenderOptions disk_options(int size, double radius) {
     RenderOptions o;
     o.width = o.height = size;
@@ -348,7 +346,7 @@ TEST_F(DiskAo, ElementTermsAndGatherMatchTheCpuHierarchy) {
     const glm::vec3 lo(bb.min), hi(bb.max);
     const float pad = 0.3f * (hi.x - lo.x);
     // Floor under the bunny: the bunny's up is +y in its file.
-    const Mesh floor = box({lo.x - pad, lo.y - 0.02f, lo.z - pad}, {hi.x + pad, lo.y, hi.z + pad});
+    const Mesh floor = test::flat_box_mesh({lo.x - pad, lo.y - 0.02f, lo.z - pad}, {hi.x + pad, lo.y, hi.z + pad});
     Renderer ren;
     ren.add(bunny, {});
     ren.add(floor, {});
@@ -473,8 +471,8 @@ TEST_F(DiskAo, CtSkinAndBunnyAgainstTheEmbreeReference) {
 // new settings rerun the element passes only; a new surface rebuilds.
 TEST_F(DiskAo, PassesAreCulledWhenOffAndTheHierarchyIsKeptAcrossViews) {
     Renderer ren;
-    ren.add(box({-20, -20, -20}, {20, 20, 20}), {});
-    ren.add(box({-40, -40, -25}, {40, 40, -20}), {});
+    ren.add(test::flat_box_mesh({-20, -20, -20}, {20, 20, 20}), {});
+    ren.add(test::flat_box_mesh({-40, -40, -25}, {40, 40, -20}), {});
     const Camera cam = looking({30, -300, 40}, {0, 0, 0}, {0, 0, 1});
     RenderOptions o;
     o.width = o.height = 48;
@@ -505,7 +503,7 @@ TEST_F(DiskAo, PassesAreCulledWhenOffAndTheHierarchyIsKeptAcrossViews) {
     EXPECT_TRUE(c.disk_elements) << "new settings";
     o.look.cone.radius_mm = 12;
     EXPECT_TRUE(ren.render(moved, o).disk_elements) << "new radius";
-    ren.add(box({-5, -5, 25}, {5, 5, 35}), {});
+    ren.add(test::flat_box_mesh({-5, -5, 25}, {5, 5, 35}), {});
     const auto d = ren.render(moved, o);
     EXPECT_TRUE(d.disk_built) << "a new surface";
     EXPECT_TRUE(d.disk_elements);

@@ -26,7 +26,7 @@ namespace {
 using core::SliceOrientation;
 
 // A drag with `button` from `from` by `by`, in steps, as events sent at once.
-void drag(QWidget* w, Qt::MouseButton button, QPoint from, QPoint by) {
+void drag_by(QWidget* w, Qt::MouseButton button, QPoint from, QPoint by) {
     const auto send = [&](QEvent::Type t, QPoint at, Qt::MouseButtons held) {
         QMouseEvent e(t, QPointF(at), w->mapToGlobal(QPointF(at)), button, held, Qt::NoModifier);
         QCoreApplication::sendEvent(w, &e);
@@ -189,8 +189,8 @@ TEST_F(GuiLayouts, SessionRestoresTheLayoutSliceViewsAndCrosshair) {
     auto* sagittal = w.slice_view(SliceOrientation::Sagittal);
     const double coronal_pixel = w.workspace().planes()[1].pixel_mm;
     const glm::dvec3 sagittal_centre = w.workspace().planes()[2].center;
-    drag(coronal, Qt::RightButton, {coronal->width() / 2, coronal->height() / 2}, {0, -40});
-    drag(sagittal, Qt::MiddleButton, {sagittal->width() / 2, sagittal->height() / 2}, {30, 20});
+    drag_by(coronal, Qt::RightButton, {coronal->width() / 2, coronal->height() / 2}, {0, -40});
+    drag_by(sagittal, Qt::MiddleButton, {sagittal->width() / 2, sagittal->height() / 2}, {30, 20});
     EXPECT_LT(w.workspace().planes()[1].pixel_mm, coronal_pixel * 0.9);
     EXPECT_GT(glm::length(w.workspace().planes()[2].center - sagittal_centre), 1.0);
     const auto saved = w.workspace().planes();

@@ -34,6 +34,7 @@
 #include "renderer/surface/analysis.hpp"
 
 using namespace iso;
+using test::button_drag;
 using test::wait_until;
 
 namespace {
@@ -78,14 +79,6 @@ void send_mouse(QWidget* target, QEvent::Type type, Qt::MouseButton button, Qt::
 }
 
 void hover(QWidget* target, QPointF at) { send_mouse(target, QEvent::MouseMove, Qt::NoButton, Qt::NoButton, at); }
-
-// A drag with one button from `from` to `to` in 6 moves.
-void drag(QWidget* target, Qt::MouseButton button, QPointF from, QPointF to) {
-    send_mouse(target, QEvent::MouseButtonPress, button, button, from);
-    for (int i = 1; i <= 6; ++i)
-        send_mouse(target, QEvent::MouseMove, Qt::NoButton, button, from + (to - from) * (i / 6.0));
-    send_mouse(target, QEvent::MouseButtonRelease, button, Qt::NoButton, to);
-}
 
 void wheel(QWidget* target, int notches) {
     const QPointF at(target->width() / 2.0, target->height() / 2.0);
@@ -160,7 +153,7 @@ TEST_F(GuiSlices, ScaleBarIsARoundLengthOfTheGridsPixelSize) {
     const double before = check("fitted");
     // Right drag up: magnifies, the bar gets shorter in mm.
     const QPointF c(v->width() / 2.0, v->height() / 2.0);
-    drag(v, Qt::RightButton, c, c - QPointF(0, v->height() / 2.0));
+    button_drag(v, Qt::RightButton, c, c - QPointF(0, v->height() / 2.0));
     const double after = check("zoomed in 2x");
     EXPECT_LE(after, before);
 }
@@ -194,7 +187,7 @@ TEST_F(GuiSlices, HoverProbeReadsTheCoreWithoutReplacingTheClick) {
         EXPECT_EQ(w().statusBar()->currentMessage(), clicked) << "the hover replaced the click's readout";
     }
     // Outside the volume: pan the head away (middle drag) and hover where the core finds nothing.
-    drag(v, Qt::MiddleButton, QPointF(10, 10), QPointF(v->width() - 10, v->height() - 10));
+    button_drag(v, Qt::MiddleButton, QPointF(10, 10), QPointF(v->width() - 10, v->height() - 10));
     const QPointF out(20.5, 20.5);
     ASSERT_FALSE(core::sample_at_pixel(vol, v->grid(), {out.x(), out.y()})) << "the pixel should be outside";
     hover(v, out);
@@ -276,8 +269,8 @@ TEST_F(GuiSlices, FitRecentresAfterPanAndZoom) {
     core::zoom_to_fit(want, v->width(), v->height());
     for (const char* how : {"F", "double-click", "button"}) {
         const QPointF c(v->width() / 2.0, v->height() / 2.0);
-        drag(v, Qt::MiddleButton, c, c + QPointF(60, -35));
-        drag(v, Qt::RightButton, c, c - QPointF(0, 80));
+        button_drag(v, Qt::MiddleButton, c, c + QPointF(60, -35));
+        button_drag(v, Qt::RightButton, c, c - QPointF(0, 80));
         ASSERT_GT(glm::length(v->plane()->center - want.center), 1.0) << how << ": the pan did nothing";
         ASSERT_GT(std::abs(v->plane()->pixel_mm - want.pixel_mm), 1e-3) << how << ": the zoom did nothing";
         if (std::string(how) == "F") {

@@ -40,7 +40,7 @@ namespace {
 using test::add_through_panel;
 using test::wait_until;
 
-template <class T> T* child(QWidget* row, const char* name) { return row ? row->findChild<T*>(name) : nullptr; }
+using test::child;
 
 // A frame drawn after now, without error.
 void expect_new_frame(gui::MainWindow& w, int frames_before) {

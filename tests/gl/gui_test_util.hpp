@@ -65,6 +65,22 @@ inline void add_through_panel(gui::MainWindow& w, double iso) {
     ASSERT_TRUE(wait_until([&] { return !w.busy(); }, 60000)) << "the extraction did not finish";
 }
 
+// A drag with one button, as events sent to `target` at once: pressed at
+// `from`, `steps` moves to `to`, released there.
+inline void button_drag(QWidget* target, Qt::MouseButton button, QPointF from, QPointF to, int steps = 6) {
+    const auto send = [&](QEvent::Type type, QPointF at, Qt::MouseButton b, Qt::MouseButtons held) {
+        QMouseEvent e(type, at, target->mapToGlobal(at), b, held, Qt::NoModifier);
+        QCoreApplication::sendEvent(target, &e);
+    };
+    send(QEvent::MouseButtonPress, from, button, button);
+    for (int i = 1; i <= steps; ++i)
+        send(QEvent::MouseMove, from + (to - from) * (double(i) / steps), Qt::NoButton, button);
+    send(QEvent::MouseButtonRelease, to, button, Qt::NoButton);
+}
+
+// A widget's child of type T named `name` (none without the widget).
+template <class T> T* child(QWidget* w, const char* name) { return w ? w->findChild<T*>(name) : nullptr; }
+
 // Pixels brighter than black: the picture shows something, not an empty frame.
 // A left drag delivered straight to the widget (QTest::mouseMove moves the X
 // pointer, whose events arrive later), the event loop running between steps.

@@ -40,7 +40,8 @@ using namespace iso;
 namespace {
 using test::wait_until;
 
-template <class T> T* child(QWidget* row, const char* name) { return row ? row->findChild<T*>(name) : nullptr; }
+using test::add_through_panel;
+using test::child;
 
 void open_headsq(gui::MainWindow& w) {
     w.open_path(QString::fromStdString(test::data("headsq.nhdr")));
@@ -55,16 +56,6 @@ void show_with_headsq(gui::MainWindow& w) {
     w.show();
     ASSERT_TRUE(QTest::qWaitForWindowExposed(&w));
     open_headsq(w);
-}
-
-void add_through_panel(gui::MainWindow& w, double iso) {
-    auto* panel = w.surfaces_panel();
-    auto* value = panel->findChild<QDoubleSpinBox*>("add_iso_value");
-    auto* add = panel->findChild<QPushButton*>("add_surface");
-    ASSERT_NE(add, nullptr);
-    value->setValue(iso);
-    QTest::mouseClick(add, Qt::LeftButton);
-    ASSERT_TRUE(wait_until([&] { return !w.busy(); }, 60000)) << "the extraction did not finish";
 }
 
 // A drag of a slider through `values`: pressed, moved, released.

@@ -43,6 +43,7 @@
 #include "renderer/surface/analysis.hpp"
 
 using namespace iso;
+using test::button_drag;
 using test::wait_until;
 
 namespace {
@@ -63,22 +64,6 @@ gui::SeriesDialog* visible_chooser(gui::MainWindow& w) {
     for (auto* d : w.findChildren<gui::SeriesDialog*>("series_chooser"))
         if (d->isVisible()) return d;
     return nullptr;
-}
-
-// A drag with one button: press at `from`, `steps` moves to `to`, release.
-void drag(QWidget* target, Qt::MouseButton button, QPointF from, QPointF to, int steps = 6) {
-    auto send = [&](QEvent::Type type, QPointF at, Qt::MouseButtons held) {
-        QMouseEvent e(type, at, target->mapToGlobal(at), button, held, Qt::NoModifier);
-        QCoreApplication::sendEvent(target, &e);
-    };
-    send(QEvent::MouseButtonPress, from, button);
-    for (int i = 1; i <= steps; ++i) {
-        QMouseEvent e(QEvent::MouseMove, from + (to - from) * (double(i) / steps),
-                      target->mapToGlobal(from + (to - from) * (double(i) / steps)), Qt::NoButton, button,
-                      Qt::NoModifier);
-        QCoreApplication::sendEvent(target, &e);
-    }
-    send(QEvent::MouseButtonRelease, to, Qt::NoButton);
 }
 
 // ---- the oblique volume: a field linear in LPS on a rotated, anisotropic grid
@@ -306,7 +291,7 @@ TEST(GuiViews, ObliqueVolumeSliceClicksPanZoomAndWindow) {
         // ---- middle drag pans: the content follows the pointer, the slice stays
         const core::SliceGrid g0 = view->grid();
         const QPointF delta(37, 21);
-        drag(view, Qt::MiddleButton, mid, QPointF(mid) + delta);
+        button_drag(view, Qt::MiddleButton, mid, QPointF(mid) + delta);
         const core::SliceGrid g1 = view->grid();
         EXPECT_NEAR(g1.offset_mm, g0.offset_mm, 1e-9);
         EXPECT_EQ(g1.pixel_mm, g0.pixel_mm);
@@ -321,7 +306,7 @@ TEST(GuiViews, ObliqueVolumeSliceClicksPanZoomAndWindow) {
         const core::SliceGrid g2 = view->grid();
         const QPointF press(mid.x() - 20, mid.y() + 10);
         const double up = view->height() / 4.0;
-        drag(view, Qt::RightButton, press, press - QPointF(0, up));
+        button_drag(view, Qt::RightButton, press, press - QPointF(0, up));
         const core::SliceGrid g3 = view->grid();
         EXPECT_NEAR(g2.pixel_mm / g3.pixel_mm, core::drag_zoom_factor(up, view->height()), 1e-9);
         EXPECT_NEAR(glm::length(core::pixel_to_lps(g3, {press.x(), press.y()}) -
@@ -339,7 +324,7 @@ TEST(GuiViews, ObliqueVolumeSliceClicksPanZoomAndWindow) {
     const QString status = w.statusBar()->currentMessage();
     const core::WindowLevel start = w.workspace().window();
     const QPointF from(axial->width() / 2.0, axial->height() / 2.0);
-    drag(axial, Qt::LeftButton, from, from + QPointF(60, -25));
+    button_drag(axial, Qt::LeftButton, from, from + QPointF(60, -25));
     const core::WindowLevel want = core::drag_window(start, {60, 25}, v.value_range());
     EXPECT_NEAR(w.workspace().window().width, want.width, 1e-9);
     EXPECT_NEAR(w.workspace().window().center, want.center, 1e-9);
@@ -435,7 +420,7 @@ TEST(GuiViews, ThreeDViewMouseAndToolBar) {
 
     // ---- left drag rotates about the target (distance kept)
     Camera c0 = viewer->camera();
-    drag(viewer, Qt::LeftButton, mid, mid + QPointF(40, 0));
+    button_drag(viewer, Qt::LeftButton, mid, mid + QPointF(40, 0));
     Camera c1 = viewer->camera();
     EXPECT_NEAR(glm::length(c1.target - c0.target), 0.0, 1e-9);
     EXPECT_NEAR(glm::length(c1.eye - c1.target), glm::length(c0.eye - c0.target), 1e-6);
@@ -444,7 +429,7 @@ TEST(GuiViews, ThreeDViewMouseAndToolBar) {
 
     // ---- middle drag pans (direction and distance kept, target moved)
     c0 = viewer->camera();
-    drag(viewer, Qt::MiddleButton, mid, mid + QPointF(30, 20));
+    button_drag(viewer, Qt::MiddleButton, mid, mid + QPointF(30, 20));
     c1 = viewer->camera();
     EXPECT_NEAR(glm::length(c1.forward() - c0.forward()), 0.0, 1e-9);
     EXPECT_NEAR(glm::length(c1.eye - c1.target), glm::length(c0.eye - c0.target), 1e-6);
@@ -453,12 +438,12 @@ TEST(GuiViews, ThreeDViewMouseAndToolBar) {
     // ---- right drag up zooms in (core::drag_zoom_factor of the drag), down zooms out
     c0 = viewer->camera();
     const double up = double(viewer->height() / 4);
-    drag(viewer, Qt::RightButton, mid, mid - QPointF(0, up), 4);
+    button_drag(viewer, Qt::RightButton, mid, mid - QPointF(0, up), 4);
     c1 = viewer->camera();
     EXPECT_NEAR(glm::length(c0.eye - c0.target) / glm::length(c1.eye - c1.target),
                 core::drag_zoom_factor(up, viewer->height()), 1e-6);
     EXPECT_NEAR(glm::length(c1.target - c0.target), 0.0, 1e-9);
-    drag(viewer, Qt::RightButton, mid, mid + QPointF(0, up), 4);
+    button_drag(viewer, Qt::RightButton, mid, mid + QPointF(0, up), 4);
     EXPECT_NEAR(glm::length(viewer->camera().eye - viewer->camera().target), glm::length(c0.eye - c0.target), 1e-6);
 
     // ---- the wheel zooms (one notch forward: closer)

@@ -37,7 +37,7 @@ struct Shells {
     }
 };
 
-core::RenderRequest request(int size = 128) {
+core::RenderRequest square_request(int size = 128) {
     core::RenderRequest req;
     req.width = req.height = size;
     req.annotations = false;
@@ -50,7 +50,7 @@ core::PickResult centre_pick(core::Scene& scene, double threshold = 0.5, bool al
     p.x = p.y = 64;
     p.threshold = threshold;
     p.all_layers = all;
-    return core::pick(scene, request(), p);
+    return core::pick(scene, square_request(), p);
 }
 
 std::string visible_name(const core::PickResult& r) {
@@ -104,7 +104,7 @@ TEST_F(PickRule, OnTheHeadSkinOnlyRaysStayOnTheFaceAndBoneIsSeenThroughSkin) {
     scene.open(test::data("headsq.nhdr"));
     const auto ids = scene.add_isosurfaces({500, 1150});
     scene.info(ids[0]).opacity = 0.3f;
-    const auto req = request(256);
+    const auto req = square_request(256);
     // One frame lists rows 100 to 160 (the orbits, the cheeks, the mouth);
     // each pixel of three rows is resolved from it, as core::pick would.
     const Camera cam = core::frame_camera(scene, req);
@@ -160,7 +160,7 @@ TEST_F(PickRule, TheCliSaysTheSameAsTheCore) {
         p.x = x;
         p.y = y;
         p.all_layers = true;
-        const auto core_r = core::pick(scene, request(256), p);
+        const auto core_r = core::pick(scene, square_request(256), p);
         const auto cli = test::run_command(test::cli() + " pick " + test::data("headsq.nhdr") +
                                                " --iso 500 --iso 1150 --opacity 0.3 --size 256x256 --at " +
                                                std::to_string(x) + "," + std::to_string(y) + " --all-layers --json",

@@ -7,6 +7,7 @@
 // measure` (per surface, per component, --component-at).
 #include <cmath>
 #include <filesystem>
+#include <numbers>
 #include <string>
 
 #include <glm/glm.hpp>
@@ -20,8 +21,6 @@ using namespace iso;
 using iso::test::TempDir;
 
 namespace {
-
-constexpr double kPi = 3.14159265358979323846;
 
 // An int16 volume, 1 mm voxels, whose value is 500 + 100 * field(p) (clamped
 // to 0..1000) at each voxel's index p.
@@ -37,7 +36,7 @@ template <class F> void save_field(const std::string& path, F field) {
     save_volume(v, path, false);
 }
 
-double ball_ml(double r) { return 4.0 / 3.0 * kPi * r * r * r / 1000.0; }
+double ball_ml(double r) { return 4.0 / 3.0 * std::numbers::pi * r * r * r / 1000.0; }
 
 nlohmann::json run_json(const std::string& args) {
     const auto r = test::run_command(test::cli() + " " + args + " --json");

@@ -114,7 +114,7 @@ glm::dmat4 expected_affine(const std::vector<Header>& hs, int steps) {
     return m;
 }
 
-void expect_affine_near(const glm::dmat4& a, const glm::dmat4& b, double tol = kMm) {
+void expect_affine_mm(const glm::dmat4& a, const glm::dmat4& b, double tol = kMm) {
     test::expect_affine_near(a, b, tol);
 }
 
@@ -201,12 +201,12 @@ TEST(Dicom, AxialCtDimsValuesAndAffine) {
     // Affine from the header fields of the written files.
     const auto hs = sorted_headers(dir);
     ASSERT_EQ(hs.size(), 8u);
-    expect_affine_near(v.index_to_lps, expected_affine(hs, 7));
+    expect_affine_mm(v.index_to_lps, expected_affine(hs, 7));
     // ... and from the construction.
     glm::dmat4 built(1.0);
     for (int a = 0; a < 3; ++a) built[a] = glm::dvec4(spec.rot[a] * spec.spacing[a], 0);
     built[3] = glm::dvec4(spec.origin, 1);
-    expect_affine_near(v.index_to_lps, built);
+    expect_affine_mm(v.index_to_lps, built);
 
     // HU = stored + intercept; voxel (i, j, k) = pattern.
     for (int k = 0; k < 8; ++k)
@@ -276,7 +276,7 @@ TEST(Dicom, ObliqueAffineIsRotatedAndMatchesHeaders) {
     write_series(tmp / "obl", spec);
     const Volume v = load_volume(tmp / "obl");
     const auto hs = sorted_headers(tmp / "obl");
-    expect_affine_near(v.index_to_lps, expected_affine(hs, 7));
+    expect_affine_mm(v.index_to_lps, expected_affine(hs, 7));
     const glm::dvec3 c0 = glm::dvec3(v.index_to_lps[0]), c1 = glm::dvec3(v.index_to_lps[1]),
                      c2 = glm::dvec3(v.index_to_lps[2]);
     EXPECT_NEAR(glm::length(c0), 0.7, kMm);
@@ -313,7 +313,7 @@ TEST(Dicom, ReverseFileOrderAndShuffledNamesStillSort) {
     glm::dmat4 built(1.0);
     for (int a = 0; a < 3; ++a) built[a] = glm::dvec4(spec.rot[a] * spec.spacing[a], 0);
     built[3] = glm::dvec4(spec.origin, 1);
-    expect_affine_near(v.index_to_lps, built);
+    expect_affine_mm(v.index_to_lps, built);
 }
 
 TEST(Dicom, MissingSliceIsReportedAndInterpolated) {
@@ -326,7 +326,7 @@ TEST(Dicom, MissingSliceIsReportedAndInterpolated) {
     EXPECT_TRUE(any_warning(v, "missing slice")) << all_warnings(v);
     EXPECT_TRUE(any_warning(v, "between slice 2")) << all_warnings(v);
     EXPECT_TRUE(any_warning(v, "interpolat")) << all_warnings(v);
-    expect_affine_near(v.index_to_lps, expected_affine(hs, 7));
+    expect_affine_mm(v.index_to_lps, expected_affine(hs, 7));
     // The pattern is linear in k, so the interpolated slice equals the missing one.
     for (int j = 0; j < 12; ++j)
         for (int i = 0; i < 16; ++i) ASSERT_EQ(v.value(i, j, 3), pattern(i, j, 3) - 1024);
@@ -538,7 +538,7 @@ TEST(Dicom, RealSiemensMrScoutFolder) {
     std::vector<Header> hs;
     for (const char* f : {"1-1.dcm", "1-2.dcm", "1-3.dcm"}) hs.push_back(header(dir + "/" + f));
     std::sort(hs.begin(), hs.end(), [](const Header& a, const Header& b) { return a.ipp.z < b.ipp.z; });
-    expect_affine_near(v.index_to_lps, expected_affine(hs, 2));
+    expect_affine_mm(v.index_to_lps, expected_affine(hs, 2));
     EXPECT_NEAR(v.spacing().z, 12.0, kMm);
     EXPECT_TRUE(any_warning(v, "scout")) << all_warnings(v);
     // Voxels against the raw pixel data of the middle file.

@@ -6,6 +6,7 @@
 
 #include <array>
 #include <cmath>
+#include <numbers>
 #include <vector>
 
 #include <glm/glm.hpp>
@@ -16,7 +17,6 @@ using namespace iso;
 namespace {
 
 using V = glm::dvec3;
-constexpr double kPi = 3.14159265358979323846;
 
 // A receiver frame away from the origin with a tilted normal, so that nothing
 // depends on axis-aligned arithmetic.
@@ -58,7 +58,7 @@ double integrate_form_factor(const V& p, const V& n, const V& a, const V& b, con
         const double cos_r = glm::dot(n, r) / std::sqrt(r2);
         if (cos_r <= 0) return 0.0;
         const double cos_e = -glm::dot(front, r) / std::sqrt(r2);
-        return cos_r * cos_e / (kPi * r2) * tri_area(a, b, c);
+        return cos_r * cos_e / (std::numbers::pi * r2) * tri_area(a, b, c);
     }
     const V ab = 0.5 * (a + b), bc = 0.5 * (b + c), ca = 0.5 * (c + a);
     return integrate_form_factor(p, n, a, ab, ca, front, depth + 1, smooth, edge) +
@@ -105,7 +105,7 @@ glm::dvec3 barycentric(const V& x, const V& a, const V& b, const V& c) {
 double rectangle_corner_form_factor(double a, double b, double c) {
     const double x = a / c, y = b / c;
     const double sx = std::sqrt(1 + x * x), sy = std::sqrt(1 + y * y);
-    return (x / sx * std::atan(y / sx) + y / sy * std::atan(x / sy)) / (2 * kPi);
+    return (x / sx * std::atan(y / sx) + y / sy * std::atan(x / sy)) / (2 * std::numbers::pi);
 }
 
 // A regular `sides`-gon of circumradius r in the plane through c with unit
@@ -115,7 +115,7 @@ std::vector<V> regular_polygon(const V& c, const V& m, double r, int sides) {
     const V w = glm::cross(m, u);
     std::vector<V> q;
     for (int k = 0; k < sides; ++k) {
-        const double phi = 2 * kPi * k / sides;
+        const double phi = 2 * std::numbers::pi * k / sides;
         q.push_back(c + r * (std::cos(phi) * u + std::sin(phi) * w));
     }
     return q;
@@ -330,7 +330,7 @@ TEST(DiskGeometry, PolygonFormFactorOfDiskOnAxis) {
             const int sides = 256;
             const auto q = regular_polygon(p + h * n, -n, R, sides); // front faces p
             const double F = polygon_ff(p, n, q);
-            const double rin = R * std::cos(kPi / sides);
+            const double rin = R * std::cos(std::numbers::pi / sides);
             const double lo = rin * rin / (h * h + rin * rin), hi = R * R / (h * h + R * R);
             EXPECT_GE(F, lo - 1e-13) << h << " " << R;
             EXPECT_LE(F, hi + 1e-13) << h << " " << R;
@@ -350,7 +350,7 @@ TEST(DiskGeometry, PolygonFormFactorOfRectangles) {
         for (double h : {0.2, 1.0, 2.5}) {
             const V q[4] = {f.at(-a, -a, h), f.at(-a, a, h), f.at(a, a, h), f.at(a, -a, h)}; // normal -n: faces p
             const double X = a / h, s = std::sqrt(1 + X * X);
-            const double closed = 4 / kPi * X / s * std::atan(X / s);
+            const double closed = 4 / std::numbers::pi * X / s * std::atan(X / s);
             EXPECT_NEAR(polygon_form_factor(f.p, f.n, q, 4), closed, 1e-14) << a << " " << h;
             EXPECT_NEAR(closed, 4 * rectangle_corner_form_factor(a, a, h), 1e-15);
         }
@@ -433,7 +433,7 @@ TEST(DiskGeometry, AdditivityAndReciprocity) {
         const V upper[4] = {V(0, 0, 1), V(0, 1, 1), V(1, 1, 1), V(1, 0, 1)}; // front -z
         const double X = 1, Y = 1;
         const double closed =
-            2 / (kPi * X * Y) *
+            2 / (std::numbers::pi * X * Y) *
             (0.5 * std::log((1 + X * X) * (1 + Y * Y) / (1 + X * X + Y * Y)) +
              X * std::sqrt(1 + Y * Y) * std::atan(X / std::sqrt(1 + Y * Y)) +
              Y * std::sqrt(1 + X * X) * std::atan(Y / std::sqrt(1 + X * X)) - X * std::atan(X) - Y * std::atan(Y));
@@ -461,7 +461,7 @@ TEST(DiskGeometry, DiskFormFactor) {
     const Frame f;
     for (double h : {0.1, 1.0, 10.0})
         for (double R : {0.5, 2.0}) {
-            const double F = disk_form_factor(f.p, f.n, f.at(0, 0, h), -f.n, kPi * R * R);
+            const double F = disk_form_factor(f.p, f.n, f.at(0, 0, h), -f.n, std::numbers::pi * R * R);
             EXPECT_NEAR(F, R * R / (h * h + R * R), 1e-15);
         }
 

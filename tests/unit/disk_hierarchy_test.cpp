@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <numbers>
 #include <random>
 #include <vector>
 
@@ -24,7 +25,6 @@ using namespace iso;
 namespace {
 
 using V = glm::dvec3;
-constexpr double kPi = 3.14159265358979323846;
 
 // A grid of nu x nv quads (2 triangles each) spanning origin + [0,1]u + [0,1]v;
 // front = cross(u, v), vertex normals along it.
@@ -70,7 +70,7 @@ Mesh sphere(const V& c, double r, int nu, int nv) {
     Mesh m;
     for (int j = 0; j <= nv; ++j)
         for (int i = 0; i < nu; ++i) {
-            const double th = kPi * j / nv, ph = 2 * kPi * i / nu;
+            const double th = std::numbers::pi * j / nv, ph = 2 * std::numbers::pi * i / nu;
             const V d(std::sin(th) * std::cos(ph), std::sin(th) * std::sin(ph), std::cos(th));
             m.positions.emplace_back(c + r * d);
             m.normals.emplace_back(d);
@@ -122,7 +122,7 @@ void check_structure(const DiskHierarchy& h, const std::vector<const Mesh*>& mes
             for (std::int32_t t = node.links.z; t < node.links.z + node.links.w; ++t)
                 ++owner_seen[static_cast<std::size_t>(t)];
             // A leaf's bound holds its disk and its triangles.
-            const double r = std::sqrt(node.centre_area.w / kPi);
+            const double r = std::sqrt(node.centre_area.w / std::numbers::pi);
             EXPECT_LE(r, node.normal_bound.w * (1 + 1e-6) + 1e-12);
             for (std::int32_t t = node.links.z; t < node.links.z + node.links.w; ++t)
                 for (int k = 0; k < 3; ++k)
@@ -153,7 +153,8 @@ void check_structure(const DiskHierarchy& h, const std::vector<const Mesh*>& mes
         for (std::int32_t j = i + 1; j < skip; ++j) {
             const DiskNode& leaf = h.nodes[static_cast<std::size_t>(j)];
             if (leaf.links.y >= 0) continue;
-            const double reach = glm::length(xyz(leaf.centre_area) - centre) + std::sqrt(leaf.centre_area.w / kPi);
+            const double reach =
+                glm::length(xyz(leaf.centre_area) - centre) + std::sqrt(leaf.centre_area.w / std::numbers::pi);
             EXPECT_LE(reach, node.normal_bound.w * (1 + 1e-5) + 1e-9) << "leaf " << j << " outside node " << i;
             for (std::int32_t t = leaf.links.z; t < leaf.links.z + leaf.links.w; ++t)
                 for (int k = 0; k < 3; ++k)
@@ -215,7 +216,7 @@ Mesh load_bunny() { return load_mesh(std::string(ISOSCOPE_DATA_DIR) + "/bunny.vt
 // side 2a (facing it): four corner rectangles.
 double centred_square_ff(double a, double h) {
     const double x = a / h, s = x / std::sqrt(1 + x * x);
-    return 4.0 / kPi * s * std::atan(s);
+    return 4.0 / std::numbers::pi * s * std::atan(s);
 }
 
 } // namespace
@@ -457,8 +458,8 @@ TEST(DiskOcclusion, FarFieldIsTheDiskApproximation) {
     const double d = 10.0;
     const double exact = centred_square_ff(0.5, d);
     const double got = disk_occlusion(h, V(0, 0, d), V(0, 0, -1), {}, s, 100.0);
-    EXPECT_NEAR(got, exact, 1.5 * (1.0 / kPi) / (d * d) * exact);
-    EXPECT_NEAR(got, 1.0 / (kPi * d * d + 1.0), 1e-6); // exactly the root disk
+    EXPECT_NEAR(got, exact, 1.5 * (1.0 / std::numbers::pi) / (d * d) * exact);
+    EXPECT_NEAR(got, 1.0 / (std::numbers::pi * d * d + 1.0), 1e-6); // exactly the root disk
 }
 
 // The radius: elements count by their centre's distance (triangles: their

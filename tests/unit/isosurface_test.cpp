@@ -134,7 +134,7 @@ std::size_t duplicate_positions(const Mesh& m) {
     return d;
 }
 
-glm::dmat4 oblique_affine() {
+glm::dmat4 tilted_affine() {
     glm::dmat4 r = glm::rotate(glm::dmat4(1.0), glm::radians(30.0), glm::normalize(glm::dvec3(1, 2, 0.5)));
     return glm::translate(glm::dmat4(1.0), glm::dvec3(-40, 12, 300)) * r *
            glm::scale(glm::dmat4(1.0), glm::dvec3(0.7, 0.9, 2.5));
@@ -143,7 +143,7 @@ glm::dmat4 oblique_affine() {
 } // namespace
 
 TEST(Isosurface, MatchesFlyingEdgesOnObliqueAnisotropicSphere) {
-    const auto aff = oblique_affine();
+    const auto aff = tilted_affine();
     const glm::dvec3 c = glm::dvec3(aff * glm::dvec4(21.5, 17, 9, 1));
     const auto v = sphere({44, 37, 19}, aff, c, 14.3);
     const double iso = 0.123; // ties no sample (floats of a distance field)
@@ -267,7 +267,7 @@ TEST(Isosurface, TwoAdjacentInsideCornersGiveAHandComputedQuad) {
 TEST(Isosurface, ChunkingDoesNotChangeTheMesh) {
     std::mt19937 rng(7);
     std::uniform_real_distribution<float> u(0.f, 1.f);
-    auto v = Volume::dense({23, 19, 17}, VoxelType::F32, oblique_affine());
+    auto v = Volume::dense({23, 19, 17}, VoxelType::F32, tilted_affine());
     for (auto& x : v.as<float>()) x = u(rng); // noise: every MC case, many chunk borders crossed
     const auto ref = canonical(extract_isosurface(v, 0.5, {.chunk_size = 1000}));
     ASSERT_GT(ref.size(), 1000u);
@@ -352,7 +352,7 @@ TEST(Isosurface, MirroredAffineStillFacesOutward) {
 }
 
 TEST(Isosurface, NormalsAreWorldSpaceForAnisotropicRotatedGrids) {
-    const auto aff = oblique_affine();
+    const auto aff = tilted_affine();
     const glm::dvec3 c = glm::dvec3(aff * glm::dvec4(21.5, 17, 9, 1));
     const auto v = sphere({44, 37, 19}, aff, c, 14.3);
     const Mesh m = extract_isosurface(v, 0.0, {});
@@ -367,7 +367,7 @@ TEST(Isosurface, NormalsAreWorldSpaceForAnisotropicRotatedGrids) {
 }
 
 TEST(Isosurface, IncrementalEqualsFull) {
-    auto v = sphere({40, 36, 30}, oblique_affine(), glm::dvec3(oblique_affine() * glm::dvec4(20, 18, 15, 1)), 12.0);
+    auto v = sphere({40, 36, 30}, tilted_affine(), glm::dvec3(tilted_affine() * glm::dvec4(20, 18, 15, 1)), 12.0);
     Extractor x(v, {.chunk_size = 8});
     auto surf = x.extract(0.0);
     // Edit: a box set to a high value (a "paint" stroke) crossing chunk borders.

@@ -8,6 +8,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <numbers>
 #include <optional>
 #include <random>
 
@@ -28,13 +29,12 @@ using namespace iso::test;
 
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
-double ball_area(double r) { return 4.0 * kPi * r * r; }
-double ball_ml(double r) { return 4.0 / 3.0 * kPi * r * r * r / 1000.0; }
+double ball_area(double r) { return 4.0 * std::numbers::pi * r * r; }
+double ball_ml(double r) { return 4.0 / 3.0 * std::numbers::pi * r * r * r / 1000.0; }
 // Volume of the part of a ball of radius r beyond a plane at distance d from its centre (a cap).
 double cap_ml(double r, double d) {
     const double h = r - d;
-    return kPi * h * h * (3.0 * r - h) / 3.0 / 1000.0;
+    return std::numbers::pi * h * h * (3.0 * r - h) / 3.0 / 1000.0;
 }
 
 // An axis-aligned box [lo, hi] as 8 vertices and 12 outward triangles.
@@ -595,7 +595,7 @@ TEST(MeasureIsosurface, BallCutByTheVolumeBorderIsOpenAndABound) {
     EXPECT_EQ(s.components[0].volume_kind, VolumeKind::LowerBound);
     // The boundary: the circle where the plane cuts the ball.
     const double rho = std::sqrt(r * r - d * d);
-    EXPECT_NEAR(s.boundary_length_mm, 2 * kPi * rho, 0.01 * 2 * kPi * rho);
+    EXPECT_NEAR(s.boundary_length_mm, 2 * std::numbers::pi * rho, 0.01 * 2 * std::numbers::pi * rho);
     // The capped volume: the ball without the cap beyond the plane; less than the ball.
     const double inside = ball_ml(r) - cap_ml(r, d);
     EXPECT_NEAR(s.volume_ml, inside, 0.01 * inside);

@@ -18,7 +18,7 @@ namespace fs = std::filesystem;
 namespace {
 
 // A closed unit cube of 12 outward-facing triangles, offset to LPS (10, 20, 30).
-Mesh cube() {
+Mesh unit_cube() {
     Mesh m;
     for (int z = 0; z < 2; ++z)
         for (int y = 0; y < 2; ++y)
@@ -39,7 +39,7 @@ Mesh cube() {
 } // namespace
 
 TEST(MeshIo, CubeStatsAreExact) {
-    const auto s = mesh_stats(cube());
+    const auto s = mesh_stats(unit_cube());
     EXPECT_DOUBLE_EQ(s.area, 6.0);
     EXPECT_DOUBLE_EQ(s.volume, 1.0);
     EXPECT_EQ(s.bounds_min, glm::dvec3(10, 20, 30));
@@ -49,7 +49,7 @@ TEST(MeshIo, RoundTripsEveryFormat) {
     TempDir dir;
     Mesh bunny = load_mesh(test::data("bunny.vtp"));
     ASSERT_GE(bunny.triangles.size(), 1000u);
-    for (const Mesh& m : {cube(), bunny}) {
+    for (const Mesh& m : {unit_cube(), bunny}) {
         const auto ref = mesh_stats(m);
         for (const char* ext : {".stl", ".ply", ".obj", ".vtp"}) {
             const std::string path = dir / (std::string("m") + ext);
@@ -70,14 +70,14 @@ TEST(MeshIo, RoundTripsEveryFormat) {
 
 TEST(MeshIo, StlIsWeldedIntoAnIndexedMesh) {
     TempDir dir;
-    save_mesh(cube(), dir / "c.stl");
+    save_mesh(unit_cube(), dir / "c.stl");
     const Mesh r = load_mesh(dir / "c.stl");
     EXPECT_EQ(r.positions.size(), 8u); // 36 corners in the file, 8 distinct
 }
 
 TEST(MeshIo, NormalsAndColoursSurviveWhereTheFormatHasThem) {
     TempDir dir;
-    Mesh m = cube();
+    Mesh m = unit_cube();
     for (auto& p : m.positions) {
         m.normals.push_back(glm::normalize(p - glm::vec3(10.5f, 20.5f, 30.5f)));
         m.colors.emplace_back(std::uint8_t(p.x * 10), 200, 30, 255);
@@ -99,13 +99,13 @@ TEST(MeshIo, NormalsAndColoursSurviveWhereTheFormatHasThem) {
 
 TEST(MeshIo, SpaceTagIsWrittenAndRasIsConverted) {
     TempDir dir;
-    save_mesh(cube(), dir / "c.stl");
+    save_mesh(unit_cube(), dir / "c.stl");
     EXPECT_EQ(read_file(dir / "c.stl").substr(0, 9), "SPACE=LPS");
-    save_mesh(cube(), dir / "c.ply");
+    save_mesh(unit_cube(), dir / "c.ply");
     EXPECT_NE(read_file(dir / "c.ply").find("comment SPACE=LPS"), std::string::npos);
-    save_mesh(cube(), dir / "c.obj");
+    save_mesh(unit_cube(), dir / "c.obj");
     EXPECT_NE(read_file(dir / "c.obj").find("SPACE=LPS"), std::string::npos);
-    save_mesh(cube(), dir / "c.vtp");
+    save_mesh(unit_cube(), dir / "c.vtp");
     EXPECT_NE(read_file(dir / "c.vtp").find("SPACE"), std::string::npos);
 
     // Slicer writes RAS meshes with such a tag: x and y flip on read.
@@ -169,12 +169,12 @@ TEST(MeshIo, BadInput) {
         expect_error(dir / "format.vtp", "format 'appe' is not ascii, binary or appended");
     }
     // Writing: a bad index is refused; a missing folder is named; nothing overwritten.
-    Mesh bad = cube();
+    Mesh bad = unit_cube();
     bad.triangles.push_back({0, 1, 99});
     write_file(dir / "keep.stl", "user data");
     EXPECT_THROW(save_mesh(bad, dir / "keep.stl"), Error);
     EXPECT_EQ(read_file(dir / "keep.stl"), "user data");
-    EXPECT_THROW(save_mesh(cube(), dir / "no/such/folder/m.stl"), Error);
+    EXPECT_THROW(save_mesh(unit_cube(), dir / "no/such/folder/m.stl"), Error);
 }
 
 TEST(MeshIo, AVtpThatCrashedVtksParserIsAnErrorNamingTheFile) {

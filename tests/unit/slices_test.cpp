@@ -14,6 +14,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <map>
+#include <numbers>
 #include <random>
 
 #include <glm/common.hpp>
@@ -35,8 +36,6 @@ using namespace iso::core;
 using namespace iso::test;
 
 namespace {
-
-constexpr double kPi = 3.14159265358979323846;
 
 // The oblique grid's centre: not round, far from the origin.
 const glm::dvec3 kCentre(12.3, -45.6, 78.9);
@@ -251,14 +250,14 @@ TEST(SliceAnnotations, EdgeLettersAreTheNearestPatientDirections) {
     const double angles[2] = {30.0, 60.0};
     for (int k = 0; k < 2; ++k) {
         SlicePlane p = planes[0];
-        const double t = angles[k] * kPi / 180.0;
+        const double t = angles[k] * std::numbers::pi / 180.0;
         p.right = {std::cos(t), std::sin(t), 0.0};
         p.up = {std::sin(t), -std::cos(t), 0.0};
         for (int e = 0; e < 4; ++e) EXPECT_EQ(slice_edge_letter(p, edges[e]), turned[k][e]) << angles[k] << " deg";
     }
     // A coronal plane tilted 20 degrees about L: up = S tilted towards P stays S.
     SlicePlane c = planes[1];
-    const double t = 20.0 * kPi / 180.0;
+    const double t = 20.0 * std::numbers::pi / 180.0;
     c.up = {0.0, std::sin(t), std::cos(t)};
     EXPECT_EQ(slice_edge_letter(c, SliceEdge::Top), "S");
     EXPECT_EQ(slice_edge_letter(c, SliceEdge::Bottom), "I");
@@ -844,7 +843,7 @@ TEST(SliceOutline, ASpheresOutlineThroughItsCentreIsOneClosedLoopAtItsRadius) {
         // Counter-clockwise about the normal around the solid, and about the circle's area.
         const double rr = R * R - h * h;
         EXPECT_GT(area, 0);
-        EXPECT_NEAR(area, kPi * rr, 0.02 * kPi * rr) << "h = " << h;
+        EXPECT_NEAR(area, std::numbers::pi * rr, 0.02 * std::numbers::pi * rr) << "h = " << h;
     }
     // The equator plane: 72 segments along the 72 equator edges (their vertices are on the plane).
     SlicePlane p = default_planes(Volume::dense({2, 2, 2}, VoxelType::U8, make_affine({1, 1, 1}, {0, 0, 0})))[0];
