@@ -139,7 +139,9 @@ TEST_F(AntiAlias, DsraaSubSamplesApproachExactCoverageOfAnEdge) {
     EXPECT_LT(four.edge_rms, 0.13) << "MSAA 4x's figure: the reconstruction loses nothing on a two-colour edge";
     // 8 sub-samples where the GL allows them (llvmpipe stops at 4: the frame then says so).
     EXPECT_GE(r8.aa_samples, 4);
-    if (r8.aa_samples == 8) EXPECT_LT(eight.edge_rms, four.edge_rms);
+    if (r8.aa_samples == 8) {
+        EXPECT_LT(eight.edge_rms, four.edge_rms);
+    }
     // Away from the edge every pixel is exact: the reconstruction never blurs.
     for (const EdgeError& e : {one, four, eight}) EXPECT_LE(e.interior_max, 0.5 / 255.0);
     // The pass runs only with sub-samples.

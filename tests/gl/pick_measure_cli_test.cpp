@@ -121,7 +121,9 @@ TEST(PickCore, ThroughSkinTheVisiblePickIsTheBoneAndPositionsAreExact) {
         double share = 0;
         for (std::size_t i = 0; i < r.layers.size(); ++i) {
             share += r.layers[i].share;
-            if (i) EXPECT_GT(r.layers[i].depth_mm, r.layers[i - 1].depth_mm);
+            if (i) {
+                EXPECT_GT(r.layers[i].depth_mm, r.layers[i - 1].depth_mm);
+            }
         }
         EXPECT_LE(share, 1.0 + 1e-6);
     }

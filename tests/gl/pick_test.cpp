@@ -115,7 +115,9 @@ TEST_F(Pick, ListsOverNestedShellsEqualTheCpuRayCast) {
                 EXPECT_FLOAT_EQ(gpu[i].alpha, 0.3f);
                 EXPECT_NEAR(gpu[i].transmittance, t, 1e-6) << "front to back";
                 t *= 0.7;
-                if (i > 0) EXPECT_LE(gpu[i].depth, gpu[i - 1].depth) << "reversed Z: nearest first";
+                if (i > 0) {
+                    EXPECT_LE(gpu[i].depth, gpu[i - 1].depth) << "reversed Z: nearest first";
+                }
             }
         }
     EXPECT_GE(compared, 20);

@@ -104,18 +104,12 @@ inline Mesh uv_sphere(const glm::dvec3& c, double r, int stacks, int slices) {
 }
 
 // Triangles as position triples, rotated to start at the smallest vertex
-// (orientation kept) and sorted: equal lists mean equal meshes.
+// (orientation kept) and sorted: equal lists mean equal meshes. Compiled in
+// tests/support/meshes.cpp with the libraries' flags (library
+// isoscope_test_meshes), not inline at the tests' -O0: sorting the bundled
+// CT's triangles through std::array's operators, one call each, was most of
+// Ties.BundledCtAt500And1150's 25 s under the sanitizers.
 using Tri = std::array<std::array<float, 3>, 3>;
-inline std::vector<Tri> canonical(const Mesh& m) {
-    std::vector<Tri> out;
-    for (const auto& t : m.triangles) {
-        Tri tri;
-        for (int k = 0; k < 3; ++k) tri[k] = {m.positions[t[k]].x, m.positions[t[k]].y, m.positions[t[k]].z};
-        std::rotate(tri.begin(), std::min_element(tri.begin(), tri.end()), tri.end());
-        out.push_back(tri);
-    }
-    std::sort(out.begin(), out.end());
-    return out;
-}
+std::vector<Tri> canonical(const Mesh& m);
 
 } // namespace iso::test
