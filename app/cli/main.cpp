@@ -2,8 +2,8 @@
 // commands.hpp) and the one place errors become messages and exit statuses.
 // Parses arguments, calls the core API, prints; no algorithms live here.
 #include <cstdlib>
-#include <iostream>
 #include <functional>
+#include <iostream>
 #include <string>
 #include <unistd.h>
 #include <vector>

@@ -69,10 +69,11 @@ inline void hover(QWidget* w, QPoint at) {
 
 inline std::string headsq() { return data("headsq.nhdr"); }
 
-// `w` shown at 1400 x 1000 with headsq open (4 still frames: fewer_still_frames), the skin (500) at opacity 0.3
-// (through the Surfaces dock's slider) over the bone (1150), and the 3D
-// view's camera the scene's anterior one at the image's aspect (what
-// `isoscope pick` uses), drawn once. Call through ASSERT_NO_FATAL_FAILURE.
+// `w` shown at 1400 x 1000 with headsq open (4 still frames:
+// fewer_still_frames), the skin (500) at opacity 0.3 (through the Surfaces
+// dock's slider) over the bone (1150), and the 3D view's camera the scene's
+// anterior one at the image's aspect (what `isoscope pick` uses), drawn
+// once. Call through ASSERT_NO_FATAL_FAILURE.
 inline void open_head_with_surfaces(gui::MainWindow& w) {
     fewer_still_frames(w);
     w.resize(1400, 1000);

@@ -81,7 +81,6 @@ inline void button_drag(QWidget* target, Qt::MouseButton button, QPointF from, Q
 // A widget's child of type T named `name` (none without the widget).
 template <class T> T* child(QWidget* w, const char* name) { return w ? w->findChild<T*>(name) : nullptr; }
 
-// Pixels brighter than black: the picture shows something, not an empty frame.
 // A left drag delivered straight to the widget (QTest::mouseMove moves the X
 // pointer, whose events arrive later), the event loop running between steps.
 inline void drag_widget(QWidget* w, QPoint from, QPoint to, int steps = 5, int pause_ms = 30) {
@@ -98,6 +97,7 @@ inline void drag_widget(QWidget* w, QPoint from, QPoint to, int steps = 5, int p
     send(QEvent::MouseButtonRelease, to, Qt::NoButton);
 }
 
+// Pixels brighter than black: the picture shows something, not an empty frame.
 inline double lit_fraction(const QImage& img) {
     if (img.isNull()) return 0;
     const QImage g = img.convertToFormat(QImage::Format_Grayscale8);

@@ -298,7 +298,6 @@ TEST(GuiUndo, AskBeforeQuittingOrOpening) {
     // Nothing changed: quitting asks nothing.
     EXPECT_TRUE(w.close());
     EXPECT_FALSE(w.isVisible());
-    test::fewer_still_frames(w); // gui_test_util.hpp
     w.show();
     ASSERT_TRUE(QTest::qWaitForWindowExposed(&w));
 
@@ -355,7 +354,6 @@ TEST(GuiUndo, AskBeforeQuittingOrOpening) {
     const core::Session quit_saved = core::read_session(session);
     ASSERT_EQ(quit_saved.surfaces.size(), 1u);
     EXPECT_FALSE(quit_saved.surfaces[0].visible);
-    test::fewer_still_frames(w); // gui_test_util.hpp
     w.show();
     child<QCheckBox>(w.surfaces_panel()->row(w.scene().surfaces()[0]), "visible")->setChecked(true);
     w.close();

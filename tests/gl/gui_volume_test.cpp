@@ -268,8 +268,11 @@ TEST_F(GuiVolume, DraggingATransferFunctionPointAndUndoingIt) {
     EXPECT_NEAR(after.points()[i].value, value, 1e-9);
     EXPECT_NEAR(after.points()[i].opacity, opacity, 1e-9);
     EXPECT_EQ(after.points()[i].color, p.color);
-    for (std::size_t k = 0; k < before.points().size(); ++k)
-        if (k != i) EXPECT_EQ(after.points()[k], before.points()[k]) << k;
+    for (std::size_t k = 0; k < before.points().size(); ++k) {
+        if (k != i) {
+            EXPECT_EQ(after.points()[k], before.points()[k]) << k;
+        }
+    }
     EXPECT_EQ(v->options().look.volume.tf, after) << "the 3D view does not show the edit";
     EXPECT_EQ(w.undo_stack()->count(), steps + 1) << "a drag is one undo step";
     w.undo_stack()->undo();
