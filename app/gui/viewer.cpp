@@ -188,7 +188,7 @@ void Viewer::take_batch(const RaytracedBatch& b) {
 // picture key changes with it.
 void Viewer::camera_moved() { workspace_.set_camera(camera_); }
 
-// The camera framed for what is visible now (see initializeGL): the
+// The camera framed for what is visible now (see initialize): the
 // visible surfaces and the volume when it is ray cast (Scene::bounds(look)),
 // its near and far planes around them.
 void Viewer::frame_camera() {
