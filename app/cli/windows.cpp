@@ -7,7 +7,6 @@
 #include <QApplication>
 #include <QIcon>
 #include <QImage>
-#include <QSurfaceFormat>
 #include <QTimer>
 
 #include "app/cli/commands.hpp"
@@ -19,16 +18,6 @@
 namespace iso::cli {
 
 namespace {
-
-// Qt's windows get a GL 4.5 core context with a depth buffer (before the
-// QApplication is made), as the renderer needs.
-void use_gl45_surfaces() {
-    QSurfaceFormat fmt;
-    fmt.setVersion(4, 5);
-    fmt.setProfile(QSurfaceFormat::CoreProfile);
-    fmt.setDepthBufferSize(24);
-    QSurfaceFormat::setDefaultFormat(fmt);
-}
 
 // The windows' icon (the pictures the desktop entry's icon theme gets, as Qt
 // resources) and the desktop entry they belong to (window matching on Wayland).
@@ -58,7 +47,6 @@ int run_view(ViewArgs a, char* argv0) {
     // The view draws a workspace (its camera and picture key are the workspace's).
     iso::core::Workspace workspace(a.opt.look);
     workspace.reset(std::move(scene), a.in, a.series);
-    use_gl45_surfaces();
     int qargc = 1;
     char* qargv[] = {argv0, nullptr};
     QApplication qapp(qargc, qargv);
@@ -78,7 +66,7 @@ int run_view(ViewArgs a, char* argv0) {
                 qapp.exit(1);
                 return;
             }
-            if (!w.grabFramebuffer().save(QString::fromStdString(a.screenshot))) {
+            if (!w.grab().save(QString::fromStdString(a.screenshot))) {
                 std::cerr << "isoscope: error: " << a.screenshot << ": cannot save the screenshot\n";
                 qapp.exit(1);
                 return;
@@ -125,7 +113,6 @@ RunFn add_view(CLI::App& cmd, char* argv0) {
 // The desktop app (docs/gui.md); also what `isoscope` with no arguments
 // starts where there is a display.
 int run_gui(const std::string& in, char* argv0) {
-    use_gl45_surfaces();
     int qargc = 1;
     char* qargv[] = {argv0, nullptr};
     QApplication qapp(qargc, qargv);

@@ -3,8 +3,8 @@
 // docs/gui.md "Layouts". The layout is the workspace's (a session keeps
 // it): its menu entries set it, and the views follow it. A layout moves the
 // four views between the cells of the central grid and shows or hides them:
-// nothing is made again, so the 3D view keeps its GL context (re-parenting a
-// QOpenGLWidget would make a new one), its camera and its accumulated AO,
+// nothing is made again, so the 3D view keeps its frame thread (with its
+// GL context and the scene on its GPU), its camera and its accumulated AO,
 // and each slice view its plane.
 #pragma once
 

@@ -11,6 +11,7 @@
 #include <unistd.h>
 #endif
 
+#include "io/error.hpp"
 #include "renderer/core/drag_pacing.hpp"
 #include "renderer/gl/context.hpp"
 
@@ -44,6 +45,16 @@ bool levels_on_their_way(const StillRequest& r) {
     return waiting;
 }
 } // namespace
+
+QImage screen_image(const Image& image) {
+    if (image.is_float || image.channels != 4 || image.width < 1 || image.height < 1 ||
+        image.bytes.size() != std::size_t(image.width) * std::size_t(image.height) * 4)
+        throw Error("3D view", "a frame that is not an 8-bit RGBA image of its stated size");
+    // RGBX: the alpha is ignored (the frames are opaque); the conversion to
+    // RGB32 is a byte swizzle per pixel.
+    const QImage rgba(image.bytes.data(), image.width, image.height, image.width * 4, QImage::Format_RGBX8888);
+    return rgba.convertToFormat(QImage::Format_RGB32);
+}
 
 StillFrames::StillFrames(QObject* receiver, std::function<void(const StillFrame&)> on_frame)
     : receiver_(receiver), on_frame_(std::move(on_frame)) {
@@ -240,6 +251,7 @@ StillFrame StillFrames::draw(core::SnapshotRenderer& renderer, const StillReques
         opt.target_framebuffer = 0;
         RenderResult res = renderer.render(r.scene, r.camera, opt);
         f.image = std::make_shared<const Image>(std::move(res.image));
+        f.picture = screen_image(*f.image);
         f.ao_frames = r.ao_frames > 0 ? res.ao_frames : 0;
         f.aa_frames = res.aa_frames;
         f.labels = std::move(res.labels);

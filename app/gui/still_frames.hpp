@@ -2,10 +2,11 @@
 // frames of a drag) drawn on a thread of their own (docs/gui.md, "Frames
 // off the GUI thread"): its own headless GL context and renderer draw a
 // snapshot of the scene (core::SceneSnapshot: the meshes shared, not
-// copied), read the image back and hand it to the GUI thread, which only
-// blits it. The thread runs below the GUI thread's priority (so do the
-// software rasterizer's threads it starts) and starts no still frame while
-// the user's input is recent (a drag's own frames excepted).
+// copied), read the image back, convert it to the screen's pixel format
+// and hand it to the GUI thread, which only paints it. The thread runs
+// below the GUI thread's priority (so do the software rasterizer's threads
+// it starts) and starts no still frame while the user's input is recent (a
+// drag's own frames excepted).
 #pragma once
 
 #include <atomic>
@@ -19,6 +20,8 @@
 #include <string>
 #include <thread>
 #include <vector>
+
+#include <QImage>
 
 #include "renderer/core/scene.hpp"
 #include "renderer/frame/annotations.hpp"
@@ -47,6 +50,9 @@ struct StillRequest {
 struct StillFrame {
     std::uint64_t request = 0;
     std::shared_ptr<const Image> image; // 8-bit RGBA, rows top-down
+    // The same picture in the raster engine's own format (screen_image),
+    // converted on the frame thread: the GUI thread paints it as it is.
+    QImage picture;
     int ao_frames = 0, aa_frames = 0;
     bool last = false;        // the request's frames are all drawn: the picture stopped changing
     bool interactive = false; // drawn for a drag (StillRequest::interactive)
@@ -79,6 +85,10 @@ struct PickFrame {
     std::string error;
     bool replaced = false; // a newer replaceable job took its place: not drawn
 };
+
+// An 8-bit RGBA frame (rows top-down, opaque) as the window's raster
+// engine paints it fastest (QImage::Format_RGB32, 0xffRRGGBB): a copy.
+QImage screen_image(const Image& image);
 
 class StillFrames {
 public:

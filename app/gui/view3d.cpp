@@ -43,11 +43,10 @@ void View3D::drop_viewer() {
 }
 
 // A viewer of the workspace's scene made before anything is drawn (at
-// start, and when new data comes) and kept behind the hint: the first
-// OpenGL widget of a window switches the window to OpenGL composition
-// (150-180 ms on llvmpipe, loading the GL libraries), which the user would
-// otherwise feel when the first surface appears (a 32 M-triangle surface's
-// extraction ended in a 300 ms stall, gui_massive_bench).
+// start, and when new data comes) and kept behind the hint, so the first
+// surface appears in a widget that is there already. (It was an OpenGL
+// widget once, and the first of those switched the window to OpenGL
+// composition; the view paints images now, docs/gui.md.)
 void View3D::make_spare() {
     if (spare_ || viewer_) return;
     ViewerOptions o;

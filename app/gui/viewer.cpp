@@ -1,10 +1,7 @@
 #include "app/gui/viewer.hpp"
-#include "renderer/gl/present.hpp"
 
 #include <QApplication>
 #include <QKeyEvent>
-#include <QOpenGLContext>
-#include <QOpenGLFunctions>
 #include <QPainter>
 #include <QPen>
 #include <QPolygonF>
@@ -27,11 +24,12 @@
 #include "renderer/core/workspace.hpp"
 #include "renderer/core/slices.hpp"
 #include "renderer/frame/annotations.hpp"
+#include "renderer/gl/context.hpp"
 
 namespace iso::gui {
 
 Viewer::Viewer(core::Workspace& workspace, PatientView view, ViewerOptions options, QWidget* parent)
-    : QOpenGLWidget(parent), workspace_(workspace), scene_(workspace.scene()), initial_view_(view), options_(options),
+    : QWidget(parent), workspace_(workspace), scene_(workspace.scene()), initial_view_(view), options_(options),
       annotations_(std::make_unique<Annotations>()) {
     setFocusPolicy(Qt::StrongFocus);
     setMinimumSize(320, 240);
@@ -39,8 +37,8 @@ Viewer::Viewer(core::Workspace& workspace, PatientView view, ViewerOptions optio
     // frames draw every triangle meanwhile (docs/lod.md).
     scene_.set_background_lod(true);
     setMouseTracking(true); // hover readout
-    // The framebuffer keeps its picture between paints: a grab reads it.
-    setUpdateBehavior(QOpenGLWidget::PartialUpdate);
+    // Each paint covers the whole widget (the picture or the background).
+    setAttribute(Qt::WA_OpaquePaintEvent);
     still_timer_ = new QTimer(this);
     still_timer_->setSingleShot(true);
     connect(still_timer_, &QTimer::timeout, this, [this] { schedule_still_frame(); });
@@ -50,19 +48,20 @@ Viewer::Viewer(core::Workspace& workspace, PatientView view, ViewerOptions optio
 Viewer::~Viewer() {
     refiner_.reset(); // cancels and waits for its worker before anything it posts to goes
     stills_.reset();  // its frame in progress finishes; it frees its own context's objects
-    makeCurrent();    // GL objects are released with the widget's context current
-    scene_.release_gpu();
-    if (presenter_) presenter_->release();
-    doneCurrent();
+    if (context_) {   // frames drawn here: their GL objects go with this view's context current
+        gl::ScopedCurrent current(context_.get());
+        scene_.release_gpu();
+    }
 }
 
 namespace {
-void clear_to_background() {
-    auto* f = QOpenGLContext::currentContext()->functions();
-    f->glClearColor(0.08f, 0.09f, 0.11f, 1.0f);
-    f->glClear(GL_COLOR_BUFFER_BIT);
-}
+const QColor kBackground = QColor::fromRgbF(0.08f, 0.09f, 0.11f);
 } // namespace
+
+gl::HeadlessContext& Viewer::gl_context() {
+    if (!context_) context_ = std::make_unique<gl::HeadlessContext>();
+    return *context_;
+}
 
 double Viewer::aspect() const { return double(std::max(1, width())) / double(std::max(1, height())); }
 
@@ -71,28 +70,39 @@ double Viewer::aspect() const { return double(std::max(1, width())) / double(std
 // Framed while every visible surface was empty, it frames the first
 // surfaces that are not (keeping the direction) once they appear; later
 // surfaces leave the camera where the user put it.
-void Viewer::initializeGL() {
+void Viewer::initialize() {
+    initialized_ = true;
     const bool framed = !camera_set_;
     if (!camera_set_) camera_ = scene_.camera(initial_view_, aspect(), options_.look);
     framed_empty_ = !camera_set_ && scene_.bounds(options_.look).empty();
     if (framed) camera_moved();
 }
 
-void Viewer::paintGL() {
-    if (!error_.empty()) {
-        clear_to_background();
-        return;
+// The picture (a frame's image, scaled up when a drag's frame was drawn
+// smaller) or the background, and the sketch over it: painted by the
+// raster engine into the window's backing store.
+void Viewer::paintEvent(QPaintEvent*) {
+    if (!initialized_) initialize();
+    if (error_.empty()) {
+        try {
+            draw();
+        } catch (const std::exception& e) {
+            // Nothing escapes into Qt's event loop: report, show the background, stop drawing.
+            error_ = e.what();
+            std::cerr << "isoscope view: error: " << error_ << "\n";
+            setToolTip(QString::fromStdString(error_));
+        }
     }
-    try {
-        draw();
-        paint_sketch();
-    } catch (const std::exception& e) {
-        // Nothing escapes into Qt's event loop: report, show the background, stop drawing.
-        error_ = e.what();
-        std::cerr << "isoscope view: error: " << error_ << "\n";
-        clear_to_background();
-        setToolTip(QString::fromStdString(error_));
+    if (!error_.empty()) shown_ = QImage();
+    QPainter p(this);
+    if (shown_.isNull()) {
+        p.fillRect(rect(), kBackground);
+    } else {
+        const QSize size = image_size();
+        if (shown_.size() != size) p.setRenderHint(QPainter::SmoothPixmapTransform);
+        p.drawImage(QRectF(rect()), shown_, QRectF(shown_.rect()));
     }
+    paint_sketch(p);
 }
 
 // A frame as the view draws it (its picks ride on one of these too).
@@ -103,8 +113,9 @@ RenderOptions Viewer::frame_options() const {
     opt.height = size.height();
     opt.scale = float(devicePixelRatioF());
     opt.annotations = annotations_.get();
-    opt.present = true;
-    opt.target_framebuffer = defaultFramebufferObject();
+    // Read back, not presented: the widget paints the image.
+    opt.present = false;
+    opt.target_framebuffer = 0;
     // While a drag turns, pans or zooms the view, frames go without AO (on
     // software GL it costs 2-3x a frame, docs/gui.md); the still frames after
     // the release bring it back and accumulate it.
@@ -231,9 +242,9 @@ void Viewer::draw() {
     if (use_still_thread()) {
         if (show_still(opt) || show_latest()) return;
         // Nothing from the thread yet: the background until its first frame
-        // (a frame drawn here would upload the scene to this context too: a
-        // second GPU copy of every mesh, 1.2 GB for 32 M triangles).
-        clear_to_background();
+        // (a frame drawn here would upload the scene to a context here too:
+        // a second GPU copy of every mesh, 1.2 GB for 32 M triangles).
+        shown_ = QImage();
         return;
     }
     draw_here(opt);
@@ -257,14 +268,13 @@ bool Viewer::use_still_thread() {
     if (!options_.still_thread || stills_failed_) return false;
     if (!stills_) {
         stills_ = std::make_unique<StillFrames>(this, [this](const StillFrame& f) { take_still(f); });
-        presenter_ = std::make_unique<gl::ImagePresenter>();
     }
     return true;
 }
 
 // Still frames from the thread: a view it was not asked for yet is asked
-// for; its latest frame for this view is blitted (true). False: none yet,
-// the caller shows a plain frame meanwhile.
+// for; its latest frame for this view is shown (true). False: none yet,
+// the caller shows the newest frame or the background.
 bool Viewer::show_still(const RenderOptions& opt) {
     std::vector<double> key = frame_key(opt);
     if (key != still_key_ || !(opt.look == still_look_)) {
@@ -307,7 +317,7 @@ bool Viewer::show_latest() {
 }
 
 void Viewer::show_frame(const StillFrame& f, const RenderOptions& opt) {
-    presenter_->present(*f.image, defaultFramebufferObject(), opt.width, opt.height);
+    shown_ = f.picture;
     latest_shown_ = std::max(latest_shown_, f.request);
     if (f.image->width == opt.width) labels_ = f.labels; // a reduced drag frame's are in its own pixels
     volume_stats_ = f.volume;
@@ -351,7 +361,12 @@ void Viewer::take_still(const StillFrame& f) {
 
 // A frame drawn here, on the GUI thread (the view without the frame thread).
 void Viewer::draw_here(const RenderOptions& opt) {
-    auto r = scene_.render(camera_, opt);
+    RenderResult r;
+    {
+        gl::ScopedCurrent current(&gl_context());
+        r = scene_.render(camera_, opt);
+    }
+    shown_ = screen_image(r.image);
     raytraced_drawn_ = opt.ao_image != nullptr;
     labels_ = std::move(r.labels);
     volume_stats_ = r.volume;
@@ -397,7 +412,7 @@ bool Viewer::eventFilter(QObject* watched, QEvent* e) {
         break;
     default: break;
     }
-    return QOpenGLWidget::eventFilter(watched, e);
+    return QWidget::eventFilter(watched, e);
 }
 
 void Viewer::schedule_still_frame() {
@@ -476,13 +491,8 @@ core::PickResult Viewer::pick_at(QPointF image_pixel, PickRegion rect) {
     const core::PickRequest p = pick_request(image_pixel, rect);
     const auto t0 = std::chrono::steady_clock::now();
     if (!use_still_thread()) {
-        if (!isValid()) throw Error("3D view pick", "the view has no GL context yet");
         const RenderOptions opt = pick_options(p); // pick_in_frame sets the pick region and image again
-        makeCurrent();
-        struct Done {
-            Viewer& v;
-            ~Done() { v.doneCurrent(); }
-        } done{*this};
+        gl::ScopedCurrent current(&gl_context());
         return core::pick_in_frame(scene_, camera_, opt, p);
     }
     PickJob job{scene_.snapshot(), camera_, pick_options(p), false};
@@ -556,9 +566,8 @@ void Viewer::set_sketch(std::vector<QPointF> image_pixels) {
 }
 
 // The outline over the picture, closed back to its start (a dashed segment): in widget pixels.
-void Viewer::paint_sketch() {
+void Viewer::paint_sketch(QPainter& p) {
     if (sketch_.size() < 2) return;
-    QPainter p(this);
     p.setRenderHint(QPainter::Antialiasing);
     QPolygonF line;
     for (const QPointF& q : sketch_) line << q / devicePixelRatioF();
@@ -664,7 +673,7 @@ void Viewer::keyPressEvent(QKeyEvent* e) {
             set_view(v);
             return;
         }
-    QOpenGLWidget::keyPressEvent(e);
+    QWidget::keyPressEvent(e);
 }
 
 } // namespace iso::gui

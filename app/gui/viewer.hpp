@@ -1,7 +1,16 @@
-// The 3D view of `isoscope view`: a core::Scene drawn inside a
-// QOpenGLWidget. Presentation only: the scene, its surfaces and the renderer
+// The 3D view of `isoscope view`: a core::Scene's frames, drawn by the
+// renderer off screen (on the frame thread, StillFrames) and painted into a
+// plain widget. Presentation only: the scene, its surfaces and the renderer
 // are the core's (renderer/core/scene.hpp); the widget owns the camera and
 // the interaction.
+//
+// Not a QOpenGLWidget: one of those in a window makes Qt compose the whole
+// window through OpenGL, so every repaint of any widget in it (a label's
+// text, a progress dialog closing over it) went through a texture upload
+// and a swap; on llvmpipe under X that held the GUI thread 45-180 ms a
+// repaint (gui_massive_bench, docs/lod.md "What the stalls are"). The
+// frames are read back anyway (the frame thread has its own context), so
+// the window stays raster-composed and the view paints them as images.
 #pragma once
 
 #include <functional>
@@ -11,7 +20,8 @@
 #include <vector>
 
 #include <QElapsedTimer>
-#include <QOpenGLWidget>
+#include <QImage>
+#include <QWidget>
 
 #include <glm/vec3.hpp>
 
@@ -34,10 +44,11 @@ struct SceneSnapshot;
 } // namespace core
 } // namespace iso
 
+class QPainter;
 class QTimer;
 
 namespace iso::gl {
-class ImagePresenter;
+class HeadlessContext;
 }
 
 namespace iso::gui {
@@ -58,10 +69,10 @@ struct ViewerOptions {
     // frames go without it and the still frames after the release bring it back).
     bool ao_while_dragging = false;
     // Frames drawn on a thread of their own (StillFrames): the still frames
-    // (AO, anti-aliasing) and a drag's frames; the GUI thread blits the
-    // newest one that arrived (a plain frame of its own only before the
-    // first); off: drawn on the GUI thread between events (the way to
-    // compare, and the fallback when that thread has no GL context).
+    // (AO, anti-aliasing) and a drag's frames; the GUI thread paints the
+    // newest one that arrived (the background before the first); off: drawn
+    // on the GUI thread between events, in a context of the view's own (the
+    // way to compare, and the fallback when that thread has no GL context).
     bool still_thread = true;
     // The legend in the overlay: the visible surfaces' names, colours,
     // opacities and iso values (core/legend.hpp), as exports draw it.
@@ -76,7 +87,7 @@ struct ViewerOptions {
     }
 };
 
-class Viewer : public QOpenGLWidget {
+class Viewer : public QWidget {
 public:
     // The 3D view of the workspace's scene (the workspace, and that scene,
     // must outlive the widget). The camera it draws with is the workspace's:
@@ -117,8 +128,8 @@ public:
     // The volume's ray casting in the frame on screen (VolumeStats::drawn:
     // the volume was drawn).
     const VolumeStats& volume_stats() const { return volume_stats_; }
-    // The last rendering error (empty: none). paintGL never lets one escape:
-    // it clears to the background, reports it here and on stderr, and stops.
+    // The last rendering error (empty: none). A paint never lets one escape:
+    // it shows the background, reports it here and on stderr, and stops.
     const std::string& error() const { return error_; }
     // The GL renderer and version the view draws with (empty before its first frame).
     const std::string& gl_renderer() const { return gl_renderer_; }
@@ -193,9 +204,13 @@ public:
     // pixels from the top-left); none behind the eye.
     std::optional<QPointF> image_pixel(const glm::dvec3& lps) const;
 
+    // The picture on screen (image pixels; null before the first frame):
+    // the last frame shown, without the sketch.
+    const QImage& picture() const { return shown_; }
+
 protected:
-    void initializeGL() override;
-    void paintGL() override;
+    void paintEvent(QPaintEvent* e) override;
+    void initialize();
     void draw();
     void frame_camera();
     void draw_here(const RenderOptions& opt);
@@ -255,7 +270,6 @@ private:
     // Still frames on their own thread: what was asked of it (key and look
     // of the view it is for), its latest frame for that, the picture on screen.
     std::unique_ptr<StillFrames> stills_;
-    std::unique_ptr<gl::ImagePresenter> presenter_;
     bool stills_failed_ = false;
     std::uint64_t still_id_ = 0;
     std::vector<double> still_key_;
@@ -272,7 +286,13 @@ private:
     core::DragPacing drag_pacing_;
     std::uint64_t annotations_version_ = 0;
     std::vector<QPointF> sketch_;
-    void paint_sketch();
+    void paint_sketch(QPainter& p);
+    bool initialized_ = false; // the first paint framed the camera
+    QImage shown_;             // the picture on screen (null: the background)
+    // Frames and picks drawn here, on the GUI thread (without the frame
+    // thread): a headless context of the view's own, made on first use.
+    std::unique_ptr<gl::HeadlessContext> context_;
+    gl::HeadlessContext& gl_context();
     std::size_t thread_objects_first_ = 0; // the frame thread's GL objects after its first frame
     int thread_frames_ = 0;
     double last_thread_ms_ = 0;

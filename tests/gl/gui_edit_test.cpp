@@ -123,7 +123,7 @@ TEST_F(GuiEdit, CheekRulerOnTheFrontSkinDragUndoRedo) {
     // framebuffer (the label's masks say which pixel is which).
     {
         QTest::qWait(50);
-        const QImage shot = viewer->grabFramebuffer().convertToFormat(QImage::Format_RGB888);
+        const QImage shot = viewer->grab().toImage().convertToFormat(QImage::Format_RGB888);
         Image img;
         img.width = shot.width();
         img.height = shot.height();

@@ -273,7 +273,7 @@ TEST_F(GuiPick, StillFramesComeFromTheirThreadAndMatchTheGuiThreads) {
     EXPECT_LE(gui_frames, 1) << "the GUI thread drew still frames";
     EXPECT_GE(viewer->thread_frames() - thread_frames, viewer->options().look.ao_frames);
     EXPECT_EQ(viewer->ao_frames(), viewer->options().look.ao_frames);
-    const QImage threaded = viewer->grabFramebuffer().convertToFormat(QImage::Format_RGB32);
+    const QImage threaded = viewer->grab().toImage().convertToFormat(QImage::Format_RGB32);
 
     gui::ViewerOptions o = viewer->options();
     o.still_thread = false;
@@ -282,7 +282,7 @@ TEST_F(GuiPick, StillFramesComeFromTheirThreadAndMatchTheGuiThreads) {
     ASSERT_TRUE(wait_until(
         [&] { return (viewer->frames() > before && viewer->converged()) || !viewer->error().empty(); }, 180000));
     EXPECT_EQ(viewer->thread_frames(), shown_from_thread) << "the thread's frames were shown with it off";
-    const QImage here = viewer->grabFramebuffer().convertToFormat(QImage::Format_RGB32);
+    const QImage here = viewer->grab().toImage().convertToFormat(QImage::Format_RGB32);
     ASSERT_EQ(threaded.size(), here.size());
     double sum = 0;
     int worst = 0;

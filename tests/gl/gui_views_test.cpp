@@ -488,7 +488,7 @@ TEST(GuiViews, ThreeDViewMouseAndToolBar) {
     // right after a change may still show the one before)
     const auto settled = [&] {
         EXPECT_TRUE(wait_until([&] { return viewer->converged() || !viewer->error().empty(); }, 120000));
-        return viewer->grabFramebuffer();
+        return viewer->grab().toImage();
     };
     bar->reset_action()->trigger();
     const auto id = w.scene().surfaces().front();

@@ -203,7 +203,7 @@ TEST_F(GuiVolume, ShownWithAPresetAsTheCoreRendersIt) {
     EXPECT_FALSE(hint->isVisible());
     EXPECT_TRUE(v->volume_stats().drawn);
     EXPECT_GT(v->volume_stats().rays, 1000u);
-    const QImage shown = v->grabFramebuffer().convertToFormat(QImage::Format_RGB32);
+    const QImage shown = v->grab().toImage().convertToFormat(QImage::Format_RGB32);
     const QSize size = v->image_size();
     std::string error;
     const QImage core_on = core_picture(v->options().look, v->camera(), size, error);
@@ -307,7 +307,7 @@ TEST_F(GuiVolume, TheCropBoxCuts) {
     EXPECT_NEAR(v->options().look.clip.box->second.z, mid_s, 0.05);
     EXPECT_NEAR(v->options().look.clip.box->first.x, mid_l, 0.05);
     settle(v);
-    const QImage shown = v->grabFramebuffer().convertToFormat(QImage::Format_RGB32);
+    const QImage shown = v->grab().toImage().convertToFormat(QImage::Format_RGB32);
     FrameLook off = v->options().look;
     off.volume.enabled = false;
     std::string error;
