@@ -8,12 +8,17 @@
 #include <QThreadPool>
 #include <QMouseEvent>
 #include <QPainter>
+#include <QTransform>
 #include <QWheelEvent>
 
 #include <algorithm>
 #include <cmath>
+#include <optional>
+#include <string>
 #include <utility>
 #include <iostream>
+
+#include <glm/geometric.hpp>
 
 #include "io/color.hpp"
 #include "renderer/core/scene.hpp"
@@ -60,6 +65,7 @@ void SliceView::set_workspace(core::Workspace* workspace) {
             if (core::has(p, core::Part::Data)) { // new data: fitted again, its own range
                 fitted_ = user_framed_ = false;
                 range_.reset();
+                drop_slice(); // the slice shown is of the data before
             } else if (core::has(p, core::Part::Slices) && fitted_ && plane() && plane()->pixel_mm != fit_pixel_mm_) {
                 user_framed_ = true; // framed elsewhere (a session, an undo): resizes keep it
             }
@@ -103,11 +109,14 @@ void SliceView::scroll(double steps) {
 
 void SliceView::set_window(const core::WindowLevel& w) {
     window_ = w;
-    if (!values_.values.empty()) {
-        grey_ = core::apply_window(values_, window_, core::PixelFormat::Grey8);
-        image_ = QImage(grey_.data(), values_.width, values_.height, values_.width, QImage::Format_Grayscale8).copy();
-    }
+    if (!image_.isNull() && !values_.values.empty()) show_values(image_grid_);
     update();
+}
+
+void SliceView::show_values(const core::SliceGrid& grid) {
+    grey_ = core::apply_window(values_, window_, core::PixelFormat::Grey8);
+    image_ = QImage(grey_.data(), values_.width, values_.height, values_.width, QImage::Format_Grayscale8).copy();
+    image_grid_ = grid;
 }
 
 std::size_t SliceView::outline_segments() const {
@@ -138,14 +147,13 @@ void SliceView::refresh_outlines() {
 }
 
 void SliceView::refresh() {
-    image_ = QImage();
     drop_outlines();
     const core::SlicePlane* plane = this->plane();
     if (!plane || width() < 1 || height() < 1) {
+        drop_slice();
         update();
         return;
     }
-    const core::Scene& scene = workspace_->scene();
     try {
         if (!fitted_) {
             fitted_ = true;
@@ -158,15 +166,12 @@ void SliceView::refresh() {
             }
         }
         grid_ = core::slice_grid(*plane, width(), height());
-        core::reslice_here(scene.volume(), grid_, core::Interp::Linear,
-                           values_); // the GUI thread never waits on a worker
-        grey_ = core::apply_window(values_, window_, core::PixelFormat::Grey8);
-        image_ = QImage(grey_.data(), values_.width, values_.height, values_.width, QImage::Format_Grayscale8).copy();
+        request_slice();
         request_outlines();
     } catch (const std::exception& e) {
         // Nothing escapes into Qt's event loop.
         std::cerr << "isoscope gui: " << core::slice_orientation_name(orientation_) << " view: " << e.what() << "\n";
-        image_ = QImage();
+        drop_slice();
     }
     update_probe(); // the slice under the pointer moved
     update();
@@ -238,18 +243,26 @@ void SliceView::request_outlines() {
 }
 
 namespace {
-// The outline jobs' own threads (two, below the GUI thread's priority), not
-// Qt's global pool: the raster engine draws large images with the global
-// pool's threads and waits for them, so a paint waited behind outline jobs.
-QThreadPool* outline_pool() {
-    static QPointer<QThreadPool> pool;
+// The slice views' own threads (two per kind of job, below the GUI
+// thread's priority), not Qt's global pool: the raster engine draws large
+// images with the global pool's threads and waits for them, so a paint
+// waited behind outline jobs.
+QThreadPool* view_pool(QPointer<QThreadPool>& pool, const char* name) {
     if (!pool) {
         pool = new QThreadPool(qApp); // waited for when the application goes
-        pool->setObjectName("slice_outlines");
+        pool->setObjectName(name);
         pool->setMaxThreadCount(2);
         pool->setThreadPriority(QThread::LowPriority);
     }
     return pool;
+}
+QThreadPool* outline_pool() {
+    static QPointer<QThreadPool> pool;
+    return view_pool(pool, "slice_outlines");
+}
+QThreadPool* slice_pool() {
+    static QPointer<QThreadPool> pool;
+    return view_pool(pool, "slice_images");
 }
 } // namespace
 
@@ -278,6 +291,73 @@ void SliceView::start_outlines() {
                     self->update();
                 }
                 self->start_outlines();
+            },
+            Qt::QueuedConnection);
+    });
+}
+
+// What a slice job reads: the volume as the scene shares it (a volume
+// opened meanwhile replaces it there; this one stays until the job ends).
+struct SliceView::SliceJob {
+    std::shared_ptr<const Volume> volume;
+    core::SliceGrid grid;
+    std::uint64_t generation = 0;
+};
+
+void SliceView::drop_slice() {
+    image_ = QImage();
+    values_ = {};
+    pending_slice_.reset();
+    ++slice_generation_; // a slice on its way is for data or a plane no longer shown
+}
+
+void SliceView::request_slice() {
+    auto job = std::make_shared<SliceJob>();
+    job->volume = workspace_->scene().shared_volume();
+    job->grid = grid_;
+    job->generation = ++slice_generation_;
+    pending_slice_.reset();
+    if (std::size_t(job->volume->voxel_count()) <= inline_voxels_) {
+        // Here: an arena of one, so the GUI thread never waits on a TBB worker.
+        core::reslice_here(*job->volume, grid_, core::Interp::Linear, values_);
+        show_values(grid_);
+        return;
+    }
+    pending_slice_ = std::move(job);
+    start_slice();
+}
+
+void SliceView::start_slice() {
+    if (reslicing_ || !pending_slice_) return;
+    reslicing_ = true;
+    std::shared_ptr<const SliceJob> job = std::move(pending_slice_);
+    slice_pool()->start([job, self = QPointer<SliceView>(this)] {
+        auto values = std::make_shared<core::SliceImage>();
+        std::string error;
+        try {
+            core::reslice_here(*job->volume, job->grid, core::Interp::Linear, *values);
+        } catch (const std::exception& e) {
+            error = e.what();
+        }
+        // Back on the GUI thread (the application outlives the view; the view may not).
+        QMetaObject::invokeMethod(
+            qApp,
+            [self, job, values, error] {
+                if (!self) return;
+                self->reslicing_ = false;
+                if (job->generation == self->slice_generation_) {
+                    if (error.empty()) {
+                        self->values_ = std::move(*values);
+                        self->show_values(job->grid);
+                    } else {
+                        std::cerr << "isoscope gui: " << core::slice_orientation_name(self->orientation_)
+                                  << " view: " << error << "\n";
+                        self->drop_slice();
+                    }
+                    self->update_probe();
+                    self->update();
+                }
+                self->start_slice();
             },
             Qt::QueuedConnection);
     });
@@ -312,11 +392,37 @@ double SliceView::scale_bar_mm() const {
 
 double SliceView::scale_bar_pixels() const { return image_.isNull() ? 0.0 : scale_bar_mm() / grid_.pixel_mm; }
 
+namespace {
+bool same_grid(const core::SliceGrid& a, const core::SliceGrid& b) {
+    return a.width == b.width && a.height == b.height && a.corner == b.corner && a.dx == b.dx && a.dy == b.dy;
+}
+
+// Pixels of grid `from` to pixels of grid `to`, where the planes are
+// parallel (each point taken along the normal onto `to`); none otherwise.
+std::optional<QTransform> placed_on(const core::SliceGrid& from, const core::SliceGrid& to) {
+    if (std::abs(glm::dot(from.normal, to.normal)) < 1.0 - 1e-9) return std::nullopt;
+    const double ux = glm::dot(to.dx, to.dx), uy = glm::dot(to.dy, to.dy);
+    if (!(ux > 0) || !(uy > 0)) return std::nullopt;
+    const glm::dvec3 c = from.corner - to.corner;
+    return QTransform(glm::dot(from.dx, to.dx) / ux, glm::dot(from.dx, to.dy) / uy, glm::dot(from.dy, to.dx) / ux,
+                      glm::dot(from.dy, to.dy) / uy, glm::dot(c, to.dx) / ux, glm::dot(c, to.dy) / uy);
+}
+} // namespace
+
 void SliceView::paintEvent(QPaintEvent*) {
     QPainter p(this);
     p.fillRect(rect(), Qt::black);
     if (image_.isNull()) return;
-    p.drawImage(0, 0, image_);
+    if (same_grid(image_grid_, grid_)) {
+        p.drawImage(0, 0, image_);
+    } else if (const auto to_view = placed_on(image_grid_, grid_)) {
+        // The slice before, until the new one comes (large volumes).
+        p.save();
+        p.setTransform(*to_view);
+        p.setRenderHint(QPainter::SmoothPixmapTransform);
+        p.drawImage(0, 0, image_);
+        p.restore();
+    }
     if (!outline_image_.isNull())
         p.drawImage(0, 0, outline_image_);
     else

@@ -53,6 +53,16 @@ public:
     void refresh();
     static constexpr std::size_t kInlineTriangles = 2'000'000;
     void set_inline_triangles(std::size_t n) { inline_triangles_ = n; } // tests: 0 sends every outline to the pool
+    // Above kInlineVoxels the slice itself is resliced on a pool thread too
+    // (the newest plane next) and shown when it comes (slice_waiting()): on
+    // a 1024^3 volume a view's slice is 100-150 ms of cache misses, and a
+    // ruler's click moves the crosshair, so all three views' slices. The
+    // slice shown before stays meanwhile (has_image(), image()), painted
+    // where its pixels lie on the new grid when the planes are parallel
+    // (a scroll, a pan, a zoom; a slice of a volume no longer open goes).
+    static constexpr std::size_t kInlineVoxels = std::size_t(1) << 24;
+    void set_inline_voxels(std::size_t n) { inline_voxels_ = n; } // tests: 0 sends every slice to the pool
+    bool slice_waiting() const { return reslicing_ || pending_slice_; }
     // The outlines alone, on the slice shown (the surfaces changed, not the
     // plane, the volume or the window: the image stays).
     void refresh_outlines();
@@ -67,9 +77,11 @@ public:
     void scroll(double steps);
 
     core::SliceOrientation orientation() const { return orientation_; }
-    // The image's grid (one image pixel per widget pixel); valid after refresh
-    // with content.
+    // The view's grid (one image pixel per widget pixel): the plane's, what
+    // clicks, outlines and overlays use; valid after refresh with content.
     const core::SliceGrid& grid() const { return grid_; }
+    // The grid image() was resliced on: grid() unless a slice is on its way.
+    const core::SliceGrid& image_grid() const { return image_grid_; }
     const core::Scene* scene() const;
     const core::SlicePlane* plane() const;
     // Fit: re-centres on the volume and zooms to fit (core::fit_view; key F
@@ -138,6 +150,17 @@ private:
     bool outlining_ = false;
     std::size_t inline_triangles_ = kInlineTriangles;
     std::uint64_t outline_generation_ = 0;
+    struct SliceJob;
+    // The slice on the current grid: now, or (large volumes) on a pool
+    // thread, one at a time per view, the newest request next.
+    void request_slice();
+    void start_slice();
+    void drop_slice();                             // no slice shown or asked for
+    void show_values(const core::SliceGrid& grid); // values_ through the window: the image shown
+    std::shared_ptr<SliceJob> pending_slice_;
+    bool reslicing_ = false;
+    std::size_t inline_voxels_ = kInlineVoxels;
+    std::uint64_t slice_generation_ = 0;
     // The plane changed by the view's own gesture: into the workspace.
     void set_plane(const core::SlicePlane& p);
     void set_window(const core::WindowLevel& w);
@@ -149,6 +172,7 @@ private:
     bool user_framed_ = false; // panned, zoomed or restored: resizes keep the framing
     double fit_pixel_mm_ = 0;  // the pixel size this view's last fit gave
     core::SliceGrid grid_;
+    core::SliceGrid image_grid_; // what values_ and image_ were resliced on
     core::SliceImage values_;
     std::vector<std::uint8_t> grey_;
     QImage image_;

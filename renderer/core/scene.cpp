@@ -142,6 +142,8 @@ const Volume& Scene::volume() const {
     return *impl_->volume;
 }
 
+std::shared_ptr<const Volume> Scene::shared_volume() const { return impl_->volume; }
+
 const std::string& Scene::volume_source() const { return impl_->volume_source; }
 
 namespace {

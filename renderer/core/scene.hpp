@@ -134,6 +134,9 @@ public:
     void set_volume(Volume v, const std::string& source);
     bool has_volume() const;
     const Volume& volume() const; // throws without one
+    // The volume as the scene shares it (with snapshots and background work
+    // that must outlive a replacement); null without one.
+    std::shared_ptr<const Volume> shared_volume() const;
     const std::string& volume_source() const;
     // Isosurfaces of the volume, in increasing iso order, coloured skin to
     // bone; each gets an empty-surface warning when outside the value range.

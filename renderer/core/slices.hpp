@@ -238,7 +238,9 @@ void reslice(const Volume& v, const SliceGrid& g, Interp interp, SliceImage& out
 // inline), for a thread that must not wait: a parallel loop started from
 // the GUI thread waits for every piece a worker took, and beside busy
 // processes that held the desktop app's GUI thread 340 ms as a volume
-// arrived (gui_massive_bench). A view's slice is a few milliseconds of work.
+// arrived (gui_massive_bench). The slice views use it up to 16 M voxels,
+// where a view's slice is a few milliseconds of work (larger volumes'
+// slices go to a pool thread: app/gui/slice_view.hpp).
 void reslice_here(const Volume& v, const SliceGrid& g, Interp interp, SliceImage& out);
 SliceImage reslice(const Volume& v, const SlicePlane& p, int width, int height, Interp interp = Interp::Linear);
 

@@ -322,3 +322,42 @@ TEST_F(GuiSlices, ActionsThatNeedDataWaitForIt) {
     ASSERT_EQ(w().scene().surfaces().size(), 1u);
     for (const char* n : surface) EXPECT_TRUE(*enabled(n)) << n;
 }
+
+// Large volumes' slices come from a pool thread (SliceView::kInlineVoxels;
+// 0 here sends headsq's there too): the slice shown before stays while the
+// new one is on its way, and the one that comes is the core's reslice of
+// the newest plane through the window, byte for byte.
+TEST_F(GuiSlices, SlicesFromThePoolAreTheNewestPlanesThroughTheCore) {
+    ASSERT_NO_FATAL_FAILURE(open_head());
+    gui::SliceView* v = view(core::SliceOrientation::Sagittal);
+    v->set_inline_voxels(0);
+    const QImage before = v->image();
+    const core::SliceGrid before_grid = v->image_grid();
+    ASSERT_FALSE(before.isNull());
+    wheel(v, 1);
+    // Nothing comes back before the event loop runs: the old slice is shown.
+    EXPECT_TRUE(v->slice_waiting());
+    EXPECT_TRUE(v->has_image());
+    EXPECT_EQ(v->image(), before);
+    EXPECT_EQ(v->image_grid().corner, before_grid.corner);
+    EXPECT_NE(v->grid().corner, before_grid.corner) << "the plane moved";
+    // Three more steps before the first answer: the last plane's slice comes.
+    for (int i = 0; i < 3; ++i) wheel(v, 1);
+    ASSERT_TRUE(wait_until([&] { return !v->slice_waiting(); }, 30000));
+    const core::SliceGrid& g = v->grid();
+    EXPECT_EQ(v->image_grid().corner, g.corner);
+    EXPECT_EQ(v->image_grid().dx, g.dx);
+    EXPECT_EQ(v->image_grid().dy, g.dy);
+    core::SliceImage values;
+    core::reslice(w().scene().volume(), g, core::Interp::Linear, values);
+    const std::vector<std::uint8_t> grey = core::apply_window(values, w().workspace().window());
+    const QImage& shown = v->image();
+    ASSERT_EQ(shown.width(), g.width);
+    ASSERT_EQ(shown.height(), g.height);
+    int differ = 0;
+    for (int y = 0; y < g.height; ++y)
+        for (int x = 0; x < g.width; ++x)
+            differ += shown.constScanLine(y)[x] != grey[std::size_t(y) * std::size_t(g.width) + std::size_t(x)];
+    EXPECT_EQ(differ, 0);
+    EXPECT_NE(shown, before);
+}
