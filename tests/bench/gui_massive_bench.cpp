@@ -32,7 +32,8 @@
 //   xvfb-run -a -s '-screen 0 1600x1200x24' build/tests/bench/gui_massive_bench VOLUME [--iso 300.5]
 //       [--csv docs/gui_massive.csv] [--phases N] [--trace-events MS]
 //
-// --phases N: stop after the first N phases (to profile one; no CSV written).
+// --phases N: stop after the first N phases (four at least; to profile one;
+// no CSV written).
 // --trace-events MS: print each event the GUI thread took MS ms or more to
 // handle (the receiver's class and name, the event's type): what a stall was.
 //
@@ -195,6 +196,13 @@ int main(int argc, char** argv) {
     // (the window composed through OpenGL: the GL libraries and llvmpipe's
     // shaders paged in and compiled, waiting on the disk behind the volume's
     // read, 250 ms blocked in one run's perf).
+    // --phases N: after the Nth phase, a pause apart from the teardown (for a
+    // profile), then the end, with no CSV.
+    const auto stopped = [&] {
+        if (phases.size() < stop_after) return false;
+        wait_ms(2000);
+        return true;
+    };
     phases.push_back(phase("show the window (1 s)", [&](std::string& res) {
         const double t0 = now_ms();
         w.show();
@@ -245,10 +253,7 @@ int main(int argc, char** argv) {
         return (now_ms() - t0) / 1000;
     }));
     if (!ok) return fail("the extraction did not finish");
-    if (phases.size() >= stop_after) {
-        wait_ms(2000); // apart from the teardown, for a profile
-        return 0;
-    }
+    if (stopped()) return 0;
     gui::Viewer* v = w.viewer();
 
     phases.push_back(phase("first picture, then converged", [&](std::string& res) {
@@ -264,6 +269,7 @@ int main(int argc, char** argv) {
     }));
     if (!ok) return fail("no converged picture: " + v->error());
 
+    if (stopped()) return 0;
     phases.push_back(phase("rotate (60 Hz drag, 3 s)", [&](std::string& res) {
         const QPointF mid(v->width() / 2.0, v->height() / 2.0);
         const int before = v->thread_frames();
@@ -290,6 +296,7 @@ int main(int argc, char** argv) {
     if (on_surface.size() < 2) return fail("fewer than two view pixels show the surface");
     auto* tools = w.measure_tools();
 
+    if (stopped()) return 0;
     phases.push_back(phase("hover (60 Hz, 2 s)", [&](std::string& res) {
         const int before = tools->hover_picks();
         const double t0 = now_ms();
@@ -306,6 +313,7 @@ int main(int argc, char** argv) {
         return (now_ms() - t0) / 1000;
     }));
 
+    if (stopped()) return 0;
     phases.push_back(phase("measure: Ruler, two clicks", [&](std::string& res) {
         tools->set_tool(gui::MeasureTools::Tool::Ruler);
         const std::size_t markups = w.workspace().markups().size();
@@ -345,6 +353,7 @@ int main(int argc, char** argv) {
     // lies on, the surfaces its line passes through): worked out off the GUI
     // thread on a search tree of every triangle, "..." until then.
     auto* table = w.measurements_panel();
+    if (stopped()) return 0;
     phases.push_back(phase("the ruler's surfaces in the table", [&](std::string& res) {
         const double t0 = now_ms();
         const auto row_text = [&] {
