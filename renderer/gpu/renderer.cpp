@@ -25,6 +25,11 @@ namespace {
 
 constexpr std::size_t kOitMinNodes = 1 << 16; // the pool never shrinks below this
 
+} // namespace
+
+// A surface on the GPU: outside the anonymous namespace because
+// Renderer::Impl (declared in the header) holds them, which g++ flags
+// otherwise (-Wsubobject-linkage).
 struct GpuMesh {
     gl::VertexArray vao;
     gl::Buffer vertices, indices;
@@ -40,6 +45,8 @@ struct GpuMesh {
     // docs/lod.md); the element buffer is then theirs.
     std::unique_ptr<passes::GpuLod> lod;
 };
+
+namespace {
 
 std::vector<glm::vec3> vertex_normals(const Mesh& m) {
     std::vector<glm::vec3> n(m.positions.size(), glm::vec3(0.0f));

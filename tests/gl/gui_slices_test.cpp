@@ -44,7 +44,11 @@ constexpr core::SliceOrientation kOrientations[3] = {core::SliceOrientation::Axi
 constexpr core::SliceEdge kEdges[4] = {core::SliceEdge::Left, core::SliceEdge::Right, core::SliceEdge::Top,
                                        core::SliceEdge::Bottom};
 
-// The window shown at 1400 x 1000 with headsq open (no surfaces).
+} // namespace
+
+// The window shown at 1400 x 1000 with headsq open (no surfaces). (Outside
+// the anonymous namespace: g++ flags a test's base class in one inside a
+// unity batch, -Wsubobject-linkage.)
 class GuiSlices : public ::testing::Test {
 protected:
     void SetUp() override {
@@ -72,6 +76,8 @@ private:
     std::unique_ptr<QApplication> app_;
     std::unique_ptr<gui::MainWindow> window_;
 };
+
+namespace {
 
 void send_mouse(QWidget* target, QEvent::Type type, Qt::MouseButton button, Qt::MouseButtons held, QPointF at) {
     QMouseEvent e(type, at, target->mapToGlobal(at), button, held, Qt::NoModifier);

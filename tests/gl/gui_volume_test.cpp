@@ -116,8 +116,11 @@ Diff compare(const QImage& a, const QImage& b, const std::function<bool(int, int
     return d;
 }
 
+} // namespace
+
 // headsq open in a 1400 x 1000 window, no surfaces; the Volume dock's
-// widgets at hand.
+// widgets at hand. (Outside the anonymous namespace: g++ flags a test's
+// base class in one inside a unity batch, -Wsubobject-linkage.)
 class GuiVolume : public ::testing::Test {
 protected:
     void SetUp() override {
@@ -181,8 +184,6 @@ protected:
     QCheckBox* show_ = nullptr;
     QComboBox* preset_ = nullptr;
 };
-
-} // namespace
 
 // Show volume with a preset: the 3D view appears (no surface needed), the
 // volume stats say drawn, the picture inside the volume's projected box
