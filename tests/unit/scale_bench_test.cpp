@@ -301,7 +301,10 @@ TEST(ProcMonitor, PeaksOfAChildAndAGrandchild) {
     double start[2] = {-1, -1}, after[2] = {-1, -1}; // child, grandchild
     std::uint64_t rec[2];
     while (::read(fds[0], rec, sizeof rec) == sizeof rec)
-        if (rec[0] < 4) (rec[0] < 2 ? start : after)[rec[0] % 2] = double(rec[1]) / kMiB;
+        if (rec[0] < 2)
+            start[rec[0]] = double(rec[1]) / kMiB;
+        else if (rec[0] < 4)
+            after[rec[0] - 2] = double(rec[1]) / kMiB;
     ::close(fds[0]);
     ASSERT_GT(start[0], 0);
     ASSERT_GT(start[1], 0);
