@@ -106,6 +106,9 @@ void View3D::show_or_hint() {
     }
     apply_look();
     setCurrentWidget(viewer_);
+    // Framed now where the viewer has its place in the stack already (its
+    // aspect is the one it will draw with), else by its first paint.
+    if (viewer_->geometry() == contentsRect()) viewer_->frame_now();
     viewer_->update();
 }
 

@@ -199,6 +199,15 @@ void Viewer::take_batch(const RaytracedBatch& b) {
 // picture key changes with it.
 void Viewer::camera_moved() { workspace_.set_camera(camera_); }
 
+// What the next paint would do to the camera, now: surfaces joining are
+// framed when they join, so the workspace's camera (what a session saves,
+// what an export draws) is the framed one at once, not after a paint that
+// may come later on a busy machine.
+void Viewer::frame_now() {
+    if (!initialized_) initialize();
+    frame_camera();
+}
+
 // The camera framed for what is visible now (see initialize): the
 // visible surfaces and the volume when it is ray cast (Scene::bounds(look)),
 // its near and far planes around them.

@@ -141,6 +141,11 @@ public:
     void set_camera(const Camera& c);
     // The view's patient-view framing (as `isoscope render --view`), fitted to the widget.
     void set_view(PatientView v);
+    // Frames the camera as the next paint would (the first paint's framing;
+    // surfaces that appeared after only empty ones were drawn), now: the
+    // 3D view calls it when surfaces join, so that the workspace's camera
+    // (what a session saves, what an export draws) is the framed one at once.
+    void frame_now();
     const ViewerOptions& options() const { return options_; }
     void set_options(const ViewerOptions& o);
 
