@@ -109,7 +109,7 @@ void SliceView::scroll(double steps) {
 
 void SliceView::set_window(const core::WindowLevel& w) {
     window_ = w;
-    if (!image_.isNull() && !values_.values.empty()) show_values(image_grid_);
+    if (!values_.values.empty()) show_values(image_grid_); // values_ and image_ come and go together
     update();
 }
 
